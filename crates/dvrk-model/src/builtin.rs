@@ -1,0 +1,54 @@
+//! The dVRK descriptions shipped with the crate, and loading by name or path.
+
+use std::path::Path;
+
+use crate::error::ModelError;
+use crate::model::Model;
+
+/// Built-in robot descriptions: (name, TOML text).
+pub const BUILTIN: [(&str, &str); 3] = [
+    ("psm", include_str!("../../../robots/psm.toml")),
+    ("psm_simplified", include_str!("../../../robots/psm_simplified.toml")),
+    ("mtm", include_str!("../../../robots/mtm.toml")),
+];
+
+impl Model {
+    /// A built-in robot: `psm`, `psm_simplified` or `mtm`.
+    pub fn builtin(name: &str) -> Result<Model, ModelError> {
+        let (_, text) = BUILTIN
+            .iter()
+            .find(|(n, _)| *n == name)
+            .ok_or_else(|| ModelError::UnknownRobot(name.to_string()))?;
+        Model::from_toml_str(text, &format!("builtin:{name}"))
+    }
+
+    /// Names of the built-in robots.
+    pub fn builtin_names() -> Vec<&'static str> {
+        BUILTIN.iter().map(|(n, _)| *n).collect()
+    }
+
+    /// A built-in name, or a path to a description (`.toml`) or a `.urdf` file.
+    pub fn load(name_or_path: &str) -> Result<Model, ModelError> {
+        if BUILTIN.iter().any(|(n, _)| *n == name_or_path) {
+            return Model::builtin(name_or_path);
+        }
+        let path = Path::new(name_or_path);
+        if !path.exists() {
+            return Err(ModelError::UnknownRobot(name_or_path.to_string()));
+        }
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            file: name_or_path.to_string(),
+            source,
+        })?;
+        let is_urdf = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+            || text.trim_start().starts_with("<?xml")
+            || text.trim_start().starts_with("<robot");
+        if is_urdf {
+            Model::from_urdf_str(&text, name_or_path)
+        } else {
+            Model::from_toml_str(&text, name_or_path)
+        }
+    }
+}

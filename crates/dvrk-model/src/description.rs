@@ -1,0 +1,588 @@
+//! The robot description file (TOML, documented in `robots/README.md`) and its
+//! translation into a [`Model`]. Everything a user can get wrong is checked here, and
+//! each error names the file, the frame and the field.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DMatrix, Vector3};
+use serde::Deserialize;
+
+use crate::error::ModelError;
+use crate::expr::{Affine, Expr, ExprError, Scope};
+use crate::model::*;
+
+/// A number, or an expression string evaluated at load time.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(untagged)]
+pub enum NumOrExpr {
+    Num(f64),
+    Expr(String),
+}
+
+impl Default for NumOrExpr {
+    fn default() -> Self {
+        NumOrExpr::Num(0.0)
+    }
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum Convention {
+    /// Craig: `RotX(alpha)·TransX(a)·RotZ(theta)·TransZ(d)`
+    Modified,
+    /// `RotZ(theta)·TransZ(d)·TransX(a)·RotX(alpha)`
+    Standard,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FileDesc {
+    name: String,
+    convention: Convention,
+    coordinates: Vec<String>,
+    gravity: Option<[NumOrExpr; 3]>,
+    #[serde(default)]
+    constants: BTreeMap<String, NumOrExpr>,
+    measured: Option<MeasuredDesc>,
+    frames: Vec<FrameDesc>,
+    #[serde(default)]
+    limits: Vec<LimitDesc>,
+    #[serde(default)]
+    bounds: GlobalBounds,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MeasuredDesc {
+    joints: Vec<String>,
+    coupling: Option<Vec<Vec<f64>>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FrameDesc {
+    name: String,
+    parent: String,
+    #[serde(default)]
+    a: NumOrExpr,
+    #[serde(default)]
+    alpha: NumOrExpr,
+    #[serde(default)]
+    d: NumOrExpr,
+    #[serde(default)]
+    theta: NumOrExpr,
+    #[serde(default)]
+    inertia: bool,
+    #[serde(default)]
+    friction: bool,
+    #[serde(default)]
+    motor_inertia: bool,
+    spring: Option<String>,
+    known_force: Option<KnownForceDesc>,
+    nominal: Option<Nominal>,
+    bounds: Option<FrameBounds>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct KnownForceDesc {
+    polynomial: Vec<f64>,
+    along: Option<String>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LimitDesc {
+    expr: String,
+    position: Option<[NumOrExpr; 2]>,
+    velocity: Option<[NumOrExpr; 2]>,
+    acceleration: Option<[NumOrExpr; 2]>,
+}
+
+/// Resolves constants that may refer to each other, in dependency order.
+fn resolve_constants(
+    file: &str,
+    raw: &BTreeMap<String, NumOrExpr>,
+    coordinates: &[String],
+) -> Result<Vec<(String, f64)>, ModelError> {
+    let mut known: Vec<(String, f64)> = vec![
+        ("pi".into(), std::f64::consts::PI),
+        ("deg".into(), std::f64::consts::PI / 180.0),
+    ];
+    for name in raw.keys() {
+        if name == "pi" || name == "deg" || coordinates.contains(name) {
+            return Err(ModelError::field(
+                file,
+                "constants",
+                name,
+                "this name is reserved (pi, deg or a coordinate name)",
+            ));
+        }
+    }
+    let mut pending: Vec<(&String, &NumOrExpr)> = raw.iter().collect();
+    while !pending.is_empty() {
+        let before = pending.len();
+        let mut last_err = None;
+        pending.retain(|(name, val)| {
+            let v = match val {
+                NumOrExpr::Num(x) => Ok(*x),
+                NumOrExpr::Expr(s) => {
+                    let scope = Scope {
+                        constants: &known,
+                        coordinates: &[],
+                    };
+                    Expr::parse(s, &scope).and_then(|e| e.constant_value(&[]))
+                }
+            };
+            match v {
+                Ok(x) => {
+                    known.push(((*name).clone(), x));
+                    false
+                }
+                Err(e) => {
+                    last_err = Some(((*name).clone(), e));
+                    true
+                }
+            }
+        });
+        if pending.len() == before {
+            let (name, e) = last_err.expect("a constant failed");
+            return Err(ModelError::field(file, "constants", &name, e.to_string()));
+        }
+    }
+    Ok(known)
+}
+
+struct Ctx<'a> {
+    file: &'a str,
+    constants: Vec<(String, f64)>,
+    coordinates: &'a [String],
+}
+
+impl Ctx<'_> {
+    fn scope(&self) -> Scope<'_> {
+        Scope {
+            constants: &self.constants,
+            coordinates: self.coordinates,
+        }
+    }
+
+    fn expr(&self, place: &str, field: &str, text: &str) -> Result<Expr, ModelError> {
+        Expr::parse(text, &self.scope())
+            .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))
+    }
+
+    fn number(&self, place: &str, field: &str, v: &NumOrExpr) -> Result<f64, ModelError> {
+        match v {
+            NumOrExpr::Num(x) => Ok(*x),
+            NumOrExpr::Expr(s) => self
+                .expr(place, field, s)?
+                .constant_value(self.coordinates)
+                .map_err(|e| ModelError::field(self.file, place, field, e.to_string())),
+        }
+    }
+
+    fn affine(&self, place: &str, field: &str, v: &NumOrExpr) -> Result<Affine, ModelError> {
+        match v {
+            NumOrExpr::Num(x) => Ok(Affine::constant(*x)),
+            NumOrExpr::Expr(s) => self
+                .expr(place, field, s)?
+                .affine(self.coordinates.len())
+                .map_err(|e| ModelError::field(self.file, place, field, e.to_string())),
+        }
+    }
+
+    fn range(
+        &self,
+        place: &str,
+        field: &str,
+        v: &Option<[NumOrExpr; 2]>,
+    ) -> Result<Option<[f64; 2]>, ModelError> {
+        let Some([lo, hi]) = v else { return Ok(None) };
+        let lo = self.number(place, field, lo)?;
+        let hi = self.number(place, field, hi)?;
+        if lo > hi {
+            return Err(ModelError::field(
+                self.file,
+                place,
+                field,
+                format!("lower bound {lo} is above upper bound {hi}"),
+            ));
+        }
+        Ok(Some([lo, hi]))
+    }
+}
+
+fn check_range(file: &str, place: &str, field: &str, r: Option<[f64; 2]>) -> Result<(), ModelError> {
+    if let Some([lo, hi]) = r {
+        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
+            return Err(ModelError::field(
+                file,
+                place,
+                field,
+                format!("invalid range [{lo}, {hi}]"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl Model {
+    /// Builds a model from description text; `file` names it in error messages.
+    pub fn from_toml_str(text: &str, file: &str) -> Result<Model, ModelError> {
+        let desc: FileDesc = toml::from_str(text).map_err(|e| ModelError::Syntax {
+            file: file.to_string(),
+            message: e.to_string(),
+        })?;
+        build(desc, file)
+    }
+}
+
+fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
+    let n = desc.coordinates.len();
+    if n == 0 {
+        return Err(ModelError::field(file, "top level", "coordinates", "no coordinate"));
+    }
+    for (i, c) in desc.coordinates.iter().enumerate() {
+        if desc.coordinates[..i].contains(c) {
+            return Err(ModelError::field(
+                file,
+                "top level",
+                "coordinates",
+                format!("`{c}` appears twice"),
+            ));
+        }
+    }
+    let constants = resolve_constants(file, &desc.constants, &desc.coordinates)?;
+    let ctx = Ctx {
+        file,
+        constants,
+        coordinates: &desc.coordinates,
+    };
+    let gravity = match &desc.gravity {
+        Some(g) => {
+            let mut v = Vector3::zeros();
+            for k in 0..3 {
+                v[k] = ctx.number("top level", "gravity", &g[k])?;
+            }
+            v
+        }
+        None => Vector3::new(0.0, 0.0, -9.81),
+    };
+
+    let mut names: Vec<String> = vec!["base".into()];
+    let mut frames = Vec::with_capacity(desc.frames.len());
+    let mut params: Vec<Param> = Vec::new();
+    for (i, fd) in desc.frames.iter().enumerate() {
+        let idx = i + 1;
+        let place = format!("frame {idx} ({})", fd.name);
+        if names.contains(&fd.name) {
+            return Err(ModelError::field(file, &place, "name", "duplicate frame name"));
+        }
+        let parent = names.iter().position(|n| *n == fd.parent).ok_or_else(|| {
+            ModelError::field(
+                file,
+                &place,
+                "parent",
+                format!("`{}` is not the base nor an earlier frame", fd.parent),
+            )
+        })?;
+        let a = ctx.number(&place, "a", &fd.a)?;
+        let alpha = ctx.number(&place, "alpha", &fd.alpha)?;
+        let theta = ctx.affine(&place, "theta", &fd.theta)?;
+        let d = ctx.affine(&place, "d", &fd.d)?;
+        if !theta.is_constant() && !d.is_constant() {
+            return Err(ModelError::field(
+                file,
+                &place,
+                "theta/d",
+                "only one of theta and d may depend on the coordinates",
+            ));
+        }
+        let kind = if !theta.is_constant() {
+            JointKind::Revolute
+        } else if !d.is_constant() {
+            JointKind::Prismatic
+        } else {
+            JointKind::Fixed
+        };
+        let (th0, d0) = (theta.offset, d.offset);
+        let (pre, post, value) = match (desc.convention, kind) {
+            (Convention::Modified, JointKind::Revolute) => (
+                Transform::rot_x(alpha).compose(&Transform::trans(a, 0.0, 0.0)),
+                Transform::trans(0.0, 0.0, d0),
+                theta,
+            ),
+            (Convention::Modified, JointKind::Prismatic) => (
+                Transform::rot_x(alpha)
+                    .compose(&Transform::trans(a, 0.0, 0.0))
+                    .compose(&Transform::rot_z(th0)),
+                Transform::identity(),
+                d,
+            ),
+            (Convention::Modified, JointKind::Fixed) => (
+                Transform::rot_x(alpha)
+                    .compose(&Transform::trans(a, 0.0, 0.0))
+                    .compose(&Transform::rot_z(th0))
+                    .compose(&Transform::trans(0.0, 0.0, d0)),
+                Transform::identity(),
+                Affine::constant(0.0),
+            ),
+            (Convention::Standard, JointKind::Revolute) => (
+                Transform::identity(),
+                Transform::trans(0.0, 0.0, d0)
+                    .compose(&Transform::trans(a, 0.0, 0.0))
+                    .compose(&Transform::rot_x(alpha)),
+                theta,
+            ),
+            (Convention::Standard, JointKind::Prismatic) => (
+                Transform::rot_z(th0),
+                Transform::trans(a, 0.0, 0.0).compose(&Transform::rot_x(alpha)),
+                d,
+            ),
+            (Convention::Standard, JointKind::Fixed) => (
+                Transform::rot_z(th0)
+                    .compose(&Transform::trans(0.0, 0.0, d0))
+                    .compose(&Transform::trans(a, 0.0, 0.0))
+                    .compose(&Transform::rot_x(alpha)),
+                Transform::identity(),
+                Affine::constant(0.0),
+            ),
+        };
+        let moving = kind != JointKind::Fixed;
+
+        let inertia = if fd.inertia {
+            let p0 = params.len();
+            for (k, suffix) in INERTIA_SUFFIXES.iter().enumerate() {
+                let name = match k {
+                    0..=5 => format!("L{idx}{suffix}"),
+                    6..=8 => format!("l{idx}{suffix}"),
+                    _ => format!("m{idx}"),
+                };
+                params.push(Param {
+                    name,
+                    kind: ParamKind::Inertia { index: k },
+                    frame: idx,
+                });
+            }
+            Some(p0)
+        } else {
+            None
+        };
+        let need_motion = |field: &str| -> Result<(), ModelError> {
+            if moving {
+                Ok(())
+            } else {
+                Err(ModelError::field(
+                    file,
+                    &place,
+                    field,
+                    "needs a moving frame (theta or d depending on the coordinates)",
+                ))
+            }
+        };
+        let friction = if fd.friction {
+            need_motion("friction")?;
+            let p0 = params.len();
+            for (kind, prefix) in [
+                (ParamKind::Coulomb, "Fc"),
+                (ParamKind::Viscous, "Fv"),
+                (ParamKind::Offset, "Fo"),
+            ] {
+                params.push(Param {
+                    name: format!("{prefix}{idx}"),
+                    kind,
+                    frame: idx,
+                });
+            }
+            Some(Friction { param: p0 })
+        } else {
+            None
+        };
+        let motor_inertia = if fd.motor_inertia {
+            need_motion("motor_inertia")?;
+            if value.terms.len() != 1 {
+                return Err(ModelError::field(
+                    file,
+                    &place,
+                    "motor_inertia",
+                    "the joint value must depend on exactly one coordinate (c*q_k + const)",
+                ));
+            }
+            let (coordinate, ratio) = value.terms[0];
+            params.push(Param {
+                name: format!("Ia{idx}"),
+                kind: ParamKind::MotorInertia,
+                frame: idx,
+            });
+            Some(MotorInertia {
+                param: params.len() - 1,
+                coordinate,
+                ratio,
+            })
+        } else {
+            None
+        };
+        let spring = match &fd.spring {
+            Some(text) => {
+                need_motion("spring")?;
+                let deflection = ctx.expr(&place, "spring", text)?;
+                params.push(Param {
+                    name: format!("K{idx}"),
+                    kind: ParamKind::Spring,
+                    frame: idx,
+                });
+                Some(Spring {
+                    param: params.len() - 1,
+                    deflection,
+                })
+            }
+            None => None,
+        };
+        let known_force = match &fd.known_force {
+            Some(kf) => {
+                let along = match &kf.along {
+                    Some(text) => ctx
+                        .expr(&place, "known_force.along", text)?
+                        .affine(n)
+                        .map_err(|e: ExprError| {
+                            ModelError::field(file, &place, "known_force.along", e.to_string())
+                        })?,
+                    None => {
+                        need_motion("known_force")?;
+                        value.clone()
+                    }
+                };
+                if kf.polynomial.is_empty() || kf.polynomial.iter().any(|c| !c.is_finite()) {
+                    return Err(ModelError::field(
+                        file,
+                        &place,
+                        "known_force.polynomial",
+                        "needs at least one finite coefficient",
+                    ));
+                }
+                Some(KnownForce {
+                    along,
+                    polynomial: kf.polynomial.clone(),
+                })
+            }
+            None => None,
+        };
+        let bounds = fd.bounds.clone().unwrap_or_default();
+        if (bounds.mass.is_some() || bounds.com.is_some()) && inertia.is_none() {
+            return Err(ModelError::field(
+                file,
+                &place,
+                "bounds",
+                "mass/com bounds on a frame without link inertia",
+            ));
+        }
+        check_range(file, &place, "bounds.mass", bounds.mass)?;
+        check_range(file, &place, "bounds.spring", bounds.spring)?;
+        if let Some(com) = bounds.com {
+            for r in com {
+                check_range(file, &place, "bounds.com", Some(r))?;
+            }
+        }
+        frames.push(Frame {
+            name: fd.name.clone(),
+            parent,
+            kind,
+            value,
+            pre,
+            post,
+            inertia,
+            friction,
+            motor_inertia,
+            spring,
+            known_force,
+            nominal: fd.nominal.clone().unwrap_or_default(),
+            bounds,
+        });
+        names.push(fd.name.clone());
+    }
+    if params.is_empty() {
+        return Err(ModelError::field(file, "frames", "", "the model has no parameter"));
+    }
+
+    let measured = match &desc.measured {
+        Some(m) => {
+            if m.joints.len() != n {
+                return Err(ModelError::field(
+                    file,
+                    "measured",
+                    "joints",
+                    format!("{} names for {n} coordinates", m.joints.len()),
+                ));
+            }
+            let coupling = match &m.coupling {
+                Some(rows) => {
+                    if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+                        return Err(ModelError::field(
+                            file,
+                            "measured",
+                            "coupling",
+                            format!("must be {n} rows of {n} numbers"),
+                        ));
+                    }
+                    DMatrix::from_fn(n, n, |r, c| rows[r][c])
+                }
+                None => DMatrix::identity(n, n),
+            };
+            if coupling.clone().try_inverse().is_none() {
+                return Err(ModelError::field(
+                    file,
+                    "measured",
+                    "coupling",
+                    "the matrix is singular",
+                ));
+            }
+            Measured {
+                joints: m.joints.clone(),
+                coupling,
+            }
+        }
+        None => Measured {
+            joints: desc.coordinates.clone(),
+            coupling: DMatrix::identity(n, n),
+        },
+    };
+
+    let mut limits = Vec::new();
+    for (i, ld) in desc.limits.iter().enumerate() {
+        let place = format!("limits[{i}] ({})", ld.expr);
+        let expr = ctx.affine(&place, "expr", &NumOrExpr::Expr(ld.expr.clone()))?;
+        limits.push(Limit {
+            label: ld.expr.clone(),
+            expr,
+            position: ctx.range(&place, "position", &ld.position)?,
+            velocity: ctx.range(&place, "velocity", &ld.velocity)?,
+            acceleration: ctx.range(&place, "acceleration", &ld.acceleration)?,
+        });
+    }
+
+    let coordinate_is_length = (0..n)
+        .map(|k| {
+            frames
+                .iter()
+                .any(|f| f.kind == JointKind::Prismatic && f.value.terms.iter().any(|t| t.0 == k))
+        })
+        .collect();
+    Ok(Model {
+        name: desc.name,
+        source: file.to_string(),
+        coordinates: desc.coordinates,
+        coordinate_is_length,
+        frames,
+        gravity,
+        measured,
+        limits,
+        bounds: desc.bounds,
+        params,
+        links: Vec::new(),
+        subtree_links: Vec::new(),
+        motion: Vec::new(),
+        fixed: Vec::new(),
+    }
+    .finish())
+}

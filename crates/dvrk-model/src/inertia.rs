@@ -1,0 +1,125 @@
+//! Conversions between the barycentric link parameters used by the regressor and the
+//! standard (centre-of-mass) form people read, and the pseudo-inertia matrix whose
+//! positive definiteness is the physical-consistency condition.
+
+use nalgebra::{Matrix3, Matrix4, Vector3};
+
+fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
+    Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
+}
+
+fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
+    [m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(1, 1)], m[(1, 2)], m[(2, 2)]]
+}
+
+/// Symmetric 3x3 matrix from `[xx, xy, xz, yy, yz, zz]`.
+pub fn sym3(v: &[f64]) -> Matrix3<f64> {
+    Matrix3::new(v[0], v[1], v[2], v[1], v[3], v[4], v[2], v[4], v[5])
+}
+
+/// Barycentric `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]` (inertia about the frame
+/// origin, first moment `m·c`) from mass (kg), centre of mass `c` (m) and inertia about
+/// the centre of mass `[xx, xy, xz, yy, yz, zz]` (kg·m²), all in the frame's axes.
+pub fn barycentric_from_standard(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> [f64; 10] {
+    let c = Vector3::from(com);
+    let s = skew(&c);
+    let l = sym3(&inertia_com) + mass * s.transpose() * s;
+    let s6 = sym6(&l);
+    [
+        s6[0],
+        s6[1],
+        s6[2],
+        s6[3],
+        s6[4],
+        s6[5],
+        mass * c[0],
+        mass * c[1],
+        mass * c[2],
+        mass,
+    ]
+}
+
+/// Standard parameters of one link.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct StandardInertia {
+    /// kg
+    pub mass: f64,
+    /// centre of mass in the link frame (m); zero when the mass is not positive
+    pub com: [f64; 3],
+    /// inertia about the centre of mass, link-frame axes `[xx, xy, xz, yy, yz, zz]` (kg·m²)
+    pub inertia_com: [f64; 6],
+}
+
+/// Inverse of [`barycentric_from_standard`].
+pub fn standard_from_barycentric(p: &[f64]) -> StandardInertia {
+    let m = p[9];
+    let c = if m > 0.0 {
+        Vector3::new(p[6], p[7], p[8]) / m
+    } else {
+        Vector3::zeros()
+    };
+    let s = skew(&c);
+    let ic = sym3(&p[0..6]) - m * s.transpose() * s;
+    StandardInertia {
+        mass: m,
+        com: [c[0], c[1], c[2]],
+        inertia_com: sym6(&ic),
+    }
+}
+
+/// The 4x4 pseudo-inertia `J = [[tr(L)/2·I − L, l], [lᵀ, m]]` of barycentric parameters.
+/// `J ≻ 0` iff the parameters are those of a rigid body with positive mass density.
+pub fn pseudo_inertia(p: &[f64]) -> Matrix4<f64> {
+    let l = sym3(&p[0..6]);
+    let sigma = 0.5 * l.trace() * Matrix3::identity() - l;
+    let mut j = Matrix4::zeros();
+    j.fixed_view_mut::<3, 3>(0, 0).copy_from(&sigma);
+    for k in 0..3 {
+        j[(k, 3)] = p[6 + k];
+        j[(3, k)] = p[6 + k];
+    }
+    j[(3, 3)] = p[9];
+    j
+}
+
+/// Smallest eigenvalue of the pseudo-inertia (kg·m²); positive means consistent.
+pub fn pseudo_inertia_min_eigenvalue(p: &[f64]) -> f64 {
+    pseudo_inertia(p).symmetric_eigenvalues().min()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_parallel_axis() {
+        let b = barycentric_from_standard(2.0, [0.1, -0.2, 0.3], [1.0, 0.4, 0.5, 2.0, 0.6, 3.0]);
+        // Pinocchio's Inertia(m=2, c=[.1,-.2,.3], I_C).toDynamicParameters() gives
+        // Ixx = 1 + 2*(0.04+0.09) = 1.26, Ixy = 0.4 - 2*(0.1*-0.2) = 0.44.
+        assert!((b[0] - 1.26).abs() < 1e-15);
+        assert!((b[1] - 0.44).abs() < 1e-15);
+        assert!((b[2] - (0.5 - 2.0 * 0.1 * 0.3)).abs() < 1e-15);
+        let s = standard_from_barycentric(&b);
+        assert!((s.mass - 2.0).abs() < 1e-15);
+        for (x, y) in s.com.iter().zip([0.1, -0.2, 0.3]) {
+            assert!((x - y).abs() < 1e-15);
+        }
+        for (x, y) in s.inertia_com.iter().zip([1.0, 0.4, 0.5, 2.0, 0.6, 3.0]) {
+            assert!((x - y).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn pseudo_inertia_detects_triangle_violation() {
+        // A solid box is consistent.
+        let (m, a, b, c) = (1.0, 0.1, 0.2, 0.3);
+        let ixx = m * (b * b + c * c) / 12.0;
+        let iyy = m * (a * a + c * c) / 12.0;
+        let izz = m * (a * a + b * b) / 12.0;
+        let p = barycentric_from_standard(m, [0.0; 3], [ixx, 0.0, 0.0, iyy, 0.0, izz]);
+        assert!(pseudo_inertia_min_eigenvalue(&p) > 0.0);
+        // Izz > Ixx + Iyy violates the triangle inequality: no density realizes it.
+        let p = barycentric_from_standard(m, [0.0; 3], [ixx, 0.0, 0.0, iyy, 0.0, ixx + iyy + 0.01]);
+        assert!(pseudo_inertia_min_eigenvalue(&p) < 0.0);
+    }
+}

@@ -1,0 +1,114 @@
+//! Forward kinematics on the coupled tree: joint values from coordinates, frame poses,
+//! and frame-origin Jacobians.
+
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+use crate::model::{JointKind, Model, Transform};
+use crate::workspace::Workspace;
+
+impl Model {
+    /// Joint values, rates and accelerations of every frame: `s = A q + b`, `ṡ = A q̇`,
+    /// `s̈ = A q̈` (A is constant, which is what makes closed chains cheap).
+    #[inline]
+    pub(crate) fn joint_values(&self, ws: &mut Workspace, q: &[f64], dq: &[f64], ddq: &[f64]) {
+        for (i, f) in self.frames.iter().enumerate() {
+            ws.s[i + 1] = f.value.eval(q);
+            ws.sd[i + 1] = f.value.dot(dq);
+            ws.sdd[i + 1] = f.value.dot(ddq);
+        }
+    }
+
+    /// Parent → frame transforms from the joint values in `ws.s`.
+    #[inline]
+    pub(crate) fn local_transforms(&self, ws: &mut Workspace) {
+        for (i, f) in self.frames.iter().enumerate() {
+            let fi = i + 1;
+            ws.local[fi] = match f.kind {
+                JointKind::Fixed => self.fixed[fi],
+                JointKind::Revolute => {
+                    let (sn, cs) = ws.s[fi].sin_cos();
+                    let r = &f.pre.rotation;
+                    // pre.rotation · Rz(s): mix the first two columns.
+                    let c0 = r.column(0) * cs + r.column(1) * sn;
+                    let c1 = r.column(1) * cs - r.column(0) * sn;
+                    let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
+                    Transform {
+                        rotation: rz * f.post.rotation,
+                        translation: f.pre.translation + rz * f.post.translation,
+                    }
+                }
+                JointKind::Prismatic => {
+                    let r = &f.pre.rotation;
+                    let shift = Vector3::new(0.0, 0.0, ws.s[fi]) + f.post.translation;
+                    Transform {
+                        rotation: r * f.post.rotation,
+                        translation: f.pre.translation + r * shift,
+                    }
+                }
+            };
+        }
+    }
+
+    /// Poses of every frame in the base frame, in `ws` (read them with
+    /// [`Workspace::pose`]).
+    ///
+    /// ```
+    /// # use dvrk_model::{Model, Workspace};
+    /// let model = Model::builtin("mtm").unwrap();
+    /// let mut ws = Workspace::new(&model);
+    /// model.forward_kinematics(&mut ws, &[0.0; 7]);
+    /// // Frame 1 (top panel) sits l_b2p = 0.2154 m below the base origin.
+    /// assert!((ws.pose(1).translation.z + 0.2154).abs() < 1e-12);
+    /// ```
+    pub fn forward_kinematics(&self, ws: &mut Workspace, q: &[f64]) {
+        ws.check(self);
+        assert_eq!(q.len(), self.dof(), "q has the wrong length");
+        for (i, f) in self.frames.iter().enumerate() {
+            ws.s[i + 1] = f.value.eval(q);
+        }
+        self.local_transforms(ws);
+        self.world_transforms(ws);
+    }
+
+    #[inline]
+    pub(crate) fn world_transforms(&self, ws: &mut Workspace) {
+        for (i, f) in self.frames.iter().enumerate() {
+            let fi = i + 1;
+            ws.world[fi] = ws.world[f.parent].compose(&ws.local[fi]);
+        }
+    }
+
+    /// Poses of all frames (base first) as 4x4 homogeneous matrices; allocates.
+    pub fn frame_poses(&self, q: &[f64]) -> Vec<Transform> {
+        let mut ws = Workspace::new(self);
+        self.forward_kinematics(&mut ws, q);
+        ws.world.clone()
+    }
+
+    /// Jacobian of frame `frame`'s origin, 6×n: rows 0..3 the linear velocity of the
+    /// origin (m/s), rows 3..6 the angular velocity (rad/s), both in the base frame, per
+    /// unit coordinate rate. Call after [`Model::forward_kinematics`] at the same q.
+    pub fn frame_jacobian(&self, ws: &Workspace, frame: usize) -> DMatrix<f64> {
+        let mut jac = DMatrix::zeros(6, self.dof());
+        let p = ws.world[frame].translation;
+        let mut k = frame;
+        while k != 0 {
+            let f = &self.frames[k - 1];
+            if f.kind != JointKind::Fixed {
+                let (sw, sv) = &self.motion[k];
+                let pose = &ws.world[k];
+                let w0 = pose.rotation * sw;
+                // Velocity of the point at `p` for a unit rate of joint k.
+                let v0 = pose.rotation * sv + w0.cross(&(p - pose.translation));
+                for &(c, a) in &f.value.terms {
+                    for r in 0..3 {
+                        jac[(r, c)] += a * v0[r];
+                        jac[(r + 3, c)] += a * w0[r];
+                    }
+                }
+            }
+            k = f.parent;
+        }
+        jac
+    }
+}

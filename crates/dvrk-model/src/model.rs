@@ -1,0 +1,433 @@
+//! The immutable model: a tree of frames whose joint values are affine in the
+//! generalized coordinates, with per-frame elements and the parameter layout.
+//!
+//! It is built once (from a description file or a URDF) and shared read-only; every
+//! per-sample algorithm takes it by reference together with a mutable
+//! [`Workspace`](crate::Workspace).
+
+use nalgebra::{DMatrix, Matrix3, Vector3};
+
+use crate::expr::{Affine, Expr};
+
+/// How a frame moves relative to its parent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum JointKind {
+    /// Rotation about the joint axis by the joint value (rad).
+    Revolute,
+    /// Translation along the joint axis by the joint value (m).
+    Prismatic,
+    /// No motion: the frame is rigidly attached to its parent.
+    Fixed,
+}
+
+/// A rigid transform: `x_parent = rotation · x_child + translation`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Transform {
+    pub rotation: Matrix3<f64>,
+    /// m
+    pub translation: Vector3<f64>,
+}
+
+impl Transform {
+    pub fn identity() -> Self {
+        Transform {
+            rotation: Matrix3::identity(),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    pub fn rot_x(angle: f64) -> Self {
+        let (s, c) = angle.sin_cos();
+        Transform {
+            rotation: Matrix3::new(1.0, 0.0, 0.0, 0.0, c, -s, 0.0, s, c),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    pub fn rot_z(angle: f64) -> Self {
+        let (s, c) = angle.sin_cos();
+        Transform {
+            rotation: Matrix3::new(c, -s, 0.0, s, c, 0.0, 0.0, 0.0, 1.0),
+            translation: Vector3::zeros(),
+        }
+    }
+
+    pub fn trans(x: f64, y: f64, z: f64) -> Self {
+        Transform {
+            rotation: Matrix3::identity(),
+            translation: Vector3::new(x, y, z),
+        }
+    }
+
+    /// `self · other`.
+    #[inline]
+    pub fn compose(&self, other: &Transform) -> Transform {
+        Transform {
+            rotation: self.rotation * other.rotation,
+            translation: self.translation + self.rotation * other.translation,
+        }
+    }
+
+    pub fn inverse(&self) -> Transform {
+        let rt = self.rotation.transpose();
+        Transform {
+            rotation: rt,
+            translation: -(rt * self.translation),
+        }
+    }
+
+    /// 4x4 homogeneous matrix, row-major rows.
+    pub fn to_homogeneous(&self) -> [[f64; 4]; 4] {
+        let r = &self.rotation;
+        let t = &self.translation;
+        [
+            [r[(0, 0)], r[(0, 1)], r[(0, 2)], t[0]],
+            [r[(1, 0)], r[(1, 1)], r[(1, 2)], t[1]],
+            [r[(2, 0)], r[(2, 1)], r[(2, 2)], t[2]],
+            [0.0, 0.0, 0.0, 1.0],
+        ]
+    }
+}
+
+/// Coulomb, viscous and offset friction on a frame's joint value.
+#[derive(Clone, Debug)]
+pub struct Friction {
+    /// Index of `Fc` in the parameter vector; `Fv`, `Fo` follow.
+    pub param: usize,
+}
+
+/// A motor (rotor) inertia on a frame whose joint value is `ratio·q[coordinate] + const`.
+#[derive(Clone, Debug)]
+pub struct MotorInertia {
+    pub param: usize,
+    pub coordinate: usize,
+    pub ratio: f64,
+}
+
+/// A spring of stiffness `K` acting as `tau -= a·K·dl(q)` (the 2019 convention).
+#[derive(Clone, Debug)]
+pub struct Spring {
+    pub param: usize,
+    /// Deflection `dl(q)` (m or rad; may be nonlinear).
+    pub deflection: Expr,
+}
+
+/// A known generalized force `tau += grad(s)·p(s)`, `s` affine in q; p's coefficients
+/// are highest degree first (N·m or N).
+#[derive(Clone, Debug)]
+pub struct KnownForce {
+    pub along: Affine,
+    pub polynomial: Vec<f64>,
+}
+
+impl KnownForce {
+    /// The polynomial at the current coordinates (N·m or N along `s`).
+    #[inline]
+    pub fn value(&self, q: &[f64]) -> f64 {
+        let s = self.along.eval(q);
+        self.polynomial.iter().fold(0.0, |acc, &c| acc * s + c)
+    }
+}
+
+/// Prior (nominal) values of one frame's parameters, standard (centre-of-mass) form.
+#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Nominal {
+    /// kg
+    pub mass: Option<f64>,
+    /// centre of mass in the frame (m)
+    pub com: Option<[f64; 3]>,
+    /// inertia about the centre of mass, frame axes: xx, xy, xz, yy, yz, zz (kg·m²)
+    pub inertia: Option<[f64; 6]>,
+    pub fc: Option<f64>,
+    pub fv: Option<f64>,
+    pub fo: Option<f64>,
+    pub ia: Option<f64>,
+    pub k: Option<f64>,
+}
+
+/// Per-frame bounds for the physically consistent fit.
+#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FrameBounds {
+    /// kg
+    pub mass: Option<[f64; 2]>,
+    /// centre of mass box in the frame, per axis [min, max] (m)
+    pub com: Option<[[f64; 2]; 3]>,
+    pub fc_max: Option<f64>,
+    pub fv_max: Option<f64>,
+    pub fo_max: Option<f64>,
+    pub ia_max: Option<f64>,
+    pub spring: Option<[f64; 2]>,
+}
+
+/// Lower bounds applied to every element by the physically consistent fit.
+#[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct GlobalBounds {
+    pub fc_min: f64,
+    pub fv_min: f64,
+    pub ia_min: f64,
+    /// `J ⪰ eps·I` for every link pseudo-inertia (kg·m²)
+    pub pseudo_inertia_eps: f64,
+}
+
+impl Default for GlobalBounds {
+    fn default() -> Self {
+        GlobalBounds {
+            fc_min: 0.001,
+            fv_min: 0.001,
+            ia_min: 0.001,
+            pseudo_inertia_eps: 1e-6,
+        }
+    }
+}
+
+/// A limit on an affine combination of coordinates (excitation or joint limit).
+#[derive(Clone, Debug)]
+pub struct Limit {
+    /// The source text (e.g. `1.2177*(q7 - q6)`), for messages.
+    pub label: String,
+    pub expr: Affine,
+    /// rad or m
+    pub position: Option<[f64; 2]>,
+    /// rad/s or m/s
+    pub velocity: Option<[f64; 2]>,
+    /// rad/s² or m/s²
+    pub acceleration: Option<[f64; 2]>,
+}
+
+/// One frame of the tree (frame index = position in [`Model::frames`] + 1; 0 is the base).
+#[derive(Clone, Debug)]
+pub struct Frame {
+    pub name: String,
+    /// Parent frame index (0 = base); always smaller than this frame's index.
+    pub parent: usize,
+    pub kind: JointKind,
+    /// Joint value `s = a·q + b` (rad or m); constant for fixed frames.
+    pub value: Affine,
+    /// Transform parent → joint frame (before the motion).
+    pub pre: Transform,
+    /// Transform joint frame after the motion → this frame. The joint moves along/about
+    /// the z axis of the joint frame.
+    pub post: Transform,
+    /// Parameter index of `L{i}xx` when the frame carries a rigid link.
+    pub inertia: Option<usize>,
+    pub friction: Option<Friction>,
+    pub motor_inertia: Option<MotorInertia>,
+    pub spring: Option<Spring>,
+    pub known_force: Option<KnownForce>,
+    pub nominal: Nominal,
+    pub bounds: FrameBounds,
+}
+
+/// The measured (e.g. dVRK/ROS) joint space.
+#[derive(Clone, Debug)]
+pub struct Measured {
+    /// Measured joint names, one per coordinate, in measured order.
+    pub joints: Vec<String>,
+    /// `q_measured = M · q_model`, n×n.
+    pub coupling: DMatrix<f64>,
+}
+
+/// The kind of a parameter, for estimators that treat them differently (bounds, LMIs).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ParamKind {
+    /// One of the 10 barycentric link parameters; `index` 0..10 in
+    /// `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
+    Inertia { index: usize },
+    Coulomb,
+    Viscous,
+    Offset,
+    MotorInertia,
+    Spring,
+}
+
+/// Name, kind and owning frame of one parameter.
+#[derive(Clone, Debug)]
+pub struct Param {
+    pub name: String,
+    pub kind: ParamKind,
+    /// Frame index (1-based, base = 0).
+    pub frame: usize,
+}
+
+/// Suffixes of the 10 barycentric parameters, in order.
+pub const INERTIA_SUFFIXES: [&str; 10] = ["xx", "xy", "xz", "yy", "yz", "zz", "x", "y", "z", ""];
+
+/// The robot model. Build with [`Model::load`], [`Model::builtin`],
+/// [`Model::from_toml_str`] or [`Model::from_urdf_str`].
+#[derive(Clone, Debug)]
+pub struct Model {
+    pub name: String,
+    /// Where the model came from (file path or `builtin:psm`), for error messages.
+    pub source: String,
+    /// Generalized coordinate names, in order.
+    pub coordinates: Vec<String>,
+    /// Whether each coordinate is a length (m) rather than an angle (rad).
+    pub coordinate_is_length: Vec<bool>,
+    pub frames: Vec<Frame>,
+    /// Gravity in the base frame (m/s²).
+    pub gravity: Vector3<f64>,
+    pub measured: Measured,
+    pub limits: Vec<Limit>,
+    pub bounds: GlobalBounds,
+    pub params: Vec<Param>,
+    // Derived, for the per-sample algorithms.
+    /// Frames (1-based) carrying link inertia, in order.
+    pub(crate) links: Vec<usize>,
+    /// For each frame index (0..=N), the link frames in its subtree (itself included).
+    pub(crate) subtree_links: Vec<Vec<usize>>,
+    /// Motion subspace of each frame in its own coordinates: `[ω; v]` for unit joint rate.
+    pub(crate) motion: Vec<(Vector3<f64>, Vector3<f64>)>,
+    /// Transform parent → frame for fixed frames (precomputed).
+    pub(crate) fixed: Vec<Transform>,
+}
+
+impl Model {
+    /// Number of generalized coordinates.
+    pub fn dof(&self) -> usize {
+        self.coordinates.len()
+    }
+
+    /// Number of parameters (columns of the full regressor).
+    pub fn n_params(&self) -> usize {
+        self.params.len()
+    }
+
+    /// Parameter names in column order (2019 convention: `L1xx`, ..., `m1`, `Fc1`, ...).
+    pub fn param_names(&self) -> Vec<String> {
+        self.params.iter().map(|p| p.name.clone()).collect()
+    }
+
+    /// Index of a parameter by name.
+    pub fn param_index(&self, name: &str) -> Option<usize> {
+        self.params.iter().position(|p| p.name == name)
+    }
+
+    /// Frame by index (1-based; the base has no [`Frame`]).
+    pub fn frame(&self, index: usize) -> &Frame {
+        &self.frames[index - 1]
+    }
+
+    /// Frame indices that carry link inertia.
+    pub fn link_frames(&self) -> &[usize] {
+        &self.links
+    }
+
+    /// Frame names with the base first, indexed like frame indices.
+    pub fn frame_names(&self) -> Vec<String> {
+        std::iter::once("base".to_string())
+            .chain(self.frames.iter().map(|f| f.name.clone()))
+            .collect()
+    }
+
+    /// The constraint Jacobian `A` (N×n, one row per frame, base excluded): `ṡ = A·q̇`.
+    pub fn constraint_jacobian(&self) -> DMatrix<f64> {
+        let n = self.dof();
+        let mut a = DMatrix::zeros(self.frames.len(), n);
+        for (i, f) in self.frames.iter().enumerate() {
+            if f.kind != JointKind::Fixed {
+                for &(k, c) in &f.value.terms {
+                    a[(i, k)] = c;
+                }
+            }
+        }
+        a
+    }
+
+    /// The nominal parameter vector from the description's `nominal` entries; `None` if
+    /// any parameter has no nominal value.
+    pub fn nominal_parameters(&self) -> Option<Vec<f64>> {
+        let mut pi = vec![f64::NAN; self.n_params()];
+        for f in &self.frames {
+            let nom = &f.nominal;
+            if let Some(p0) = f.inertia {
+                let m = nom.mass?;
+                let c = nom.com.unwrap_or([0.0; 3]);
+                let ic = nom.inertia.unwrap_or([0.0; 6]);
+                let bary = crate::inertia::barycentric_from_standard(m, c, ic);
+                pi[p0..p0 + 10].copy_from_slice(&bary);
+            }
+            if let Some(fr) = &f.friction {
+                pi[fr.param] = nom.fc.unwrap_or(0.0);
+                pi[fr.param + 1] = nom.fv.unwrap_or(0.0);
+                pi[fr.param + 2] = nom.fo.unwrap_or(0.0);
+            }
+            if let Some(mi) = &f.motor_inertia {
+                pi[mi.param] = nom.ia?;
+            }
+            if let Some(sp) = &f.spring {
+                pi[sp.param] = nom.k?;
+            }
+        }
+        Some(pi)
+    }
+
+    /// Known generalized forces (e.g. a cable) at `q`, added into `tau` (N·m or N).
+    pub fn add_known_forces(&self, q: &[f64], tau: &mut [f64]) {
+        for f in &self.frames {
+            if let Some(kf) = &f.known_force {
+                let v = kf.value(q);
+                for &(k, c) in &kf.along.terms {
+                    tau[k] += c * v;
+                }
+            }
+        }
+    }
+
+    /// True if the model has known forces to subtract before fitting.
+    pub fn has_known_forces(&self) -> bool {
+        self.frames.iter().any(|f| f.known_force.is_some())
+    }
+
+    /// Maps measured joint positions to model coordinates: `q = M⁻¹ q_measured`.
+    pub fn measured_to_model_matrix(&self) -> Option<DMatrix<f64>> {
+        self.measured.coupling.clone().try_inverse()
+    }
+
+    /// Derives the per-sample lookup tables; called by every constructor.
+    pub(crate) fn finish(mut self) -> Self {
+        let n_frames = self.frames.len();
+        self.links = (1..=n_frames)
+            .filter(|&i| self.frames[i - 1].inertia.is_some())
+            .collect();
+        let mut subtree = vec![Vec::new(); n_frames + 1];
+        for &j in &self.links {
+            let mut k = j;
+            loop {
+                subtree[k].push(j);
+                if k == 0 {
+                    break;
+                }
+                k = self.frames[k - 1].parent;
+            }
+        }
+        self.subtree_links = subtree;
+        self.motion = std::iter::once((Vector3::zeros(), Vector3::zeros()))
+            .chain(self.frames.iter().map(|f| {
+                // Body coordinates of the unit joint twist about/along z of the joint
+                // frame: rotate by post⁻¹ and move the reference point to the origin.
+                let rt = f.post.rotation.transpose();
+                let z = Vector3::z();
+                match f.kind {
+                    JointKind::Revolute => (rt * z, rt * z.cross(&f.post.translation)),
+                    JointKind::Prismatic => (Vector3::zeros(), rt * z),
+                    JointKind::Fixed => (Vector3::zeros(), Vector3::zeros()),
+                }
+            }))
+            .collect();
+        self.fixed = std::iter::once(Transform::identity())
+            .chain(self.frames.iter().map(|f| {
+                let s = f.value.offset;
+                let joint = match f.kind {
+                    JointKind::Revolute => Transform::rot_z(s),
+                    JointKind::Prismatic => Transform::trans(0.0, 0.0, s),
+                    JointKind::Fixed => Transform::identity(),
+                };
+                f.pre.compose(&joint).compose(&f.post)
+            }))
+            .collect();
+        self
+    }
+}
