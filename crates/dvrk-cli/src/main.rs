@@ -1,1 +1,44 @@
-fn main() {}
+//! `dvrk-ident`: the command-line front of the dvrk-ident crates. Each subcommand lives in
+//! its own module under `cmd/`, parses its flags, calls the libraries and prints; no
+//! algorithm lives here.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod cmd;
+
+#[derive(Parser)]
+#[command(name = "dvrk-ident", version, about = "Dynamic identification of robot arms (dVRK PSM/MTM, DH tables, URDF)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Summarize a robot model, or evaluate its regressor or inverse dynamics.
+    Model(cmd::model::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Model(args) => cmd::model::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if is_broken_pipe(&e) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("dvrk-ident: error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}

@@ -36,10 +36,12 @@ pub mod inertia;
 mod kinematics;
 mod model;
 mod regressor;
+mod summary;
 mod urdf;
 mod workspace;
 
 pub use base::BaseParameters;
+pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use description::Convention;
 pub use dynamics::sign0;
 pub use error::ModelError;

@@ -431,3 +431,53 @@ impl Model {
         self
     }
 }
+
+impl Model {
+    /// A parameter vector from values by name (e.g. a result file's `parameters`).
+    /// Every parameter of the model must be present; unknown names are an error too,
+    /// since they usually mean the values belong to another robot.
+    pub fn params_from_named<'a>(
+        &self,
+        values: impl IntoIterator<Item = (&'a str, f64)>,
+        source: &str,
+    ) -> Result<Vec<f64>, crate::ModelError> {
+        let mut pi = vec![f64::NAN; self.n_params()];
+        let mut unknown = Vec::new();
+        for (name, v) in values {
+            match self.param_index(name) {
+                Some(k) => pi[k] = v,
+                None => unknown.push(name.to_string()),
+            }
+        }
+        let missing: Vec<&str> = self
+            .params
+            .iter()
+            .zip(&pi)
+            .filter(|(_, v)| v.is_nan())
+            .map(|(p, _)| p.name.as_str())
+            .collect();
+        if !unknown.is_empty() || !missing.is_empty() {
+            let mut msg = String::new();
+            if !missing.is_empty() {
+                msg += &format!("missing parameters: {}", missing.join(", "));
+            }
+            if !unknown.is_empty() {
+                if !msg.is_empty() {
+                    msg += "; ";
+                }
+                msg += &format!("parameters not in model {}: {}", self.name, unknown.join(", "));
+            }
+            return Err(crate::ModelError::Syntax {
+                file: source.to_string(),
+                message: msg,
+            });
+        }
+        if let Some((p, v)) = self.params.iter().zip(&pi).find(|(_, v)| !v.is_finite()) {
+            return Err(crate::ModelError::Syntax {
+                file: source.to_string(),
+                message: format!("parameter {} is not finite ({v})", p.name),
+            });
+        }
+        Ok(pi)
+    }
+}

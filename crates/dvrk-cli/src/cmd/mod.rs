@@ -1,0 +1,58 @@
+//! One module per subcommand, plus the few conversions they share.
+
+pub mod model;
+
+use anyhow::{bail, Context, Result};
+
+/// Writes `text` and a newline to stdout. A closed pipe (`dvrk-ident ... | head`) is
+/// reported as an I/O error that `main` treats as a normal end, not a panic.
+pub fn emit(text: &str) -> Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_all(text.as_bytes())?;
+    if !text.ends_with('\n') {
+        out.write_all(b"\n")?;
+    }
+    out.flush()?;
+    Ok(())
+}
+
+/// Parses a comma-separated list of numbers such as `0.1,-0.2,0.3` of length `n`.
+pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|t| {
+            t.trim()
+                .parse::<f64>()
+                .with_context(|| format!("{flag}: `{t}` is not a number"))
+        })
+        .collect::<Result<_>>()?;
+    if v.len() != n {
+        bail!("{flag}: expected {n} comma-separated values, got {}", v.len());
+    }
+    if let Some(x) = v.iter().find(|x| !x.is_finite()) {
+        bail!("{flag}: value {x} is not finite");
+    }
+    Ok(v)
+}
+
+/// Reads a parameter file: a JSON object `{"parameters": {name: value, ...}}` (a result
+/// file) or a plain `{name: value}` object.
+pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
+    let doc: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{path}: not valid JSON"))?;
+    let map = doc
+        .get("parameters")
+        .unwrap_or(&doc)
+        .as_object()
+        .with_context(|| format!("{path}: expected an object of parameter values"))?;
+    let mut values = Vec::with_capacity(map.len());
+    for (k, v) in map {
+        let x = v
+            .as_f64()
+            .with_context(|| format!("{path}: parameter {k} is not a number"))?;
+        values.push((k.as_str(), x));
+    }
+    Ok(model.params_from_named(values, path)?)
+}

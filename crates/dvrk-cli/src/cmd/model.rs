@@ -1,0 +1,127 @@
+//! `dvrk-ident model ROBOT`: summary, regressor and inverse dynamics of a model.
+
+use anyhow::{bail, Context, Result};
+use dvrk_model::{Model, Workspace};
+use serde_json::json;
+
+use std::fmt::Write as _;
+
+use super::{emit, parse_vector, read_params};
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Built-in robot (psm, psm_simplified, mtm) or a path to a .toml description or .urdf
+    pub robot: String,
+    /// Print JSON instead of text
+    #[arg(long)]
+    pub json: bool,
+    /// Print the regressor at --q/--dq/--ddq as JSON {"parameters": [...], "rows": [...]}
+    #[arg(long, conflicts_with = "torque")]
+    pub regressor: bool,
+    /// With --regressor: the base regressor (columns = base parameters)
+    #[arg(long, requires = "regressor")]
+    pub base: bool,
+    /// Print the inverse-dynamics torque at --q/--dq/--ddq as JSON {"tau": [...]}
+    #[arg(long)]
+    pub torque: bool,
+    /// Coordinates (rad, m), comma-separated, model order
+    #[arg(long, allow_hyphen_values = true)]
+    pub q: Option<String>,
+    /// Velocities (rad/s, m/s); zeros if omitted
+    #[arg(long, allow_hyphen_values = true)]
+    pub dq: Option<String>,
+    /// Accelerations (rad/s², m/s²); zeros if omitted
+    #[arg(long, allow_hyphen_values = true)]
+    pub ddq: Option<String>,
+    /// Parameter file for --torque (JSON {name: value} or a result file); default: the
+    /// description's nominal parameters
+    #[arg(long)]
+    pub params: Option<String>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let model = Model::load(&args.robot)?;
+    if args.regressor || args.torque {
+        return evaluate(&model, &args);
+    }
+    let base = model
+        .base_parameters()
+        .with_context(|| format!("{}: base parameters", args.robot))?;
+    let summary = model.summary(&base);
+    if args.json {
+        return emit(&serde_json::to_string_pretty(&summary)?);
+    }
+    let mut out = String::new();
+    writeln!(out, "robot {} ({})", summary.name, summary.source)?;
+    writeln!(
+        out,
+        "{} coordinates: {}",
+        summary.coordinates.len(),
+        summary.coordinates.join(" ")
+    )?;
+    writeln!(out, "measured joints: {}", summary.measured_joints.join(" "))?;
+    writeln!(out, "{} frames:", summary.frames.len())?;
+    for f in &summary.frames {
+        writeln!(
+            out,
+            "  {:>2} {:<28} parent {:>2}  {:<9} {:<36} {}",
+            f.index,
+            f.name,
+            f.parent,
+            f.joint,
+            f.value,
+            f.elements.join(",")
+        )?;
+    }
+    writeln!(
+        out,
+        "{} parameters: {}",
+        summary.parameters.len(),
+        summary.parameters.join(" ")
+    )?;
+    writeln!(out, "{} base parameters:", summary.base_parameters.len())?;
+    for (i, e) in summary.base_parameters.iter().enumerate() {
+        writeln!(out, "  {:>3} {e}", i + 1)?;
+    }
+    emit(&out)
+}
+
+fn evaluate(model: &Model, args: &Args) -> Result<()> {
+    let n = model.dof();
+    let Some(q) = &args.q else {
+        bail!("--regressor and --torque need --q");
+    };
+    let q = parse_vector(q, n, "--q")?;
+    let optional = |text: &Option<String>, flag: &str| match text {
+        Some(t) => parse_vector(t, n, flag),
+        None => Ok(vec![0.0; n]),
+    };
+    let dq = optional(&args.dq, "--dq")?;
+    let ddq = optional(&args.ddq, "--ddq")?;
+    let mut ws = Workspace::new(model);
+    if args.regressor {
+        let h = model.regressor(&mut ws, &q, &dq, &ddq);
+        let (names, h) = if args.base {
+            let base = model.base_parameters()?;
+            (base.expressions.clone(), h.select_columns(&base.independent))
+        } else {
+            (model.param_names(), h)
+        };
+        let rows: Vec<Vec<f64>> = (0..h.nrows())
+            .map(|r| h.row(r).iter().copied().collect())
+            .collect();
+        return emit(&json!({"parameters": names, "rows": rows}).to_string());
+    }
+    let params = match &args.params {
+        Some(path) => read_params(model, path)?,
+        None => model.nominal_parameters().with_context(|| {
+            format!(
+                "{}: the description has no nominal value for every parameter; give --params FILE",
+                args.robot
+            )
+        })?,
+    };
+    let mut tau = vec![0.0; n];
+    model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
+    emit(&json!({ "tau": tau }).to_string())
+}
