@@ -52,9 +52,8 @@ impl Model {
         } else {
             Vector3::zeros()
         };
-        for (i, f) in self.frames.iter().enumerate() {
-            let fi = i + 1;
-            let p = f.parent;
+        for &fi in &self.active {
+            let p = self.frames[fi - 1].parent;
             let x = &ws.local[fi];
             let rt = x.rotation.transpose();
             let (sw, sv) = &self.motion[fi];
@@ -94,9 +93,11 @@ impl Model {
         );
         assert_eq!(params.len(), self.n_params(), "parameter vector length");
         self.joint_values(ws, q, dq, ddq);
-        self.local_transforms(ws);
+        self.active_local_transforms(ws);
         self.forward_pass(ws, terms.gravity);
-        for fi in 0..ws.n_frames {
+        ws.n[0] = Vector3::zeros();
+        ws.f[0] = Vector3::zeros();
+        for &fi in &self.active {
             ws.n[fi] = Vector3::zeros();
             ws.f[fi] = Vector3::zeros();
         }
@@ -112,7 +113,7 @@ impl Model {
             ws.n[j] = l_in * dw + w.cross(&(l_in * w)) + l.cross(&ac);
         }
         tau.fill(0.0);
-        for fi in (1..ws.n_frames).rev() {
+        for &fi in self.active.iter().rev() {
             let f = &self.frames[fi - 1];
             let (sw, sv) = &self.motion[fi];
             let t = sw.dot(&ws.n[fi]) + sv.dot(&ws.f[fi]);

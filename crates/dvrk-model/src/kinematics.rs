@@ -7,46 +7,60 @@ use crate::model::{JointKind, Model, Transform};
 use crate::workspace::Workspace;
 
 impl Model {
-    /// Joint values, rates and accelerations of every frame: `s = A q + b`, `ṡ = A q̇`,
+    /// Joint values, rates and accelerations of the active frames: `s = A q + b`, `ṡ = A q̇`,
     /// `s̈ = A q̈` (A is constant, which is what makes closed chains cheap).
     #[inline]
     pub(crate) fn joint_values(&self, ws: &mut Workspace, q: &[f64], dq: &[f64], ddq: &[f64]) {
-        for (i, f) in self.frames.iter().enumerate() {
-            ws.s[i + 1] = f.value.eval(q);
-            ws.sd[i + 1] = f.value.dot(dq);
-            ws.sdd[i + 1] = f.value.dot(ddq);
+        for &fi in &self.active {
+            let value = &self.frames[fi - 1].value;
+            ws.s[fi] = value.eval(q);
+            ws.sd[fi] = value.dot(dq);
+            ws.sdd[fi] = value.dot(ddq);
         }
     }
 
-    /// Parent → frame transforms from the joint values in `ws.s`.
+    /// Parent → frame transforms of all frames from the joint values in `ws.s`.
     #[inline]
     pub(crate) fn local_transforms(&self, ws: &mut Workspace) {
-        for (i, f) in self.frames.iter().enumerate() {
-            let fi = i + 1;
-            ws.local[fi] = match f.kind {
-                JointKind::Fixed => self.fixed[fi],
-                JointKind::Revolute => {
-                    let (sn, cs) = ws.s[fi].sin_cos();
-                    let r = &f.pre.rotation;
-                    // pre.rotation · Rz(s): mix the first two columns.
-                    let c0 = r.column(0) * cs + r.column(1) * sn;
-                    let c1 = r.column(1) * cs - r.column(0) * sn;
-                    let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
-                    Transform {
-                        rotation: rz * f.post.rotation,
-                        translation: f.pre.translation + rz * f.post.translation,
-                    }
-                }
-                JointKind::Prismatic => {
-                    let r = &f.pre.rotation;
-                    let shift = Vector3::new(0.0, 0.0, ws.s[fi]) + f.post.translation;
-                    Transform {
-                        rotation: r * f.post.rotation,
-                        translation: f.pre.translation + r * shift,
-                    }
-                }
-            };
+        for fi in 1..=self.frames.len() {
+            self.local_transform(ws, fi);
         }
+    }
+
+    /// Parent → frame transforms of the frames that carry link dynamics.
+    #[inline]
+    pub(crate) fn active_local_transforms(&self, ws: &mut Workspace) {
+        for &fi in &self.active {
+            self.local_transform(ws, fi);
+        }
+    }
+
+    #[inline]
+    fn local_transform(&self, ws: &mut Workspace, fi: usize) {
+        let f = &self.frames[fi - 1];
+        ws.local[fi] = match f.kind {
+            JointKind::Fixed => self.fixed[fi],
+            JointKind::Revolute => {
+                let (sn, cs) = ws.s[fi].sin_cos();
+                let r = &f.pre.rotation;
+                // pre.rotation · Rz(s): mix the first two columns.
+                let c0 = r.column(0) * cs + r.column(1) * sn;
+                let c1 = r.column(1) * cs - r.column(0) * sn;
+                let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
+                Transform {
+                    rotation: rz * f.post.rotation,
+                    translation: f.pre.translation + rz * f.post.translation,
+                }
+            }
+            JointKind::Prismatic => {
+                let r = &f.pre.rotation;
+                let shift = Vector3::new(0.0, 0.0, ws.s[fi]) + f.post.translation;
+                Transform {
+                    rotation: r * f.post.rotation,
+                    translation: f.pre.translation + r * shift,
+                }
+            }
+        };
     }
 
     /// Poses of every frame in the base frame, in `ws` (read them with
@@ -75,6 +89,14 @@ impl Model {
         for (i, f) in self.frames.iter().enumerate() {
             let fi = i + 1;
             ws.world[fi] = ws.world[f.parent].compose(&ws.local[fi]);
+        }
+    }
+
+    #[inline]
+    pub(crate) fn active_world_transforms(&self, ws: &mut Workspace) {
+        for &fi in &self.active {
+            let parent = self.frames[fi - 1].parent;
+            ws.world[fi] = ws.world[parent].compose(&ws.local[fi]);
         }
     }
 

@@ -278,6 +278,10 @@ pub struct Model {
     pub(crate) links: Vec<usize>,
     /// For each frame index (0..=N), the link frames in its subtree (itself included).
     pub(crate) subtree_links: Vec<Vec<usize>>,
+    /// Frames (1-based, increasing) with at least one link in their subtree: the only
+    /// ones whose motion matters to the link dynamics, so the per-sample passes skip the
+    /// rest (e.g. the PSM's massless tool and virtual motor frames).
+    pub(crate) active: Vec<usize>,
     /// Motion subspace of each frame in its own coordinates: `[ω; v]` for unit joint rate.
     pub(crate) motion: Vec<(Vector3<f64>, Vector3<f64>)>,
     /// Transform parent → frame for fixed frames (precomputed).
@@ -403,6 +407,7 @@ impl Model {
                 k = self.frames[k - 1].parent;
             }
         }
+        self.active = (1..=n_frames).filter(|&k| !subtree[k].is_empty()).collect();
         self.subtree_links = subtree;
         self.motion = std::iter::once((Vector3::zeros(), Vector3::zeros()))
             .chain(self.frames.iter().map(|f| {

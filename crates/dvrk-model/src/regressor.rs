@@ -51,16 +51,16 @@ impl Model {
         assert_eq!(out.len(), n * p, "regressor buffer must have n*p entries");
         out.fill(0.0);
         self.joint_values(ws, q, dq, ddq);
-        self.local_transforms(ws);
-        self.world_transforms(ws);
+        self.active_local_transforms(ws);
+        self.active_world_transforms(ws);
         self.forward_pass(ws, true);
 
         for &j in &self.links {
             link_block(ws, j);
         }
-        for (i, f) in self.frames.iter().enumerate() {
-            let k = i + 1;
-            if f.kind == JointKind::Fixed || self.subtree_links[k].is_empty() {
+        for &k in &self.active {
+            let f = &self.frames[k - 1];
+            if f.kind == JointKind::Fixed {
                 continue;
             }
             let (sw, sv) = &self.motion[k];

@@ -242,6 +242,7 @@ impl Model {
             params,
             links: Vec::new(),
             subtree_links: Vec::new(),
+            active: Vec::new(),
             motion: Vec::new(),
             fixed: Vec::new(),
         }
