@@ -49,7 +49,10 @@ fn dvrk(c: &mut Criterion) {
             })
         });
     }
-    let panda = concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared/anchors/panda_arm_7dof.urdf");
+    let panda = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../../shared/anchors/panda_arm_7dof.urdf"
+    );
     match Model::load(panda) {
         Ok(model) => bench_model(c, "panda", &model),
         Err(_) => eprintln!("SKIPPED panda benchmarks: {panda} not found"),

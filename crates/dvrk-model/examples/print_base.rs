@@ -4,7 +4,12 @@ fn main() {
     let t = std::time::Instant::now();
     let model = dvrk_model::Model::load(&name).expect("model");
     let base = model.base_parameters().expect("base parameters");
-    println!("{} base parameters of {} ({:?})", base.rank(), model.n_params(), t.elapsed());
+    println!(
+        "{} base parameters of {} ({:?})",
+        base.rank(),
+        model.n_params(),
+        t.elapsed()
+    );
     for (i, e) in base.expressions.iter().enumerate() {
         println!("{:3} {e}", i + 1);
     }

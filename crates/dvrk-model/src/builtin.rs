@@ -8,7 +8,10 @@ use crate::model::Model;
 /// Built-in robot descriptions: (name, TOML text).
 pub const BUILTIN: [(&str, &str); 3] = [
     ("psm", include_str!("../../../robots/psm.toml")),
-    ("psm_simplified", include_str!("../../../robots/psm_simplified.toml")),
+    (
+        "psm_simplified",
+        include_str!("../../../robots/psm_simplified.toml"),
+    ),
     ("mtm", include_str!("../../../robots/mtm.toml")),
 ];
 

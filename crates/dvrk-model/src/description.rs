@@ -213,7 +213,12 @@ impl Ctx<'_> {
     }
 }
 
-fn check_range(file: &str, place: &str, field: &str, r: Option<[f64; 2]>) -> Result<(), ModelError> {
+fn check_range(
+    file: &str,
+    place: &str,
+    field: &str,
+    r: Option<[f64; 2]>,
+) -> Result<(), ModelError> {
     if let Some([lo, hi]) = r {
         if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
             return Err(ModelError::field(
@@ -241,7 +246,12 @@ impl Model {
 fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     let n = desc.coordinates.len();
     if n == 0 {
-        return Err(ModelError::field(file, "top level", "coordinates", "no coordinate"));
+        return Err(ModelError::field(
+            file,
+            "top level",
+            "coordinates",
+            "no coordinate",
+        ));
     }
     for (i, c) in desc.coordinates.iter().enumerate() {
         if desc.coordinates[..i].contains(c) {
@@ -277,7 +287,12 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         let idx = i + 1;
         let place = format!("frame {idx} ({})", fd.name);
         if names.contains(&fd.name) {
-            return Err(ModelError::field(file, &place, "name", "duplicate frame name"));
+            return Err(ModelError::field(
+                file,
+                &place,
+                "name",
+                "duplicate frame name",
+            ));
         }
         let parent = names.iter().position(|n| *n == fd.parent).ok_or_else(|| {
             ModelError::field(
@@ -502,7 +517,12 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         names.push(fd.name.clone());
     }
     if params.is_empty() {
-        return Err(ModelError::field(file, "frames", "", "the model has no parameter"));
+        return Err(ModelError::field(
+            file,
+            "frames",
+            "",
+            "the model has no parameter",
+        ));
     }
 
     let measured = match &desc.measured {

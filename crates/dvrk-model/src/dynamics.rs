@@ -75,6 +75,7 @@ impl Model {
     }
 
     /// Core of the inverse dynamics; writes `tau` (length n).
+    #[allow(clippy::too_many_arguments)]
     pub(crate) fn rnea(
         &self,
         ws: &mut Workspace,
@@ -220,7 +221,15 @@ impl Model {
         for k in 0..n {
             e.fill(0.0);
             e[k] = 1.0;
-            self.rnea(ws, params, q, &zeros, &e, terms, &mut out[k * n..(k + 1) * n]);
+            self.rnea(
+                ws,
+                params,
+                q,
+                &zeros,
+                &e,
+                terms,
+                &mut out[k * n..(k + 1) * n],
+            );
         }
         ws.zeros = zeros;
         ws.tmp_q = e;

@@ -257,7 +257,8 @@ impl Expr {
     pub fn affine(&self, n_coordinates: usize) -> Result<Affine, ExprError> {
         let n_vars = self.vars.len();
         let probes: [f64; 4] = [0.0, 0.731, -1.913, 2.417];
-        let point = |p: usize, i: usize| probes[(p + 3 * i) % probes.len()] * (1.0 + 0.1 * i as f64);
+        let point =
+            |p: usize, i: usize| probes[(p + 3 * i) % probes.len()] * (1.0 + 0.1 * i as f64);
         let mut terms = Vec::new();
         for (i, &k) in self.vars.iter().enumerate() {
             let d = self

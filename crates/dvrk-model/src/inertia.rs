@@ -9,7 +9,14 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
 }
 
 fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
-    [m[(0, 0)], m[(0, 1)], m[(0, 2)], m[(1, 1)], m[(1, 2)], m[(2, 2)]]
+    [
+        m[(0, 0)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(1, 1)],
+        m[(1, 2)],
+        m[(2, 2)],
+    ]
 }
 
 /// Symmetric 3x3 matrix from `[xx, xy, xz, yy, yz, zz]`.

@@ -41,9 +41,9 @@ mod urdf;
 mod workspace;
 
 pub use base::BaseParameters;
-pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use description::Convention;
 pub use dynamics::sign0;
 pub use error::ModelError;
 pub use model::*;
+pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use workspace::Workspace;

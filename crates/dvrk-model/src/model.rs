@@ -235,7 +235,9 @@ pub struct Measured {
 pub enum ParamKind {
     /// One of the 10 barycentric link parameters; `index` 0..10 in
     /// `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
-    Inertia { index: usize },
+    Inertia {
+        index: usize,
+    },
     Coulomb,
     Viscous,
     Offset,
@@ -470,7 +472,11 @@ impl Model {
                 if !msg.is_empty() {
                     msg += "; ";
                 }
-                msg += &format!("parameters not in model {}: {}", self.name, unknown.join(", "));
+                msg += &format!(
+                    "parameters not in model {}: {}",
+                    self.name,
+                    unknown.join(", ")
+                );
             }
             return Err(crate::ModelError::Syntax {
                 file: source.to_string(),

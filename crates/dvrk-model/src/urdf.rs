@@ -1,6 +1,15 @@
 //! URDF import with `urdf-rs`: joints become frames, non-mimic moving joints become
 //! coordinates, mimic joints become couplings (`s = multiplier·q + offset`), child-link
 //! `<inertial>` elements become nominal parameters in the joint (child link) frame.
+//!
+//! Every joint, fixed ones included, is one frame named after its child link and carries
+//! that link's 10 barycentric parameters, so a fixed child is not merged into its moving
+//! parent (as Pinocchio does): its columns are the parent's through a constant change of
+//! frame, and the base-parameter reduction removes the redundancy. The root link's
+//! inertial never moves and is ignored. `<limit>` elements become [`Limit`]s on the
+//! joint value (`lower`/`upper` unless continuous, `velocity`, and URDF 1.2
+//! `acceleration`); `<dynamics>` (damping, friction) is ignored. Gravity is −9.81 m/s²
+//! along the root link's z axis.
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
@@ -17,8 +26,10 @@ fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
     let z = Vector3::z();
     match Rotation3::rotation_between(&z, axis) {
         Some(r) => *r.matrix(),
-        None => *Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::x()), std::f64::consts::PI)
-            .matrix(),
+        None => {
+            *Rotation3::from_axis_angle(&Unit::new_normalize(Vector3::x()), std::f64::consts::PI)
+                .matrix()
+        }
     }
 }
 
@@ -29,7 +40,19 @@ impl Model {
             file: file.to_string(),
             message,
         };
-        let robot = urdf_rs::read_from_string(text).map_err(|e| err(e.to_string()))?;
+        let robot = urdf_rs::read_from_string(text).map_err(|e| {
+            err(format!(
+                "cannot parse the document (malformed XML or a missing element): {e}"
+            ))
+        })?;
+        let mut seen = std::collections::HashSet::new();
+        if let Some(l) = robot.links.iter().find(|l| !seen.insert(l.name.as_str())) {
+            return Err(err(format!("link `{}` is defined twice", l.name)));
+        }
+        let mut seen = std::collections::HashSet::new();
+        if let Some(j) = robot.joints.iter().find(|j| !seen.insert(j.name.as_str())) {
+            return Err(err(format!("joint `{}` is defined twice", j.name)));
+        }
         let is_child = |l: &str| robot.joints.iter().any(|j| j.child.link == l);
         let roots: Vec<&str> = robot
             .links
@@ -46,27 +69,41 @@ impl Model {
         }
         // Breadth-first order from the root so parents precede children.
         let mut order: Vec<usize> = Vec::new();
-        let mut frontier = vec![roots[0].to_string()];
+        let mut frontier = std::collections::VecDeque::from([roots[0].to_string()]);
         let mut link_frame: std::collections::HashMap<String, usize> =
             [(roots[0].to_string(), 0usize)].into_iter().collect();
-        while let Some(link) = frontier.first().cloned() {
-            frontier.remove(0);
+        while let Some(link) = frontier.pop_front() {
             for (ji, j) in robot.joints.iter().enumerate() {
                 if j.parent.link == link {
                     if link_frame.contains_key(&j.child.link) {
-                        return Err(err(format!("link `{}` has two parents", j.child.link)));
+                        return Err(err(format!(
+                            "link `{}` has two parents (joint `{}` closes a loop or duplicates another joint)",
+                            j.child.link, j.name
+                        )));
                     }
                     order.push(ji);
                     link_frame.insert(j.child.link.clone(), order.len());
-                    frontier.push(j.child.link.clone());
+                    frontier.push_back(j.child.link.clone());
                 }
             }
         }
         if order.len() != robot.joints.len() {
-            return Err(err("some joints are not connected to the root link".into()));
+            let lost: Vec<String> = robot
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(ji, _)| !order.contains(ji))
+                .map(|(_, j)| format!("`{}` (parent link `{}`)", j.name, j.parent.link))
+                .collect();
+            return Err(err(format!(
+                "joints not connected to the root link `{}`: {}",
+                roots[0],
+                lost.join(", ")
+            )));
         }
         // Coordinates: moving joints without mimic, in tree order.
         let mut coordinates = Vec::new();
+        let mut coordinate_is_length = Vec::new();
         for &ji in &order {
             let j = &robot.joints[ji];
             match j.joint_type {
@@ -75,20 +112,20 @@ impl Model {
                 | urdf_rs::JointType::Prismatic => {
                     if j.mimic.is_none() {
                         coordinates.push(j.name.clone());
+                        coordinate_is_length.push(j.joint_type == urdf_rs::JointType::Prismatic);
                     }
                 }
                 urdf_rs::JointType::Fixed => {}
                 ref other => {
+                    let kind = format!("{other:?}").to_lowercase();
                     return Err(err(format!(
-                        "joint `{}`: type {other:?} is not supported (revolute, continuous, prismatic, fixed)",
+                        "joint `{}`: type `{kind}` is not supported (revolute, continuous, prismatic, fixed)",
                         j.name
-                    )))
+                    )));
                 }
             }
         }
-        if coordinates.is_empty() {
-            return Err(err("no moving joint".into()));
-        }
+        let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
         let coord_of = |name: &str| coordinates.iter().position(|c| c == name);
         let mut frames = Vec::new();
         let mut params = Vec::new();
@@ -96,6 +133,9 @@ impl Model {
         for (fi, &ji) in order.iter().enumerate() {
             let idx = fi + 1;
             let j = &robot.joints[ji];
+            if !finite(&j.origin.xyz.0) || !finite(&j.origin.rpy.0) {
+                return Err(err(format!("joint `{}`: origin is not finite", j.name)));
+            }
             let origin = Transform {
                 rotation: rpy(&j.origin.rpy.0),
                 translation: Vector3::from(j.origin.xyz.0),
@@ -109,8 +149,11 @@ impl Model {
                 (origin, Transform::identity())
             } else {
                 let axis = Vector3::from(j.axis.xyz.0);
-                if axis.norm() < 1e-12 {
-                    return Err(err(format!("joint `{}`: zero axis", j.name)));
+                if !axis.iter().all(|x| x.is_finite()) || axis.norm() < 1e-12 {
+                    return Err(err(format!(
+                        "joint `{}`: axis {:?} is zero or not finite",
+                        j.name, j.axis.xyz.0
+                    )));
                 }
                 let r = align_z(&axis.normalize());
                 (
@@ -128,54 +171,89 @@ impl Model {
                 Affine::constant(0.0)
             } else if let Some(m) = &j.mimic {
                 let k = coord_of(&m.joint).ok_or_else(|| {
-                    err(format!(
-                        "joint `{}` mimics `{}`, which is not a moving non-mimic joint",
-                        j.name, m.joint
-                    ))
+                    let why = match robot.joints.iter().find(|o| o.name == m.joint) {
+                        None => "no joint has that name",
+                        Some(o) if o.mimic.is_some() => "it is itself a mimic joint",
+                        Some(_) => "it is not a moving joint",
+                    };
+                    err(format!("joint `{}` mimics `{}`: {why}", j.name, m.joint))
                 })?;
+                let multiplier = m.multiplier.unwrap_or(1.0);
+                let offset = m.offset.unwrap_or(0.0);
+                if !multiplier.is_finite() || !offset.is_finite() {
+                    return Err(err(format!(
+                        "joint `{}`: mimic multiplier and offset must be finite",
+                        j.name
+                    )));
+                }
                 Affine {
-                    terms: vec![(k, m.multiplier.unwrap_or(1.0))],
-                    offset: m.offset.unwrap_or(0.0),
+                    terms: vec![(k, multiplier)],
+                    offset,
                 }
             } else {
-                let k = coord_of(&j.name).expect("coordinate");
+                Affine {
+                    terms: vec![(coord_of(&j.name).expect("coordinate"), 1.0)],
+                    offset: 0.0,
+                }
+            };
+            if kind != JointKind::Fixed {
+                // Limits on the joint value s (for a mimic joint, multiplier·q + offset).
                 let lim = &j.limit;
                 let position = (j.joint_type != urdf_rs::JointType::Continuous
                     && lim.lower.is_finite()
                     && lim.upper.is_finite()
                     && lim.lower < lim.upper)
                     .then_some([lim.lower, lim.upper]);
-                let velocity = (lim.velocity.is_finite() && lim.velocity > 0.0)
-                    .then_some([-lim.velocity, lim.velocity]);
-                if position.is_some() || velocity.is_some() {
+                let symmetric = |v: f64| (v.is_finite() && v > 0.0).then_some([-v, v]);
+                let velocity = symmetric(lim.velocity);
+                let acceleration = symmetric(lim.acceleration);
+                if position.is_some() || velocity.is_some() || acceleration.is_some() {
                     limits.push(Limit {
                         label: j.name.clone(),
-                        expr: Affine {
-                            terms: vec![(k, 1.0)],
-                            offset: 0.0,
-                        },
+                        expr: value.clone(),
                         position,
                         velocity,
-                        acceleration: None,
+                        acceleration,
                     });
                 }
-                Affine {
-                    terms: vec![(k, 1.0)],
-                    offset: 0.0,
-                }
-            };
+            }
             let link = robot
                 .links
                 .iter()
                 .find(|l| l.name == j.child.link)
-                .ok_or_else(|| err(format!("joint `{}`: child link `{}` is not defined", j.name, j.child.link)))?;
+                .ok_or_else(|| {
+                    err(format!(
+                        "joint `{}`: child link `{}` is not defined",
+                        j.name, j.child.link
+                    ))
+                })?;
             let inertial = &link.inertial;
+            let i = &inertial.inertia;
+            let values = [
+                inertial.mass.value,
+                i.ixx,
+                i.ixy,
+                i.ixz,
+                i.iyy,
+                i.iyz,
+                i.izz,
+            ];
+            if inertial.mass.value < 0.0
+                || !values.iter().all(|x| x.is_finite())
+                || !finite(&inertial.origin.xyz.0)
+                || !finite(&inertial.origin.rpy.0)
+            {
+                return Err(err(format!(
+                    "link `{}`: inertial mass must be non-negative and all inertial values finite",
+                    link.name
+                )));
+            }
             // Inertia about the centre of mass, rotated from the inertial frame to the link frame.
             let ri = rpy(&inertial.origin.rpy.0);
-            let i = &inertial.inertia;
-            let ic = ri
-                * Matrix3::new(i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz)
-                * ri.transpose();
+            let ic =
+                ri * Matrix3::new(
+                    i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+                ) * ri.transpose();
             let nominal = Nominal {
                 mass: Some(inertial.mass.value),
                 com: Some(inertial.origin.xyz.0),
@@ -218,14 +296,11 @@ impl Model {
                 bounds: FrameBounds::default(),
             });
         }
+        // After the frames, so that a broken mimic is reported as such.
+        if coordinates.is_empty() {
+            return Err(err("no moving joint".into()));
+        }
         let n = coordinates.len();
-        let coordinate_is_length = (0..n)
-            .map(|k| {
-                frames.iter().any(|f: &Frame| {
-                    f.kind == JointKind::Prismatic && f.value.terms.iter().any(|t| t.0 == k)
-                })
-            })
-            .collect();
         Ok(Model {
             name: robot.name.clone(),
             source: file.to_string(),

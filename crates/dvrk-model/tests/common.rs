@@ -12,7 +12,10 @@ pub fn shared_file(rel: &str) -> Option<PathBuf> {
     if path.exists() {
         Some(path)
     } else {
-        eprintln!("SKIPPED: {} not found (the ../shared folder is absent)", path.display());
+        eprintln!(
+            "SKIPPED: {} not found (the ../shared folder is absent)",
+            path.display()
+        );
         None
     }
 }
@@ -22,5 +25,9 @@ pub fn read_json(path: &std::path::Path) -> serde_json::Value {
 }
 
 pub fn f64s(v: &serde_json::Value) -> Vec<f64> {
-    v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
 }

@@ -36,13 +36,27 @@ fn check_regressor(robot: &str) {
             for c in 0..p {
                 let d = (h[(r, c)] - row[c]).abs();
                 if d > worst.0 {
-                    worst = (d, format!("row {r} column {} ({}): ours {} 2019 {}", c, names[c], h[(r, c)], row[c]));
+                    worst = (
+                        d,
+                        format!(
+                            "row {r} column {} ({}): ours {} 2019 {}",
+                            c,
+                            names[c],
+                            h[(r, c)],
+                            row[c]
+                        ),
+                    );
                 }
             }
         }
     }
     eprintln!("{robot}: worst difference {:e} at {}", worst.0, worst.1);
-    assert!(worst.0 < 1e-8, "{robot}: worst difference {:e} at {}", worst.0, worst.1);
+    assert!(
+        worst.0 < 1e-8,
+        "{robot}: worst difference {:e} at {}",
+        worst.0,
+        worst.1
+    );
 }
 
 #[test]
@@ -72,7 +86,10 @@ fn parse_combination(text: &str, names: &[String]) -> Vec<f64> {
             None if term.starts_with('-') => (-1.0, &term[1..]),
             None => (1.0, term),
         };
-        let k = names.iter().position(|n| n == name).unwrap_or_else(|| panic!("unknown {name}"));
+        let k = names
+            .iter()
+            .position(|n| n == name)
+            .unwrap_or_else(|| panic!("unknown {name}"));
         row[k] += coef;
     }
     row
@@ -111,13 +128,23 @@ fn check_base_span(robot: &str) {
             k2019[(r - expected, c)]
         }
     });
-    assert_eq!(rank(&stacked), expected, "{robot}: base parameter spans differ");
+    assert_eq!(
+        rank(&stacked),
+        expected,
+        "{robot}: base parameter spans differ"
+    );
     // And our base regressor reproduces the oracle's torques through β = K·π.
     let mut ws = Workspace::new(&model);
-    let pi: Vec<f64> = (0..p).map(|k| ((k * 37 % 11) as f64 - 5.0) * 0.01).collect();
+    let pi: Vec<f64> = (0..p)
+        .map(|k| ((k * 37 % 11) as f64 - 5.0) * 0.01)
+        .collect();
     let beta = base.project(&pi);
     for sample in oracle["samples"].as_array().unwrap() {
-        let (q, dq, ddq) = (f64s(&sample["q"]), f64s(&sample["dq"]), f64s(&sample["ddq"]));
+        let (q, dq, ddq) = (
+            f64s(&sample["q"]),
+            f64s(&sample["dq"]),
+            f64s(&sample["ddq"]),
+        );
         let h = model.regressor(&mut ws, &q, &dq, &ddq);
         let hb = h.select_columns(&base.independent);
         let lhs = &h * nalgebra::DVector::from_vec(pi.clone());
