@@ -19,12 +19,21 @@ struct Cli {
 enum Command {
     /// Summarize a robot model, or evaluate its regressor or inverse dynamics.
     Model(cmd::model::Args),
+    /// Identify the parameters from a log (OLS, WLS, IRLS or the physically consistent SDP).
+    Fit(cmd::fit::Args),
+    /// Errors of an identified model on other logs.
+    Validate(cmd::validate::Args),
+    /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
+    CableFit(cmd::cable_fit::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Model(args) => cmd::model::run(args),
+        Command::Fit(args) => cmd::fit::run(args),
+        Command::Validate(args) => cmd::validate::run(args),
+        Command::CableFit(args) => cmd::cable_fit::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

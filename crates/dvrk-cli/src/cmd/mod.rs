@@ -1,6 +1,9 @@
 //! One module per subcommand, plus the few conversions they share.
 
+pub mod cable_fit;
+pub mod fit;
 pub mod model;
+pub mod validate;
 
 use anyhow::{bail, Context, Result};
 

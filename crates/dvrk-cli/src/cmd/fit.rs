@@ -1,0 +1,190 @@
+//! `dvrk-ident fit LOG --robot ROBOT ...`: identification from a log.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use anyhow::{bail, Result};
+use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::result::{write_atomic, InputInfo};
+use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::{FitResult, FitSettings, Method};
+use dvrk_model::Model;
+
+use super::emit;
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum FormatArg {
+    /// The 2019 layout: no header, q, dq, tau columns in model coordinates
+    WpiCsv,
+    /// Headered CSV: time, position.<joint>, velocity.<joint>, effort.<joint>
+    Csv,
+}
+
+impl FormatArg {
+    pub fn format(self) -> LogFormat {
+        match self {
+            FormatArg::WpiCsv => LogFormat::Wpi,
+            FormatArg::Csv => LogFormat::Csv,
+        }
+    }
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    Ols,
+    Wls,
+    Irls,
+    Sdp,
+}
+
+/// Options shared by every command that reads logs.
+#[derive(clap::Args, Clone)]
+pub struct LogArgs {
+    /// Log format (default: from the file extension and content)
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+    /// Sampling rate of logs without time stamps (Hz)
+    #[arg(long)]
+    pub rate: Option<f64>,
+    /// Low-pass cut-off (Hz), zero-phase 6th-order Butterworth; one value or one per
+    /// coordinate, comma-separated. The 2019 PSM/MTM fits effectively used 16.965/5.655.
+    #[arg(long)]
+    pub cutoff: Option<String>,
+    /// Samples trimmed at each end after filtering
+    #[arg(long)]
+    pub trim: Option<usize>,
+}
+
+impl LogArgs {
+    pub fn read(&self, path: &str) -> Result<dvrk_ident::Trajectory> {
+        Ok(log::read(path, self.format.map(FormatArg::format), self.rate)?)
+    }
+
+    pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
+        let mut s = base;
+        if let Some(c) = &self.cutoff {
+            let values: Vec<f64> = c
+                .split(',')
+                .map(|v| v.trim().parse::<f64>())
+                .collect::<std::result::Result<_, _>>()
+                .map_err(|_| anyhow::anyhow!("--cutoff: `{c}` is not a number list"))?;
+            let cutoff = if values.len() == 1 {
+                Cutoff::All(values[0])
+            } else {
+                Cutoff::PerJoint(values)
+            };
+            s.processing.filter = Some(LowPass {
+                cutoff_hz: cutoff,
+                ..LowPass::default()
+            });
+        }
+        if let Some(t) = self.trim {
+            s.processing.trim = t;
+        }
+        Ok(s)
+    }
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Training log
+    pub log: String,
+    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
+    #[arg(long)]
+    pub robot: String,
+    #[command(flatten)]
+    pub logs: LogArgs,
+    /// Estimator
+    #[arg(long, value_enum, default_value = "sdp")]
+    pub method: MethodArg,
+    /// Test (validation) log
+    #[arg(long)]
+    pub test: Option<String>,
+    /// Metrics on the first N processed test samples only
+    #[arg(long)]
+    pub test_window: Option<usize>,
+    /// Write the result document here (atomically)
+    #[arg(long)]
+    pub out: Option<String>,
+    /// Print the result document to stdout instead of the table
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let model = Model::load(&args.robot)?;
+    let train = args.logs.read(&args.log)?;
+    let test = match &args.test {
+        Some(t) => Some(args.logs.read(t)?),
+        None => None,
+    };
+    let mut settings = args.logs.settings(FitSettings::default())?;
+    settings.method = match args.method {
+        MethodArg::Ols => Method::Ols,
+        MethodArg::Wls => Method::Wls,
+        MethodArg::Irls => Method::Irls,
+        MethodArg::Sdp => Method::Sdp,
+    };
+    settings.test_window = args.test_window;
+    let mut result = dvrk_ident::fit(&model, &train, test.as_ref(), &settings)?;
+    result.inputs.push(InputInfo::from_file("train", Path::new(&args.log))?);
+    if let Some(t) = &args.test {
+        result.inputs.push(InputInfo::from_file("test", Path::new(t))?);
+    }
+    if let Some(out) = &args.out {
+        write_atomic(Path::new(out), &result.to_json())?;
+    }
+    if args.json {
+        emit(&result.to_json())?;
+    } else {
+        emit(&table(&result))?;
+    }
+    if !result.solver.converged {
+        bail!(
+            "the solver did not converge (status {}): the parameters are not a result",
+            result.solver.status
+        );
+    }
+    Ok(())
+}
+
+/// The human summary: solver, consistency and per-joint errors.
+pub fn table(r: &FitResult) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "robot {}  method {}  rows {}  condition number {:.1}",
+        r.robot, r.method, r.rows, r.condition_number
+    );
+    let _ = writeln!(
+        s,
+        "solver {} status {} converged {} in {:.3} s",
+        r.solver.name, r.solver.status, r.solver.converged, r.solver.seconds
+    );
+    let bad: Vec<&str> = r
+        .consistency
+        .iter()
+        .filter(|c| !c.consistent)
+        .map(|c| c.link.as_str())
+        .collect();
+    let _ = writeln!(
+        s,
+        "physically consistent: {}{}",
+        r.physically_consistent,
+        if bad.is_empty() {
+            String::new()
+        } else {
+            format!(" (not: {})", bad.join(", "))
+        }
+    );
+    let _ = writeln!(s, "{:<8} {:>12} {:>12} {:>12} {:>12}", "joint", "train rel", "train rms", "test rel", "test rms");
+    for (j, name) in r.metrics.train.joints.iter().enumerate() {
+        let (tr, trms) = (r.metrics.train.relative_error[j], r.metrics.train.rms[j]);
+        let (te, terms) = match &r.metrics.test {
+            Some(t) => (format!("{:.4}", t.relative_error[j]), format!("{:.4}", t.rms[j])),
+            None => ("-".into(), "-".into()),
+        };
+        let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");
+    }
+    s
+}

@@ -1,0 +1,65 @@
+//! `dvrk-ident validate RESULT LOG...`: errors of an identified model on other logs.
+
+use std::fmt::Write as _;
+
+use anyhow::Result;
+use dvrk_ident::fit::{joint_metrics, prepare};
+use dvrk_ident::FitResult;
+use dvrk_model::Model;
+use serde_json::json;
+
+use super::emit;
+use super::fit::LogArgs;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Result file written by `dvrk-ident fit --out`
+    pub result: String,
+    /// Logs to validate on
+    #[arg(required = true)]
+    pub logs: Vec<String>,
+    /// Robot (default: the one the result was fitted for)
+    #[arg(long)]
+    pub robot: Option<String>,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Metrics on the first N processed samples only
+    #[arg(long)]
+    pub test_window: Option<usize>,
+    /// Print JSON
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let result = FitResult::read(std::path::Path::new(&args.result))?;
+    let robot = args.robot.clone().unwrap_or_else(|| {
+        result
+            .robot_source
+            .strip_prefix("builtin:")
+            .unwrap_or(&result.robot_source)
+            .to_string()
+    });
+    let model = Model::load(&robot)?;
+    let params = result.params_for(&model)?;
+    // The processing the result was fitted with, unless overridden on the command line.
+    let settings = args.log_args.settings(result.settings.clone())?;
+    let mut reports = Vec::new();
+    let mut text = String::new();
+    for path in &args.logs {
+        let traj = args.log_args.read(path)?;
+        let data = prepare(&model, &traj, &settings.processing)?;
+        let m = joint_metrics(&model, &params, &data, args.test_window);
+        let _ = writeln!(text, "{path} ({} samples)", m.samples);
+        let _ = writeln!(text, "{:<8} {:>12} {:>12}", "joint", "relative", "rms");
+        for (j, name) in m.joints.iter().enumerate() {
+            let _ = writeln!(text, "{name:<8} {:>12.4} {:>12.4}", m.relative_error[j], m.rms[j]);
+        }
+        reports.push(json!({"log": path, "metrics": m}));
+    }
+    if args.json {
+        emit(&serde_json::to_string_pretty(&json!({"result": args.result, "validations": reports}))?)
+    } else {
+        emit(&text)
+    }
+}

@@ -1,0 +1,33 @@
+//! The error type of the identification pipeline: every failure names its input (file,
+//! joint, setting) so that the CLI and Python can show it as is.
+
+use thiserror::Error;
+
+/// Error of the identification pipeline.
+#[derive(Debug, Error)]
+pub enum IdentError {
+    #[error(transparent)]
+    Model(#[from] dvrk_model::ModelError),
+    #[error(transparent)]
+    Log(#[from] crate::log::LogError),
+    #[error(transparent)]
+    Trajectory(#[from] crate::trajectory::TrajectoryError),
+    #[error(transparent)]
+    Sdp(#[from] crate::estimate::sdp::SdpError),
+    #[error("{source_name}: {error}")]
+    Signal {
+        source_name: String,
+        error: crate::signal::SignalError,
+    },
+    /// The log does not fit the robot (joints, sizes).
+    #[error("{source_name}: {message}")]
+    Mismatch { source_name: String, message: String },
+    /// The data do not determine the parameters (too few or unexciting samples).
+    #[error("{source_name}: {message}")]
+    RankDeficient { source_name: String, message: String },
+    /// A setting is out of range.
+    #[error("invalid setting {name}: {message}")]
+    Setting { name: String, message: String },
+    #[error("{file}: {message}")]
+    Io { file: String, message: String },
+}

@@ -1,0 +1,959 @@
+//! Physically consistent estimator: a semidefinite program solved with Clarabel.
+//!
+//! # Problem
+//!
+//! Over ALL `p = model.n_params()` parameters π (barycentric link parameters, friction,
+//! motor inertia, spring; units as in [`dvrk_model::Param`]):
+//!
+//! ```text
+//! minimize   ‖R[:, 0..p]·π − R[:, p]‖²  +  λ·Σᵢ dᵢ²·(πᵢ − priorᵢ)²
+//! subject to J(π_link) ⪰ eps·I                       every link (4×4 pseudo-inertia)
+//!            m_min ≤ m ≤ m_max,  m·r_min ≤ l ≤ m·r_max  frame bounds (mass, com box)
+//!            Fc ≥ fc_min, Fv ≥ fv_min, Ia ≥ ia_min      global lower bounds
+//!            Fc ≤ fc_max, Fv ≤ fv_max, |Fo| ≤ fo_max, Ia ≤ ia_max, K ∈ [k_min, k_max]
+//! ```
+//!
+//! `R` is the (p+1)×(p+1) factor of the weighted observation `[W·H | W·τ] = Q·R`, so the
+//! first term is `‖W·H·π − W·τ‖² = ‖R11·π − r1‖² + ρ²` without the tens of thousands of
+//! rows (any square `R` with the same `RᵀR` works: all p+1 rows are used).
+//!
+//! # Regularization
+//!
+//! R11 is rank deficient: only the base parameters are identifiable, and the
+//! pseudo-inertia constraints do not bound the inertia from above, so the optimum is
+//! not unique and its non-identifiable part can run off to infinity inside an interior
+//! point method. The Tikhonov term pulls those directions toward `prior` (zero when
+//! `None`). It is scale invariant: `dᵢ = ‖R[:, i]‖` is the data's own scale of
+//! parameter i (for a column the data never see, the median `d` of the parameters of the
+//! same kind and unit), so in the equilibrated variables `uᵢ = dᵢ·πᵢ` the term is
+//! `λ·‖u − u_prior‖²` with `λ = regularization · max diag(R̃ᵀR̃)`, `R̃ = R·diag(1/d)`
+//! (whose diagonal is all ones), i.e. `regularization` is relative to the data and has no
+//! units. The price is a bias of about `λ/σ²` on a base direction whose equilibrated
+//! singular value is σ; with the default 1e-10 this is far below any noise on
+//! reasonably excited data, while the non-identifiable part stays bounded.
+//!
+//! # Formulation for Clarabel
+//!
+//! Variables `x = [u; y]` with `πᵢ = sᵢ·uᵢ`, `sᵢ = γ/dᵢ`, `γ = ‖R[:, p]‖ = ‖W·τ‖`
+//! (so u = O(1) and the objective is at most about 1) and `y = R̃·u − R[:, p]/γ`
+//! (p+1 equality rows, no normal equations). Objective `½‖y‖² + ½λ‖u − u_prior‖²`
+//! (Clarabel's `½xᵀPx + qᵀx` with diagonal P). Linear bounds are rows of a nonnegative
+//! cone, each normalized to a unit largest coefficient. Each link's LMI is one
+//! `PSDTriangleConeT(4)` on `T·(J − eps·I)·T` with `T = diag(1, 1, 1, τ)`, τ a length of
+//! the link (its largest com-box bound, 0.1 m without one): a congruence, so it is the
+//! same constraint, but it balances the kg·m², kg·m and kg entries of J.
+//! Clarabel's triangle convention: upper triangle, column-major, off-diagonals ×√2.
+
+use std::time::Instant;
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{
+    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
+use dvrk_model::{Model, ParamKind};
+use nalgebra::DMatrix;
+use thiserror::Error;
+
+// Link the system OpenBLAS that provides Clarabel's BLAS/LAPACK (no download).
+use openblas_src as _;
+
+/// Options of [`solve_sdp`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SdpOptions {
+    /// Tikhonov weight toward `prior`, relative to the data (no units; see the module
+    /// documentation). 0 disables it (only sensible when R11 has full rank).
+    pub regularization: f64,
+    /// Values the regularization pulls toward, one per parameter (model units); `None`
+    /// means zero. E.g. the model's nominal (CAD) parameters.
+    pub prior: Option<Vec<f64>>,
+    /// Clarabel's iteration limit.
+    pub max_iter: u32,
+    /// Clarabel's gap and feasibility tolerances (relative to the problem, which is
+    /// scaled so that the objective is at most about 1).
+    pub tolerance: f64,
+    /// `false`: apply the model's per-frame bounds ([`dvrk_model::FrameBounds`]: mass,
+    /// com box, friction maxima, `ia_max`, spring range). `true`: ignore them, keeping
+    /// only physical consistency (`J ⪰ eps·I`) and the global lower bounds
+    /// ([`dvrk_model::GlobalBounds`]: `fc_min`, `fv_min`, `ia_min`).
+    pub override_bounds: bool,
+}
+
+impl Default for SdpOptions {
+    fn default() -> Self {
+        SdpOptions {
+            regularization: 1e-10,
+            prior: None,
+            max_iter: 200,
+            tolerance: 1e-8,
+            override_bounds: false,
+        }
+    }
+}
+
+/// Result of [`solve_sdp`]. Only trust `params` when `converged`.
+#[derive(Clone, Debug)]
+pub struct SdpSolution {
+    /// All model parameters, in model order and units (the solver's last iterate, or a
+    /// meaningless certificate when infeasible, if not converged).
+    pub params: Vec<f64>,
+    /// Clarabel's status name (`Solved`, `AlmostSolved`, `PrimalInfeasible`,
+    /// `MaxIterations`, ...).
+    pub status: String,
+    /// True only for status `Solved` (not `AlmostSolved`).
+    pub converged: bool,
+    /// Wall time of the whole call: building the problem and solving (s).
+    pub seconds: f64,
+    /// Interior point iterations.
+    pub iterations: u32,
+    /// `‖R11·π − r1‖² + ρ² = ‖W·H·π − W·τ‖²` at `params` (the weighted residual sum of
+    /// squares, without the regularization term).
+    pub objective: f64,
+}
+
+/// Why [`solve_sdp`] could not set up the problem (infeasibility is not an error: it is
+/// reported in [`SdpSolution::status`]).
+#[derive(Clone, Debug, Error, PartialEq)]
+pub enum SdpError {
+    #[error(
+        "the R factor is {rows}x{cols}, but model {model} needs {expected}x{expected} \
+         ({params} parameters and the torque column)"
+    )]
+    Dimension {
+        model: String,
+        rows: usize,
+        cols: usize,
+        expected: usize,
+        params: usize,
+    },
+    #[error("prior has {found} values, model {model} has {expected} parameters")]
+    PriorLength {
+        model: String,
+        found: usize,
+        expected: usize,
+    },
+    #[error("non-finite value in {what}")]
+    NonFinite { what: String },
+    #[error("invalid SDP option {name}: {message}")]
+    Option { name: &'static str, message: String },
+    #[error("clarabel rejected the problem: {0}")]
+    Solver(String),
+}
+
+/// Coefficients of the pseudo-inertia in Clarabel's triangle order: entry k of
+/// `svec(J)` (upper triangle, column-major: (0,0), (0,1), (1,1), (0,2), (1,2), (2,2),
+/// (0,3), (1,3), (2,3), (3,3)) as `(row, col, [(barycentric index, coefficient)])`,
+/// barycentric order `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`, before the √2.
+const PSEUDO_INERTIA_SVEC: [(usize, usize, &[(usize, f64)]); 10] = [
+    (0, 0, &[(0, -0.5), (3, 0.5), (5, 0.5)]),
+    (0, 1, &[(1, -1.0)]),
+    (1, 1, &[(0, 0.5), (3, -0.5), (5, 0.5)]),
+    (0, 2, &[(2, -1.0)]),
+    (1, 2, &[(4, -1.0)]),
+    (2, 2, &[(0, 0.5), (3, 0.5), (5, -0.5)]),
+    (0, 3, &[(6, 1.0)]),
+    (1, 3, &[(7, 1.0)]),
+    (2, 3, &[(8, 1.0)]),
+    (3, 3, &[(9, 1.0)]),
+];
+
+/// Rows `s = b − A·π ∈ PSD(4)` (in π, before variable scaling) that encode
+/// `T·(J(π) − eps·I)·T ⪰ 0`, `T = diag(1, 1, 1, tau)`, for the link whose `Lxx` is
+/// parameter `p0`. Returns, per svec entry, the `(parameter, coefficient of A)` list and
+/// `b`.
+fn lmi_rows(p0: usize, eps: f64, tau: f64) -> Vec<(Vec<(usize, f64)>, f64)> {
+    PSEUDO_INERTIA_SVEC
+        .iter()
+        .map(|&(i, j, coefs)| {
+            let t = |k: usize| if k == 3 { tau } else { 1.0 };
+            let w = t(i) * t(j) * if i == j { 1.0 } else { std::f64::consts::SQRT_2 };
+            let a = coefs.iter().map(|&(k, c)| (p0 + k, -w * c)).collect();
+            let b = if i == j { -w * eps } else { 0.0 };
+            (a, b)
+        })
+        .collect()
+}
+
+/// Unit class of a parameter, for the fallback scale of columns the data never see.
+fn unit_class(kind: ParamKind) -> usize {
+    match kind {
+        ParamKind::Inertia { index } if index < 6 => 0,
+        ParamKind::Inertia { index } if index < 9 => 1,
+        ParamKind::Inertia { .. } => 2,
+        ParamKind::Coulomb | ParamKind::Offset => 3,
+        ParamKind::Viscous => 4,
+        ParamKind::MotorInertia => 5,
+        ParamKind::Spring => 6,
+    }
+}
+
+fn median(mut v: Vec<f64>) -> Option<f64> {
+    if v.is_empty() {
+        return None;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    Some(v[v.len() / 2])
+}
+
+/// Linear constraints `Σ a·π ≤ c` collected per frame.
+#[derive(Default)]
+struct Linear {
+    rows: Vec<(Vec<(usize, f64)>, f64)>,
+}
+
+impl Linear {
+    /// `Σ a·π ≤ c`; an infinite `c = +∞` is no constraint.
+    fn le(&mut self, a: Vec<(usize, f64)>, c: f64, what: &str) -> Result<(), SdpError> {
+        if c == f64::INFINITY {
+            return Ok(());
+        }
+        if !c.is_finite() {
+            return Err(SdpError::NonFinite {
+                what: what.to_string(),
+            });
+        }
+        self.rows.push((a, c));
+        Ok(())
+    }
+}
+
+fn bounds_rows(model: &Model, override_bounds: bool) -> Result<Linear, SdpError> {
+    let g = &model.bounds;
+    let mut lin = Linear::default();
+    for (fi, f) in model.frames.iter().enumerate() {
+        let place = |what: &str| format!("bounds of frame {} ({}): {what}", fi + 1, f.name);
+        let b = &f.bounds;
+        if let Some(p0) = f.inertia {
+            let m = p0 + 9;
+            if !override_bounds {
+                if let Some([lo, hi]) = b.mass {
+                    lin.le(vec![(m, -1.0)], -lo, &place("mass"))?;
+                    lin.le(vec![(m, 1.0)], hi, &place("mass"))?;
+                }
+                if let Some(com) = b.com {
+                    for (k, [lo, hi]) in com.into_iter().enumerate() {
+                        if !(lo.is_finite() && hi.is_finite()) {
+                            return Err(SdpError::NonFinite { what: place("com") });
+                        }
+                        // m·lo ≤ l_k ≤ m·hi
+                        lin.le(vec![(m, lo), (p0 + 6 + k, -1.0)], 0.0, &place("com"))?;
+                        lin.le(vec![(p0 + 6 + k, 1.0), (m, -hi)], 0.0, &place("com"))?;
+                    }
+                }
+            }
+        }
+        if let Some(fr) = &f.friction {
+            let (fc, fv, fo) = (fr.param, fr.param + 1, fr.param + 2);
+            lin.le(vec![(fc, -1.0)], -g.fc_min, "global bound fc_min")?;
+            lin.le(vec![(fv, -1.0)], -g.fv_min, "global bound fv_min")?;
+            if !override_bounds {
+                if let Some(v) = b.fc_max {
+                    lin.le(vec![(fc, 1.0)], v, &place("fc_max"))?;
+                }
+                if let Some(v) = b.fv_max {
+                    lin.le(vec![(fv, 1.0)], v, &place("fv_max"))?;
+                }
+                if let Some(v) = b.fo_max {
+                    lin.le(vec![(fo, 1.0)], v, &place("fo_max"))?;
+                    lin.le(vec![(fo, -1.0)], v, &place("fo_max"))?;
+                }
+            }
+        }
+        if let Some(mi) = &f.motor_inertia {
+            lin.le(vec![(mi.param, -1.0)], -g.ia_min, "global bound ia_min")?;
+            if !override_bounds {
+                if let Some(v) = b.ia_max {
+                    lin.le(vec![(mi.param, 1.0)], v, &place("ia_max"))?;
+                }
+            }
+        }
+        if let Some(sp) = &f.spring {
+            if !override_bounds {
+                if let Some([lo, hi]) = b.spring {
+                    lin.le(vec![(sp.param, -1.0)], -lo, &place("spring"))?;
+                    lin.le(vec![(sp.param, 1.0)], hi, &place("spring"))?;
+                }
+            }
+        }
+    }
+    Ok(lin)
+}
+
+/// Length (m) balancing a link's pseudo-inertia: the largest com-box bound, clamped to
+/// [0.01, 10] m, or 0.1 m without a box.
+fn link_length(model: &Model, frame_index: usize, override_bounds: bool) -> f64 {
+    let f = &model.frames[frame_index];
+    match f.bounds.com {
+        Some(com) if !override_bounds => {
+            let r = com
+                .iter()
+                .flat_map(|b| b.iter())
+                .fold(0.0f64, |a, &x| a.max(x.abs()));
+            if r.is_finite() {
+                r.clamp(0.01, 10.0)
+            } else {
+                0.1
+            }
+        }
+        _ => 0.1,
+    }
+}
+
+/// The physically consistent fit: minimizes `‖R11·π − r1‖² + ρ²` (plus the small
+/// regularization of [`SdpOptions::regularization`]) over all model parameters subject
+/// to the model's consistency constraints and bounds (see the module documentation).
+///
+/// `r` is the (p+1)×(p+1) R factor of `[W·H | W·τ]` over all `p = model.n_params()`
+/// parameters (last column the torque). A problem the solver cannot solve (infeasible
+/// bounds, iteration limit, numerical trouble) is returned with `converged = false` and
+/// Clarabel's status; only malformed input is an error.
+pub fn solve_sdp(
+    model: &Model,
+    r: &DMatrix<f64>,
+    options: &SdpOptions,
+) -> Result<SdpSolution, SdpError> {
+    let started = Instant::now();
+    let p = model.n_params();
+    let np1 = p + 1;
+    if r.nrows() != np1 || r.ncols() != np1 {
+        return Err(SdpError::Dimension {
+            model: model.name.clone(),
+            rows: r.nrows(),
+            cols: r.ncols(),
+            expected: np1,
+            params: p,
+        });
+    }
+    if r.iter().any(|x| !x.is_finite()) {
+        return Err(SdpError::NonFinite {
+            what: "the R factor".into(),
+        });
+    }
+    if !(options.regularization.is_finite() && options.regularization >= 0.0) {
+        return Err(SdpError::Option {
+            name: "regularization",
+            message: format!("must be finite and >= 0, got {}", options.regularization),
+        });
+    }
+    if !(options.tolerance.is_finite() && options.tolerance > 0.0) {
+        return Err(SdpError::Option {
+            name: "tolerance",
+            message: format!("must be finite and > 0, got {}", options.tolerance),
+        });
+    }
+    if options.max_iter == 0 {
+        return Err(SdpError::Option {
+            name: "max_iter",
+            message: "must be at least 1".into(),
+        });
+    }
+    let prior = match &options.prior {
+        Some(v) if v.len() != p => {
+            return Err(SdpError::PriorLength {
+                model: model.name.clone(),
+                found: v.len(),
+                expected: p,
+            })
+        }
+        Some(v) if v.iter().any(|x| !x.is_finite()) => {
+            return Err(SdpError::NonFinite {
+                what: "the prior".into(),
+            })
+        }
+        Some(v) => v.clone(),
+        None => vec![0.0; p],
+    };
+    let eps = model.bounds.pseudo_inertia_eps;
+    if !eps.is_finite() {
+        return Err(SdpError::NonFinite {
+            what: "bounds.pseudo_inertia_eps".into(),
+        });
+    }
+
+    // --- Scaling: πᵢ = sᵢ·uᵢ with sᵢ = γ/dᵢ. ---
+    let norms: Vec<f64> = (0..p).map(|c| r.column(c).norm()).collect();
+    let max_norm = norms.iter().cloned().fold(0.0, f64::max);
+    let seen = |c: usize| max_norm > 0.0 && norms[c] > 1e-9 * max_norm;
+    let mut d = norms.clone();
+    let all_seen: Vec<f64> = (0..p).filter(|&c| seen(c)).map(|c| norms[c]).collect();
+    let global = median(all_seen).unwrap_or(1.0);
+    for c in 0..p {
+        if !seen(c) {
+            let class = unit_class(model.params[c].kind);
+            let same: Vec<f64> = (0..p)
+                .filter(|&k| seen(k) && unit_class(model.params[k].kind) == class)
+                .map(|k| norms[k])
+                .collect();
+            d[c] = median(same).unwrap_or(global);
+        }
+    }
+    let tau_norm = r.column(p).norm();
+    let gamma = if tau_norm > 0.0 { tau_norm } else { 1.0 };
+    let s: Vec<f64> = d.iter().map(|di| gamma / di).collect();
+    let lambda = options.regularization;
+
+    // --- Variables x = [u (p); t]: minimize t subject to
+    // ‖[R̃·u − R[:, p]/γ; √λ·(u − u_prior)]‖ ≤ t (one second-order cone). ---
+    let n = p + 1;
+    let pmat = CscMatrix::zeros((n, n));
+    let mut q = vec![0.0; n];
+    q[p] = 1.0;
+    let mut ai = Vec::new();
+    let mut aj = Vec::new();
+    let mut av = Vec::new();
+    let mut b = Vec::new();
+    let mut cones = Vec::new();
+    // Cone rows s = b − A·x: s₀ = t, then the residual R̃·u − r̃, then √λ·(u − u_prior).
+    ai.push(0);
+    aj.push(p);
+    av.push(-1.0);
+    b.push(0.0);
+    for row in 0..np1 {
+        for c in 0..p {
+            let v = r[(row, c)];
+            if v != 0.0 {
+                ai.push(1 + row);
+                aj.push(c);
+                av.push(-v * s[c] / gamma);
+            }
+        }
+        b.push(-r[(row, p)] / gamma);
+    }
+    if lambda > 0.0 {
+        let sl = lambda.sqrt();
+        for i in 0..p {
+            ai.push(b.len());
+            aj.push(i);
+            av.push(-sl);
+            b.push(-sl * prior[i] / s[i]);
+        }
+    }
+    cones.push(SupportedConeT::SecondOrderConeT(b.len()));
+    // Linear bounds, each row scaled to a unit largest coefficient.
+    let lin = bounds_rows(model, options.override_bounds)?;
+    for (coefs, c) in &lin.rows {
+        let scaled: Vec<(usize, f64)> = coefs.iter().map(|&(k, a)| (k, a * s[k])).collect();
+        let w = scaled.iter().fold(0.0f64, |m, &(_, a)| m.max(a.abs()));
+        let w = if w > 0.0 { w } else { 1.0 };
+        let row = b.len();
+        for (k, a) in scaled {
+            ai.push(row);
+            aj.push(k);
+            av.push(a / w);
+        }
+        b.push(c / w);
+    }
+    if !lin.rows.is_empty() {
+        cones.push(SupportedConeT::NonnegativeConeT(lin.rows.len()));
+    }
+    // Pseudo-inertia LMIs.
+    for (fi, f) in model.frames.iter().enumerate() {
+        let Some(p0) = f.inertia else { continue };
+        let tau = link_length(model, fi, options.override_bounds);
+        let rows = lmi_rows(p0, eps, tau);
+        // Normalize the block so its largest scaled coefficient is 1.
+        let w = rows
+            .iter()
+            .flat_map(|(a, _)| a.iter().map(|&(k, v)| (v * s[k]).abs()))
+            .fold(0.0f64, f64::max);
+        let w = if w > 0.0 { w } else { 1.0 };
+        for (coefs, bv) in rows {
+            let row = b.len();
+            for (k, a) in coefs {
+                ai.push(row);
+                aj.push(k);
+                av.push(a * s[k] / w);
+            }
+            b.push(bv / w);
+        }
+        cones.push(SupportedConeT::PSDTriangleConeT(4));
+    }
+    let m_rows = b.len();
+    let amat = CscMatrix::new_from_triplets(m_rows, n, ai, aj, av);
+
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(options.max_iter)
+        .tol_gap_abs(options.tolerance)
+        .tol_gap_rel(options.tolerance)
+        .tol_feas(options.tolerance)
+        .build()
+        .map_err(|e| SdpError::Solver(e.to_string()))?;
+    let mut solver = DefaultSolver::new(&pmat, &q, &amat, &b, &cones, settings)
+        .map_err(|e| SdpError::Solver(format!("{e:?}")))?;
+    solver.solve();
+    let sol = &solver.solution;
+    let params: Vec<f64> = (0..p).map(|i| s[i] * sol.x[i]).collect();
+    let objective = residual_sum_of_squares(r, &params);
+    Ok(SdpSolution {
+        params,
+        status: format!("{:?}", sol.status),
+        converged: sol.status == SolverStatus::Solved,
+        seconds: started.elapsed().as_secs_f64(),
+        iterations: sol.iterations,
+        objective,
+    })
+}
+
+/// `‖R[:, 0..p]·π − R[:, p]‖²` (= `‖R11·π − r1‖² + ρ²` for a triangular R).
+fn residual_sum_of_squares(r: &DMatrix<f64>, params: &[f64]) -> f64 {
+    let p = params.len();
+    (0..r.nrows())
+        .map(|row| {
+            let v: f64 = (0..p).map(|c| r[(row, c)] * params[c]).sum::<f64>() - r[(row, p)];
+            v * v
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use dvrk_model::inertia::{
+        barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue,
+    };
+    use nalgebra::{DVector, Matrix3, Matrix4, Rotation3, Vector3};
+
+    /// Small deterministic generator (xorshift64*), uniform in [lo, hi).
+    struct Rng(u64);
+    impl Rng {
+        fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
+        }
+    }
+
+    /// Upper-triangular (p+1)×(p+1) R of `[h | tau]` by Householder QR (zero rows
+    /// appended when there are fewer than p+1 rows).
+    fn r_factor(h: &DMatrix<f64>, tau: &DVector<f64>) -> DMatrix<f64> {
+        let np1 = h.ncols() + 1;
+        let mut ht = DMatrix::zeros(h.nrows().max(np1), np1);
+        ht.view_mut((0, 0), (h.nrows(), h.ncols())).copy_from(h);
+        ht.view_mut((0, h.ncols()), (h.nrows(), 1)).copy_from(tau);
+        ht.qr().r()
+    }
+
+    const ONE_LINK: &str = r#"
+name = "one_link"
+convention = "modified"
+coordinates = ["q1"]
+gravity = [0.0, 0.0, -9.81]
+
+[[frames]]
+name = "link"
+parent = "base"
+alpha = "pi/2"
+theta = "q1"
+inertia = true
+friction = true
+bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
+"#;
+
+    /// Any symmetric-matrix vectorization that preserves the Frobenius norm
+    /// (independent of the solver's triangle order): diagonal then √2·(strict upper),
+    /// row by row.
+    fn frob_vec(j: &Matrix4<f64>) -> Vec<f64> {
+        let mut v = Vec::new();
+        for i in 0..4 {
+            v.push(j[(i, i)]);
+        }
+        for i in 0..4 {
+            for k in i + 1..4 {
+                v.push(std::f64::consts::SQRT_2 * j[(i, k)]);
+            }
+        }
+        v
+    }
+
+    /// With `‖R11·π − r1‖ = ‖J(π) − J_t‖_F` (link) and `R11 = I` (friction), the SDP is
+    /// a Euclidean projection with a closed form: clip J_t's eigenvalues at eps, clip the
+    /// friction parameters into their bounds.
+    #[test]
+    fn sdp_tiny_projection_has_closed_form() {
+        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
+        assert_eq!(model.n_params(), 13);
+        let eps = model.bounds.pseudo_inertia_eps;
+        // Target: a "link" whose inertia violates the triangle inequality and whose
+        // pseudo-inertia has a clearly negative eigenvalue.
+        let target_link =
+            barycentric_from_standard(0.8, [0.05, -0.02, 0.1], [0.001, 0.0, 0.0, 0.001, 0.0, 0.01]);
+        let jt = pseudo_inertia(&target_link);
+        assert!(pseudo_inertia_min_eigenvalue(&target_link) < -1e-3);
+        let target_friction = [-0.5, 3.0, -0.7]; // Fc < fc_min, Fv > fv_max, Fo < -fo_max
+        // G: column k = frob_vec(J(e_k)) (10×10, invertible), friction block identity.
+        let mut g = DMatrix::zeros(13, 13);
+        for k in 0..10 {
+            let mut e = [0.0; 10];
+            e[k] = 1.0;
+            for (i, v) in frob_vec(&pseudo_inertia(&e)).into_iter().enumerate() {
+                g[(i, k)] = v;
+            }
+        }
+        for k in 10..13 {
+            g[(k, k)] = 1.0;
+        }
+        let mut rhs = DVector::zeros(13);
+        for (i, v) in frob_vec(&jt).into_iter().enumerate() {
+            rhs[i] = v;
+        }
+        for k in 0..3 {
+            rhs[10 + k] = target_friction[k];
+        }
+        let r = r_factor(&g, &rhs);
+        let options = SdpOptions {
+            regularization: 0.0,
+            ..SdpOptions::default()
+        };
+        let sol = solve_sdp(&model, &r, &options).unwrap();
+        assert!(sol.converged, "status {}", sol.status);
+        assert_eq!(sol.status, "Solved");
+
+        // Closed form of the link part: eigenvalues of J_t clipped at eps.
+        let eig = jt.symmetric_eigen();
+        let clipped = eig.eigenvalues.map(|l| l.max(eps));
+        let j_star = eig.eigenvectors * Matrix4::from_diagonal(&clipped) * eig.eigenvectors.transpose();
+        let j_sol = pseudo_inertia(&sol.params[0..10]);
+        let err = (j_sol - j_star).norm();
+        assert!(err < 1e-6 * jt.norm(), "J error {err:e}\n{j_sol}\n{j_star}");
+        assert!(pseudo_inertia_min_eigenvalue(&sol.params[0..10]) >= eps * (1.0 - 1e-3));
+        // Friction: projection onto [fc_min, fc_max] × [fv_min, fv_max] × [-fo, fo].
+        let expected = [model.bounds.fc_min, 2.0, -0.3];
+        for k in 0..3 {
+            assert!(
+                (sol.params[10 + k] - expected[k]).abs() < 1e-7,
+                "friction {k}: {} vs {}",
+                sol.params[10 + k],
+                expected[k]
+            );
+        }
+        // The reported objective is the data term at the solution.
+        let want = (j_sol - jt).norm_squared()
+            + (0..3)
+                .map(|k| (sol.params[10 + k] - target_friction[k]).powi(2))
+                .sum::<f64>();
+        assert!((sol.objective - want).abs() < 1e-8 * want.max(1.0));
+    }
+
+    /// The LMI rows (A, b of `s = b − A·π`, triangle order, √2) unpack to `J(π) − eps·I`.
+    #[test]
+    fn sdp_lmi_rows_reproduce_pseudo_inertia() {
+        let mut rng = Rng(0x1234_5678_9abc_def1);
+        for trial in 0..20 {
+            let p0 = trial % 3;
+            let pi: Vec<f64> = (0..p0 + 10).map(|_| rng.uniform(-2.0, 2.0)).collect();
+            let eps = rng.uniform(0.0, 0.1);
+            let tau = if trial % 2 == 0 { 1.0 } else { rng.uniform(0.05, 2.0) };
+            let rows = lmi_rows(p0, eps, tau);
+            assert_eq!(rows.len(), 10);
+            // Unpack svec (upper triangle, column-major, off-diagonals ×√2).
+            let mut s = Matrix4::zeros();
+            let mut k = 0;
+            for col in 0..4 {
+                for row in 0..=col {
+                    let (a, b) = &rows[k];
+                    let ax: f64 = a.iter().map(|&(c, v)| v * pi[c]).sum();
+                    let mut v = b - ax;
+                    if row != col {
+                        v /= std::f64::consts::SQRT_2;
+                    }
+                    s[(row, col)] = v;
+                    s[(col, row)] = v;
+                    k += 1;
+                }
+            }
+            let t = Matrix4::from_diagonal(&nalgebra::Vector4::new(1.0, 1.0, 1.0, tau));
+            let want = t * (pseudo_inertia(&pi[p0..p0 + 10]) - eps * Matrix4::identity()) * t;
+            assert!((s - want).norm() < 1e-12, "trial {trial}\n{s}\n{want}");
+        }
+    }
+
+    /// Random physically consistent parameters inside the model's bounds.
+    fn random_consistent(model: &Model, rng: &mut Rng) -> Vec<f64> {
+        let g = &model.bounds;
+        let mut pi = vec![0.0; model.n_params()];
+        for f in &model.frames {
+            let b = &f.bounds;
+            if let Some(p0) = f.inertia {
+                let inner = |lo: f64, hi: f64, rng: &mut Rng| {
+                    let w = hi - lo;
+                    rng.uniform(lo + 0.05 * w, hi - 0.05 * w)
+                };
+                let [mlo, mhi] = b.mass.unwrap_or([0.1, 2.0]);
+                let com = b.com.unwrap_or([[-0.1, 0.1]; 3]);
+                let bary = loop {
+                    let m = inner(mlo, mhi, rng);
+                    let c = [
+                        inner(com[0][0], com[0][1], rng),
+                        inner(com[1][0], com[1][1], rng),
+                        inner(com[2][0], com[2][1], rng),
+                    ];
+                    // Solid box a×b×c, randomly rotated.
+                    let (x, y, z) = (
+                        rng.uniform(0.03, 0.4),
+                        rng.uniform(0.03, 0.4),
+                        rng.uniform(0.03, 0.4),
+                    );
+                    let d = Matrix3::from_diagonal(&Vector3::new(
+                        m * (y * y + z * z) / 12.0,
+                        m * (x * x + z * z) / 12.0,
+                        m * (x * x + y * y) / 12.0,
+                    ));
+                    let rot = Rotation3::from_euler_angles(
+                        rng.uniform(-3.0, 3.0),
+                        rng.uniform(-3.0, 3.0),
+                        rng.uniform(-3.0, 3.0),
+                    );
+                    let ic = rot.matrix() * d * rot.matrix().transpose();
+                    let ic6 = [
+                        ic[(0, 0)],
+                        ic[(0, 1)],
+                        ic[(0, 2)],
+                        ic[(1, 1)],
+                        ic[(1, 2)],
+                        ic[(2, 2)],
+                    ];
+                    let bary = barycentric_from_standard(m, c, ic6);
+                    if pseudo_inertia_min_eigenvalue(&bary) > 20.0 * g.pseudo_inertia_eps {
+                        break bary;
+                    }
+                };
+                pi[p0..p0 + 10].copy_from_slice(&bary);
+            }
+            if let Some(fr) = &f.friction {
+                pi[fr.param] = rng.uniform(g.fc_min, b.fc_max.unwrap_or(0.5));
+                pi[fr.param + 1] = rng.uniform(g.fv_min, b.fv_max.unwrap_or(0.5));
+                let fo = b.fo_max.unwrap_or(0.3);
+                pi[fr.param + 2] = rng.uniform(-fo, fo);
+            }
+            if let Some(mi) = &f.motor_inertia {
+                pi[mi.param] = rng.uniform(g.ia_min, b.ia_max.unwrap_or(0.01));
+            }
+            if let Some(sp) = &f.spring {
+                let [lo, hi] = b.spring.unwrap_or([0.0, 1.0]);
+                pi[sp.param] = rng.uniform(lo, hi);
+            }
+        }
+        pi
+    }
+
+    /// Every constraint of the model at π, to `tol` (absolute, model units).
+    fn assert_feasible(model: &Model, pi: &[f64], tol: f64) {
+        let g = &model.bounds;
+        for f in &model.frames {
+            let b = &f.bounds;
+            let name = &f.name;
+            if let Some(p0) = f.inertia {
+                let ev = pseudo_inertia_min_eigenvalue(&pi[p0..p0 + 10]);
+                assert!(
+                    ev >= g.pseudo_inertia_eps * (1.0 - 1e-3),
+                    "{name}: pseudo-inertia eigenvalue {ev:e}"
+                );
+                let m = pi[p0 + 9];
+                if let Some([lo, hi]) = b.mass {
+                    assert!(m >= lo - tol && m <= hi + tol, "{name}: mass {m}");
+                }
+                if let Some(com) = b.com {
+                    for k in 0..3 {
+                        let l = pi[p0 + 6 + k];
+                        assert!(
+                            l >= m * com[k][0] - tol && l <= m * com[k][1] + tol,
+                            "{name}: l[{k}] = {l} outside m·[{}, {}]",
+                            com[k][0],
+                            com[k][1]
+                        );
+                    }
+                }
+            }
+            if let Some(fr) = &f.friction {
+                let (fc, fv, fo) = (pi[fr.param], pi[fr.param + 1], pi[fr.param + 2]);
+                assert!(fc >= g.fc_min - tol, "{name}: Fc {fc}");
+                assert!(fv >= g.fv_min - tol, "{name}: Fv {fv}");
+                if let Some(v) = b.fc_max {
+                    assert!(fc <= v + tol, "{name}: Fc {fc}");
+                }
+                if let Some(v) = b.fv_max {
+                    assert!(fv <= v + tol, "{name}: Fv {fv}");
+                }
+                if let Some(v) = b.fo_max {
+                    assert!(fo.abs() <= v + tol, "{name}: Fo {fo}");
+                }
+            }
+            if let Some(mi) = &f.motor_inertia {
+                let ia = pi[mi.param];
+                assert!(ia >= g.ia_min - tol, "{name}: Ia {ia}");
+                if let Some(v) = b.ia_max {
+                    assert!(ia <= v + tol, "{name}: Ia {ia}");
+                }
+            }
+            if let Some(sp) = &f.spring {
+                if let Some([lo, hi]) = b.spring {
+                    let k = pi[sp.param];
+                    assert!(k >= lo - tol && k <= hi + tol, "{name}: K {k}");
+                }
+            }
+        }
+    }
+
+    fn synthetic(name: &str, seed: u64, noise: f64) {
+        synthetic_with(name, seed, noise, &SdpOptions::default(), true);
+    }
+
+    fn synthetic_with(name: &str, seed: u64, noise: f64, options: &SdpOptions, check: bool) {
+        let model = Model::builtin(name).unwrap();
+        let mut rng = Rng(seed);
+        let truth = random_consistent(&model, &mut rng);
+        assert_feasible(&model, &truth, 0.0);
+        let h = model.random_regressor(300, seed ^ 0xabcdef);
+        let mut tau = &h * DVector::from_column_slice(&truth);
+        let scale = tau.amax();
+        for v in tau.iter_mut() {
+            *v += noise * scale * rng.uniform(-1.0, 1.0);
+        }
+        let r = r_factor(&h, &tau);
+        let sol = solve_sdp(&model, &r, options).unwrap();
+        println!(
+            "{name} (regularization {:e}): {} params, status {}, {} iterations, {:.3} s, objective {:e}",
+            model.n_params(),
+            sol.status,
+            sol.iterations,
+            sol.seconds,
+            sol.objective
+        );
+        if !check {
+            let base = model.base_parameters().unwrap();
+            let (beta, bt) = (base.project(&sol.params), base.project(&truth));
+            let worst = beta
+                .iter()
+                .zip(&bt)
+                .map(|(a, b)| (a - b).abs() / b.abs().max(1e-3))
+                .fold(0.0, f64::max);
+            let ev = model
+                .link_frames()
+                .iter()
+                .map(|&f| {
+                    let p0 = model.frame(f).inertia.unwrap();
+                    pseudo_inertia_min_eigenvalue(&sol.params[p0..p0 + 10])
+                })
+                .fold(f64::INFINITY, f64::min);
+            println!("  worst base error {worst:e}, min eigenvalue {ev:e}");
+            return;
+        }
+        assert!(sol.converged, "{name}: status {}", sol.status);
+        assert_feasible(&model, &sol.params, 1e-7);
+        let base = model.base_parameters().unwrap();
+        let beta = base.project(&sol.params);
+        let beta_true = base.project(&truth);
+        // Torque-space error of the base parameters, relative.
+        let hb = h.select_columns(&base.independent);
+        let pred = &hb * DVector::from_column_slice(&beta);
+        let pred_true = &hb * DVector::from_column_slice(&beta_true);
+        let rel = (&pred - &pred_true).norm() / pred_true.norm();
+        let worst = beta
+            .iter()
+            .zip(&beta_true)
+            .map(|(a, b)| (a - b).abs() / b.abs().max(1e-3))
+            .fold(0.0, f64::max);
+        println!("{name}: base parameter error: torque-relative {rel:e}, worst {worst:e}");
+        if noise == 0.0 {
+            assert!(rel < 1e-6, "{name}: torque-relative error {rel:e}");
+            assert!(worst < 1e-4, "{name}: worst base parameter error {worst:e}");
+        }
+    }
+
+    #[test]
+    fn sdp_synthetic_psm_recovers_base_parameters() {
+        synthetic("psm", 0x9e37_79b9_7f4a_7c15, 0.0);
+    }
+
+    #[test]
+    fn sdp_synthetic_mtm_recovers_base_parameters() {
+        synthetic("mtm", 0xd1b5_4a32_d192_ed03, 0.0);
+    }
+
+    #[test]
+    #[ignore = "exploration: bias of the regularization"]
+    fn sdp_regularization_sweep() {
+        for reg in [0.0, 1e-14, 1e-12, 1e-10, 1e-8, 1e-6] {
+            let options = SdpOptions {
+                regularization: reg,
+                ..SdpOptions::default()
+            };
+            synthetic_with("psm", 0x9e37_79b9_7f4a_7c15, 0.0, &options, false);
+            synthetic_with("mtm", 0xd1b5_4a32_d192_ed03, 0.0, &options, false);
+        }
+    }
+
+    #[test]
+    fn sdp_synthetic_noisy_is_feasible() {
+        synthetic("psm", 0x2545_f491_4f6c_dd1d, 0.01);
+        synthetic("mtm", 0x94d0_49bb_1331_11eb, 0.01);
+    }
+
+    /// Contradictory bounds are reported as infeasible, not as a result.
+    #[test]
+    fn sdp_infeasible_bounds_are_not_converged() {
+        // Needs the LMI: J ⪰ eps·I forces m ≥ eps = 1 kg, but the bounds say m ≤ 0.5 kg.
+        let text = ONE_LINK.replace(
+            "bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }",
+            "bounds = { mass = [0.1, 0.5] }\n\n[bounds]\npseudo_inertia_eps = 1.0",
+        );
+        let model = Model::from_toml_str(&text, "infeasible.toml").unwrap();
+        let r = DMatrix::identity(14, 14);
+        let sol = solve_sdp(&model, &r, &SdpOptions::default()).unwrap();
+        assert!(!sol.converged);
+        assert!(sol.status.contains("Infeasible"), "status {}", sol.status);
+        // Plain contradictory bounds (m ≥ 5, m ≤ 4) on the built-in PSM.
+        let mut psm = Model::builtin("psm").unwrap();
+        let p0 = psm.frames[0].inertia.unwrap();
+        psm.frames[0].bounds.mass = Some([5.0, 4.0]);
+        let h = psm.random_regressor(50, 7);
+        let truth = vec![0.0; psm.n_params()];
+        let tau = &h * DVector::from_column_slice(&truth);
+        let r = r_factor(&h, &tau);
+        let sol = solve_sdp(&psm, &r, &SdpOptions::default()).unwrap();
+        assert!(!sol.converged);
+        assert_eq!(sol.status, "PrimalInfeasible", "m1 = {}", sol.params[p0 + 9]);
+        // The same model with override_bounds ignores the frame bounds and solves.
+        let options = SdpOptions {
+            override_bounds: true,
+            ..SdpOptions::default()
+        };
+        let sol = solve_sdp(&psm, &r, &options).unwrap();
+        assert!(sol.converged, "status {}", sol.status);
+    }
+
+    #[test]
+    fn sdp_rejects_bad_input() {
+        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
+        let mut r = DMatrix::identity(14, 14);
+        r[(2, 5)] = f64::NAN;
+        assert!(matches!(
+            solve_sdp(&model, &r, &SdpOptions::default()),
+            Err(SdpError::NonFinite { .. })
+        ));
+        let r = DMatrix::identity(13, 13);
+        assert!(matches!(
+            solve_sdp(&model, &r, &SdpOptions::default()),
+            Err(SdpError::Dimension { .. })
+        ));
+        let r = DMatrix::identity(14, 14);
+        let bad_prior = SdpOptions {
+            prior: Some(vec![f64::INFINITY; 13]),
+            ..SdpOptions::default()
+        };
+        assert!(matches!(
+            solve_sdp(&model, &r, &bad_prior),
+            Err(SdpError::NonFinite { .. })
+        ));
+        let bad_reg = SdpOptions {
+            regularization: f64::NAN,
+            ..SdpOptions::default()
+        };
+        assert!(matches!(
+            solve_sdp(&model, &r, &bad_reg),
+            Err(SdpError::Option { .. })
+        ));
+    }
+}

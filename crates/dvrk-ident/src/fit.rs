@@ -1,0 +1,441 @@
+//! The identification pipeline: log → model coordinates → known forces removed →
+//! processing → weighted observation → estimator → parameters, metrics and the result
+//! document.
+
+use dvrk_model::{inertia, Model, ParamKind, Workspace};
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+
+use crate::error::IdentError;
+use crate::estimate::ols::{base_least_squares, representative, BaseEstimate};
+use crate::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::observation::{Observation, Samples};
+use crate::result::*;
+use crate::signal::{process, Processing};
+use crate::trajectory::{Coordinates, Trajectory};
+
+/// Which estimator to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Ordinary least squares on the base parameters.
+    Ols,
+    /// Weighted least squares, joint weights 1 / (torque range on the training set).
+    Wls,
+    /// Iteratively re-weighted least squares: weights 1 / (residual std per joint).
+    Irls,
+    /// Physically consistent semidefinite fit over all parameters (WLS weights).
+    #[default]
+    Sdp,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Ols => "ols",
+            Method::Wls => "wls",
+            Method::Irls => "irls",
+            Method::Sdp => "sdp",
+        }
+    }
+}
+
+/// Settings of a fit. Defaults: SDP, the processing defaults, metrics over whole logs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FitSettings {
+    pub method: Method,
+    pub processing: Processing,
+    /// Metrics on the first N processed samples of the test log only (the 2019 protocol
+    /// uses the first period). `None`: all samples.
+    pub test_window: Option<usize>,
+    /// Re-weighting passes of IRLS.
+    pub irls_iterations: usize,
+    /// Tikhonov weight of the SDP toward zero, relative (see `estimate::sdp`).
+    pub sdp_regularization: f64,
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        FitSettings {
+            method: Method::default(),
+            processing: Processing::default(),
+            test_window: None,
+            irls_iterations: 5,
+            sdp_regularization: SdpOptions::default().regularization,
+        }
+    }
+}
+
+/// Processed samples in model coordinates, known forces subtracted from the torques.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    pub source: String,
+    pub time: Vec<f64>,
+    pub q: DMatrix<f64>,
+    pub dq: DMatrix<f64>,
+    pub ddq: DMatrix<f64>,
+    /// N·m or N, known forces subtracted
+    pub tau: DMatrix<f64>,
+}
+
+impl Prepared {
+    pub fn samples(&self) -> Samples<'_> {
+        Samples {
+            q: &self.q,
+            dq: &self.dq,
+            ddq: &self.ddq,
+            tau: &self.tau,
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.q.nrows()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The trajectory in model coordinates: columns matched to the robot's measured joint
+/// names (any order, extra joints ignored), then `q = M⁻¹ q_measured`,
+/// `q̇ = M⁻¹ q̇_measured`, `τ = Mᵀ τ_measured`.
+pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajectory, IdentError> {
+    let n = model.dof();
+    let mismatch = |message: String| IdentError::Mismatch {
+        source_name: traj.source.clone(),
+        message,
+    };
+    if traj.coordinates == Coordinates::Model {
+        if traj.dof() != n {
+            return Err(mismatch(format!(
+                "the log has {} joints in model coordinates but robot {} has {n} coordinates",
+                traj.dof(),
+                model.name
+            )));
+        }
+        return Ok(traj.clone());
+    }
+    let mut cols = Vec::with_capacity(n);
+    for name in &model.measured.joints {
+        match traj.joint_names.iter().position(|j| j == name) {
+            Some(c) => cols.push(c),
+            None => {
+                return Err(mismatch(format!(
+                    "joint `{name}` of robot {} is missing (the log has: {})",
+                    model.name,
+                    traj.joint_names.join(", ")
+                )))
+            }
+        }
+    }
+    let minv = model
+        .measured_to_model_matrix()
+        .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
+    let mt = model.measured.coupling.transpose();
+    let rows = traj.len();
+    let pick = |m: &DMatrix<f64>| DMatrix::from_fn(rows, n, |i, j| m[(i, cols[j])]);
+    let q = pick(&traj.q) * minv.transpose();
+    let dq = traj.dq.as_ref().map(|d| pick(d) * minv.transpose());
+    let tau = pick(&traj.tau) * mt.transpose();
+    Ok(Trajectory {
+        time: traj.time.clone(),
+        q,
+        dq,
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: traj.source.clone(),
+    })
+}
+
+/// Model coordinates, known forces subtracted (on the raw positions, as in 2019), then
+/// processed.
+pub fn prepare(
+    model: &Model,
+    traj: &Trajectory,
+    processing: &Processing,
+) -> Result<Prepared, IdentError> {
+    let mut t = to_model_coordinates(model, traj)?;
+    if model.has_known_forces() {
+        let n = model.dof();
+        let mut q = vec![0.0; n];
+        let mut known = vec![0.0; n];
+        for k in 0..t.len() {
+            for j in 0..n {
+                q[j] = t.q[(k, j)];
+            }
+            known.fill(0.0);
+            model.add_known_forces(&q, &mut known);
+            for j in 0..n {
+                t.tau[(k, j)] -= known[j];
+            }
+        }
+    }
+    let p = process(&t, processing).map_err(|error| IdentError::Signal {
+        source_name: t.source.clone(),
+        error,
+    })?;
+    if p.is_empty() {
+        return Err(IdentError::Mismatch {
+            source_name: t.source.clone(),
+            message: "no sample left after processing (log too short for the trimming?)".into(),
+        });
+    }
+    Ok(Prepared {
+        source: t.source,
+        time: p.time,
+        q: p.q,
+        dq: p.dq,
+        ddq: p.ddq,
+        tau: p.tau,
+    })
+}
+
+/// Predicted torques `H(q, q̇, q̈)·π` for every sample (known forces excluded, as the
+/// prepared torques).
+pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
+    let n = model.dof();
+    let mut ws = Workspace::new(model);
+    let mut out = DMatrix::zeros(data.len(), n);
+    let (mut q, mut dq, mut ddq, mut tau) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let s = data.samples();
+    for k in 0..data.len() {
+        s.read(k, &mut q, &mut dq, &mut ddq);
+        model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
+        for j in 0..n {
+            out[(k, j)] = tau[j];
+        }
+    }
+    out
+}
+
+/// Per-joint relative error `‖τ − τ̂‖ / ‖τ‖` and RMS error over the first `window`
+/// samples (all if `None`), computed like 2019 on torques without known forces.
+pub fn joint_metrics(
+    model: &Model,
+    params: &[f64],
+    data: &Prepared,
+    window: Option<usize>,
+) -> JointMetrics {
+    let pred = predict(model, params, data);
+    let rows = window.map_or(data.len(), |w| w.min(data.len()));
+    let n = model.dof();
+    let mut relative_error = Vec::with_capacity(n);
+    let mut rms = Vec::with_capacity(n);
+    for j in 0..n {
+        let (mut e2, mut t2) = (0.0, 0.0);
+        for k in 0..rows {
+            let e = data.tau[(k, j)] - pred[(k, j)];
+            e2 += e * e;
+            t2 += data.tau[(k, j)] * data.tau[(k, j)];
+        }
+        relative_error.push(if t2 > 0.0 { (e2 / t2).sqrt() } else { f64::NAN });
+        rms.push((e2 / rows.max(1) as f64).sqrt());
+    }
+    JointMetrics {
+        joints: model.coordinates.clone(),
+        samples: rows,
+        relative_error,
+        rms,
+    }
+}
+
+/// Joint weights `1 / (max − min)` of the prepared torques (1/N·m or 1/N).
+pub fn range_weights(data: &Prepared) -> Vec<f64> {
+    (0..data.tau.ncols())
+        .map(|j| {
+            let c = data.tau.column(j);
+            let range = c.max() - c.min();
+            if range > 0.0 {
+                1.0 / range
+            } else {
+                1.0
+            }
+        })
+        .collect()
+}
+
+fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> IdentError {
+    IdentError::RankDeficient {
+        source_name: source.to_string(),
+        message: format!(
+            "the data do not determine the base parameters ({} rows); undetermined: {}. \
+             Use a longer or more exciting trajectory.",
+            e.rows,
+            e.parameters.join(", ")
+        ),
+    }
+}
+
+/// Runs the whole fit. `test` (optional) is validated with `settings.test_window`.
+pub fn fit(
+    model: &Model,
+    train: &Trajectory,
+    test: Option<&Trajectory>,
+    settings: &FitSettings,
+) -> Result<FitResult, IdentError> {
+    let data = prepare(model, train, &settings.processing)?;
+    let test_data = match test {
+        Some(t) => Some(prepare(model, t, &settings.processing)?),
+        None => None,
+    };
+    let base = model.base_parameters()?;
+    let n = model.dof();
+    let p = model.n_params();
+    let started = std::time::Instant::now();
+
+    let mut weights = match settings.method {
+        Method::Ols | Method::Irls => vec![1.0; n],
+        Method::Wls | Method::Sdp => range_weights(&data),
+    };
+    let mut obs = Observation::assemble(model, data.samples(), &weights);
+    let mut estimate: BaseEstimate =
+        base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
+    let mut solver = SolverInfo {
+        name: "qr".into(),
+        status: "Solved".into(),
+        converged: true,
+        seconds: 0.0,
+        iterations: 1,
+    };
+    if settings.method == Method::Irls {
+        for it in 0..settings.irls_iterations {
+            let pi = representative(&base, &estimate.beta, p);
+            let pred = predict(model, &pi, &data);
+            let new: Vec<f64> = (0..n)
+                .map(|j| {
+                    let res = data.tau.column(j) - pred.column(j);
+                    let std = (res.norm_squared() / res.len().max(1) as f64).sqrt();
+                    if std > 0.0 {
+                        1.0 / std
+                    } else {
+                        1.0
+                    }
+                })
+                .collect();
+            weights = new;
+            obs = Observation::assemble(model, data.samples(), &weights);
+            estimate = base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
+            solver.iterations = it as u32 + 2;
+        }
+    }
+    let params = if settings.method == Method::Sdp {
+        let options = SdpOptions {
+            regularization: settings.sdp_regularization,
+            ..SdpOptions::default()
+        };
+        let sol = solve_sdp(model, obs.r(), &options)?;
+        solver = SolverInfo {
+            name: "clarabel".into(),
+            status: sol.status.clone(),
+            converged: sol.converged,
+            seconds: sol.seconds,
+            iterations: sol.iterations,
+        };
+        sol.params
+    } else {
+        representative(&base, &estimate.beta, p)
+    };
+    if settings.method != Method::Sdp {
+        solver.seconds = started.elapsed().as_secs_f64();
+    }
+    let beta = base.project(&params);
+    let train_metrics = joint_metrics(model, &params, &data, None);
+    let test_metrics = test_data
+        .as_ref()
+        .map(|t| joint_metrics(model, &params, t, settings.test_window));
+    Ok(build_result(
+        model,
+        &base,
+        settings,
+        params,
+        beta,
+        &estimate,
+        weights,
+        solver,
+        Metrics {
+            train: train_metrics,
+            test: test_metrics,
+        },
+        obs.rows(),
+    ))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_result(
+    model: &Model,
+    base: &dvrk_model::BaseParameters,
+    settings: &FitSettings,
+    params: Vec<f64>,
+    beta: Vec<f64>,
+    estimate: &BaseEstimate,
+    weights: Vec<f64>,
+    solver: SolverInfo,
+    metrics: Metrics,
+    rows: usize,
+) -> FitResult {
+    let names = model.param_names();
+    let mut links = Vec::new();
+    let mut consistency = Vec::new();
+    for &j in model.link_frames() {
+        let f = model.frame(j);
+        let p0 = f.inertia.expect("link");
+        let bary = &params[p0..p0 + 10];
+        let std = inertia::standard_from_barycentric(bary);
+        let min_eig = inertia::pseudo_inertia_min_eigenvalue(bary);
+        links.push(LinkResult {
+            frame: j,
+            link: f.name.clone(),
+            mass: std.mass,
+            com: std.com,
+            inertia_com: std.inertia_com,
+        });
+        consistency.push(Consistency {
+            frame: j,
+            link: f.name.clone(),
+            min_eigenvalue: min_eig,
+            consistent: min_eig > 0.0,
+        });
+    }
+    let base_parameters = (0..base.rank())
+        .map(|i| BaseParameterResult {
+            name: base.names[i].clone(),
+            expression: base.expressions[i].clone(),
+            value: beta[i],
+            std: estimate.std[i],
+        })
+        .collect();
+    let elements_ok = model.params.iter().zip(&params).all(|(p, v)| match p.kind {
+        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= 0.0,
+        _ => true,
+    });
+    FitResult {
+        tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
+        robot: model.name.clone(),
+        robot_source: model.source.clone(),
+        method: settings.method.name().into(),
+        settings: settings.clone(),
+        inputs: Vec::new(),
+        parameters: names.iter().cloned().zip(params.iter().copied()).collect(),
+        parameter_order: names,
+        links,
+        base_parameters,
+        consistency,
+        physically_consistent: elements_ok
+            && model
+                .link_frames()
+                .iter()
+                .all(|&j| {
+                    let p0 = model.frame(j).inertia.expect("link");
+                    inertia::pseudo_inertia_min_eigenvalue(&params[p0..p0 + 10]) > 0.0
+                }),
+        solver,
+        weights,
+        rows,
+        condition_number: estimate.condition_number,
+        sigma2: estimate.sigma2,
+        metrics,
+    }
+}

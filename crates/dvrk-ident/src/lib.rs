@@ -1,0 +1,23 @@
+//! Identification pipeline for coupled robot arms (dVRK PSM/MTM and others).
+//!
+//! Data flows one way: [`log`] reads joint-space logs into a [`Trajectory`],
+//! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
+//! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
+//! the parameters (least squares or the physically consistent semidefinite program),
+//! and [`fit`] runs the whole pipeline and builds the [`result`] document.
+
+pub mod error;
+pub mod estimate;
+pub mod log;
+pub mod observation;
+pub mod signal;
+pub mod trajectory;
+
+pub use error::IdentError;
+pub use trajectory::{Coordinates, Trajectory, TrajectoryError};
+pub mod fit;
+pub mod result;
+
+pub use fit::{fit, FitSettings, Method};
+pub use result::FitResult;
+pub mod cable;

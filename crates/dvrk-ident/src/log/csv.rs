@@ -1,0 +1,461 @@
+//! CSV readers and writers: the 2019 (wpi) headerless layout and headered CSV.
+
+use super::{fmt_f64, read_bytes, strip_bom, write_atomic, LogError};
+use crate::trajectory::{uniform_time, Coordinates, Signal, Trajectory};
+use csv::{ReaderBuilder, StringRecord, Trim, WriterBuilder};
+use nalgebra::DMatrix;
+use std::path::Path;
+
+/// Iterates the data records of a CSV byte buffer with their 1-based line numbers.
+/// Blank lines and lines starting with `#` are skipped; fields are trimmed; rows may
+/// have differing lengths (checked by the callers, for precise messages).
+fn records<'a>(
+    path: &'a Path,
+    bytes: &'a [u8],
+) -> impl Iterator<Item = Result<(u64, StringRecord), LogError>> + 'a {
+    let mut rdr = ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(strip_bom(bytes));
+    let mut done = false;
+    std::iter::from_fn(move || {
+        if done {
+            return None;
+        }
+        let mut record = StringRecord::new();
+        loop {
+            match rdr.read_record(&mut record) {
+                Ok(true) if record.iter().all(str::is_empty) => continue, // whitespace-only line
+                Ok(true) => {
+                    let line = record.position().map(|p| p.line()).unwrap_or(0);
+                    return Some(Ok((line, record)));
+                }
+                Ok(false) => {
+                    done = true;
+                    return None;
+                }
+                Err(e) => {
+                    done = true;
+                    return Some(Err(LogError::Csv {
+                        path: path.to_path_buf(),
+                        line: e.position().map(|p| p.line()),
+                        message: e.to_string(),
+                    }));
+                }
+            }
+        }
+    })
+}
+
+/// Parses one field as a finite number; the error names the file, line and column.
+fn parse_field(
+    path: &Path,
+    line: u64,
+    column: usize,
+    name: impl FnOnce() -> String,
+    text: &str,
+) -> Result<f64, LogError> {
+    match text.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(LogError::NonFinite {
+            path: path.to_path_buf(),
+            line,
+            column: column + 1,
+            name: name(),
+            text: text.to_string(),
+        }),
+        Err(_) => Err(LogError::MalformedNumber {
+            path: path.to_path_buf(),
+            line,
+            column: column + 1,
+            name: name(),
+            text: text.to_string(),
+        }),
+    }
+}
+
+fn wpi_column_name(column: usize, dof: usize) -> String {
+    let (block, j) = (column / dof, column % dof + 1);
+    match block {
+        0 => format!("q{j}"),
+        1 => format!("dq{j}"),
+        _ => format!("tau{j}"),
+    }
+}
+
+/// Reads the 2019 (wpi) layout: no header, each row `q1..qn, dq1..dqn, tau1..taun`
+/// (rad or m, rad/s or m/s, N·m or N), already in the model's coordinates. There are no
+/// time stamps: sample `k` is at `k / rate_hz` s. `dof` fixes the number of joints
+/// (the row must have `3 * dof` fields); `None` infers it as columns / 3. Joints are
+/// named `q1..qn`, like the model coordinates.
+///
+/// ```rust
+/// use dvrk_ident::log::read_wpi;
+/// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-wpi-{}.csv", std::process::id()));
+/// std::fs::write(&path, "0.1,0.2,1.0,2.0,-3.0,4.5\n0.2,0.3,1.0,2.0,-3.0,4.5\n").unwrap();
+/// let traj = read_wpi(&path, 200.0, None).unwrap();
+/// assert_eq!((traj.len(), traj.dof()), (2, 2));
+/// assert_eq!(traj.dq.as_ref().unwrap()[(0, 1)], 2.0);
+/// assert_eq!(traj.time[1], 0.005);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+pub fn read_wpi(
+    path: impl AsRef<Path>,
+    rate_hz: f64,
+    dof: Option<usize>,
+) -> Result<Trajectory, LogError> {
+    let path = path.as_ref();
+    if !(rate_hz.is_finite() && rate_hz > 0.0) {
+        return Err(LogError::InvalidRate {
+            path: path.to_path_buf(),
+            rate_hz,
+        });
+    }
+    let bytes = read_bytes(path)?;
+    let mut values: Vec<f64> = Vec::new();
+    let mut columns: Option<(usize, usize)> = None; // (columns, dof)
+    let mut rows = 0;
+    for rec in records(path, &bytes) {
+        let (line, rec) = rec?;
+        let (ncols, n) = match columns {
+            Some(c) => c,
+            None => {
+                let found = rec.len();
+                let ok = match dof {
+                    Some(d) => d > 0 && found == 3 * d,
+                    None => found > 0 && found % 3 == 0,
+                };
+                if !ok {
+                    return Err(LogError::DofMismatch {
+                        path: path.to_path_buf(),
+                        line,
+                        columns: found,
+                        dof,
+                    });
+                }
+                *columns.insert((found, found / 3))
+            }
+        };
+        if rec.len() != ncols {
+            return Err(LogError::ColumnCount {
+                path: path.to_path_buf(),
+                line,
+                expected: ncols,
+                found: rec.len(),
+            });
+        }
+        for (c, field) in rec.iter().enumerate() {
+            values.push(parse_field(path, line, c, || wpi_column_name(c, n), field)?);
+        }
+        rows += 1;
+    }
+    let Some((ncols, n)) = columns else {
+        return Err(LogError::Empty {
+            path: path.to_path_buf(),
+            what: "no rows",
+        });
+    };
+    let all = DMatrix::from_row_slice(rows, ncols, &values);
+    Ok(Trajectory {
+        time: uniform_time(rows, rate_hz),
+        q: all.columns(0, n).into_owned(),
+        dq: Some(all.columns(n, n).into_owned()),
+        tau: all.columns(2 * n, n).into_owned(),
+        joint_names: (1..=n).map(|j| format!("q{j}")).collect(),
+        coordinates: Coordinates::Model,
+        source: path.display().to_string(),
+    })
+}
+
+/// What a headered-CSV column holds.
+#[derive(Clone, Copy, PartialEq)]
+enum Kind {
+    Time,
+    Joint(Signal, usize), // signal, joint index (into the position-column order)
+}
+
+/// Coordinates stated in a leading `# ... coordinates: model|measured` comment.
+fn stated_coordinates(bytes: &[u8]) -> Option<Coordinates> {
+    let text = String::from_utf8_lossy(strip_bom(bytes));
+    for line in text.lines().map(str::trim) {
+        if line.is_empty() {
+            continue;
+        }
+        let comment = line.strip_prefix('#')?.to_ascii_lowercase();
+        if let Some(rest) = comment.split("coordinates:").nth(1) {
+            let word: String = rest
+                .trim_start()
+                .chars()
+                .take_while(|c| c.is_ascii_alphabetic())
+                .collect();
+            match word.as_str() {
+                "model" => return Some(Coordinates::Model),
+                "measured" => return Some(Coordinates::Measured),
+                _ => {}
+            }
+        }
+    }
+    None
+}
+
+/// Reads a headered CSV log. The header has a `time` column (s), and for each joint
+/// `position.<joint>` (rad or m), `effort.<joint>` (N·m or N) and optionally
+/// `velocity.<joint>` (rad/s or m/s; for all joints or none), in any order. The joint
+/// order is the order of the position columns; joint names may contain dots (the text
+/// after the first dot). Unknown or duplicate columns are errors (a typo would
+/// otherwise silently drop data). Time must strictly increase.
+///
+/// Columns are in measured joint space unless a comment line before the header says
+/// `coordinates: model` (as [`write_headered`] writes it). Lines starting with `#`
+/// are comments.
+///
+/// ```rust
+/// use dvrk_ident::log::read_headered;
+/// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-csv-{}.csv", std::process::id()));
+/// std::fs::write(&path, "effort.yaw,time,position.yaw\n0.5,0.0,1.0\n0.6,0.01,1.1\n").unwrap();
+/// let traj = read_headered(&path).unwrap();
+/// assert_eq!(traj.joint_names, vec!["yaw"]);
+/// assert!(traj.dq.is_none());
+/// assert_eq!(traj.tau[(1, 0)], 0.6);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+pub fn read_headered(path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+    let path = path.as_ref();
+    let p = || path.to_path_buf();
+    let bytes = read_bytes(path)?;
+    let mut recs = records(path, &bytes);
+    let (header_line, header) = match recs.next() {
+        None => {
+            return Err(LogError::Empty {
+                path: p(),
+                what: "no rows",
+            })
+        }
+        Some(r) => r?,
+    };
+    // Classify columns.
+    let names: Vec<String> = header.iter().map(str::to_string).collect();
+    for (i, n) in names.iter().enumerate() {
+        if names[..i].contains(n) {
+            return Err(LogError::DuplicateColumn {
+                path: p(),
+                line: header_line,
+                column: n.clone(),
+            });
+        }
+    }
+    let mut joints: Vec<String> = Vec::new();
+    let mut parsed: Vec<Option<(Signal, String)>> = Vec::with_capacity(names.len());
+    for n in &names {
+        if n == "time" {
+            parsed.push(None);
+            continue;
+        }
+        let (prefix, joint) = n.split_once('.').unwrap_or((n.as_str(), ""));
+        let signal = match prefix {
+            "position" => Signal::Position,
+            "velocity" => Signal::Velocity,
+            "effort" => Signal::Effort,
+            _ => Signal::Time,
+        };
+        if signal == Signal::Time || joint.is_empty() {
+            return Err(LogError::UnknownColumn {
+                path: p(),
+                line: header_line,
+                column: n.clone(),
+            });
+        }
+        if signal == Signal::Position {
+            joints.push(joint.to_string());
+        }
+        parsed.push(Some((signal, joint.to_string())));
+    }
+    if !names.iter().any(|n| n == "time") {
+        return Err(LogError::MissingTime { path: p() });
+    }
+    if joints.is_empty() {
+        return Err(LogError::NoJoints { path: p() });
+    }
+    let dof = joints.len();
+    let mut kinds = Vec::with_capacity(names.len());
+    let mut have = vec![[false; 2]; dof]; // velocity, effort
+    for (n, pc) in names.iter().zip(&parsed) {
+        match pc {
+            None => kinds.push(Kind::Time),
+            Some((signal, joint)) => {
+                let Some(j) = joints.iter().position(|x| x == joint) else {
+                    return Err(LogError::OrphanColumn {
+                        path: p(),
+                        column: n.clone(),
+                        joint: joint.clone(),
+                    });
+                };
+                match signal {
+                    Signal::Velocity => have[j][0] = true,
+                    Signal::Effort => have[j][1] = true,
+                    _ => {}
+                }
+                kinds.push(Kind::Joint(*signal, j));
+            }
+        }
+    }
+    if let Some(j) = have.iter().position(|h| !h[1]) {
+        return Err(LogError::MissingJointColumn {
+            path: p(),
+            signal: Signal::Effort,
+            joint: joints[j].clone(),
+        });
+    }
+    let with_velocity = have.iter().any(|h| h[0]);
+    if with_velocity {
+        if let Some(j) = have.iter().position(|h| !h[0]) {
+            return Err(LogError::PartialVelocity {
+                path: p(),
+                joint: joints[j].clone(),
+            });
+        }
+    }
+    // Data rows.
+    let mut time = Vec::new();
+    let mut q = Vec::new();
+    let mut dq = Vec::new();
+    let mut tau = Vec::new();
+    let mut row = vec![0.0; names.len()];
+    let mut last: Option<f64> = None;
+    for rec in recs {
+        let (line, rec) = rec?;
+        if rec.len() != names.len() {
+            return Err(LogError::ColumnCount {
+                path: p(),
+                line,
+                expected: names.len(),
+                found: rec.len(),
+            });
+        }
+        for (c, field) in rec.iter().enumerate() {
+            row[c] = parse_field(path, line, c, || names[c].clone(), field)?;
+        }
+        let base = q.len();
+        q.resize(base + dof, 0.0);
+        tau.resize(base + dof, 0.0);
+        if with_velocity {
+            dq.resize(base + dof, 0.0);
+        }
+        for (c, kind) in kinds.iter().enumerate() {
+            match *kind {
+                Kind::Time => {
+                    let t = row[c];
+                    if let Some(prev) = last {
+                        if t <= prev {
+                            return Err(LogError::NonMonotonicTime {
+                                path: p(),
+                                line,
+                                previous: prev,
+                                current: t,
+                            });
+                        }
+                    }
+                    last = Some(t);
+                    time.push(t);
+                }
+                Kind::Joint(Signal::Position, j) => q[base + j] = row[c],
+                Kind::Joint(Signal::Velocity, j) => dq[base + j] = row[c],
+                Kind::Joint(_, j) => tau[base + j] = row[c],
+            }
+        }
+    }
+    let n = time.len();
+    if n == 0 {
+        return Err(LogError::Empty {
+            path: p(),
+            what: "a header but no data rows",
+        });
+    }
+    Ok(Trajectory {
+        time,
+        q: DMatrix::from_row_slice(n, dof, &q),
+        dq: with_velocity.then(|| DMatrix::from_row_slice(n, dof, &dq)),
+        tau: DMatrix::from_row_slice(n, dof, &tau),
+        joint_names: joints,
+        coordinates: stated_coordinates(&bytes).unwrap_or(Coordinates::Measured),
+        source: path.display().to_string(),
+    })
+}
+
+fn validated(path: &Path, traj: &Trajectory) -> Result<(), LogError> {
+    traj.validate().map_err(|source| LogError::Invalid {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Writes the 2019 (wpi) layout (see [`read_wpi`]) atomically. The layout holds model
+/// coordinates and velocities and no time stamps: a trajectory in measured coordinates
+/// or without velocities is refused, and the time stamps are dropped (the reader
+/// assumes a uniform clock at the rate it is given).
+pub fn write_wpi(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogError> {
+    let path = path.as_ref();
+    validated(path, traj)?;
+    if traj.coordinates != Coordinates::Model {
+        return Err(LogError::WrongCoordinates {
+            path: path.to_path_buf(),
+            found: traj.coordinates,
+        });
+    }
+    let Some(dq) = &traj.dq else {
+        return Err(LogError::MissingVelocity {
+            path: path.to_path_buf(),
+        });
+    };
+    write_atomic(path, |w| {
+        let mut wr = WriterBuilder::new().has_headers(false).from_writer(w);
+        let mut rec: Vec<String> = Vec::with_capacity(3 * traj.dof());
+        for i in 0..traj.len() {
+            rec.clear();
+            for m in [&traj.q, dq, &traj.tau] {
+                rec.extend(m.row(i).iter().map(|v| fmt_f64(*v)));
+            }
+            wr.write_record(&rec)?;
+        }
+        wr.flush()
+    })
+}
+
+/// Writes a headered CSV (see [`read_headered`]) atomically: a comment line stating the
+/// coordinates, then `time, position.<joint>..., [velocity.<joint>...,]
+/// effort.<joint>...`. Values are written with the shortest representation that reads
+/// back to the same `f64`, so a write-read round trip is exact.
+pub fn write_headered(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogError> {
+    let path = path.as_ref();
+    validated(path, traj)?;
+    write_atomic(path, |w| {
+        writeln!(
+            w,
+            "# dvrk-ident joint log; coordinates: {}; time s, position rad|m, velocity rad/s|m/s, effort N*m|N",
+            traj.coordinates
+        )?;
+        let mut wr = WriterBuilder::new().has_headers(false).from_writer(w);
+        let mut header = vec!["time".to_string()];
+        let mut signals: Vec<(&str, &DMatrix<f64>)> = vec![("position", &traj.q)];
+        if let Some(dq) = &traj.dq {
+            signals.push(("velocity", dq));
+        }
+        signals.push(("effort", &traj.tau));
+        for (prefix, _) in &signals {
+            header.extend(traj.joint_names.iter().map(|j| format!("{prefix}.{j}")));
+        }
+        wr.write_record(&header)?;
+        let mut rec: Vec<String> = Vec::with_capacity(header.len());
+        for i in 0..traj.len() {
+            rec.clear();
+            rec.push(fmt_f64(traj.time[i]));
+            for (_, m) in &signals {
+                rec.extend(m.row(i).iter().map(|v| fmt_f64(*v)));
+            }
+            wr.write_record(&rec)?;
+        }
+        wr.flush()
+    })
+}

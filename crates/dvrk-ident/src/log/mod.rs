@@ -1,0 +1,483 @@
+//! Reading and writing joint-space logs.
+//!
+//! Formats ([`LogFormat`]):
+//! - [`LogFormat::Wpi`]: the 2019 dVRK identification package's CSV: no header,
+//!   `q1..qn, dq1..dqn, tau1..taun` per row, no time stamps (the caller gives the rate),
+//!   values in the model's coordinates. See [`read_wpi`] / [`write_wpi`].
+//! - [`LogFormat::Csv`]: headered CSV with `time`, `position.<joint>`,
+//!   `velocity.<joint>` (optional: all or none) and `effort.<joint>` columns in any
+//!   order. See [`read_headered`] / [`write_headered`].
+//! - [`LogFormat::Mcap`]: ROS 2 `sensor_msgs/JointState` recordings; the reader belongs
+//!   in `log/mcap.rs` and is not written yet ([`read`] reports it as unsupported).
+//!
+//! Readers never panic on bad input: every problem is a [`LogError`] naming the file,
+//! the line (1-based, as an editor shows it) and what is wrong. Writers write to a
+//! temporary file in the target directory and rename it, so a crash never leaves a
+//! half-written log under the final name.
+
+mod csv;
+
+pub use self::csv::{read_headered, read_wpi, write_headered, write_wpi};
+
+use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
+use serde::{Deserialize, Serialize};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use thiserror::Error;
+
+/// A log file layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+#[non_exhaustive]
+pub enum LogFormat {
+    /// 2019 layout: headerless `q, dq, tau` columns, model coordinates, implicit clock.
+    Wpi,
+    /// Headered CSV: `time`, `position.<joint>`, `velocity.<joint>`, `effort.<joint>`.
+    Csv,
+    /// ROS 2 MCAP with `sensor_msgs/JointState` (reader not implemented yet).
+    Mcap,
+}
+
+impl std::fmt::Display for LogFormat {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            LogFormat::Wpi => "wpi",
+            LogFormat::Csv => "csv",
+            LogFormat::Mcap => "mcap",
+        })
+    }
+}
+
+impl std::str::FromStr for LogFormat {
+    type Err = String;
+
+    /// Parses `wpi` (also `2019`), `csv` or `mcap`, case-insensitively.
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.to_ascii_lowercase().as_str() {
+            "wpi" | "2019" => Ok(LogFormat::Wpi),
+            "csv" => Ok(LogFormat::Csv),
+            "mcap" => Ok(LogFormat::Mcap),
+            other => Err(format!(
+                "unknown log format {other:?}: expected wpi, csv or mcap"
+            )),
+        }
+    }
+}
+
+/// Why a log could not be read or written. Messages start with `file:line:` where a
+/// line is known.
+#[derive(Debug, Error)]
+pub enum LogError {
+    /// The file could not be opened, read, written or renamed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The OS error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// No data rows.
+    #[error("{}: empty log: {what}", path.display())]
+    Empty {
+        /// The file.
+        path: PathBuf,
+        /// What is missing (e.g. "no rows", "a header but no data rows").
+        what: &'static str,
+    },
+    /// A field that is not a number.
+    #[error("{}:{line}: column {column} ({name}): malformed number {text:?}", path.display())]
+    MalformedNumber {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: u64,
+        /// Column, 1-based.
+        column: usize,
+        /// Column name (header, or `q3`, `dq3`, `tau3` for the 2019 layout).
+        name: String,
+        /// The field's text.
+        text: String,
+    },
+    /// NaN or infinite value in the file.
+    #[error("{}:{line}: column {column} ({name}): non-finite value {text:?}", path.display())]
+    NonFinite {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: u64,
+        /// Column, 1-based.
+        column: usize,
+        /// Column name.
+        name: String,
+        /// The field's text.
+        text: String,
+    },
+    /// A row whose number of fields differs from the header or the first row.
+    #[error("{}:{line}: {found} columns, expected {expected}", path.display())]
+    ColumnCount {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: u64,
+        /// Expected number of fields.
+        expected: usize,
+        /// Number of fields found.
+        found: usize,
+    },
+    /// A 2019-layout column count that is not `3 * dof`.
+    #[error("{}:{line}: {columns} columns cannot hold q, dq, tau for {}", path.display(), match dof { Some(d) => format!("{d} joints (expected {} columns)", 3 * d), None => "any number of joints (not divisible by 3)".to_string() })]
+    DofMismatch {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: u64,
+        /// Number of columns.
+        columns: usize,
+        /// Number of joints requested by the caller, if any.
+        dof: Option<usize>,
+    },
+    /// A required column is missing from a headered CSV.
+    #[error("{}: missing {signal} column for joint {joint:?} (expected a column named \"{signal}.{joint}\")", path.display())]
+    MissingJointColumn {
+        /// The file.
+        path: PathBuf,
+        /// Which signal.
+        signal: Signal,
+        /// Joint name.
+        joint: String,
+    },
+    /// Velocity columns given for some joints but not all.
+    #[error("{}: missing velocity column for joint {joint:?}: velocity columns must be given for all joints or none", path.display())]
+    PartialVelocity {
+        /// The file.
+        path: PathBuf,
+        /// The first joint without velocity.
+        joint: String,
+    },
+    /// A headered CSV without a `time` column.
+    #[error("{}: missing column \"time\" (s)", path.display())]
+    MissingTime {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A headered CSV without any `position.<joint>` column.
+    #[error("{}: no position.<joint> column: the joint list is taken from the position columns", path.display())]
+    NoJoints {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A header name that is not `time`, `position.*`, `velocity.*` or `effort.*`.
+    #[error("{}:{line}: unknown column {column:?}: expected time, position.<joint>, velocity.<joint> or effort.<joint>", path.display())]
+    UnknownColumn {
+        /// The file.
+        path: PathBuf,
+        /// Line of the header, 1-based.
+        line: u64,
+        /// The header name.
+        column: String,
+    },
+    /// A velocity or effort column for a joint that has no position column.
+    #[error("{}: column {column:?} has no matching \"position.{joint}\" column", path.display())]
+    OrphanColumn {
+        /// The file.
+        path: PathBuf,
+        /// The header name.
+        column: String,
+        /// Its joint.
+        joint: String,
+    },
+    /// The same header name twice.
+    #[error("{}:{line}: duplicate column {column:?}", path.display())]
+    DuplicateColumn {
+        /// The file.
+        path: PathBuf,
+        /// Line of the header, 1-based.
+        line: u64,
+        /// The header name.
+        column: String,
+    },
+    /// Time stamps that do not strictly increase.
+    #[error("{}:{line}: time {current} s is not after the previous row's {previous} s", path.display())]
+    NonMonotonicTime {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based.
+        line: u64,
+        /// Previous time, s.
+        previous: f64,
+        /// This row's time, s.
+        current: f64,
+    },
+    /// The 2019 layout has no time stamps and no rate was given.
+    #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate in Hz (the 2019 dVRK logs are 200 Hz)", path.display())]
+    MissingRate {
+        /// The file.
+        path: PathBuf,
+    },
+    /// A rate that is not positive and finite.
+    #[error("{}: sampling rate must be positive and finite, got {rate_hz} Hz", path.display())]
+    InvalidRate {
+        /// The file.
+        path: PathBuf,
+        /// The rate, Hz.
+        rate_hz: f64,
+    },
+    /// A CSV-level problem (e.g. invalid UTF-8).
+    #[error("{}{}: {message}", path.display(), line.map(|l| format!(":{l}")).unwrap_or_default())]
+    Csv {
+        /// The file.
+        path: PathBuf,
+        /// Line, 1-based, when known.
+        line: Option<u64>,
+        /// The parser's message.
+        message: String,
+    },
+    /// A format this build cannot read or write yet.
+    #[error("{}: {format} logs are not supported yet: {reason}", path.display())]
+    Unsupported {
+        /// The file.
+        path: PathBuf,
+        /// The format.
+        format: LogFormat,
+        /// Why / what to do instead.
+        reason: &'static str,
+    },
+    /// Writing the 2019 layout, which holds model coordinates, from a measured-joint
+    /// trajectory.
+    #[error("{}: the 2019 (wpi) layout holds model coordinates but the trajectory is in {found} coordinates: map it to model coordinates first", path.display())]
+    WrongCoordinates {
+        /// The file.
+        path: PathBuf,
+        /// The trajectory's coordinates.
+        found: Coordinates,
+    },
+    /// Writing the 2019 layout, which requires velocities, from a trajectory without.
+    #[error("{}: the 2019 (wpi) layout needs velocities but the trajectory has none", path.display())]
+    MissingVelocity {
+        /// The file.
+        path: PathBuf,
+    },
+    /// The trajectory to write is invalid.
+    #[error("{}: cannot write an invalid trajectory: {source}", path.display())]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with the trajectory.
+        #[source]
+        source: TrajectoryError,
+    },
+}
+
+/// Reads a log, choosing the layout from `format` or, when `None`, from the file:
+/// `.mcap` is MCAP; otherwise a file whose first non-comment row parses as all numbers
+/// is the 2019 (wpi) layout and anything else a headered CSV.
+///
+/// `rate_hz` (Hz) is required for the 2019 layout, which has no time stamps (the dVRK
+/// logs are 200 Hz), and ignored for formats with time stamps. The 2019 layout's number
+/// of joints is inferred as columns / 3 (use [`read_wpi`] to force it).
+///
+/// ```rust
+/// use dvrk_ident::log::{read, write_wpi};
+/// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+/// use nalgebra::DMatrix;
+/// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-read-{}.csv", std::process::id()));
+/// let traj = Trajectory {
+///     time: uniform_time(4, 200.0),
+///     q: DMatrix::from_element(4, 2, 0.5),
+///     dq: Some(DMatrix::zeros(4, 2)),
+///     tau: DMatrix::from_element(4, 2, -1.25),
+///     joint_names: vec!["q1".into(), "q2".into()],
+///     coordinates: Coordinates::Model,
+///     source: "doc".into(),
+/// };
+/// write_wpi(&path, &traj).unwrap();
+/// let back = read(&path, None, Some(200.0)).unwrap(); // detected as the 2019 layout
+/// assert_eq!(back.dof(), 2);
+/// assert_eq!(back.tau[(3, 1)], -1.25);
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+pub fn read(
+    path: impl AsRef<Path>,
+    format: Option<LogFormat>,
+    rate_hz: Option<f64>,
+) -> Result<Trajectory, LogError> {
+    let path = path.as_ref();
+    let format = match format {
+        Some(f) => f,
+        None => detect_format(path)?,
+    };
+    match format {
+        LogFormat::Wpi => {
+            let rate = rate_hz.ok_or_else(|| LogError::MissingRate {
+                path: path.to_path_buf(),
+            })?;
+            read_wpi(path, rate, None)
+        }
+        LogFormat::Csv => read_headered(path),
+        // The MCAP reader goes in log/mcap.rs; dispatch to it here.
+        LogFormat::Mcap => Err(LogError::Unsupported {
+            path: path.to_path_buf(),
+            format,
+            reason:
+                "convert to headered CSV (time, position.<joint>, velocity.<joint>, effort.<joint>)",
+        }),
+    }
+}
+
+/// Writes a trajectory in the given layout (atomically). See [`write_wpi`] and
+/// [`write_headered`] for what each layout requires.
+pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Result<(), LogError> {
+    let path = path.as_ref();
+    match format {
+        LogFormat::Wpi => write_wpi(path, traj),
+        LogFormat::Csv => write_headered(path, traj),
+        LogFormat::Mcap => Err(LogError::Unsupported {
+            path: path.to_path_buf(),
+            format,
+            reason: "write headered CSV instead",
+        }),
+    }
+}
+
+/// Guesses a file's layout: `.mcap` extension is MCAP; otherwise the first row that is
+/// not blank or a `#` comment decides: all fields numbers means the headerless 2019
+/// layout, else a headered CSV.
+pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
+    let path = path.as_ref();
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        return Ok(LogFormat::Mcap);
+    }
+    let bytes = read_bytes(path)?;
+    let text = String::from_utf8_lossy(strip_bom(&bytes));
+    let first = text
+        .lines()
+        .map(str::trim)
+        .find(|l| !l.is_empty() && !l.starts_with('#'));
+    match first {
+        None => Err(LogError::Empty {
+            path: path.to_path_buf(),
+            what: "no rows",
+        }),
+        Some(line) => {
+            let numeric = line
+                .split(',')
+                .all(|f| f.trim().trim_matches('"').parse::<f64>().is_ok());
+            Ok(if numeric {
+                LogFormat::Wpi
+            } else {
+                LogFormat::Csv
+            })
+        }
+    }
+}
+
+pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, LogError> {
+    std::fs::read(path).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
+}
+
+/// Formats a value so that parsing it gives back the same `f64` (shortest round-trip
+/// representation), in plain notation for ordinary magnitudes and exponent notation for
+/// very small or large ones (Rust's plain `{}` would print 1e-300 with 300 zeros).
+pub(crate) fn fmt_f64(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || (1e-5..1e16).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
+static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+/// Writes `path` atomically: the content goes to a new temporary file in the same
+/// directory (same file system, so the rename is atomic), is flushed to disk, then
+/// renamed over `path`. On failure the temporary file is removed and `path` is left
+/// untouched.
+pub(crate) fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), LogError> {
+    let io_err = |source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path.file_name().ok_or_else(|| {
+        io_err(std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "not a file path",
+        ))
+    })?;
+    let tmp = dir.join(format!(
+        ".{}.{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| -> std::io::Result<()> {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        let mut w = std::io::BufWriter::new(file);
+        fill(&mut w)?;
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(io_err(e));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn format_names() {
+        for f in [LogFormat::Wpi, LogFormat::Csv, LogFormat::Mcap] {
+            assert_eq!(f.to_string().parse::<LogFormat>().unwrap(), f);
+        }
+        assert_eq!("2019".parse::<LogFormat>().unwrap(), LogFormat::Wpi);
+        assert!("xls".parse::<LogFormat>().is_err());
+    }
+
+    #[test]
+    fn float_format_round_trips() {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            -0.1,
+            1e-300,
+            -2.5e-7,
+            1e20,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+            0.1 + 0.2,
+            -0.43909142302978293,
+        ] {
+            let s = fmt_f64(v);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
+            assert!(s.len() < 30, "{s}");
+        }
+    }
+}
