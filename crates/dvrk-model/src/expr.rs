@@ -1,22 +1,35 @@
 //! Expressions of the generalized coordinates, parsed by `exmex`.
 //!
-//! Constants are substituted as numbers at load time so that the evaluated expression only
-//! has coordinates as variables; evaluation then fills a stack buffer, which keeps the
-//! real-time path free of allocation.
+//! Constants stay exmex variables whose values are filled in at evaluation, with the
+//! coordinates, from a stack buffer: evaluation then allocates nothing (exmex keeps up to
+//! [`MAX_EXPR_NODES`] operands on the stack, so longer expressions are refused at load
+//! time), and nothing recursive runs on the expression tree (deep trees would overflow
+//! the stack).
 
 use exmex::prelude::*;
-use exmex::{Differentiate, FlatEx};
+use exmex::FlatEx;
 
-/// Largest number of distinct coordinates one expression may use (the stack buffer size).
-pub const MAX_EXPR_VARS: usize = 16;
+/// Largest number of distinct names (coordinates and constants) in one expression: the
+/// size of the evaluation buffer.
+pub const MAX_EXPR_VARS: usize = 32;
+/// Largest number of operands (numbers and names) in one expression: what exmex
+/// evaluates on the stack.
+pub const MAX_EXPR_NODES: usize = 32;
 
-/// A parsed expression `f(q)` with constants already substituted.
+/// What an exmex variable reads.
+#[derive(Clone, Copy, Debug)]
+enum Slot {
+    Coordinate(usize),
+    Constant(f64),
+}
+
+/// A parsed expression `f(q)`.
 #[derive(Clone, Debug)]
 pub struct Expr {
     text: String,
     flat: FlatEx<f64>,
-    /// For each exmex variable (alphabetical order), the coordinate index it reads.
-    vars: Vec<usize>,
+    /// For each exmex variable (alphabetical order), where its value comes from.
+    slots: Vec<Slot>,
 }
 
 /// An affine function `s = a·q + b`, stored sparsely (only non-zero coefficients).
@@ -126,8 +139,10 @@ pub enum ExprError {
     Parse(String),
     /// It names something that is neither a coordinate nor a constant.
     Unknown(String),
-    /// It uses more than [`MAX_EXPR_VARS`] coordinates.
+    /// It uses more than [`MAX_EXPR_VARS`] names.
     TooManyVariables,
+    /// It has more operands than [`MAX_EXPR_NODES`] (count given).
+    TooLong(usize),
     /// It must be affine in the coordinates but is not.
     NotAffine,
     /// It must be constant but depends on coordinates.
@@ -145,8 +160,16 @@ impl std::fmt::Display for ExprError {
                 "unknown name `{v}` (not a coordinate nor a constant; predefined: pi, deg)"
             ),
             ExprError::TooManyVariables => {
-                write!(f, "expression uses more than {MAX_EXPR_VARS} coordinates")
+                write!(
+                    f,
+                    "expression uses more than {MAX_EXPR_VARS} distinct names"
+                )
             }
+            ExprError::TooLong(n) => write!(
+                f,
+                "expression has {n} operands; at most {MAX_EXPR_NODES} are evaluated without \
+                 allocation (split it with constants, or simplify it)"
+            ),
             ExprError::NotAffine => write!(
                 f,
                 "must be affine in the coordinates (a·q + b), but it is not"
@@ -166,44 +189,30 @@ pub struct Scope<'a> {
 }
 
 impl Expr {
-    /// Parses `text`, substituting constants from the scope.
+    /// Parses `text`; names must be constants of the scope or coordinates.
     pub fn parse(text: &str, scope: &Scope<'_>) -> Result<Expr, ExprError> {
-        let raw = FlatEx::<f64>::parse(text).map_err(|e| ExprError::Parse(e.to_string()))?;
-        for v in raw.var_names() {
-            let known = scope.constants.iter().any(|(n, _)| n == v)
-                || scope.coordinates.iter().any(|c| c == v);
-            if !known {
+        let operands = count_operands(text);
+        if operands > MAX_EXPR_NODES {
+            return Err(ExprError::TooLong(operands));
+        }
+        let flat = FlatEx::<f64>::parse(text).map_err(|e| ExprError::Parse(e.to_string()))?;
+        let mut slots = Vec::with_capacity(flat.var_names().len());
+        for v in flat.var_names() {
+            if let Some(k) = scope.coordinates.iter().position(|c| c == v) {
+                slots.push(Slot::Coordinate(k));
+            } else if let Some((_, val)) = scope.constants.iter().find(|(n, _)| n == v) {
+                slots.push(Slot::Constant(*val));
+            } else {
                 return Err(ExprError::Unknown(v.clone()));
             }
         }
-        let mut sub = |var: &str| {
-            scope
-                .constants
-                .iter()
-                .find(|(n, _)| n == var)
-                .map(|(_, val)| FlatEx::<f64>::from_num(*val))
-        };
-        let flat = raw
-            .subs(&mut sub)
-            .map_err(|e| ExprError::Parse(e.to_string()))?;
-        let vars: Vec<usize> = flat
-            .var_names()
-            .iter()
-            .map(|v| {
-                scope
-                    .coordinates
-                    .iter()
-                    .position(|c| c == v)
-                    .expect("remaining variables are coordinates")
-            })
-            .collect();
-        if vars.len() > MAX_EXPR_VARS {
+        if slots.len() > MAX_EXPR_VARS {
             return Err(ExprError::TooManyVariables);
         }
         Ok(Expr {
             text: text.to_string(),
             flat,
-            vars,
+            slots,
         })
     }
 
@@ -214,7 +223,7 @@ impl Expr {
 
     /// True when no coordinate appears.
     pub fn is_constant(&self) -> bool {
-        self.vars.is_empty()
+        !self.slots.iter().any(|s| matches!(s, Slot::Coordinate(_)))
     }
 
     /// Evaluates at coordinates `q` without allocating. A failed evaluation gives NaN,
@@ -222,26 +231,33 @@ impl Expr {
     #[inline]
     pub fn eval(&self, q: &[f64]) -> f64 {
         let mut buf = [0.0; MAX_EXPR_VARS];
-        for (slot, &k) in buf.iter_mut().zip(&self.vars) {
-            *slot = q[k];
+        for (slot, s) in buf.iter_mut().zip(&self.slots) {
+            *slot = match *s {
+                Slot::Coordinate(k) => q[k],
+                Slot::Constant(v) => v,
+            };
         }
-        self.flat.eval(&buf[..self.vars.len()]).unwrap_or(f64::NAN)
+        self.flat.eval(&buf[..self.slots.len()]).unwrap_or(f64::NAN)
+    }
+
+    /// Coordinates the expression reads.
+    fn coordinates(&self) -> impl Iterator<Item = usize> + '_ {
+        self.slots.iter().filter_map(|s| match s {
+            Slot::Coordinate(k) => Some(*k),
+            Slot::Constant(_) => None,
+        })
     }
 
     /// The value of a constant expression.
     pub fn constant_value(&self, coordinate_names: &[String]) -> Result<f64, ExprError> {
         if !self.is_constant() {
             let names = self
-                .vars
-                .iter()
-                .map(|&k| coordinate_names[k].clone())
+                .coordinates()
+                .map(|k| coordinate_names[k].clone())
                 .collect();
             return Err(ExprError::NotConstant(names));
         }
-        let v = self
-            .flat
-            .eval(&[])
-            .map_err(|e| ExprError::Eval(e.to_string()))?;
+        let v = self.eval(&[]);
         if v.is_finite() {
             Ok(v)
         } else {
@@ -251,60 +267,96 @@ impl Expr {
 
     /// Extracts `a` and `b` of an affine expression, checking affinity.
     ///
-    /// The coefficients come from exmex's symbolic partial derivatives (exact for
-    /// literals such as `1.0186`); affinity is then checked numerically: each derivative
-    /// must be the same at several points and the expression must equal `a·q + b` there.
+    /// `b = f(0)`; `a_k` from a symmetric difference over a wide step (the offset
+    /// cancels), snapped to the shortest decimal within a few ulps, so that `1.0186*q5`
+    /// gives exactly 1.0186. The expression must then equal `a·q + b` at several other
+    /// points (a nonlinear term cannot pass).
     pub fn affine(&self, n_coordinates: usize) -> Result<Affine, ExprError> {
-        let n_vars = self.vars.len();
-        let probes: [f64; 4] = [0.0, 0.731, -1.913, 2.417];
-        let point =
-            |p: usize, i: usize| probes[(p + 3 * i) % probes.len()] * (1.0 + 0.1 * i as f64);
-        let mut terms = Vec::new();
-        for (i, &k) in self.vars.iter().enumerate() {
-            let d = self
-                .flat
-                .clone()
-                .partial(i)
-                .map_err(|e| ExprError::Parse(e.to_string()))?;
-            let vals: Vec<f64> = (0..probes.len())
-                .map(|p| {
-                    let x: Vec<f64> = (0..n_vars).map(|j| point(p, j)).collect();
-                    d.eval(&x).unwrap_or(f64::NAN)
-                })
-                .collect();
-            let c = vals[0];
-            if !c.is_finite() || vals.iter().any(|v| (v - c).abs() > 1e-12 * (1.0 + c.abs())) {
-                return Err(ExprError::NotAffine);
-            }
-            if c != 0.0 {
-                terms.push((k, c));
-            }
-        }
-        terms.sort_by_key(|t| t.0);
-        let zero = vec![0.0; n_vars];
-        let b = self
-            .flat
-            .eval(&zero)
-            .map_err(|e| ExprError::Eval(e.to_string()))?;
+        let mut x = vec![0.0; n_coordinates];
+        let b = self.eval(&x);
         if !b.is_finite() {
             return Err(ExprError::Eval(format!("value at q = 0 is {b}")));
         }
-        let aff = Affine { terms, offset: b };
-        // Value check at the probe points, in full coordinate space.
-        for p in 1..probes.len() {
-            let x: Vec<f64> = (0..n_vars).map(|j| point(p, j)).collect();
-            let mut q = vec![0.0; n_coordinates];
-            for (j, &k) in self.vars.iter().enumerate() {
-                q[k] = x[j];
+        let mut used: Vec<usize> = self.coordinates().collect();
+        used.sort_unstable();
+        used.dedup();
+        let mut terms = Vec::new();
+        for &k in &used {
+            const STEP: f64 = 1048576.0; // 2^20: scaling by it is exact
+            x[k] = STEP;
+            let up = self.eval(&x);
+            x[k] = -STEP;
+            let down = self.eval(&x);
+            x[k] = 0.0;
+            let c = shortest_decimal((up - down) / (2.0 * STEP));
+            if !c.is_finite() {
+                return Err(ExprError::NotAffine);
             }
-            let exact = self.flat.eval(&x).unwrap_or(f64::NAN);
-            let lin = aff.eval(&q);
+            // Round-off of `(c + b) − b` is far below any meaningful coefficient.
+            if c.abs() > 1e-14 * (1.0 + b.abs()) {
+                terms.push((k, c));
+            }
+        }
+        let aff = Affine { terms, offset: b };
+        let probes: [f64; 4] = [0.731, -1.913, 2.417, -0.377];
+        for p in 0..probes.len() {
+            for (i, &k) in used.iter().enumerate() {
+                x[k] = probes[(p + i) % probes.len()] * (1.0 + 0.1 * i as f64);
+            }
+            let exact = self.eval(&x);
+            let lin = aff.eval(&x);
             if !exact.is_finite() || (exact - lin).abs() > 1e-10 * (1.0 + exact.abs()) {
                 return Err(ExprError::NotAffine);
             }
         }
         Ok(aff)
     }
+}
+
+/// The decimal with the fewest significant digits within 8 ulps of `x` (`x` itself if
+/// none): undoes the round-off of a difference quotient for literal coefficients.
+fn shortest_decimal(x: f64) -> f64 {
+    if !x.is_finite() || x == 0.0 {
+        return x;
+    }
+    let ulp = f64::EPSILON * x.abs();
+    for digits in 1..=16 {
+        if let Ok(c) = format!("{:.*e}", digits - 1, x).parse::<f64>() {
+            if (c - x).abs() <= 8.0 * ulp {
+                return c;
+            }
+        }
+    }
+    x
+}
+
+/// Numbers and names in `text` that are operands (not function names): an upper bound
+/// of exmex's operand nodes.
+fn count_operands(text: &str) -> usize {
+    let chars: Vec<char> = text.chars().collect();
+    let mut count = 0;
+    let mut i = 0;
+    while i < chars.len() {
+        if chars[i].is_alphanumeric() || chars[i] == '_' || chars[i] == '.' {
+            let start = i;
+            while i < chars.len()
+                && (chars[i].is_alphanumeric() || chars[i] == '_' || chars[i] == '.')
+            {
+                i += 1;
+            }
+            let mut j = i;
+            while j < chars.len() && chars[j].is_whitespace() {
+                j += 1;
+            }
+            let is_function = j < chars.len() && chars[j] == '(' && chars[start].is_alphabetic();
+            if !is_function {
+                count += 1;
+            }
+        } else {
+            i += 1;
+        }
+    }
+    count
 }
 
 #[cfg(test)]

@@ -1,0 +1,170 @@
+//! Helpers shared by the `dynamics_*` integration tests (included with `#[path]`): a
+//! seeded generator, random states, random (and physically consistent) parameters.
+#![allow(dead_code)]
+
+use dvrk_model::{inertia, Model, ParamKind};
+use nalgebra::{Matrix3, UnitQuaternion, Vector4};
+
+/// SplitMix64: tiny, seeded, the same on every machine.
+pub struct Rng(u64);
+
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Rng(seed)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in `[lo, hi)`.
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
+        lo + (hi - lo) * u
+    }
+
+    pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
+        (0..n).map(|_| self.uniform(lo, hi)).collect()
+    }
+
+    /// A random rotation (normalized random quaternion).
+    pub fn rotation(&mut self) -> Matrix3<f64> {
+        loop {
+            let v = Vector4::new(
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+                self.uniform(-1.0, 1.0),
+            );
+            if v.norm() > 0.1 {
+                let q = UnitQuaternion::from_quaternion(nalgebra::Quaternion::from(v));
+                return q.to_rotation_matrix().into_inner();
+            }
+        }
+    }
+}
+
+/// A random state `(q, q̇, q̈)`.
+pub fn random_state(model: &Model, rng: &mut Rng) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let n = model.dof();
+    (
+        rng.vec(n, -1.2, 1.2),
+        rng.vec(n, -2.0, 2.0),
+        rng.vec(n, -3.0, 3.0),
+    )
+}
+
+/// Arbitrary (not necessarily physical) parameters in [-1, 1].
+pub fn random_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
+    rng.vec(model.n_params(), -1.0, 1.0)
+}
+
+/// `[xx, xy, xz, yy, yz, zz]` of a symmetric matrix.
+pub fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
+    [
+        m[(0, 0)],
+        m[(0, 1)],
+        m[(0, 2)],
+        m[(1, 1)],
+        m[(1, 2)],
+        m[(2, 2)],
+    ]
+}
+
+/// A random positive-definite inertia about the centre of mass that a real mass
+/// distribution realizes (principal moments from positive second moments, so the
+/// triangle inequalities hold), in random principal axes.
+pub fn random_inertia_com(mass: f64, rng: &mut Rng) -> [f64; 6] {
+    let (a, b, c) = (
+        mass * rng.uniform(1e-4, 1e-2),
+        mass * rng.uniform(1e-4, 1e-2),
+        mass * rng.uniform(1e-4, 1e-2),
+    );
+    let d = Matrix3::from_diagonal(&nalgebra::Vector3::new(b + c, a + c, a + b));
+    let r = rng.rotation();
+    sym6(&(r * d * r.transpose()))
+}
+
+/// Physically consistent random parameters: every link a positive mass, a centre of mass
+/// and a positive-definite inertia about it; positive friction, motor inertias, springs.
+pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
+    let mut pi = vec![f64::NAN; model.n_params()];
+    for f in &model.frames {
+        if let Some(p0) = f.inertia {
+            let m = rng.uniform(0.2, 2.0);
+            let com = [
+                rng.uniform(-0.15, 0.15),
+                rng.uniform(-0.15, 0.15),
+                rng.uniform(-0.15, 0.15),
+            ];
+            let ic = random_inertia_com(m, rng);
+            let bary = inertia::barycentric_from_standard(m, com, ic);
+            assert!(inertia::pseudo_inertia_min_eigenvalue(&bary) > 0.0);
+            pi[p0..p0 + 10].copy_from_slice(&bary);
+        }
+        if let Some(fr) = &f.friction {
+            pi[fr.param] = rng.uniform(0.01, 0.3);
+            pi[fr.param + 1] = rng.uniform(0.01, 0.3);
+            pi[fr.param + 2] = rng.uniform(-0.2, 0.2);
+        }
+        if let Some(mi) = &f.motor_inertia {
+            pi[mi.param] = rng.uniform(0.01, 0.1);
+        }
+        if let Some(sp) = &f.spring {
+            pi[sp.param] = rng.uniform(0.1, 2.0);
+        }
+    }
+    assert!(pi.iter().all(|x| x.is_finite()), "every parameter was set");
+    pi
+}
+
+/// Copy of `params` keeping only the parameters for which `keep` is true (others 0).
+pub fn filter_params(model: &Model, params: &[f64], keep: impl Fn(ParamKind) -> bool) -> Vec<f64> {
+    model
+        .params
+        .iter()
+        .zip(params)
+        .map(|(p, &v)| if keep(p.kind) { v } else { 0.0 })
+        .collect()
+}
+
+/// True for friction and spring parameters.
+pub fn is_friction_or_spring(kind: ParamKind) -> bool {
+    matches!(
+        kind,
+        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::Offset | ParamKind::Spring
+    )
+}
+
+/// Inverse dynamics into a new vector.
+pub fn id(
+    model: &Model,
+    ws: &mut dvrk_model::Workspace,
+    params: &[f64],
+    q: &[f64],
+    dq: &[f64],
+    ddq: &[f64],
+) -> Vec<f64> {
+    let mut tau = vec![0.0; model.dof()];
+    model.inverse_dynamics(ws, params, q, dq, ddq, &mut tau);
+    tau
+}
+
+/// Asserts `|a - b| <= tol * scale` element-wise, scale = max(1, max |b|).
+#[track_caller]
+pub fn assert_close(what: &str, a: &[f64], b: &[f64], tol: f64) {
+    assert_eq!(a.len(), b.len(), "{what}: lengths");
+    let scale = b.iter().fold(1.0f64, |m, x| m.max(x.abs()));
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        assert!(
+            (x - y).abs() <= tol * scale,
+            "{what}[{k}]: {x} vs {y} (diff {:e}, tol {:e})\n  got {a:?}\n  expected {b:?}",
+            (x - y).abs(),
+            tol * scale
+        );
+    }
+}
