@@ -9,7 +9,11 @@ use clap::{Parser, Subcommand};
 mod cmd;
 
 #[derive(Parser)]
-#[command(name = "dvrk-ident", version, about = "Dynamic identification of robot arms (dVRK PSM/MTM, DH tables, URDF)")]
+#[command(
+    name = "dvrk-ident",
+    version,
+    about = "Dynamic identification of robot arms (dVRK PSM/MTM, DH tables, URDF)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

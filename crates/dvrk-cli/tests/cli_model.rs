@@ -36,11 +36,25 @@ fn regressor_and_torque_match_the_library() {
     let q = "0.1,-0.2,0.15,0.3,-0.4,0.5,0.6";
     let dq = "0.5,0.4,-0.1,0.2,0.1,-0.3,0.2";
     let ddq = "-1,0.5,0.2,0.1,0.3,-0.2,0.4";
-    let (ok, out, err) = run(&["model", "psm", "--regressor", "--q", q, "--dq", dq, "--ddq", ddq]);
+    let (ok, out, err) = run(&[
+        "model",
+        "psm",
+        "--regressor",
+        "--q",
+        q,
+        "--dq",
+        dq,
+        "--ddq",
+        ddq,
+    ]);
     assert!(ok, "{err}");
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
     let model = dvrk_model::Model::builtin("psm").unwrap();
-    let parse = |s: &str| s.split(',').map(|x| x.parse().unwrap()).collect::<Vec<f64>>();
+    let parse = |s: &str| {
+        s.split(',')
+            .map(|x| x.parse().unwrap())
+            .collect::<Vec<f64>>()
+    };
     let mut ws = dvrk_model::Workspace::new(&model);
     let h = model.regressor(&mut ws, &parse(q), &parse(dq), &parse(ddq));
     let rows = doc["rows"].as_array().unwrap();
@@ -66,14 +80,29 @@ fn regressor_and_torque_match_the_library() {
         .map(|(k, n)| (n.clone(), serde_json::json!(0.01 * (k % 7) as f64 + 0.001)))
         .collect();
     let file = dir.join("params.json");
-    std::fs::write(&file, serde_json::json!({ "parameters": params }).to_string()).unwrap();
+    std::fs::write(
+        &file,
+        serde_json::json!({ "parameters": params }).to_string(),
+    )
+    .unwrap();
     let (ok, out, err) = run(&[
-        "model", "psm", "--torque", "--q", q, "--dq", dq, "--ddq", ddq, "--params",
+        "model",
+        "psm",
+        "--torque",
+        "--q",
+        q,
+        "--dq",
+        dq,
+        "--ddq",
+        ddq,
+        "--params",
         file.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
     let doc: serde_json::Value = serde_json::from_str(&out).unwrap();
-    let pi: Vec<f64> = (0..model.n_params()).map(|k| 0.01 * (k % 7) as f64 + 0.001).collect();
+    let pi: Vec<f64> = (0..model.n_params())
+        .map(|k| 0.01 * (k % 7) as f64 + 0.001)
+        .collect();
     let tau = &h * nalgebra::DVector::from_vec(pi);
     for r in 0..7 {
         let t = doc["tau"][r].as_f64().unwrap();

@@ -60,7 +60,7 @@ pub fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Option<Vec<f64>> {
     let qr = a.qr();
     let rhs = qr.q().transpose() * b;
     let u = qr.r().solve_upper_triangular(&rhs)?; // p(u) = Σ u_k ((x - c)/s)^k
-    // Expand Σ u_k ((x - c)/s)^k into powers of x (ascending).
+                                                  // Expand Σ u_k ((x - c)/s)^k into powers of x (ascending).
     let mut coef = vec![0.0; degree + 1];
     let mut basis = vec![1.0]; // ((x - c)/s)^k, ascending powers of x
     for (k, uk) in u.iter().enumerate() {
@@ -87,7 +87,12 @@ pub fn polyval(coef: &[f64], x: f64) -> f64 {
 
 /// Fits the cable curve to a sweep: `q` (rad) and `tau` (N·m) in sweep order, the first
 /// half one way and the second half back.
-pub fn fit_cable(q: &[f64], tau: &[f64], settings: &CableSettings, source: &str) -> Result<CableFit, IdentError> {
+pub fn fit_cable(
+    q: &[f64],
+    tau: &[f64],
+    settings: &CableSettings,
+    source: &str,
+) -> Result<CableFit, IdentError> {
     let m = q.len().min(tau.len());
     let half = m / 2;
     let err = |message: String| IdentError::Mismatch {
@@ -165,7 +170,16 @@ mod tests {
             q.push(x);
             tau.push(polyval(&cable, x) + 0.07 * dir);
         }
-        let fit = fit_cable(&q, &tau, &CableSettings { degree: 3, drop: 50 }, "sweep").unwrap();
+        let fit = fit_cable(
+            &q,
+            &tau,
+            &CableSettings {
+                degree: 3,
+                drop: 50,
+            },
+            "sweep",
+        )
+        .unwrap();
         for (a, b) in fit.polynomial.iter().zip(cable) {
             assert!((a - b).abs() < 1e-3, "{:?}", fit.polynomial);
         }
@@ -192,7 +206,9 @@ mod tests {
         // The 2019 curve (dvrk-models.md), compared as a function over the swept range
         // less 5% at each end, where the dropped turnaround samples leave both fits
         // extrapolating.
-        let p2019 = [0.0004877, -0.0037149, 0.0067497, 0.008519, -0.0201475, -0.025265, 0.048095, 0.00255];
+        let p2019 = [
+            0.0004877, -0.0037149, 0.0067497, 0.008519, -0.0201475, -0.025265, 0.048095, 0.00255,
+        ];
         let mut worst: f64 = 0.0;
         for i in 0..=100 {
             let span = fit.range[1] - fit.range[0];
@@ -203,7 +219,10 @@ mod tests {
         // few mN·m; both explain the sweep equally well (same residual to 1e-4 N·m).
         let half = q.len() / 2;
         let kept: Vec<usize> = (100..half - 100).chain(half + 100..q.len() - 100).collect();
-        let rms2019 = (kept.iter().map(|&i| (polyval(&p2019, q[i]) - tau[i]).powi(2)).sum::<f64>()
+        let rms2019 = (kept
+            .iter()
+            .map(|&i| (polyval(&p2019, q[i]) - tau[i]).powi(2))
+            .sum::<f64>()
             / kept.len() as f64)
             .sqrt();
         eprintln!(

@@ -21,10 +21,16 @@ pub enum IdentError {
     },
     /// The log does not fit the robot (joints, sizes).
     #[error("{source_name}: {message}")]
-    Mismatch { source_name: String, message: String },
+    Mismatch {
+        source_name: String,
+        message: String,
+    },
     /// The data do not determine the parameters (too few or unexciting samples).
     #[error("{source_name}: {message}")]
-    RankDeficient { source_name: String, message: String },
+    RankDeficient {
+        source_name: String,
+        message: String,
+    },
     /// A setting is out of range.
     #[error("invalid setting {name}: {message}")]
     Setting { name: String, message: String },

@@ -199,7 +199,8 @@ pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
     let n = model.dof();
     let mut ws = Workspace::new(model);
     let mut out = DMatrix::zeros(data.len(), n);
-    let (mut q, mut dq, mut ddq, mut tau) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let (mut q, mut dq, mut ddq, mut tau) =
+        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let s = data.samples();
     for k in 0..data.len() {
         s.read(k, &mut q, &mut dq, &mut ddq);
@@ -424,13 +425,10 @@ fn build_result(
         base_parameters,
         consistency,
         physically_consistent: elements_ok
-            && model
-                .link_frames()
-                .iter()
-                .all(|&j| {
-                    let p0 = model.frame(j).inertia.expect("link");
-                    inertia::pseudo_inertia_min_eigenvalue(&params[p0..p0 + 10]) > 0.0
-                }),
+            && model.link_frames().iter().all(|&j| {
+                let p0 = model.frame(j).inertia.expect("link");
+                inertia::pseudo_inertia_min_eigenvalue(&params[p0..p0 + 10]) > 0.0
+            }),
         solver,
         weights,
         rows,

@@ -117,7 +117,11 @@ impl Observation {
     /// Combines with the observation of other data: the result is the factor of both
     /// stacked (exact up to round-off).
     pub fn merge(&mut self, other: &Observation) {
-        assert_eq!(other.r.ncols(), self.r.ncols(), "observations of different models");
+        assert_eq!(
+            other.r.ncols(),
+            self.r.ncols(),
+            "observations of different models"
+        );
         let c = self.r.ncols();
         let stacked = Mat::from_fn(2 * c, c, |i, j| {
             if i < c {
@@ -206,7 +210,9 @@ mod tests {
         let n = model.dof();
         let mut state = seed;
         let mut next = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         let mut m = || DMatrix::from_fn(count, n, |_, _| next());
@@ -267,13 +273,46 @@ mod tests {
         let half = |a: &DMatrix<f64>, lo: usize, hi: usize| a.rows(lo, hi - lo).into_owned();
         let all = Observation::assemble(
             &model,
-            Samples { q: &q, dq: &dq, ddq: &ddq, tau: &tau },
+            Samples {
+                q: &q,
+                dq: &dq,
+                ddq: &ddq,
+                tau: &tau,
+            },
             &w,
         );
-        let (q1, dq1, ddq1, t1) = (half(&q, 0, 100), half(&dq, 0, 100), half(&ddq, 0, 100), half(&tau, 0, 100));
-        let (q2, dq2, ddq2, t2) = (half(&q, 100, 300), half(&dq, 100, 300), half(&ddq, 100, 300), half(&tau, 100, 300));
-        let mut a = Observation::assemble(&model, Samples { q: &q1, dq: &dq1, ddq: &ddq1, tau: &t1 }, &w);
-        let b = Observation::assemble(&model, Samples { q: &q2, dq: &dq2, ddq: &ddq2, tau: &t2 }, &w);
+        let (q1, dq1, ddq1, t1) = (
+            half(&q, 0, 100),
+            half(&dq, 0, 100),
+            half(&ddq, 0, 100),
+            half(&tau, 0, 100),
+        );
+        let (q2, dq2, ddq2, t2) = (
+            half(&q, 100, 300),
+            half(&dq, 100, 300),
+            half(&ddq, 100, 300),
+            half(&tau, 100, 300),
+        );
+        let mut a = Observation::assemble(
+            &model,
+            Samples {
+                q: &q1,
+                dq: &dq1,
+                ddq: &ddq1,
+                tau: &t1,
+            },
+            &w,
+        );
+        let b = Observation::assemble(
+            &model,
+            Samples {
+                q: &q2,
+                dq: &dq2,
+                ddq: &ddq2,
+                tau: &t2,
+            },
+            &w,
+        );
         a.merge(&b);
         assert_eq!(a.rows(), all.rows());
         let g1 = a.r().transpose() * a.r();

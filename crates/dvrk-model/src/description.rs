@@ -441,7 +441,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         let spring = match &fd.spring {
             Some(text) => {
                 need_motion("spring")?;
-                let deflection = ctx.expr(&place, "spring", text)?;
+                let deflection = Deflection::new(ctx.expr(&place, "spring", text)?, n);
                 params.push(Param {
                     name: format!("K{idx}"),
                     kind: ParamKind::Spring,
@@ -604,6 +604,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         active: Vec::new(),
         motion: Vec::new(),
         fixed: Vec::new(),
+        post_identity: Vec::new(),
     }
     .finish())
 }

@@ -48,7 +48,11 @@ impl Model {
                 let c1 = r.column(1) * cs - r.column(0) * sn;
                 let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
                 Transform {
-                    rotation: rz * f.post.rotation,
+                    rotation: if self.post_identity[fi] {
+                        rz
+                    } else {
+                        rz * f.post.rotation
+                    },
                     translation: f.pre.translation + rz * f.post.translation,
                 }
             }

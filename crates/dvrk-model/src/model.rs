@@ -109,7 +109,32 @@ pub struct MotorInertia {
 pub struct Spring {
     pub param: usize,
     /// Deflection `dl(q)` (m or rad; may be nonlinear).
-    pub deflection: Expr,
+    pub deflection: Deflection,
+}
+
+/// A spring deflection: affine ones (the common case) skip the expression evaluator.
+#[derive(Clone, Debug)]
+pub enum Deflection {
+    Affine(Affine),
+    Expr(Expr),
+}
+
+impl Deflection {
+    /// From an expression, kept affine when it is.
+    pub fn new(expr: Expr, n_coordinates: usize) -> Self {
+        match expr.affine(n_coordinates) {
+            Ok(a) => Deflection::Affine(a),
+            Err(_) => Deflection::Expr(expr),
+        }
+    }
+
+    #[inline]
+    pub fn eval(&self, q: &[f64]) -> f64 {
+        match self {
+            Deflection::Affine(a) => a.eval(q),
+            Deflection::Expr(e) => e.eval(q),
+        }
+    }
 }
 
 /// A known generalized force `tau += grad(s)·p(s)`, `s` affine in q; p's coefficients
@@ -288,6 +313,8 @@ pub struct Model {
     pub(crate) motion: Vec<(Vector3<f64>, Vector3<f64>)>,
     /// Transform parent → frame for fixed frames (precomputed).
     pub(crate) fixed: Vec<Transform>,
+    /// Whether each frame's `post` rotation is the identity (then skipped per sample).
+    pub(crate) post_identity: Vec<bool>,
 }
 
 impl Model {
@@ -423,6 +450,13 @@ impl Model {
                     JointKind::Fixed => (Vector3::zeros(), Vector3::zeros()),
                 }
             }))
+            .collect();
+        self.post_identity = std::iter::once(true)
+            .chain(
+                self.frames
+                    .iter()
+                    .map(|f| f.post.rotation == Matrix3::identity()),
+            )
             .collect();
         self.fixed = std::iter::once(Transform::identity())
             .chain(self.frames.iter().map(|f| {

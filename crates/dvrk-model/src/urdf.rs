@@ -320,6 +320,7 @@ impl Model {
             active: Vec::new(),
             motion: Vec::new(),
             fixed: Vec::new(),
+            post_identity: Vec::new(),
         }
         .finish())
     }

@@ -31,12 +31,16 @@ pub fn run(args: Args) -> Result<()> {
         }
         let cols: Vec<&str> = line.split(',').collect();
         if cols.len() < 3 {
-            anyhow::bail!("{}:{}: expected 3 columns (position, velocity, effort)", args.sweep, i + 1);
+            anyhow::bail!(
+                "{}:{}: expected 3 columns (position, velocity, effort)",
+                args.sweep,
+                i + 1
+            );
         }
         let num = |s: &str| {
-            s.trim()
-                .parse::<f64>()
-                .with_context(|| format!("{}:{}: `{}` is not a number", args.sweep, i + 1, s.trim()))
+            s.trim().parse::<f64>().with_context(|| {
+                format!("{}:{}: `{}` is not a number", args.sweep, i + 1, s.trim())
+            })
         };
         q.push(num(cols[0])?);
         tau.push(num(cols[2])?);

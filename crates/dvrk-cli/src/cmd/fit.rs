@@ -57,7 +57,11 @@ pub struct LogArgs {
 
 impl LogArgs {
     pub fn read(&self, path: &str) -> Result<dvrk_ident::Trajectory> {
-        Ok(log::read(path, self.format.map(FormatArg::format), self.rate)?)
+        Ok(log::read(
+            path,
+            self.format.map(FormatArg::format),
+            self.rate,
+        )?)
     }
 
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
@@ -127,9 +131,13 @@ pub fn run(args: Args) -> Result<()> {
     };
     settings.test_window = args.test_window;
     let mut result = dvrk_ident::fit(&model, &train, test.as_ref(), &settings)?;
-    result.inputs.push(InputInfo::from_file("train", Path::new(&args.log))?);
+    result
+        .inputs
+        .push(InputInfo::from_file("train", Path::new(&args.log))?);
     if let Some(t) = &args.test {
-        result.inputs.push(InputInfo::from_file("test", Path::new(t))?);
+        result
+            .inputs
+            .push(InputInfo::from_file("test", Path::new(t))?);
     }
     if let Some(out) = &args.out {
         write_atomic(Path::new(out), &result.to_json())?;
@@ -177,11 +185,18 @@ pub fn table(r: &FitResult) -> String {
             format!(" (not: {})", bad.join(", "))
         }
     );
-    let _ = writeln!(s, "{:<8} {:>12} {:>12} {:>12} {:>12}", "joint", "train rel", "train rms", "test rel", "test rms");
+    let _ = writeln!(
+        s,
+        "{:<8} {:>12} {:>12} {:>12} {:>12}",
+        "joint", "train rel", "train rms", "test rel", "test rms"
+    );
     for (j, name) in r.metrics.train.joints.iter().enumerate() {
         let (tr, trms) = (r.metrics.train.relative_error[j], r.metrics.train.rms[j]);
         let (te, terms) = match &r.metrics.test {
-            Some(t) => (format!("{:.4}", t.relative_error[j]), format!("{:.4}", t.rms[j])),
+            Some(t) => (
+                format!("{:.4}", t.relative_error[j]),
+                format!("{:.4}", t.rms[j]),
+            ),
             None => ("-".into(), "-".into()),
         };
         let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");

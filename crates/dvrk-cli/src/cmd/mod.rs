@@ -31,7 +31,10 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
         })
         .collect::<Result<_>>()?;
     if v.len() != n {
-        bail!("{flag}: expected {n} comma-separated values, got {}", v.len());
+        bail!(
+            "{flag}: expected {n} comma-separated values, got {}",
+            v.len()
+        );
     }
     if let Some(x) = v.iter().find(|x| !x.is_finite()) {
         bail!("{flag}: value {x} is not finite");

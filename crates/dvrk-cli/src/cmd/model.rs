@@ -59,7 +59,11 @@ pub fn run(args: Args) -> Result<()> {
         summary.coordinates.len(),
         summary.coordinates.join(" ")
     )?;
-    writeln!(out, "measured joints: {}", summary.measured_joints.join(" "))?;
+    writeln!(
+        out,
+        "measured joints: {}",
+        summary.measured_joints.join(" ")
+    )?;
     writeln!(out, "{} frames:", summary.frames.len())?;
     for f in &summary.frames {
         writeln!(
@@ -103,7 +107,10 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
         let h = model.regressor(&mut ws, &q, &dq, &ddq);
         let (names, h) = if args.base {
             let base = model.base_parameters()?;
-            (base.expressions.clone(), h.select_columns(&base.independent))
+            (
+                base.expressions.clone(),
+                h.select_columns(&base.independent),
+            )
         } else {
             (model.param_names(), h)
         };

@@ -53,12 +53,18 @@ pub fn run(args: Args) -> Result<()> {
         let _ = writeln!(text, "{path} ({} samples)", m.samples);
         let _ = writeln!(text, "{:<8} {:>12} {:>12}", "joint", "relative", "rms");
         for (j, name) in m.joints.iter().enumerate() {
-            let _ = writeln!(text, "{name:<8} {:>12.4} {:>12.4}", m.relative_error[j], m.rms[j]);
+            let _ = writeln!(
+                text,
+                "{name:<8} {:>12.4} {:>12.4}",
+                m.relative_error[j], m.rms[j]
+            );
         }
         reports.push(json!({"log": path, "metrics": m}));
     }
     if args.json {
-        emit(&serde_json::to_string_pretty(&json!({"result": args.result, "validations": reports}))?)
+        emit(&serde_json::to_string_pretty(
+            &json!({"result": args.result, "validations": reports}),
+        )?)
     } else {
         emit(&text)
     }
