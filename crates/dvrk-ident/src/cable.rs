@@ -52,7 +52,7 @@ pub fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Option<Vec<f64>> {
     let hi = x.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     let c = 0.5 * (lo + hi);
     let s = 0.5 * (hi - lo);
-    if !(s > 0.0) {
+    if s.is_nan() || s <= 0.0 {
         return None;
     }
     let a = DMatrix::from_fn(m, degree + 1, |i, k| ((x[i] - c) / s).powi(k as i32));

@@ -163,13 +163,13 @@ pub fn prepare(
         let mut q = vec![0.0; n];
         let mut known = vec![0.0; n];
         for k in 0..t.len() {
-            for j in 0..n {
-                q[j] = t.q[(k, j)];
+            for (j, qj) in q.iter_mut().enumerate() {
+                *qj = t.q[(k, j)];
             }
             known.fill(0.0);
             model.add_known_forces(&q, &mut known);
-            for j in 0..n {
-                t.tau[(k, j)] -= known[j];
+            for (j, kj) in known.iter().enumerate() {
+                t.tau[(k, j)] -= kj;
             }
         }
     }

@@ -389,7 +389,8 @@ fn rate_and_format_errors() {
     let mcap = write_file(&dir, "x.mcap", "not really");
     assert_eq!(detect_format(&mcap).unwrap(), LogFormat::Mcap);
     let e = read(&mcap, None, None).unwrap_err();
-    assert!(matches!(e, LogError::Unsupported { .. }));
+    assert!(matches!(e, LogError::Mcap { .. }), "{e}");
+    assert!(e.to_string().contains("x.mcap"), "{e}");
     let missing = dir.join("missing.csv");
     let e = read(&missing, None, Some(200.0)).unwrap_err();
     assert!(matches!(e, LogError::Io { .. }));
@@ -426,7 +427,7 @@ fn writer_errors_leave_no_file() {
             LogFormat::Mcap
         )
         .unwrap_err(),
-        LogError::Unsupported { .. }
+        LogError::Mcap { .. }
     ));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     // A missing directory is an I/O error naming the target.

@@ -116,7 +116,7 @@ pub struct Spring {
 #[derive(Clone, Debug)]
 pub enum Deflection {
     Affine(Affine),
-    Expr(Expr),
+    Expr(Box<Expr>),
 }
 
 impl Deflection {
@@ -124,7 +124,7 @@ impl Deflection {
     pub fn new(expr: Expr, n_coordinates: usize) -> Self {
         match expr.affine(n_coordinates) {
             Ok(a) => Deflection::Affine(a),
-            Err(_) => Deflection::Expr(expr),
+            Err(_) => Deflection::Expr(Box::new(expr)),
         }
     }
 

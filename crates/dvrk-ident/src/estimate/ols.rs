@@ -39,7 +39,7 @@ pub fn base_least_squares(
     let rho = rr[(r, r)];
     let diag_max = (0..r).map(|i| r11[(i, i)].abs()).fold(0.0, f64::max);
     let weak: Vec<String> = (0..r)
-        .filter(|&i| !(r11[(i, i)].abs() > 1e-10 * diag_max))
+        .filter(|&i| r11[(i, i)].abs() <= 1e-10 * diag_max || r11[(i, i)].is_nan())
         .map(|i| base.names[i].clone())
         .collect();
     if obs.rows() < r || !weak.is_empty() {

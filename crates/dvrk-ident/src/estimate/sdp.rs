@@ -21,28 +21,40 @@
 //!
 //! R11 is rank deficient: only the base parameters are identifiable, and the
 //! pseudo-inertia constraints do not bound the inertia from above, so the optimum is
-//! not unique and its non-identifiable part can run off to infinity inside an interior
-//! point method. The Tikhonov term pulls those directions toward `prior` (zero when
-//! `None`). It is scale invariant: `dᵢ = ‖R[:, i]‖` is the data's own scale of
-//! parameter i (for a column the data never see, the median `d` of the parameters of the
-//! same kind and unit), so in the equilibrated variables `uᵢ = dᵢ·πᵢ` the term is
-//! `λ·‖u − u_prior‖²` with `λ = regularization · max diag(R̃ᵀR̃)`, `R̃ = R·diag(1/d)`
-//! (whose diagonal is all ones), i.e. `regularization` is relative to the data and has no
-//! units. The price is a bias of about `λ/σ²` on a base direction whose equilibrated
-//! singular value is σ; with the default 1e-10 this is far below any noise on
-//! reasonably excited data, while the non-identifiable part stays bounded.
+//! not unique and its non-identifiable part can run off inside an interior point method
+//! (unregularized, the solver typically stops at `AlmostSolved`). The Tikhonov term pulls
+//! those directions toward `prior` (zero when `None`). It is scale invariant:
+//! `dᵢ = ‖R[:, i]‖` is the data's own scale of parameter i (for a column the data never
+//! see, the median `d` of the parameters of the same kind and unit), so in the
+//! equilibrated variables `uᵢ = dᵢ·πᵢ` the term is `λ·‖u − u_prior‖²` with
+//! `λ = regularization · max diag(R̃ᵀR̃)`, `R̃ = R·diag(1/d)` (whose diagonal is all
+//! ones): `regularization` is relative to the data and has no units.
+//!
+//! The price is a bias of about `λ/σ²` on a base direction whose equilibrated singular
+//! value is σ. On noise-free synthetic PSM/MTM data (300 random samples) the base
+//! parameters' torque-relative error is ≈ 700·λ, and the worst single base parameter's
+//! relative error ≈ 3e8·λ; with 1% noise the noise dominates for any λ ≤ 1e-8. The
+//! default 1e-12 keeps the bias below 1e-9 of the torque while every solve still ends
+//! `Solved`; raise it (e.g. 1e-6) to pull the unidentifiable part toward a CAD `prior`.
 //!
 //! # Formulation for Clarabel
 //!
-//! Variables `x = [u; y]` with `πᵢ = sᵢ·uᵢ`, `sᵢ = γ/dᵢ`, `γ = ‖R[:, p]‖ = ‖W·τ‖`
-//! (so u = O(1) and the objective is at most about 1) and `y = R̃·u − R[:, p]/γ`
-//! (p+1 equality rows, no normal equations). Objective `½‖y‖² + ½λ‖u − u_prior‖²`
-//! (Clarabel's `½xᵀPx + qᵀx` with diagonal P). Linear bounds are rows of a nonnegative
-//! cone, each normalized to a unit largest coefficient. Each link's LMI is one
-//! `PSDTriangleConeT(4)` on `T·(J − eps·I)·T` with `T = diag(1, 1, 1, τ)`, τ a length of
-//! the link (its largest com-box bound, 0.1 m without one): a congruence, so it is the
-//! same constraint, but it balances the kg·m², kg·m and kg entries of J.
-//! Clarabel's triangle convention: upper triangle, column-major, off-diagonals ×√2.
+//! Variables `x = [u; t]` with `πᵢ = sᵢ·uᵢ`, `sᵢ = γ/dᵢ`, `γ = ‖R[:, p]‖ = ‖W·τ‖`, so
+//! that u = O(1) and the residual norm is at most about 1. Second-order cone epigraph:
+//! minimize t subject to `‖[R̃·u − R[:, p]/γ; √λ·(u − u_prior)]‖ ≤ t` (one cone of
+//! dimension 2p+2; the same minimizer as the squared objective, but the solver's gap
+//! tolerance then bounds the residual norm instead of its square, which matters when the
+//! fit is nearly exact). Linear bounds are rows of a nonnegative cone, each normalized
+//! to a unit largest coefficient. Each link's LMI is one `PSDTriangleConeT(4)` on
+//! `T·(J − eps·I)·T` with `T = diag(1, 1, 1, τ)`, τ a length of the link (its largest
+//! com-box bound, 0.1 m without one): a congruence, so it is the same constraint, but it
+//! balances the kg·m², kg·m and kg entries of J. Clarabel's triangle convention: upper
+//! triangle, column-major, off-diagonals ×√2.
+//!
+//! After a `Solved` status the friction, motor inertia and spring parameters (which
+//! appear in no other constraint) are clamped into their bounds, removing the solver's
+//! feasibility tolerance; link parameters are the solver's values (bounds and
+//! `J ⪰ eps·I` hold to the tolerance).
 
 use std::time::Instant;
 
@@ -60,16 +72,17 @@ use openblas_src as _;
 /// Options of [`solve_sdp`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SdpOptions {
-    /// Tikhonov weight toward `prior`, relative to the data (no units; see the module
-    /// documentation). 0 disables it (only sensible when R11 has full rank).
+    /// Tikhonov weight toward `prior`, relative to the data (no units; default 1e-12; see
+    /// the module documentation). 0 disables it, only sensible when R11 has full rank
+    /// (otherwise the solver typically ends `AlmostSolved`).
     pub regularization: f64,
     /// Values the regularization pulls toward, one per parameter (model units); `None`
     /// means zero. E.g. the model's nominal (CAD) parameters.
     pub prior: Option<Vec<f64>>,
     /// Clarabel's iteration limit.
     pub max_iter: u32,
-    /// Clarabel's gap and feasibility tolerances (relative to the problem, which is
-    /// scaled so that the objective is at most about 1).
+    /// Clarabel's gap and feasibility tolerances, in the scaled problem whose objective
+    /// (the residual norm divided by `‖W·τ‖`) is at most about 1.
     pub tolerance: f64,
     /// `false`: apply the model's per-frame bounds ([`dvrk_model::FrameBounds`]: mass,
     /// com box, friction maxima, `ia_max`, spring range). `true`: ignore them, keeping
@@ -81,7 +94,7 @@ pub struct SdpOptions {
 impl Default for SdpOptions {
     fn default() -> Self {
         SdpOptions {
-            regularization: 1e-10,
+            regularization: 1e-12,
             prior: None,
             max_iter: 200,
             tolerance: 1e-8,
@@ -139,11 +152,13 @@ pub enum SdpError {
     Solver(String),
 }
 
+type SvecEntry = (usize, usize, &'static [(usize, f64)]);
+
 /// Coefficients of the pseudo-inertia in Clarabel's triangle order: entry k of
 /// `svec(J)` (upper triangle, column-major: (0,0), (0,1), (1,1), (0,2), (1,2), (2,2),
 /// (0,3), (1,3), (2,3), (3,3)) as `(row, col, [(barycentric index, coefficient)])`,
 /// barycentric order `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`, before the √2.
-const PSEUDO_INERTIA_SVEC: [(usize, usize, &[(usize, f64)]); 10] = [
+const PSEUDO_INERTIA_SVEC: [SvecEntry; 10] = [
     (0, 0, &[(0, -0.5), (3, 0.5), (5, 0.5)]),
     (0, 1, &[(1, -1.0)]),
     (1, 1, &[(0, 0.5), (3, -0.5), (5, 0.5)]),
@@ -382,14 +397,14 @@ pub fn solve_sdp(
     let mut d = norms.clone();
     let all_seen: Vec<f64> = (0..p).filter(|&c| seen(c)).map(|c| norms[c]).collect();
     let global = median(all_seen).unwrap_or(1.0);
-    for c in 0..p {
+    for (c, dc) in d.iter_mut().enumerate() {
         if !seen(c) {
             let class = unit_class(model.params[c].kind);
             let same: Vec<f64> = (0..p)
                 .filter(|&k| seen(k) && unit_class(model.params[k].kind) == class)
                 .map(|k| norms[k])
                 .collect();
-            d[c] = median(same).unwrap_or(global);
+            *dc = median(same).unwrap_or(global);
         }
     }
     let tau_norm = r.column(p).norm();
@@ -477,7 +492,7 @@ pub fn solve_sdp(
     let amat = CscMatrix::new_from_triplets(m_rows, n, ai, aj, av);
 
     let settings = DefaultSettingsBuilder::default()
-        .verbose(std::env::var("SDP_DEBUG").is_ok())
+        .verbose(false)
         .max_iter(options.max_iter)
         .tol_gap_abs(options.tolerance)
         .tol_gap_rel(options.tolerance)
@@ -493,14 +508,6 @@ pub fn solve_sdp(
     if converged {
         clamp_element_bounds(model, &mut params, options.override_bounds);
     }
-    if std::env::var("SDP_DEBUG").is_ok() {
-        let xmax = sol.x.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
-        let bmax = b.iter().fold(0.0f64, |a, &v| a.max(v.abs()));
-        eprintln!(
-            "DEBUG max|x| {xmax:e} max|b| {bmax:e} t {:e} r_prim {:e} r_dual {:e}",
-            sol.x[p], sol.r_prim, sol.r_dual
-        );
-    }
     let objective = residual_sum_of_squares(r, &params);
     Ok(SdpSolution {
         params,
@@ -512,17 +519,23 @@ pub fn solve_sdp(
     })
 }
 
-/// Clamps friction, motor inertia and spring parameters into their bounds. Each appears
-/// in no other constraint, and a solved problem satisfies its bounds to the solver's
-/// tolerance, so this only removes that tolerance (relative to the variable's scale,
-/// e.g. 1e-8·300 N·m/rad on the MTM spring) and makes the bounds hold exactly.
+/// Clamps friction, motor inertia and spring parameters into their bounds when they
+/// miss them by at most `1e-6·max(1, |bound|)`. Each appears in no other constraint,
+/// and a solved problem satisfies its bounds to the solver's tolerance (relative to the
+/// variable's scale, e.g. ~1e-5 N·m/rad on the MTM's 300 N·m/rad spring), so this only
+/// makes the bounds hold exactly; a larger miss is left visible.
 fn clamp_element_bounds(model: &Model, params: &mut [f64], override_bounds: bool) {
     let g = &model.bounds;
+    let near = |v: f64, bound: f64| (v - bound).abs() <= 1e-6 * bound.abs().max(1.0);
     let clamp = |v: &mut f64, lo: f64, hi: Option<f64>| {
         if let Some(hi) = hi.filter(|&hi| hi >= lo) {
-            *v = v.min(hi);
+            if *v > hi && near(*v, hi) {
+                *v = hi;
+            }
         }
-        *v = v.max(lo);
+        if *v < lo && near(*v, lo) {
+            *v = lo;
+        }
     };
     for f in &model.frames {
         let b = &f.bounds;
@@ -676,13 +689,9 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
         assert!(pseudo_inertia_min_eigenvalue(&sol.params[0..10]) >= eps * (1.0 - 1e-3));
         // Friction: projection onto [fc_min, fc_max] × [fv_min, fv_max] × [-fo, fo].
         let expected = [model.bounds.fc_min, 2.0, -0.3];
-        for k in 0..3 {
-            assert!(
-                (sol.params[10 + k] - expected[k]).abs() < 1e-7,
-                "friction {k}: {} vs {}",
-                sol.params[10 + k],
-                expected[k]
-            );
+        for (k, want) in expected.into_iter().enumerate() {
+            let got = sol.params[10 + k];
+            assert!((got - want).abs() < 1e-7, "friction {k}: {got} vs {want}");
         }
         // The reported objective is the data term at the solution.
         let want = (j_sol - jt).norm_squared()
@@ -928,6 +937,9 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
         }
     }
 
+    /// Noise-free: the base parameters come back up to the regularization's bias
+    /// (≈ 700·λ torque-relative, see the module documentation), with the default λ and
+    /// with a 100 times smaller one.
     fn check_noise_free(name: &str, seed: u64) {
         let rep = synthetic(name, seed, 0.0, &SdpOptions::default());
         assert!(rep.sol.converged, "{name}: status {}", rep.sol.status);
@@ -938,12 +950,28 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
             rep.torque_rel
         );
         assert!(
-            rep.component_rel < 1e-8,
+            rep.component_rel < 1e-6,
             "{name}: per-component error {:e}",
             rep.component_rel
         );
         assert!(
-            rep.worst_rel < 1e-3,
+            rep.worst_rel < 1e-2,
+            "{name}: worst relative error {:e}",
+            rep.worst_rel
+        );
+        let tight = SdpOptions {
+            regularization: 1e-14,
+            ..SdpOptions::default()
+        };
+        let rep = synthetic(name, seed, 0.0, &tight);
+        assert!(rep.sol.converged, "{name}: status {}", rep.sol.status);
+        assert!(
+            rep.torque_rel < 1e-10,
+            "{name}: torque-relative error {:e}",
+            rep.torque_rel
+        );
+        assert!(
+            rep.worst_rel < 1e-4,
             "{name}: worst relative error {:e}",
             rep.worst_rel
         );

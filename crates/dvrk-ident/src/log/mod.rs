@@ -7,8 +7,9 @@
 //! - [`LogFormat::Csv`]: headered CSV with `time`, `position.<joint>`,
 //!   `velocity.<joint>` (optional: all or none) and `effort.<joint>` columns in any
 //!   order. See [`read_headered`] / [`write_headered`].
-//! - [`LogFormat::Mcap`]: ROS 2 `sensor_msgs/JointState` recordings; the reader belongs
-//!   in `log/mcap.rs` and is not written yet ([`read`] reports it as unsupported).
+//! - [`LogFormat::Mcap`]: ROS 2 MCAP recordings of `sensor_msgs/msg/JointState`
+//!   (dVRK `measured_js`), measured coordinates, header stamps. See [`mcap`]
+//!   ([`mcap::read_mcap`] / [`mcap::write_mcap`] for topics, time source, resampling).
 //!
 //! Readers never panic on bad input: every problem is a [`LogError`] naming the file,
 //! the line (1-based, as an editor shows it) and what is wrong. Writers write to a
@@ -16,6 +17,7 @@
 //! half-written log under the final name.
 
 mod csv;
+pub mod mcap;
 
 pub use self::csv::{read_headered, read_wpi, write_headered, write_wpi};
 
@@ -35,7 +37,7 @@ pub enum LogFormat {
     Wpi,
     /// Headered CSV: `time`, `position.<joint>`, `velocity.<joint>`, `effort.<joint>`.
     Csv,
-    /// ROS 2 MCAP with `sensor_msgs/JointState` (reader not implemented yet).
+    /// ROS 2 MCAP with `sensor_msgs/msg/JointState` messages (see [`mcap`]).
     Mcap,
 }
 
@@ -259,6 +261,17 @@ pub enum LogError {
         /// The file.
         path: PathBuf,
     },
+    /// A problem specific to MCAP logs: container, topic choice, message contents,
+    /// timing (see [`mcap::McapProblem`]).
+    #[error("{}{}: {problem}", path.display(), topic.as_ref().map(|t| format!(": topic {t}")).unwrap_or_default())]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The topic concerned, if one is.
+        topic: Option<String>,
+        /// What is wrong.
+        problem: Box<mcap::McapProblem>,
+    },
     /// The trajectory to write is invalid.
     #[error("{}: cannot write an invalid trajectory: {source}", path.display())]
     Invalid {
@@ -275,7 +288,9 @@ pub enum LogError {
 /// is the 2019 (wpi) layout and anything else a headered CSV.
 ///
 /// `rate_hz` (Hz) is required for the 2019 layout, which has no time stamps (the dVRK
-/// logs are 200 Hz), and ignored for formats with time stamps. The 2019 layout's number
+/// logs are 200 Hz), and ignored for formats with time stamps. MCAP files are read with
+/// [`mcap::McapOptions::default`] (automatic topic, header stamps, no resampling; use
+/// [`mcap::read_mcap`] for more). The 2019 layout's number
 /// of joints is inferred as columns / 3 (use [`read_wpi`] to force it).
 ///
 /// ```rust
@@ -316,28 +331,25 @@ pub fn read(
             read_wpi(path, rate, None)
         }
         LogFormat::Csv => read_headered(path),
-        // The MCAP reader goes in log/mcap.rs; dispatch to it here.
-        LogFormat::Mcap => Err(LogError::Unsupported {
-            path: path.to_path_buf(),
-            format,
-            reason:
-                "convert to headered CSV (time, position.<joint>, velocity.<joint>, effort.<joint>)",
-        }),
+        LogFormat::Mcap => mcap::read_mcap(path, &mcap::McapOptions::default()),
     }
 }
 
-/// Writes a trajectory in the given layout (atomically). See [`write_wpi`] and
-/// [`write_headered`] for what each layout requires.
+/// Writes a trajectory in the given layout (atomically). See [`write_wpi`],
+/// [`write_headered`] and [`mcap::write_mcap`] (here on topic
+/// [`mcap::DEFAULT_TOPIC`] with [`mcap::McapWriteOptions::default`]) for what each layout
+/// requires.
 pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Result<(), LogError> {
     let path = path.as_ref();
     match format {
         LogFormat::Wpi => write_wpi(path, traj),
         LogFormat::Csv => write_headered(path, traj),
-        LogFormat::Mcap => Err(LogError::Unsupported {
-            path: path.to_path_buf(),
-            format,
-            reason: "write headered CSV instead",
-        }),
+        LogFormat::Mcap => mcap::write_mcap(
+            path,
+            traj,
+            mcap::DEFAULT_TOPIC,
+            &mcap::McapWriteOptions::default(),
+        ),
     }
 }
 
