@@ -110,6 +110,9 @@ pub struct Args {
     /// Write the result document here (atomically)
     #[arg(long)]
     pub out: Option<String>,
+    /// Also write the parameters in the 2019 package's params.json layout (atomically)
+    #[arg(long)]
+    pub wpi_json: Option<String>,
     /// Print the result document to stdout instead of the table
     #[arg(long)]
     pub json: bool,
@@ -139,8 +142,15 @@ pub fn run(args: Args) -> Result<()> {
             .inputs
             .push(InputInfo::from_file("test", Path::new(t))?);
     }
-    if let Some(out) = &args.out {
-        write_atomic(Path::new(out), &result.to_json())?;
+    if result.solver.converged {
+        if let Some(out) = &args.out {
+            write_atomic(Path::new(out), &result.to_json())?;
+        }
+        if let Some(out) = &args.wpi_json {
+            let params = result.params_for(&model)?;
+            let doc = dvrk_ident::result::wpi_params_json(&model, &params);
+            write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
+        }
     }
     if args.json {
         emit(&result.to_json())?;
