@@ -368,18 +368,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
 
         let inertia = if fd.inertia {
             let p0 = params.len();
-            for (k, suffix) in INERTIA_SUFFIXES.iter().enumerate() {
-                let name = match k {
-                    0..=5 => format!("L{idx}{suffix}"),
-                    6..=8 => format!("l{idx}{suffix}"),
-                    _ => format!("m{idx}"),
-                };
-                params.push(Param {
-                    name,
-                    kind: ParamKind::Inertia { index: k },
-                    frame: idx,
-                });
-            }
+            params.extend(Param::inertia_block(idx));
             Some(p0)
         } else {
             None

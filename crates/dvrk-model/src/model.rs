@@ -282,6 +282,22 @@ pub struct Param {
 /// Suffixes of the 10 barycentric parameters, in order.
 pub const INERTIA_SUFFIXES: [&str; 10] = ["xx", "xy", "xz", "yy", "yz", "zz", "x", "y", "z", ""];
 
+impl Param {
+    /// The 10 link parameters of frame `frame`, named in the 2019 convention:
+    /// `L{i}xx … L{i}zz` (inertia about the origin), `l{i}x l{i}y l{i}z`, `m{i}`.
+    pub fn inertia_block(frame: usize) -> impl Iterator<Item = Param> {
+        INERTIA_SUFFIXES.iter().enumerate().map(move |(k, suffix)| Param {
+            name: match k {
+                0..=5 => format!("L{frame}{suffix}"),
+                6..=8 => format!("l{frame}{suffix}"),
+                _ => format!("m{frame}"),
+            },
+            kind: ParamKind::Inertia { index: k },
+            frame,
+        })
+    }
+}
+
 /// The robot model. Build with [`Model::load`], [`Model::builtin`],
 /// [`Model::from_toml_str`] or [`Model::from_urdf_str`].
 #[derive(Clone, Debug)]

@@ -268,18 +268,7 @@ impl Model {
                 ..Default::default()
             };
             let p0 = params.len();
-            for (k, suffix) in INERTIA_SUFFIXES.iter().enumerate() {
-                let name = match k {
-                    0..=5 => format!("L{idx}{suffix}"),
-                    6..=8 => format!("l{idx}{suffix}"),
-                    _ => format!("m{idx}"),
-                };
-                params.push(Param {
-                    name,
-                    kind: ParamKind::Inertia { index: k },
-                    frame: idx,
-                });
-            }
+            params.extend(Param::inertia_block(idx));
             frames.push(Frame {
                 name: link.name.clone(),
                 parent: link_frame[&j.parent.link],
