@@ -1,0 +1,341 @@
+//! `fit`, `validate` and `cable-fit` end to end on logs written by the test itself: the
+//! flags scripts rely on, the result document, atomic outputs and errors.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+use dvrk_model::{inertia, Model, Workspace};
+use nalgebra::DMatrix;
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
+        .args(args)
+        .output()
+        .expect("run dvrk-ident");
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dvrk-cli-fit-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A noise-free MTM log in model coordinates (the 2019 CSV layout) from consistent
+/// parameters; `phase` changes the motion so train and test differ.
+fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
+    let model = Model::builtin("mtm").unwrap();
+    let n = model.dof();
+    let mut pi = vec![0.0; model.n_params()];
+    for f in &model.frames {
+        if let Some(p0) = f.inertia {
+            let m = f.bounds.mass.map_or(1.0, |[a, _]| 1.5 * a);
+            let c = f.bounds.com.map_or([0.0; 3], |b| {
+                [
+                    0.5 * (b[0][0] + b[0][1]),
+                    0.5 * (b[1][0] + b[1][1]),
+                    0.5 * (b[2][0] + b[2][1]),
+                ]
+            });
+            let d = 0.05 * m;
+            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(
+                m,
+                c,
+                [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
+            ));
+        }
+        if let Some(fr) = &f.friction {
+            // No Coulomb term: its torque steps would be smeared by the low-pass filter
+            // and bias the check below (the synthetic library tests cover it unfiltered).
+            pi[fr.param] = 0.0;
+            pi[fr.param + 1] = 0.02;
+            pi[fr.param + 2] = 0.01;
+        }
+        if let Some(mi) = &f.motor_inertia {
+            pi[mi.param] = 0.005;
+        }
+        if let Some(sp) = &f.spring {
+            pi[sp.param] = 270.0;
+        }
+    }
+    let rate = 200.0;
+    let count = 3000;
+    let time = uniform_time(count, rate);
+    let (mut q, mut dq, mut tau) = (
+        DMatrix::zeros(count, n),
+        DMatrix::zeros(count, n),
+        DMatrix::zeros(count, n),
+    );
+    let mut ws = Workspace::new(&model);
+    let (mut a, mut b, mut c, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for (k, &tk) in time.iter().enumerate() {
+        for j in 0..n {
+            let (w1, w2) = (0.6 + 0.13 * j as f64, 1.7 + 0.11 * j as f64);
+            let p = phase + j as f64;
+            a[j] = 0.4 * (w1 * tk + p).sin()
+                + 0.2 * (w2 * tk + 2.0 * p).sin()
+                + if j == 1 { 0.5 } else { 0.0 };
+            b[j] = 0.4 * w1 * (w1 * tk + p).cos() + 0.2 * w2 * (w2 * tk + 2.0 * p).cos();
+            c[j] = -0.4 * w1 * w1 * (w1 * tk + p).sin() - 0.2 * w2 * w2 * (w2 * tk + 2.0 * p).sin();
+        }
+        model.inverse_dynamics(&mut ws, &pi, &a, &b, &c, &mut t);
+        model.add_known_forces(&a, &mut t);
+        for j in 0..n {
+            q[(k, j)] = a[j];
+            dq[(k, j)] = b[j];
+            tau[(k, j)] = t[j];
+        }
+    }
+    let traj = Trajectory {
+        time,
+        q,
+        dq: Some(dq),
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: "test".into(),
+    };
+    dvrk_ident::log::write(path, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+    pi
+}
+
+#[test]
+fn fit_validate_and_exports() {
+    let dir = temp_dir("fit");
+    let (one, two) = (dir.join("one.csv"), dir.join("two.csv"));
+    let truth = write_mtm_log(&one, 0.0);
+    write_mtm_log(&two, 1.0);
+    let out = dir.join("result.json");
+    let wpi = dir.join("params.json");
+    let (ok, stdout, err) = run(&[
+        "fit",
+        one.to_str().unwrap(),
+        "--robot",
+        "mtm",
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--method",
+        "wls",
+        "--test",
+        two.to_str().unwrap(),
+        "--test-window",
+        "1000",
+        "--trim",
+        "20",
+        "--cutoff",
+        "20",
+        "--out",
+        out.to_str().unwrap(),
+        "--wpi-json",
+        wpi.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("test rel"), "{stdout}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    for key in [
+        "method",
+        "parameters",
+        "base_parameters",
+        "consistency",
+        "solver",
+        "metrics",
+    ] {
+        assert!(doc.get(key).is_some(), "missing key {key}");
+    }
+    assert_eq!(doc["method"], "wls");
+    assert_eq!(doc["solver"]["converged"], true);
+    assert!(doc["consistency"][0]["min_eigenvalue"].is_number());
+    assert_eq!(
+        doc["metrics"]["test"]["relative_error"]
+            .as_array()
+            .unwrap()
+            .len(),
+        7
+    );
+    assert_eq!(doc["metrics"]["test"]["samples"], 1000);
+    assert_eq!(doc["inputs"][0]["sha256"].as_str().unwrap().len(), 64);
+    // The base parameters of noise-free data come back.
+    let model = Model::builtin("mtm").unwrap();
+    let beta = model.base_parameters().unwrap().project(&truth);
+    for (b, t) in doc["base_parameters"].as_array().unwrap().iter().zip(&beta) {
+        let v = b["value"].as_f64().unwrap();
+        assert!(
+            (v - t).abs() < 1e-3 * (1.0 + t.abs()),
+            "{}: {v} vs {t}",
+            b["expression"]
+        );
+    }
+    let wpi_doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&wpi).unwrap()).unwrap();
+    assert_eq!(wpi_doc.as_object().unwrap().len(), 10);
+    // validate reproduces the fit's test metrics.
+    let (ok, stdout, err) = run(&[
+        "validate",
+        out.to_str().unwrap(),
+        two.to_str().unwrap(),
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--test-window",
+        "1000",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let a = &v["validations"][0]["metrics"]["relative_error"];
+    let b = &doc["metrics"]["test"]["relative_error"];
+    for j in 0..7 {
+        assert!((a[j].as_f64().unwrap() - b[j].as_f64().unwrap()).abs() < 1e-12);
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn fit_errors_exit_non_zero_and_write_nothing() {
+    let dir = temp_dir("errors");
+    let out = dir.join("result.json");
+    // Missing file.
+    let (ok, _, err) = run(&[
+        "fit",
+        dir.join("nope.csv").to_str().unwrap(),
+        "--robot",
+        "psm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("nope.csv"), "{err}");
+    // Malformed number.
+    let bad = dir.join("bad.csv");
+    std::fs::write(&bad, "1,2,3\n4,x,6\n").unwrap();
+    let (ok, _, err) = run(&[
+        "fit",
+        bad.to_str().unwrap(),
+        "--robot",
+        "psm",
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("bad.csv"), "{err}");
+    // A headered log that lacks one of the robot's joints.
+    let csv = dir.join("missing_joint.csv");
+    let mut text = String::from("time");
+    let joints = [
+        "outer_yaw",
+        "outer_pitch",
+        "outer_insertion",
+        "outer_roll",
+        "outer_wrist_pitch",
+        "outer_wrist_yaw",
+    ];
+    for j in joints {
+        text += &format!(",position.{j},effort.{j}");
+    }
+    text += "\n";
+    for k in 0..500 {
+        text += &format!("{}", k as f64 / 200.0);
+        for _ in joints {
+            text += ",0.1,0.2";
+        }
+        text += "\n";
+    }
+    std::fs::write(&csv, text).unwrap();
+    let (ok, _, err) = run(&[
+        "fit",
+        csv.to_str().unwrap(),
+        "--robot",
+        "psm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("`jaw`"), "{err}");
+    // Too short to determine the parameters after trimming.
+    let short = dir.join("short.csv");
+    write_mtm_log(&short, 0.0);
+    let text = std::fs::read_to_string(&short).unwrap();
+    let few: String = text.lines().take(450).map(|l| format!("{l}\n")).collect();
+    std::fs::write(&short, few).unwrap();
+    let (ok, _, err) = run(&[
+        "fit",
+        short.to_str().unwrap(),
+        "--robot",
+        "mtm",
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--method",
+        "ols",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("short.csv") && err.contains("do not determine"),
+        "{err}"
+    );
+    assert!(!out.exists(), "a failed fit must not write its output");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn cable_fit_prints_a_description_line() {
+    let dir = temp_dir("cable");
+    let sweep = dir.join("sweep.csv");
+    let poly = [0.02, -0.01, 0.05];
+    let mut text = String::new();
+    for i in 0..1000 {
+        let (x, dir) = if i < 500 {
+            (-1.0 + i as f64 / 250.0, 1.0)
+        } else {
+            (1.0 - (i - 500) as f64 / 250.0, -1.0)
+        };
+        let tau = poly[0] * x * x + poly[1] * x + poly[2] + 0.03 * dir;
+        text += &format!("{x},0,{tau}\n");
+    }
+    std::fs::write(&sweep, text).unwrap();
+    let (ok, stdout, err) = run(&[
+        "cable-fit",
+        sweep.to_str().unwrap(),
+        "--degree",
+        "2",
+        "--drop",
+        "20",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    for (c, p) in doc["polynomial"].as_array().unwrap().iter().zip(poly) {
+        assert!((c.as_f64().unwrap() - p).abs() < 1e-9, "{doc}");
+    }
+    let (ok, stdout, _) = run(&[
+        "cable-fit",
+        sweep.to_str().unwrap(),
+        "--degree",
+        "2",
+        "--drop",
+        "20",
+    ]);
+    assert!(ok);
+    assert!(
+        stdout.contains("known_force = { polynomial = ["),
+        "{stdout}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
