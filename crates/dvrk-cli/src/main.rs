@@ -29,6 +29,10 @@ enum Command {
     Validate(cmd::validate::Args),
     /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
     CableFit(cmd::cable_fit::Args),
+    /// Simulate a log of a robot with known parameters along a Fourier trajectory.
+    Simulate(cmd::simulate::Args),
+    /// Convert a log between MCAP, headered CSV and the 2019 CSV layout.
+    Convert(cmd::convert::Args),
 }
 
 fn main() -> ExitCode {
@@ -38,6 +42,8 @@ fn main() -> ExitCode {
         Command::Fit(args) => cmd::fit::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::CableFit(args) => cmd::cable_fit::run(args),
+        Command::Simulate(args) => cmd::simulate::run(args),
+        Command::Convert(args) => cmd::convert::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

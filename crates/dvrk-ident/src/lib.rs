@@ -8,9 +8,11 @@
 
 pub mod error;
 pub mod estimate;
+pub mod excite;
 pub mod log;
 pub mod observation;
 pub mod signal;
+pub mod simulate;
 pub mod trajectory;
 
 pub use error::IdentError;

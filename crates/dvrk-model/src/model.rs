@@ -286,15 +286,18 @@ impl Param {
     /// The 10 link parameters of frame `frame`, named in the 2019 convention:
     /// `L{i}xx … L{i}zz` (inertia about the origin), `l{i}x l{i}y l{i}z`, `m{i}`.
     pub fn inertia_block(frame: usize) -> impl Iterator<Item = Param> {
-        INERTIA_SUFFIXES.iter().enumerate().map(move |(k, suffix)| Param {
-            name: match k {
-                0..=5 => format!("L{frame}{suffix}"),
-                6..=8 => format!("l{frame}{suffix}"),
-                _ => format!("m{frame}"),
-            },
-            kind: ParamKind::Inertia { index: k },
-            frame,
-        })
+        INERTIA_SUFFIXES
+            .iter()
+            .enumerate()
+            .map(move |(k, suffix)| Param {
+                name: match k {
+                    0..=5 => format!("L{frame}{suffix}"),
+                    6..=8 => format!("l{frame}{suffix}"),
+                    _ => format!("m{frame}"),
+                },
+                kind: ParamKind::Inertia { index: k },
+                frame,
+            })
     }
 }
 

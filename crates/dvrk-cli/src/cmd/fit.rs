@@ -4,9 +4,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Result};
+use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::result::{write_atomic, InputInfo};
-use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::signal::{resample_linear, Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
@@ -18,6 +19,8 @@ pub enum FormatArg {
     WpiCsv,
     /// Headered CSV: time, position.<joint>, velocity.<joint>, effort.<joint>
     Csv,
+    /// ROS 2 MCAP of sensor_msgs/msg/JointState (measured joints, header stamps)
+    Mcap,
 }
 
 impl FormatArg {
@@ -25,6 +28,7 @@ impl FormatArg {
         match self {
             FormatArg::WpiCsv => LogFormat::Wpi,
             FormatArg::Csv => LogFormat::Csv,
+            FormatArg::Mcap => LogFormat::Mcap,
         }
     }
 }
@@ -37,6 +41,85 @@ pub enum MethodArg {
     Sdp,
 }
 
+/// Which time of an MCAP message is its sample time.
+#[derive(Clone, Copy, Default, clap::ValueEnum)]
+pub enum TimeArg {
+    /// header.stamp: when the controller measured the joints
+    #[default]
+    Header,
+    /// MCAP log time: when the recorder received the message
+    Log,
+    /// MCAP publish time
+    Publish,
+}
+
+/// MCAP reading options, and resampling for every format.
+#[derive(clap::Args, Clone, Default)]
+pub struct McapArgs {
+    /// MCAP: sensor_msgs/msg/JointState topic to read; repeat to merge topics (the first
+    /// is the clock, e.g. --topic /PSM1/measured_js --topic /PSM1/jaw/measured_js).
+    /// Default: the topic with positions and efforts (ending in measured_js if several)
+    #[arg(long = "topic", value_name = "TOPIC")]
+    pub topics: Vec<String>,
+    /// MCAP: sample times from the message header stamps or the MCAP log/publish times
+    #[arg(long, value_enum, default_value = "header")]
+    pub time: TimeArg,
+    /// Resample to this uniform rate (Hz) by linear interpolation before anything else
+    /// (bridges gaps and jitter; without it such logs are refused)
+    #[arg(long, value_name = "HZ")]
+    pub resample: Option<f64>,
+}
+
+impl McapArgs {
+    pub fn options(&self) -> McapOptions {
+        McapOptions {
+            topics: self.topics.clone(),
+            time_source: match self.time {
+                TimeArg::Header => TimeSource::HeaderStamp,
+                TimeArg::Log => TimeSource::LogTime,
+                TimeArg::Publish => TimeSource::PublishTime,
+            },
+            resample_hz: self.resample,
+        }
+    }
+}
+
+/// Reads a log in `format` (default: from the extension and content) with the MCAP
+/// options of `mcap`; `--resample` applies to every format (MCAP while reading).
+pub fn read_log(
+    path: &str,
+    format: Option<LogFormat>,
+    rate: Option<f64>,
+    mcap: &McapArgs,
+) -> Result<dvrk_ident::Trajectory> {
+    let format = match format {
+        Some(f) => f,
+        None => log::detect_format(path)?,
+    };
+    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
+        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
+    }
+    let mut traj = log::read_with(path, Some(format), rate, &mcap.options())?;
+    if let (Some(hz), true) = (mcap.resample, format != LogFormat::Mcap) {
+        traj.validate()?;
+        let fail = |e| anyhow::anyhow!("{path}: --resample {hz}: {e}");
+        let (time, q) = resample_linear(&traj.time, &traj.q, hz).map_err(fail)?;
+        let (_, tau) = resample_linear(&traj.time, &traj.tau, hz).map_err(fail)?;
+        let dq = match &traj.dq {
+            Some(d) => Some(resample_linear(&traj.time, d, hz).map_err(fail)?.1),
+            None => None,
+        };
+        traj = dvrk_ident::Trajectory {
+            time,
+            q,
+            dq,
+            tau,
+            ..traj
+        };
+    }
+    Ok(traj)
+}
+
 /// Options shared by every command that reads logs.
 #[derive(clap::Args, Clone)]
 pub struct LogArgs {
@@ -47,26 +130,33 @@ pub struct LogArgs {
     #[arg(long)]
     pub rate: Option<f64>,
     /// Low-pass cut-off (Hz), zero-phase 6th-order Butterworth; one value or one per
-    /// coordinate, comma-separated. The 2019 PSM/MTM fits effectively used 16.965/5.655.
+    /// coordinate, comma-separated, or `none` (no filter: for clean or simulated logs,
+    /// where the filter's smoothing of the Coulomb friction steps biases the fit).
+    /// The 2019 PSM/MTM fits effectively used 16.965/5.655.
     #[arg(long)]
     pub cutoff: Option<String>,
     /// Samples trimmed at each end after filtering
     #[arg(long)]
     pub trim: Option<usize>,
+    #[command(flatten)]
+    pub mcap: McapArgs,
 }
 
 impl LogArgs {
     pub fn read(&self, path: &str) -> Result<dvrk_ident::Trajectory> {
-        Ok(log::read(
+        read_log(
             path,
             self.format.map(FormatArg::format),
             self.rate,
-        )?)
+            &self.mcap,
+        )
     }
 
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
         let mut s = base;
-        if let Some(c) = &self.cutoff {
+        if self.cutoff.as_deref().map(str::trim) == Some("none") {
+            s.processing.filter = None;
+        } else if let Some(c) = &self.cutoff {
             let values: Vec<f64> = c
                 .split(',')
                 .map(|v| v.trim().parse::<f64>())
@@ -169,6 +259,18 @@ pub fn run(args: Args) -> Result<()> {
 /// The human summary: solver, consistency and per-joint errors.
 pub fn table(r: &FitResult) -> String {
     let mut s = String::new();
+    let _ = writeln!(s, "base parameters (value ± std):");
+    for b in &r.base_parameters {
+        let _ = writeln!(s, "  {:>12.6} ± {:<10.2e} {}", b.value, b.std, b.expression);
+    }
+    let _ = writeln!(s, "links (mass kg, centre of mass m in the link frame):");
+    for l in &r.links {
+        let _ = writeln!(
+            s,
+            "  {:>2} {:<24} {:>9.4}  [{:>8.4} {:>8.4} {:>8.4}]",
+            l.frame, l.link, l.mass, l.com[0], l.com[1], l.com[2]
+        );
+    }
     let _ = writeln!(
         s,
         "robot {}  method {}  rows {}  condition number {:.1}",

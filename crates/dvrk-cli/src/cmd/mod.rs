@@ -1,8 +1,10 @@
 //! One module per subcommand, plus the few conversions they share.
 
 pub mod cable_fit;
+pub mod convert;
 pub mod fit;
 pub mod model;
+pub mod simulate;
 pub mod validate;
 
 use anyhow::{bail, Context, Result};

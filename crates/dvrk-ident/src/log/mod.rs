@@ -290,7 +290,7 @@ pub enum LogError {
 /// `rate_hz` (Hz) is required for the 2019 layout, which has no time stamps (the dVRK
 /// logs are 200 Hz), and ignored for formats with time stamps. MCAP files are read with
 /// [`mcap::McapOptions::default`] (automatic topic, header stamps, no resampling; use
-/// [`mcap::read_mcap`] for more). The 2019 layout's number
+/// [`read_with`] or [`mcap::read_mcap`] for more). The 2019 layout's number
 /// of joints is inferred as columns / 3 (use [`read_wpi`] to force it).
 ///
 /// ```rust
@@ -318,6 +318,17 @@ pub fn read(
     format: Option<LogFormat>,
     rate_hz: Option<f64>,
 ) -> Result<Trajectory, LogError> {
+    read_with(path, format, rate_hz, &mcap::McapOptions::default())
+}
+
+/// [`read`] with the MCAP options (topics, time source, resampling) used when the file
+/// is an MCAP log; other formats ignore them.
+pub fn read_with(
+    path: impl AsRef<Path>,
+    format: Option<LogFormat>,
+    rate_hz: Option<f64>,
+    mcap_options: &mcap::McapOptions,
+) -> Result<Trajectory, LogError> {
     let path = path.as_ref();
     let format = match format {
         Some(f) => f,
@@ -331,7 +342,7 @@ pub fn read(
             read_wpi(path, rate, None)
         }
         LogFormat::Csv => read_headered(path),
-        LogFormat::Mcap => mcap::read_mcap(path, &mcap::McapOptions::default()),
+        LogFormat::Mcap => mcap::read_mcap(path, mcap_options),
     }
 }
 

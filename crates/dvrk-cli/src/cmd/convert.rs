@@ -1,0 +1,98 @@
+//! `dvrk-ident convert IN OUT ...`: a log from one layout and joint space to another
+//! (ROS 2 MCAP, headered CSV, the 2019 CSV layout).
+
+use anyhow::{bail, Result};
+use dvrk_ident::log::{mcap, LogFormat};
+use dvrk_ident::simulate::to_measured_coordinates;
+use dvrk_ident::Coordinates;
+use dvrk_model::Model;
+
+use super::emit;
+use super::fit::{read_log, FormatArg, McapArgs};
+use super::simulate::{output_format, write_log};
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum CoordinatesArg {
+    /// The model's generalized coordinates (e.g. q1..q7, motor angles of the PSM wrist)
+    Model,
+    /// The robot's measured joints (e.g. the dVRK ROS joint names)
+    Measured,
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Input log
+    pub input: String,
+    /// Output log (written atomically)
+    pub output: String,
+    /// Robot (built-in name or description path): needed to change coordinates
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Input format (default: from the extension and content)
+    #[arg(long, value_enum)]
+    pub from: Option<FormatArg>,
+    /// Output format (default: mcap for a .mcap file, otherwise headered csv)
+    #[arg(long, value_enum)]
+    pub format: Option<FormatArg>,
+    /// Sampling rate of an input without time stamps (2019 layout), Hz
+    #[arg(long, value_name = "HZ")]
+    pub rate: Option<f64>,
+    #[command(flatten)]
+    pub mcap: McapArgs,
+    /// Output coordinates (default: model for wpi-csv, measured for mcap, the input's for
+    /// csv). Changing them needs --robot
+    #[arg(long, value_enum)]
+    pub coordinates: Option<CoordinatesArg>,
+    /// Topic of the written MCAP
+    #[arg(long, default_value = mcap::DEFAULT_TOPIC, value_name = "TOPIC")]
+    pub out_topic: String,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let model = args.robot.as_deref().map(Model::load).transpose()?;
+    let traj = read_log(
+        &args.input,
+        args.from.map(FormatArg::format),
+        args.rate,
+        &args.mcap,
+    )?;
+    traj.validate()?;
+    let format = output_format(&args.output, args.format);
+    let target = match (args.coordinates, format) {
+        (Some(CoordinatesArg::Measured), LogFormat::Wpi) => {
+            bail!("the 2019 (wpi-csv) layout holds model coordinates, not measured joints")
+        }
+        (Some(CoordinatesArg::Model), LogFormat::Mcap) => {
+            bail!("MCAP JointState logs hold measured joints, not model coordinates")
+        }
+        (Some(CoordinatesArg::Model), _) => Coordinates::Model,
+        (Some(CoordinatesArg::Measured), _) => Coordinates::Measured,
+        (None, LogFormat::Wpi) => Coordinates::Model,
+        (None, LogFormat::Mcap) => Coordinates::Measured,
+        (None, _) => traj.coordinates,
+    };
+    let out = match (target, &model) {
+        (Coordinates::Model, Some(m)) => dvrk_ident::fit::to_model_coordinates(m, &traj)?,
+        (Coordinates::Measured, Some(m)) => to_measured_coordinates(m, &traj)?,
+        (t, None) if t == traj.coordinates => traj,
+        (t, None) => bail!(
+            "{}: the log is in {} coordinates; converting to {t} coordinates needs --robot",
+            args.input,
+            traj.coordinates
+        ),
+    };
+    if format == LogFormat::Wpi {
+        if let Err(e) = out.check_uniform(mcap::JITTER_TOLERANCE) {
+            bail!("the 2019 (wpi-csv) layout has no time stamps: {e} (or use --resample HZ)");
+        }
+    }
+    write_log(model.as_ref(), &out, &args.output, format, &args.out_topic)?;
+    let rate = out.rate_hz().unwrap_or(f64::NAN);
+    emit(&format!(
+        "wrote {} ({format}, {} coordinates, {} samples at {rate:.6} Hz, joints {})",
+        args.output,
+        out.coordinates,
+        out.len(),
+        out.joint_names.join(" ")
+    ))
+}

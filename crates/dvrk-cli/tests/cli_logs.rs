@@ -1,0 +1,556 @@
+//! Logs in and out, end to end through the binary: the bundled simulated PSM log is
+//! fitted back to its generating parameters, `simulate` and `convert` round-trip values
+//! between MCAP, headered CSV and the 2019 layout, and bad inputs fail with a message
+//! naming the problem, a non-zero exit and no output file.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dvrk_ident::log;
+use dvrk_model::Model;
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
+        .args(args)
+        .output()
+        .expect("run dvrk-ident");
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+fn examples() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn example(name: &str) -> String {
+    examples().join(name).display().to_string()
+}
+
+/// A fresh temporary directory per test.
+fn tmp(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dvrk-cli-logs-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Noise of the bundled log, N·m or N per model coordinate (see examples/README.md).
+const NOISE: f64 = 0.002;
+
+/// The generating parameters of the bundled log, projected on the base parameters.
+fn true_base_parameters(model: &Model) -> Vec<f64> {
+    let text = std::fs::read_to_string(examples().join("psm_params.json")).unwrap();
+    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let map = doc["parameters"].as_object().unwrap();
+    let pi = model
+        .params_from_named(
+            map.iter().map(|(k, v)| (k.as_str(), v.as_f64().unwrap())),
+            "psm_params.json",
+        )
+        .unwrap();
+    model.base_parameters().unwrap().project(&pi)
+}
+
+fn fit_example(method: &str) -> serde_json::Value {
+    // No low-pass filter: the log is clean apart from white torque noise, and a filter
+    // would smooth the Coulomb friction steps at every velocity reversal (with the default
+    // 5.4 Hz filter the residuals are 0.015-0.06 N·m instead of the 0.002 noise).
+    let log = example("psm_excitation.mcap");
+    let (ok, out, err) = run(&[
+        "fit", &log, "--robot", "psm", "--method", method, "--cutoff", "none", "--json",
+    ]);
+    assert!(ok, "{err}");
+    serde_json::from_str(&out).unwrap()
+}
+
+#[test]
+fn ols_fit_of_the_example_recovers_the_generating_base_parameters() {
+    let model = Model::builtin("psm").unwrap();
+    let truth = true_base_parameters(&model);
+    let r = fit_example("ols");
+    assert_eq!(r["solver"]["converged"], true);
+    assert_eq!(r["rows"], 7 * (2222 - 2 * 200));
+    let base = r["base_parameters"].as_array().unwrap();
+    assert_eq!(base.len(), truth.len());
+    let mut worst: f64 = 0.0;
+    for (b, t) in base.iter().zip(&truth) {
+        let (v, std) = (b["value"].as_f64().unwrap(), b["std"].as_f64().unwrap());
+        worst = worst.max((v - t).abs() / std);
+        assert!(
+            (v - t).abs() <= 6.0 * std + 1e-9,
+            "{}: {v} vs {t} (std {std})",
+            b["expression"]
+        );
+    }
+    // What is left is the noise.
+    for rms in r["metrics"]["train"]["rms"].as_array().unwrap() {
+        let rms = rms.as_f64().unwrap();
+        assert!(rms < 1.2 * NOISE && rms > 0.8 * NOISE, "rms {rms}");
+    }
+    println!(
+        "ols: worst |error|/std {worst:.2}, condition number {:.1}",
+        r["condition_number"]
+    );
+}
+
+#[test]
+fn sdp_fit_of_the_example_converges_and_is_physically_consistent() {
+    let model = Model::builtin("psm").unwrap();
+    let truth = true_base_parameters(&model);
+    let r = fit_example("sdp");
+    assert_eq!(r["solver"]["converged"], true, "{}", r["solver"]);
+    assert_eq!(r["physically_consistent"], true);
+    for c in r["consistency"].as_array().unwrap() {
+        assert!(c["min_eigenvalue"].as_f64().unwrap() > 0.0, "{c}");
+    }
+    let mut worst: f64 = 0.0;
+    for (b, t) in r["base_parameters"].as_array().unwrap().iter().zip(&truth) {
+        let (v, std) = (b["value"].as_f64().unwrap(), b["std"].as_f64().unwrap());
+        worst = worst.max((v - t).abs() / std);
+        // The generating parameters are feasible, so the constraints cost little: the
+        // same bound as least squares (std from the WLS fit of the same data).
+        assert!(
+            (v - t).abs() <= 6.0 * std + 1e-6,
+            "{}: {v} vs {t} (std {std})",
+            b["expression"]
+        );
+    }
+    for rms in r["metrics"]["train"]["rms"].as_array().unwrap() {
+        assert!(rms.as_f64().unwrap() < 1.5 * NOISE, "{rms}");
+    }
+    println!("sdp: worst |error|/std {worst:.2}");
+}
+
+#[test]
+fn the_example_log_is_what_its_readme_command_writes() {
+    let dir = tmp("regenerate");
+    let out = dir.join("again.mcap");
+    let (ok, _, err) = run(&[
+        "simulate",
+        "psm",
+        "--params",
+        &example("psm_params.json"),
+        "--trajectory",
+        &example("psm_trajectory.json"),
+        "--periods",
+        "2",
+        "--rate",
+        "200",
+        "--noise",
+        "0.002",
+        "--seed",
+        "1",
+        "--topic",
+        "/PSM1/measured_js",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(ok, "{err}");
+    let a = log::read(example("psm_excitation.mcap"), None, None).unwrap();
+    let b = log::read(&out, None, None).unwrap();
+    assert_eq!(a.len(), 2222);
+    assert_eq!(a.time, b.time);
+    assert_eq!(a.joint_names, b.joint_names);
+    assert_eq!(a.q, b.q);
+    assert_eq!(a.dq, b.dq);
+    assert_eq!(a.tau, b.tau);
+    // The same trajectory taken from the 2019 coefficient file.
+    let anchor = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/anchors/wpi2019_excitation_trajectories.json");
+    if anchor.exists() {
+        let picked = dir.join("picked.mcap");
+        let (ok, _, err) = run(&[
+            "simulate",
+            "psm",
+            "--params",
+            &example("psm_params.json"),
+            "--trajectory",
+            &s(&anchor),
+            "--pick",
+            "psm_one",
+            "--periods",
+            "2",
+            "--noise",
+            "0.002",
+            "--seed",
+            "1",
+            "--out",
+            &s(&picked),
+        ]);
+        assert!(ok, "{err}");
+        let c = log::read(&picked, None, None).unwrap();
+        assert_eq!((&c.q, &c.tau), (&a.q, &a.tau));
+    } else {
+        println!("SKIPPED: --pick check, {} not found", anchor.display());
+    }
+    let readme = std::fs::read_to_string(examples().join("README.md")).unwrap();
+    assert!(readme.contains("--periods 2 --rate 200 --noise 0.002 --seed 1"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn simulate_then_convert_round_trips_values() {
+    let dir = tmp("roundtrip");
+    let mcap = dir.join("sim.mcap");
+    let (ok, out, err) = run(&[
+        "simulate",
+        "psm",
+        "--params",
+        &example("psm_params.json"),
+        "--trajectory",
+        &example("psm_trajectory.json"),
+        "--duration",
+        "1.5",
+        "--noise",
+        "0.01",
+        "--seed",
+        "9",
+        "--out",
+        &s(&mcap),
+    ]);
+    assert!(ok, "{err}");
+    assert!(out.contains("300 samples"), "{out}");
+    let original = log::read(&mcap, None, None).unwrap();
+    assert_eq!(original.len(), 300);
+
+    // MCAP -> headered CSV (measured joints, exact values).
+    let csv = dir.join("sim.csv");
+    let (ok, _, err) = run(&["convert", &s(&mcap), &s(&csv)]);
+    assert!(ok, "{err}");
+    let c = log::read(&csv, None, None).unwrap();
+    assert_eq!(c.coordinates, dvrk_ident::Coordinates::Measured);
+    assert_eq!(
+        (&c.time, &c.q, &c.dq, &c.tau),
+        (&original.time, &original.q, &original.dq, &original.tau)
+    );
+
+    // CSV -> 2019 layout (model coordinates).
+    let wpi = dir.join("sim_wpi.csv");
+    let (ok, _, err) = run(&[
+        "convert",
+        &s(&csv),
+        &s(&wpi),
+        "--robot",
+        "psm",
+        "--format",
+        "wpi-csv",
+    ]);
+    assert!(ok, "{err}");
+    let w = log::read(&wpi, None, Some(200.0)).unwrap();
+    let model = Model::builtin("psm").unwrap();
+    let expected = dvrk_ident::fit::to_model_coordinates(&model, &original).unwrap();
+    assert_eq!(w.coordinates, dvrk_ident::Coordinates::Model);
+    assert!((&w.q - &expected.q).abs().max() == 0.0);
+    assert!((&w.tau - &expected.tau).abs().max() == 0.0);
+    assert_eq!(w.time, original.time);
+
+    // 2019 layout -> MCAP (back to measured joints through the coupling).
+    let back = dir.join("back.mcap");
+    let (ok, _, err) = run(&[
+        "convert",
+        &s(&wpi),
+        &s(&back),
+        "--robot",
+        "psm",
+        "--rate",
+        "200",
+    ]);
+    assert!(ok, "{err}");
+    let b = log::read(&back, None, None).unwrap();
+    assert_eq!(b.joint_names, original.joint_names);
+    assert_eq!(b.time, original.time);
+    assert!((&b.q - &original.q).abs().max() < 1e-14);
+    assert!(
+        (b.dq.as_ref().unwrap() - original.dq.as_ref().unwrap())
+            .abs()
+            .max()
+            < 1e-13
+    );
+    assert!((&b.tau - &original.tau).abs().max() < 1e-13);
+
+    // Model-coordinate headered CSV and the MCAP reading flags.
+    let model_csv = dir.join("model.csv");
+    let (ok, _, err) = run(&[
+        "convert",
+        &s(&mcap),
+        &s(&model_csv),
+        "--robot",
+        "psm",
+        "--coordinates",
+        "model",
+        "--topic",
+        "/measured_js",
+        "--time",
+        "log",
+    ]);
+    assert!(ok, "{err}");
+    let m = log::read(&model_csv, None, None).unwrap();
+    assert_eq!(m.coordinates, dvrk_ident::Coordinates::Model);
+    assert_eq!(m.joint_names, model.coordinates);
+    assert_eq!(m.q, expected.q);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn fit_reads_mcap_with_topic_time_and_resample_flags() {
+    let log = example("psm_excitation.mcap");
+    let (ok, out, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--method",
+        "ols",
+        "--cutoff",
+        "none",
+        "--topic",
+        "/PSM1/measured_js",
+        "--time",
+        "log",
+        "--resample",
+        "100",
+        "--trim",
+        "50",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    // 1111 samples at 100 Hz (11.105 s), 50 trimmed at each end.
+    assert_eq!(r["rows"], 7 * (1111 - 100));
+    let (ok, _, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--topic",
+        "/PSM2/measured_js",
+    ]);
+    assert!(!ok);
+    assert!(err.contains("/PSM2/measured_js"), "{err}");
+}
+
+/// Asserts a failure: non-zero exit, the message contains every word, no output file.
+fn assert_fails(args: &[&str], words: &[&str], output: Option<&Path>) {
+    let (ok, _, err) = run(args);
+    assert!(!ok, "{args:?} succeeded");
+    for w in words {
+        assert!(err.contains(w), "{args:?}: `{w}` not in: {err}");
+    }
+    if let Some(o) = output {
+        assert!(!o.exists(), "{} was written", o.display());
+        let dir = o.parent().unwrap();
+        for e in std::fs::read_dir(dir).unwrap() {
+            let name = e.unwrap().file_name().to_string_lossy().to_string();
+            assert!(!name.contains(".tmp"), "temporary file {name} left behind");
+        }
+    }
+}
+
+#[test]
+fn bad_logs_fail_naming_the_problem_and_write_nothing() {
+    let dir = tmp("errors");
+    let mcap = dir.join("sim.mcap");
+    let (ok, _, err) = run(&[
+        "simulate",
+        "psm",
+        "--params",
+        &example("psm_params.json"),
+        "--trajectory",
+        &example("psm_trajectory.json"),
+        "--duration",
+        "1",
+        "--out",
+        &s(&mcap),
+    ]);
+    assert!(ok, "{err}");
+    let csv = dir.join("sim.csv");
+    assert!(run(&["convert", &s(&mcap), &s(&csv)]).0);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let out = dir.join("out.csv");
+
+    // A CSV without the jaw: the robot's joint is named.
+    let keep: Vec<usize> = {
+        let header = text.lines().nth(1).unwrap();
+        header
+            .split(',')
+            .enumerate()
+            .filter(|(_, h)| !h.ends_with(".jaw"))
+            .map(|(i, _)| i)
+            .collect()
+    };
+    let no_jaw: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                l.to_string()
+            } else {
+                let f: Vec<&str> = l.split(',').collect();
+                keep.iter().map(|&i| f[i]).collect::<Vec<_>>().join(",")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let no_jaw_path = dir.join("no_jaw.csv");
+    std::fs::write(&no_jaw_path, no_jaw).unwrap();
+    let model_out = dir.join("model.csv");
+    assert_fails(
+        &[
+            "convert",
+            &s(&no_jaw_path),
+            &s(&model_out),
+            "--robot",
+            "psm",
+            "--coordinates",
+            "model",
+        ],
+        &["no_jaw.csv", "`jaw`", "missing"],
+        Some(&model_out),
+    );
+    assert_fails(
+        &["fit", &s(&no_jaw_path), "--robot", "psm", "--method", "ols"],
+        &["`jaw`", "missing"],
+        None,
+    );
+    // A CSV missing one effort column.
+    let header = text.lines().nth(1).unwrap();
+    let k = header
+        .split(',')
+        .position(|h| h == "effort.outer_roll")
+        .unwrap();
+    let no_effort: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with('#') {
+                l.to_string()
+            } else {
+                let mut f: Vec<&str> = l.split(',').collect();
+                f.remove(k);
+                f.join(",")
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let p = dir.join("no_effort.csv");
+    std::fs::write(&p, no_effort).unwrap();
+    assert_fails(
+        &["convert", &s(&p), &s(&out)],
+        &["effort", "outer_roll"],
+        Some(&out),
+    );
+
+    // NaN in a CSV: file, line and column.
+    let lines: Vec<&str> = text.lines().collect();
+    let mut f: Vec<String> = lines[10].split(',').map(String::from).collect();
+    f[3] = "NaN".into();
+    let mut nan = lines.clone();
+    let row = f.join(",");
+    nan[10] = &row;
+    let p = dir.join("nan.csv");
+    std::fs::write(&p, nan.join("\n")).unwrap();
+    assert_fails(
+        &["convert", &s(&p), &s(&out)],
+        &["nan.csv:11", "non-finite"],
+        Some(&out),
+    );
+    let mcap_out = dir.join("out.mcap");
+    assert_fails(
+        &["convert", &s(&p), &s(&mcap_out)],
+        &["nan.csv"],
+        Some(&mcap_out),
+    );
+
+    // A truncated MCAP.
+    let bytes = std::fs::read(&mcap).unwrap();
+    let p = dir.join("truncated.mcap");
+    std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+    assert_fails(
+        &["convert", &s(&p), &s(&out)],
+        &["truncated.mcap"],
+        Some(&out),
+    );
+    assert_fails(
+        &["fit", &s(&p), "--robot", "psm", "--method", "ols"],
+        &["truncated.mcap"],
+        None,
+    );
+
+    // Simulation inputs: NaN noise, a trajectory for another robot, bad parameters.
+    let sim_out = dir.join("sim_out.mcap");
+    let sim = |extra: &[&str]| -> Vec<String> {
+        let mut a: Vec<String> = [
+            "simulate",
+            "psm",
+            "--params",
+            &example("psm_params.json"),
+            "--trajectory",
+            &example("psm_trajectory.json"),
+            "--out",
+            &s(&sim_out),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    let args = sim(&["--noise", "nan"]);
+    assert_fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["noise"],
+        Some(&sim_out),
+    );
+    let args = sim(&["--rate", "0"]);
+    assert_fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["rate"],
+        Some(&sim_out),
+    );
+    let mut args = sim(&[]);
+    args[1] = "mtm".into();
+    assert_fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["psm_params.json"],
+        Some(&sim_out),
+    );
+    let short = dir.join("traj6.json");
+    std::fs::write(
+        &short,
+        r#"{"order": 1, "base_frequency_hz": 0.2, "q0": [0,0,0,0,0,0], "a": [[0],[0],[0],[0],[0],[0]], "b": [[0],[0],[0],[0],[0],[0]]}"#,
+    )
+    .unwrap();
+    let mut args = sim(&[]);
+    args[5] = s(&short);
+    assert_fails(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+        &["6 coordinates"],
+        Some(&sim_out),
+    );
+    // Coordinates the target format cannot hold.
+    assert_fails(
+        &[
+            "convert",
+            &s(&mcap),
+            &s(&mcap_out),
+            "--coordinates",
+            "model",
+            "--robot",
+            "psm",
+        ],
+        &["measured"],
+        Some(&mcap_out),
+    );
+    let wpi_out = dir.join("w.csv");
+    assert_fails(
+        &["convert", &s(&mcap), &s(&wpi_out), "--format", "wpi-csv"],
+        &["--robot"],
+        Some(&wpi_out),
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,285 @@
+//! Simulated logs: a robot model with known parameters runs an excitation trajectory and
+//! "measures" its joints, as the real robot would log them.
+//!
+//! [`simulate`] samples the trajectory (model coordinates) at a fixed rate, computes the
+//! torques `τ = H(q, q̇, q̈)·π + known forces(q) + noise` with independent Gaussian noise
+//! per model coordinate, then maps everything to the robot's measured joints
+//! ([`to_measured_coordinates`]): `q_meas = M q`, `q̇_meas = M q̇`, `τ_meas = M⁻ᵀ τ`
+//! with `M` = `model.measured.coupling`. The result is a [`Trajectory`] in
+//! [`Coordinates::Measured`] with the model's measured joint names and the exact
+//! velocities, ready for [`crate::log::write`] (e.g. a ROS 2 MCAP log).
+//!
+//! The noise comes from a small built-in generator (SplitMix64 and Box–Muller), so a
+//! seed gives the same log on every platform and with every dependency version.
+
+use dvrk_model::{Model, Workspace};
+use nalgebra::DMatrix;
+
+use crate::error::IdentError;
+use crate::excite::FourierTrajectory;
+use crate::trajectory::{uniform_time, Coordinates, Trajectory};
+
+/// Most samples [`simulate`] produces (a guard against a mistyped duration or rate).
+pub const MAX_SAMPLES: usize = 10_000_000;
+
+/// How to sample and perturb a simulated log.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulation {
+    /// Length of the log, s; `None`: one period of the trajectory.
+    pub duration_s: Option<f64>,
+    /// Sampling rate, Hz (sample `k` at `k / rate`).
+    pub rate_hz: f64,
+    /// Standard deviation of the torque noise, N·m or N, added in model coordinates
+    /// before the mapping to measured joints: empty for none, one value for every
+    /// coordinate or one per coordinate.
+    pub noise_std: Vec<f64>,
+    /// Seed of the noise generator.
+    pub seed: u64,
+}
+
+impl Default for Simulation {
+    /// One period at 200 Hz (the dVRK logging rate), no noise, seed 0.
+    fn default() -> Self {
+        Simulation {
+            duration_s: None,
+            rate_hz: 200.0,
+            noise_std: Vec::new(),
+            seed: 0,
+        }
+    }
+}
+
+impl Simulation {
+    /// Number of samples for a trajectory: `round(duration · rate)`.
+    pub fn samples(&self, traj: &FourierTrajectory) -> usize {
+        let d = self.duration_s.unwrap_or_else(|| traj.period_s());
+        let n = (d * self.rate_hz).round();
+        if n.is_finite() && n >= 0.0 {
+            n.min(usize::MAX as f64) as usize
+        } else {
+            0
+        }
+    }
+}
+
+/// Deterministic normal deviates: SplitMix64 uniforms and the Box–Muller transform.
+#[derive(Clone, Debug)]
+pub struct Gaussian {
+    state: u64,
+}
+
+impl Gaussian {
+    /// A generator for `seed` (any value, including 0).
+    pub fn new(seed: u64) -> Self {
+        Gaussian { state: seed }
+    }
+
+    fn next_u64(&mut self) -> u64 {
+        self.state = self.state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.state;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// Uniform in (0, 1].
+    fn uniform(&mut self) -> f64 {
+        ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64
+    }
+
+    /// A standard normal deviate.
+    pub fn sample(&mut self) -> f64 {
+        let (u, v) = (self.uniform(), self.uniform());
+        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+    }
+}
+
+fn setting(name: &str, message: String) -> IdentError {
+    IdentError::Setting {
+        name: name.into(),
+        message,
+    }
+}
+
+/// Simulates a log of `model` with parameters `params` (the model's order) along
+/// `traj` (model coordinates): see the module docs. Returns measured coordinates with
+/// velocities. Errors name the setting or the mismatch (trajectory size or coordinate
+/// names against the model, parameter count, non-finite values, singular coupling).
+pub fn simulate(
+    model: &Model,
+    params: &[f64],
+    traj: &FourierTrajectory,
+    sim: &Simulation,
+) -> Result<Trajectory, IdentError> {
+    let n = model.dof();
+    let mismatch = |message: String| IdentError::Mismatch {
+        source_name: "simulation".into(),
+        message,
+    };
+    traj.validate("excitation trajectory")
+        .map_err(|e| mismatch(e.to_string()))?;
+    if traj.dof() != n {
+        return Err(mismatch(format!(
+            "the trajectory has {} coordinates but robot {} has {n}",
+            traj.dof(),
+            model.name
+        )));
+    }
+    if !traj.coordinates.is_empty() && traj.coordinates != model.coordinates {
+        return Err(mismatch(format!(
+            "the trajectory's coordinates ({}) are not robot {}'s ({})",
+            traj.coordinates.join(", "),
+            model.name,
+            model.coordinates.join(", ")
+        )));
+    }
+    if params.len() != model.n_params() {
+        return Err(mismatch(format!(
+            "{} parameter values for robot {}'s {} parameters",
+            params.len(),
+            model.name,
+            model.n_params()
+        )));
+    }
+    if let Some(k) = params.iter().position(|v| !v.is_finite()) {
+        return Err(mismatch(format!(
+            "parameter {} = {} is not finite",
+            model.params[k].name, params[k]
+        )));
+    }
+    if !(sim.rate_hz.is_finite() && sim.rate_hz > 0.0) {
+        return Err(setting(
+            "rate",
+            format!("must be positive and finite, got {} Hz", sim.rate_hz),
+        ));
+    }
+    if let Some(d) = sim.duration_s {
+        if !(d.is_finite() && d > 0.0) {
+            return Err(setting(
+                "duration",
+                format!("must be positive and finite, got {d} s"),
+            ));
+        }
+    }
+    let noise: Vec<f64> = match sim.noise_std.len() {
+        0 => vec![0.0; n],
+        1 => vec![sim.noise_std[0]; n],
+        m if m == n => sim.noise_std.clone(),
+        m => {
+            return Err(setting(
+                "noise",
+                format!("expected one value or {n} (one per coordinate), got {m}"),
+            ))
+        }
+    };
+    if let Some(v) = noise.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+        return Err(setting(
+            "noise",
+            format!("standard deviations must be finite and non-negative, got {v}"),
+        ));
+    }
+    let count = sim.samples(traj);
+    if count < 2 {
+        return Err(setting(
+            "duration",
+            format!("the log would have {count} samples; at least 2 are needed"),
+        ));
+    }
+    if count > MAX_SAMPLES {
+        return Err(setting(
+            "duration",
+            format!("the log would have {count} samples (more than {MAX_SAMPLES})"),
+        ));
+    }
+    let time = uniform_time(count, sim.rate_hz);
+    let (q, dq, ddq) = traj.sample(&time);
+    let mut ws = Workspace::new(model);
+    let mut rng = Gaussian::new(sim.seed);
+    let mut tau = DMatrix::zeros(count, n);
+    let (mut qk, mut dqk, mut ddqk, mut tk) =
+        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for k in 0..count {
+        for j in 0..n {
+            qk[j] = q[(k, j)];
+            dqk[j] = dq[(k, j)];
+            ddqk[j] = ddq[(k, j)];
+        }
+        model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
+        model.add_known_forces(&qk, &mut tk);
+        for j in 0..n {
+            let e = if noise[j] > 0.0 {
+                noise[j] * rng.sample()
+            } else {
+                0.0
+            };
+            tau[(k, j)] = tk[j] + e;
+        }
+    }
+    let in_model = Trajectory {
+        time,
+        q,
+        dq: Some(dq),
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: format!("simulated {}", model.name),
+    };
+    let measured = to_measured_coordinates(model, &in_model)?;
+    measured.validate()?;
+    Ok(measured)
+}
+
+/// The inverse of [`crate::fit::to_model_coordinates`]: a model-coordinate trajectory
+/// mapped to the robot's measured joints, `q_meas = M q`, `q̇_meas = M q̇`,
+/// `τ_meas = M⁻ᵀ τ` (`M` = `model.measured.coupling`), named by the measured joint
+/// names. A trajectory already in measured coordinates is returned as it is.
+pub fn to_measured_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajectory, IdentError> {
+    if traj.coordinates == Coordinates::Measured {
+        return Ok(traj.clone());
+    }
+    let n = model.dof();
+    let mismatch = |message: String| IdentError::Mismatch {
+        source_name: traj.source.clone(),
+        message,
+    };
+    if traj.dof() != n {
+        return Err(mismatch(format!(
+            "the log has {} joints in model coordinates but robot {} has {n} coordinates",
+            traj.dof(),
+            model.name
+        )));
+    }
+    let m = &model.measured.coupling;
+    let minv = model
+        .measured_to_model_matrix()
+        .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
+    let mt = m.transpose();
+    Ok(Trajectory {
+        time: traj.time.clone(),
+        q: &traj.q * &mt,
+        dq: traj.dq.as_ref().map(|d| d * &mt),
+        tau: &traj.tau * minv,
+        joint_names: model.measured.joints.clone(),
+        coordinates: Coordinates::Measured,
+        source: traj.source.clone(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn gaussian_moments() {
+        let mut g = Gaussian::new(0);
+        let n = 200_000;
+        let xs: Vec<f64> = (0..n).map(|_| g.sample()).collect();
+        let mean = xs.iter().sum::<f64>() / n as f64;
+        let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / n as f64;
+        assert!(mean.abs() < 0.01, "{mean}");
+        assert!((var - 1.0).abs() < 0.01, "{var}");
+        let mut a = Gaussian::new(7);
+        let mut b = Gaussian::new(7);
+        assert_eq!(a.sample(), b.sample());
+    }
+}
