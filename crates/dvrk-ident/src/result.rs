@@ -161,27 +161,10 @@ impl FitResult {
     }
 }
 
-/// Writes `text` to `path` atomically: a temporary file in the same folder, then a
-/// rename, so an interrupted run never leaves a half-written output.
+/// Writes `text` to `path` atomically (temporary file in the same folder, synced, then
+/// renamed), so an interrupted run never leaves a half-written output.
 pub fn write_atomic(path: &Path, text: &str) -> Result<(), IdentError> {
-    let io = |e: std::io::Error| IdentError::Io {
-        file: path.display().to_string(),
-        message: e.to_string(),
-    };
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().to_string())
-        .unwrap_or_default();
-    let tmp = dir.join(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, text).map_err(io)?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        io(e)
-    })
+    crate::log::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(IdentError::from)
 }
 
 /// The parameters in the 2019 package's `params.json` layout: one entry per frame

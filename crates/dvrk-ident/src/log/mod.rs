@@ -428,7 +428,7 @@ static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
 /// directory (same file system, so the rename is atomic), is flushed to disk, then
 /// renamed over `path`. On failure the temporary file is removed and `path` is left
 /// untouched.
-pub(crate) fn write_atomic(
+pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
