@@ -33,6 +33,8 @@ enum Command {
     Simulate(cmd::simulate::Args),
     /// Convert a log between MCAP, headered CSV and the 2019 CSV layout.
     Convert(cmd::convert::Args),
+    /// Optimize an excitation trajectory under the limits, or evaluate one.
+    Excite(cmd::excite::Args),
 }
 
 fn main() -> ExitCode {
@@ -44,6 +46,7 @@ fn main() -> ExitCode {
         Command::CableFit(args) => cmd::cable_fit::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),
+        Command::Excite(args) => cmd::excite::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

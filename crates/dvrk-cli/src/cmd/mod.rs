@@ -2,6 +2,7 @@
 
 pub mod cable_fit;
 pub mod convert;
+pub mod excite;
 pub mod fit;
 pub mod model;
 pub mod simulate;

@@ -4,5 +4,6 @@
 //! coefficient files.
 
 pub mod fourier;
+pub mod optimize;
 
 pub use fourier::{FourierError, FourierTrajectory};

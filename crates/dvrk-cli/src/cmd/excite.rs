@@ -1,0 +1,253 @@
+//! `dvrk-ident excite --robot ROBOT ...`: optimize an excitation trajectory (Fourier
+//! coefficients minimizing the condition number of the base regressor under the
+//! description's limits), or evaluate one with `--evaluate TRAJ.json`.
+//!
+//! The setpoint CSV (`--csv`) is `time,<measured joint names>`: one period at `--rate`,
+//! positions in the MEASURED joint space (`q_meas = M q`; rad or m), no effort columns.
+
+use std::io::IsTerminal;
+
+use anyhow::{bail, Context, Result};
+use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions};
+use dvrk_ident::excite::FourierTrajectory;
+use dvrk_model::Model;
+
+use super::emit;
+
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub enum CriterionArg {
+    /// Condition number of the column-normalized base regressor (minimized)
+    Condition,
+    /// log det of the normalized information matrix (D-optimality, maximized)
+    LogDet,
+}
+
+impl CriterionArg {
+    fn criterion(self) -> Criterion {
+        match self {
+            CriterionArg::Condition => Criterion::Condition,
+            CriterionArg::LogDet => Criterion::LogDet,
+        }
+    }
+}
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
+    #[arg(long)]
+    pub robot: String,
+    /// Number of harmonics L
+    #[arg(long, default_value_t = 6)]
+    pub order: usize,
+    /// Base frequency f0 (Hz)
+    #[arg(long, default_value_t = 0.18)]
+    pub f0: f64,
+    /// Limits file ([[limits]] tables: expr, position, velocity, acceleration); default:
+    /// the description's
+    #[arg(long, value_name = "FILE")]
+    pub limits: Option<String>,
+    /// Optimality criterion
+    #[arg(long, value_enum, default_value = "condition")]
+    pub criterion: CriterionArg,
+    /// Seed of the random starts
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Number of random starts
+    #[arg(long, default_value_t = 4)]
+    pub starts: usize,
+    /// L-BFGS iterations per penalty stage (5 stages)
+    #[arg(long, default_value_t = 150)]
+    pub iterations: usize,
+    /// Regressor samples per period per harmonic for the criterion
+    #[arg(long, default_value_t = 15)]
+    pub samples_per_harmonic: usize,
+    /// Zero velocity and acceleration at the start and end of the period
+    #[arg(long)]
+    pub rest: bool,
+    /// Optimize the exact condition number from the start (no smooth surrogate stages)
+    #[arg(long)]
+    pub no_smooth: bool,
+    /// Output trajectory JSON (default: stdout)
+    #[arg(long, value_name = "FILE")]
+    pub out: Option<String>,
+    /// Setpoint CSV (time,<measured joints>; one period at --rate, measured joint space)
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<String>,
+    /// Setpoint rate (Hz)
+    #[arg(long, default_value_t = 200.0, value_name = "HZ")]
+    pub rate: f64,
+    /// Rate of the dense feasibility check (Hz; at least 1000)
+    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
+    pub check_rate: f64,
+    /// Warm start: refine this trajectory (Fourier JSON; with --init-pick, a 2019 file)
+    #[arg(long, value_name = "TRAJ.json")]
+    pub init: Option<String>,
+    /// Take the warm start (e.g. mtm_one) from a 2019-layout coefficient file
+    #[arg(long, value_name = "NAME", requires = "init")]
+    pub init_pick: Option<String>,
+    /// Evaluate this trajectory file instead of optimizing
+    #[arg(long, value_name = "TRAJ.json")]
+    pub evaluate: Option<String>,
+    /// With --evaluate: take this trajectory (e.g. psm_one) from a 2019 coefficient file
+    #[arg(long, value_name = "NAME", requires = "evaluate")]
+    pub pick: Option<String>,
+    /// With --evaluate: print JSON
+    #[arg(long)]
+    pub json: bool,
+}
+
+fn print_evaluation(ev: &Evaluation, json: bool) -> Result<()> {
+    if json {
+        let doc = serde_json::json!({
+            "criterion": ev.criterion,
+            "feasible": ev.feasibility.feasible,
+            "worst_violation": ev.feasibility.worst,
+            "violated": ev.feasibility.violated,
+            "check_samples": ev.feasibility.samples,
+            "check_rate_hz": ev.feasibility.rate_hz,
+        });
+        return emit(&serde_json::to_string_pretty(&doc)?);
+    }
+    let mut s = format!(
+        "criterion: {} = {:.6}\nfeasible: {} (dense check: {} samples at {} Hz)\n",
+        ev.criterion.name,
+        ev.criterion.value,
+        ev.feasibility.feasible,
+        ev.feasibility.samples,
+        ev.feasibility.rate_hz
+    );
+    if let Some(w) = &ev.feasibility.worst {
+        s += &format!(
+            "worst {}: {} {} = {:.6} vs bound {} ({} {:.3e}) at t = {:.3} s\n",
+            if w.excess > 0.0 {
+                "violation"
+            } else {
+                "margin"
+            },
+            w.limit,
+            w.quantity,
+            w.value,
+            w.bound,
+            if w.excess > 0.0 {
+                "excess"
+            } else {
+                "inside by"
+            },
+            w.excess.abs(),
+            w.time_s
+        );
+    }
+    if ev.feasibility.violated.len() > 1 {
+        s += "violated limits:\n";
+        for w in &ev.feasibility.violated {
+            s += &format!(
+                "  {} {}: {:.6} vs {} (excess {:.3e}) at t = {:.3} s\n",
+                w.limit, w.quantity, w.value, w.bound, w.excess, w.time_s
+            );
+        }
+    }
+    emit(&s)
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let model = Model::load(&args.robot)?;
+    let base = model.base_parameters()?;
+    let limits = match &args.limits {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
+            optimize::limits_from_toml_str(&model, &text, path)?
+        }
+        None => model.limits.clone(),
+    };
+    let criterion = args.criterion.criterion();
+
+    if let Some(path) = &args.evaluate {
+        let traj = match &args.pick {
+            Some(name) => FourierTrajectory::from_wpi2019_file(path, name)?,
+            None => FourierTrajectory::from_json_file(path)?,
+        };
+        let ev = optimize::evaluate(
+            &model,
+            &base,
+            &traj,
+            &limits,
+            criterion,
+            args.samples_per_harmonic,
+            args.check_rate,
+        )?;
+        return print_evaluation(&ev, args.json);
+    }
+
+    if limits.is_empty() {
+        eprintln!("dvrk-ident: warning: no limits (the motion is unconstrained)");
+    }
+    let opts = ExciteOptions {
+        order: args.order,
+        base_frequency_hz: args.f0,
+        criterion,
+        samples_per_harmonic: args.samples_per_harmonic,
+        starts: args.starts,
+        seed: args.seed,
+        iterations_per_stage: args.iterations,
+        rest: args.rest,
+        smooth: !args.no_smooth,
+        init: match (&args.init, &args.init_pick) {
+            (Some(path), Some(name)) => Some(FourierTrajectory::from_wpi2019_file(path, name)?),
+            (Some(path), None) => Some(FourierTrajectory::from_json_file(path)?),
+            _ => None,
+        },
+        check_rate_hz: args.check_rate,
+        ..ExciteOptions::default()
+    };
+    if args.rate <= 0.0 || !args.rate.is_finite() {
+        bail!("--rate must be positive");
+    }
+    let tty = std::io::stderr().is_terminal();
+    let started = std::time::Instant::now();
+    let progress = move |done: usize, total: usize| {
+        if tty {
+            eprint!(
+                "\rexcite: start {done}/{total} done ({:.1} s)",
+                started.elapsed().as_secs_f64()
+            );
+            if done == total {
+                eprintln!();
+            }
+        }
+    };
+    let result = optimize::optimize(&model, &base, &limits, &opts, Some(&progress))?;
+    let doc = serde_json::to_string_pretty(&result.to_json_value())?;
+    match &args.out {
+        Some(path) => {
+            std::fs::write(path, doc + "\n").with_context(|| format!("{path}: cannot write"))?
+        }
+        None => emit(&doc)?,
+    }
+    if let Some(path) = &args.csv {
+        let csv = optimize::setpoints_csv(&model, &result.trajectory, args.rate)?;
+        std::fs::write(path, csv).with_context(|| format!("{path}: cannot write"))?;
+    }
+    let ev = &result.evaluation;
+    let w = ev.feasibility.worst.as_ref();
+    eprintln!(
+        "excite: {} = {:.6} ({} starts: {}), feasible on {} samples at {} Hz{}, {:.1} s",
+        ev.criterion.name,
+        ev.criterion.value,
+        result.starts.len(),
+        result
+            .starts
+            .iter()
+            .map(|s| s.map_or("failed".to_string(), |v| format!("{v:.4}")))
+            .collect::<Vec<_>>()
+            .join(" "),
+        ev.feasibility.samples,
+        ev.feasibility.rate_hz,
+        w.map_or(String::new(), |w| format!(
+            "; tightest: {} {} inside by {:.3e}",
+            w.limit, w.quantity, -w.excess
+        )),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
