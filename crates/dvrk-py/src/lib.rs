@@ -1,1 +1,48 @@
-//! Python bindings: filled by the Python-module issue.
+//! Python bindings of dvrk-ident: the `dvrk_ident` module (build with maturin, see
+//! `pyproject.toml` and `README.md` next to this crate).
+//!
+//! A thin layer: conversions between numpy arrays and the library's buffers, and calls
+//! into `dvrk-model` and `dvrk-ident`; no algorithm lives here. Heavy work runs
+//! without the GIL (per-sample loops in chunks with a signal check between them, fits
+//! and log reading on a worker thread polled for Ctrl-C).
+
+mod convert;
+mod data;
+mod errors;
+mod fit;
+mod json;
+mod robot;
+
+use pyo3::prelude::*;
+
+/// Dynamic parameter identification for robot arms (dVRK PSM/MTM, DH and URDF
+/// robots): models, regressors and dynamics over numpy arrays, log reading, and the
+/// fit of ``dvrk-ident fit``.
+///
+/// Example::
+///
+///     >>> import dvrk_ident as di
+///     >>> psm = di.Robot.load("psm")
+///     >>> train = di.read_log("one_results.csv", psm, format="wpi-csv", rate=200)
+///     >>> result = di.fit(psm, train, method="ols", cutoff=16.965)
+///     >>> result.metrics["train"]["relative_error"]
+#[pymodule(name = "dvrk_ident")]
+mod dvrk_ident_module {
+    use super::*;
+
+    #[pymodule_export]
+    use crate::robot::{BaseParametersPy, Robot};
+
+    #[pymodule_export]
+    use crate::data::{list_topics, read_log, DataPy, PreparedPy};
+
+    #[pymodule_export]
+    use crate::fit::{fit, prepare, FitResultPy};
+
+    #[pymodule_init]
+    fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
+        crate::errors::register(m)?;
+        m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        Ok(())
+    }
+}

@@ -1,0 +1,326 @@
+"""Type stubs of the dvrk_ident extension module (see README.md for the tutorial).
+
+Arrays are float64 numpy arrays. Functions of the robot state take one sample as 1-D
+arrays of ``dof`` values or ``N`` samples as 2-D arrays ``(N, dof)``; outputs then have
+a leading sample axis, which a single 1-D sample drops.
+"""
+
+import os
+import pathlib
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+
+import numpy as np
+import numpy.typing as npt
+
+__version__: str
+
+FloatArray = npt.NDArray[np.float64]
+ArrayLike = npt.ArrayLike
+PathLike = Union[str, "os.PathLike[str]"]
+#: A parameter vector (``len(robot.parameter_names)`` values, in that order), a mapping
+#: ``{name: value}`` with every parameter, or a fit ``Result``.
+Params = Union[ArrayLike, Mapping[str, float], "Result"]
+
+class DvrkError(Exception):
+    """Base class of every error raised by dvrk_ident."""
+
+class InputError(DvrkError, ValueError):
+    """Invalid input: arguments, array shapes or values (NaN), robot descriptions, log
+    contents, data that do not fit the robot or do not determine the parameters."""
+
+class DvrkIOError(DvrkError, OSError):
+    """A file that cannot be read or written."""
+
+class DvrkFileNotFoundError(DvrkIOError, FileNotFoundError):
+    """A file that does not exist."""
+
+class SolverError(DvrkError, RuntimeError):
+    """A numerical failure (solver, base parameters) or an internal error."""
+
+class NotConvergedError(SolverError):
+    """The fit's solver did not converge; ``result`` holds the unconverged Result."""
+
+    result: "Result"
+
+class Robot:
+    """A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``,
+    ``"mtm"``), a ``.toml`` description or a ``.urdf`` file."""
+
+    def __init__(self, name_or_path: PathLike) -> None: ...
+    @staticmethod
+    def load(name_or_path: PathLike) -> "Robot":
+        """Loads a built-in robot or a ``.toml``/``.urdf`` file."""
+    @staticmethod
+    def from_toml(text: str, source: str = "<string>") -> "Robot": ...
+    @staticmethod
+    def from_urdf(text: str, source: str = "<string>") -> "Robot": ...
+    @staticmethod
+    def builtin_names() -> List[str]: ...
+    @property
+    def name(self) -> str: ...
+    @property
+    def source(self) -> str:
+        """``builtin:psm`` or the file path."""
+    @property
+    def coordinates(self) -> List[str]:
+        """Model coordinate names: the columns of ``q``."""
+    @property
+    def measured_joints(self) -> List[str]:
+        """Measured joint names (e.g. ROS), one per coordinate."""
+    @property
+    def coupling(self) -> FloatArray:
+        """``(dof, dof)``: ``q_measured = coupling @ q_model``."""
+    @property
+    def parameter_names(self) -> List[str]:
+        """Parameter names in regressor column order."""
+    @property
+    def dof(self) -> int: ...
+    @property
+    def n_parameters(self) -> int: ...
+    @property
+    def frame_names(self) -> List[str]:
+        """Frame names, base first (the frame axis of ``forward_kinematics``)."""
+    @property
+    def gravity_vector(self) -> FloatArray:
+        """Gravity in the base frame, m/s², ``(3,)``."""
+    @property
+    def nominal_parameters(self) -> Optional[FloatArray]:
+        """``(n_parameters,)`` nominal values of the description, or ``None``."""
+    def summary(self) -> Dict[str, Any]:
+        """The document of ``dvrk-ident model ROBOT --json``."""
+    def base(self) -> "BaseParameters":
+        """The base (identifiable) parameters (computed once per robot)."""
+    def regressor(
+        self, q: ArrayLike, dq: Optional[ArrayLike] = None, ddq: Optional[ArrayLike] = None
+    ) -> FloatArray:
+        """``H`` with ``tau = H @ params``: ``(N*dof, n_parameters)`` (row ``k*dof + j``
+        is coordinate ``j`` of sample ``k``), ``(dof, n_parameters)`` for one sample."""
+    def base_regressor(
+        self, q: ArrayLike, dq: Optional[ArrayLike] = None, ddq: Optional[ArrayLike] = None
+    ) -> FloatArray:
+        """The ``base().independent`` columns of ``regressor``: ``(N*dof, rank)``."""
+    def inverse_dynamics(
+        self,
+        params: Params,
+        q: ArrayLike,
+        dq: Optional[ArrayLike] = None,
+        ddq: Optional[ArrayLike] = None,
+    ) -> FloatArray:
+        """``tau = H @ params`` without known forces: ``(N, dof)`` or ``(dof,)``."""
+    def gravity(self, params: Params, q: ArrayLike) -> FloatArray:
+        """Gravity torque of the links: ``(N, dof)`` or ``(dof,)``."""
+    def mass_matrix(self, params: Params, q: ArrayLike) -> FloatArray:
+        """``M(q)``: ``(N, dof, dof)``, or ``(dof, dof)`` for one 1-D sample."""
+    def forward_dynamics(
+        self, params: Params, q: ArrayLike, dq: ArrayLike, tau: ArrayLike
+    ) -> FloatArray:
+        """Accelerations under measured torques: ``(N, dof)`` or ``(dof,)``."""
+    def known_forces(self, q: ArrayLike) -> FloatArray:
+        """Known generalized forces (e.g. the MTM cable): ``(N, dof)`` or ``(dof,)``."""
+    def forward_kinematics(self, q: ArrayLike) -> FloatArray:
+        """Frame poses in the base frame, base first: ``(N, frames, 4, 4)`` or
+        ``(frames, 4, 4)``."""
+
+class BaseParameters:
+    """``beta = combination @ params``; ``H @ params == H[:, independent] @ beta``."""
+
+    @property
+    def names(self) -> List[str]: ...
+    @property
+    def expressions(self) -> List[str]: ...
+    @property
+    def independent(self) -> List[int]: ...
+    @property
+    def combination(self) -> FloatArray:
+        """``(rank, n_parameters)``."""
+    @property
+    def rank(self) -> int: ...
+    def __len__(self) -> int: ...
+    def project(self, params: Params) -> FloatArray:
+        """``beta``, ``(rank,)``."""
+    def regressor(
+        self, q: ArrayLike, dq: Optional[ArrayLike] = None, ddq: Optional[ArrayLike] = None
+    ) -> FloatArray:
+        """The base regressor, as ``Robot.base_regressor``."""
+    def to_dict(self) -> Dict[str, Any]: ...
+
+class Data:
+    """A joint-space log: times, positions, velocities (optional), efforts."""
+
+    def __init__(
+        self,
+        time: ArrayLike,
+        q: ArrayLike,
+        tau: ArrayLike,
+        dq: Optional[ArrayLike] = None,
+        *,
+        joint_names: Optional[Sequence[str]] = None,
+        coordinates: str = "model",
+        source: str = "numpy",
+    ) -> None: ...
+    @property
+    def time(self) -> FloatArray:
+        """Sample times, s, ``(N,)``."""
+    @property
+    def q(self) -> FloatArray:
+        """``(N, joints)``, rad or m."""
+    @property
+    def dq(self) -> Optional[FloatArray]:
+        """``(N, joints)``, rad/s or m/s, or ``None``."""
+    @property
+    def tau(self) -> FloatArray:
+        """``(N, joints)``, N·m or N."""
+    @property
+    def joint_names(self) -> List[str]: ...
+    @property
+    def coordinates(self) -> str:
+        """``"measured"`` or ``"model"``."""
+    @property
+    def source(self) -> str: ...
+    @property
+    def path(self) -> Optional[pathlib.Path]:
+        """The file the data were read from (absolute), or ``None``."""
+    @property
+    def dof(self) -> int: ...
+    @property
+    def rate(self) -> Optional[float]:
+        """Sampling rate estimate, Hz."""
+    def __len__(self) -> int: ...
+    def to_model(self, robot: Robot) -> "Data":
+        """The data in the robot's model coordinates."""
+    def write(
+        self, path: PathLike, format: Optional[str] = None, topic: Optional[str] = None
+    ) -> None:
+        """Writes a ``csv``, ``wpi`` or ``mcap`` log atomically."""
+
+class Prepared:
+    """Processed samples in model coordinates (known forces subtracted)."""
+
+    @property
+    def time(self) -> FloatArray: ...
+    @property
+    def q(self) -> FloatArray: ...
+    @property
+    def dq(self) -> FloatArray: ...
+    @property
+    def ddq(self) -> FloatArray: ...
+    @property
+    def tau(self) -> FloatArray: ...
+    @property
+    def joint_names(self) -> List[str]: ...
+    @property
+    def source(self) -> str: ...
+    def __len__(self) -> int: ...
+
+class Result:
+    """The result document of a fit (``dvrk-ident fit --out``)."""
+
+    @staticmethod
+    def from_json(text: str, robot: Optional[Robot] = None) -> "Result": ...
+    @staticmethod
+    def read(path: PathLike, robot: Optional[Robot] = None) -> "Result": ...
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def write(self, path: PathLike) -> None: ...
+    @property
+    def parameters(self) -> Dict[str, float]: ...
+    @property
+    def parameter_array(self) -> FloatArray: ...
+    @property
+    def parameter_order(self) -> List[str]: ...
+    @property
+    def base_parameters(self) -> List[Dict[str, Any]]:
+        """``[{name, expression, value, std}]``."""
+    @property
+    def links(self) -> List[Dict[str, Any]]: ...
+    @property
+    def consistency(self) -> List[Dict[str, Any]]:
+        """``[{frame, link, min_eigenvalue, consistent}]``."""
+    @property
+    def physically_consistent(self) -> bool: ...
+    @property
+    def solver(self) -> Dict[str, Any]:
+        """``{name, status, converged, seconds, iterations}``."""
+    @property
+    def metrics(self) -> Dict[str, Any]:
+        """``{train, test}``, each ``{joints, samples, relative_error, rms}`` or None."""
+    @property
+    def settings(self) -> Dict[str, Any]: ...
+    @property
+    def inputs(self) -> List[Dict[str, Any]]: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def robot(self) -> str:
+        """The robot's name."""
+    @property
+    def robot_source(self) -> str: ...
+    @property
+    def tool(self) -> str: ...
+    @property
+    def weights(self) -> FloatArray: ...
+    @property
+    def rows(self) -> int: ...
+    @property
+    def condition_number(self) -> float: ...
+    @property
+    def sigma2(self) -> float: ...
+    def load_robot(self) -> Robot: ...
+    def prepare(self, data: Data, robot: Optional[Robot] = None) -> Prepared: ...
+    def predict(
+        self, data: Union[Data, Prepared], robot: Optional[Robot] = None
+    ) -> FloatArray:
+        """Predicted torques ``(N, dof)`` at the processed samples of ``data``
+        (rows of ``self.prepare(data)``), known forces excluded."""
+    def validate(
+        self, data: Data, test_window: Optional[int] = None, robot: Optional[Robot] = None
+    ) -> Dict[str, Any]: ...
+    def wpi_params(self, robot: Optional[Robot] = None) -> Dict[str, Any]: ...
+
+def read_log(
+    path: PathLike,
+    robot: Optional[Robot] = None,
+    format: Optional[str] = None,
+    rate: Optional[float] = None,
+    topic: Optional[Union[str, Sequence[str]]] = None,
+    time_source: Optional[str] = None,
+    resample: Optional[float] = None,
+) -> Data:
+    """Reads a 2019 CSV (``format="wpi-csv"``, ``rate`` required), headered CSV or
+    ROS 2 MCAP log; ``resample`` (Hz) resamples any format."""
+
+def list_topics(path: PathLike) -> List[Dict[str, Any]]:
+    """The topics of an MCAP file."""
+
+def fit(
+    robot: Robot,
+    data: Data,
+    method: Optional[str] = None,
+    *,
+    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    test: Optional[Data] = None,
+    test_window: Optional[int] = None,
+    trim: Optional[int] = None,
+    decimate: Optional[int] = None,
+    min_speed: Optional[float] = None,
+    resample: Optional[float] = None,
+    irls_iterations: Optional[int] = None,
+    sdp_regularization: Optional[float] = None,
+    settings: Optional[Mapping[str, Any]] = None,
+    allow_unconverged: bool = False,
+) -> Result:
+    """Identifies the parameters (``method``: ``ols``, ``wls``, ``irls``, ``sdp``
+    (default)); ``cutoff``: Hz, per coordinate, or ``"none"``/``False`` (no filter)."""
+
+def prepare(
+    robot: Robot,
+    data: Data,
+    *,
+    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    trim: Optional[int] = None,
+    decimate: Optional[int] = None,
+    min_speed: Optional[float] = None,
+    resample: Optional[float] = None,
+    settings: Optional[Mapping[str, Any]] = None,
+) -> Prepared:
+    """The processed samples the estimators see."""

@@ -1,0 +1,296 @@
+//! Conversions between numpy arrays and the library's buffers, and the two ways heavy
+//! work runs without the GIL: per-sample loops in chunks with a signal check between
+//! chunks, and whole calls on a worker thread that the caller polls for Ctrl-C.
+
+use std::panic::AssertUnwindSafe;
+use std::sync::mpsc;
+use std::time::Duration;
+
+use nalgebra::DMatrix;
+use numpy::ndarray::{ArrayD, IxDyn};
+use numpy::{IntoPyArray, PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+
+use crate::errors::{error, input, Kind};
+
+/// Samples per chunk of the per-sample loops: between chunks the GIL is taken back and
+/// pending signals (Ctrl-C) are handled. A PSM regressor chunk takes a few ms.
+pub const CHUNK: usize = 1024;
+
+/// How often a caller waiting for a worker thread checks for signals.
+const POLL: Duration = Duration::from_millis(50);
+
+/// A batch of samples: `rows` rows of `width` values, row-major. `single`: the input
+/// was one 1-D sample, so outputs drop the batch axis.
+#[derive(Clone, Debug)]
+pub struct Rows {
+    pub data: Vec<f64>,
+    pub rows: usize,
+    pub width: usize,
+    pub single: bool,
+}
+
+impl Rows {
+    pub fn row(&self, k: usize) -> &[f64] {
+        &self.data[k * self.width..(k + 1) * self.width]
+    }
+
+    pub fn zeros_like(other: &Rows) -> Rows {
+        Rows {
+            data: vec![0.0; other.data.len()],
+            ..other.clone()
+        }
+    }
+
+    /// Output shape: `[rows, tail...]`, or `tail` alone for a single sample.
+    pub fn shape(&self, tail: &[usize]) -> Vec<usize> {
+        let mut s = Vec::with_capacity(tail.len() + 1);
+        if !self.single {
+            s.push(self.rows);
+        }
+        s.extend_from_slice(tail);
+        s
+    }
+}
+
+/// `numpy.asarray(obj, dtype=float64)` as a read-only float64 array.
+pub fn float_array<'py>(
+    py: Python<'py>,
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    static ASARRAY: PyOnceLock<Py<PyAny>> = PyOnceLock::new();
+    let asarray = ASARRAY.import(py, "numpy", "asarray")?;
+    let arr = asarray
+        .call1((obj, "float64"))
+        .map_err(|e| input(format!("{name}: not convertible to a float64 array: {e}")))?;
+    arr.cast_into::<PyArrayDyn<f64>>()
+        .map_err(|e| input(format!("{name}: not a float64 array: {e}")))
+}
+
+fn check_finite(values: &[f64], width: usize, name: &str, labels: &[String]) -> PyResult<()> {
+    if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+        let (k, j) = (i / width.max(1), i % width.max(1));
+        let label = labels.get(j).map(|l| format!(" ({l})")).unwrap_or_default();
+        return Err(input(format!(
+            "{name}: non-finite value {} at sample {k}, column {j}{label}",
+            values[i]
+        )));
+    }
+    Ok(())
+}
+
+/// A batch of samples from a 1-D array of `width` values (one sample) or a 2-D array of
+/// shape `(N, width)`; every value must be finite. `labels` name the columns in
+/// messages.
+pub fn rows(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    width: usize,
+    name: &str,
+    labels: &[String],
+) -> PyResult<Rows> {
+    let arr = float_array(py, obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let shape = view.shape().to_vec();
+    let (n_rows, single) = match shape.as_slice() {
+        [w] if *w == width => (1, true),
+        [r, w] if *w == width => (*r, false),
+        _ => {
+            return Err(input(format!(
+                "{name}: expected shape ({width},) for one sample or (N, {width}), got {}",
+                fmt_shape(&shape)
+            )))
+        }
+    };
+    let data: Vec<f64> = view.iter().copied().collect();
+    check_finite(&data, width, name, labels)?;
+    Ok(Rows {
+        data,
+        rows: n_rows,
+        width,
+        single,
+    })
+}
+
+/// Like [`rows`] for an optional argument that defaults to zeros shaped like `like`.
+pub fn rows_or_zeros(
+    py: Python<'_>,
+    obj: Option<&Bound<'_, PyAny>>,
+    like: &Rows,
+    name: &str,
+    like_name: &str,
+    labels: &[String],
+) -> PyResult<Rows> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Rows::zeros_like(like));
+    };
+    let r = rows(py, obj, like.width, name, labels)?;
+    if r.rows != like.rows || r.single != like.single {
+        return Err(input(format!(
+            "{name} has shape {} but {like_name} has shape {}: give one sample per row of {like_name}",
+            fmt_shape(&r.shape(&[r.width])),
+            fmt_shape(&like.shape(&[like.width]))
+        )));
+    }
+    Ok(r)
+}
+
+/// A 1-D float64 vector of length `len` (any length if `None`), finite values.
+pub fn vector(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    len: Option<usize>,
+    name: &str,
+    labels: &[String],
+) -> PyResult<Vec<f64>> {
+    let arr = float_array(py, obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let shape = view.shape().to_vec();
+    match (shape.as_slice(), len) {
+        ([l], Some(n)) if *l == n => {}
+        ([_], None) => {}
+        (_, Some(n)) => {
+            return Err(input(format!(
+                "{name}: expected shape ({n},), got {}",
+                fmt_shape(&shape)
+            )))
+        }
+        (_, None) => {
+            return Err(input(format!(
+                "{name}: expected a 1-D array, got shape {}",
+                fmt_shape(&shape)
+            )))
+        }
+    }
+    let data: Vec<f64> = view.iter().copied().collect();
+    if let Some(i) = data.iter().position(|v| !v.is_finite()) {
+        let label = labels.get(i).map(|l| format!(" ({l})")).unwrap_or_default();
+        return Err(input(format!(
+            "{name}: non-finite value {} at index {i}{label}",
+            data[i]
+        )));
+    }
+    Ok(data)
+}
+
+pub fn fmt_shape(shape: &[usize]) -> String {
+    match shape {
+        [one] => format!("({one},)"),
+        _ => format!(
+            "({})",
+            shape
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    }
+}
+
+/// A new float64 array of `shape` that takes ownership of `data` (row-major).
+pub fn array<'py>(py: Python<'py>, data: Vec<f64>, shape: &[usize]) -> Bound<'py, PyArrayDyn<f64>> {
+    ArrayD::from_shape_vec(IxDyn(shape), data)
+        .expect("buffer length matches the shape")
+        .into_pyarray(py)
+}
+
+/// A matrix (samples × joints) as a new `(rows, cols)` float64 array.
+pub fn matrix<'py>(py: Python<'py>, m: &DMatrix<f64>) -> Bound<'py, PyArrayDyn<f64>> {
+    let (r, c) = m.shape();
+    let mut data = Vec::with_capacity(r * c);
+    for i in 0..r {
+        data.extend(m.row(i).iter());
+    }
+    array(py, data, &[r, c])
+}
+
+/// Runs `f(sample, out_row)` for `rows` samples with `width` outputs each, without the
+/// GIL, in chunks of [`CHUNK`] samples; between chunks pending signals are handled, so
+/// Ctrl-C raises `KeyboardInterrupt` within one chunk.
+pub fn per_sample<F>(py: Python<'_>, rows: usize, width: usize, mut f: F) -> PyResult<Vec<f64>>
+where
+    F: FnMut(usize, &mut [f64]) + Send,
+{
+    let mut out = vec![0.0; rows * width];
+    if width == 0 {
+        return Ok(out);
+    }
+    let mut start = 0;
+    while start < rows {
+        let end = (start + CHUNK).min(rows);
+        let chunk = &mut out[start * width..end * width];
+        py.detach(|| {
+            for (k, o) in (start..end).zip(chunk.chunks_mut(width)) {
+                f(k, o);
+            }
+        });
+        py.check_signals()?;
+        start = end;
+    }
+    Ok(out)
+}
+
+/// A failure computed without the GIL, turned into an exception by the caller.
+pub type Failure = (Kind, String);
+
+/// Runs `f` on a worker thread and waits for it without the GIL, checking for signals
+/// every 50 ms: Ctrl-C raises `KeyboardInterrupt` at once. The library has no
+/// cancellation, so an interrupted computation finishes in the background and its
+/// result is dropped.
+pub fn background<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+where
+    T: Send + 'static,
+    F: FnOnce() -> Result<T, Failure> + Send + 'static,
+{
+    let (tx, rx) = mpsc::channel();
+    std::thread::Builder::new()
+        .name("dvrk-ident".into())
+        .spawn(move || {
+            let r = std::panic::catch_unwind(AssertUnwindSafe(f));
+            let _ = tx.send(r);
+        })
+        .map_err(|e| error(Kind::Solver, format!("cannot start a worker thread: {e}")))?;
+    let mut rx = rx;
+    loop {
+        // `Receiver` is not `Sync`: move it into the GIL-free closure and back.
+        let (received, back) = py.detach(move || (rx.recv_timeout(POLL), rx));
+        rx = back;
+        match received {
+            Ok(Ok(Ok(v))) => return Ok(v),
+            Ok(Ok(Err((kind, message)))) => return Err(error(kind, message)),
+            Ok(Err(panic)) => {
+                let what = panic
+                    .downcast_ref::<String>()
+                    .cloned()
+                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+                    .unwrap_or_else(|| "unknown panic".into());
+                return Err(error(Kind::Solver, format!("internal error: {what}")));
+            }
+            Err(mpsc::RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(error(
+                    Kind::Solver,
+                    "internal error: the worker thread ended without a result",
+                ))
+            }
+        }
+    }
+}
+
+/// A Python string literal for `__repr__`.
+pub fn py_str(s: &str) -> String {
+    format!("'{}'", s.replace('\\', "\\\\").replace('\'', "\\'"))
+}
+
+/// `True` / `False`.
+pub fn py_bool(b: bool) -> &'static str {
+    if b {
+        "True"
+    } else {
+        "False"
+    }
+}

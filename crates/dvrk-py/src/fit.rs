@@ -1,0 +1,577 @@
+//! `fit`, `prepare` and the fit `Result`.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
+use dvrk_ident::result::{wpi_params_json, write_atomic, InputInfo};
+use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::{FitResult, FitSettings, Method};
+use dvrk_model::Model;
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{array, background, matrix, py_bool, py_str};
+use crate::data::{fail_ident, DataPy, PreparedPy};
+use crate::errors::{error, from_ident, from_model, input, Kind};
+use crate::json::{from_python, to_python};
+use crate::robot::Robot;
+
+fn parse_method(text: &str) -> PyResult<Method> {
+    match text.to_ascii_lowercase().as_str() {
+        "ols" => Ok(Method::Ols),
+        "wls" => Ok(Method::Wls),
+        "irls" => Ok(Method::Irls),
+        "sdp" => Ok(Method::Sdp),
+        other => Err(input(format!(
+            "method: unknown estimator {other:?}: expected ols, wls, irls or sdp"
+        ))),
+    }
+}
+
+/// The keyword arguments that change the settings, shared by `fit` and `prepare`.
+#[derive(Default)]
+struct Overrides<'a, 'py> {
+    settings: Option<&'a Bound<'py, PyAny>>,
+    method: Option<&'a str>,
+    cutoff: Option<&'a Bound<'py, PyAny>>,
+    trim: Option<usize>,
+    test_window: Option<usize>,
+    decimate: Option<usize>,
+    min_speed: Option<f64>,
+    resample: Option<f64>,
+    irls_iterations: Option<usize>,
+    sdp_regularization: Option<f64>,
+}
+
+impl Overrides<'_, '_> {
+    /// `settings` (the result document's `settings` layout; missing fields take the
+    /// defaults) or the defaults, then each keyword that is not `None`.
+    fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
+        let mut s = match self.settings.filter(|s| !s.is_none()) {
+            Some(obj) => from_python::<FitSettings>(py, obj, "settings")?,
+            None => FitSettings::default(),
+        };
+        if let Some(m) = self.method {
+            s.method = parse_method(m)?;
+        }
+        if let Some(c) = self.cutoff.filter(|c| !c.is_none()) {
+            let off = c.extract::<bool>().ok() == Some(false)
+                || c.extract::<String>()
+                    .is_ok_and(|t| t.trim().eq_ignore_ascii_case("none"));
+            if off {
+                // The CLI's `--cutoff none`: no low-pass filter.
+                s.processing.filter = None;
+            } else {
+                let cutoff = match c.extract::<f64>() {
+                    Ok(v) if !c.is_instance_of::<pyo3::types::PyBool>() => Cutoff::All(v),
+                    _ => Cutoff::PerJoint(c.extract::<Vec<f64>>().map_err(|_| {
+                        input(
+                            "cutoff: expected a number (Hz), one number per coordinate, \
+                             or \"none\" (no filter)",
+                        )
+                    })?),
+                };
+                // Same as the CLI's --cutoff on default settings; keeps the other
+                // filter settings (order, form, convention) of `settings`.
+                let base = s.processing.filter.take().unwrap_or_default();
+                s.processing.filter = Some(LowPass {
+                    cutoff_hz: cutoff,
+                    ..base
+                });
+            }
+        }
+        if let Some(t) = self.trim {
+            s.processing.trim = t;
+        }
+        if let Some(w) = self.test_window {
+            s.test_window = Some(w);
+        }
+        if let Some(d) = self.decimate {
+            s.processing.decimate = d;
+        }
+        if let Some(v) = self.min_speed {
+            s.processing.min_speed = Some(v);
+        }
+        if let Some(r) = self.resample {
+            s.processing.resample_hz = Some(r);
+        }
+        if let Some(i) = self.irls_iterations {
+            s.irls_iterations = i;
+        }
+        if let Some(r) = self.sdp_regularization {
+            s.sdp_regularization = r;
+        }
+        Ok(s)
+    }
+}
+
+/// Identifies the robot's parameters from a log: the pipeline of ``dvrk-ident fit``
+/// (model coordinates, known forces subtracted, zero-phase low-pass, derivatives,
+/// trimming, the R factor of the weighted regressor, the estimator) and the same
+/// result document.
+///
+/// - ``method``: ``"ols"``, ``"wls"``, ``"irls"`` or ``"sdp"`` (the default: the
+///   physically consistent semidefinite fit);
+/// - ``cutoff``: low-pass cut-off, Hz, one number or one per coordinate (default
+///   5.4 Hz; the 2019 PSM/MTM fits effectively used 16.965/5.655), or ``"none"``
+///   (or ``False``) for no filter (clean or simulated logs);
+/// - ``test``: a :class:`Data` to validate on, ``test_window``: metrics on its first
+///   N processed samples only;
+/// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
+///   ``resample`` (Hz), ``irls_iterations``, ``sdp_regularization``;
+/// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
+///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
+///   above override it.
+///
+/// A fit whose solver did not converge raises ``NotConvergedError`` (its ``result``
+/// attribute holds the unconverged :class:`Result`) unless ``allow_unconverged``.
+///
+/// The work runs without the GIL on a worker thread; Ctrl-C raises
+/// ``KeyboardInterrupt`` within 50 ms, while the interrupted computation finishes in
+/// the background (the library cannot cancel it) and is discarded.
+///
+/// Example::
+///
+///     >>> result = di.fit(psm, train, method="ols", cutoff=16.965, test=test,
+///     ...                 test_window=1111)
+///     >>> result.metrics["test"]["relative_error"]
+#[pyfunction]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, settings = None, allow_unconverged = false))]
+#[allow(clippy::too_many_arguments)]
+pub fn fit(
+    py: Python<'_>,
+    robot: &Bound<'_, Robot>,
+    data: &Bound<'_, DataPy>,
+    method: Option<&str>,
+    cutoff: Option<&Bound<'_, PyAny>>,
+    test: Option<&Bound<'_, DataPy>>,
+    test_window: Option<usize>,
+    trim: Option<usize>,
+    decimate: Option<usize>,
+    min_speed: Option<f64>,
+    resample: Option<f64>,
+    irls_iterations: Option<usize>,
+    sdp_regularization: Option<f64>,
+    settings: Option<&Bound<'_, PyAny>>,
+    allow_unconverged: bool,
+) -> PyResult<FitResultPy> {
+    let settings = Overrides {
+        settings,
+        method,
+        cutoff,
+        trim,
+        test_window,
+        decimate,
+        min_speed,
+        resample,
+        irls_iterations,
+        sdp_regularization,
+    }
+    .apply(py)?;
+    let model = robot.get().model.clone();
+    let train = data.get().traj.clone();
+    let train_path = data.get().path.clone();
+    let (test_traj, test_path) = match test {
+        Some(t) => (Some(t.get().traj.clone()), t.get().path.clone()),
+        None => (None, None),
+    };
+    let inner = background(py, move || {
+        let mut r =
+            dvrk_ident::fit(&model, &train, test_traj.as_deref(), &settings).map_err(fail_ident)?;
+        for (role, path) in [("train", train_path), ("test", test_path)] {
+            if let Some(p) = path {
+                r.inputs
+                    .push(InputInfo::from_file(role, &p).map_err(fail_ident)?);
+            }
+        }
+        Ok(r)
+    })?;
+    let converged = inner.solver.converged;
+    let status = inner.solver.status.clone();
+    let result = FitResultPy {
+        inner,
+        robot: Some(robot.clone().unbind()),
+    };
+    if !converged && !allow_unconverged {
+        let err = error(
+            Kind::NotConverged,
+            format!(
+                "the solver did not converge (status {status}): the parameters are not a result"
+            ),
+        );
+        err.value(py).setattr("result", Py::new(py, result)?)?;
+        return Err(err);
+    }
+    Ok(result)
+}
+
+/// The samples an estimator sees (see :class:`Prepared`): ``data`` mapped to
+/// ``robot``'s model coordinates, known forces subtracted, filtered, differentiated
+/// and trimmed, with the settings of :func:`fit` (same keywords and defaults).
+#[pyfunction]
+#[pyo3(signature = (robot, data, *, cutoff = None, trim = None, decimate = None, min_speed = None, resample = None, settings = None))]
+#[allow(clippy::too_many_arguments)]
+pub fn prepare(
+    py: Python<'_>,
+    robot: &Bound<'_, Robot>,
+    data: &Bound<'_, DataPy>,
+    cutoff: Option<&Bound<'_, PyAny>>,
+    trim: Option<usize>,
+    decimate: Option<usize>,
+    min_speed: Option<f64>,
+    resample: Option<f64>,
+    settings: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PreparedPy> {
+    let settings = Overrides {
+        settings,
+        cutoff,
+        trim,
+        decimate,
+        min_speed,
+        resample,
+        ..Overrides::default()
+    }
+    .apply(py)?;
+    prepared(py, robot.get().model.clone(), data.get(), settings)
+}
+
+fn prepared(
+    py: Python<'_>,
+    model: Arc<Model>,
+    data: &DataPy,
+    settings: FitSettings,
+) -> PyResult<PreparedPy> {
+    let traj = data.traj.clone();
+    let names = model.coordinates.clone();
+    let p = background(py, move || {
+        prepare_data(&model, &traj, &settings.processing).map_err(fail_ident)
+    })?;
+    Ok(PreparedPy {
+        inner: Arc::new(p),
+        joint_names: names,
+    })
+}
+
+/// The result of :func:`fit`: the document of ``dvrk-ident fit --out`` (see
+/// :meth:`to_json`), with its fields as attributes and the identified model's
+/// predictions.
+///
+/// Attributes (the JSON keys): ``parameters`` (dict name → value, model order),
+/// ``base_parameters`` (list of ``{name, expression, value, std}``), ``links``,
+/// ``consistency`` (list of ``{frame, link, min_eigenvalue, consistent}``),
+/// ``physically_consistent``, ``solver`` (``{name, status, converged, seconds,
+/// iterations}``), ``metrics`` (``{train, test}``, each ``{joints, samples,
+/// relative_error, rms}`` or ``None``), ``method``, ``robot`` (name),
+/// ``robot_source``, ``settings``, ``inputs``, ``weights``, ``rows``,
+/// ``condition_number``, ``sigma2``, ``tool``. Non-finite numbers are ``None``, as in
+/// the JSON.
+#[pyclass(name = "Result", module = "dvrk_ident", frozen)]
+pub struct FitResultPy {
+    pub inner: FitResult,
+    /// The robot it was fitted with (`None` when read from JSON without one).
+    pub robot: Option<Py<Robot>>,
+}
+
+impl FitResultPy {
+    /// The model: `robot`, else the one fitted with, else loaded from `robot_source`.
+    fn model(&self, py: Python<'_>, robot: Option<&Bound<'_, Robot>>) -> PyResult<Arc<Model>> {
+        if let Some(r) = robot {
+            return Ok(r.get().model.clone());
+        }
+        if let Some(r) = &self.robot {
+            return Ok(r.get().model.clone());
+        }
+        let source = self.inner.robot_source.clone();
+        let name = source
+            .strip_prefix("builtin:")
+            .unwrap_or(&source)
+            .to_string();
+        let model = py.detach(move || Model::load(&name)).map_err(from_model)?;
+        Ok(Arc::new(model))
+    }
+
+    fn params(&self, model: &Model) -> PyResult<Vec<f64>> {
+        self.inner.params_for(model).map_err(from_ident)
+    }
+}
+
+fn with_robot(inner: FitResult, robot: Option<&Bound<'_, Robot>>) -> FitResultPy {
+    FitResultPy {
+        inner,
+        robot: robot.map(|r| r.clone().unbind()),
+    }
+}
+
+#[pymethods]
+impl FitResultPy {
+    /// A result from the JSON text of ``dvrk-ident fit --out`` / :meth:`to_json`;
+    /// ``robot`` (optional) is used by :meth:`predict` and friends instead of loading
+    /// ``robot_source``.
+    #[staticmethod]
+    #[pyo3(signature = (text, robot = None))]
+    fn from_json(text: &str, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+        let inner = FitResult::from_json(text, "<string>").map_err(|e| input(e.to_string()))?;
+        Ok(with_robot(inner, robot))
+    }
+
+    /// Reads a result file (``dvrk-ident fit --out``).
+    #[staticmethod]
+    #[pyo3(signature = (path, robot = None))]
+    fn read(path: PathBuf, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            let kind = if e.kind() == std::io::ErrorKind::NotFound {
+                Kind::NotFound
+            } else {
+                Kind::Io
+            };
+            error(kind, format!("{}: {e}", path.display()))
+        })?;
+        let inner = FitResult::from_json(&text, &path.display().to_string())
+            .map_err(|e| input(e.to_string()))?;
+        Ok(with_robot(inner, robot))
+    }
+
+    /// The result document as JSON text, exactly as ``dvrk-ident fit --out`` writes it.
+    fn to_json(&self) -> String {
+        self.inner.to_json()
+    }
+
+    /// The whole result document as a dict (``json.loads(to_json())``).
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner)
+    }
+
+    /// Writes :meth:`to_json` to ``path`` atomically (temporary file and rename).
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let text = self.inner.to_json();
+        py.detach(move || write_atomic(&path, &text))
+            .map_err(from_ident)
+    }
+
+    /// Every parameter by name, in the model's order (barycentric: inertia about the
+    /// frame origin, first moment, mass; friction; motor inertia; spring). For least
+    /// squares, a representative: base parameters on their kept columns, zero elsewhere.
+    #[getter]
+    fn parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        for (k, v) in &self.inner.parameters {
+            d.set_item(k, *v)?;
+        }
+        Ok(d)
+    }
+
+    /// The parameter values as an array in ``parameter_order`` (the robot's
+    /// ``parameter_names``), for :meth:`Robot.inverse_dynamics` and friends.
+    #[getter]
+    fn parameter_array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let v: Vec<f64> = self
+            .inner
+            .parameter_order
+            .iter()
+            .map(|k| {
+                self.inner
+                    .parameters
+                    .get(k)
+                    .copied()
+                    .ok_or_else(|| input(format!("result: parameter {k} has no value")))
+            })
+            .collect::<PyResult<_>>()?;
+        let n = v.len();
+        Ok(array(py, v, &[n]))
+    }
+
+    /// Parameter names in the model's order.
+    #[getter]
+    fn parameter_order(&self) -> Vec<String> {
+        self.inner.parameter_order.clone()
+    }
+
+    #[getter]
+    fn base_parameters<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.base_parameters)
+    }
+
+    #[getter]
+    fn links<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.links)
+    }
+
+    #[getter]
+    fn consistency<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.consistency)
+    }
+
+    #[getter]
+    fn physically_consistent(&self) -> bool {
+        self.inner.physically_consistent
+    }
+
+    #[getter]
+    fn solver<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.solver)
+    }
+
+    #[getter]
+    fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.metrics)
+    }
+
+    #[getter]
+    fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.settings)
+    }
+
+    #[getter]
+    fn inputs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.inputs)
+    }
+
+    #[getter]
+    fn method(&self) -> String {
+        self.inner.method.clone()
+    }
+
+    /// The robot's name.
+    #[getter]
+    fn robot(&self) -> String {
+        self.inner.robot.clone()
+    }
+
+    #[getter]
+    fn robot_source(&self) -> String {
+        self.inner.robot_source.clone()
+    }
+
+    #[getter]
+    fn tool(&self) -> String {
+        self.inner.tool.clone()
+    }
+
+    /// Row weights per coordinate used by the estimator, ``(dof,)``.
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let n = self.inner.weights.len();
+        array(py, self.inner.weights.clone(), &[n])
+    }
+
+    #[getter]
+    fn rows(&self) -> usize {
+        self.inner.rows
+    }
+
+    #[getter]
+    fn condition_number(&self) -> f64 {
+        self.inner.condition_number
+    }
+
+    #[getter]
+    fn sigma2(&self) -> f64 {
+        self.inner.sigma2
+    }
+
+    /// The :class:`Robot` of this result: the one it was fitted (or read) with, else
+    /// loaded from ``robot_source``.
+    fn load_robot(&self, py: Python<'_>) -> PyResult<Py<Robot>> {
+        if let Some(r) = &self.robot {
+            return Ok(r.clone_ref(py));
+        }
+        let model = self.model(py, None)?;
+        Py::new(py, Robot::new((*model).clone()))
+    }
+
+    /// The processed samples of ``data`` with this result's processing settings (see
+    /// :class:`Prepared`); the rows :meth:`predict` returns torques for.
+    #[pyo3(signature = (data, robot = None))]
+    fn prepare(
+        &self,
+        py: Python<'_>,
+        data: &Bound<'_, DataPy>,
+        robot: Option<&Bound<'_, Robot>>,
+    ) -> PyResult<PreparedPy> {
+        let model = self.model(py, robot)?;
+        prepared(py, model, data.get(), self.inner.settings.clone())
+    }
+
+    /// Torques predicted by the identified parameters, ``H(q, dq, ddq) @ params``
+    /// (N·m or N), shape ``(N, dof)``, in model coordinates and without known forces.
+    ///
+    /// ``data`` is a :class:`Data` (a log as read) or a :class:`Prepared`. A ``Data``
+    /// is first processed with this result's settings, exactly as for the fit and its
+    /// metrics: mapped to model coordinates, filtered, differentiated and trimmed, so
+    /// row ``k`` is the sample at ``self.prepare(data).time[k]`` and compares with
+    /// ``self.prepare(data).tau`` (the measured torques in model coordinates, known
+    /// forces such as the MTM cable subtracted). A ``Prepared`` is used as it is.
+    #[pyo3(signature = (data, robot = None))]
+    fn predict<'py>(
+        &self,
+        py: Python<'py>,
+        data: &Bound<'py, PyAny>,
+        robot: Option<&Bound<'py, Robot>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        let prepared = if let Ok(p) = data.cast::<PreparedPy>() {
+            if p.get().joint_names.len() != model.dof() {
+                return Err(input(format!(
+                    "data: prepared for {} coordinates, the robot has {}",
+                    p.get().joint_names.len(),
+                    model.dof()
+                )));
+            }
+            p.get().inner.clone()
+        } else if let Ok(d) = data.cast::<DataPy>() {
+            prepared(py, model.clone(), d.get(), self.inner.settings.clone())?.inner
+        } else {
+            return Err(input("data: expected a Data or a Prepared"));
+        };
+        let pred = background(py, move || Ok(predict(&model, &params, &prepared)))?;
+        Ok(matrix(py, &pred))
+    }
+
+    /// Metrics of this result on another log, as ``dvrk-ident validate``: ``{joints,
+    /// samples, relative_error, rms}`` over the first ``test_window`` processed samples
+    /// (all if ``None``), with this result's processing settings.
+    #[pyo3(signature = (data, test_window = None, robot = None))]
+    fn validate<'py>(
+        &self,
+        py: Python<'py>,
+        data: &Bound<'py, DataPy>,
+        test_window: Option<usize>,
+        robot: Option<&Bound<'py, Robot>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        let traj = data.get().traj.clone();
+        let processing = self.inner.settings.processing.clone();
+        let m = background(py, move || {
+            let p = prepare_data(&model, &traj, &processing).map_err(fail_ident)?;
+            Ok(joint_metrics(&model, &params, &p, test_window))
+        })?;
+        to_python(py, &m)
+    }
+
+    /// The parameters in the 2019 package's ``params.json`` layout (``dvrk-ident fit
+    /// --wpi-json``): per frame ``"1"``… ``{I, r, m, Fc, Fv, Fo, Im, K}``.
+    #[pyo3(signature = (robot = None))]
+    fn wpi_params<'py>(
+        &self,
+        py: Python<'py>,
+        robot: Option<&Bound<'py, Robot>>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        to_python(py, &wpi_params_json(&model, &params))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Result(robot={}, method={}, converged={}, physically_consistent={})",
+            py_str(&self.inner.robot),
+            py_str(&self.inner.method),
+            py_bool(self.inner.solver.converged),
+            py_bool(self.inner.physically_consistent)
+        )
+    }
+}

@@ -1,0 +1,579 @@
+//! `Robot` (a loaded model) and `BaseParameters`: kinematics, regressors and dynamics
+//! over batches of samples.
+
+use std::path::PathBuf;
+use std::sync::{Arc, OnceLock};
+
+use dvrk_model::{BaseParameters, Model, Workspace};
+use numpy::PyArrayDyn;
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use crate::convert::{array, per_sample, py_str, rows, rows_or_zeros, vector, Rows};
+use crate::errors::{error, from_ident, from_model, input, Kind};
+use crate::json::to_python;
+
+/// A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``, ``"mtm"``), a
+/// ``.toml`` description or a ``.urdf`` file.
+///
+/// Arrays are float64. Functions of the state take one sample as 1-D arrays of
+/// ``dof`` values, or ``N`` samples as 2-D arrays of shape ``(N, dof)``; the output
+/// then has a leading sample axis (see each method). ``dq`` and ``ddq`` default to
+/// zeros. Parameters (``params``) are a vector of ``len(parameter_names)`` values in
+/// ``parameter_names`` order, a dict ``{name: value}`` with every parameter, or a fit
+/// ``Result``.
+///
+/// Example::
+///
+///     >>> import numpy as np, dvrk_ident as di
+///     >>> psm = di.Robot.load("psm")
+///     >>> psm.dof, len(psm.parameter_names), len(psm.base().names)
+///     (7, 115, 49)
+///     >>> psm.regressor(np.zeros((10, 7))).shape
+///     (70, 115)
+#[pyclass(name = "Robot", module = "dvrk_ident", frozen)]
+pub struct Robot {
+    pub model: Arc<Model>,
+    base: OnceLock<Arc<BaseParameters>>,
+}
+
+impl Robot {
+    pub fn new(model: Model) -> Self {
+        Robot {
+            model: Arc::new(model),
+            base: OnceLock::new(),
+        }
+    }
+
+    /// The base parameters, computed once (about 10 ms for the PSM) without the GIL.
+    pub fn base_parameters(&self, py: Python<'_>) -> PyResult<Arc<BaseParameters>> {
+        if let Some(b) = self.base.get() {
+            return Ok(b.clone());
+        }
+        let model = self.model.clone();
+        let b = py
+            .detach(move || model.base_parameters())
+            .map_err(from_model)?;
+        Ok(self.base.get_or_init(|| Arc::new(b)).clone())
+    }
+
+    pub fn params(&self, py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+        params_of(py, &self.model, obj)
+    }
+
+    fn state(
+        &self,
+        py: Python<'_>,
+        q: &Bound<'_, PyAny>,
+        dq: Option<&Bound<'_, PyAny>>,
+        ddq: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<(Rows, Rows, Rows)> {
+        state_of(py, &self.model, q, dq, ddq)
+    }
+}
+
+/// A parameter vector from an array, a `{name: value}` mapping or a fit `Result`.
+pub fn params_of(py: Python<'_>, model: &Model, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    if let Ok(r) = obj.cast::<crate::fit::FitResultPy>() {
+        return r.get().inner.params_for(model).map_err(from_ident);
+    }
+    if obj.cast::<PyDict>().is_ok() || obj.hasattr("keys")? {
+        let items = obj.call_method0("items")?;
+        let mut values: Vec<(String, f64)> = Vec::new();
+        for item in items.try_iter()? {
+            let (k, v): (String, Bound<'_, PyAny>) = item?.extract().map_err(|e| {
+                input(format!(
+                    "params: expected a mapping of names to numbers: {e}"
+                ))
+            })?;
+            let v: f64 = v
+                .extract()
+                .map_err(|_| input(format!("params: parameter {k} is not a number")))?;
+            values.push((k, v));
+        }
+        return model
+            .params_from_named(values.iter().map(|(k, v)| (k.as_str(), *v)), "params")
+            .map_err(from_model);
+    }
+    vector(
+        py,
+        obj,
+        Some(model.n_params()),
+        "params",
+        &model.param_names(),
+    )
+}
+
+/// `q`, `dq`, `ddq` (zeros when `None`) as batches of the same shape.
+fn state_of(
+    py: Python<'_>,
+    model: &Model,
+    q: &Bound<'_, PyAny>,
+    dq: Option<&Bound<'_, PyAny>>,
+    ddq: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Rows, Rows, Rows)> {
+    let labels = &model.coordinates;
+    let q = rows(py, q, model.dof(), "q", labels)?;
+    let dq = rows_or_zeros(py, dq, &q, "dq", "q", labels)?;
+    let ddq = rows_or_zeros(py, ddq, &q, "ddq", "q", labels)?;
+    Ok((q, dq, ddq))
+}
+
+fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Robot> {
+    let name = name_or_path.to_string_lossy().to_string();
+    let model = py.detach(move || Model::load(&name)).map_err(from_model)?;
+    Ok(Robot::new(model))
+}
+
+/// Full regressor rows of `n` samples into `out` (`n·dof × p`), shared with
+/// `BaseParameters.regressor`.
+fn regressor_rows(
+    py: Python<'_>,
+    model: &Model,
+    base: Option<&BaseParameters>,
+    q: &Rows,
+    dq: &Rows,
+    ddq: &Rows,
+) -> PyResult<(Vec<f64>, usize)> {
+    let (n, p) = (model.dof(), model.n_params());
+    let cols = base.map_or(p, |b| b.rank());
+    let mut ws = Workspace::new(model);
+    let mut full = vec![0.0; n * p];
+    let out = per_sample(py, q.rows, n * cols, |k, out| match base {
+        None => model.regressor_into(&mut ws, q.row(k), dq.row(k), ddq.row(k), out),
+        Some(b) => {
+            model.regressor_into(&mut ws, q.row(k), dq.row(k), ddq.row(k), &mut full);
+            b.select_into(&full, p, out);
+        }
+    })?;
+    Ok((out, cols))
+}
+
+#[pymethods]
+impl Robot {
+    /// Same as :meth:`Robot.load`.
+    #[new]
+    fn py_new(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Self> {
+        load(py, name_or_path)
+    }
+
+    /// Loads a robot: a built-in name (``"psm"``, ``"psm_simplified"``, ``"mtm"``) or a
+    /// path to a ``.toml`` description or a ``.urdf`` file.
+    ///
+    /// Raises ``InputError`` (a ``ValueError``) for an unknown name or a wrong
+    /// description, ``DvrkIOError`` (an ``OSError``) for an unreadable file.
+    #[staticmethod]
+    fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Self> {
+        load(py, name_or_path)
+    }
+
+    /// A robot from the text of a ``.toml`` description; ``source`` names it in messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, source = "<string>"))]
+    fn from_toml(text: &str, source: &str) -> PyResult<Self> {
+        Ok(Robot::new(
+            Model::from_toml_str(text, source).map_err(from_model)?,
+        ))
+    }
+
+    /// A robot from the text of a URDF file; ``source`` names it in messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, source = "<string>"))]
+    fn from_urdf(text: &str, source: &str) -> PyResult<Self> {
+        Ok(Robot::new(
+            Model::from_urdf_str(text, source).map_err(from_model)?,
+        ))
+    }
+
+    /// Names of the built-in robots.
+    #[staticmethod]
+    fn builtin_names() -> Vec<&'static str> {
+        Model::builtin_names()
+    }
+
+    /// Robot name (from the description).
+    #[getter]
+    fn name(&self) -> String {
+        self.model.name.clone()
+    }
+
+    /// Where the robot came from: ``builtin:psm`` or the file path.
+    #[getter]
+    fn source(&self) -> String {
+        self.model.source.clone()
+    }
+
+    /// Generalized (model) coordinate names, in order: the columns of ``q``.
+    #[getter]
+    fn coordinates(&self) -> Vec<String> {
+        self.model.coordinates.clone()
+    }
+
+    /// Measured joint names (e.g. the dVRK's ROS joint names), one per coordinate.
+    #[getter]
+    fn measured_joints(&self) -> Vec<String> {
+        self.model.measured.joints.clone()
+    }
+
+    /// ``(dof, dof)`` coupling ``M``: ``q_measured = M @ q_model``,
+    /// ``tau_model = M.T @ tau_measured``.
+    #[getter]
+    fn coupling<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        crate::convert::matrix(py, &self.model.measured.coupling)
+    }
+
+    /// Parameter names in regressor column order (2019 convention: ``L1xx`` ... ``m1``,
+    /// ``Fc1``, ``Fv1``, ``Fo1``, ``Ia1``, ``K1``, ...).
+    #[getter]
+    fn parameter_names(&self) -> Vec<String> {
+        self.model.param_names()
+    }
+
+    /// Number of generalized coordinates.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.model.dof()
+    }
+
+    /// Number of parameters (columns of the full regressor).
+    #[getter]
+    fn n_parameters(&self) -> usize {
+        self.model.n_params()
+    }
+
+    /// Frame names, base first: the frame axis of :meth:`forward_kinematics`.
+    #[getter]
+    fn frame_names(&self) -> Vec<String> {
+        self.model.frame_names()
+    }
+
+    /// Gravity in the base frame, m/s², shape ``(3,)``.
+    #[getter]
+    fn gravity_vector<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let g = self.model.gravity;
+        array(py, vec![g[0], g[1], g[2]], &[3])
+    }
+
+    /// The description's nominal parameters (e.g. a URDF's inertials), shape
+    /// ``(n_parameters,)``, or ``None`` when some parameter has no nominal value.
+    #[getter]
+    fn nominal_parameters<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArrayDyn<f64>>> {
+        self.model.nominal_parameters().map(|v| {
+            let n = v.len();
+            array(py, v, &[n])
+        })
+    }
+
+    /// The document of ``dvrk-ident model ROBOT --json`` as a dict (coordinates,
+    /// measured joints, coupling, frames, parameters, base parameters, gravity).
+    fn summary<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let base = self.base_parameters(py)?;
+        to_python(py, &self.model.summary(&base))
+    }
+
+    /// The base (identifiable) parameters: ``names``, ``expressions``, ``independent``
+    /// (kept regressor columns), ``combination`` (``K``, with ``beta = K @ params``).
+    /// Computed once per robot.
+    fn base(&self, py: Python<'_>) -> PyResult<BaseParametersPy> {
+        Ok(BaseParametersPy {
+            model: self.model.clone(),
+            base: self.base_parameters(py)?,
+        })
+    }
+
+    /// The regressor ``H(q, dq, ddq)`` with ``tau = H @ params``: for ``N`` samples,
+    /// shape ``(N*dof, n_parameters)``, the samples' ``dof × n_parameters`` blocks
+    /// stacked (row ``k*dof + j`` is coordinate ``j`` of sample ``k``); for one 1-D
+    /// sample, ``(dof, n_parameters)``. Known forces (e.g. the MTM cable) are not part
+    /// of it.
+    ///
+    /// Example::
+    ///
+    ///     >>> H = psm.regressor(q, dq, ddq)            # q, dq, ddq: (N, 7)
+    ///     >>> tau = (H @ params).reshape(-1, psm.dof)  # == psm.inverse_dynamics(params, q, dq, ddq)
+    #[pyo3(signature = (q, dq = None, ddq = None))]
+    fn regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        dq: Option<&Bound<'py, PyAny>>,
+        ddq: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
+        let (out, cols) = regressor_rows(py, &self.model, None, &q, &dq, &ddq)?;
+        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+    }
+
+    /// The base regressor: the columns ``base().independent`` of :meth:`regressor`,
+    /// shape ``(N*dof, rank)`` (``(dof, rank)`` for one sample), with
+    /// ``tau = Hb @ base().project(params)``.
+    #[pyo3(signature = (q, dq = None, ddq = None))]
+    fn base_regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        dq: Option<&Bound<'py, PyAny>>,
+        ddq: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let base = self.base_parameters(py)?;
+        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
+        let (out, cols) = regressor_rows(py, &self.model, Some(&base), &q, &dq, &ddq)?;
+        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+    }
+
+    /// Inverse dynamics ``tau = H(q, dq, ddq) @ params`` (N·m or N): links, friction,
+    /// springs, motor inertias; known forces (e.g. the MTM cable) excluded — add
+    /// :meth:`known_forces` to predict a measured torque. Shape ``(N, dof)``, or
+    /// ``(dof,)`` for one sample.
+    #[pyo3(signature = (params, q, dq = None, ddq = None))]
+    fn inverse_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        dq: Option<&Bound<'py, PyAny>>,
+        ddq: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let params = self.params(py, params)?;
+        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
+        let model = &self.model;
+        let n = model.dof();
+        let mut ws = Workspace::new(model);
+        let out = per_sample(py, q.rows, n, |k, out| {
+            model.inverse_dynamics(&mut ws, &params, q.row(k), dq.row(k), ddq.row(k), out)
+        })?;
+        Ok(array(py, out, &q.shape(&[n])))
+    }
+
+    /// Gravity torque ``g(q)`` of the links alone (no friction, spring or known force),
+    /// shape ``(N, dof)`` or ``(dof,)``.
+    fn gravity<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let params = self.params(py, params)?;
+        let model = &self.model;
+        let n = model.dof();
+        let q = rows(py, q, n, "q", &model.coordinates)?;
+        let mut ws = Workspace::new(model);
+        let out = per_sample(py, q.rows, n, |k, out| {
+            model.gravity_torque(&mut ws, &params, q.row(k), out)
+        })?;
+        Ok(array(py, out, &q.shape(&[n])))
+    }
+
+    /// Mass matrix ``M(q)`` (motor inertias included), shape ``(N, dof, dof)``, or
+    /// ``(dof, dof)`` for one 1-D sample.
+    fn mass_matrix<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let params = self.params(py, params)?;
+        let model = &self.model;
+        let n = model.dof();
+        let q = rows(py, q, n, "q", &model.coordinates)?;
+        let mut ws = Workspace::new(model);
+        let mut col_major = vec![0.0; n * n];
+        let out = per_sample(py, q.rows, n * n, |k, out| {
+            model.mass_matrix_into(&mut ws, &params, q.row(k), &mut col_major);
+            for r in 0..n {
+                for c in 0..n {
+                    out[r * n + c] = col_major[c * n + r];
+                }
+            }
+        })?;
+        Ok(array(py, out, &q.shape(&[n, n])))
+    }
+
+    /// Forward dynamics: accelerations under torques ``tau`` (as measured: known forces
+    /// are subtracted first) with friction, springs and gravity; shape ``(N, dof)`` or
+    /// ``(dof,)``. Raises ``SolverError`` if the mass matrix is not positive definite.
+    fn forward_dynamics<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+        q: &Bound<'py, PyAny>,
+        dq: &Bound<'py, PyAny>,
+        tau: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let params = self.params(py, params)?;
+        let (q, dq, tau) = self.state(py, q, Some(dq), Some(tau))?;
+        let model = &self.model;
+        let n = model.dof();
+        let mut ws = Workspace::new(model);
+        let mut singular = None;
+        let out = per_sample(py, q.rows, n, |k, out| {
+            match model.forward_dynamics(&mut ws, &params, q.row(k), dq.row(k), tau.row(k)) {
+                Some(a) => out.copy_from_slice(a.as_slice()),
+                None => {
+                    singular.get_or_insert(k);
+                    out.fill(f64::NAN);
+                }
+            }
+        })?;
+        if let Some(k) = singular {
+            return Err(error(
+                Kind::Solver,
+                format!("forward_dynamics: the mass matrix is not positive definite at sample {k} (the parameters are not physical)"),
+            ));
+        }
+        Ok(array(py, out, &q.shape(&[n])))
+    }
+
+    /// Known generalized forces at ``q`` (e.g. the MTM gravity-compensation cable),
+    /// shape ``(N, dof)`` or ``(dof,)``; zeros for a robot without any.
+    fn known_forces<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let model = &self.model;
+        let n = model.dof();
+        let q = rows(py, q, n, "q", &model.coordinates)?;
+        let out = per_sample(py, q.rows, n, |k, out| {
+            out.fill(0.0);
+            model.add_known_forces(q.row(k), out)
+        })?;
+        Ok(array(py, out, &q.shape(&[n])))
+    }
+
+    /// Poses of every frame in the base frame, base included (index 0, the identity),
+    /// as 4×4 homogeneous matrices (m): shape ``(N, len(frame_names), 4, 4)``, or
+    /// ``(len(frame_names), 4, 4)`` for one sample.
+    fn forward_kinematics<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let model = &self.model;
+        let n = model.dof();
+        let frames = model.frames.len() + 1;
+        let q = rows(py, q, n, "q", &model.coordinates)?;
+        let mut ws = Workspace::new(model);
+        let out = per_sample(py, q.rows, frames * 16, |k, out| {
+            model.forward_kinematics(&mut ws, q.row(k));
+            for (i, block) in out.chunks_mut(16).enumerate() {
+                let h = ws.pose(i).to_homogeneous();
+                for (r, row) in h.iter().enumerate() {
+                    block[4 * r..4 * r + 4].copy_from_slice(row);
+                }
+            }
+        })?;
+        Ok(array(py, out, &q.shape(&[frames, 4, 4])))
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Robot({}, dof={}, parameters={}, source={})",
+            py_str(&self.model.name),
+            self.model.dof(),
+            self.model.n_params(),
+            py_str(&self.model.source)
+        )
+    }
+}
+
+/// The base (identifiable) parameters of a robot: ``beta = combination @ params``, and
+/// the base regressor is the full regressor's ``independent`` columns, so that
+/// ``H @ params == H[:, independent] @ beta``.
+///
+/// Attributes: ``names`` (leading parameter of each), ``expressions`` (e.g.
+/// ``"L2xy + L6xy + 0.2159*l2x"``), ``independent`` (column indices), ``combination``
+/// (``(rank, n_parameters)`` array), ``rank``.
+#[pyclass(name = "BaseParameters", module = "dvrk_ident", frozen)]
+pub struct BaseParametersPy {
+    model: Arc<Model>,
+    base: Arc<BaseParameters>,
+}
+
+#[pymethods]
+impl BaseParametersPy {
+    /// Name of the leading (kept) parameter of each base parameter.
+    #[getter]
+    fn names(&self) -> Vec<String> {
+        self.base.names.clone()
+    }
+
+    /// Each base parameter as a readable combination of parameters.
+    #[getter]
+    fn expressions(&self) -> Vec<String> {
+        self.base.expressions.clone()
+    }
+
+    /// Columns of the full regressor kept as the base regressor (increasing).
+    #[getter]
+    fn independent(&self) -> Vec<usize> {
+        self.base.independent.clone()
+    }
+
+    /// ``K``, shape ``(rank, n_parameters)``: ``beta = K @ params``.
+    #[getter]
+    fn combination<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        crate::convert::matrix(py, &self.base.combination)
+    }
+
+    /// Number of base parameters.
+    #[getter]
+    fn rank(&self) -> usize {
+        self.base.rank()
+    }
+
+    fn __len__(&self) -> usize {
+        self.base.rank()
+    }
+
+    /// ``beta = combination @ params``, shape ``(rank,)``; ``params`` as in
+    /// :meth:`Robot.inverse_dynamics`.
+    fn project<'py>(
+        &self,
+        py: Python<'py>,
+        params: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let pi = params_of(py, &self.model, params)?;
+        let beta = self.base.project(&pi);
+        let r = beta.len();
+        Ok(array(py, beta, &[r]))
+    }
+
+    /// The base regressor, as :meth:`Robot.base_regressor`.
+    #[pyo3(signature = (q, dq = None, ddq = None))]
+    fn regressor<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        dq: Option<&Bound<'py, PyAny>>,
+        ddq: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        let (q, dq, ddq) = state_of(py, &self.model, q, dq, ddq)?;
+        let (out, cols) = regressor_rows(py, &self.model, Some(&self.base), &q, &dq, &ddq)?;
+        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+    }
+
+    /// ``{"names", "expressions", "independent", "combination"}`` with plain lists.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("names", &self.base.names)?;
+        d.set_item("expressions", &self.base.expressions)?;
+        d.set_item("independent", &self.base.independent)?;
+        let k = &self.base.combination;
+        let rows = PyList::empty(py);
+        for r in 0..k.nrows() {
+            rows.append(k.row(r).iter().copied().collect::<Vec<f64>>())?;
+        }
+        d.set_item("combination", rows)?;
+        Ok(d)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "BaseParameters(rank={}, of {} parameters of {})",
+            self.base.rank(),
+            self.model.n_params(),
+            py_str(&self.model.name)
+        )
+    }
+}

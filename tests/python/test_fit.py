@@ -1,0 +1,265 @@
+"""fit and Result against `dvrk-ident fit --json` / `--out` / `validate` on the same
+files, the Result API, and Ctrl-C during long calls."""
+
+import json
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import dvrk_ident as di
+
+TOL = 1e-12
+
+
+def close(a, b, tol=TOL):
+    a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+    scale = max(1.0, float(np.max(np.abs(b)))) if b.size else 1.0
+    np.testing.assert_allclose(a, b, rtol=tol, atol=tol * scale)
+
+
+def same_document(py, cli, tol=TOL):
+    """Every number of the two result documents to `tol` (relative to the largest
+    value of each field); file paths and timings aside."""
+    assert py["method"] == cli["method"] and py["robot"] == cli["robot"]
+    assert py["robot_source"] == cli["robot_source"]
+    assert py["settings"] == cli["settings"]
+    assert py["parameter_order"] == cli["parameter_order"]
+    assert list(py["parameters"]) == list(cli["parameters"])
+    close(list(py["parameters"].values()), list(cli["parameters"].values()), tol)
+    for a, b in zip(py["base_parameters"], cli["base_parameters"]):
+        assert (a["name"], a["expression"]) == (b["name"], b["expression"])
+    for key in ("value", "std"):
+        close([b[key] for b in py["base_parameters"]], [b[key] for b in cli["base_parameters"]], tol)
+    close([c["min_eigenvalue"] for c in py["consistency"]],
+          [c["min_eigenvalue"] for c in cli["consistency"]], tol)
+    assert py["physically_consistent"] == cli["physically_consistent"]
+    for key in ("mass", "com", "inertia_com"):
+        close([l[key] for l in py["links"]], [l[key] for l in cli["links"]], tol)
+    for key in ("name", "status", "converged", "iterations"):
+        assert py["solver"][key] == cli["solver"][key]
+    close(py["weights"], cli["weights"], tol)
+    assert py["rows"] == cli["rows"]
+    close(py["condition_number"], cli["condition_number"], tol)
+    close(py["sigma2"], cli["sigma2"], tol)
+    for part in ("train", "test"):
+        a, b = py["metrics"][part], cli["metrics"][part]
+        assert (a is None) == (b is None)
+        if a is not None:
+            assert a["joints"] == b["joints"] and a["samples"] == b["samples"]
+            close(a["relative_error"], b["relative_error"], tol)
+            close(a["rms"], b["rms"], tol)
+    assert [(i["role"], i["sha256"], i["bytes"]) for i in py["inputs"]] == [
+        (i["role"], i["sha256"], i["bytes"]) for i in cli["inputs"]
+    ]
+
+
+@pytest.mark.parametrize("method", ["ols", "wls", "irls", "sdp"])
+def test_fit_matches_cli(psm, psm_logs, run_cli, method):
+    train = di.read_log(psm_logs["csv"], psm)
+    test = di.read_log(psm_logs["test"], psm)
+    result = di.fit(psm, train, method=method, cutoff=5.0, test=test, test_window=2000)
+    assert result.solver["converged"]
+    cli = run_cli("fit", psm_logs["csv"], "--robot", "psm", "--method", method,
+                  "--cutoff", "5", "--test", psm_logs["test"], "--test-window", "2000",
+                  "--json")
+    same_document(result.to_dict(), cli)
+    if method == "sdp":
+        assert result.physically_consistent
+
+
+def test_fit_mcap_matches_cli(psm, psm_logs, run_cli):
+    data = di.read_log(psm_logs["mcap"], psm)
+    assert data.coordinates == "measured"
+    result = di.fit(psm, data, method="wls", cutoff=[5.0] * 7, trim=100)
+    cli = run_cli("fit", psm_logs["mcap"], "--robot", "psm", "--method", "wls",
+                  "--cutoff", ",".join(["5"] * 7), "--trim", "100", "--json")
+    same_document(result.to_dict(), cli)
+
+
+def test_bundled_example_matches_cli(psm, run_cli):
+    """examples/psm_excitation.mcap: simulated from examples/psm_params.json."""
+    from conftest import REPO
+
+    log = REPO / "examples" / "psm_excitation.mcap"
+    if not log.exists():
+        pytest.skip(f"{log} not found")
+    data = di.read_log(log, psm)
+    assert data.coordinates == "measured" and len(data) == 2222
+    for method in ("ols", "sdp"):
+        result = di.fit(psm, data, method=method, cutoff="none")
+        cli = run_cli("fit", log, "--robot", "psm", "--method", method, "--cutoff", "none",
+                      "--json")
+        same_document(result.to_dict(), cli)
+        assert result.settings["processing"]["filter"] is None
+    # The least-squares fit finds the generating base parameters.
+    true = json.loads((REPO / "examples" / "psm_params.json").read_text())["parameters"]
+    ols = di.fit(psm, data, method="ols", cutoff=False)
+    beta_true = psm.base().project(true)
+    beta = np.array([b["value"] for b in ols.base_parameters])
+    std = np.array([b["std"] for b in ols.base_parameters])
+    assert np.all(np.abs(beta - beta_true) < 6 * std + 1e-9)
+
+
+def test_resampled_csv_matches_cli(psm, psm_excitation, run_cli, tmp_path):
+    e = psm_excitation
+    t = e["t"].copy()
+    t[3000:] += 0.3 / 200.0  # one jittered step: refused unless resampled
+    path = tmp_path / "jitter.csv"
+    di.Data(t, e["q"], e["noisy"], dq=e["dq"]).write(path)
+    with pytest.raises(di.InputError, match="resample"):
+        di.fit(psm, di.read_log(path), method="ols", cutoff=5.0)
+    data = di.read_log(path, resample=200.0)
+    assert abs(data.rate - 200.0) < 1e-9
+    result = di.fit(psm, data, method="ols", cutoff=5.0)
+    cli = run_cli("fit", path, "--robot", "psm", "--method", "ols", "--cutoff", "5",
+                  "--resample", "200", "--json")
+    same_document(result.to_dict(), cli)
+
+
+def test_result_files_interoperate_with_cli(psm, psm_logs, run_cli, tmp_path):
+    out = tmp_path / "cli.json"
+    wpi = tmp_path / "params.json"
+    run_cli("fit", psm_logs["csv"], "--robot", "psm", "--method", "ols", "--cutoff", "5",
+            "--out", out, "--wpi-json", wpi, "--json")
+    from_cli = di.Result.read(out)
+    assert from_cli.to_json() == out.read_text()
+    assert di.Result.from_json(out.read_text()).parameters == from_cli.parameters
+    # The result without a robot loads it from robot_source for predictions.
+    assert from_cli.load_robot().name == "psm"
+    assert from_cli.wpi_params() == json.loads(wpi.read_text())
+    # A Python result file is read by `dvrk-ident validate`, with the same metrics.
+    ours = di.fit(psm, di.read_log(psm_logs["csv"]), method="ols", cutoff=5.0)
+    ours.write(tmp_path / "py.json")
+    doc = run_cli("validate", tmp_path / "py.json", psm_logs["test"], "--test-window", "1500",
+                  "--json")
+    metrics = ours.validate(di.read_log(psm_logs["test"]), test_window=1500)
+    cli_metrics = doc["validations"][0]["metrics"]
+    assert metrics["samples"] == cli_metrics["samples"] == 1500
+    close(metrics["relative_error"], cli_metrics["relative_error"])
+    close(metrics["rms"], cli_metrics["rms"])
+    # Parameters of a result are accepted by `model --torque --params`.
+    q = np.full(7, 0.1)
+    tau = run_cli("model", "psm", "--torque", "--q", ",".join(["0.1"] * 7), "--params",
+                  tmp_path / "py.json")["tau"]
+    close(psm.inverse_dynamics(ours, q), tau)
+
+
+def test_result_api(psm, psm_logs, psm_excitation):
+    train = di.read_log(psm_logs["csv"], psm)
+    test = di.read_log(psm_logs["test"], psm)
+    r = di.fit(psm, train, method="ols", cutoff=5.0, test=test, test_window=1000)
+    doc = json.loads(r.to_json())
+    # Attributes are the document's keys.
+    assert r.parameters == doc["parameters"]
+    assert list(r.parameters) == psm.parameter_names == r.parameter_order
+    np.testing.assert_array_equal(r.parameter_array, list(doc["parameters"].values()))
+    assert r.base_parameters == doc["base_parameters"]
+    assert len(r.base_parameters) == 49
+    assert set(r.base_parameters[0]) == {"name", "expression", "value", "std"}
+    assert r.consistency == doc["consistency"]
+    assert set(r.consistency[0]) == {"frame", "link", "min_eigenvalue", "consistent"}
+    assert r.links == doc["links"]
+    assert r.physically_consistent == doc["physically_consistent"]
+    assert r.solver == doc["solver"] and r.solver["name"] == "qr"
+    assert r.metrics == doc["metrics"]
+    assert set(r.metrics["train"]) == {"joints", "samples", "relative_error", "rms"}
+    assert r.metrics["test"]["samples"] == 1000
+    assert r.settings == doc["settings"] and r.inputs == doc["inputs"]
+    assert [i["role"] for i in r.inputs] == ["train", "test"]
+    assert r.method == "ols" and r.robot == "psm" and r.robot_source == "builtin:psm"
+    assert r.rows == doc["rows"] and r.condition_number == doc["condition_number"]
+    assert r.sigma2 == doc["sigma2"] and r.tool == doc["tool"]
+    np.testing.assert_array_equal(r.weights, doc["weights"])
+    assert r.to_dict() == doc
+    assert repr(r) == (
+        "Result(robot='psm', method='ols', converged=True, physically_consistent=False)"
+    )
+    # JSON round trip: the same document, the same numbers.
+    again = di.Result.from_json(r.to_json())
+    assert again.to_json() == r.to_json()
+    # Fitting again with the result's settings gives the same parameters.
+    again = di.fit(psm, train, settings=r.settings)
+    assert again.parameters == r.parameters
+
+    # predict: H(q, dq, ddq) @ params on the processed samples.
+    prepared = r.prepare(train)
+    predicted = r.predict(train)
+    assert predicted.shape == (len(prepared), 7) and predicted.dtype == np.float64
+    np.testing.assert_array_equal(predicted, r.predict(prepared))
+    expected = psm.inverse_dynamics(r.parameter_array, prepared.q, prepared.dq, prepared.ddq)
+    np.testing.assert_allclose(predicted, expected, atol=1e-12)
+    # The metrics are those of these predictions.
+    err = np.linalg.norm(prepared.tau - predicted, axis=0) / np.linalg.norm(prepared.tau, axis=0)
+    close(err, r.metrics["train"]["relative_error"], 1e-10)
+    # The identified model predicts the noise-free torques closely.
+    e = psm_excitation
+    exact = e["tau"][200:-200]
+    assert np.linalg.norm(predicted - exact) / np.linalg.norm(exact) < 0.02
+    # validate(test) reproduces the test metrics.
+    v = r.validate(test, test_window=1000)
+    assert v == r.metrics["test"]
+    # Parameters from a result feed the model functions.
+    np.testing.assert_array_equal(
+        psm.inverse_dynamics(r, prepared.q[:5], prepared.dq[:5], prepared.ddq[:5]),
+        predicted[:5],
+    )
+
+
+def test_sdp_result_is_consistent(psm, psm_logs):
+    r = di.fit(psm, di.read_log(psm_logs["csv"]), cutoff=5.0)
+    assert r.method == "sdp" and r.solver["name"] == "clarabel" and r.solver["converged"]
+    assert r.physically_consistent
+    assert all(c["consistent"] and c["min_eigenvalue"] > 0 for c in r.consistency)
+    p = r.parameters
+    assert all(p[n] >= 0.001 - 1e-6 for n in p if n[:2] in ("Fc", "Fv", "Ia"))
+    # A consistent result has a positive definite mass matrix: forward dynamics works.
+    q = np.zeros((3, 7))
+    q[:, 2] = 0.12
+    ddq = np.full((3, 7), 0.3)
+    tau = psm.inverse_dynamics(r, q, q * 0, ddq)
+    np.testing.assert_allclose(psm.forward_dynamics(r, q, q * 0, tau), ddq, atol=1e-6)
+
+
+def test_allow_unconverged_flag_is_accepted(psm, psm_logs):
+    r = di.fit(psm, di.read_log(psm_logs["csv"]), method="ols", cutoff=5.0,
+               allow_unconverged=True)
+    assert r.solver["converged"]
+
+
+def interrupt_after(seconds):
+    timer = threading.Timer(seconds, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
+                    reason="signals are delivered to the main thread")
+def test_ctrl_c_stops_a_long_per_sample_call(psm):
+    q = np.zeros((400_000, 7))  # several seconds of mass matrices
+    started = time.monotonic()
+    timer = interrupt_after(0.3)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            psm.mass_matrix(np.full(115, 0.01), q)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 2.0
+
+
+@pytest.mark.skipif(threading.current_thread() is not threading.main_thread(),
+                    reason="signals are delivered to the main thread")
+def test_ctrl_c_stops_waiting_for_a_fit(psm, psm_excitation):
+    e = psm_excitation
+    data = di.Data(e["t"], e["q"], e["noisy"], dq=e["dq"])
+    started = time.monotonic()
+    timer = interrupt_after(0.3)
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            di.fit(psm, data, method="irls", irls_iterations=12, cutoff=5.0)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 1.0
