@@ -6,7 +6,6 @@ use std::sync::Arc;
 
 use dvrk_ident::fit::{to_model_coordinates, Prepared};
 use dvrk_ident::log::{self, mcap, LogFormat};
-use dvrk_ident::signal::resample_linear;
 use dvrk_ident::trajectory::{Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
@@ -438,7 +437,9 @@ pub fn read_log(
         }
         .map_err(fail_log)?;
         let traj = match resample {
-            Some(hz) if format != LogFormat::Mcap => resampled(traj, hz)?,
+            Some(hz) if format != LogFormat::Mcap => {
+                log::resample(&file, traj, hz).map_err(fail_log)?
+            }
             _ => traj,
         };
         if let Some(model) = &model {
@@ -447,28 +448,6 @@ pub fn read_log(
         Ok(traj)
     })?;
     Ok(DataPy::new(traj, Some(absolute(&path))))
-}
-
-/// Every signal resampled to `hz` by linear interpolation (the CLI's `--resample` on
-/// CSV logs; MCAP logs are resampled while read).
-fn resampled(traj: Trajectory, hz: f64) -> Result<Trajectory, Failure> {
-    traj.validate().map_err(|e| (Kind::Input, e.to_string()))?;
-    let fail = |e: dvrk_ident::signal::SignalError| {
-        (Kind::Input, format!("{}: resample {hz}: {e}", traj.source))
-    };
-    let (time, q) = resample_linear(&traj.time, &traj.q, hz).map_err(fail)?;
-    let (_, tau) = resample_linear(&traj.time, &traj.tau, hz).map_err(fail)?;
-    let dq = match &traj.dq {
-        Some(d) => Some(resample_linear(&traj.time, d, hz).map_err(fail)?.1),
-        None => None,
-    };
-    Ok(Trajectory {
-        time,
-        q,
-        dq,
-        tau,
-        ..traj
-    })
 }
 
 fn absolute(path: &Path) -> PathBuf {

@@ -7,7 +7,7 @@ use anyhow::{bail, Result};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::result::{write_atomic, InputInfo};
-use dvrk_ident::signal::{resample_linear, Cutoff, LowPass};
+use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
@@ -99,24 +99,7 @@ pub fn read_log(
     if !mcap.topics.is_empty() && format != LogFormat::Mcap {
         bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
     }
-    let mut traj = log::read_with(path, Some(format), rate, &mcap.options())?;
-    if let (Some(hz), true) = (mcap.resample, format != LogFormat::Mcap) {
-        traj.validate()?;
-        let fail = |e| anyhow::anyhow!("{path}: --resample {hz}: {e}");
-        let (time, q) = resample_linear(&traj.time, &traj.q, hz).map_err(fail)?;
-        let (_, tau) = resample_linear(&traj.time, &traj.tau, hz).map_err(fail)?;
-        let dq = match &traj.dq {
-            Some(d) => Some(resample_linear(&traj.time, d, hz).map_err(fail)?.1),
-            None => None,
-        };
-        traj = dvrk_ident::Trajectory {
-            time,
-            q,
-            dq,
-            tau,
-            ..traj
-        };
-    }
+    let traj = log::read_with(path, Some(format), rate, &mcap.options())?;
     Ok(traj)
 }
 

@@ -272,6 +272,17 @@ pub enum LogError {
         /// What is wrong.
         problem: Box<mcap::McapProblem>,
     },
+    /// Resampling a log to a uniform rate failed.
+    #[error("{}: resample to {rate_hz} Hz: {source}", path.display())]
+    Resample {
+        /// The file.
+        path: PathBuf,
+        /// The requested rate, Hz.
+        rate_hz: f64,
+        /// Why.
+        #[source]
+        source: crate::signal::SignalError,
+    },
     /// The trajectory to write is invalid.
     #[error("{}: cannot write an invalid trajectory: {source}", path.display())]
     Invalid {
@@ -334,16 +345,52 @@ pub fn read_with(
         Some(f) => f,
         None => detect_format(path)?,
     };
-    match format {
+    let traj = match format {
         LogFormat::Wpi => {
             let rate = rate_hz.ok_or_else(|| LogError::MissingRate {
                 path: path.to_path_buf(),
             })?;
-            read_wpi(path, rate, None)
+            read_wpi(path, rate, None)?
         }
-        LogFormat::Csv => read_headered(path),
-        LogFormat::Mcap => mcap::read_mcap(path, mcap_options),
+        LogFormat::Csv => read_headered(path)?,
+        // MCAP logs are resampled while read (options.resample_hz).
+        LogFormat::Mcap => return mcap::read_mcap(path, mcap_options),
+    };
+    match mcap_options.resample_hz {
+        Some(hz) => resample(path, traj, hz),
+        None => Ok(traj),
     }
+}
+
+/// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
+/// interpolation: what `--resample` does for logs read without MCAP's own resampling.
+pub fn resample(path: &Path, traj: Trajectory, hz: f64) -> Result<Trajectory, LogError> {
+    traj.validate().map_err(|source| LogError::Invalid {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let fail = |source| LogError::Resample {
+        path: path.to_path_buf(),
+        rate_hz: hz,
+        source,
+    };
+    let (time, q) = crate::signal::resample_linear(&traj.time, &traj.q, hz).map_err(fail)?;
+    let (_, tau) = crate::signal::resample_linear(&traj.time, &traj.tau, hz).map_err(fail)?;
+    let dq = match &traj.dq {
+        Some(d) => Some(
+            crate::signal::resample_linear(&traj.time, d, hz)
+                .map_err(fail)?
+                .1,
+        ),
+        None => None,
+    };
+    Ok(Trajectory {
+        time,
+        q,
+        dq,
+        tau,
+        ..traj
+    })
 }
 
 /// Writes a trajectory in the given layout (atomically). See [`write_wpi`],
