@@ -73,7 +73,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use thiserror::Error;
 
 /// Largest accepted relative deviation of a time step from the median step before a log
@@ -1311,45 +1311,19 @@ pub fn write_mcap(
     })
 }
 
-/// Like [`crate::log::write_atomic`], for writers that need to seek (the MCAP writer
-/// goes back to fill in lengths): `fill` gets the temporary file and returns it when
-/// done; it is synced and renamed over `path`, or removed on failure.
+/// [`crate::log::write_atomic_file`] with the MCAP writer's errors named.
 fn write_atomic_seek(
     path: &Path,
     fill: impl FnOnce(
         std::io::BufWriter<std::fs::File>,
     ) -> Result<std::io::BufWriter<std::fs::File>, ::mcap::McapError>,
 ) -> Result<(), LogError> {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    static COUNTER: AtomicUsize = AtomicUsize::new(0);
-    let io_err = |source| LogError::Io {
-        path: path.to_path_buf(),
-        source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| {
-        io_err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a file path",
-        ))
-    })?;
-    let tmp = dir.join(format!(
-        ".{}.{}.mcap{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| -> Result<(), LogError> {
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(io_err)?;
-        let w = fill(std::io::BufWriter::new(file)).map_err(|e| match e {
-            ::mcap::McapError::Io(source) => io_err(source),
+    crate::log::write_atomic_file(path, |w| {
+        fill(w).map_err(|e| match e {
+            ::mcap::McapError::Io(source) => LogError::Io {
+                path: path.to_path_buf(),
+                source,
+            },
             other => mcap_error(
                 path,
                 None,
@@ -1357,15 +1331,8 @@ fn write_atomic_seek(
                     reason: other.to_string(),
                 },
             ),
-        })?;
-        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
-        file.sync_all().map_err(io_err)?;
-        std::fs::rename(&tmp, path).map_err(io_err)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+        })
+    })
 }
 
 #[cfg(test)]

@@ -479,6 +479,23 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
+    write_atomic_file(path, |mut w| {
+        fill(&mut w).map_err(|source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok(w)
+    })
+}
+
+/// [`write_atomic`] for writers that need the file itself (the MCAP writer seeks back to
+/// fill in lengths): `fill` gets the buffered temporary file and returns it when done.
+pub(crate) fn write_atomic_file(
+    path: &Path,
+    fill: impl FnOnce(
+        std::io::BufWriter<std::fs::File>,
+    ) -> Result<std::io::BufWriter<std::fs::File>, LogError>,
+) -> Result<(), LogError> {
     let io_err = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
@@ -499,22 +516,21 @@ pub fn write_atomic(
         std::process::id(),
         TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
-    let result = (|| -> std::io::Result<()> {
+    let result = (|| -> Result<(), LogError> {
         let file = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
-            .open(&tmp)?;
-        let mut w = std::io::BufWriter::new(file);
-        fill(&mut w)?;
-        let file = w.into_inner().map_err(|e| e.into_error())?;
-        file.sync_all()?;
-        std::fs::rename(&tmp, path)
+            .open(&tmp)
+            .map_err(io_err)?;
+        let w = fill(std::io::BufWriter::new(file))?;
+        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
+        file.sync_all().map_err(io_err)?;
+        std::fs::rename(&tmp, path).map_err(io_err)
     })();
-    if let Err(e) = result {
+    if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
-        return Err(io_err(e));
     }
-    Ok(())
+    result
 }
 
 #[cfg(test)]
