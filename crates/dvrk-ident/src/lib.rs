@@ -11,6 +11,7 @@ pub mod estimate;
 pub mod excite;
 pub mod log;
 pub mod observation;
+pub mod progress;
 pub mod signal;
 pub mod simulate;
 pub mod trajectory;
