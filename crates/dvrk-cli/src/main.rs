@@ -35,6 +35,8 @@ enum Command {
     Convert(cmd::convert::Args),
     /// Optimize an excitation trajectory under the limits, or evaluate one.
     Excite(cmd::excite::Args),
+    /// Figures and a self-contained HTML report of a result on its logs.
+    Report(cmd::report::Args),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),
         Command::Excite(args) => cmd::excite::run(args),
+        Command::Report(args) => cmd::report::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -14,6 +14,8 @@ pub enum IdentError {
     Trajectory(#[from] crate::trajectory::TrajectoryError),
     #[error(transparent)]
     Sdp(#[from] crate::estimate::sdp::SdpError),
+    #[error(transparent)]
+    Report(#[from] crate::report::ReportError),
     #[error("{source_name}: {error}")]
     Signal {
         source_name: String,

@@ -12,6 +12,7 @@ pub mod excite;
 pub mod log;
 pub mod observation;
 pub mod progress;
+pub mod report;
 pub mod signal;
 pub mod simulate;
 pub mod trajectory;

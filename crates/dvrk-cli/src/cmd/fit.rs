@@ -186,6 +186,9 @@ pub struct Args {
     /// Also write the parameters in the 2019 package's params.json layout (atomically)
     #[arg(long)]
     pub wpi_json: Option<String>,
+    /// Also write figures and report.html into this folder (see `dvrk-ident report`)
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<String>,
     /// Print the result document to stdout instead of the table
     #[arg(long)]
     pub json: bool,
@@ -223,6 +226,13 @@ pub fn run(args: Args) -> Result<()> {
             let params = result.params_for(&model)?;
             let doc = dvrk_ident::result::wpi_params_json(&model, &params);
             write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
+        }
+        if let Some(dir) = &args.report {
+            let mut logs = vec![("training", &train, None)];
+            if let Some(t) = &test {
+                logs.push(("test", t, args.test_window));
+            }
+            super::report::write(&model, &result, &logs, None, dir)?;
         }
     }
     if args.json {

@@ -1,6 +1,8 @@
 //! `dvrk-ident model ROBOT`: summary, regressor and inverse dynamics of a model.
 
 use anyhow::{bail, Context, Result};
+use dvrk_ident::report::draw::kinematic_drawing;
+use dvrk_ident::report::write_figure;
 use dvrk_model::{Model, Workspace};
 use serde_json::json;
 
@@ -33,6 +35,12 @@ pub struct Args {
     /// Accelerations (rad/s², m/s²); zeros if omitted
     #[arg(long, allow_hyphen_values = true)]
     pub ddq: Option<String>,
+    /// Draw the kinematic tree at --q (zeros if omitted) into --out (.svg or .png)
+    #[arg(long, requires = "out", conflicts_with_all = ["regressor", "torque", "json"])]
+    pub draw: bool,
+    /// Output figure of --draw
+    #[arg(long, requires = "draw")]
+    pub out: Option<String>,
     /// Parameter file for --torque (JSON {name: value} or a result file); default: the
     /// description's nominal parameters
     #[arg(long)]
@@ -41,6 +49,9 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
+    if args.draw {
+        return draw(&model, &args);
+    }
     if args.regressor || args.torque {
         return evaluate(&model, &args);
     }
@@ -88,6 +99,17 @@ pub fn run(args: Args) -> Result<()> {
         writeln!(out, "  {:>3} {e}", i + 1)?;
     }
     emit(&out)
+}
+
+fn draw(model: &Model, args: &Args) -> Result<()> {
+    let q = match &args.q {
+        Some(q) => parse_vector(q, model.dof(), "--q")?,
+        None => vec![0.0; model.dof()],
+    };
+    let out = args.out.as_deref().context("--draw needs --out")?;
+    let drawing = kinematic_drawing(model, &q).map_err(anyhow::Error::msg)?;
+    write_figure(&drawing, std::path::Path::new(out))?;
+    emit(out)
 }
 
 fn evaluate(model: &Model, args: &Args) -> Result<()> {

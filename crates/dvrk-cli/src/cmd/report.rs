@@ -1,0 +1,115 @@
+//! `dvrk-ident report RESULT [LOG...] --out DIR` (and `fit --report DIR`): the figures of a
+//! result and a self-contained `report.html`.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use dvrk_ident::excite::fourier::FourierTrajectory;
+use dvrk_ident::report::{self, ReportInput, ReportLog};
+use dvrk_ident::{FitResult, Trajectory};
+use dvrk_model::Model;
+
+use super::emit;
+use super::fit::LogArgs;
+
+#[derive(clap::Args)]
+pub struct Args {
+    /// Result file written by `dvrk-ident fit --out`
+    pub result: String,
+    /// Logs to show (default: the result's own training and test logs, if they exist)
+    pub logs: Vec<String>,
+    /// Folder to write report.html and the figures (SVG and PNG) into
+    #[arg(long)]
+    pub out: String,
+    /// Robot (default: the one the result was fitted for)
+    #[arg(long)]
+    pub robot: Option<String>,
+    /// Excitation trajectory (JSON of `dvrk-ident excite`) to plot against the limits
+    #[arg(long)]
+    pub excitation: Option<String>,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+}
+
+/// Writes the report of `result` on `logs` (role, trajectory, metric window) into `dir`
+/// and prints where it is.
+pub fn write(
+    model: &Model,
+    result: &FitResult,
+    logs: &[(&str, &Trajectory, Option<usize>)],
+    excitation: Option<&FourierTrajectory>,
+    dir: &str,
+) -> Result<()> {
+    let input = ReportInput {
+        model,
+        result,
+        logs: logs
+            .iter()
+            .map(|&(role, trajectory, window)| ReportLog {
+                role,
+                trajectory,
+                window,
+            })
+            .collect(),
+        excitation,
+    };
+    let built = report::build(&input)?;
+    let written = built.write(Path::new(dir))?;
+    eprintln!(
+        "report: {} ({} files)",
+        Path::new(dir).join("report.html").display(),
+        written.len()
+    );
+    Ok(())
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let result = FitResult::read(Path::new(&args.result))?;
+    let model = super::result_model(&result, args.robot.as_deref())?;
+    let mut settings = args.log_args.settings(result.settings.clone())?;
+    settings.test_window = result.settings.test_window;
+    let mut result = result;
+    result.settings = settings;
+    let sources: Vec<(String, String)> = if args.logs.is_empty() {
+        result
+            .inputs
+            .iter()
+            .filter(|i| Path::new(&i.path).exists())
+            .map(|i| (i.role.clone(), i.path.clone()))
+            .collect()
+    } else {
+        args.logs
+            .iter()
+            .enumerate()
+            .map(|(k, p)| (format!("log {}", k + 1), p.clone()))
+            .collect()
+    };
+    let mut trajectories = Vec::new();
+    for (role, path) in &sources {
+        trajectories.push((role.clone(), args.log_args.read(path)?));
+    }
+    let logs: Vec<(&str, &Trajectory, Option<usize>)> = trajectories
+        .iter()
+        .map(|(role, t)| {
+            let window = if role == "test" {
+                result.settings.test_window
+            } else {
+                None
+            };
+            (role.as_str(), t, window)
+        })
+        .collect();
+    let excitation = match &args.excitation {
+        Some(p) => {
+            Some(FourierTrajectory::from_json_file(p).with_context(|| format!("{p}: excitation"))?)
+        }
+        None => None,
+    };
+    write(&model, &result, &logs, excitation.as_ref(), &args.out)?;
+    emit(
+        &Path::new(&args.out)
+            .join("report.html")
+            .display()
+            .to_string(),
+    )
+}

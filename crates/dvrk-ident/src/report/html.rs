@@ -1,0 +1,301 @@
+//! The self-contained `report.html`: tables of a result and its figures inlined as SVG,
+//! so the page opens in a browser with no network and no other file.
+
+use std::fmt::Write as _;
+
+use dvrk_model::{Model, ParamKind};
+
+use super::{LogSummary, RenderedFigure};
+use crate::result::{FitResult, JointMetrics};
+
+/// Escapes text for HTML element content and attribute values.
+pub fn escape(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// A number for a table: fixed notation in the readable range, scientific outside,
+/// 6 significant digits either way (the JSON result keeps every digit).
+pub fn number(v: f64) -> String {
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if a == 0.0 || (1e-3..1e5).contains(&a) {
+        let digits = if a == 0.0 {
+            0
+        } else {
+            (5 - a.log10().floor() as i32).clamp(0, 9) as usize
+        };
+        format!("{v:.digits$}")
+    } else {
+        format!("{v:.5e}")
+    }
+}
+
+const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;margin:24px;color:#222;max-width:1400px}\
+h1{font-size:24px}h2{font-size:19px;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
+table{border-collapse:collapse;margin:8px 0;font-size:13px}\
+th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}\
+th{background:#f2f2f2}td.l,th.l{text-align:left}\
+.bad{color:#b00020;font-weight:bold}.ok{color:#106010}\
+figure{margin:16px 0}figcaption{font-size:13px;color:#555}\
+figure svg{max-width:100%;height:auto}pre{background:#f7f7f7;padding:8px;font-size:12px;overflow:auto}";
+
+fn metrics_table(
+    out: &mut String,
+    caption: &str,
+    m: &JointMetrics,
+    unit: &dyn Fn(usize) -> &'static str,
+) {
+    let _ = write!(
+        out,
+        "<table><caption>{} ({} samples)</caption><tr><th class=l>joint</th>\
+         <th>relative error</th><th>RMS</th><th class=l>unit</th></tr>",
+        escape(caption),
+        m.samples
+    );
+    for (j, name) in m.joints.iter().enumerate() {
+        let _ = write!(
+            out,
+            "<tr><td class=l>{}</td><td>{:.4}</td><td>{}</td><td class=l>{}</td></tr>",
+            escape(name),
+            m.relative_error.get(j).copied().unwrap_or(f64::NAN),
+            number(m.rms.get(j).copied().unwrap_or(f64::NAN)),
+            unit(j)
+        );
+    }
+    out.push_str("</table>");
+}
+
+/// The SVG document without an XML prolog, ready to inline.
+fn inline_svg(svg: &str) -> &str {
+    match svg.find("<svg") {
+        Some(i) => &svg[i..],
+        None => svg,
+    }
+}
+
+/// The whole page.
+pub fn page(
+    model: &Model,
+    result: &FitResult,
+    logs: &[LogSummary],
+    figures: &[RenderedFigure],
+) -> String {
+    let unit = |j: usize| super::figures::units(model, j)[3];
+    let mut o = String::new();
+    let _ = write!(
+        o,
+        "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>\
+         <title>dvrk-ident report: {robot} ({method})</title><style>{STYLE}</style></head><body>\
+         <h1>Identification report: {robot}, {method}</h1>",
+        robot = escape(&result.robot),
+        method = escape(&result.method)
+    );
+
+    // Summary and solver.
+    let consistent = if result.physically_consistent {
+        "<span class=ok>yes</span>"
+    } else {
+        "<span class=bad>no</span>"
+    };
+    let converged = if result.solver.converged {
+        "<span class=ok>converged</span>"
+    } else {
+        "<span class=bad>NOT converged: these numbers are not a result</span>"
+    };
+    let _ = write!(
+        o,
+        "<h2>Summary</h2><table>\
+         <tr><th class=l>robot</th><td class=l>{} ({})</td></tr>\
+         <tr><th class=l>method</th><td class=l>{}</td></tr>\
+         <tr><th class=l>solver</th><td class=l>{} — {} — {} ({} iterations, {:.3} s)</td></tr>\
+         <tr><th class=l>physically consistent</th><td class=l>{}</td></tr>\
+         <tr><th class=l>observation rows</th><td class=l>{}</td></tr>\
+         <tr><th class=l>condition number</th><td class=l>{}</td></tr>\
+         <tr><th class=l>residual variance σ²</th><td class=l>{}</td></tr>\
+         <tr><th class=l>tool</th><td class=l>{}</td></tr></table>",
+        escape(&result.robot),
+        escape(&result.robot_source),
+        escape(&result.method),
+        escape(&result.solver.name),
+        escape(&result.solver.status),
+        converged,
+        result.solver.iterations,
+        result.solver.seconds,
+        consistent,
+        result.rows,
+        number(result.condition_number),
+        number(result.sigma2),
+        escape(&result.tool),
+    );
+
+    // Metrics of the result, then of every log drawn here.
+    o.push_str("<h2>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
+    metrics_table(&mut o, "result: training", &result.metrics.train, &unit);
+    if let Some(test) = &result.metrics.test {
+        metrics_table(&mut o, "result: test", test, &unit);
+    }
+    for log in logs {
+        metrics_table(
+            &mut o,
+            &format!("this report: {} ({})", log.role, log.source),
+            &log.metrics,
+            &unit,
+        );
+    }
+
+    // Parameters by link.
+    o.push_str(
+        "<h2>Links</h2><p>Standard parameters in each link's frame: mass (kg), centre of mass (m), \
+         inertia about the centre of mass (kg·m²); consistency is the smallest eigenvalue of the \
+         4×4 pseudo-inertia (kg·m², positive: realizable by a positive mass density).</p>\
+         <table><tr><th>frame</th><th class=l>link</th><th>mass</th><th>cx</th><th>cy</th><th>cz</th>\
+         <th>Ixx</th><th>Ixy</th><th>Ixz</th><th>Iyy</th><th>Iyz</th><th>Izz</th>\
+         <th>min eigenvalue</th><th class=l>consistent</th></tr>",
+    );
+    for link in &result.links {
+        let c = result.consistency.iter().find(|c| c.frame == link.frame);
+        let _ = write!(
+            o,
+            "<tr><td>{}</td><td class=l>{}</td><td>{}</td>",
+            link.frame,
+            escape(&link.link),
+            number(link.mass)
+        );
+        for v in link.com.iter().chain(&link.inertia_com) {
+            let _ = write!(o, "<td>{}</td>", number(*v));
+        }
+        match c {
+            Some(c) => {
+                let _ = write!(
+                    o,
+                    "<td>{}</td><td class=l>{}</td></tr>",
+                    number(c.min_eigenvalue),
+                    if c.consistent {
+                        "<span class=ok>yes</span>"
+                    } else {
+                        "<span class=bad>no</span>"
+                    }
+                );
+            }
+            None => o.push_str("<td></td><td></td></tr>"),
+        }
+    }
+    o.push_str("</table>");
+
+    // Joint elements (friction, motor inertia, spring) by frame.
+    o.push_str(
+        "<h2>Joint elements</h2><p>Coulomb Fc, viscous Fv and offset Fo friction (N·m, N·m·s/rad; N, N·s/m), \
+         motor inertia Im (kg·m²), spring K, by frame.</p>\
+         <table><tr><th>frame</th><th class=l>name</th><th class=l>parameter</th><th>value</th></tr>",
+    );
+    for p in &model.params {
+        if matches!(p.kind, ParamKind::Inertia { .. }) {
+            continue;
+        }
+        let value = result.parameters.get(&p.name).copied().unwrap_or(f64::NAN);
+        let _ = write!(
+            o,
+            "<tr><td>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td></tr>",
+            p.frame,
+            escape(&model.frames[p.frame - 1].name),
+            escape(&p.name),
+            number(value)
+        );
+    }
+    o.push_str("</table>");
+
+    // Base parameters.
+    let _ = write!(
+        o,
+        "<h2>Base parameters</h2><p>{} independent combinations the data determine; std is the \
+         standard deviation of the least-squares fit of the same weighted data.</p>\
+         <table><tr><th>#</th><th class=l>name</th><th class=l>expression</th><th>value</th>\
+         <th>std</th><th>relative std (%)</th></tr>",
+        result.base_parameters.len()
+    );
+    for (i, b) in result.base_parameters.iter().enumerate() {
+        let _ = write!(
+            o,
+            "<tr><td>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td><td>{}</td><td>{:.2}</td></tr>",
+            i + 1,
+            escape(&b.name),
+            escape(&b.expression),
+            number(b.value),
+            number(b.std),
+            100.0 * b.std / b.value.abs()
+        );
+    }
+    o.push_str("</table>");
+
+    // Figures.
+    o.push_str("<h2>Figures</h2>");
+    for f in figures {
+        let _ = write!(
+            o,
+            "<figure id=\"{stem}\">{svg}<figcaption>{caption} Files: \
+             <a href=\"{stem}.svg\">{stem}.svg</a>, <a href=\"{stem}.png\">{stem}.png</a>.\
+             </figcaption></figure>",
+            stem = escape(&f.stem),
+            svg = inline_svg(&f.svg),
+            caption = escape(&f.caption)
+        );
+    }
+
+    // Settings and provenance.
+    let settings = serde_json::to_string_pretty(&result.settings).unwrap_or_default();
+    let _ = write!(
+        o,
+        "<h2>Settings</h2><pre>{}</pre><p>Row weights per coordinate: {}</p>",
+        escape(&settings),
+        result
+            .weights
+            .iter()
+            .map(|w| number(*w))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    o.push_str(
+        "<h2>Provenance</h2><table><tr><th class=l>role</th><th class=l>path</th>\
+         <th class=l>SHA-256</th><th>bytes</th></tr>",
+    );
+    for i in &result.inputs {
+        let _ = write!(
+            o,
+            "<tr><td class=l>{}</td><td class=l>{}</td><td class=l><code>{}</code></td><td>{}</td></tr>",
+            escape(&i.role),
+            escape(&i.path),
+            escape(&i.sha256),
+            i.bytes
+        );
+    }
+    o.push_str("</table></body></html>\n");
+    o
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_markup_and_formats_numbers() {
+        assert_eq!(escape("a<b & \"c\""), "a&lt;b &amp; &quot;c&quot;");
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(1.234_567_89), "1.23457");
+        assert_eq!(number(-0.012_345_678), "-0.0123457");
+        assert_eq!(number(1.5e-7), "1.50000e-7");
+        assert_eq!(number(f64::NAN), "NaN");
+    }
+}

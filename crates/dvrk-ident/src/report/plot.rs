@@ -1,0 +1,426 @@
+//! Drawing figures to SVG or PNG in memory with plotters.
+//!
+//! Figures are plain data ([`PanelGrid`] and the kinematic drawing) rendered by one
+//! generic routine per figure type, so the same figure comes out as SVG (embedded in
+//! the HTML report) or PNG without two drawing codes. Text uses the DejaVu Sans shipped
+//! in `assets/fonts` (registered once through ab_glyph), so figures render identically
+//! on a bare machine with no fontconfig. Everything is rendered into memory first: the
+//! caller writes files atomically only once every figure has been drawn.
+
+use std::error::Error;
+use std::path::Path;
+use std::sync::Once;
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use super::ReportError;
+
+/// The font every figure uses, registered under plotters' `sans-serif` family.
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// Result of drawing on a backend; boxed so one routine serves SVG and bitmap backends.
+pub type DrawResult = Result<(), Box<dyn Error>>;
+
+/// Output encoding of a figure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ImageFormat {
+    Svg,
+    Png,
+}
+
+impl ImageFormat {
+    /// The format a path asks for by its extension (`.svg` or `.png`).
+    pub fn from_path(path: &Path) -> Result<ImageFormat, ReportError> {
+        match path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase())
+            .as_deref()
+        {
+            Some("svg") => Ok(ImageFormat::Svg),
+            Some("png") => Ok(ImageFormat::Png),
+            _ => Err(ReportError::Format {
+                file: path.display().to_string(),
+                message: "figures are written as .svg or .png (by extension)".into(),
+            }),
+        }
+    }
+
+    pub fn extension(self) -> &'static str {
+        match self {
+            ImageFormat::Svg => "svg",
+            ImageFormat::Png => "png",
+        }
+    }
+}
+
+/// Something that can be drawn on any plotters backend.
+pub trait Figure {
+    /// Pixel size (SVG user units for SVG).
+    fn size(&self) -> (u32, u32);
+    /// Draws the figure on `root` (already cleared to white).
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static;
+}
+
+fn register_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bundled file is a valid TrueType font; a failure here is a build defect.
+        if plotters::style::register_font("sans-serif", FontStyle::Normal, FONT).is_err() {
+            panic!("the bundled DejaVu Sans font does not parse");
+        }
+    });
+}
+
+/// Renders `figure` to the bytes of an SVG document or a PNG file.
+pub fn render(figure: &impl Figure, format: ImageFormat) -> Result<Vec<u8>, ReportError> {
+    register_font();
+    let (w, h) = figure.size();
+    let failed = |e: Box<dyn Error>| ReportError::Draw(e.to_string());
+    match format {
+        ImageFormat::Svg => {
+            let mut text = String::new();
+            {
+                let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
+                root.fill(&WHITE).map_err(|e| failed(e.into()))?;
+                figure.draw(&root).map_err(failed)?;
+                root.present().map_err(|e| failed(e.into()))?;
+            }
+            Ok(text.into_bytes())
+        }
+        ImageFormat::Png => {
+            let mut rgb = vec![0u8; w as usize * h as usize * 3];
+            {
+                let root = BitMapBackend::with_buffer(&mut rgb, (w, h)).into_drawing_area();
+                root.fill(&WHITE).map_err(|e| failed(e.into()))?;
+                figure.draw(&root).map_err(failed)?;
+                root.present().map_err(|e| failed(e.into()))?;
+            }
+            encode_png(&rgb, w, h)
+        }
+    }
+}
+
+fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, w, h);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let failed = |e: png::EncodingError| ReportError::Draw(format!("PNG encoding: {e}"));
+    let mut writer = encoder.write_header().map_err(failed)?;
+    writer.write_image_data(rgb).map_err(failed)?;
+    writer.finish().map_err(failed)?;
+    Ok(out)
+}
+
+/// How a series is drawn.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SeriesStyle {
+    Line,
+    Dashed,
+    Points,
+    /// Points with vertical bars from `lower[i]` to `upper[i]`.
+    ErrorBars {
+        lower: Vec<f64>,
+        upper: Vec<f64>,
+    },
+}
+
+/// One curve of a panel.
+#[derive(Clone, Debug)]
+pub struct Series {
+    /// Legend text (empty: no legend entry).
+    pub label: String,
+    pub color: RGBColor,
+    pub style: SeriesStyle,
+    pub x: Vec<f64>,
+    pub y: Vec<f64>,
+}
+
+impl Series {
+    pub fn line(label: &str, color: RGBColor, x: Vec<f64>, y: Vec<f64>) -> Series {
+        Series {
+            label: label.into(),
+            color,
+            style: SeriesStyle::Line,
+            x,
+            y,
+        }
+    }
+}
+
+/// One chart of a grid: title, axis descriptions (with units) and curves.
+#[derive(Clone, Debug, Default)]
+pub struct Panel {
+    pub title: String,
+    pub x_label: String,
+    pub y_label: String,
+    pub series: Vec<Series>,
+    /// Horizontal reference lines (value, colour), e.g. limits; drawn dashed.
+    pub hlines: Vec<(f64, RGBColor)>,
+}
+
+/// Panels on a grid under a common title.
+#[derive(Clone, Debug)]
+pub struct PanelGrid {
+    pub title: String,
+    pub columns: usize,
+    /// Size of one panel in pixels.
+    pub panel_size: (u32, u32),
+    pub panels: Vec<Panel>,
+}
+
+/// Most points a drawn series keeps; longer series are reduced to their min/max
+/// envelope per bucket, which keeps every peak visible at a fraction of the file size.
+pub const MAX_POINTS: usize = 2000;
+
+/// The min/max envelope of `(x, y)` in at most `max_points` points, in x order. Short
+/// series are returned unchanged.
+pub fn envelope(x: &[f64], y: &[f64], max_points: usize) -> Vec<(f64, f64)> {
+    let n = x.len().min(y.len());
+    if n <= max_points || max_points < 2 {
+        return (0..n).map(|i| (x[i], y[i])).collect();
+    }
+    let buckets = max_points / 2;
+    let mut out = Vec::with_capacity(2 * buckets);
+    for b in 0..buckets {
+        let (s, e) = (
+            b * n / buckets,
+            ((b + 1) * n / buckets).max(b * n / buckets + 1),
+        );
+        let (mut lo, mut hi) = (s, s);
+        for i in s..e.min(n) {
+            if y[i] < y[lo] {
+                lo = i;
+            }
+            if y[i] > y[hi] {
+                hi = i;
+            }
+        }
+        let (a, b2) = if lo <= hi { (lo, hi) } else { (hi, lo) };
+        out.push((x[a], y[a]));
+        if b2 != a {
+            out.push((x[b2], y[b2]));
+        }
+    }
+    out
+}
+
+fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    (lo <= hi).then_some((lo, hi))
+}
+
+/// A range with a margin, never empty (a constant signal gets ±1 % or ±1).
+fn padded(range: Option<(f64, f64)>, margin: f64) -> (f64, f64) {
+    let (lo, hi) = range.unwrap_or((0.0, 1.0));
+    let span = hi - lo;
+    if span > 0.0 {
+        (lo - margin * span, hi + margin * span)
+    } else {
+        let d = if lo != 0.0 { 0.01 * lo.abs() } else { 1.0 };
+        (lo - d, hi + d)
+    }
+}
+
+impl Panel {
+    fn x_range(&self) -> (f64, f64) {
+        // Markers need room at the ends; curves use the whole width.
+        let markers = self
+            .series
+            .iter()
+            .any(|s| !matches!(s.style, SeriesStyle::Line | SeriesStyle::Dashed));
+        padded(
+            finite_range(self.series.iter().flat_map(|s| s.x.iter().copied())),
+            if markers { 0.02 } else { 0.0 },
+        )
+    }
+
+    fn y_range(&self) -> (f64, f64) {
+        let values = self.series.iter().flat_map(|s| {
+            let extra: Vec<f64> = match &s.style {
+                SeriesStyle::ErrorBars { lower, upper } => {
+                    lower.iter().chain(upper.iter()).copied().collect()
+                }
+                _ => Vec::new(),
+            };
+            s.y.iter().copied().chain(extra)
+        });
+        padded(
+            finite_range(values.chain(self.hlines.iter().map(|h| h.0))),
+            0.05,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, area: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (x0, x1) = self.x_range();
+        let (y0, y1) = self.y_range();
+        let mut chart = ChartBuilder::on(area)
+            .caption(&self.title, ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(36)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x0..x1, y0..y1)?;
+        chart
+            .configure_mesh()
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(RGBColor(225, 225, 225))
+            .x_desc(self.x_label.as_str())
+            .y_desc(self.y_label.as_str())
+            .label_style(("sans-serif", 12))
+            .axis_desc_style(("sans-serif", 13))
+            .x_labels(6)
+            .y_labels(6)
+            .draw()?;
+        for &(v, color) in &self.hlines {
+            chart.draw_series(DashedLineSeries::new(
+                vec![(x0, v), (x1, v)],
+                6,
+                4,
+                color.stroke_width(1),
+            ))?;
+        }
+        let mut legend = false;
+        for s in &self.series {
+            let color = s.color;
+            let drawn =
+                match &s.style {
+                    SeriesStyle::Line => chart.draw_series(LineSeries::new(
+                        envelope(&s.x, &s.y, MAX_POINTS),
+                        color.stroke_width(1),
+                    ))?,
+                    SeriesStyle::Dashed => chart.draw_series(DashedLineSeries::new(
+                        envelope(&s.x, &s.y, MAX_POINTS),
+                        6,
+                        4,
+                        color.stroke_width(1),
+                    ))?,
+                    SeriesStyle::Points => chart.draw_series(
+                        s.x.iter()
+                            .zip(&s.y)
+                            .map(|(&x, &y)| Circle::new((x, y), 3, color.filled())),
+                    )?,
+                    SeriesStyle::ErrorBars { lower, upper } => {
+                        chart.draw_series(s.x.iter().zip(lower.iter().zip(upper)).map(
+                            |(&x, (&lo, &hi))| PathElement::new(vec![(x, lo), (x, hi)], color),
+                        ))?;
+                        chart.draw_series(
+                            s.x.iter()
+                                .zip(&s.y)
+                                .map(|(&x, &y)| Circle::new((x, y), 3, color.filled())),
+                        )?
+                    }
+                };
+            if !s.label.is_empty() {
+                legend = true;
+                drawn.label(s.label.as_str()).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+                });
+            }
+        }
+        if legend {
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .label_font(("sans-serif", 12))
+                .background_style(WHITE.mix(0.8))
+                .border_style(RGBColor(180, 180, 180))
+                .draw()?;
+        }
+        Ok(())
+    }
+}
+
+impl Figure for PanelGrid {
+    fn size(&self) -> (u32, u32) {
+        let cols = self.columns.max(1);
+        let rows = self.panels.len().div_ceil(cols).max(1);
+        (
+            self.panel_size.0 * cols as u32,
+            self.panel_size.1 * rows as u32 + TITLE_HEIGHT,
+        )
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult
+    where
+        DB::ErrorType: 'static,
+    {
+        let (title, body) = root.split_vertically(TITLE_HEIGHT);
+        title.titled(&self.title, ("sans-serif", 20))?;
+        let cols = self.columns.max(1);
+        let rows = self.panels.len().div_ceil(cols).max(1);
+        let areas = body.split_evenly((rows, cols));
+        for (panel, area) in self.panels.iter().zip(areas.iter()) {
+            panel.draw(area)?;
+        }
+        Ok(())
+    }
+}
+
+/// Height of a figure's title strip, px.
+const TITLE_HEIGHT: u32 = 36;
+
+/// A palette that stays readable in print: measured, predicted, error, then extras.
+pub mod colors {
+    use plotters::style::RGBColor;
+    pub const MEASURED: RGBColor = RGBColor(31, 119, 180);
+    pub const PREDICTED: RGBColor = RGBColor(214, 39, 40);
+    pub const ERROR: RGBColor = RGBColor(127, 127, 127);
+    pub const RAW: RGBColor = RGBColor(170, 170, 170);
+    pub const FILTERED: RGBColor = RGBColor(31, 119, 180);
+    pub const LIMIT: RGBColor = RGBColor(214, 39, 40);
+    pub const AXIS_X: RGBColor = RGBColor(214, 39, 40);
+    pub const AXIS_Y: RGBColor = RGBColor(44, 160, 44);
+    pub const AXIS_Z: RGBColor = RGBColor(31, 119, 180);
+    /// One colour per coordinate (tab10).
+    pub const CYCLE: [RGBColor; 10] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+    ];
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn envelope_keeps_extremes_and_order() {
+        let n = 10_000;
+        let x: Vec<f64> = (0..n).map(|i| i as f64).collect();
+        let mut y: Vec<f64> = x.iter().map(|t| (t * 0.01).sin()).collect();
+        y[4321] = 7.0;
+        y[8000] = -5.0;
+        let e = envelope(&x, &y, 500);
+        assert!(e.len() <= 500);
+        assert!(e.iter().any(|p| p == &(4321.0, 7.0)));
+        assert!(e.iter().any(|p| p == &(8000.0, -5.0)));
+        assert!(e.windows(2).all(|w| w[0].0 < w[1].0));
+        assert_eq!(envelope(&x[..10], &y[..10], 500).len(), 10);
+    }
+
+    #[test]
+    fn constant_and_empty_ranges_are_not_degenerate() {
+        assert_eq!(padded(Some((2.0, 2.0)), 0.05), (1.98, 2.02));
+        assert_eq!(padded(Some((0.0, 0.0)), 0.05), (-1.0, 1.0));
+        assert_eq!(padded(None, 0.0), (0.0, 1.0));
+    }
+}

@@ -1,0 +1,305 @@
+//! Figures and the HTML report: valid SVG and PNG of the announced size with the
+//! expected series, and a page that carries the numbers of the result it came from.
+//!
+//! Data: the bundled example log (`examples/psm_excitation.mcap`, in the repository),
+//! first 4 s, fitted by OLS (fast) without filtering.
+
+use std::path::PathBuf;
+
+use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::{joint_metrics, predict, prepare};
+use dvrk_ident::report::draw::kinematic_drawing;
+use dvrk_ident::report::plot::{render, Figure, ImageFormat, MAX_POINTS};
+use dvrk_ident::report::{build, figures, ReportInput, ReportLog};
+use dvrk_ident::trajectory::Trajectory;
+use dvrk_ident::{fit, FitResult, FitSettings, Method};
+use dvrk_model::Model;
+
+fn examples() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+}
+
+fn example_log(seconds: f64) -> Trajectory {
+    let t = dvrk_ident::log::read(examples().join("psm_excitation.mcap"), None, None).unwrap();
+    let t0 = t.time[0];
+    let keep = t.time.iter().take_while(|&&s| s - t0 < seconds).count();
+    let rows: Vec<usize> = (0..keep).collect();
+    Trajectory {
+        time: t.time[..keep].to_vec(),
+        q: t.q.select_rows(&rows),
+        dq: t.dq.as_ref().map(|d| d.select_rows(&rows)),
+        tau: t.tau.select_rows(&rows),
+        ..t
+    }
+}
+
+fn settings() -> FitSettings {
+    let mut s = FitSettings {
+        method: Method::Ols,
+        ..FitSettings::default()
+    };
+    s.processing.filter = None;
+    s
+}
+
+fn fitted() -> (Model, Trajectory, FitResult) {
+    let model = Model::builtin("psm").unwrap();
+    let log = example_log(4.0);
+    let result = fit(&model, &log, Some(&log), &settings()).unwrap();
+    (model, log, result)
+}
+
+/// Width and height attributes of an SVG document's root element.
+fn svg_size(svg: &str) -> (u32, u32) {
+    let root = &svg[svg.find("<svg").unwrap()..];
+    let attr = |name: &str| -> u32 {
+        let key = format!("{name}=\"");
+        let s = &root[root.find(&key).unwrap() + key.len()..];
+        s[..s.find('"').unwrap()].parse().unwrap()
+    };
+    (attr("width"), attr("height"))
+}
+
+/// Polylines drawn in colour `hex` (e.g. `#D62728`), with their point counts.
+fn polylines(svg: &str, hex: &str) -> Vec<usize> {
+    svg.split("<polyline")
+        .skip(1)
+        .filter(|p| p[..p.find("/>").unwrap()].contains(&format!("stroke=\"{hex}\"")))
+        .map(|p| {
+            let s = &p[p.find("points=\"").unwrap() + 8..];
+            s[..s.find('"').unwrap()].split_whitespace().count()
+        })
+        .collect()
+}
+
+fn png_size(bytes: &[u8]) -> (u32, u32, Vec<u8>) {
+    let decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    buf.truncate(info.buffer_size());
+    (info.width, info.height, buf)
+}
+
+#[test]
+fn torque_figure_has_one_panel_per_joint_with_three_series_and_units() {
+    let (model, log, result) = fitted();
+    let params = result.params_for(&model).unwrap();
+    let data = prepare(&model, &log, &result.settings.processing).unwrap();
+    let predicted = predict(&model, &params, &data);
+    let metrics = joint_metrics(&model, &params, &data, None);
+    let fig = figures::torque_figure(&model, "training", &data, &predicted, &metrics);
+    assert_eq!(fig.panels.len(), 7);
+    // q3 is the PSM insertion (prismatic): newtons; the others newton-metres.
+    assert_eq!(fig.panels[2].y_label, "torque (N)");
+    assert_eq!(fig.panels[0].y_label, "torque (N·m)");
+    for (j, p) in fig.panels.iter().enumerate() {
+        let labels: Vec<&str> = p.series.iter().map(|s| s.label.as_str()).collect();
+        assert_eq!(labels, ["measured", "predicted", "error"]);
+        // The error series is measured minus predicted, sample by sample.
+        for k in [0, data.len() / 2, data.len() - 1] {
+            assert_eq!(p.series[2].y[k], data.tau[(k, j)] - predicted[(k, j)]);
+        }
+        assert!(p
+            .title
+            .contains(&format!("{:.4}", metrics.relative_error[j])));
+    }
+
+    let svg = String::from_utf8(render(&fig, ImageFormat::Svg).unwrap()).unwrap();
+    assert_eq!(svg_size(&svg), fig.size());
+    assert!(svg.trim_end().ends_with("</svg>"));
+    // Per panel: the predicted curve with every sample (fewer than MAX_POINTS here),
+    // plus its legend sample.
+    let red = polylines(&svg, "#D62728");
+    assert!(data.len() < MAX_POINTS);
+    assert_eq!(
+        red.iter().filter(|&&n| n == data.len()).count(),
+        7,
+        "{red:?}"
+    );
+    assert_eq!(red.len(), 14);
+    assert_eq!(svg.matches(">\nmeasured\n</text>").count(), 7);
+
+    let png = render(&fig, ImageFormat::Png).unwrap();
+    let (w, h, pixels) = png_size(&png);
+    assert_eq!((w, h), fig.size());
+    // Something was drawn in the predicted red (not only a white page).
+    assert!(pixels
+        .chunks(3)
+        .any(|p| p[0] == 214 && p[1] == 39 && p[2] == 40));
+}
+
+#[test]
+fn long_series_are_reduced_to_their_envelope() {
+    let (model, log, result) = fitted();
+    let params = result.params_for(&model).unwrap();
+    // Upsample the example 4x to get more samples than the drawing keeps.
+    let data = prepare(&model, &log, &result.settings.processing).unwrap();
+    let mut long = data.clone();
+    let reps = MAX_POINTS / data.len() + 2;
+    let rows: Vec<usize> = (0..reps * data.len()).map(|k| k % data.len()).collect();
+    long.q = data.q.select_rows(&rows);
+    long.dq = data.dq.select_rows(&rows);
+    long.ddq = data.ddq.select_rows(&rows);
+    long.tau = data.tau.select_rows(&rows);
+    long.time = (0..rows.len()).map(|k| k as f64 * 0.005).collect();
+    let predicted = predict(&model, &params, &long);
+    let metrics = joint_metrics(&model, &params, &long, None);
+    let fig = figures::torque_figure(&model, "long", &long, &predicted, &metrics);
+    let svg = String::from_utf8(render(&fig, ImageFormat::Svg).unwrap()).unwrap();
+    let red = polylines(&svg, "#D62728");
+    let longest = *red.iter().max().unwrap();
+    assert!(
+        longest <= MAX_POINTS && longest > MAX_POINTS / 2,
+        "{longest}"
+    );
+}
+
+#[test]
+fn report_page_carries_the_result_metrics_and_is_self_contained() {
+    let (model, log, result) = fitted();
+    let traj = FourierTrajectory::from_json_file(examples().join("psm_trajectory.json")).unwrap();
+    let input = ReportInput {
+        model: &model,
+        result: &result,
+        logs: vec![
+            ReportLog {
+                role: "training",
+                trajectory: &log,
+                window: None,
+            },
+            ReportLog {
+                role: "test",
+                trajectory: &log,
+                window: Some(100),
+            },
+        ],
+        excitation: Some(&traj),
+    };
+    let report = build(&input).unwrap();
+    let stems: Vec<&str> = report.figures.iter().map(|f| f.stem.as_str()).collect();
+    assert_eq!(
+        stems,
+        [
+            "torque_1_training",
+            "processing_1_training",
+            "torque_2_test",
+            "processing_2_test",
+            "base_parameters",
+            "excitation",
+            "kinematics"
+        ]
+    );
+    let html = &report.html;
+    for j in 0..7 {
+        let rel = result.metrics.train.relative_error[j];
+        assert!(html.contains(&format!("<td>{rel:.4}</td>")), "joint {j}");
+    }
+    // The recomputed training metrics are the result's (same data, same settings);
+    // the windowed test ones use 100 samples.
+    assert_eq!(report.logs[0].metrics, result.metrics.train);
+    assert_eq!(report.logs[1].metrics.samples, 100);
+    for b in &result.base_parameters {
+        assert!(html.contains(&dvrk_ident::report::html::escape(&b.expression)));
+    }
+    for l in &result.links {
+        assert!(html.contains(&format!("<td class=l>{}</td>", l.link)));
+    }
+    // Every figure inlined as SVG, nothing fetched from elsewhere.
+    assert_eq!(html.matches("<svg").count(), report.figures.len());
+    assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
+    assert!(!html.contains("href=\"http"));
+
+    let dir = std::env::temp_dir().join(format!("dvrk-report-{}", std::process::id()));
+    let written = report.write(&dir).unwrap();
+    assert_eq!(written.len(), 2 * report.figures.len() + 1);
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names.len(),
+        written.len(),
+        "no temporary file left: {names:?}"
+    );
+    let back = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    assert_eq!(&back, html);
+    let (w, h, _) = png_size(&std::fs::read(dir.join("kinematics.png")).unwrap());
+    assert!(w > 600 && h > 600);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn excitation_figure_shows_limits_and_combinations() {
+    let model = Model::builtin("psm").unwrap();
+    let traj = FourierTrajectory::from_json_file(examples().join("psm_trajectory.json")).unwrap();
+    let fig = figures::excitation_figure(&model, &traj, 100.0);
+    let single = model
+        .limits
+        .iter()
+        .filter(|l| l.position.is_some() && l.expr.terms.len() == 1 && l.expr.terms[0].1 == 1.0)
+        .count();
+    let combined = model.limits.iter().filter(|l| l.position.is_some()).count() - single;
+    assert!(
+        combined >= 1,
+        "the PSM jaw limit is a combination of q6 and q7"
+    );
+    assert_eq!(fig.panels.len(), 7 + combined);
+    let hlines: usize = fig.panels.iter().map(|p| p.hlines.len()).sum();
+    assert_eq!(hlines, 2 * (single + combined));
+    // The curve is the trajectory itself over one period.
+    let (q, _, _) = traj.sample(&[0.0]);
+    assert_eq!(fig.panels[1].series[0].y[0], q[(0, 1)]);
+    let last = fig.panels[0].series[0].x.last().copied().unwrap();
+    assert!((last - traj.period_s()).abs() < 1e-12);
+}
+
+#[test]
+fn kinematic_drawing_flags_closed_chain_frames_and_draws_every_frame() {
+    let model = Model::builtin("psm").unwrap();
+    let q = [0.3, -0.2, 0.12, 0.1, 0.2, 0.0, 0.1];
+    let d = kinematic_drawing(&model, &q).unwrap();
+    let poses = model.frame_poses(&q);
+    for (f, p) in d.frames.iter().zip(&poses) {
+        assert_eq!(f.pose, *p);
+    }
+    let branch: Vec<&str> = d
+        .frames
+        .iter()
+        .filter(|f| f.branch)
+        .map(|f| f.name.as_str())
+        .collect();
+    let chain: Vec<&str> = d
+        .frames
+        .iter()
+        .filter(|f| !f.branch)
+        .map(|f| f.name.as_str())
+        .collect();
+    // In the 2019 PSM tree the tool hangs from the parallelogram's far end
+    // (pitch_end); the parallelogram's other links, the insertion stage carried by the
+    // pitch frame, the virtual motor frames are branches.
+    assert_eq!(
+        chain,
+        [
+            "base",
+            "yaw",
+            "pitch_intermediate",
+            "pitch_back",
+            "pitch_front",
+            "pitch_bottom",
+            "pitch_end",
+            "tool_roll",
+            "wrist_pitch",
+            "wrist_yaw_2"
+        ]
+    );
+    assert!(branch.contains(&"pitch_top") && branch.contains(&"main_insertion"));
+    assert!(branch.contains(&"motor_6") && branch.contains(&"pitch_front_ext"));
+    let svg = String::from_utf8(render(&d, ImageFormat::Svg).unwrap()).unwrap();
+    assert_eq!(svg_size(&svg), d.size());
+    // One origin marker per frame in each of the two views.
+    assert_eq!(svg.matches("<circle").count(), 2 * d.frames.len());
+    assert!(kinematic_drawing(&model, &[0.0; 3]).is_err());
+    assert!(kinematic_drawing(&model, &[f64::NAN; 7]).is_err());
+}
