@@ -1,0 +1,173 @@
+//! `fit --report`, `report` and `model --draw` end to end on the bundled example log:
+//! the files a user opens, their content, and errors that leave nothing behind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
+        .args(args)
+        .output()
+        .expect("run dvrk-ident");
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dvrk-cli-report-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn example() -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/psm_excitation.mcap")
+        .display()
+        .to_string()
+}
+
+fn files(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn fit_report_then_report_command_show_the_result() {
+    let dir = temp_dir("fit");
+    let out = dir.join("result.json");
+    let rep = dir.join("fit-report");
+    let log = example();
+    let (ok, _, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--method",
+        "wls",
+        "--cutoff",
+        "none",
+        "--test",
+        &log,
+        "--test-window",
+        "500",
+        "--out",
+        out.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let names = files(&rep);
+    for stem in [
+        "torque_1_training",
+        "torque_2_test",
+        "processing_1_training",
+        "base_parameters",
+        "kinematics",
+    ] {
+        assert!(names.contains(&format!("{stem}.svg")), "{names:?}");
+        assert!(names.contains(&format!("{stem}.png")), "{names:?}");
+    }
+    let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    for key in ["train", "test"] {
+        for v in result["metrics"][key]["relative_error"].as_array().unwrap() {
+            let cell = format!("<td>{:.4}</td>", v.as_f64().unwrap());
+            assert!(html.contains(&cell), "{key} {cell}");
+        }
+    }
+    assert!(html.contains(result["inputs"][0]["sha256"].as_str().unwrap()));
+
+    // `report` on the same result: its recorded logs by default, plus an excitation.
+    let rep2 = dir.join("report");
+    let traj = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_trajectory.json");
+    let (ok, stdout, err) = run(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        rep2.to_str().unwrap(),
+        "--excitation",
+        traj.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert_eq!(stdout.trim(), rep2.join("report.html").display().to_string());
+    let names2 = files(&rep2);
+    assert!(names2.contains(&"excitation.svg".to_string()));
+    assert!(names2.contains(&"torque_2_test.png".to_string()));
+    // The test metrics of the page come from the same 500-sample window.
+    let html2 = std::fs::read_to_string(rep2.join("report.html")).unwrap();
+    assert!(html2.contains("(500 samples)"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn draw_writes_svg_and_png_of_the_tree() {
+    let dir = temp_dir("draw");
+    let svg = dir.join("tree.svg");
+    let png = dir.join("tree.png");
+    let (ok, _, err) = run(&[
+        "model",
+        "mtm",
+        "--draw",
+        "--q",
+        "0.1,0.2,-0.3,0,0,0,0",
+        "--out",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.trim_end().ends_with("</svg>"));
+    assert!(text.contains("q3=-0.300"));
+    let (ok, _, err) = run(&["model", "psm", "--draw", "--out", png.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_requests_fail_cleanly_and_write_nothing() {
+    let dir = temp_dir("errors");
+    let bad_ext = dir.join("tree.pdf");
+    let (ok, _, err) = run(&["model", "psm", "--draw", "--out", bad_ext.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(err.contains("tree.pdf") && err.contains(".svg or .png"), "{err}");
+    let (ok, _, err) = run(&[
+        "model",
+        "psm",
+        "--draw",
+        "--q",
+        "0,0",
+        "--out",
+        dir.join("t.svg").to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("--q"), "{err}");
+    let missing = dir.join("missing.json");
+    let (ok, _, err) = run(&[
+        "report",
+        missing.to_str().unwrap(),
+        "--out",
+        dir.join("rep").to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("missing.json"), "{err}");
+    // A result file that is not one.
+    let junk = dir.join("junk.json");
+    std::fs::write(&junk, "{\"method\": 3}").unwrap();
+    let (ok, _, err) = run(&[
+        "report",
+        junk.to_str().unwrap(),
+        "--out",
+        dir.join("rep").to_str().unwrap(),
+    ]);
+    assert!(!ok && err.contains("junk.json"), "{err}");
+    assert_eq!(files(&dir), ["junk.json"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
