@@ -7,6 +7,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod cmd;
+mod progress;
 
 #[derive(Parser)]
 #[command(
@@ -15,6 +16,9 @@ mod cmd;
     about = "Dynamic identification of robot arms (dVRK PSM/MTM, DH tables, URDF)"
 )]
 struct Cli {
+    /// No progress bars (they are also hidden when stderr is not a terminal)
+    #[arg(long, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -41,6 +45,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    progress::set_quiet(cli.quiet);
     let result = match cli.command {
         Command::Model(args) => cmd::model::run(args),
         Command::Fit(args) => cmd::fit::run(args),

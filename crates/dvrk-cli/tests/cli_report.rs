@@ -98,7 +98,10 @@ fn fit_report_then_report_command_show_the_result() {
         traj.to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
-    assert_eq!(stdout.trim(), rep2.join("report.html").display().to_string());
+    assert_eq!(
+        stdout.trim(),
+        rep2.join("report.html").display().to_string()
+    );
     let names2 = files(&rep2);
     assert!(names2.contains(&"excitation.svg".to_string()));
     assert!(names2.contains(&"torque_2_test.png".to_string()));
@@ -139,7 +142,10 @@ fn bad_requests_fail_cleanly_and_write_nothing() {
     let bad_ext = dir.join("tree.pdf");
     let (ok, _, err) = run(&["model", "psm", "--draw", "--out", bad_ext.to_str().unwrap()]);
     assert!(!ok);
-    assert!(err.contains("tree.pdf") && err.contains(".svg or .png"), "{err}");
+    assert!(
+        err.contains("tree.pdf") && err.contains(".svg or .png"),
+        "{err}"
+    );
     let (ok, _, err) = run(&[
         "model",
         "psm",
@@ -170,4 +176,20 @@ fn bad_requests_fail_cleanly_and_write_nothing() {
     assert!(!ok && err.contains("junk.json"), "{err}");
     assert_eq!(files(&dir), ["junk.json"]);
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn progress_bars_stay_off_pipes_and_quiet_is_global() {
+    let log = example();
+    for extra in [&[][..], &["--quiet"][..]] {
+        let mut args = vec![
+            "fit", &log, "--robot", "psm", "--cutoff", "none", "--method", "ols",
+        ];
+        args.extend_from_slice(extra);
+        let (ok, stdout, err) = run(&args);
+        assert!(ok, "{err}");
+        assert!(stdout.contains("physically consistent"));
+        // stderr is a pipe here: no bar, no spinner, nothing at all.
+        assert_eq!(err, "", "{extra:?}");
+    }
 }

@@ -10,6 +10,7 @@ use crate::error::IdentError;
 use crate::estimate::ols::{base_least_squares, representative, BaseEstimate};
 use crate::estimate::sdp::{solve_sdp, SdpOptions};
 use crate::observation::{Observation, Samples};
+use crate::progress::{Progress, Silent};
 use crate::result::*;
 use crate::signal::{process, Processing};
 use crate::trajectory::{Coordinates, Trajectory};
@@ -277,11 +278,25 @@ pub fn fit(
     test: Option<&Trajectory>,
     settings: &FitSettings,
 ) -> Result<FitResult, IdentError> {
+    fit_with_progress(model, train, test, settings, &Silent)
+}
+
+/// [`fit`] announcing its stages (processing, assembling with a sample count, solving)
+/// to `progress`.
+pub fn fit_with_progress(
+    model: &Model,
+    train: &Trajectory,
+    test: Option<&Trajectory>,
+    settings: &FitSettings,
+    progress: &dyn Progress,
+) -> Result<FitResult, IdentError> {
+    progress.stage("processing", None);
     let data = prepare(model, train, &settings.processing)?;
     let test_data = match test {
         Some(t) => Some(prepare(model, t, &settings.processing)?),
         None => None,
     };
+    progress.finish();
     let base = model.base_parameters()?;
     let n = model.dof();
     let p = model.n_params();
@@ -291,7 +306,16 @@ pub fn fit(
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range_weights(&data),
     };
-    let mut obs = Observation::assemble(model, data.samples(), &weights);
+    let passes = 1 + if settings.method == Method::Irls {
+        settings.irls_iterations
+    } else {
+        0
+    };
+    progress.stage(
+        "assembling the observation",
+        Some((passes * data.len()) as u64),
+    );
+    let mut obs = Observation::assemble_with_progress(model, data.samples(), &weights, progress);
     let mut estimate: BaseEstimate =
         base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
     let mut solver = SolverInfo {
@@ -317,17 +341,20 @@ pub fn fit(
                 })
                 .collect();
             weights = new;
-            obs = Observation::assemble(model, data.samples(), &weights);
+            obs = Observation::assemble_with_progress(model, data.samples(), &weights, progress);
             estimate = base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
             solver.iterations = it as u32 + 2;
         }
     }
+    progress.finish();
     let params = if settings.method == Method::Sdp {
+        progress.stage("solving the semidefinite program", None);
         let options = SdpOptions {
             regularization: settings.sdp_regularization,
             ..SdpOptions::default()
         };
         let sol = solve_sdp(model, obs.r(), &options)?;
+        progress.finish();
         solver = SolverInfo {
             name: "clarabel".into(),
             status: sol.status.clone(),

@@ -152,6 +152,17 @@ impl Observation {
     /// 1/N), assembled in parallel chunks and merged in order (the result does not
     /// depend on the number of threads).
     pub fn assemble(model: &Model, samples: Samples<'_>, weights: &[f64]) -> Observation {
+        Observation::assemble_with_progress(model, samples, weights, &crate::progress::Silent)
+    }
+
+    /// [`Observation::assemble`] reporting the samples done to `progress` (from the
+    /// worker threads, one call per chunk).
+    pub fn assemble_with_progress(
+        model: &Model,
+        samples: Samples<'_>,
+        weights: &[f64],
+        progress: &dyn crate::progress::Progress,
+    ) -> Observation {
         let n = model.dof();
         let p = model.n_params();
         assert_eq!(weights.len(), n, "one weight per coordinate");
@@ -187,10 +198,12 @@ impl Observation {
                             block[(row, p)] = w * samples.tau[(k, j)];
                         }
                     }
-                    Observation {
+                    let factor = Observation {
                         r: r_factor(&block),
                         rows,
-                    }
+                    };
+                    progress.advance((end - start) as u64);
+                    factor
                 },
             )
             .collect();

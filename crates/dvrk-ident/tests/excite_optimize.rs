@@ -8,6 +8,7 @@ use dvrk_ident::excite::optimize::{
     ExciteOptions,
 };
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::progress::Silent;
 use dvrk_model::Model;
 
 const ARM: &str = r#"
@@ -163,7 +164,7 @@ fn optimized_trajectory_respects_limits_on_dense_grid() {
     let model = arm();
     let base = model.base_parameters().unwrap();
     let o = opts(3, 0.25);
-    let res = optimize::optimize(&model, &base, &model.limits, &o, None).expect("feasible");
+    let res = optimize::optimize(&model, &base, &model.limits, &o, &Silent).expect("feasible");
     assert!(res.evaluation.feasibility.feasible);
     // Independent re-check at 5 kHz, with the trajectory's own evaluation.
     let t = &res.trajectory;
@@ -182,7 +183,7 @@ fn optimized_trajectory_respects_limits_on_dense_grid() {
     assert!((crit.value - res.evaluation.criterion.value).abs() < 1e-9 * crit.value);
     assert_eq!(crit.name, "condition");
     // Deterministic for a seed.
-    let again = optimize::optimize(&model, &base, &model.limits, &o, None).unwrap();
+    let again = optimize::optimize(&model, &base, &model.limits, &o, &Silent).unwrap();
     assert_eq!(again.trajectory, res.trajectory);
     // The JSON document has the five keys, coordinates and the criterion.
     let doc = res.to_json_value();
@@ -210,7 +211,7 @@ fn rest_option_gives_zero_rates_at_the_ends() {
         criterion: Criterion::LogDet,
         ..opts(4, 0.25)
     };
-    let res = optimize::optimize(&model, &base, &model.limits, &o, None).expect("feasible");
+    let res = optimize::optimize(&model, &base, &model.limits, &o, &Silent).expect("feasible");
     let t = &res.trajectory;
     let (mut q, mut dq, mut ddq) = ([0.0; 2], [0.0; 2], [0.0; 2]);
     for time in [0.0, t.period_s()] {
@@ -239,7 +240,7 @@ expr = "q1"
 position = [1.5, 2.0]
 "#;
     let limits = optimize::limits_from_toml_str(&model, text, "bad.toml").unwrap();
-    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), None).unwrap_err();
+    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
     assert!(matches!(e, ExciteError::ImpossibleLimits(_)), "{e}");
     // A velocity range excluding 0: a periodic motion cannot satisfy it.
     let text = r#"
@@ -249,7 +250,7 @@ velocity = ["10*deg", "30*deg"]
 "#;
     let limits = optimize::limits_from_toml_str(&model, text, "bad.toml").unwrap();
     assert!((limits[0].velocity.unwrap()[0] - 10f64.to_radians()).abs() < 1e-12);
-    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), None).unwrap_err();
+    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
     assert!(e.to_string().contains("excludes 0"), "{e}");
     // Malformed files name the file.
     let e = optimize::limits_from_toml_str(&model, "[[limits]]\nexpr = \"q9\"\n", "x.toml")
@@ -312,7 +313,7 @@ fn acceptance_psm_and_mtm_vs_2019() {
             base_frequency_hz: f0,
             ..ExciteOptions::default()
         };
-        let res = optimize::optimize(&model, &base, &model.limits, &o, None).unwrap();
+        let res = optimize::optimize(&model, &base, &model.limits, &o, &Silent).unwrap();
         let secs = started.elapsed().as_secs_f64();
         // The 2019 trajectory pulled inside the limits (toward a static pose, no
         // optimization): the fair feasible comparison, since both 2019 ones violate.
@@ -326,7 +327,7 @@ fn acceptance_psm_and_mtm_vs_2019() {
                 init: Some(old.clone()),
                 ..o.clone()
             },
-            None,
+            &Silent,
         )
         .unwrap();
         eprintln!(

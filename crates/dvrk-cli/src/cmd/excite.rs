@@ -5,11 +5,10 @@
 //! The setpoint CSV (`--csv`) is `time,<measured joint names>`: one period at `--rate`,
 //! positions in the MEASURED joint space (`q_meas = M q`; rad or m), no effort columns.
 
-use std::io::IsTerminal;
-
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::result::write_atomic;
 use dvrk_model::Model;
 
 use super::emit;
@@ -203,30 +202,16 @@ pub fn run(args: Args) -> Result<()> {
     if args.rate <= 0.0 || !args.rate.is_finite() {
         bail!("--rate must be positive");
     }
-    let tty = std::io::stderr().is_terminal();
     let started = std::time::Instant::now();
-    let progress = move |done: usize, total: usize| {
-        if tty {
-            eprint!(
-                "\rexcite: start {done}/{total} done ({:.1} s)",
-                started.elapsed().as_secs_f64()
-            );
-            if done == total {
-                eprintln!();
-            }
-        }
-    };
-    let result = optimize::optimize(&model, &base, &limits, &opts, Some(&progress))?;
+    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())?;
     let doc = serde_json::to_string_pretty(&result.to_json_value())?;
     match &args.out {
-        Some(path) => {
-            std::fs::write(path, doc + "\n").with_context(|| format!("{path}: cannot write"))?
-        }
+        Some(path) => write_atomic(std::path::Path::new(path), &(doc + "\n"))?,
         None => emit(&doc)?,
     }
     if let Some(path) = &args.csv {
         let csv = optimize::setpoints_csv(&model, &result.trajectory, args.rate)?;
-        std::fs::write(path, csv).with_context(|| format!("{path}: cannot write"))?;
+        write_atomic(std::path::Path::new(path), &csv)?;
     }
     let ev = &result.evaluation;
     let w = ev.feasibility.worst.as_ref();

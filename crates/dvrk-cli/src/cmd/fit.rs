@@ -99,7 +99,9 @@ pub fn read_log(
     if !mcap.topics.is_empty() && format != LogFormat::Mcap {
         bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
     }
-    let traj = log::read_with(path, Some(format), rate, &mcap.options())?;
+    let traj = crate::progress::Bars::new().spin(&format!("reading {path}"), || {
+        log::read_with(path, Some(format), rate, &mcap.options())
+    })?;
     Ok(traj)
 }
 
@@ -209,7 +211,13 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::Sdp => Method::Sdp,
     };
     settings.test_window = args.test_window;
-    let mut result = dvrk_ident::fit(&model, &train, test.as_ref(), &settings)?;
+    let mut result = dvrk_ident::fit::fit_with_progress(
+        &model,
+        &train,
+        test.as_ref(),
+        &settings,
+        &crate::progress::Bars::new(),
+    )?;
     result
         .inputs
         .push(InputInfo::from_file("train", Path::new(&args.log))?);

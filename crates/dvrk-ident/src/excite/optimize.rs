@@ -39,7 +39,6 @@
 )]
 
 use std::f64::consts::PI;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dvrk_model::expr::{Expr, Scope};
 use dvrk_model::{BaseParameters, Limit, Model, Workspace};
@@ -1056,14 +1055,14 @@ pub fn objective_and_gradient(
     Some((v, g))
 }
 
-/// Optimizes an excitation trajectory. `progress(done, total)` is called after each
-/// start (from worker threads).
+/// Optimizes an excitation trajectory. `progress` counts the starts done (reported
+/// from the worker threads).
 pub fn optimize(
     model: &Model,
     base: &BaseParameters,
     limits: &[Limit],
     opts: &ExciteOptions,
-    progress: Option<&(dyn Fn(usize, usize) + Sync)>,
+    progress: &dyn crate::progress::Progress,
 ) -> Result<Excitation, ExciteError> {
     let n = model.dof();
     let order = opts.order;
@@ -1095,20 +1094,18 @@ pub fn optimize(
     let samples = (opts.samples_per_harmonic.max(1) * order).max(base.rank().div_ceil(n) + 1);
     let cgrid = Grid::uniform((40 * order).max(200), order, f0);
     let dense = dense_grid(order, f0, opts.check_rate_hz);
-    let done = AtomicUsize::new(0);
+    progress.stage("optimizing (starts)", Some(opts.starts as u64));
     let results: Vec<Option<(f64, Vec<f64>)>> = (0..opts.starts)
         .into_par_iter()
         .map(|start| {
             let out = run_start(
                 model, base, opts, &rows, &xs, &cgrid, &dense, samples, start,
             );
-            let d = done.fetch_add(1, Ordering::SeqCst) + 1;
-            if let Some(p) = progress {
-                p(d, opts.starts);
-            }
+            progress.advance(1);
             out
         })
         .collect();
+    progress.finish();
     let mut best: Option<(f64, Vec<f64>)> = None;
     for (obj, x) in results.iter().flatten() {
         if best.as_ref().is_none_or(|(b, _)| obj < b) {

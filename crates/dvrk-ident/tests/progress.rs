@@ -1,0 +1,87 @@
+//! The fit and the excitation optimizer announce their stages and count all their work,
+//! so the CLI's bars end at 100 %.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+use dvrk_ident::excite::optimize::{optimize, ExciteOptions};
+use dvrk_ident::fit::{fit_with_progress, prepare};
+use dvrk_ident::progress::Progress;
+use dvrk_ident::{FitSettings, Method};
+use dvrk_model::Model;
+
+#[derive(Default)]
+struct Recorder {
+    stages: Mutex<Vec<(String, Option<u64>)>>,
+    units: AtomicU64,
+    finished: AtomicU64,
+}
+
+impl Progress for Recorder {
+    fn stage(&self, name: &str, total: Option<u64>) {
+        self.stages.lock().unwrap().push((name.into(), total));
+    }
+    fn advance(&self, units: u64) {
+        self.units.fetch_add(units, Ordering::Relaxed);
+    }
+    fn finish(&self) {
+        self.finished.fetch_add(1, Ordering::Relaxed);
+    }
+}
+
+fn example() -> dvrk_ident::Trajectory {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples/psm_excitation.mcap");
+    dvrk_ident::log::read(path, None, None).unwrap()
+}
+
+#[test]
+fn fit_counts_every_sample_of_every_pass() {
+    let model = Model::builtin("psm").unwrap();
+    let log = example();
+    for (method, passes) in [(Method::Ols, 1u64), (Method::Irls, 4), (Method::Sdp, 1)] {
+        let mut settings = FitSettings {
+            method,
+            irls_iterations: 3,
+            ..FitSettings::default()
+        };
+        settings.processing.filter = None;
+        let samples = prepare(&model, &log, &settings.processing).unwrap().len() as u64;
+        let rec = Recorder::default();
+        fit_with_progress(&model, &log, None, &settings, &rec).unwrap();
+        let stages = rec.stages.lock().unwrap().clone();
+        let assembling = stages
+            .iter()
+            .find(|(n, _)| n.starts_with("assembling"))
+            .unwrap();
+        assert_eq!(assembling.1, Some(passes * samples), "{method:?}");
+        assert_eq!(rec.units.load(Ordering::Relaxed), passes * samples);
+        assert_eq!(
+            stages.iter().any(|(n, _)| n.contains("semidefinite")),
+            method == Method::Sdp
+        );
+        // Every stage ends.
+        assert_eq!(rec.finished.load(Ordering::Relaxed), stages.len() as u64);
+    }
+}
+
+#[test]
+fn optimizer_counts_its_starts() {
+    let model = Model::builtin("psm_simplified").unwrap();
+    let base = model.base_parameters().unwrap();
+    let opts = ExciteOptions {
+        order: 2,
+        base_frequency_hz: 0.2,
+        starts: 3,
+        iterations_per_stage: 5,
+        ..ExciteOptions::default()
+    };
+    let rec = Recorder::default();
+    optimize(&model, &base, &model.limits, &opts, &rec).unwrap();
+    assert_eq!(
+        *rec.stages.lock().unwrap(),
+        [("optimizing (starts)".to_string(), Some(3))]
+    );
+    assert_eq!(rec.units.load(Ordering::Relaxed), 3);
+    assert_eq!(rec.finished.load(Ordering::Relaxed), 1);
+}
