@@ -234,7 +234,7 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
 fn excitation_figure_shows_limits_and_combinations() {
     let model = Model::builtin("psm").unwrap();
     let traj = FourierTrajectory::from_json_file(examples().join("psm_trajectory.json")).unwrap();
-    let fig = figures::excitation_figure(&model, &traj, 100.0);
+    let fig = figures::excitation_figure(&model, &traj, &model.limits, 100.0);
     let single = model
         .limits
         .iter()

@@ -8,8 +8,10 @@
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::report::figures::excitation_figure;
+use dvrk_ident::report::write_figure;
 use dvrk_ident::result::write_atomic;
-use dvrk_model::Model;
+use dvrk_model::{Limit, Model};
 
 use super::emit;
 
@@ -87,6 +89,10 @@ pub struct Args {
     /// Evaluate this trajectory file instead of optimizing
     #[arg(long, value_name = "TRAJ.json")]
     pub evaluate: Option<String>,
+    /// Write a preview plot of the trajectory (one period, with the position limits):
+    /// .svg or .png
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<String>,
     /// With --evaluate: take this trajectory (e.g. psm_one) from a 2019 coefficient file
     #[arg(long, value_name = "NAME", requires = "evaluate")]
     pub pick: Option<String>,
@@ -149,6 +155,10 @@ fn print_evaluation(ev: &Evaluation, json: bool) -> Result<()> {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(path) = &args.plot {
+        // Refuse a bad plot path before minutes of optimization, not after.
+        dvrk_ident::report::plot::ImageFormat::from_path(std::path::Path::new(path))?;
+    }
     let model = Model::load(&args.robot)?;
     let base = model.base_parameters()?;
     let limits = match &args.limits {
@@ -175,6 +185,9 @@ pub fn run(args: Args) -> Result<()> {
             args.samples_per_harmonic,
             args.check_rate,
         )?;
+        if let Some(path) = &args.plot {
+            plot(&model, &traj, &limits, path)?;
+        }
         return print_evaluation(&ev, args.json);
     }
 
@@ -213,6 +226,9 @@ pub fn run(args: Args) -> Result<()> {
         let csv = optimize::setpoints_csv(&model, &result.trajectory, args.rate)?;
         write_atomic(std::path::Path::new(path), &csv)?;
     }
+    if let Some(path) = &args.plot {
+        plot(&model, &result.trajectory, &limits, path)?;
+    }
     let ev = &result.evaluation;
     let w = ev.feasibility.worst.as_ref();
     eprintln!(
@@ -234,5 +250,12 @@ pub fn run(args: Args) -> Result<()> {
         )),
         started.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+/// The preview figure of `traj` against `limits`, 500 samples per second.
+fn plot(model: &Model, traj: &FourierTrajectory, limits: &[Limit], path: &str) -> Result<()> {
+    let figure = excitation_figure(model, traj, limits, 500.0);
+    write_figure(&figure, std::path::Path::new(path))?;
     Ok(())
 }

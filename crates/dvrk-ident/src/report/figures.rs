@@ -2,7 +2,7 @@
 //! predicted torques, raw vs processed signals, base parameters with their
 //! uncertainty, and an excitation trajectory against its limits.
 
-use dvrk_model::Model;
+use dvrk_model::{Limit, Model};
 use nalgebra::DMatrix;
 
 use super::plot::{colors, Panel, PanelGrid, Series, SeriesStyle};
@@ -185,8 +185,14 @@ pub fn base_parameter_figure(result: &FitResult) -> PanelGrid {
 
 /// One period of an excitation trajectory sampled at `rate_hz`: one panel per
 /// coordinate, plus one per limit on a combination of coordinates (e.g. the PSM jaw
-/// opening), with the position limits as dashed lines.
-pub fn excitation_figure(model: &Model, traj: &FourierTrajectory, rate_hz: f64) -> PanelGrid {
+/// opening), with the position limits of `limits` (usually `model.limits`) as dashed
+/// lines.
+pub fn excitation_figure(
+    model: &Model,
+    traj: &FourierTrajectory,
+    limits: &[Limit],
+    rate_hz: f64,
+) -> PanelGrid {
     let count = ((traj.period_s() * rate_hz).round() as usize).max(2);
     let time: Vec<f64> = (0..=count)
         .map(|k| k as f64 * traj.period_s() / count as f64)
@@ -214,7 +220,7 @@ pub fn excitation_figure(model: &Model, traj: &FourierTrajectory, rate_hz: f64) 
             hlines: Vec::new(),
         })
         .collect();
-    for limit in &model.limits {
+    for limit in limits {
         let Some([lo, hi]) = limit.position else {
             continue;
         };

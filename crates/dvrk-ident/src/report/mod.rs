@@ -187,7 +187,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
             .into());
         }
         figures.push(render_both(
-            &figures::excitation_figure(model, traj, 200.0),
+            &figures::excitation_figure(model, traj, &model.limits, 200.0),
             "excitation",
             "Excitation trajectory over one period, with the position limits (dashed).",
         )?);
