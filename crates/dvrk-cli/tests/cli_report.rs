@@ -193,3 +193,61 @@ fn progress_bars_stay_off_pipes_and_quiet_is_global() {
         assert_eq!(err, "", "{extra:?}");
     }
 }
+
+/// A fit with `--stribeck` records it in its settings, so `validate` and `report`
+/// rebuild the same extended model and reproduce its metrics.
+#[test]
+fn stribeck_fit_is_read_back_by_validate_and_report() {
+    let dir = temp_dir("stribeck");
+    let out = dir.join("r.json");
+    let log = example();
+    let (ok, _, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--cutoff",
+        "none",
+        "--method",
+        "sdp",
+        "--stribeck",
+        "0.2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let result: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert_eq!(result["settings"]["stribeck_velocity"], 0.2);
+    let params = result["parameters"].as_object().unwrap();
+    assert!(params.contains_key("Fs1") && params.contains_key("Fs16"));
+    let (ok, stdout, err) = run(&[
+        "validate",
+        out.to_str().unwrap(),
+        &log,
+        "--cutoff",
+        "none",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let again = v["validations"][0]["metrics"]["relative_error"]
+        .as_array()
+        .unwrap();
+    let train = result["metrics"]["train"]["relative_error"]
+        .as_array()
+        .unwrap();
+    for (a, b) in again.iter().zip(train) {
+        assert!((a.as_f64().unwrap() - b.as_f64().unwrap()).abs() < 1e-12);
+    }
+    let (ok, _, err) = run(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        dir.join("rep").to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let html = std::fs::read_to_string(dir.join("rep/report.html")).unwrap();
+    assert!(html.contains("<td class=l>Fs16</td>"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

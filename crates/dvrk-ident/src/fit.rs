@@ -54,6 +54,22 @@ pub struct FitSettings {
     pub irls_iterations: usize,
     /// Tikhonov weight of the SDP toward zero, relative (see `estimate::sdp`).
     pub sdp_regularization: f64,
+    /// Adds a Stribeck term `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` with this velocity (rad/s or
+    /// m/s) to every friction element of the model that has none (see
+    /// [`FitSettings::model`]). `None`: the model as described.
+    pub stribeck_velocity: Option<f64>,
+}
+
+impl FitSettings {
+    /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
+    /// of [`FitSettings::stribeck_velocity`]. Everything that reads a result back
+    /// (validate, report, export) goes through here so the parameters line up.
+    pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
+        Ok(match self.stribeck_velocity {
+            Some(v) => std::borrow::Cow::Owned(model.with_stribeck(v)?),
+            None => std::borrow::Cow::Borrowed(model),
+        })
+    }
 }
 
 impl Default for FitSettings {
@@ -64,9 +80,14 @@ impl Default for FitSettings {
             test_window: None,
             irls_iterations: 5,
             sdp_regularization: SdpOptions::default().regularization,
+            stribeck_velocity: None,
         }
     }
 }
+
+/// Friction and motor inertia count as non-negative down to `-ELEMENT_TOLERANCE`
+/// (N·m, N·m·s/rad, kg·m²): Clarabel's feasibility tolerance is 1e-8 relative.
+pub const ELEMENT_TOLERANCE: f64 = 1e-9;
 
 /// Processed samples in model coordinates, known forces subtracted from the torques.
 #[derive(Clone, Debug)]
@@ -290,6 +311,8 @@ pub fn fit_with_progress(
     settings: &FitSettings,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {
+    let model_cow = settings.model(model)?;
+    let model: &Model = &model_cow;
     progress.stage("processing", None);
     let data = prepare(model, train, &settings.processing)?;
     let test_data = match test {
@@ -435,9 +458,17 @@ fn build_result(
             std: estimate.std[i],
         })
         .collect();
+    // Sign conditions hold to the solver's feasibility tolerance: an interior-point
+    // solution sits a hair outside a bound that is active at zero.
+    let tol = -ELEMENT_TOLERANCE;
     let elements_ok = model.params.iter().zip(&params).all(|(p, v)| match p.kind {
-        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= 0.0,
+        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
         _ => true,
+    }) && model.frames.iter().all(|f| match &f.friction {
+        Some(fr) => fr
+            .stribeck
+            .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
+        None => true,
     });
     FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),

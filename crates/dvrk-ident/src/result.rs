@@ -117,7 +117,8 @@ pub struct FitResult {
     pub links: Vec<LinkResult>,
     pub base_parameters: Vec<BaseParameterResult>,
     pub consistency: Vec<Consistency>,
-    /// Every link pseudo-inertia positive definite and friction/motor inertia ≥ 0.
+    /// Every link pseudo-inertia positive definite, friction/motor inertia ≥ 0 and, with
+    /// a Stribeck term, `Fc + Fs ≥ 0`.
     pub physically_consistent: bool,
     pub solver: SolverInfo,
     /// Row weights per coordinate used by the estimator (1/N·m or 1/N).
@@ -138,6 +139,18 @@ impl FitResult {
             self.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
             "result",
         )?)
+    }
+
+    /// The model this result's parameters belong to: its recorded robot (or `robot`
+    /// instead), with the fit's model options (Stribeck terms) applied.
+    pub fn model(&self, robot: Option<&str>) -> Result<dvrk_model::Model, IdentError> {
+        let robot = robot.unwrap_or_else(|| {
+            self.robot_source
+                .strip_prefix("builtin:")
+                .unwrap_or(&self.robot_source)
+        });
+        let model = dvrk_model::Model::load(robot)?;
+        Ok(self.settings.model(&model)?.into_owned())
     }
 
     pub fn to_json(&self) -> String {

@@ -75,6 +75,8 @@ struct FrameDesc {
     inertia: bool,
     #[serde(default)]
     friction: bool,
+    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
+    stribeck_velocity: Option<NumOrExpr>,
     #[serde(default)]
     motor_inertia: bool,
     spring: Option<String>,
@@ -283,6 +285,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     let mut names: Vec<String> = vec!["base".into()];
     let mut frames = Vec::with_capacity(desc.frames.len());
     let mut params: Vec<Param> = Vec::new();
+    let mut stribeck: Vec<(usize, f64)> = Vec::new();
     for (i, fd) in desc.frames.iter().enumerate() {
         let idx = i + 1;
         let place = format!("frame {idx} ({})", fd.name);
@@ -399,10 +402,33 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
                     frame: idx,
                 });
             }
-            Some(Friction { param: p0 })
+            Some(Friction {
+                param: p0,
+                stribeck: None,
+            })
         } else {
             None
         };
+        if let Some(v) = &fd.stribeck_velocity {
+            if !fd.friction {
+                return Err(ModelError::field(
+                    file,
+                    &place,
+                    "stribeck_velocity",
+                    "needs `friction = true` on the frame",
+                ));
+            }
+            let v = ctx.number(&place, "stribeck_velocity", v)?;
+            if !(v > 0.0 && v.is_finite()) {
+                return Err(ModelError::field(
+                    file,
+                    &place,
+                    "stribeck_velocity",
+                    format!("must be positive (rad/s or m/s), got {v}"),
+                ));
+            }
+            stribeck.push((idx, v));
+        }
         let motor_inertia = if fd.motor_inertia {
             need_motion("motor_inertia")?;
             if value.terms.len() != 1 {
@@ -577,7 +603,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
                 .any(|f| f.kind == JointKind::Prismatic && f.value.terms.iter().any(|t| t.0 == k))
         })
         .collect();
-    Ok(Model {
+    let mut model = Model {
         name: desc.name,
         source: file.to_string(),
         coordinates: desc.coordinates,
@@ -595,5 +621,10 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         fixed: Vec::new(),
         post_identity: Vec::new(),
     }
-    .finish())
+    .finish();
+    // Stribeck parameters come after all the others, as `Model::with_stribeck` adds them.
+    for (frame, v) in stribeck {
+        model.add_stribeck(frame, v)?;
+    }
+    Ok(model)
 }

@@ -145,9 +145,12 @@ impl Model {
             if terms.dissipative {
                 if let Some(fr) = &f.friction {
                     let sd = f.value.dot(dq);
-                    let force = params[fr.param] * sign0(sd)
+                    let mut force = params[fr.param] * sign0(sd)
                         + params[fr.param + 1] * sd
                         + params[fr.param + 2];
+                    if let Some(st) = &fr.stribeck {
+                        force += params[st.param] * st.factor(sd);
+                    }
                     for &(k, c) in &f.value.terms {
                         tau[k] += c * force;
                     }

@@ -8,6 +8,7 @@
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::expr::{Affine, Expr};
+use crate::ModelError;
 
 /// How a frame moves relative to its parent.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,11 +90,34 @@ impl Transform {
     }
 }
 
-/// Coulomb, viscous and offset friction on a frame's joint value.
+/// Coulomb, viscous and offset friction on a frame's joint value, optionally with a
+/// Stribeck term.
 #[derive(Clone, Debug)]
 pub struct Friction {
     /// Index of `Fc` in the parameter vector; `Fv`, `Fo` follow.
     pub param: usize,
+    pub stribeck: Option<Stribeck>,
+}
+
+/// The Stribeck term `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` of a friction element: the extra
+/// friction at low speed that the Coulomb + viscous model misses at every velocity
+/// reversal. Linear in `Fs` for a fixed Stribeck velocity `vs`, so it stays a regressor
+/// column.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Stribeck {
+    /// Index of `Fs` (N·m or N) in the parameter vector.
+    pub param: usize,
+    /// Stribeck velocity `vs` (rad/s or m/s), positive.
+    pub velocity: f64,
+}
+
+impl Stribeck {
+    /// The regressor factor of `Fs` at joint rate `sd`.
+    #[inline]
+    pub fn factor(&self, sd: f64) -> f64 {
+        let x = sd / self.velocity;
+        crate::dynamics::sign0(sd) * (-x * x).exp()
+    }
 }
 
 /// A motor (rotor) inertia on a frame whose joint value is `ratio·q[coordinate] + const`.
@@ -167,6 +191,8 @@ pub struct Nominal {
     pub fc: Option<f64>,
     pub fv: Option<f64>,
     pub fo: Option<f64>,
+    /// Stribeck friction (N·m or N), for frames with a Stribeck term.
+    pub fs: Option<f64>,
     pub ia: Option<f64>,
     pub k: Option<f64>,
 }
@@ -268,6 +294,8 @@ pub enum ParamKind {
     Offset,
     MotorInertia,
     Spring,
+    /// Stribeck friction `Fs` (see [`Stribeck`]).
+    Stribeck,
 }
 
 /// Name, kind and owning frame of one parameter.
@@ -405,6 +433,9 @@ impl Model {
                 pi[fr.param] = nom.fc.unwrap_or(0.0);
                 pi[fr.param + 1] = nom.fv.unwrap_or(0.0);
                 pi[fr.param + 2] = nom.fo.unwrap_or(0.0);
+                if let Some(st) = &fr.stribeck {
+                    pi[st.param] = nom.fs.unwrap_or(0.0);
+                }
             }
             if let Some(mi) = &f.motor_inertia {
                 pi[mi.param] = nom.ia?;
@@ -426,6 +457,71 @@ impl Model {
                 }
             }
         }
+    }
+
+    /// Adds a Stribeck term of velocity `velocity` (rad/s or m/s) to the friction
+    /// element of frame `frame` (1-based); its `Fs{frame}` parameter is appended to the
+    /// parameter vector. Errors if the frame has no friction, already has a Stribeck
+    /// term, or the velocity is not positive and finite.
+    pub fn add_stribeck(&mut self, frame: usize, velocity: f64) -> Result<(), ModelError> {
+        let numeric = |message: String| ModelError::Numeric {
+            model: self.name.clone(),
+            message,
+        };
+        if !(velocity > 0.0 && velocity.is_finite()) {
+            return Err(numeric(format!(
+                "Stribeck velocity must be positive and finite, got {velocity}"
+            )));
+        }
+        let p = self.params.len();
+        let Some(f) = frame.checked_sub(1).and_then(|i| self.frames.get_mut(i)) else {
+            return Err(numeric(format!("no frame {frame}")));
+        };
+        let Some(fr) = f.friction.as_mut() else {
+            return Err(numeric(format!(
+                "frame {frame} ({}) has no friction to add a Stribeck term to",
+                f.name
+            )));
+        };
+        if fr.stribeck.is_some() {
+            return Err(numeric(format!(
+                "frame {frame} ({}) already has a Stribeck term",
+                f.name
+            )));
+        }
+        fr.stribeck = Some(Stribeck { param: p, velocity });
+        self.params.push(Param {
+            name: format!("Fs{frame}"),
+            kind: ParamKind::Stribeck,
+            frame,
+        });
+        Ok(())
+    }
+
+    /// This model with a Stribeck term of velocity `velocity` (rad/s or m/s) on every
+    /// friction element that has none (e.g. `dvrk-ident fit --stribeck 0.1`).
+    ///
+    /// ```
+    /// let psm = dvrk_model::Model::builtin("psm").unwrap();
+    /// let with = psm.with_stribeck(0.1).unwrap();
+    /// // One Fs per friction element (10 on the PSM), appended after the others.
+    /// assert_eq!(with.n_params(), psm.n_params() + 10);
+    /// assert_eq!(with.param_names()[psm.n_params()], "Fs1");
+    /// ```
+    pub fn with_stribeck(&self, velocity: f64) -> Result<Model, ModelError> {
+        let mut m = self.clone();
+        let frames: Vec<usize> = (1..=m.frames.len())
+            .filter(|&i| {
+                m.frames[i - 1]
+                    .friction
+                    .as_ref()
+                    .is_some_and(|fr| fr.stribeck.is_none())
+            })
+            .collect();
+        for i in frames {
+            m.add_stribeck(i, velocity)?;
+        }
+        Ok(m)
     }
 
     /// True if the model has known forces to subtract before fitting.

@@ -94,6 +94,12 @@ impl Model {
                     out[base + 1] += a * sd;
                     out[base + 2] += a;
                 }
+                if let Some(st) = &fr.stribeck {
+                    let v = st.factor(sd);
+                    for &(coord, a) in &f.value.terms {
+                        out[coord * p + st.param] += a * v;
+                    }
+                }
             }
             if let Some(mi) = &f.motor_inertia {
                 out[mi.coordinate * p + mi.param] += mi.ratio * ddq[mi.coordinate];

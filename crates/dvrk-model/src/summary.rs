@@ -16,7 +16,8 @@ pub struct FrameSummary {
     pub joint: String,
     /// The joint value as an affine expression of the coordinates (rad or m).
     pub value: String,
-    /// Element flags: `inertia`, `friction`, `motor_inertia`, `spring`, `known_force`.
+    /// Element flags: `inertia`, `friction`, `stribeck`, `motor_inertia`, `spring`,
+    /// `known_force`.
     pub elements: Vec<String>,
 }
 
@@ -66,6 +67,10 @@ impl Model {
                     for (on, name) in [
                         (f.inertia.is_some(), "inertia"),
                         (f.friction.is_some(), "friction"),
+                        (
+                            f.friction.as_ref().is_some_and(|fr| fr.stribeck.is_some()),
+                            "stribeck",
+                        ),
                         (f.motor_inertia.is_some(), "motor_inertia"),
                         (f.spring.is_some(), "spring"),
                         (f.known_force.is_some(), "known_force"),

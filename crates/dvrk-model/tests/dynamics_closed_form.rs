@@ -771,3 +771,72 @@ fn builtin_springs_closed_form() {
         );
     }
 }
+
+// ------------------------------------------------------------------------------------
+// Stribeck friction
+// ------------------------------------------------------------------------------------
+
+/// `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` on a coupled value, from the description and from
+/// `with_stribeck`, equal to the closed form in inverse dynamics and in `H·π`.
+#[test]
+fn stribeck_friction_closed_form() {
+    let described = load(&ELEMENTS.replace(
+        "theta = \"2*q1 - q2\"\nfriction = true",
+        "theta = \"2*q1 - q2\"\nfriction = true\nstribeck_velocity = 0.2",
+    ));
+    assert_eq!(described.param_names().last().unwrap(), "Fs3");
+    assert_eq!(described.n_params(), 11);
+    let all = load(ELEMENTS).with_stribeck(0.2).unwrap();
+    assert_eq!(&all.param_names()[10..], ["Fs3", "Fs4"]);
+    assert!(load(ELEMENTS).with_stribeck(0.0).is_err());
+    assert!(all.clone().add_stribeck(3, 0.1).is_err(), "already has one");
+    assert!(
+        all.clone().add_stribeck(1, 0.1).is_err(),
+        "frame 1 has no friction"
+    );
+
+    let (fs3, fs4, vs) = (0.3, -0.15, 0.2);
+    let mut pi = ELEMENT_PARAMS.to_vec();
+    pi.extend([fs3, fs4]);
+    let mut ws = Workspace::new(&all);
+    for (q, dq, ddq) in [
+        ([0.4, -0.3], [0.07, -0.02], [1.0, 2.0]),
+        ([-1.1, 0.8], [-0.3, 0.9], [-0.5, 0.25]),
+        ([0.2, 0.1], [0.5, 1.0], [0.0, 0.0]),
+    ] {
+        let mut expect = elements_expected(&q, &dq, &ddq);
+        let sd3 = 2.0 * dq[0] - dq[1];
+        let f3 = fs3 * sign0(sd3) * (-(sd3 / vs).powi(2)).exp();
+        expect[0] += 2.0 * f3;
+        expect[1] -= f3;
+        expect[1] += fs4 * sign0(dq[1]) * (-(dq[1] / vs).powi(2)).exp();
+        let tau = id(&all, &mut ws, &pi, &q, &dq, &ddq);
+        assert_close("stribeck tau", &tau, &expect, 1e-13);
+        let hp = h_times(&all, &mut ws, &q, &dq, &ddq, &pi);
+        assert_close("stribeck H·pi", &hp, &expect, 1e-13);
+    }
+
+    let err = Model::from_toml_str(
+        &ELEMENTS.replace(
+            "name = \"motor1\"",
+            "name = \"motor1\"\nstribeck_velocity = 0.1",
+        ),
+        "stribeck.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("stribeck.toml") && err.contains("stribeck_velocity"),
+        "{err}"
+    );
+    let err = Model::from_toml_str(
+        &ELEMENTS.replace(
+            "d = \"q2\"\nfriction = true",
+            "d = \"q2\"\nfriction = true\nstribeck_velocity = -1",
+        ),
+        "neg.toml",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(err.contains("must be positive"), "{err}");
+}

@@ -275,21 +275,26 @@ pub struct FitResultPy {
 }
 
 impl FitResultPy {
-    /// The model: `robot`, else the one fitted with, else loaded from `robot_source`.
+    /// The model: `robot`, else the one fitted with, else loaded from `robot_source`;
+    /// with the fit's model options (Stribeck terms) applied.
     fn model(&self, py: Python<'_>, robot: Option<&Bound<'_, Robot>>) -> PyResult<Arc<Model>> {
-        if let Some(r) = robot {
-            return Ok(r.get().model.clone());
-        }
-        if let Some(r) = &self.robot {
-            return Ok(r.get().model.clone());
-        }
-        let source = self.inner.robot_source.clone();
-        let name = source
-            .strip_prefix("builtin:")
-            .unwrap_or(&source)
-            .to_string();
-        let model = py.detach(move || Model::load(&name)).map_err(from_model)?;
-        Ok(Arc::new(model))
+        let base = if let Some(r) = robot {
+            r.get().model.clone()
+        } else if let Some(r) = &self.robot {
+            r.get().model.clone()
+        } else {
+            let source = self.inner.robot_source.clone();
+            let name = source
+                .strip_prefix("builtin:")
+                .unwrap_or(&source)
+                .to_string();
+            Arc::new(py.detach(move || Model::load(&name)).map_err(from_model)?)
+        };
+        let extended = match self.inner.settings.model(&base).map_err(from_ident)? {
+            std::borrow::Cow::Borrowed(_) => None,
+            std::borrow::Cow::Owned(m) => Some(Arc::new(m)),
+        };
+        Ok(extended.unwrap_or(base))
     }
 
     fn params(&self, model: &Model) -> PyResult<Vec<f64>> {

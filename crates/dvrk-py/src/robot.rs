@@ -75,7 +75,9 @@ impl Robot {
 /// A parameter vector from an array, a `{name: value}` mapping or a fit `Result`.
 pub fn params_of(py: Python<'_>, model: &Model, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
     if let Ok(r) = obj.cast::<crate::fit::FitResultPy>() {
-        return r.get().inner.params_for(model).map_err(from_ident);
+        let inner = &r.get().inner;
+        let model = inner.settings.model(model).map_err(from_ident)?;
+        return inner.params_for(&model).map_err(from_ident);
     }
     if obj.cast::<PyDict>().is_ok() || obj.hasattr("keys")? {
         let items = obj.call_method0("items")?;

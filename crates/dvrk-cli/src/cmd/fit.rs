@@ -188,6 +188,10 @@ pub struct Args {
     /// Also write the parameters in the 2019 package's params.json layout (atomically)
     #[arg(long)]
     pub wpi_json: Option<String>,
+    /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
+    /// or m/s) to every friction element (parameters Fs<frame>)
+    #[arg(long, value_name = "VS")]
+    pub stribeck: Option<f64>,
     /// Also write figures and report.html into this folder (see `dvrk-ident report`)
     #[arg(long, value_name = "DIR")]
     pub report: Option<String>,
@@ -211,6 +215,8 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::Sdp => Method::Sdp,
     };
     settings.test_window = args.test_window;
+    settings.stribeck_velocity = args.stribeck;
+    let model = settings.model(&model)?.into_owned();
     let mut result = dvrk_ident::fit::fit_with_progress(
         &model,
         &train,

@@ -66,19 +66,3 @@ pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
     }
     Ok(model.params_from_named(values, path)?)
 }
-
-/// The model a result was fitted for (its recorded robot source), unless `robot`
-/// overrides it.
-pub fn result_model(
-    result: &dvrk_ident::FitResult,
-    robot: Option<&str>,
-) -> Result<dvrk_model::Model> {
-    let robot = robot.map(str::to_string).unwrap_or_else(|| {
-        result
-            .robot_source
-            .strip_prefix("builtin:")
-            .unwrap_or(&result.robot_source)
-            .to_string()
-    });
-    Ok(dvrk_model::Model::load(&robot)?)
-}

@@ -65,7 +65,7 @@ pub fn write(
 
 pub fn run(args: Args) -> Result<()> {
     let result = FitResult::read(Path::new(&args.result))?;
-    let model = super::result_model(&result, args.robot.as_deref())?;
+    let model = result.model(args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
     settings.test_window = result.settings.test_window;
     let mut result = result;

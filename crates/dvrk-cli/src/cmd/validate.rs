@@ -32,7 +32,7 @@ pub struct Args {
 
 pub fn run(args: Args) -> Result<()> {
     let result = FitResult::read(std::path::Path::new(&args.result))?;
-    let model = super::result_model(&result, args.robot.as_deref())?;
+    let model = result.model(args.robot.as_deref())?;
     let params = result.params_for(&model)?;
     // The processing the result was fitted with, unless overridden on the command line.
     let settings = args.log_args.settings(result.settings.clone())?;

@@ -200,7 +200,7 @@ fn unit_class(kind: ParamKind) -> usize {
         ParamKind::Inertia { index } if index < 6 => 0,
         ParamKind::Inertia { index } if index < 9 => 1,
         ParamKind::Inertia { .. } => 2,
-        ParamKind::Coulomb | ParamKind::Offset => 3,
+        ParamKind::Coulomb | ParamKind::Offset | ParamKind::Stribeck => 3,
         ParamKind::Viscous => 4,
         ParamKind::MotorInertia => 5,
         ParamKind::Spring => 6,
@@ -266,6 +266,12 @@ fn bounds_rows(model: &Model, override_bounds: bool) -> Result<Linear, SdpError>
             let (fc, fv, fo) = (fr.param, fr.param + 1, fr.param + 2);
             lin.le(vec![(fc, -1.0)], -g.fc_min, "global bound fc_min")?;
             lin.le(vec![(fv, -1.0)], -g.fv_min, "global bound fv_min")?;
+            // Friction opposes motion at low speed too: Fc + Fs ≥ 0. Fs itself may be
+            // negative (a friction that builds up with speed, or the smoothing the
+            // low-pass filter gives the measured Coulomb steps).
+            if let Some(st) = &fr.stribeck {
+                lin.le(vec![(fc, -1.0), (st.param, -1.0)], 0.0, "Fc + Fs ≥ 0")?;
+            }
             if !override_bounds {
                 if let Some(v) = b.fc_max {
                     lin.le(vec![(fc, 1.0)], v, &place("fc_max"))?;

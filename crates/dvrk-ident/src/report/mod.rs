@@ -120,8 +120,9 @@ fn slug(text: &str) -> String {
 /// low-pass filter, so both line up). The tree is drawn at the first sample of the
 /// first log (at zero without logs).
 pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
-    let model = input.model;
     let result = input.result;
+    let model_cow = result.settings.model(input.model)?;
+    let model: &Model = &model_cow;
     let params = result.params_for(model)?;
     let processing = &result.settings.processing;
     let mut unfiltered = processing.clone();
