@@ -35,6 +35,8 @@ enum Command {
     Convert(cmd::convert::Args),
     /// Optimize an excitation trajectory under the limits, or evaluate one.
     Excite(cmd::excite::Args),
+    /// Write an identified model as URDF (and/or the 2019 params.json layout).
+    Export(cmd::export::Args),
 }
 
 fn main() -> ExitCode {
@@ -47,6 +49,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),
         Command::Excite(args) => cmd::excite::run(args),
+        Command::Export(args) => cmd::export::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
