@@ -54,6 +54,12 @@ impl Model {
 /// Whether a robot file is a URDF (by its `.urdf` extension or an XML start) rather than a
 /// TOML description: how [`Model::load`] decides, for callers that need the original
 /// document again (e.g. to export identified inertials into it).
+///
+/// ```
+/// use std::path::Path;
+/// assert!(dvrk_model::is_urdf_document(Path::new("arm.xml"), "<robot name=\"arm\"/>"));
+/// assert!(!dvrk_model::is_urdf_document(Path::new("arm.toml"), "name = \"arm\""));
+/// ```
 pub fn is_urdf_document(path: &Path, text: &str) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
