@@ -41,6 +41,8 @@ enum Command {
     Excite(cmd::excite::Args),
     /// Figures and a self-contained HTML report of a result on its logs.
     Report(cmd::report::Args),
+    /// Write an identified model as URDF (and/or the 2019 params.json layout).
+    Export(cmd::export::Args),
 }
 
 fn main() -> ExitCode {
@@ -55,6 +57,7 @@ fn main() -> ExitCode {
         Command::Convert(args) => cmd::convert::run(args),
         Command::Excite(args) => cmd::excite::run(args),
         Command::Report(args) => cmd::report::run(args),
+        Command::Export(args) => cmd::export::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

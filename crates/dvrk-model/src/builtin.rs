@@ -43,15 +43,26 @@ impl Model {
             file: name_or_path.to_string(),
             source,
         })?;
-        let is_urdf = path
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
-            || text.trim_start().starts_with("<?xml")
-            || text.trim_start().starts_with("<robot");
-        if is_urdf {
+        if is_urdf_document(path, &text) {
             Model::from_urdf_str(&text, name_or_path)
         } else {
             Model::from_toml_str(&text, name_or_path)
         }
     }
+}
+
+/// Whether a robot file is a URDF (by its `.urdf` extension or an XML start) rather than a
+/// TOML description: how [`Model::load`] decides, for callers that need the original
+/// document again (e.g. to export identified inertials into it).
+///
+/// ```
+/// use std::path::Path;
+/// assert!(dvrk_model::is_urdf_document(Path::new("arm.xml"), "<robot name=\"arm\"/>"));
+/// assert!(!dvrk_model::is_urdf_document(Path::new("arm.toml"), "name = \"arm\""));
+/// ```
+pub fn is_urdf_document(path: &Path, text: &str) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+        || text.trim_start().starts_with("<?xml")
+        || text.trim_start().starts_with("<robot")
 }

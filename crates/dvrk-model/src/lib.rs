@@ -38,9 +38,11 @@ mod model;
 mod regressor;
 mod summary;
 mod urdf;
+mod urdf_export;
 mod workspace;
 
 pub use base::BaseParameters;
+pub use builtin::is_urdf_document;
 pub use description::Convention;
 pub use dynamics::sign0;
 pub use error::ModelError;

@@ -3,6 +3,7 @@
 pub mod cable_fit;
 pub mod convert;
 pub mod excite;
+pub mod export;
 pub mod fit;
 pub mod model;
 pub mod report;
@@ -10,6 +11,8 @@ pub mod simulate;
 pub mod validate;
 
 use anyhow::{bail, Context, Result};
+use dvrk_ident::FitResult;
+use dvrk_model::Model;
 
 /// Writes `text` and a newline to stdout. A closed pipe (`dvrk-ident ... | head`) is
 /// reported as an I/O error that `main` treats as a normal end, not a panic.
@@ -65,4 +68,39 @@ pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
         values.push((k.as_str(), x));
     }
     Ok(model.params_from_named(values, path)?)
+}
+
+/// A fit result with the model it was fitted for and its parameter vector.
+pub struct LoadedResult {
+    pub result: FitResult,
+    /// The robot as given to [`Model::load`]: a built-in name or a path.
+    pub robot: String,
+    pub model: Model,
+    pub params: Vec<f64>,
+}
+
+/// Reads a result file and rebuilds its model: `robot` if given, else the robot the
+/// result records (built-in name or description path), with the fit's model options.
+pub fn load_result(path: &str, robot: Option<&str>) -> Result<LoadedResult> {
+    let result = FitResult::read(std::path::Path::new(path))?;
+    let robot = robot.map(str::to_string).unwrap_or_else(|| {
+        result
+            .robot_source
+            .strip_prefix("builtin:")
+            .unwrap_or(&result.robot_source)
+            .to_string()
+    });
+    // Through the result, so the fit's model options (Stribeck terms) are applied.
+    let model = result
+        .model(Some(&robot))
+        .with_context(|| format!("{path}: robot of the result"))?;
+    let params = result
+        .params_for(&model)
+        .with_context(|| format!("{path}: parameters for robot `{robot}`"))?;
+    Ok(LoadedResult {
+        result,
+        robot,
+        model,
+        params,
+    })
 }

@@ -64,8 +64,8 @@ pub fn write(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let result = FitResult::read(Path::new(&args.result))?;
-    let model = result.model(args.robot.as_deref())?;
+    let super::LoadedResult { result, model, .. } =
+        super::load_result(&args.result, args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
     settings.test_window = result.settings.test_window;
     let mut result = result;

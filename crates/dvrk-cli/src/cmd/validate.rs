@@ -4,11 +4,10 @@ use std::fmt::Write as _;
 
 use anyhow::Result;
 use dvrk_ident::fit::{joint_metrics, prepare};
-use dvrk_ident::FitResult;
 use serde_json::json;
 
-use super::emit;
 use super::fit::LogArgs;
+use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
 pub struct Args {
@@ -31,9 +30,12 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let result = FitResult::read(std::path::Path::new(&args.result))?;
-    let model = result.model(args.robot.as_deref())?;
-    let params = result.params_for(&model)?;
+    let LoadedResult {
+        result,
+        model,
+        params,
+        ..
+    } = load_result(&args.result, args.robot.as_deref())?;
     // The processing the result was fitted with, unless overridden on the command line.
     let settings = args.log_args.settings(result.settings.clone())?;
     let mut reports = Vec::new();

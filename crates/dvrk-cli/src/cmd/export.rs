@@ -1,0 +1,121 @@
+//! `dvrk-ident export RESULT --urdf OUT.urdf [--from ROBOT.urdf] [--wpi-json OUT.json]`:
+//! an identified model for the tools that read URDF or the 2019 params.json.
+
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use dvrk_ident::result::{wpi_params_json, write_atomic};
+use dvrk_model::Model;
+
+use super::{emit, load_result, LoadedResult};
+
+#[derive(clap::Args)]
+#[command(group(
+    clap::ArgGroup::new("outputs")
+        .args(["urdf", "wpi_json"])
+        .required(true)
+        .multiple(true)
+))]
+pub struct Args {
+    /// Result file written by `dvrk-ident fit --out`
+    pub result: String,
+    /// Write a URDF with the identified inertials here (atomically)
+    #[arg(long, value_name = "OUT.urdf")]
+    pub urdf: Option<String>,
+    /// URDF whose <inertial> elements are replaced, everything else kept (default: the
+    /// robot's own file when the robot is a URDF; for a description, a URDF is generated)
+    #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
+    pub from: Option<String>,
+    /// Write the parameters in the 2019 package's params.json layout here (atomically)
+    #[arg(long, value_name = "OUT.json")]
+    pub wpi_json: Option<String>,
+    /// Robot (default: the one the result was fitted for)
+    #[arg(long)]
+    pub robot: Option<String>,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let loaded = load_result(&args.result, args.robot.as_deref())?;
+    // Everything is built before anything is written: an error leaves no output.
+    let urdf = match &args.urdf {
+        Some(out) => Some((out, urdf_text(&loaded, args.from.as_deref(), &args.result)?)),
+        None => None,
+    };
+    let wpi = match &args.wpi_json {
+        Some(out) => {
+            let doc = wpi_params_json(&loaded.model, &loaded.params);
+            Some((out, serde_json::to_string_pretty(&doc)?))
+        }
+        None => None,
+    };
+    let mut report = String::new();
+    if let Some((out, (text, how))) = &urdf {
+        write_atomic(Path::new(out), text)?;
+        report += &format!("wrote {out}: {how}\n");
+    }
+    if let Some((out, text)) = &wpi {
+        write_atomic(Path::new(out), text)?;
+        report += &format!("wrote {out}: 2019 params.json layout\n");
+    }
+    emit(&report)
+}
+
+/// The URDF text and how it was made: the inertials replaced in `from` (or the robot's own
+/// URDF), else generated from the description.
+fn urdf_text(loaded: &LoadedResult, from: Option<&str>, result: &str) -> Result<(String, String)> {
+    let LoadedResult {
+        result: fit,
+        robot,
+        model,
+        params,
+    } = loaded;
+    let hint = || {
+        if fit.method == "sdp" {
+            String::new()
+        } else {
+            format!(
+                " (this {} fit identifies the base parameters only, its link parameters \
+                 are a representative, not rigid bodies; `dvrk-ident fit --method sdp` \
+                 gives physically consistent ones)",
+                fit.method
+            )
+        }
+    };
+    let context = || format!("{result}: cannot export to URDF{}", hint());
+    let source = from.map(str::to_string).or_else(|| robot_urdf(robot));
+    match source {
+        Some(path) => {
+            let text =
+                std::fs::read_to_string(&path).with_context(|| format!("{path}: cannot read"))?;
+            let out = model
+                .urdf_with_inertials(params, &text, &path)
+                .with_context(context)?;
+            Ok((
+                out,
+                format!(
+                    "{path} with the identified inertials of robot `{}`",
+                    model.name
+                ),
+            ))
+        }
+        None => {
+            let out = model.to_urdf(params).with_context(context)?;
+            Ok((
+                out,
+                format!(
+                    "URDF generated from robot `{}` (what URDF cannot hold is listed in its header)",
+                    model.name
+                ),
+            ))
+        }
+    }
+}
+
+/// The robot's own URDF file, when it was loaded from one.
+fn robot_urdf(robot: &str) -> Option<String> {
+    if Model::builtin_names().contains(&robot) {
+        return None;
+    }
+    let text = std::fs::read_to_string(robot).ok()?;
+    dvrk_model::is_urdf_document(Path::new(robot), &text).then(|| robot.to_string())
+}

@@ -1,0 +1,420 @@
+//! `export` end to end: a fit of the bundled PSM log exported as a generated URDF, a fit
+//! of a URDF robot exported into its own URDF, both read back with the importer and
+//! compared torque for torque with the result's model; the params.json layout equal to
+//! `fit --wpi-json`'s; errors naming the file, exiting non-zero and writing nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+use dvrk_ident::FitResult;
+use dvrk_model::{Model, ParamKind, Workspace};
+use nalgebra::DMatrix;
+
+fn run(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
+        .args(args)
+        .output()
+        .expect("run dvrk-ident");
+    (
+        out.status.success(),
+        String::from_utf8(out.stdout).unwrap(),
+        String::from_utf8(out.stderr).unwrap(),
+    )
+}
+
+fn example(name: &str) -> String {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../examples")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn tmp(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dvrk-cli-export-{}-{test}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Fits the bundled PSM log (noise-free processing, quick) and writes the result and the
+/// params.json of `fit --wpi-json`.
+fn fit_example(dir: &Path, method: &str) -> (PathBuf, PathBuf) {
+    let (out, wpi) = (
+        dir.join(format!("{method}.json")),
+        dir.join(format!("{method}_params.json")),
+    );
+    let (ok, _, err) = run(&[
+        "fit",
+        &example("psm_excitation.mcap"),
+        "--robot",
+        "psm",
+        "--cutoff",
+        "none",
+        "--method",
+        method,
+        "--out",
+        &s(&out),
+        "--wpi-json",
+        &s(&wpi),
+    ]);
+    assert!(ok, "{err}");
+    (out, wpi)
+}
+
+/// Largest |τ_a − τ_b| (rigid-body inverse dynamics, coordinates matched by name) over
+/// deterministic pseudo-random states.
+fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64]) -> f64 {
+    let perm: Vec<usize> = b
+        .coordinates
+        .iter()
+        .map(|c| a.coordinates.iter().position(|d| d == c).unwrap())
+        .collect();
+    let (mut wa, mut wb) = (Workspace::new(a), Workspace::new(b));
+    let n = a.dof();
+    let mut x = 0.25f64;
+    let mut next = || {
+        x = (x * 9301.0 + 0.49297).fract();
+        2.0 * x - 1.0
+    };
+    let mut worst = 0.0f64;
+    for _ in 0..30 {
+        let q: Vec<f64> = (0..n).map(|_| next()).collect();
+        let dq: Vec<f64> = (0..n).map(|_| 2.0 * next()).collect();
+        let ddq: Vec<f64> = (0..n).map(|_| 3.0 * next()).collect();
+        let pick = |v: &[f64]| perm.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        let (mut ta, mut tb) = (vec![0.0; n], vec![0.0; n]);
+        a.inverse_dynamics(&mut wa, pa, &q, &dq, &ddq, &mut ta);
+        b.inverse_dynamics(&mut wb, pb, &pick(&q), &pick(&dq), &pick(&ddq), &mut tb);
+        assert!(
+            ta.iter().any(|t| t.abs() > 1e-3),
+            "the test moves something"
+        );
+        for (j, &k) in perm.iter().enumerate() {
+            worst = worst.max((ta[k] - tb[j]).abs());
+        }
+    }
+    worst
+}
+
+fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
+    model
+        .params
+        .iter()
+        .zip(params)
+        .map(|(p, &v)| match p.kind {
+            ParamKind::Inertia { .. } => v,
+            _ => 0.0,
+        })
+        .collect()
+}
+
+#[test]
+fn psm_fit_exports_a_generated_urdf_and_the_2019_layout() {
+    let dir = tmp("psm");
+    let (result, fit_wpi) = fit_example(&dir, "sdp");
+    let (urdf, wpi) = (dir.join("psm.urdf"), dir.join("params.json"));
+    let (ok, stdout, err) = run(&[
+        "export",
+        &s(&result),
+        "--urdf",
+        &s(&urdf),
+        "--wpi-json",
+        &s(&wpi),
+    ]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("generated from robot `psm`"), "{stdout}");
+    assert_eq!(
+        std::fs::read(&wpi).unwrap(),
+        std::fs::read(&fit_wpi).unwrap(),
+        "export --wpi-json writes what fit --wpi-json wrote"
+    );
+    // The URDF's rigid-body dynamics are the result's.
+    let model = Model::builtin("psm").unwrap();
+    let fit = FitResult::read(&result).unwrap();
+    let params = rigid_only(&model, &fit.params_for(&model).unwrap());
+    let back = Model::load(&s(&urdf)).unwrap();
+    let worst = torque_difference(&model, &params, &back, &back.nominal_parameters().unwrap());
+    eprintln!("psm sdp result → generated URDF: max |Δτ| = {worst:e}");
+    assert!(worst < 1e-9, "torques differ by {worst:e}");
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    assert!(
+        text.contains("motor inertia Ia11"),
+        "header notes motor inertia"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+const ARM: &str = r#"<?xml version="1.0"?>
+<!-- a three-joint arm for the export test -->
+<robot name="arm">
+  <link name="world"/>
+  <link name="l1">
+    <inertial>
+      <origin xyz="0 0 0.1" rpy="0 0 0"/>
+      <mass value="2"/>
+      <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.01"/>
+    </inertial>
+    <visual><geometry><cylinder radius="0.05" length="0.2"/></geometry></visual>
+  </link>
+  <joint name="j1" type="revolute">
+    <origin xyz="0 0 0.1" rpy="0 0 0"/>
+    <parent link="world"/>
+    <child link="l1"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="20" velocity="2"/>
+  </joint>
+  <link name="l2">
+    <inertial>
+      <origin xyz="0.15 0 0" rpy="0 0 0"/>
+      <mass value="1.5"/>
+      <inertia ixx="0.002" ixy="0" ixz="0" iyy="0.012" iyz="0" izz="0.012"/>
+    </inertial>
+  </link>
+  <joint name="j2" type="revolute">
+    <origin xyz="0 0 0.2" rpy="1.5707963267948966 0 0"/>
+    <parent link="l1"/>
+    <child link="l2"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="20" velocity="2"/>
+  </joint>
+  <link name="l3">
+    <inertial>
+      <origin xyz="0.1 0.01 0" rpy="0.2 0 0"/>
+      <mass value="0.8"/>
+      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/>
+    </inertial>
+  </link>
+  <joint name="j3" type="revolute">
+    <origin xyz="0.3 0 0" rpy="0 0 0"/>
+    <parent link="l2"/>
+    <child link="l3"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-2" upper="2" effort="20" velocity="2"/>
+  </joint>
+</robot>
+"#;
+
+/// A noise-free log of the arm (2019 CSV layout, model coordinates) with its URDF's
+/// nominal parameters.
+fn write_arm_log(urdf: &Path, log: &Path) {
+    let model = Model::load(&s(urdf)).unwrap();
+    let pi = model.nominal_parameters().unwrap();
+    let n = model.dof();
+    let rate = 200.0;
+    let count = 2000;
+    let time = uniform_time(count, rate);
+    let (mut q, mut dq, mut tau) = (
+        DMatrix::zeros(count, n),
+        DMatrix::zeros(count, n),
+        DMatrix::zeros(count, n),
+    );
+    let mut ws = Workspace::new(&model);
+    let (mut a, mut b, mut c, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for (k, &tk) in time.iter().enumerate() {
+        for j in 0..n {
+            let (w1, w2, p) = (0.7 + 0.17 * j as f64, 1.9 + 0.23 * j as f64, j as f64);
+            a[j] = 0.8 * (w1 * tk + p).sin() + 0.3 * (w2 * tk + 2.0 * p).sin();
+            b[j] = 0.8 * w1 * (w1 * tk + p).cos() + 0.3 * w2 * (w2 * tk + 2.0 * p).cos();
+            c[j] = -0.8 * w1 * w1 * (w1 * tk + p).sin() - 0.3 * w2 * w2 * (w2 * tk + 2.0 * p).sin();
+        }
+        model.inverse_dynamics(&mut ws, &pi, &a, &b, &c, &mut t);
+        for j in 0..n {
+            q[(k, j)] = a[j];
+            dq[(k, j)] = b[j];
+            tau[(k, j)] = t[j];
+        }
+    }
+    let traj = Trajectory {
+        time,
+        q,
+        dq: Some(dq),
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: "test".into(),
+    };
+    dvrk_ident::log::write(log, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+}
+
+#[test]
+fn urdf_robot_fit_exports_into_its_own_urdf() {
+    let dir = tmp("arm");
+    let urdf = dir.join("arm.urdf");
+    std::fs::write(&urdf, ARM).unwrap();
+    let log = dir.join("arm.csv");
+    write_arm_log(&urdf, &log);
+    let result = dir.join("result.json");
+    let (ok, _, err) = run(&[
+        "fit",
+        &s(&log),
+        "--robot",
+        &s(&urdf),
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--cutoff",
+        "none",
+        "--trim",
+        "10",
+        "--out",
+        &s(&result),
+    ]);
+    assert!(ok, "{err}");
+    let model = Model::load(&s(&urdf)).unwrap();
+    let fit = FitResult::read(&result).unwrap();
+    let params = fit.params_for(&model).unwrap();
+    // Without --from: the robot's own URDF; with --from: a copy elsewhere.
+    let copy = dir.join("copy_of_arm.urdf");
+    std::fs::copy(&urdf, &copy).unwrap();
+    for (out, from) in [("own.urdf", None), ("from.urdf", Some(&copy))] {
+        let out = dir.join(out);
+        let mut args = vec!["export".to_string(), s(&result), "--urdf".into(), s(&out)];
+        if let Some(f) = from {
+            args.extend(["--from".to_string(), s(f)]);
+        }
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (ok, stdout, err) = run(&args);
+        assert!(ok, "{err}");
+        assert!(stdout.contains("with the identified inertials"), "{stdout}");
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert!(text.contains("<!-- a three-joint arm for the export test -->"));
+        assert!(text.contains(r#"<cylinder radius="0.05" length="0.2"/>"#));
+        let back = Model::load(&s(&out)).unwrap();
+        let nominal = back.nominal_parameters().unwrap();
+        let worst_param = nominal
+            .iter()
+            .zip(&params)
+            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+        let worst = torque_difference(&model, &params, &back, &nominal);
+        eprintln!(
+            "arm sdp result → {}: max |Δπ| = {worst_param:e}, max |Δτ| = {worst:e}",
+            out.display()
+        );
+        assert!(worst_param < 1e-12 && worst < 1e-9);
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Runs a failing command: non-zero exit, every word in stderr, no output files (nor
+/// temporaries) in `dir` besides `keep`.
+#[track_caller]
+fn assert_fails(args: &[&str], words: &[&str], dir: &Path, keep: &[&Path]) {
+    let (ok, _, err) = run(args);
+    assert!(!ok, "{args:?} succeeded");
+    assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    for w in words {
+        assert!(err.contains(w), "{args:?}: `{w}` not in: {err}");
+    }
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        assert!(keep.contains(&p.as_path()), "{} was written", p.display());
+    }
+}
+
+#[test]
+fn export_errors_name_the_file_and_write_nothing() {
+    let dir = tmp("errors");
+    let inputs = tmp("errors-inputs");
+    let (ols, ols_wpi) = fit_example(&inputs, "ols");
+    let (urdf, wpi) = (s(&dir.join("out.urdf")), s(&dir.join("out.json")));
+
+    // A least-squares representative is not a set of rigid bodies: no URDF, a hint, and
+    // not the params.json either (nothing is written when any output fails).
+    let r = s(&ols);
+    assert_fails(
+        &["export", &r, "--urdf", &urdf, "--wpi-json", &wpi],
+        &[
+            &r,
+            "cannot export to URDF",
+            "mass 0 with first moment",
+            "--method sdp",
+        ],
+        &dir,
+        &[],
+    );
+    // Its params.json alone is what fit wrote.
+    let (ok, _, err) = run(&["export", &r, "--wpi-json", &wpi]);
+    assert!(ok, "{err}");
+    assert_eq!(
+        std::fs::read(&wpi).unwrap(),
+        std::fs::read(&ols_wpi).unwrap()
+    );
+    std::fs::remove_file(&wpi).unwrap();
+
+    // Missing result file.
+    let missing = s(&inputs.join("nope.json"));
+    assert_fails(
+        &["export", &missing, "--urdf", &urdf],
+        &[&missing],
+        &dir,
+        &[],
+    );
+    // Not a result.
+    let garbage = inputs.join("garbage.json");
+    std::fs::write(&garbage, "{\"parameters\": [1, 2").unwrap();
+    assert_fails(
+        &["export", &s(&garbage), "--urdf", &urdf],
+        &[&s(&garbage), "not a dvrk-ident result"],
+        &dir,
+        &[],
+    );
+    // A parameter that is not a number (NaN is written as null by JSON writers).
+    let sdp = fit_example(&inputs, "sdp").0;
+    let text = std::fs::read_to_string(&sdp).unwrap();
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["parameters"]["m2"] = serde_json::Value::Null;
+    let nan = inputs.join("nan.json");
+    std::fs::write(&nan, serde_json::to_string(&doc).unwrap()).unwrap();
+    assert_fails(
+        &["export", &s(&nan), "--urdf", &urdf],
+        &[&s(&nan)],
+        &dir,
+        &[],
+    );
+    // A parameter of another robot.
+    let mut doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+    doc["parameters"].as_object_mut().unwrap().remove("m2");
+    let short = inputs.join("short.json");
+    std::fs::write(&short, serde_json::to_string(&doc).unwrap()).unwrap();
+    assert_fails(
+        &["export", &s(&short), "--urdf", &urdf],
+        &[&s(&short), "missing parameters: m2"],
+        &dir,
+        &[],
+    );
+    // --from a URDF that is not the robot.
+    let other = inputs.join("other.urdf");
+    std::fs::write(&other, ARM).unwrap();
+    assert_fails(
+        &["export", &s(&sdp), "--urdf", &urdf, "--from", &s(&other)],
+        &[&s(&other), "do not match robot `psm`"],
+        &dir,
+        &[],
+    );
+    // --from a file that does not exist.
+    let absent = s(&inputs.join("absent.urdf"));
+    assert_fails(
+        &["export", &s(&sdp), "--urdf", &urdf, "--from", &absent],
+        &[&absent, "cannot read"],
+        &dir,
+        &[],
+    );
+    // No output asked for: a usage error.
+    assert_fails(&["export", &s(&sdp)], &["--urdf", "--wpi-json"], &dir, &[]);
+    // --from without --urdf.
+    assert_fails(
+        &["export", &s(&sdp), "--wpi-json", &wpi, "--from", &s(&other)],
+        &["--urdf"],
+        &dir,
+        &[],
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&inputs).unwrap();
+}

@@ -1,0 +1,1060 @@
+//! URDF export of identified parameters, for the tools that read URDF rather than our
+//! descriptions (Pinocchio, KDL, RBDL, Drake, Gazebo, MuJoCo's importer).
+//!
+//! Two modes, because a robot's URDF is usually much more than its dynamics:
+//!
+//! - [`Model::urdf_with_inertials`] (replace mode) rewrites the URDF a model was imported
+//!   from with the `<inertial>` of every identified link replaced, and nothing else
+//!   touched. It splices the text at the byte spans `quick-xml` reports, because a round
+//!   trip through `urdf-rs`'s types would drop what they do not model (comments,
+//!   `<transmission>`, `<gazebo>`, `<ros2_control>`, the element order). The import
+//!   ([`Model::from_urdf_str`]) makes every model frame the URDF frame of the joint's child
+//!   link (`pre·post` is the joint origin, the motion is about the normalized axis), so the
+//!   identified values go in unchanged: mass, centre of mass as the inertial origin, the
+//!   inertia about it in the link axes, rpy zero.
+//! - [`Model::to_urdf`] (generate mode) writes a URDF of a whole description, e.g. the DH
+//!   trees of the dVRK PSM and MTM with their parallelograms and tendon couplings, with
+//!   `urdf_rs::write_to_string`. Every model frame becomes a link of the same name (the
+//!   base is the root link). A frame's pose relative to its parent is
+//!   `pre·J(s)·post` with `J` the rotation about (translation along) z by the joint
+//!   value `s = a·q + c`; because `post` commutes with `J` whenever it keeps the z axis
+//!   line (always for the modified-DH and URDF frames), the joint origin is `pre·post`
+//!   and the axis is z seen from after `post`; otherwise `post` becomes a fixed joint
+//!   after a massless `{frame}_motion` link. Then:
+//!   - each coordinate `q_k` is carried by exactly one non-mimic joint named after it: the
+//!     first frame whose value is exactly `q_k`, else `q_k + c` (the constant folded into
+//!     the origin), else `−q_k + c` (axis −z), else a massless link `{q_k}_coordinate`
+//!     hung from the root, so that the URDF's coordinates are the model's;
+//!   - every other frame driven by one coordinate, `s = a·q_k + c`, is a
+//!     `<mimic joint="q_k" multiplier="a" offset="c">`;
+//!   - a frame driven by several coordinates (the MTM parallelogram, `q3 − q2`) is a chain
+//!     of joints about the same axis through the same point, one mimic per coordinate,
+//!     separated by massless links `{frame}_{q_k}` with identity origins. Rotations about
+//!     one axis (translations along it) add, so the chain's total motion is exactly `s`;
+//!     no mimic ever refers to another mimic;
+//!   - Coulomb and viscous friction of a one-coordinate frame go into
+//!     `<dynamics friction="Fc" damping="Fv">` of its joint. Offset friction, the friction
+//!     of multi-coordinate frames, motor inertias, springs and known forces have no URDF
+//!     element; the file's header comment lists their values.
+//!
+//!   Joint limits come from the description's `[[limits]]` on one coordinate (for the
+//!   dVRK descriptions, the 2019 excitation ranges), mapped through each joint's
+//!   multiplier and offset; a revolute joint without a known range is `continuous`, a
+//!   prismatic one gets a `<limit>` without `lower`/`upper`.
+//!   Effort limits are unknown to an identification and written as 0, as URDF
+//!   exporters commonly do (urdfdom requires the attribute).
+//!
+//! Numbers are written with Rust's shortest round-trip formatting, so the written
+//! values are the computed ones; joint-origin rotations are converted to rpy by removing
+//! one angle at a time, which reproduces the rotation to rounding also at pitch ±π/2.
+
+use std::collections::{HashMap, HashSet};
+use std::fmt::Write as _;
+
+use nalgebra::{Matrix3, Rotation3, Vector3};
+use serde::Serialize;
+
+use crate::error::ModelError;
+use crate::inertia::{
+    barycentric_from_standard, pseudo_inertia_min_eigenvalue, standard_from_barycentric,
+    StandardInertia,
+};
+use crate::model::*;
+
+/// URDF tools assume this gravity along −z of the root link (m/s²).
+const URDF_GRAVITY: f64 = 9.81;
+
+/// Roll, pitch, yaw of a rotation in the URDF convention `R = Rz(yaw)·Ry(pitch)·Rx(roll)`.
+///
+/// Each angle is removed from the matrix before the next is read, so the decomposition
+/// reproduces `r` to rounding everywhere, including at and near pitch = ±π/2 where DH
+/// frames often sit and the textbook `asin` formula loses half the digits.
+pub(crate) fn rpy_from_rotation(r: &Matrix3<f64>) -> [f64; 3] {
+    // At pitch ±π/2 only yaw − roll (or yaw + roll) is defined; yaw = 0 there, rather than
+    // an angle read from rounding noise, keeps the numbers readable.
+    let yaw = if r[(1, 0)].hypot(r[(0, 0)]) < 1e-15 {
+        0.0
+    } else {
+        r[(1, 0)].atan2(r[(0, 0)])
+    };
+    let n = Rotation3::from_axis_angle(&Vector3::z_axis(), -yaw).matrix() * r;
+    let pitch = (-n[(2, 0)]).atan2(n[(0, 0)]);
+    let m = Rotation3::from_axis_angle(&Vector3::y_axis(), -pitch).matrix() * n;
+    let roll = m[(2, 1)].atan2(m[(2, 2)]);
+    // `+ 0.0` turns −0 into 0: `rpy="0 -0 0"` is right but reads like a mistake.
+    [roll + 0.0, pitch + 0.0, yaw + 0.0]
+}
+
+fn pose(t: &Transform) -> urdf_rs::Pose {
+    urdf_rs::Pose {
+        xyz: urdf_rs::Vec3(t.translation.map(|x| x + 0.0).into()),
+        rpy: urdf_rs::Vec3(rpy_from_rotation(&t.rotation)),
+    }
+}
+
+fn motion(kind: JointKind, s: f64) -> Transform {
+    match kind {
+        JointKind::Revolute => Transform::rot_z(s),
+        JointKind::Prismatic => Transform::trans(0.0, 0.0, s),
+        JointKind::Fixed => Transform::identity(),
+    }
+}
+
+fn urdf_inertial(s: Option<&StandardInertia>) -> urdf_rs::Inertial {
+    match s {
+        None => urdf_rs::Inertial::default(),
+        Some(s) => {
+            let i = &s.inertia_com;
+            urdf_rs::Inertial {
+                origin: urdf_rs::Pose {
+                    xyz: urdf_rs::Vec3(s.com),
+                    rpy: urdf_rs::Vec3([0.0; 3]),
+                },
+                mass: urdf_rs::Mass { value: s.mass },
+                inertia: urdf_rs::Inertia {
+                    ixx: i[0],
+                    ixy: i[1],
+                    ixz: i[2],
+                    iyy: i[3],
+                    iyz: i[4],
+                    izz: i[5],
+                },
+            }
+        }
+    }
+}
+
+/// Position range and speed bound of a coordinate from the description's limits.
+#[derive(Clone, Copy, Default)]
+struct Range {
+    position: Option<[f64; 2]>,
+    velocity: Option<f64>,
+}
+
+impl Range {
+    /// The range of `a·q + c` for `q` in this range.
+    fn map(&self, a: f64, c: f64) -> Range {
+        Range {
+            position: self.position.map(|[lo, hi]| {
+                let (x, y) = (a * lo + c, a * hi + c);
+                [x.min(y), x.max(y)]
+            }),
+            velocity: self.velocity.map(|v| a.abs() * v),
+        }
+    }
+
+    fn limit(&self) -> urdf_rs::JointLimit {
+        let [lower, upper] = self.position.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
+        urdf_rs::JointLimit {
+            lower,
+            upper,
+            effort: 0.0,
+            velocity: self.velocity.unwrap_or(0.0),
+            ..Default::default()
+        }
+    }
+}
+
+/// A joint being written; `None` limit means the joint type has none.
+struct JointSpec {
+    name: String,
+    kind: JointKind,
+    origin: Transform,
+    parent: String,
+    child: String,
+    axis: Vector3<f64>,
+    range: Range,
+    mimic: Option<(String, f64, f64)>,
+    dynamics: Option<urdf_rs::Dynamics>,
+}
+
+/// The URDF being generated, with unique names.
+#[derive(Default)]
+struct Builder {
+    links: Vec<urdf_rs::Link>,
+    joints: Vec<urdf_rs::Joint>,
+    link_names: HashSet<String>,
+    joint_names: HashSet<String>,
+}
+
+impl Builder {
+    fn link(&mut self, name: &str, inertial: Option<&StandardInertia>) -> Result<(), String> {
+        if !self.link_names.insert(name.to_string()) {
+            return Err(format!("two links would be named `{name}`"));
+        }
+        self.links.push(urdf_rs::Link {
+            name: name.to_string(),
+            inertial: urdf_inertial(inertial),
+            visual: Vec::new(),
+            collision: Vec::new(),
+        });
+        Ok(())
+    }
+
+    fn joint(&mut self, j: JointSpec) -> Result<(), String> {
+        if !self.joint_names.insert(j.name.clone()) {
+            return Err(format!("two joints would be named `{}`", j.name));
+        }
+        let joint_type = match j.kind {
+            JointKind::Fixed => urdf_rs::JointType::Fixed,
+            JointKind::Prismatic => urdf_rs::JointType::Prismatic,
+            JointKind::Revolute if j.range.position.is_some() => urdf_rs::JointType::Revolute,
+            JointKind::Revolute => urdf_rs::JointType::Continuous,
+        };
+        self.joints.push(urdf_rs::Joint {
+            name: j.name,
+            joint_type,
+            origin: pose(&j.origin),
+            parent: urdf_rs::LinkName { link: j.parent },
+            child: urdf_rs::LinkName { link: j.child },
+            axis: urdf_rs::Axis {
+                xyz: urdf_rs::Vec3(j.axis.map(|x| x + 0.0).into()),
+            },
+            limit: j.range.limit(),
+            calibration: None,
+            dynamics: j.dynamics,
+            mimic: j.mimic.map(|(joint, multiplier, offset)| urdf_rs::Mimic {
+                joint,
+                multiplier: Some(multiplier),
+                offset: (offset != 0.0).then_some(offset),
+            }),
+            safety_controller: None,
+        });
+        Ok(())
+    }
+}
+
+/// XML comments may not contain `--`.
+fn comment_safe(text: &str) -> String {
+    let mut s = text.to_string();
+    while s.contains("--") {
+        s = s.replace("--", "- -");
+    }
+    s
+}
+
+/// The leading whitespace of the line containing `pos`.
+fn line_indent(text: &str, pos: usize) -> &str {
+    let line = &text[text[..pos].rfind('\n').map_or(0, |k| k + 1)..];
+    &line[..line.len() - line.trim_start_matches([' ', '\t']).len()]
+}
+
+/// The indentation of an element starting at `pos`: its line's, or one level deeper when
+/// it starts after other markup on that line.
+fn element_indent(text: &str, pos: usize) -> String {
+    let lead = line_indent(text, pos);
+    let line_start = text[..pos].rfind('\n').map_or(0, |k| k + 1);
+    if line_start + lead.len() == pos {
+        lead.to_string()
+    } else {
+        format!("{lead}  ")
+    }
+}
+
+fn indent_lines(snippet: &str, indent: &str) -> String {
+    snippet.replace('\n', &format!("\n{indent}"))
+}
+
+impl Model {
+    /// Checks a parameter vector before writing it anywhere: right length, all finite.
+    fn check_export_params(&self, params: &[f64]) -> Result<(), ModelError> {
+        let numeric = |message: String| ModelError::Numeric {
+            model: self.name.clone(),
+            message,
+        };
+        if params.len() != self.n_params() {
+            return Err(numeric(format!(
+                "{} parameter values for a model with {} parameters",
+                params.len(),
+                self.n_params()
+            )));
+        }
+        if let Some((p, v)) = self.params.iter().zip(params).find(|(_, v)| !v.is_finite()) {
+            return Err(numeric(format!("parameter {} is not finite ({v})", p.name)));
+        }
+        Ok(())
+    }
+
+    /// Standard inertials per frame index (`None` for the base and frames without link
+    /// inertia), refusing what a URDF `<inertial>` cannot hold exactly: a negative mass,
+    /// or a first moment without mass (a least-squares representative is typically
+    /// such: the base parameters spread over columns with no physical meaning).
+    fn export_inertials(&self, params: &[f64]) -> Result<Vec<Option<StandardInertia>>, ModelError> {
+        let mut out = vec![None];
+        let mut bad = Vec::new();
+        for f in &self.frames {
+            let Some(p0) = f.inertia else {
+                out.push(None);
+                continue;
+            };
+            let p = &params[p0..p0 + 10];
+            let m = p[9];
+            if m < 0.0 {
+                bad.push(format!("{} (mass {m})", f.name));
+            } else if m == 0.0 && p[6..9].iter().any(|&x| x != 0.0) {
+                bad.push(format!(
+                    "{} (mass 0 with first moment [{}, {}, {}])",
+                    f.name, p[6], p[7], p[8]
+                ));
+            } else {
+                let s = standard_from_barycentric(p);
+                let back = barycentric_from_standard(s.mass, s.com, s.inertia_com);
+                let scale = p.iter().fold(1.0f64, |a, x| a.max(x.abs()));
+                let err = back
+                    .iter()
+                    .zip(p)
+                    .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+                if err > 1e-12 * scale {
+                    bad.push(format!(
+                        "{} (mass {m} too small for its first moment: the centre of mass \
+                         cannot be written exactly)",
+                        f.name
+                    ));
+                }
+                out.push(Some(s));
+                continue;
+            }
+            out.push(None);
+        }
+        if !bad.is_empty() {
+            return Err(ModelError::Numeric {
+                model: self.name.clone(),
+                message: format!(
+                    "cannot write URDF inertials for link{} {}: a URDF inertial is a rigid \
+                     body (mass ≥ 0, no first moment without mass); these parameters are not \
+                     (e.g. a least-squares representative of the base parameters), use \
+                     physically consistent ones",
+                    if bad.len() > 1 { "s" } else { "" },
+                    bad.join(", ")
+                ),
+            });
+        }
+        Ok(out)
+    }
+
+    /// The URDF `urdf` (the text the model was imported from, named `file` in errors) with
+    /// the `<inertial>` of every link carrying identified inertia replaced by `params`,
+    /// everything else byte for byte as it was. Links without identified inertia (the
+    /// root) keep theirs; a link without `<inertial>` gets one.
+    ///
+    /// The URDF's links must be the model's frames (same names, parents and poses), since
+    /// the parameters are expressed in those frames.
+    ///
+    /// ```
+    /// use dvrk_model::{inertia, Model};
+    /// let urdf = r#"<robot name="pendulum">
+    ///   <link name="world"/>
+    ///   <link name="arm"><visual><geometry><box size="0.1 0.1 1"/></geometry></visual></link>
+    ///   <joint name="swing" type="continuous">
+    ///     <parent link="world"/><child link="arm"/><axis xyz="0 1 0"/>
+    ///   </joint>
+    /// </robot>"#;
+    /// let model = Model::from_urdf_str(urdf, "pendulum.urdf").unwrap();
+    /// let mut params = vec![0.0; model.n_params()];
+    /// let bary = inertia::barycentric_from_standard(2.0, [0.0, 0.0, -0.5], [0.1, 0.0, 0.0, 0.1, 0.0, 0.01]);
+    /// params[..10].copy_from_slice(&bary);
+    /// let out = model.urdf_with_inertials(&params, urdf, "pendulum.urdf").unwrap();
+    /// assert!(out.contains(r#"<mass value="2"/>"#));
+    /// assert!(out.contains(r#"<box size="0.1 0.1 1"/>"#)); // the rest is untouched
+    /// let back = Model::from_urdf_str(&out, "out.urdf").unwrap();
+    /// assert_eq!(back.nominal_parameters().unwrap(), params);
+    /// ```
+    pub fn urdf_with_inertials(
+        &self,
+        params: &[f64],
+        urdf: &str,
+        file: &str,
+    ) -> Result<String, ModelError> {
+        self.check_export_params(params)?;
+        let inertials = self.export_inertials(params)?;
+        let theirs = Model::from_urdf_str(urdf, file)?;
+        self.check_same_links(&theirs, file)?;
+        let mut snippets = HashMap::new();
+        for (f, s) in self.frames.iter().zip(&inertials[1..]) {
+            if let Some(s) = s {
+                let mut text = String::new();
+                let mut ser = quick_xml::se::Serializer::with_root(&mut text, Some("inertial"))
+                    .map_err(|e| self.urdf_error(file, e))?;
+                ser.indent(' ', 2);
+                urdf_inertial(Some(s))
+                    .serialize(ser)
+                    .map_err(|e| self.urdf_error(file, e))?;
+                snippets.insert(f.name.as_str(), text);
+            }
+        }
+        splice_inertials(urdf, file, &snippets)
+    }
+
+    fn urdf_error(&self, file: &str, e: impl std::fmt::Display) -> ModelError {
+        ModelError::Urdf {
+            file: file.to_string(),
+            message: e.to_string(),
+        }
+    }
+
+    /// Whether `theirs` (imported from `file`) has exactly our frames: names, parents,
+    /// joint kinds, coordinates, and poses at a few configurations.
+    fn check_same_links(&self, theirs: &Model, file: &str) -> Result<(), ModelError> {
+        let err = |message: String| ModelError::Urdf {
+            file: file.to_string(),
+            message: format!(
+                "its links do not match robot `{}` ({}): {message}",
+                self.name, self.source
+            ),
+        };
+        let ours: Vec<&str> = self.frames.iter().map(|f| f.name.as_str()).collect();
+        let their: Vec<&str> = theirs.frames.iter().map(|f| f.name.as_str()).collect();
+        let missing: Vec<&str> = ours
+            .iter()
+            .copied()
+            .filter(|n| !their.contains(n))
+            .collect();
+        let extra: Vec<&str> = their
+            .iter()
+            .copied()
+            .filter(|n| !ours.contains(n))
+            .collect();
+        if !missing.is_empty() || !extra.is_empty() {
+            let mut m = String::new();
+            if !missing.is_empty() {
+                m += &format!("no link named {}", missing.join(", "));
+            }
+            if !extra.is_empty() {
+                if !m.is_empty() {
+                    m += "; ";
+                }
+                m += &format!("links not in the robot: {}", extra.join(", "));
+            }
+            return Err(err(m));
+        }
+        let our_names = self.frame_names();
+        let their_names = theirs.frame_names();
+        let index: HashMap<&str, usize> =
+            their.iter().enumerate().map(|(i, n)| (*n, i + 1)).collect();
+        for (i, f) in self.frames.iter().enumerate() {
+            let g = theirs.frame(index[f.name.as_str()]);
+            let (pa, pb) = (&our_names[f.parent], &their_names[g.parent]);
+            if pa != pb {
+                return Err(err(format!(
+                    "link `{}` hangs from `{pb}`, frame {} from `{pa}`",
+                    f.name,
+                    i + 1
+                )));
+            }
+            if f.kind != g.kind {
+                return Err(err(format!(
+                    "joint of link `{}` is {:?}, the robot's is {:?}",
+                    f.name, g.kind, f.kind
+                )));
+            }
+        }
+        let mut coords_ours = self.coordinates.clone();
+        let mut coords_theirs = theirs.coordinates.clone();
+        coords_ours.sort();
+        coords_theirs.sort();
+        if coords_ours != coords_theirs {
+            return Err(err(format!(
+                "joints {:?}, robot coordinates {:?}",
+                theirs.coordinates, self.coordinates
+            )));
+        }
+        let to_theirs: Vec<usize> = theirs
+            .coordinates
+            .iter()
+            .map(|c| self.coordinates.iter().position(|d| d == c).unwrap())
+            .collect();
+        for trial in 0..3 {
+            let q: Vec<f64> = (0..self.dof())
+                .map(|k| 0.37 * trial as f64 * (1.3 * k as f64 + 0.7).sin())
+                .collect();
+            let q_theirs: Vec<f64> = to_theirs.iter().map(|&k| q[k]).collect();
+            let a = self.frame_poses(&q);
+            let b = theirs.frame_poses(&q_theirs);
+            for (i, f) in self.frames.iter().enumerate() {
+                let (x, y) = (&a[i + 1], &b[index[f.name.as_str()]]);
+                let d = (x.rotation - y.rotation)
+                    .abs()
+                    .max()
+                    .max((x.translation - y.translation).abs().max());
+                if d > 1e-9 {
+                    return Err(err(format!(
+                        "link `{}` is not where frame {} is (pose differs by {d:e} at q = {q:?})",
+                        f.name,
+                        i + 1
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// For each coordinate, the frame whose joint carries it and the sign of its
+    /// coefficient: the first frame whose value is exactly `q_k`, else `q_k + c`, else
+    /// `−q_k + c`; `None` when no frame qualifies.
+    fn coordinate_carriers(&self) -> Vec<Option<(usize, f64)>> {
+        (0..self.dof())
+            .map(|k| {
+                self.frames
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, f)| {
+                        f.kind != JointKind::Fixed
+                            && f.value.terms.len() == 1
+                            && f.value.terms[0].0 == k
+                    })
+                    .filter_map(|(i, f)| {
+                        let a = f.value.terms[0].1;
+                        let rank = if a == 1.0 && f.value.offset == 0.0 {
+                            0
+                        } else if a == 1.0 {
+                            1
+                        } else if a == -1.0 {
+                            2
+                        } else {
+                            return None;
+                        };
+                        Some((rank, i + 1, a))
+                    })
+                    .min_by_key(|&(rank, i, _)| (rank, i))
+                    .map(|(_, i, a)| (i, a))
+            })
+            .collect()
+    }
+
+    /// Position ranges and speed bounds of the coordinates, from the limits on a single
+    /// coordinate (intersected when there are several).
+    fn coordinate_ranges(&self) -> Vec<Range> {
+        let mut ranges = vec![Range::default(); self.dof()];
+        for lim in &self.limits {
+            let [(k, a)] = lim.expr.terms[..] else {
+                continue;
+            };
+            let b = lim.expr.offset;
+            let r = &mut ranges[k];
+            if let Some([lo, hi]) = lim.position {
+                let (x, y) = ((lo - b) / a, (hi - b) / a);
+                let (x, y) = (x.min(y), x.max(y));
+                r.position = match r.position {
+                    Some([l, h]) if x.max(l) <= y.min(h) => Some([x.max(l), y.min(h)]),
+                    Some(old) => Some(old),
+                    None => Some([x, y]),
+                };
+            }
+            if let Some([lo, hi]) = lim.velocity {
+                let v = lo.abs().min(hi.abs()) / a.abs();
+                r.velocity = Some(r.velocity.map_or(v, |old: f64| old.min(v)));
+            }
+        }
+        ranges
+    }
+
+    /// A URDF of the whole model with the standard inertial parameters of `params` (the
+    /// full parameter vector): one link per frame, one non-mimic joint per coordinate,
+    /// mimic joints and massless chains for the couplings (see the module documentation
+    /// for the construction and why it is exact). The header comment lists what URDF
+    /// cannot hold (motor inertias, springs, known forces, offset friction).
+    ///
+    /// ```
+    /// use dvrk_model::Model;
+    /// let mtm = Model::builtin("mtm").unwrap();
+    /// let mut params = vec![0.0; mtm.n_params()];
+    /// for &i in mtm.link_frames() {
+    ///     let p0 = mtm.frame(i).inertia.unwrap();
+    ///     params[p0 + 9] = 1.0; // a 1 kg point mass at each frame origin
+    /// }
+    /// let urdf = mtm.to_urdf(&params).unwrap();
+    /// let back = Model::from_urdf_str(&urdf, "mtm.urdf").unwrap();
+    /// assert_eq!(back.coordinates.len(), 7);
+    /// // The forearm turns by q3 − q2: a mimic of q2 then a mimic of q3 about the same axis.
+    /// assert!(urdf.contains(r#"<mimic joint="q2" multiplier="-1""#));
+    /// ```
+    pub fn to_urdf(&self, params: &[f64]) -> Result<String, ModelError> {
+        self.check_export_params(params)?;
+        let inertials = self.export_inertials(params)?;
+        self.generate(params, &inertials)
+            .map_err(|message| ModelError::Urdf {
+                file: self.source.clone(),
+                message,
+            })
+    }
+
+    fn generate(
+        &self,
+        params: &[f64],
+        inertials: &[Option<StandardInertia>],
+    ) -> Result<String, String> {
+        let names = self.frame_names();
+        let ranges = self.coordinate_ranges();
+        let carriers = self.coordinate_carriers();
+        let mut out = Builder::default();
+        let mut notes: Vec<String> = Vec::new();
+        let expr = |a: &crate::expr::Affine| a.display(&self.coordinates);
+
+        // Gravity: URDF tools pull along −z of the root link.
+        let g = self.gravity;
+        if g.norm() == 0.0 {
+            notes.push("the model has no gravity; URDF tools apply their own".into());
+        } else {
+            let down = -Vector3::z();
+            if (g.normalize() - down).norm() > 1e-15 {
+                let root = format!("{}_world", names[0]);
+                out.link(&root, None)?;
+                let r = Rotation3::rotation_between(&g, &down).unwrap_or_else(|| {
+                    Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
+                });
+                out.joint(JointSpec {
+                    name: format!("{}_joint", root),
+                    kind: JointKind::Fixed,
+                    origin: Transform {
+                        rotation: *r.matrix(),
+                        translation: Vector3::zeros(),
+                    },
+                    parent: root.clone(),
+                    child: names[0].clone(),
+                    axis: Vector3::z(),
+                    range: Range::default(),
+                    mimic: None,
+                    dynamics: None,
+                })?;
+            }
+            if (g.norm() - URDF_GRAVITY).abs() > 1e-12 {
+                notes.push(format!(
+                    "gravity is {} m/s² in the model, URDF tools apply their own (usually {URDF_GRAVITY})",
+                    g.norm()
+                ));
+            }
+        }
+        out.link(&names[0], None)?;
+        for (f, s) in self.frames.iter().zip(&inertials[1..]) {
+            out.link(&f.name, s.as_ref())?;
+        }
+        // Coordinates no frame can carry get a massless link of their own.
+        for (k, c) in carriers.iter().enumerate() {
+            if c.is_none() {
+                let link = format!("{}_coordinate", self.coordinates[k]);
+                out.link(&link, None)?;
+                out.joint(JointSpec {
+                    name: self.coordinates[k].clone(),
+                    kind: if self.coordinate_is_length[k] {
+                        JointKind::Prismatic
+                    } else {
+                        JointKind::Revolute
+                    },
+                    origin: Transform::identity(),
+                    parent: names[0].clone(),
+                    child: link,
+                    axis: Vector3::z(),
+                    range: ranges[k],
+                    mimic: None,
+                    dynamics: None,
+                })?;
+            }
+        }
+
+        for (fi, f) in self.frames.iter().enumerate() {
+            let i = fi + 1;
+            let parent = names[f.parent].clone();
+            if f.kind == JointKind::Fixed {
+                out.joint(JointSpec {
+                    name: format!("{}_joint", f.name),
+                    kind: JointKind::Fixed,
+                    origin: self.fixed[i],
+                    parent,
+                    child: f.name.clone(),
+                    axis: Vector3::z(),
+                    range: Range::default(),
+                    mimic: None,
+                    dynamics: None,
+                })?;
+                continue;
+            }
+            // pre·J(s)·post = (pre·post)·J_u(s) when post keeps the z axis line.
+            let fold = match f.kind {
+                JointKind::Revolute => f.post.translation.x == 0.0 && f.post.translation.y == 0.0,
+                _ => true,
+            };
+            let (axis, end) = if fold {
+                (f.post.rotation.transpose() * Vector3::z(), f.name.clone())
+            } else {
+                let end = format!("{}_motion", f.name);
+                out.link(&end, None)?;
+                out.joint(JointSpec {
+                    name: format!("{}_post", f.name),
+                    kind: JointKind::Fixed,
+                    origin: f.post,
+                    parent: end.clone(),
+                    child: f.name.clone(),
+                    axis: Vector3::z(),
+                    range: Range::default(),
+                    mimic: None,
+                    dynamics: None,
+                })?;
+                (Vector3::z(), end)
+            };
+            let origin = |c: f64| {
+                let o = f.pre.compose(&motion(f.kind, c));
+                if fold {
+                    o.compose(&f.post)
+                } else {
+                    o
+                }
+            };
+            let c = f.value.offset;
+            // Friction on a one-coordinate joint value is URDF <dynamics>.
+            let mut dynamics = None;
+            if let Some(fr) = &f.friction {
+                let (fc, fv, fo) = (params[fr.param], params[fr.param + 1], params[fr.param + 2]);
+                let (nc, nv, no) = (
+                    &self.params[fr.param].name,
+                    &self.params[fr.param + 1].name,
+                    &self.params[fr.param + 2].name,
+                );
+                if f.value.terms.len() > 1 {
+                    if fc != 0.0 || fv != 0.0 || fo != 0.0 {
+                        notes.push(format!(
+                        "friction {nc} = {fc}, {nv} = {fv}, {no} = {fo} of frame {} (joint value {}: several coordinates, no single URDF joint)",
+                        f.name,
+                        expr(&f.value)
+                    ));
+                    }
+                } else {
+                    if fc < 0.0 || fv < 0.0 {
+                        notes.push(format!(
+                            "friction {nc} = {fc}, {nv} = {fv} of frame {} (negative, not written as <dynamics>)",
+                            f.name
+                        ));
+                    } else if fc != 0.0 || fv != 0.0 {
+                        dynamics = Some(urdf_rs::Dynamics {
+                            damping: fv,
+                            friction: fc,
+                        });
+                    }
+                    if fo != 0.0 {
+                        notes.push(format!(
+                            "offset friction {no} = {fo} of frame {} (on {})",
+                            f.name,
+                            expr(&f.value)
+                        ));
+                    }
+                }
+            }
+            if let [(k, a)] = f.value.terms[..] {
+                if let Some((carrier, sign)) = carriers[k] {
+                    if carrier == i {
+                        out.joint(JointSpec {
+                            name: self.coordinates[k].clone(),
+                            kind: f.kind,
+                            origin: origin(c),
+                            parent,
+                            child: end,
+                            axis: sign * axis,
+                            range: ranges[k],
+                            mimic: None,
+                            dynamics,
+                        })?;
+                        continue;
+                    }
+                }
+                out.joint(JointSpec {
+                    name: format!("{}_joint", f.name),
+                    kind: f.kind,
+                    origin: origin(0.0),
+                    parent,
+                    child: end,
+                    axis,
+                    range: ranges[k].map(a, c),
+                    mimic: Some((self.coordinates[k].clone(), a, c)),
+                    dynamics,
+                })?;
+                continue;
+            }
+            // Several coordinates: one joint per coordinate about the same axis.
+            let mut from = parent;
+            let last = f.value.terms.len() - 1;
+            for (j, &(k, a)) in f.value.terms.iter().enumerate() {
+                let coord = &self.coordinates[k];
+                let child = if j == last {
+                    end.clone()
+                } else {
+                    let l = format!("{}_{coord}", f.name);
+                    out.link(&l, None)?;
+                    l
+                };
+                let offset = if j == 0 { c } else { 0.0 };
+                out.joint(JointSpec {
+                    name: format!("{}_joint_{coord}", f.name),
+                    kind: f.kind,
+                    origin: if j == 0 {
+                        origin(0.0)
+                    } else {
+                        Transform::identity()
+                    },
+                    parent: from,
+                    child: child.clone(),
+                    axis,
+                    range: ranges[k].map(a, offset),
+                    mimic: Some((coord.clone(), a, offset)),
+                    dynamics: None,
+                })?;
+                from = child;
+            }
+        }
+
+        for f in &self.frames {
+            if let Some(mi) = &f.motor_inertia {
+                notes.push(format!(
+                    "motor inertia {} = {} of frame {} (on {})",
+                    self.params[mi.param].name,
+                    params[mi.param],
+                    f.name,
+                    expr(&f.value)
+                ));
+            }
+            if let Some(sp) = &f.spring {
+                let deflection = match &sp.deflection {
+                    Deflection::Affine(a) => expr(a),
+                    Deflection::Expr(e) => e.text().to_string(),
+                };
+                notes.push(format!(
+                    "spring {} = {} of frame {} (deflection {deflection})",
+                    self.params[sp.param].name, params[sp.param], f.name
+                ));
+            }
+            if let Some(kf) = &f.known_force {
+                notes.push(format!(
+                    "known force of frame {}: polynomial {:?} (highest degree first) along {}",
+                    f.name,
+                    kf.polynomial,
+                    expr(&kf.along)
+                ));
+            }
+        }
+        let inconsistent: Vec<&str> = self
+            .frames
+            .iter()
+            .filter(|f| {
+                f.inertia.is_some_and(|p0| {
+                    params[p0 + 9] > 0.0
+                        && pseudo_inertia_min_eigenvalue(&params[p0..p0 + 10]) <= 0.0
+                })
+            })
+            .map(|f| f.name.as_str())
+            .collect();
+
+        let mut head = String::new();
+        let _ = writeln!(
+            head,
+            "Generated by dvrk-ident from robot `{}` ({}).",
+            self.name, self.source
+        );
+        let _ = writeln!(
+            head,
+            "One link per model frame (same names, root = `{}`). Joint `qk` carries model\n\
+             coordinate qk; other moving joints mimic one coordinate (value = multiplier*qk +\n\
+             offset). A frame driven by several coordinates is a chain of joints about one\n\
+             axis, one mimic per coordinate, separated by massless links `<frame>_<qk>`: the\n\
+             motions add up exactly. `<qk>_coordinate` links carry a coordinate no frame\n\
+             carries alone; `<frame>_motion` links separate a joint from its fixed post-transform.",
+            names[0]
+        );
+        let _ = writeln!(
+            head,
+            "Inertials: identified mass, centre of mass and inertia about it in the link frame.\n\
+             <dynamics>: friction = Coulomb Fc, damping = viscous Fv of one-coordinate joints.\n\
+             Limits: the description's limits on one coordinate; effort limits unknown (0)."
+        );
+        if !inconsistent.is_empty() {
+            let _ = writeln!(
+                head,
+                "Not physically consistent (pseudo-inertia not positive definite): {}.",
+                inconsistent.join(", ")
+            );
+        }
+        if notes.is_empty() {
+            let _ = writeln!(head, "Everything identified is in this file.");
+        } else {
+            let _ = writeln!(head, "Not expressible in URDF, not in this file:");
+            for n in &notes {
+                let _ = writeln!(head, "  {n}");
+            }
+        }
+        let robot = urdf_rs::Robot {
+            name: self.name.clone(),
+            version: None,
+            links: out.links,
+            joints: out.joints,
+            materials: Vec::new(),
+        };
+        let body = urdf_rs::write_to_string(&robot).map_err(|e| e.to_string())?;
+        Ok(format!(
+            "<?xml version=\"1.0\"?>\n<!--\n{}-->\n{body}\n",
+            comment_safe(&head)
+        ))
+    }
+}
+
+/// Replaces (or inserts) the `<inertial>` of the links named in `snippets`, keeping every
+/// other byte of `text`.
+fn splice_inertials(
+    text: &str,
+    file: &str,
+    snippets: &HashMap<&str, String>,
+) -> Result<String, ModelError> {
+    use quick_xml::events::{BytesStart, Event};
+    let err = |message: String| ModelError::Urdf {
+        file: file.to_string(),
+        message,
+    };
+    let mut reader = quick_xml::Reader::from_str(text);
+    let decoder = reader.decoder();
+    let name_of = |e: &BytesStart<'_>| -> Result<String, ModelError> {
+        let attr = e
+            .try_get_attribute("name")
+            .map_err(|e| err(e.to_string()))?
+            .ok_or_else(|| err("a <link> has no name".into()))?;
+        Ok(attr
+            .decode_and_unescape_value(decoder)
+            .map_err(|e| err(e.to_string()))?
+            .into_owned())
+    };
+    // (start, end, replacement) byte spans, in document order.
+    let mut edits: Vec<(usize, usize, String)> = Vec::new();
+    let mut depth = 0usize;
+    // The open link: its name, where its start tag ends, whether it had an inertial.
+    let mut link: Option<(String, usize, bool)> = None;
+    let mut inertial_start = None;
+    let mut done = HashSet::new();
+    loop {
+        let start = reader.buffer_position() as usize;
+        let event = reader
+            .read_event()
+            .map_err(|e| err(format!("cannot parse the document: {e}")))?;
+        let end = reader.buffer_position() as usize;
+        match event {
+            Event::Start(e) => {
+                let tag = e.local_name();
+                if depth == 1 && tag.as_ref() == b"link" {
+                    link = Some((name_of(&e)?, end, false));
+                } else if depth == 2 && tag.as_ref() == b"inertial" && link.is_some() {
+                    inertial_start = Some(start);
+                }
+                depth += 1;
+            }
+            Event::End(e) => {
+                depth -= 1;
+                let tag = e.local_name();
+                if depth == 2 && tag.as_ref() == b"inertial" {
+                    if let (Some(s), Some((name, _, had))) = (inertial_start.take(), &mut link) {
+                        *had = true;
+                        if let Some(snippet) = snippets.get(name.as_str()) {
+                            edits.push((s, end, indent_lines(snippet, &element_indent(text, s))));
+                            done.insert(name.clone());
+                        }
+                    }
+                } else if depth == 1 && tag.as_ref() == b"link" {
+                    if let Some((name, tag_end, had)) = link.take() {
+                        if let (false, Some(snippet)) = (had, snippets.get(name.as_str())) {
+                            let inner = format!("{}  ", line_indent(text, start));
+                            edits.push((
+                                tag_end,
+                                tag_end,
+                                format!("\n{inner}{}", indent_lines(snippet, &inner)),
+                            ));
+                            done.insert(name);
+                        }
+                    }
+                }
+            }
+            Event::Empty(e) => {
+                let tag = e.local_name();
+                if depth == 1 && tag.as_ref() == b"link" {
+                    let name = name_of(&e)?;
+                    if let Some(snippet) = snippets.get(name.as_str()) {
+                        let indent = line_indent(text, start);
+                        let inner = format!("{indent}  ");
+                        let open = text[start..end].trim_end_matches('>').trim_end_matches('/');
+                        edits.push((
+                            start,
+                            end,
+                            format!(
+                                "{}>\n{inner}{}\n{indent}</link>",
+                                open.trim_end(),
+                                indent_lines(snippet, &inner)
+                            ),
+                        ));
+                        done.insert(name);
+                    }
+                } else if depth == 2 && tag.as_ref() == b"inertial" {
+                    if let Some((name, _, had)) = &mut link {
+                        *had = true;
+                        if let Some(snippet) = snippets.get(name.as_str()) {
+                            edits.push((
+                                start,
+                                end,
+                                indent_lines(snippet, &element_indent(text, start)),
+                            ));
+                            done.insert(name.clone());
+                        }
+                    }
+                }
+            }
+            Event::Eof => break,
+            _ => {}
+        }
+    }
+    if let Some(missing) = snippets.keys().find(|k| !done.contains(**k)) {
+        return Err(err(format!("link `{missing}` not found in the document")));
+    }
+    edits.sort_by_key(|e| e.0);
+    let mut out = String::with_capacity(text.len() + 256 * edits.len());
+    let mut at = 0;
+    for (s, e, replacement) in edits {
+        out.push_str(&text[at..s]);
+        out.push_str(&replacement);
+        at = e;
+    }
+    out.push_str(&text[at..]);
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn from_rpy(r: [f64; 3]) -> Matrix3<f64> {
+        *Rotation3::from_euler_angles(r[0], r[1], r[2]).matrix()
+    }
+
+    #[test]
+    fn rpy_reproduces_rotations_also_at_gimbal_lock() {
+        let h = std::f64::consts::FRAC_PI_2;
+        let mut cases: Vec<Matrix3<f64>> = vec![
+            Matrix3::identity(),
+            Transform::rot_x(h).compose(&Transform::rot_z(h)).rotation,
+            Transform::rot_x(-h).compose(&Transform::rot_z(-h)).rotation,
+            from_rpy([0.3, h, -1.1]),
+            from_rpy([0.3, -h, 2.0]),
+            from_rpy([0.3, h - 1e-9, -1.1]),
+            from_rpy([-2.9, -h + 3e-13, 0.4]),
+            from_rpy([std::f64::consts::PI, 0.0, 0.0]),
+        ];
+        let mut x = 0.123f64;
+        for _ in 0..200 {
+            let mut next = || {
+                x = (x * 9301.0 + 0.49297).fract();
+                (x - 0.5) * 7.0
+            };
+            cases.push(from_rpy([next(), next() / 2.0, next()]));
+        }
+        for r in cases {
+            let back = from_rpy(rpy_from_rotation(&r));
+            let d = (back - r).abs().max();
+            assert!(d < 2e-15, "rpy round trip error {d:e} for {r}");
+        }
+    }
+
+    #[test]
+    fn comments_never_contain_double_dashes() {
+        assert_eq!(comment_safe("a --- b -- c"), "a - - - b - - c");
+    }
+}

@@ -1,0 +1,581 @@
+//! URDF export round trips: identified parameters written to a URDF and read back with
+//! our importer must give the same inverse dynamics (to 1e-9) at random states.
+//!
+//! - replace mode on a hand-written arm with every URDF feature the importer knows
+//!   (fixed, revolute, prismatic, continuous and mimic joints, skew axes, rotated
+//!   inertials, links with and without inertial) and elements it does not (comments,
+//!   transmission, gazebo, materials), which must survive untouched; and on the Panda of
+//!   `../shared/anchors` when present;
+//! - generate mode on the dVRK PSM, simplified PSM and MTM (parallelograms, tendon
+//!   couplings, counterweights, virtual motor frames) and on a standard-DH robot that
+//!   needs every fallback (a −q carrier, a coordinate no frame carries alone, a post
+//!   transform that does not commute with its joint, gravity not along −z).
+
+mod common;
+#[path = "dynamics_support.rs"]
+mod support;
+
+use dvrk_model::{Model, ParamKind, Workspace};
+use support::*;
+
+const TOL: f64 = 1e-9;
+
+const ARM: &str = r#"<?xml version="1.0"?>
+<!-- A test arm: every joint type, a mimic, skew axes, rotated inertials. -->
+<robot name="test_arm">
+  <material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>
+  <link name="world"/>
+  <link name="base_link">
+    <inertial>
+      <origin xyz="0 0 0.05" rpy="0 0 0"/>
+      <mass value="5"/>
+      <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.05"/>
+    </inertial>
+    <visual>
+      <geometry><cylinder radius="0.1" length="0.2"/></geometry>
+      <material name="grey"/>
+    </visual>
+  </link>
+  <joint name="mount" type="fixed">
+    <origin xyz="0 0 0.1" rpy="0 0 0.3"/>
+    <parent link="world"/>
+    <child link="base_link"/>
+  </joint>
+  <link name="shoulder">
+    <inertial>
+      <origin xyz="0.01 0.02 0.1" rpy="0.3 -0.2 1.1"/>
+      <mass value="2.5"/>
+      <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0.002" izz="0.01"/>
+    </inertial>
+    <visual><geometry><mesh filename="package://arm/meshes/shoulder.stl"/></geometry></visual>
+    <collision><geometry><box size="0.1 0.1 0.2"/></geometry></collision>
+  </link>
+  <joint name="j1" type="revolute">
+    <origin xyz="0 0 0.2" rpy="0 0 0"/>
+    <parent link="base_link"/>
+    <child link="shoulder"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-2.9" upper="2.9" effort="80" velocity="2.1"/>
+    <dynamics damping="0.5" friction="0.1"/>
+  </joint>
+  <!-- no inertial: the export adds one -->
+  <link name="upper">
+    <visual><geometry><box size="0.05 0.05 0.4"/></geometry></visual>
+  </link>
+  <joint name="j2" type="revolute">
+    <origin xyz="0.05 0 0.15" rpy="1.5707963267948966 0 -1.5707963267948966"/>
+    <parent link="shoulder"/>
+    <child link="upper"/>
+    <axis xyz="0 1 0"/>
+    <limit lower="-1.5" upper="1.5" effort="60" velocity="2"/>
+  </joint>
+  <link name="slider"/>
+  <joint name="j3" type="prismatic">
+    <origin xyz="0 0 0.4" rpy="0.2 0.1 0"/>
+    <parent link="upper"/>
+    <child link="slider"/>
+    <axis xyz="1 0 0"/>
+    <limit lower="0" upper="0.3" effort="100" velocity="0.5"/>
+  </joint>
+  <link name="wrist">
+    <inertial>
+      <mass value="0.7"/>
+      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/>
+    </inertial>
+  </link>
+  <joint name="j4" type="continuous">
+    <origin xyz="0.1 0 0" rpy="0 1.2 0"/>
+    <parent link="slider"/>
+    <child link="wrist"/>
+    <axis xyz="1 1 0"/>
+  </joint>
+  <link name="finger_l"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="j5" type="revolute">
+    <origin xyz="0 0.02 0.05" rpy="0 0 0"/>
+    <parent link="wrist"/>
+    <child link="finger_l"/>
+    <axis xyz="0 0 -1"/>
+    <limit lower="0" upper="0.8" effort="5" velocity="1"/>
+  </joint>
+  <link name="finger_r"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
+  <joint name="j6" type="revolute">
+    <origin xyz="0 -0.02 0.05" rpy="0 0 3.14159"/>
+    <parent link="wrist"/>
+    <child link="finger_r"/>
+    <axis xyz="0 0 1"/>
+    <limit lower="-0.8" upper="0" effort="5" velocity="1"/>
+    <mimic joint="j5" multiplier="-1" offset="0.1"/>
+  </joint>
+  <link name="tool"/>
+  <joint name="tool_joint" type="fixed">
+    <origin xyz="0 0 0.12" rpy="0 0.5 0"/>
+    <parent link="wrist"/>
+    <child link="tool"/>
+  </joint>
+  <transmission name="t1">
+    <type>transmission_interface/SimpleTransmission</type>
+    <joint name="j1"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
+    <actuator name="m1"><mechanicalReduction>50</mechanicalReduction></actuator>
+  </transmission>
+  <gazebo reference="wrist"><material>Gazebo/Grey</material></gazebo>
+</robot>
+"#;
+
+/// The lines of a document outside its `<inertial>` elements, trimmed, with empty
+/// `<link .../>` elements written as start and end tag (the export opens them).
+fn outside_inertials(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = text;
+    while let Some(k) = rest.find("<inertial") {
+        out.push(rest[..k].to_string());
+        let after = &rest[k..];
+        rest = &after[after.find("</inertial>").expect("closed inertial") + "</inertial>".len()..];
+    }
+    out.push(rest.to_string());
+    out.concat()
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .flat_map(|l| {
+            if l.starts_with("<link ") && l.ends_with("/>") && !l.contains("><") {
+                let open = format!("{}>", l.trim_end_matches("/>").trim_end());
+                vec![open, "</link>".to_string()]
+            } else if let Some(open) = l.strip_suffix("</link>").filter(|o| !o.is_empty()) {
+                vec![open.to_string(), "</link>".to_string()]
+            } else {
+                vec![l.to_string()]
+            }
+        })
+        .collect()
+}
+
+/// Largest |τ_a − τ_b| over `samples` random states, coordinates matched by name; `a`
+/// uses `pa` and `b` uses `pb`.
+fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64], seed: u64) -> f64 {
+    assert_eq!(a.dof(), b.dof(), "number of coordinates");
+    let perm: Vec<usize> = b
+        .coordinates
+        .iter()
+        .map(|c| {
+            a.coordinates
+                .iter()
+                .position(|d| d == c)
+                .unwrap_or_else(|| panic!("coordinate {c} of the URDF is not the model's"))
+        })
+        .collect();
+    let mut rng = Rng::new(seed);
+    let (mut wa, mut wb) = (Workspace::new(a), Workspace::new(b));
+    let mut worst = 0.0f64;
+    for _ in 0..40 {
+        let (q, dq, ddq) = random_state(a, &mut rng);
+        let pick = |v: &[f64]| perm.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        let ta = id(a, &mut wa, pa, &q, &dq, &ddq);
+        let tb = id(b, &mut wb, pb, &pick(&q), &pick(&dq), &pick(&ddq));
+        assert!(
+            ta.iter().any(|t| t.abs() > 1e-3),
+            "the test moves something"
+        );
+        for (j, &k) in perm.iter().enumerate() {
+            worst = worst.max((ta[k] - tb[j]).abs());
+        }
+    }
+    worst
+}
+
+fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
+    filter_params(model, params, |k| matches!(k, ParamKind::Inertia { .. }))
+}
+
+fn replace_round_trip(text: &str, file: &str, seed: u64) -> String {
+    let model = Model::from_urdf_str(text, file).unwrap();
+    let params = physical_params(&model, &mut Rng::new(seed));
+    let out = model.urdf_with_inertials(&params, text, file).unwrap();
+    let back = Model::from_urdf_str(&out, "exported.urdf").unwrap();
+    assert_eq!(back.frame_names(), model.frame_names());
+    let nominal = back.nominal_parameters().unwrap();
+    let worst_param = nominal
+        .iter()
+        .zip(&params)
+        .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+    let worst = torque_difference(&model, &params, &back, &nominal, seed + 1);
+    eprintln!("{file}: replace mode, max |Δπ| = {worst_param:e}, max |Δτ| = {worst:e}");
+    assert!(worst_param < 1e-12, "parameters differ by {worst_param:e}");
+    assert!(worst < TOL, "torques differ by {worst:e}");
+    out
+}
+
+#[test]
+fn replace_mode_round_trips_and_keeps_everything_else() {
+    let out = replace_round_trip(ARM, "arm.urdf", 11);
+    // Everything but the inertials is as it was: comments, materials, meshes,
+    // transmission, gazebo, limits, dynamics, mimic, element order.
+    assert_eq!(outside_inertials(&out), outside_inertials(ARM));
+    for kept in [
+        "<!-- A test arm: every joint type, a mimic, skew axes, rotated inertials. -->",
+        "<mechanicalReduction>50</mechanicalReduction>",
+        r#"<gazebo reference="wrist"><material>Gazebo/Grey</material></gazebo>"#,
+        r#"<dynamics damping="0.5" friction="0.1"/>"#,
+        r#"<mimic joint="j5" multiplier="-1" offset="0.1"/>"#,
+    ] {
+        assert!(out.contains(kept), "lost: {kept}\n{out}");
+    }
+    // Every link got an inertial in its own frame (rpy zero), the root kept none.
+    let robot = urdf_rs::read_from_string(&out).unwrap();
+    for l in &robot.links {
+        if l.name == "world" {
+            assert_eq!(l.inertial.mass.value, 0.0);
+        } else {
+            assert!(l.inertial.mass.value > 0.0, "{}", l.name);
+            assert_eq!(l.inertial.origin.rpy.0, [0.0; 3], "{}", l.name);
+        }
+    }
+    // Exporting the exported file again changes nothing but the inertials.
+    let model = Model::from_urdf_str(&out, "out.urdf").unwrap();
+    let again = model
+        .urdf_with_inertials(&model.nominal_parameters().unwrap(), &out, "out.urdf")
+        .unwrap();
+    assert_eq!(outside_inertials(&again), outside_inertials(&out));
+}
+
+#[test]
+fn replace_mode_round_trips_the_panda() {
+    let Some(path) = common::shared_file("anchors/panda_arm_7dof.urdf") else {
+        return;
+    };
+    let text = std::fs::read_to_string(&path).unwrap();
+    replace_round_trip(&text, path.to_str().unwrap(), 21);
+}
+
+fn replace_error(model: &Model, params: &[f64], text: &str) -> String {
+    model
+        .urdf_with_inertials(params, text, "other.urdf")
+        .unwrap_err()
+        .to_string()
+}
+
+#[track_caller]
+fn assert_mentions(message: &str, parts: &[&str]) {
+    for p in parts {
+        assert!(message.contains(p), "`{p}` missing from: {message}");
+    }
+}
+
+#[test]
+fn replace_mode_refuses_other_robots_and_bad_parameters() {
+    let model = Model::from_urdf_str(ARM, "arm.urdf").unwrap();
+    let params = physical_params(&model, &mut Rng::new(5));
+    // Another robot.
+    let pendulum = r#"<robot name="p"><link name="world"/><link name="bob"/>
+        <joint name="swing" type="continuous"><parent link="world"/><child link="bob"/></joint></robot>"#;
+    let msg = replace_error(&model, &params, pendulum);
+    assert_mentions(
+        &msg,
+        &[
+            "other.urdf",
+            "do not match",
+            "test_arm",
+            "no link named",
+            "bob",
+        ],
+    );
+    // Same links, one joint moved: the parameters would land in the wrong frame.
+    let moved = ARM.replace(
+        r#"<origin xyz="0.1 0 0" rpy="0 1.2 0"/>"#,
+        r#"<origin xyz="0.1 0 0" rpy="0 1.3 0"/>"#,
+    );
+    let msg = replace_error(&model, &params, &moved);
+    assert_mentions(&msg, &["other.urdf", "`wrist`", "not where"]);
+    // A joint re-parented.
+    let reparented = ARM.replace(
+        r#"<parent link="wrist"/>
+    <child link="tool"/>"#,
+        r#"<parent link="slider"/>
+    <child link="tool"/>"#,
+    );
+    let msg = replace_error(&model, &params, &reparented);
+    assert_mentions(&msg, &["`tool`", "hangs from `slider`"]);
+    // Not a URDF.
+    let msg = replace_error(
+        &model,
+        &params,
+        "<robot name=\"x\"><link name=\"a\"></robot>",
+    );
+    assert_mentions(&msg, &["other.urdf"]);
+    // Parameters: not finite, negative mass, mass-less first moment, wrong length.
+    let mut bad = params.clone();
+    bad[model.param_index("l4y").unwrap()] = f64::NAN;
+    assert_mentions(&replace_error(&model, &bad, ARM), &["l4y", "not finite"]);
+    let mut bad = params.clone();
+    bad[model.param_index("m1").unwrap()] = -0.5;
+    assert_mentions(
+        &replace_error(&model, &bad, ARM),
+        &["base_link", "mass -0.5", "rigid body"],
+    );
+    let mut bad = params.clone();
+    bad[model.param_index("m3").unwrap()] = 0.0;
+    assert_mentions(
+        &replace_error(&model, &bad, ARM),
+        &["upper", "mass 0 with first moment"],
+    );
+    assert_mentions(
+        &replace_error(&model, &params[1..], ARM),
+        &["parameter values"],
+    );
+}
+
+/// Generate mode on a description: exact rigid-body dynamics, the expected structure.
+fn generate_round_trip(model: &Model, seed: u64) -> (String, urdf_rs::Robot) {
+    let params = physical_params(model, &mut Rng::new(seed));
+    let urdf = model.to_urdf(&params).unwrap();
+    let robot = urdf_rs::read_from_string(&urdf).unwrap();
+    let back = Model::from_urdf_str(&urdf, "generated.urdf").unwrap();
+    let mut ours = model.coordinates.clone();
+    let mut theirs = back.coordinates.clone();
+    ours.sort();
+    theirs.sort();
+    assert_eq!(theirs, ours, "the URDF's coordinates are the model's");
+    // Rigid body only: URDF has no motor inertia or spring, and the importer reads no
+    // friction.
+    let rigid = rigid_only(model, &params);
+    let nominal = back.nominal_parameters().unwrap();
+    let worst = torque_difference(model, &rigid, &back, &nominal, seed + 1);
+    eprintln!("{}: generate mode, max |Δτ| = {worst:e}", model.name);
+    assert!(worst < TOL, "{}: torques differ by {worst:e}", model.name);
+    // Every identified link is in the URDF with its identified mass.
+    for f in &model.frames {
+        let link = robot.links.iter().find(|l| l.name == f.name).unwrap();
+        let mass = f.inertia.map_or(0.0, |p0| params[p0 + 9]);
+        assert_eq!(link.inertial.mass.value, mass, "{}", f.name);
+    }
+    // Friction of a frame carried by a coordinate joint is its <dynamics>.
+    for (k, c) in model.coordinates.iter().enumerate() {
+        let joint = robot.joints.iter().find(|j| &j.name == c).unwrap();
+        let carrier = model.frames.iter().find(|f| {
+            f.name == joint.child.link && f.value.terms.first().is_some_and(|t| t.0 == k)
+        });
+        if let Some(fr) = carrier.and_then(|f| f.friction.as_ref()) {
+            let d = joint.dynamics.as_ref().expect("dynamics");
+            assert_eq!(
+                (d.friction, d.damping),
+                (params[fr.param], params[fr.param + 1])
+            );
+        }
+    }
+    (urdf, robot)
+}
+
+struct Counts {
+    links: usize,
+    joints: usize,
+    mimic: usize,
+    fixed: usize,
+}
+
+fn counts(robot: &urdf_rs::Robot) -> Counts {
+    Counts {
+        links: robot.links.len(),
+        joints: robot.joints.len(),
+        mimic: robot.joints.iter().filter(|j| j.mimic.is_some()).count(),
+        fixed: robot
+            .joints
+            .iter()
+            .filter(|j| j.joint_type == urdf_rs::JointType::Fixed)
+            .count(),
+    }
+}
+
+#[track_caller]
+fn assert_counts(robot: &urdf_rs::Robot, links: usize, joints: usize, mimic: usize, fixed: usize) {
+    let c = counts(robot);
+    assert_eq!(
+        (c.links, c.joints, c.mimic, c.fixed),
+        (links, joints, mimic, fixed),
+        "(links, joints, mimic joints, fixed joints)"
+    );
+}
+
+fn has_link(robot: &urdf_rs::Robot, name: &str) -> bool {
+    robot.links.iter().any(|l| l.name == name)
+}
+
+fn joint<'a>(robot: &'a urdf_rs::Robot, name: &str) -> &'a urdf_rs::Joint {
+    robot
+        .joints
+        .iter()
+        .find(|j| j.name == name)
+        .unwrap_or_else(|| panic!("no joint {name}"))
+}
+
+#[test]
+fn generate_mode_psm() {
+    let model = Model::builtin("psm").unwrap();
+    let (urdf, robot) = generate_round_trip(&model, 31);
+    // 16 frames + base; wrist_yaw_1, wrist_yaw_2 and jaw_coupling_friction depend on two
+    // coordinates (+1 massless link each); no frame is driven by q5 alone (1.0186*q5):
+    // q5_coordinate. 19 moving joints, 7 of them the coordinates; pitch_back is fixed.
+    assert_counts(&robot, 21, 20, 12, 1);
+    assert!(has_link(&robot, "q5_coordinate"));
+    assert!(has_link(&robot, "wrist_yaw_1_q5"));
+    // q2 is carried by pitch_bottom (theta = q2 exactly), the parallelogram mimics it.
+    assert_eq!(joint(&robot, "q2").child.link, "pitch_bottom");
+    let front = joint(&robot, "pitch_front_joint").mimic.as_ref().unwrap();
+    assert_eq!((front.joint.as_str(), front.multiplier), ("q2", Some(-1.0)));
+    // q3: the counterweight (d = q3); the insertion stage mimics it with an offset.
+    assert_eq!(joint(&robot, "q3").child.link, "main_insertion");
+    assert_eq!(
+        joint(&robot, "q3").joint_type,
+        urdf_rs::JointType::Prismatic
+    );
+    let m = joint(&robot, "wrist_pitch_joint").mimic.as_ref().unwrap();
+    assert_eq!((m.joint.as_str(), m.multiplier), ("q5", Some(1.0186)));
+    for note in ["Ia10", "Ia11", "K10", "Fo1", "Fc16", "deflection -q4"] {
+        assert!(urdf.contains(note), "header lacks {note}");
+    }
+}
+
+#[test]
+fn generate_mode_psm_simplified() {
+    let model = Model::builtin("psm_simplified").unwrap();
+    let (_, robot) = generate_round_trip(&model, 41);
+    // 14 frames + base, the same three two-coordinate frames and q5 link as the PSM.
+    assert_counts(&robot, 19, 18, 10, 1);
+}
+
+#[test]
+fn generate_mode_mtm() {
+    let model = Model::builtin("mtm").unwrap();
+    let (urdf, robot) = generate_round_trip(&model, 51);
+    // 10 frames + base; forearm (q3 − q2) and front_parallel (q2 − q3) +1 link each,
+    // wrist_platform (0.6697 q2 − 0.6697 q3 + q4) +2; every coordinate has a carrier.
+    assert_counts(&robot, 15, 14, 7, 0);
+    for (j, coord, multiplier) in [
+        ("forearm_joint_q2", "q2", -1.0),
+        ("forearm_joint_q3", "q3", 1.0),
+        ("wrist_platform_joint_q2", "q2", 0.6697),
+        ("wrist_platform_joint_q3", "q3", -0.6697),
+        ("wrist_platform_joint_q4", "q4", 1.0),
+    ] {
+        let m = joint(&robot, j).mimic.as_ref().unwrap();
+        assert_eq!(
+            (m.joint.as_str(), m.multiplier),
+            (coord, Some(multiplier)),
+            "{j}"
+        );
+    }
+    // The chain's later joints sit at the first one's origin, about the same axis.
+    assert_eq!(joint(&robot, "forearm_joint_q3").origin.xyz.0, [0.0; 3]);
+    assert_eq!(joint(&robot, "forearm_joint_q3").parent.link, "forearm_q2");
+    for note in [
+        "known force of frame wrist_platform",
+        "spring K7",
+        "Ia10",
+        "Fc3",
+    ] {
+        assert!(urdf.contains(note), "header lacks {note}");
+    }
+    // Limits from the description (q1 in [-57, 29] degrees).
+    let l = &joint(&robot, "q1").limit;
+    let deg = std::f64::consts::PI / 180.0;
+    assert!((l.lower + 57.0 * deg).abs() < 1e-15 && (l.upper - 29.0 * deg).abs() < 1e-15);
+}
+
+const ODD: &str = r#"
+name = "odd"
+convention = "standard"
+coordinates = ["u", "v", "w"]
+gravity = [0.0, -9.81, 0.0]
+
+[[frames]]
+name = "one"
+parent = "base"
+a = 0.2
+alpha = 0.5
+d = 0.1
+theta = "-u + 0.3"
+inertia = true
+friction = true
+
+[[frames]]
+name = "two"
+parent = "one"
+a = 0.15
+alpha = -0.7
+theta = 0.4
+d = "v + 0.05"
+inertia = true
+friction = true
+
+[[frames]]
+name = "three"
+parent = "two"
+d = 0.1
+alpha = 1.2
+theta = "2*w"
+inertia = true
+
+[[frames]]
+name = "four"
+parent = "three"
+a = 0.05
+theta = "u + w - 0.2"
+inertia = true
+friction = true
+
+[[limits]]
+expr = "u"
+position = [-1.0, 1.0]
+velocity = [-2.0, 2.0]
+
+[[limits]]
+expr = "2*w"
+position = [-1.0, 1.5]
+"#;
+
+#[test]
+fn generate_mode_fallbacks_are_exact() {
+    let model = Model::from_toml_str(ODD, "odd.toml").unwrap();
+    let (urdf, robot) = generate_round_trip(&model, 61);
+    // base_world (gravity along −y in the model), base, 4 frames; one_motion and
+    // four_motion (standard DH revolute with a ≠ 0: the post transform moves off the
+    // joint axis, so it is a fixed joint after the motion); four_u (chain u, w);
+    // w_coordinate (only 2*w and u + w drive frames).
+    assert_counts(&robot, 10, 9, 3, 3);
+    for l in [
+        "base_world",
+        "one_motion",
+        "four_motion",
+        "four_u",
+        "w_coordinate",
+    ] {
+        assert!(has_link(&robot, l), "no link {l}");
+    }
+    assert_eq!(joint(&robot, "three_joint").parent.link, "two");
+    assert_eq!(joint(&robot, "four_joint_w").child.link, "four_motion");
+    assert_eq!(joint(&robot, "u").axis.xyz.0, [0.0, 0.0, -1.0]);
+    assert_eq!(joint(&robot, "u").child.link, "one_motion");
+    assert_eq!(joint(&robot, "v").child.link, "two");
+    assert_eq!(joint(&robot, "w").child.link, "w_coordinate");
+    assert_eq!(joint(&robot, "w").joint_type, urdf_rs::JointType::Revolute);
+    let l = &joint(&robot, "w").limit;
+    assert_eq!((l.lower, l.upper), (-0.5, 0.75));
+    // three's joint value is 2w: its mimic limits are the coordinate's, doubled.
+    let l = &joint(&robot, "three_joint").limit;
+    assert_eq!((l.lower, l.upper), (-1.0, 1.5));
+    assert!(
+        urdf.contains("friction Fc4"),
+        "two-coordinate friction noted"
+    );
+}
+
+#[test]
+fn generate_mode_refuses_what_urdf_cannot_hold() {
+    let model = Model::builtin("psm").unwrap();
+    let mut params = physical_params(&model, &mut Rng::new(3));
+    let m = model.param_index("m4").unwrap();
+    params[m] = 0.0;
+    let msg = model.to_urdf(&params).unwrap_err().to_string();
+    assert_mentions(&msg, &["psm", "pitch_front", "mass 0 with first moment"]);
+    params[m] = f64::INFINITY;
+    let msg = model.to_urdf(&params).unwrap_err().to_string();
+    assert_mentions(&msg, &["m4", "not finite"]);
+}
