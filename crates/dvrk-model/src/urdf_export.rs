@@ -801,6 +801,16 @@ impl Model {
         }
 
         for f in &self.frames {
+            if let Some(st) = f.friction.as_ref().and_then(|fr| fr.stribeck) {
+                notes.push(format!(
+                    "Stribeck friction {} = {} of frame {} (velocity {}, on {})",
+                    self.params[st.param].name,
+                    params[st.param],
+                    f.name,
+                    st.velocity,
+                    expr(&f.value)
+                ));
+            }
             if let Some(mi) = &f.motor_inertia {
                 notes.push(format!(
                     "motor inertia {} = {} of frame {} (on {})",
