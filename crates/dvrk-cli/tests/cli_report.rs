@@ -251,3 +251,57 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
     assert!(html.contains("<td class=l>Fs16</td>"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `fit --excitation`: the trajectory is drawn in the report, and the test metrics cover
+/// its first period (int(200 Hz / 0.18 Hz) = 1111 samples, the 2019 protocol).
+#[test]
+fn fit_with_excitation_uses_its_period_and_draws_it() {
+    let dir = temp_dir("excitation");
+    let log = example();
+    let traj = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_trajectory.json");
+    let rep = dir.join("rep");
+    let (ok, stdout, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--cutoff",
+        "none",
+        "--method",
+        "ols",
+        "--test",
+        &log,
+        "--excitation",
+        traj.to_str().unwrap(),
+        "--json",
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(r["settings"]["test_window"], 1111);
+    assert_eq!(r["metrics"]["test"]["samples"], 1111);
+    assert!(files(&rep).contains(&"excitation.svg".to_string()));
+    // An explicit --test-window wins.
+    let (ok, stdout, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--cutoff",
+        "none",
+        "--method",
+        "ols",
+        "--test",
+        &log,
+        "--excitation",
+        traj.to_str().unwrap(),
+        "--test-window",
+        "300",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(r["metrics"]["test"]["samples"], 300);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::result::{write_atomic, InputInfo};
@@ -182,6 +182,11 @@ pub struct Args {
     /// Metrics on the first N processed test samples only
     #[arg(long)]
     pub test_window: Option<usize>,
+    /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
+    /// --report, and with --test but no --test-window the test metrics cover its first
+    /// period (the 2019 protocol)
+    #[arg(long, value_name = "TRAJ.json")]
+    pub excitation: Option<String>,
     /// Write the result document here (atomically)
     #[arg(long)]
     pub out: Option<String>,
@@ -214,7 +219,25 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::Irls => Method::Irls,
         MethodArg::Sdp => Method::Sdp,
     };
-    settings.test_window = args.test_window;
+    let excitation = match &args.excitation {
+        Some(p) => Some(
+            dvrk_ident::excite::FourierTrajectory::from_json_file(p)
+                .with_context(|| format!("{p}: excitation"))?,
+        ),
+        None => None,
+    };
+    settings.test_window = match (args.test_window, &excitation, &test) {
+        (Some(w), _, _) => Some(w),
+        (None, Some(traj), Some(t)) => {
+            let rate = t
+                .rate_hz()
+                .context("the test log has no usable time stamps")?;
+            // int(rate / f0) as in 2019 (1111 samples for the PSM at 200 Hz, 0.18 Hz).
+            let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
+            Some(samples / settings.processing.decimate.max(1))
+        }
+        _ => None,
+    };
     settings.stribeck_velocity = args.stribeck;
     let model = settings.model(&model)?.into_owned();
     let mut result = dvrk_ident::fit::fit_with_progress(
@@ -244,9 +267,9 @@ pub fn run(args: Args) -> Result<()> {
         if let Some(dir) = &args.report {
             let mut logs = vec![("training", &train, None)];
             if let Some(t) = &test {
-                logs.push(("test", t, args.test_window));
+                logs.push(("test", t, settings.test_window));
             }
-            super::report::write(&model, &result, &logs, None, dir)?;
+            super::report::write(&model, &result, &logs, excitation.as_ref(), dir)?;
         }
     }
     if args.json {
