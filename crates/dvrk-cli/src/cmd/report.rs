@@ -53,7 +53,8 @@ pub fn write(
             .collect(),
         excitation,
     };
-    let built = report::build(&input)?;
+    let built =
+        crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?;
     let written = built.write(Path::new(dir))?;
     eprintln!(
         "report: {} ({} files)",
