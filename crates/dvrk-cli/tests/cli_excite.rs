@@ -1,27 +1,9 @@
 //! `excite` end to end: an optimized trajectory's documented keys, its setpoints in
 //! measured space, its preview plot, and `--evaluate` agreeing with the optimizer.
 
+mod support;
 use std::path::PathBuf;
-use std::process::Command;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-excite-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use support::{example, run, temp_dir};
 
 #[test]
 fn optimize_writes_trajectory_setpoints_and_plot_then_evaluate_agrees() {
@@ -102,8 +84,7 @@ fn optimize_writes_trajectory_setpoints_and_plot_then_evaluate_agrees() {
 #[test]
 fn bad_plot_path_is_an_error_naming_it() {
     let dir = temp_dir("bad");
-    let example =
-        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_trajectory.json");
+    let example = PathBuf::from(example("psm_trajectory.json"));
     let (ok, _, err) = run(&[
         "excite",
         "--robot",

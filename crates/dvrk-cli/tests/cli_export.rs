@@ -3,40 +3,14 @@
 //! compared torque for torque with the result's model; the params.json layout equal to
 //! `fit --wpi-json`'s; errors naming the file, exiting non-zero and writing nothing.
 
+mod support;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use support::{example, run, temp_dir};
 
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_ident::FitResult;
 use dvrk_model::{Model, ParamKind, Workspace};
 use nalgebra::DMatrix;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn example(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-        .display()
-        .to_string()
-}
-
-fn tmp(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-export-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn s(p: &Path) -> String {
     p.display().to_string()
@@ -116,7 +90,7 @@ fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
 
 #[test]
 fn psm_fit_exports_a_generated_urdf_and_the_2019_layout() {
-    let dir = tmp("psm");
+    let dir = temp_dir("export-psm");
     let (result, fit_wpi) = fit_example(&dir, "sdp");
     let (urdf, wpi) = (dir.join("psm.urdf"), dir.join("params.json"));
     let (ok, stdout, err) = run(&[
@@ -244,7 +218,7 @@ fn write_arm_log(urdf: &Path, log: &Path) {
 
 #[test]
 fn urdf_robot_fit_exports_into_its_own_urdf() {
-    let dir = tmp("arm");
+    let dir = temp_dir("export-arm");
     let urdf = dir.join("arm.urdf");
     std::fs::write(&urdf, ARM).unwrap();
     let log = dir.join("arm.csv");
@@ -320,8 +294,8 @@ fn assert_fails(args: &[&str], words: &[&str], dir: &Path, keep: &[&Path]) {
 
 #[test]
 fn export_errors_name_the_file_and_write_nothing() {
-    let dir = tmp("errors");
-    let inputs = tmp("errors-inputs");
+    let dir = temp_dir("export-errors");
+    let inputs = temp_dir("export-errors-inputs");
     let (ols, ols_wpi) = fit_example(&inputs, "ols");
     let (urdf, wpi) = (s(&dir.join("out.urdf")), s(&dir.join("out.json")));
 

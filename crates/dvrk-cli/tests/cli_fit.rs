@@ -1,31 +1,13 @@
 //! `fit`, `validate` and `cable-fit` end to end on logs written by the test itself: the
 //! flags scripts rely on, the result document, atomic outputs and errors.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod support;
+use std::path::Path;
+use support::{run, temp_dir};
 
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::DMatrix;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-fit-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// A noise-free MTM log in model coordinates (the 2019 CSV layout) from consistent
 /// parameters; `phase` changes the motion so train and test differ.

@@ -1,19 +1,8 @@
 //! The `model` subcommand end to end: exact flags and JSON keys scripts rely on, the
 //! numbers against the library, and errors with a non-zero exit.
 
-use std::process::Command;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
+mod support;
+use support::run;
 
 #[test]
 fn model_json_has_the_documented_keys() {

@@ -1,50 +1,16 @@
 //! `fit --report`, `report` and `model --draw` end to end on the bundled example log:
 //! the files a user opens, their content, and errors that leave nothing behind.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-report-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn example() -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples/psm_excitation.mcap")
-        .display()
-        .to_string()
-}
-
-fn files(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
-}
+mod support;
+use std::path::PathBuf;
+use support::{example, files, run, temp_dir};
 
 #[test]
 fn fit_report_then_report_command_show_the_result() {
     let dir = temp_dir("fit");
     let out = dir.join("result.json");
     let rep = dir.join("fit-report");
-    let log = example();
+    let log = example("psm_excitation.mcap");
     let (ok, _, err) = run(&[
         "fit",
         &log,
@@ -88,7 +54,7 @@ fn fit_report_then_report_command_show_the_result() {
 
     // `report` on the same result: its recorded logs by default, plus an excitation.
     let rep2 = dir.join("report");
-    let traj = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_trajectory.json");
+    let traj = PathBuf::from(example("psm_trajectory.json"));
     let (ok, stdout, err) = run(&[
         "report",
         out.to_str().unwrap(),
@@ -180,7 +146,7 @@ fn bad_requests_fail_cleanly_and_write_nothing() {
 
 #[test]
 fn progress_bars_stay_off_pipes_and_quiet_is_global() {
-    let log = example();
+    let log = example("psm_excitation.mcap");
     for extra in [&[][..], &["--quiet"][..]] {
         let mut args = vec![
             "fit", &log, "--robot", "psm", "--cutoff", "none", "--method", "ols",
@@ -200,7 +166,7 @@ fn progress_bars_stay_off_pipes_and_quiet_is_global() {
 fn stribeck_fit_is_read_back_by_validate_and_report() {
     let dir = temp_dir("stribeck");
     let out = dir.join("r.json");
-    let log = example();
+    let log = example("psm_excitation.mcap");
     let (ok, _, err) = run(&[
         "fit",
         &log,
@@ -257,8 +223,8 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
 #[test]
 fn fit_with_excitation_uses_its_period_and_draws_it() {
     let dir = temp_dir("excitation");
-    let log = example();
-    let traj = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_trajectory.json");
+    let log = example("psm_excitation.mcap");
+    let traj = PathBuf::from(example("psm_trajectory.json"));
     let rep = dir.join("rep");
     let (ok, stdout, err) = run(&[
         "fit",
