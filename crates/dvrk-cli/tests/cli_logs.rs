@@ -58,14 +58,10 @@ fn true_base_parameters(model: &Model) -> Vec<f64> {
     model.base_parameters().unwrap().project(&pi)
 }
 
+/// The README's main command (default processing), with a method and JSON output.
 fn fit_example(method: &str) -> serde_json::Value {
-    // No low-pass filter: the log is clean apart from white torque noise, and a filter
-    // would smooth the Coulomb friction steps at every velocity reversal (with the default
-    // 5.4 Hz filter the residuals are 0.015-0.06 N·m instead of the 0.002 noise).
     let log = example("psm_excitation.mcap");
-    let (ok, out, err) = run(&[
-        "fit", &log, "--robot", "psm", "--method", method, "--cutoff", "none", "--json",
-    ]);
+    let (ok, out, err) = run(&["fit", &log, "--robot", "psm", "--method", method, "--json"]);
     assert!(ok, "{err}");
     serde_json::from_str(&out).unwrap()
 }
@@ -98,6 +94,44 @@ fn ols_fit_of_the_example_recovers_the_generating_base_parameters() {
         "ols: worst |error|/std {worst:.2}, condition number {:.1}",
         r["condition_number"]
     );
+    // The README's main command is this fit with the default processing.
+    let readme = std::fs::read_to_string(examples().join("../README.md")).unwrap();
+    assert!(readme.contains(
+        "cargo run --release -p dvrk-cli -- fit examples/psm_excitation.mcap --robot psm\n"
+    ));
+}
+
+#[test]
+fn filtering_the_torques_biases_the_example_fit() {
+    // Why the default processing leaves the torques alone: the low-pass smooths the
+    // Coulomb friction steps in the measured torques but not in the regressor.
+    let model = Model::builtin("psm").unwrap();
+    let truth = true_base_parameters(&model);
+    let log = example("psm_excitation.mcap");
+    let (ok, out, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--method",
+        "ols",
+        "--filter-torque",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["settings"]["processing"]["filter_torque"], true);
+    let worst = r["base_parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(&truth)
+        .map(|(b, t)| (b["value"].as_f64().unwrap() - t).abs() / b["std"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert!(worst > 20.0, "worst |error|/std {worst}");
+    for rms in r["metrics"]["train"]["rms"].as_array().unwrap() {
+        assert!(rms.as_f64().unwrap() > 5.0 * NOISE, "{rms}");
+    }
 }
 
 #[test]

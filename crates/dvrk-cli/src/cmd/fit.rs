@@ -112,12 +112,15 @@ pub struct LogArgs {
     /// Sampling rate of logs without time stamps (Hz)
     #[arg(long)]
     pub rate: Option<f64>,
-    /// Low-pass cut-off (Hz), zero-phase 6th-order Butterworth; one value or one per
-    /// coordinate, comma-separated, or `none` (no filter: for clean or simulated logs,
-    /// where the filter's smoothing of the Coulomb friction steps biases the fit).
-    /// The 2019 PSM/MTM fits effectively used 16.965/5.655.
+    /// Low-pass cut-off (Hz) of the positions, velocities and accelerations, zero-phase
+    /// 6th-order Butterworth; one value or one per coordinate, comma-separated, or
+    /// `none` (no filter). The 2019 PSM/MTM fits effectively used 16.965/5.655.
     #[arg(long)]
     pub cutoff: Option<String>,
+    /// Also low-pass the torques, as the 2019 protocol did (it smooths the Coulomb
+    /// friction steps on the measured side only, which biases the friction estimates)
+    #[arg(long)]
+    pub filter_torque: bool,
     /// Samples trimmed at each end after filtering
     #[arg(long)]
     pub trim: Option<usize>,
@@ -157,6 +160,9 @@ impl LogArgs {
         }
         if let Some(t) = self.trim {
             s.processing.trim = t;
+        }
+        if self.filter_torque {
+            s.processing.filter_torque = true;
         }
         Ok(s)
     }
