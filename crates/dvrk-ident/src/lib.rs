@@ -10,6 +10,7 @@ pub mod error;
 pub mod estimate;
 pub mod excite;
 pub mod log;
+mod median;
 pub mod observation;
 pub mod progress;
 pub mod signal;

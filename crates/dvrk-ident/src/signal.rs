@@ -17,6 +17,7 @@
 mod butter;
 mod filter;
 mod ops;
+pub mod stream;
 
 pub use butter::{
     butter_lowpass, butter_lowpass_sos, butter_lowpass_sos_wn, butter_lowpass_wn, Section,
@@ -346,6 +347,27 @@ impl LowPass {
                 }
             };
             run(&cache[pos].1, col, self.padlen)
+        })
+    }
+}
+
+impl LowPass {
+    /// The filter for one cut-off, Hz, at `rate_hz`, ready to run sample by sample, and
+    /// second-order sections with its poles (they bound its transients).
+    pub(crate) fn stepper(
+        &self,
+        cutoff_hz: f64,
+        rate_hz: f64,
+    ) -> Result<(filter::Stepper, Vec<Section>), SignalError> {
+        Ok(match self.design(cutoff_hz, rate_hz)? {
+            Designed::Ba(tf) => {
+                let wn = self.convention.wn(cutoff_hz, rate_hz);
+                (
+                    filter::Stepper::ba(&tf.b, &tf.a)?,
+                    butter_lowpass_sos_wn(self.order, wn)?,
+                )
+            }
+            Designed::Sos(sections) => (filter::Stepper::sos(&sections)?, sections),
         })
     }
 }
