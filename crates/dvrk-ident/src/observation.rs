@@ -153,14 +153,110 @@ impl Observation {
     /// depend on the number of threads).
     pub fn assemble(model: &Model, samples: Samples<'_>, weights: &[f64]) -> Observation {
         let n = model.dof();
-        let p = model.n_params();
         assert_eq!(weights.len(), n, "one weight per coordinate");
-        let count = samples.len();
-        let chunks: Vec<(usize, usize)> = (0..count)
-            .step_by(CHUNK_SAMPLES)
-            .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
-            .collect();
-        let factors: Vec<Observation> = chunks
+        let mut obs = Observation::new(model.n_params());
+        chunk_factors(
+            model,
+            samples,
+            |block| {
+                let rows = block.nrows();
+                let mut block = block;
+                for i in 0..rows {
+                    let w = weights[i % n];
+                    for c in 0..block.ncols() {
+                        block[(i, c)] *= w;
+                    }
+                }
+                vec![Observation {
+                    r: r_factor(&block),
+                    rows,
+                }]
+            },
+            |f| obs.merge(&f[0]),
+        );
+        obs
+    }
+
+    /// One observation per coordinate, unweighted: the rows of [`Observation::assemble`]
+    /// split by the coordinate they belong to. Weights can then be chosen after the
+    /// data are read, with [`Observation::weighted`]: what a fit streamed over a long
+    /// log needs, where the weights come from the whole log.
+    pub fn assemble_per_coordinate(model: &Model, samples: Samples<'_>) -> Vec<Observation> {
+        let mut parts = vec![Observation::new(model.n_params()); model.dof()];
+        Observation::add_per_coordinate(&mut parts, model, samples);
+        parts
+    }
+
+    /// Adds `samples` to the per-coordinate observations `parts`: each chunk of
+    /// [`CHUNK_SAMPLES`] samples is factored (in parallel) and merged into `parts` in
+    /// order. Samples added in batches of whole chunks therefore give the same factors,
+    /// to the last bit, as all at once: a log streamed in blocks and the same log in
+    /// memory are fitted alike.
+    pub fn add_per_coordinate(parts: &mut [Observation], model: &Model, samples: Samples<'_>) {
+        let n = model.dof();
+        assert_eq!(parts.len(), n, "one observation per coordinate");
+        chunk_factors(
+            model,
+            samples,
+            |block| {
+                let count = block.nrows() / n;
+                (0..n)
+                    .map(|j| {
+                        let rows = Mat::from_fn(count, block.ncols(), |k, c| block[(k * n + j, c)]);
+                        Observation {
+                            r: r_factor(&rows),
+                            rows: count,
+                        }
+                    })
+                    .collect()
+            },
+            |f| {
+                for (o, part) in parts.iter_mut().zip(&f) {
+                    o.merge(part);
+                }
+            },
+        );
+    }
+
+    /// The observation of the coordinates' rows (`parts`, one per coordinate, from
+    /// [`Observation::assemble_per_coordinate`]) each scaled by its weight: the factor
+    /// of `[w₁ R₁; …; wₙ Rₙ]`, which has the Gram matrix of the weighted rows (exact up
+    /// to rounding).
+    pub fn weighted(parts: &[Observation], weights: &[f64]) -> Observation {
+        assert_eq!(parts.len(), weights.len(), "one weight per coordinate");
+        let c = parts.first().map_or(1, |o| o.r.ncols());
+        let stacked = Mat::from_fn(c * parts.len(), c, |i, j| {
+            weights[i / c] * parts[i / c].r[(i % c, j)]
+        });
+        Observation {
+            r: r_factor(&stacked),
+            rows: parts.iter().map(|o| o.rows).sum(),
+        }
+    }
+}
+
+/// Chunks factored in parallel before their factors are merged: bounds the factors
+/// held at once (a long log in memory has thousands of chunks).
+const CHUNKS_IN_FLIGHT: usize = 32;
+
+/// The rows `[H | τ]` of `samples` in parallel chunks of [`CHUNK_SAMPLES`] (row
+/// `k·n + j`: coordinate `j` of the chunk's sample `k`), each reduced by `reduce`;
+/// `merge` gets the chunks' results in order.
+fn chunk_factors(
+    model: &Model,
+    samples: Samples<'_>,
+    reduce: impl Fn(Mat<f64>) -> Vec<Observation> + Sync,
+    mut merge: impl FnMut(Vec<Observation>),
+) {
+    let n = model.dof();
+    let p = model.n_params();
+    let count = samples.len();
+    let chunks: Vec<(usize, usize)> = (0..count)
+        .step_by(CHUNK_SAMPLES)
+        .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
+        .collect();
+    for group in chunks.chunks(CHUNKS_IN_FLIGHT) {
+        let factors: Vec<Vec<Observation>> = group
             .par_iter()
             .map_init(
                 || {
@@ -180,25 +276,17 @@ impl Observation {
                         model.regressor_into(ws, q, dq, ddq, h);
                         for j in 0..n {
                             let row = (k - start) * n + j;
-                            let w = weights[j];
                             for c in 0..p {
-                                block[(row, c)] = w * h[j * p + c];
+                                block[(row, c)] = h[j * p + c];
                             }
-                            block[(row, p)] = w * samples.tau[(k, j)];
+                            block[(row, p)] = samples.tau[(k, j)];
                         }
                     }
-                    Observation {
-                        r: r_factor(&block),
-                        rows,
-                    }
+                    reduce(block)
                 },
             )
             .collect();
-        let mut obs = Observation::new(p);
-        for f in &factors {
-            obs.merge(f);
-        }
-        obs
+        factors.into_iter().for_each(&mut merge);
     }
 }
 
@@ -262,6 +350,39 @@ mod tests {
         assert!((r1 - r2).abs() < 1e-9 * r2);
         x[0] += 1.0;
         assert!(((obs.r() * &x).norm() - (&full * &x).norm()).abs() < 1e-9 * r2);
+    }
+
+    #[test]
+    fn per_coordinate_parts_weighted_equal_the_weighted_assembly() {
+        let model = Model::builtin("psm").unwrap();
+        let n = model.dof();
+        let [q, dq, ddq, tau] = random_samples(&model, 2 * CHUNK_SAMPLES + 5, 11);
+        let s = Samples {
+            q: &q,
+            dq: &dq,
+            ddq: &ddq,
+            tau: &tau,
+        };
+        let weights: Vec<f64> = (0..n).map(|j| 0.5 + 0.3 * j as f64).collect();
+        let direct = Observation::assemble(&model, s, &weights);
+        let parts = Observation::assemble_per_coordinate(&model, s);
+        assert!(parts.iter().all(|o| o.rows() == q.nrows()));
+        let combined = Observation::weighted(&parts, &weights);
+        assert_eq!(combined.rows(), direct.rows());
+        let g1 = combined.r().transpose() * combined.r();
+        let g2 = direct.r().transpose() * direct.r();
+        assert!(
+            (&g1 - &g2).amax() < 1e-12 * g2.amax(),
+            "{}",
+            (&g1 - &g2).amax()
+        );
+        // One coordinate's factor holds that coordinate's residual: zero weight elsewhere.
+        let mut only = vec![0.0; n];
+        only[2] = 1.0;
+        let third = Observation::weighted(&parts, &only);
+        let g3 = third.r().transpose() * third.r();
+        let g = parts[2].r().transpose() * parts[2].r();
+        assert!((&g3 - &g).amax() < 1e-12 * g.amax());
     }
 
     #[test]
