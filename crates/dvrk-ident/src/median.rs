@@ -67,7 +67,8 @@ impl Target {
         self.width = span.div_ceil(u128::from(BUCKETS)) as u64;
         let buckets = span.div_ceil(u128::from(self.width)) as usize;
         self.histogram.clear();
-        self.histogram.resize(if self.resolved() { 0 } else { buckets }, 0);
+        self.histogram
+            .resize(if self.resolved() { 0 } else { buckets }, 0);
     }
 
     fn observe(&mut self, key: u64) {

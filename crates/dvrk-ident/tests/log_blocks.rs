@@ -26,11 +26,7 @@ fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> Trajectory {
 }
 
 fn read_blocks(reader: &LogReader, size: usize) -> Trajectory {
-    let blocks: Vec<Trajectory> = reader
-        .blocks(size)
-        .unwrap()
-        .map(|b| b.unwrap())
-        .collect();
+    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
     let rows: usize = blocks.iter().map(Trajectory::len).sum();
     let cat = |f: &dyn Fn(&Trajectory) -> Option<&DMatrix<f64>>| {
         f(&blocks[0]).map(|_| {
@@ -56,9 +52,21 @@ fn read_blocks(reader: &LogReader, size: usize) -> Trajectory {
 #[test]
 fn blocks_of_any_size_are_the_whole_log() {
     let cases = [
-        ("wpi.csv", LogFormat::Wpi, log(3001, true, Coordinates::Model)),
-        ("csv.csv", LogFormat::Csv, log(3001, true, Coordinates::Measured)),
-        ("nodq.csv", LogFormat::Csv, log(2500, false, Coordinates::Model)),
+        (
+            "wpi.csv",
+            LogFormat::Wpi,
+            log(3001, true, Coordinates::Model),
+        ),
+        (
+            "csv.csv",
+            LogFormat::Csv,
+            log(3001, true, Coordinates::Measured),
+        ),
+        (
+            "nodq.csv",
+            LogFormat::Csv,
+            log(2500, false, Coordinates::Model),
+        ),
     ];
     for (name, format, traj) in cases {
         let path = temp(name);
@@ -95,7 +103,11 @@ fn bad_rows_are_named_by_line_in_any_block() {
     let mut text = String::from("time,position.a,velocity.a,effort.a\n");
     for k in 0..100 {
         let t = if k == 56 { 55 } else { k } as f64 * 0.005;
-        let p = if k == 60 { "nan".to_string() } else { format!("{}", k as f64 * 0.1) };
+        let p = if k == 60 {
+            "nan".to_string()
+        } else {
+            format!("{}", k as f64 * 0.1)
+        };
         text += &format!("{t},{p},1.0,2.0\n");
     }
     std::fs::write(&path, text).unwrap();
@@ -107,11 +119,7 @@ fn bad_rows_are_named_by_line_in_any_block() {
     );
     let reader = LogReader::open(&path, None, None, &opts).unwrap();
     for size in [1, 10, 56, 57, 1000] {
-        let e = reader
-            .blocks(size)
-            .unwrap()
-            .find_map(Result::err)
-            .unwrap();
+        let e = reader.blocks(size).unwrap().find_map(Result::err).unwrap();
         assert_eq!(e.to_string(), whole.to_string(), "blocks of {size}");
     }
     std::fs::remove_file(&path).unwrap();

@@ -1030,11 +1030,7 @@ fn mcap_cut_or_corrupted_files_never_panic() {
 
 /// Every block of `reader` in blocks of `size`, concatenated.
 fn concatenated(reader: &McapReader, size: usize) -> Trajectory {
-    let blocks: Vec<Trajectory> = reader
-        .blocks(size)
-        .unwrap()
-        .map(|b| b.unwrap())
-        .collect();
+    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
     assert!(blocks.iter().all(|b| b.len() <= size));
     let rows: usize = blocks.iter().map(Trajectory::len).sum();
     let cat = |f: fn(&Trajectory) -> Option<&DMatrix<f64>>| {
@@ -1084,7 +1080,13 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
         if (2..stamps.len() - 5).contains(&k) {
             let sj = s + 1_500_000;
             let t = (sj - T0) as f64 / 1e9;
-            jaw_backlog.push(joint_state(sj, &["jaw"], &[0.3 + 0.2 * t], &[0.2], &[-0.1 + t]));
+            jaw_backlog.push(joint_state(
+                sj,
+                &["jaw"],
+                &[0.3 + 0.2 * t],
+                &[0.2],
+                &[-0.1 + t],
+            ));
         }
         if k % 37 == 36 {
             for m in jaw_backlog.drain(..) {
@@ -1138,7 +1140,10 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
         assert_eq!(whole.timing.largest_step_s, steps[m - 1] as f64 / 1e9);
         println!(
             "{:?}: {} samples, trimmed {:?}, median step {} s",
-            opts.topics, whole.trajectory.len(), whole.trimmed, whole.timing.median_step_s
+            opts.topics,
+            whole.trajectory.len(),
+            whole.trimmed,
+            whole.timing.median_step_s
         );
     }
 }

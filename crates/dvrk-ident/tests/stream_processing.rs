@@ -29,7 +29,11 @@ fn synthetic(n: usize, with_dq: bool) -> Trajectory {
     });
     let tau = DMatrix::from_fn(n, 3, |i, j| {
         let t = time[i];
-        let step = if (t * (0.7 + 0.2 * j as f64)).sin() > 0.0 { 0.3 } else { -0.3 };
+        let step = if (t * (0.7 + 0.2 * j as f64)).sin() > 0.0 {
+            0.3
+        } else {
+            -0.3
+        };
         2.0 * (0.9 * t).cos() + step + 0.02 * noise()
     });
     Trajectory {
@@ -64,7 +68,11 @@ fn blocks(traj: &Trajectory, size: usize) -> Vec<Trajectory> {
 }
 
 /// The streamed processing of `traj` in blocks of `size`, concatenated.
-fn streamed(traj: &Trajectory, settings: &Processing, size: usize) -> Result<Processed, SignalError> {
+fn streamed(
+    traj: &Trajectory,
+    settings: &Processing,
+    size: usize,
+) -> Result<Processed, SignalError> {
     let parts = blocks(traj, size);
     let mut survey = TimingSurvey::new();
     let timing = loop {

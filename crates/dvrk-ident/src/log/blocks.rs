@@ -96,9 +96,11 @@ impl LogReader {
         let path = self.path.as_path();
         let source = match (&self.mcap, self.format) {
             (Some(m), _) => Source::Mcap(m.blocks(block_samples)?),
-            (None, LogFormat::Wpi) => {
-                Source::Wpi(WpiBlocks::open(path, self.rate_hz.unwrap_or(f64::NAN), None)?)
-            }
+            (None, LogFormat::Wpi) => Source::Wpi(WpiBlocks::open(
+                path,
+                self.rate_hz.unwrap_or(f64::NAN),
+                None,
+            )?),
             (None, _) => Source::Csv(HeaderedBlocks::open(path)?),
         };
         let resampler = match self.resample_hz {

@@ -127,7 +127,11 @@ pub struct WpiBlocks {
 impl WpiBlocks {
     /// Opens `path`; `rate_hz` (Hz) is the implicit clock, `dof` the number of joints
     /// (`None`: columns / 3 of the first row).
-    pub fn open(path: impl AsRef<Path>, rate_hz: f64, dof: Option<usize>) -> Result<Self, LogError> {
+    pub fn open(
+        path: impl AsRef<Path>,
+        rate_hz: f64,
+        dof: Option<usize>,
+    ) -> Result<Self, LogError> {
         let path = path.as_ref();
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(LogError::InvalidRate {
@@ -184,7 +188,13 @@ impl WpiBlocks {
                 });
             }
             for (c, field) in rec.iter().enumerate() {
-                values.push(parse_field(&path, line, c, || wpi_column_name(c, n), field)?);
+                values.push(parse_field(
+                    &path,
+                    line,
+                    c,
+                    || wpi_column_name(c, n),
+                    field,
+                )?);
             }
             count += 1;
         }
@@ -201,7 +211,9 @@ impl WpiBlocks {
         let first = self.rows;
         self.rows += count;
         Ok(Some(Trajectory {
-            time: (first..self.rows).map(|k| k as f64 / self.rate_hz).collect(),
+            time: (first..self.rows)
+                .map(|k| k as f64 / self.rate_hz)
+                .collect(),
             q: all.columns(0, n).into_owned(),
             dq: Some(all.columns(n, n).into_owned()),
             tau: all.columns(2 * n, n).into_owned(),

@@ -403,10 +403,12 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
     let mut raw = Vec::new();
     loop {
         raw.clear();
-        let read = text.read_until(b'\n', &mut raw).map_err(|source| LogError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
+        let read = text
+            .read_until(b'\n', &mut raw)
+            .map_err(|source| LogError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
         if read == 0 {
             return Err(LogError::Empty {
                 path: path.to_path_buf(),

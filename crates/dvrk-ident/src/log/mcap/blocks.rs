@@ -81,7 +81,11 @@ impl Merge {
                     merged[at..at + v.len()].copy_from_slice(v);
                 }
             };
-            put(&mut merged, 0, [&clock.position, &clock.velocity, &clock.effort]);
+            put(
+                &mut merged,
+                0,
+                [&clock.position, &clock.velocity, &clock.effort],
+            );
             let mut col = self.widths[0];
             for (k, w) in self.others.iter_mut().enumerate() {
                 // The last sample at or before t, then the sample with t's stamp or
@@ -93,7 +97,10 @@ impl Merge {
                     (Some(a), Some(b)) if a.stamp != t => {
                         let f = seconds_between(a.stamp, t) / seconds_between(a.stamp, b.stamp);
                         let mix = |x: &[f64], y: &[f64]| -> Vec<f64> {
-                            x.iter().zip(y).map(|(x, y)| (1.0 - f) * x + f * y).collect()
+                            x.iter()
+                                .zip(y)
+                                .map(|(x, y)| (1.0 - f) * x + f * y)
+                                .collect()
                         };
                         let values = [
                             mix(&a.position, &b.position),
@@ -227,12 +234,14 @@ impl<'a> McapBlocks<'a> {
             match got {
                 None => {
                     self.at_end = true;
-                    self.merge.drain(true, &mut |t, r| merged.push((t, r.to_vec())));
+                    self.merge
+                        .drain(true, &mut |t, r| merged.push((t, r.to_vec())));
                 }
                 Some(None) => continue,
                 Some(Some(k)) => {
                     self.merge.add(k, &row);
-                    self.merge.drain(false, &mut |t, r| merged.push((t, r.to_vec())));
+                    self.merge
+                        .drain(false, &mut |t, r| merged.push((t, r.to_vec())));
                 }
             }
             for (stamp, values) in merged {
@@ -276,7 +285,13 @@ impl<'a> McapBlocks<'a> {
         };
         block
             .validate_rows(self.given, self.last_time)
-            .map_err(|e| mcap_error(&self.path, Some(&self.plan.topics[0]), McapProblem::Invalid(e)))?;
+            .map_err(|e| {
+                mcap_error(
+                    &self.path,
+                    Some(&self.plan.topics[0]),
+                    McapProblem::Invalid(e),
+                )
+            })?;
         self.given += n;
         self.last_time = block.time.last().copied();
         Ok(Some(block))

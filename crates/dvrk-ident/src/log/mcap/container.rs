@@ -99,7 +99,8 @@ impl Scanner {
         mut f: impl FnMut(MessageRef<'_>) -> Result<T, LogError>,
     ) -> Result<Option<T>, LogError> {
         let path = self.path.as_path();
-        let container = |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
+        let container =
+            |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
         while let Some(event) = self.reader.next_event() {
             match event.map_err(|e| container(e, self.bytes_read))? {
                 LinearReadEvent::ReadRequest(need) => {

@@ -18,8 +18,8 @@ use nalgebra::DMatrix;
 use super::container::{mcap_error, scan, MessageRef, Scanner};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::{
-    JointStateSeries, McapOptions, McapProblem, TimeSource, TimingReport,
-    GAP_FACTOR, JITTER_TOLERANCE,
+    JointStateSeries, McapOptions, McapProblem, TimeSource, TimingReport, GAP_FACTOR,
+    JITTER_TOLERANCE,
 };
 use crate::log::LogError;
 use crate::median::{ExactMedian, MedianPass};
@@ -54,7 +54,8 @@ impl StampStats {
                 }
                 self.first_bad.get_or_insert((self.count, self.last, stamp));
             } else {
-                self.median.observe((i128::from(stamp) - i128::from(self.last)) as u64);
+                self.median
+                    .observe((i128::from(stamp) - i128::from(self.last)) as u64);
             }
         }
         self.last = stamp;
@@ -86,7 +87,8 @@ impl StampStats {
 
     /// Another pass over the steps, for the median (stamps already checked).
     fn observe_step(&mut self, previous: i64, stamp: i64) {
-        self.median.observe((i128::from(stamp) - i128::from(previous)) as u64);
+        self.median
+            .observe((i128::from(stamp) - i128::from(previous)) as u64);
     }
 
     /// Whether a step is a gap (longer than [`GAP_FACTOR`] median steps).
@@ -100,7 +102,9 @@ impl StampStats {
     /// Whether a step is a gap or jittered.
     fn is_irregular(&self) -> bool {
         match (self.median2, self.steps) {
-            (Some(m2), Some((lo, hi))) => [lo, hi].iter().any(|&s| is_gap(s, m2) || is_jitter(s, m2)),
+            (Some(m2), Some((lo, hi))) => {
+                [lo, hi].iter().any(|&s| is_gap(s, m2) || is_jitter(s, m2))
+            }
             _ => false,
         }
     }
@@ -248,7 +252,11 @@ pub(super) fn survey(
             0 => {
                 let rejected = surveys
                     .values()
-                    .filter_map(|s| s.state.rejected.map(|why| format!("{}: {why}", s.state.topic)))
+                    .filter_map(|s| {
+                        s.state
+                            .rejected
+                            .map(|why| format!("{}: {why}", s.state.topic))
+                    })
                     .collect();
                 return Err(mcap_error(
                     path,
@@ -323,11 +331,12 @@ fn stamp_pass(
             if !is_joint_state(m.channel) {
                 return Ok(());
             }
-            let (_, stamp) = decode(&m, counts[k], time_source).map_err(|problem| LogError::Mcap {
-                path: path.to_path_buf(),
-                topic: Some(topics[k].clone()),
-                problem,
-            })?;
+            let (_, stamp) =
+                decode(&m, counts[k], time_source).map_err(|problem| LogError::Mcap {
+                    path: path.to_path_buf(),
+                    topic: Some(topics[k].clone()),
+                    problem,
+                })?;
             counts[k] += 1;
             f(k, stamp);
             Ok(())
@@ -485,7 +494,11 @@ pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError>
     let mut surveys = survey(path, &options.topics, ts, false)?;
     for s in &surveys {
         if !s.state.has_effort {
-            return Err(mcap_error(path, Some(&s.state.topic), McapProblem::NoEffort));
+            return Err(mcap_error(
+                path,
+                Some(&s.state.topic),
+                McapProblem::NoEffort,
+            ));
         }
     }
     let topics: Vec<String> = surveys.iter().map(|s| s.state.topic.clone()).collect();

@@ -129,12 +129,13 @@ impl BlockProcessor {
                 (Some(r), rate, n, None)
             }
             None => {
-                let median = timing
-                    .median_step_s
-                    .ok_or_else(|| TrajectoryError::TooFewSamples {
-                        source_name: source.to_string(),
-                        samples: timing.samples,
-                    })?;
+                let median =
+                    timing
+                        .median_step_s
+                        .ok_or_else(|| TrajectoryError::TooFewSamples {
+                            source_name: source.to_string(),
+                            samples: timing.samples,
+                        })?;
                 (None, 1.0 / median, timing.samples, Some(median))
             }
         };
@@ -277,8 +278,16 @@ impl BlockProcessor {
                     "{}: a block with {} joints{} in a log of {n} joints{}",
                     self.source,
                     block.dof(),
-                    if block.dq.is_some() { " and velocities" } else { "" },
-                    if self.dq_measured { " with velocities" } else { "" }
+                    if block.dq.is_some() {
+                        " and velocities"
+                    } else {
+                        ""
+                    },
+                    if self.dq_measured {
+                        " with velocities"
+                    } else {
+                        ""
+                    }
                 ),
             });
         }

@@ -131,7 +131,10 @@ impl Column {
         for i in 1..=padlen {
             ext.push(self.forward.step(2.0 * last - self.tail[n - 1 - i]));
         }
-        let y_end = ext.last().copied().unwrap_or_else(|| *self.pending.back().expect("started"));
+        let y_end = ext
+            .last()
+            .copied()
+            .unwrap_or_else(|| *self.pending.back().expect("started"));
         self.backward.settle(y_end);
         for &y in ext.iter().rev() {
             self.backward.step(y);
@@ -246,9 +249,7 @@ impl ZeroPhase {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::signal::{
-        butter_lowpass_sos_wn, butter_lowpass_wn, filtfilt, sosfiltfilt, Section,
-    };
+    use crate::signal::{butter_lowpass_sos_wn, butter_lowpass_wn, filtfilt, sosfiltfilt, Section};
 
     fn signal(n: usize) -> Vec<f64> {
         (0..n)
@@ -287,7 +288,11 @@ mod tests {
         let margin = settle_margin(&sos, 1e-12);
         let whole = sosfiltfilt(&sos, &x, None).unwrap();
         let got = streamed(Stepper::sos(&sos).unwrap(), margin, None, &x);
-        let err = whole.iter().zip(&got).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let err = whole
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert_eq!(got.len(), x.len());
         assert!(err < 1e-12, "sos {err:e}");
         // The last chunk (and a log shorter than the margin) is exact.
@@ -301,12 +306,20 @@ mod tests {
         let whole = filtfilt(&tf.b, &tf.a, &x, Some(20)).unwrap();
         let margin = settle_margin(&butter_lowpass_sos_wn(6, 0.17).unwrap(), 1e-12);
         let got = streamed(Stepper::ba(&tf.b, &tf.a).unwrap(), margin, Some(20), &x);
-        let err = whole.iter().zip(&got).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let err = whole
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(err < 1e-11, "ba {err:e}");
         // Without enough margin the streamed result is visibly off: the margin matters.
         let got = streamed(Stepper::sos(&sos).unwrap(), 5, None, &x);
         let whole = sosfiltfilt(&sos, &x, None).unwrap();
-        let err = whole.iter().zip(&got).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        let err = whole
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
         assert!(err > 1e-6, "{err:e}");
     }
 
@@ -321,7 +334,10 @@ mod tests {
         }
         assert!(matches!(
             z.finish(&mut out),
-            Err(SignalError::TooShort { len: 15, padlen: 15 })
+            Err(SignalError::TooShort {
+                len: 15,
+                padlen: 15
+            })
         ));
         assert!(out.is_empty());
     }
