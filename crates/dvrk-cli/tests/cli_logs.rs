@@ -588,3 +588,46 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn stream_gives_the_same_result_document_and_table() {
+    let log = example("psm_excitation.mcap");
+    let variants: [&[&str]; 3] = [
+        &["--method", "sdp", "--test", &log, "--test-window", "500"],
+        &["--method", "irls", "--resample", "150", "--trim", "50"],
+        &["--method", "wls", "--filter-torque", "--cutoff", "8"],
+    ];
+    for extra in variants {
+        let mut args = vec!["fit", log.as_str(), "--robot", "psm"];
+        args.extend_from_slice(extra);
+        let outputs: Vec<(serde_json::Value, String)> = [false, true]
+            .iter()
+            .map(|&stream| {
+                let mut a = args.clone();
+                if stream {
+                    a.push("--stream");
+                }
+                let (ok, table, err) = run(&a);
+                assert!(ok, "{a:?}: {err}");
+                a.push("--json");
+                let (ok, out, err) = run(&a);
+                assert!(ok, "{a:?}: {err}");
+                let mut doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+                // Wall-clock time is the only difference.
+                doc["solver"]["seconds"] = serde_json::Value::Null;
+                let table: String = table
+                    .lines()
+                    .filter(|l| !l.starts_with("solver "))
+                    .collect::<Vec<_>>()
+                    .join("\n");
+                (doc, table)
+            })
+            .collect();
+        assert_eq!(outputs[0].0, outputs[1].0, "{extra:?}: documents differ");
+        assert_eq!(outputs[0].1, outputs[1].1, "{extra:?}: tables differ");
+        assert_eq!(outputs[0].0["solver"]["converged"], true);
+    }
+    // Errors name the file when streamed too.
+    let (ok, _, err) = run(&["fit", "missing.mcap", "--robot", "psm", "--stream"]);
+    assert!(!ok && err.contains("missing.mcap"), "{err}");
+}

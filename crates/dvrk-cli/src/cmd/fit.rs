@@ -4,8 +4,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Result};
+use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
-use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::log::{self, LogFormat, LogReader};
+use dvrk_ident::progress::Silent;
 use dvrk_ident::result::{write_atomic, InputInfo};
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
@@ -84,6 +86,19 @@ impl McapArgs {
     }
 }
 
+/// The format of `path` (given, or from the extension and content); `--topic` only
+/// for MCAP logs.
+fn log_format(path: &str, format: Option<LogFormat>, mcap: &McapArgs) -> Result<LogFormat> {
+    let format = match format {
+        Some(f) => f,
+        None => log::detect_format(path)?,
+    };
+    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
+        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
+    }
+    Ok(format)
+}
+
 /// Reads a log in `format` (default: from the extension and content) with the MCAP
 /// options of `mcap`; `--resample` applies to every format (MCAP while reading).
 pub fn read_log(
@@ -92,13 +107,7 @@ pub fn read_log(
     rate: Option<f64>,
     mcap: &McapArgs,
 ) -> Result<dvrk_ident::Trajectory> {
-    let format = match format {
-        Some(f) => f,
-        None => log::detect_format(path)?,
-    };
-    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
-        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
-    }
+    let format = log_format(path, format, mcap)?;
     let traj = log::read_with(path, Some(format), rate, &mcap.options())?;
     Ok(traj)
 }
@@ -136,6 +145,17 @@ impl LogArgs {
             self.rate,
             &self.mcap,
         )
+    }
+
+    /// Opens a log for reading block by block (the checks of [`LogArgs::read`]).
+    pub fn open(&self, path: &str) -> Result<LogReader> {
+        let format = log_format(path, self.format.map(FormatArg::format), &self.mcap)?;
+        Ok(LogReader::open(
+            path,
+            Some(format),
+            self.rate,
+            &self.mcap.options(),
+        )?)
     }
 
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
@@ -195,15 +215,25 @@ pub struct Args {
     /// Print the result document to stdout instead of the table
     #[arg(long)]
     pub json: bool,
+    /// Read the logs from disk block by block, in memory independent of their length,
+    /// instead of loading them (several passes over the files; the same result).
+    /// Automatic for a log larger than 256 MiB
+    #[arg(long)]
+    pub stream: bool,
+}
+
+/// Logs larger than this are fitted streamed (`--stream`): about a tenth of this
+/// machine's memory in samples and their processed copies.
+pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
+
+/// Whether a log file is large enough to be streamed (a file that cannot be examined
+/// is read the usual way, which reports the problem).
+fn is_large(path: &str) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES)
 }
 
 pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
-    let train = args.logs.read(&args.log)?;
-    let test = match &args.test {
-        Some(t) => Some(args.logs.read(t)?),
-        None => None,
-    };
     let mut settings = args.logs.settings(FitSettings::default())?;
     settings.method = match args.method {
         MethodArg::Ols => Method::Ols,
@@ -212,7 +242,29 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::Sdp => Method::Sdp,
     };
     settings.test_window = args.test_window;
-    let mut result = dvrk_ident::fit(&model, &train, test.as_ref(), &settings)?;
+    let stream = args.stream || is_large(&args.log) || args.test.as_deref().is_some_and(is_large);
+    let mut result = if stream {
+        let train = args.logs.open(&args.log)?;
+        let test = match &args.test {
+            Some(t) => Some(args.logs.open(t)?),
+            None => None,
+        };
+        fit_stream(
+            &model,
+            &train,
+            test.as_ref(),
+            &settings,
+            BLOCK_SAMPLES,
+            &Silent,
+        )?
+    } else {
+        let train = args.logs.read(&args.log)?;
+        let test = match &args.test {
+            Some(t) => Some(args.logs.read(t)?),
+            None => None,
+        };
+        dvrk_ident::fit(&model, &train, test.as_ref(), &settings)?
+    };
     result
         .inputs
         .push(InputInfo::from_file("train", Path::new(&args.log))?);
