@@ -7,19 +7,22 @@
 //!
 //! 1. a timing survey of each log (validation, median step; an extra pass only for
 //!    timing with very many distinct steps, see [`crate::median`]);
-//! 2. the observation: one R factor per coordinate ([`Observation::assemble_per_coordinate`],
-//!    merged block by block), and the range of each processed torque. The weights are
-//!    only known at the end of the log (WLS, SDP: the torque ranges), so the weighted
-//!    observation is formed afterwards from the per-coordinate factors
-//!    ([`Observation::weighted`], exact);
+//! 2. the observation: one R factor per coordinate ([`Observation::add_per_coordinate`],
+//!    fed batches of whole chunks counted from the log's start, so that the factors
+//!    are those of the log in memory to the last bit), and the range of each processed
+//!    torque. The weights are only known at the end of the log (WLS, SDP: the torque
+//!    ranges), so the weighted observation is formed afterwards from the
+//!    per-coordinate factors ([`Observation::weighted`], exact);
 //! 3. IRLS only: one pass per re-weighting for the residuals (the weights are then
 //!    applied to the same factors, without assembling again);
 //! 4. the metrics (sums of squares per coordinate) on the training log, and on the
 //!    test log (stopping after the test window).
 //!
-//! The result equals [`super::fit`] of the whole logs up to rounding and the filters'
-//! settling tolerance ([`crate::signal::stream::SETTLE_TOLERANCE`]); the tests check
-//! parameters and metrics to 1e-9 relative.
+//! [`super::fit`] of the logs in memory processes them with the same block processor
+//! and reduces them with the same chunks, so the two give the same result to the last
+//! bit (the tests require 1e-9 relative); both differ from the exact whole-log
+//! [`crate::signal::process`] only by the filters' settling tolerance
+//! ([`crate::signal::stream::SETTLE_TOLERANCE`]).
 
 use std::ops::ControlFlow;
 

@@ -95,7 +95,7 @@ impl LogReader {
     pub fn blocks(&self, block_samples: usize) -> Result<LogBlocks<'_>, LogError> {
         let path = self.path.as_path();
         let source = match (&self.mcap, self.format) {
-            (Some(m), _) => Source::Mcap(m.blocks(block_samples)?),
+            (Some(m), _) => Source::Mcap(Box::new(m.blocks(block_samples)?)),
             (None, LogFormat::Wpi) => Source::Wpi(WpiBlocks::open(
                 path,
                 self.rate_hz.unwrap_or(f64::NAN),
@@ -155,7 +155,7 @@ impl LogReader {
 enum Source<'a> {
     Wpi(WpiBlocks),
     Csv(HeaderedBlocks),
-    Mcap(McapBlocks<'a>),
+    Mcap(Box<McapBlocks<'a>>),
 }
 
 /// One pass over a log, block by block (see [`LogReader::blocks`]).

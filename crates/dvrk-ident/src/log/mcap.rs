@@ -29,7 +29,10 @@
 //! outside the time span of another topic (it may start a little later or stop a little
 //! earlier) are dropped at either end ([`McapLog::trimmed`]); a gap in another topic is
 //! refused like a gap of the clock unless resampling is asked for. Velocities are kept
-//! only if every topic has them; joint names must be unique across topics.
+//! only if every topic has them; joint names must be unique across topics. The topics
+//! are merged as their messages come: a clock sample waits for the other topics to
+//! reach its stamp, so memory is bounded by how far apart the topics are written in
+//! the file (a recorder interleaves them), not by the log.
 //!
 //! **Time**: [`TimeSource::HeaderStamp`] (default, the time the controller measured the
 //! joints) or the MCAP log or publish time of each message. [`Trajectory::time`] is in

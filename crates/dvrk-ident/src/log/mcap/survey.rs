@@ -371,9 +371,18 @@ fn finish_median(
     Ok(())
 }
 
+/// Where the first irregular step of a stamp sequence is, ns.
+#[derive(Clone, Copy, Debug, Default)]
+struct Irregular {
+    /// The sequence's first stamp.
+    first: i64,
+    /// The stamps before and after the step.
+    previous: i64,
+    stamp: i64,
+}
+
 /// The timing report of topic `k`'s stamps within `lo..=hi` (strictly increasing,
-/// median known), and the stamps around the first irregular step: `(first stamp,
-/// previous, irregular)`.
+/// median known), and where its first irregular step is.
 fn classify(
     path: &Path,
     topics: &[String],
@@ -381,7 +390,7 @@ fn classify(
     k: usize,
     (lo, hi): (i64, i64),
     stats: &StampStats,
-) -> Result<(TimingReport, Option<(i64, i64, i64)>), LogError> {
+) -> Result<(TimingReport, Option<Irregular>), LogError> {
     let median2 = stats.median2.unwrap_or(0);
     let mut report = TimingReport {
         samples: stats.count,
@@ -416,7 +425,11 @@ fn classify(
             };
             if irregular && report.first_irregular.is_none() {
                 report.first_irregular = Some(index);
-                around = Some((first.unwrap_or(stamp), p, stamp));
+                around = Some(Irregular {
+                    first: first.unwrap_or(stamp),
+                    previous: p,
+                    stamp,
+                });
             }
         }
         previous = Some(stamp);
@@ -429,10 +442,14 @@ fn non_uniform(
     path: &Path,
     topic: &str,
     report: &TimingReport,
-    around: Option<(i64, i64, i64)>,
+    around: Option<Irregular>,
     time_source: TimeSource,
 ) -> LogError {
-    let (first, previous, stamp) = around.unwrap_or_default();
+    let Irregular {
+        first,
+        previous,
+        stamp,
+    } = around.unwrap_or_default();
     let suggested = if report.median_step_s > 0.0 {
         (1.0 / report.median_step_s).round().max(1.0)
     } else {

@@ -291,7 +291,7 @@ impl BlockProcessor {
                 ),
             });
         }
-        let mut out = self.empty();
+        let mut out = Output::default();
         let mut row = vec![0.0; 3 * n];
         for k in 0..block.len() {
             for j in 0..n {
@@ -306,7 +306,7 @@ impl BlockProcessor {
 
     /// The end of the log: the last samples.
     pub fn finish(mut self) -> Result<Processed, SignalError> {
-        let mut out = self.empty();
+        let mut out = Output::default();
         let mut scratch = std::mem::take(&mut self.scratch);
         if let Some(mut r) = self.resampler.take() {
             let (mut times, mut rows) = (Vec::new(), Vec::new());
@@ -348,10 +348,6 @@ impl BlockProcessor {
             }
         }
         Ok(self.collect(out))
-    }
-
-    fn empty(&self) -> Output {
-        Output::default()
     }
 
     /// One input sample (before resampling).

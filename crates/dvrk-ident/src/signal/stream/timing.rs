@@ -45,7 +45,7 @@ pub struct TimingSurvey {
     samples: usize,
     previous: Option<f64>,
     first: Option<f64>,
-    /// The first block's source, joint count and first empty-joints block.
+    /// The source and joint count of the first block (for the emptiness error).
     source: String,
     joints: Option<usize>,
     median: ExactMedian,
