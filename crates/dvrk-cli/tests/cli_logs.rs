@@ -58,14 +58,10 @@ fn true_base_parameters(model: &Model) -> Vec<f64> {
     model.base_parameters().unwrap().project(&pi)
 }
 
+/// The README's main command (default processing), with a method and JSON output.
 fn fit_example(method: &str) -> serde_json::Value {
-    // No low-pass filter: the log is clean apart from white torque noise, and a filter
-    // would smooth the Coulomb friction steps at every velocity reversal (with the default
-    // 5.4 Hz filter the residuals are 0.015-0.06 N·m instead of the 0.002 noise).
     let log = example("psm_excitation.mcap");
-    let (ok, out, err) = run(&[
-        "fit", &log, "--robot", "psm", "--method", method, "--cutoff", "none", "--json",
-    ]);
+    let (ok, out, err) = run(&["fit", &log, "--robot", "psm", "--method", method, "--json"]);
     assert!(ok, "{err}");
     serde_json::from_str(&out).unwrap()
 }
@@ -98,6 +94,44 @@ fn ols_fit_of_the_example_recovers_the_generating_base_parameters() {
         "ols: worst |error|/std {worst:.2}, condition number {:.1}",
         r["condition_number"]
     );
+    // The README's main command is this fit with the default processing.
+    let readme = std::fs::read_to_string(examples().join("../README.md")).unwrap();
+    assert!(readme.contains(
+        "cargo run --release -p dvrk-cli -- fit examples/psm_excitation.mcap --robot psm\n"
+    ));
+}
+
+#[test]
+fn filtering_the_torques_biases_the_example_fit() {
+    // Why the default processing leaves the torques alone: the low-pass smooths the
+    // Coulomb friction steps in the measured torques but not in the regressor.
+    let model = Model::builtin("psm").unwrap();
+    let truth = true_base_parameters(&model);
+    let log = example("psm_excitation.mcap");
+    let (ok, out, err) = run(&[
+        "fit",
+        &log,
+        "--robot",
+        "psm",
+        "--method",
+        "ols",
+        "--filter-torque",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(r["settings"]["processing"]["filter_torque"], true);
+    let worst = r["base_parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(&truth)
+        .map(|(b, t)| (b["value"].as_f64().unwrap() - t).abs() / b["std"].as_f64().unwrap())
+        .fold(0.0, f64::max);
+    assert!(worst > 20.0, "worst |error|/std {worst}");
+    for rms in r["metrics"]["train"]["rms"].as_array().unwrap() {
+        assert!(rms.as_f64().unwrap() > 5.0 * NOISE, "{rms}");
+    }
 }
 
 #[test]
@@ -553,4 +587,47 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
         Some(&wpi_out),
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn stream_gives_the_same_result_document_and_table() {
+    let log = example("psm_excitation.mcap");
+    let variants: [&[&str]; 3] = [
+        &["--method", "sdp", "--test", &log, "--test-window", "500"],
+        &["--method", "irls", "--resample", "150", "--trim", "50"],
+        &["--method", "wls", "--filter-torque", "--cutoff", "8"],
+    ];
+    for extra in variants {
+        let mut args = vec!["fit", log.as_str(), "--robot", "psm"];
+        args.extend_from_slice(extra);
+        let outputs: Vec<(serde_json::Value, String)> = [false, true]
+            .iter()
+            .map(|&stream| {
+                let mut a = args.clone();
+                if stream {
+                    a.push("--stream");
+                }
+                let (ok, table, err) = run(&a);
+                assert!(ok, "{a:?}: {err}");
+                a.push("--json");
+                let (ok, out, err) = run(&a);
+                assert!(ok, "{a:?}: {err}");
+                let mut doc: serde_json::Value = serde_json::from_str(&out).unwrap();
+                // Wall-clock time is the only difference.
+                doc["solver"]["seconds"] = serde_json::Value::Null;
+                let table: String = table
+                    .lines()
+                    .filter(|l| !l.starts_with("solver "))
+                    .collect::<Vec<_>>()
+                    .join("\n");
+                (doc, table)
+            })
+            .collect();
+        assert_eq!(outputs[0].0, outputs[1].0, "{extra:?}: documents differ");
+        assert_eq!(outputs[0].1, outputs[1].1, "{extra:?}: tables differ");
+        assert_eq!(outputs[0].0["solver"]["converged"], true);
+    }
+    // Errors name the file when streamed too.
+    let (ok, _, err) = run(&["fit", "missing.mcap", "--robot", "psm", "--stream"]);
+    assert!(!ok && err.contains("missing.mcap"), "{err}");
 }

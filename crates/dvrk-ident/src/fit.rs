@@ -1,6 +1,9 @@
 //! The identification pipeline: log → model coordinates → known forces removed →
 //! processing → weighted observation → estimator → parameters, metrics and the result
-//! document.
+//! document. [`fit`] works on logs in memory; [`stream::fit_stream`] on logs read from
+//! disk block by block, for logs larger than memory, with the same result.
+
+pub mod stream;
 
 use dvrk_model::{inertia, Model, ParamKind, Workspace};
 use nalgebra::DMatrix;
@@ -12,7 +15,8 @@ use crate::estimate::sdp::{solve_sdp, SdpOptions};
 use crate::observation::{Observation, Samples};
 use crate::progress::{Progress, Silent};
 use crate::result::*;
-use crate::signal::{process, Processing};
+use crate::signal::stream::process_in_blocks;
+use crate::signal::Processing;
 use crate::trajectory::{Coordinates, Trajectory};
 
 /// Which estimator to run.
@@ -157,10 +161,16 @@ pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajecto
         .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
     let mt = model.measured.coupling.transpose();
     let rows = traj.len();
-    let pick = |m: &DMatrix<f64>| DMatrix::from_fn(rows, n, |i, j| m[(i, cols[j])]);
-    let q = pick(&traj.q) * minv.transpose();
-    let dq = traj.dq.as_ref().map(|d| pick(d) * minv.transpose());
-    let tau = pick(&traj.tau) * mt.transpose();
+    // `x · Mᵀ` of the picked columns, summed in a fixed order per sample, so that a
+    // sample maps to the same bits whatever block of a log it comes in.
+    let map = |x: &DMatrix<f64>, m: &DMatrix<f64>| {
+        DMatrix::from_fn(rows, n, |i, j| {
+            (0..n).fold(0.0, |acc, k| acc + x[(i, cols[k])] * m[(j, k)])
+        })
+    };
+    let q = map(&traj.q, &minv);
+    let dq = traj.dq.as_ref().map(|d| map(d, &minv));
+    let tau = map(&traj.tau, &mt);
     Ok(Trajectory {
         time: traj.time.clone(),
         q,
@@ -172,30 +182,39 @@ pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajecto
     })
 }
 
+/// Subtracts the known forces (e.g. the MTM cable) from the torques of `t` (model
+/// coordinates), evaluated on the raw positions as in 2019.
+pub(crate) fn subtract_known_forces(model: &Model, t: &mut Trajectory) {
+    if !model.has_known_forces() {
+        return;
+    }
+    let n = model.dof();
+    let mut q = vec![0.0; n];
+    let mut known = vec![0.0; n];
+    for k in 0..t.len() {
+        for (j, qj) in q.iter_mut().enumerate() {
+            *qj = t.q[(k, j)];
+        }
+        known.fill(0.0);
+        model.add_known_forces(&q, &mut known);
+        for (j, kj) in known.iter().enumerate() {
+            t.tau[(k, j)] -= kj;
+        }
+    }
+}
+
 /// Model coordinates, known forces subtracted (on the raw positions, as in 2019), then
-/// processed.
+/// processed by the block processor ([`process_in_blocks`]: equal to
+/// [`crate::signal::process`] to 1e-12 relative, and to the last bit to what
+/// [`stream::fit_stream`] sees of the same log read from its file).
 pub fn prepare(
     model: &Model,
     traj: &Trajectory,
     processing: &Processing,
 ) -> Result<Prepared, IdentError> {
     let mut t = to_model_coordinates(model, traj)?;
-    if model.has_known_forces() {
-        let n = model.dof();
-        let mut q = vec![0.0; n];
-        let mut known = vec![0.0; n];
-        for k in 0..t.len() {
-            for (j, qj) in q.iter_mut().enumerate() {
-                *qj = t.q[(k, j)];
-            }
-            known.fill(0.0);
-            model.add_known_forces(&q, &mut known);
-            for (j, kj) in known.iter().enumerate() {
-                t.tau[(k, j)] -= kj;
-            }
-        }
-    }
-    let p = process(&t, processing).map_err(|error| IdentError::Signal {
+    subtract_known_forces(model, &mut t);
+    let p = process_in_blocks(&t, processing).map_err(|error| IdentError::Signal {
         source_name: t.source.clone(),
         error,
     })?;
@@ -242,45 +261,161 @@ pub fn joint_metrics(
     data: &Prepared,
     window: Option<usize>,
 ) -> JointMetrics {
-    let pred = predict(model, params, data);
-    let rows = window.map_or(data.len(), |w| w.min(data.len()));
-    let n = model.dof();
-    let mut relative_error = Vec::with_capacity(n);
-    let mut rms = Vec::with_capacity(n);
-    for j in 0..n {
-        let (mut e2, mut t2) = (0.0, 0.0);
-        for k in 0..rows {
-            let e = data.tau[(k, j)] - pred[(k, j)];
-            e2 += e * e;
-            t2 += data.tau[(k, j)] * data.tau[(k, j)];
+    let mut sums = MetricSums::new(model);
+    sums.add(model, params, data.samples(), window);
+    sums.metrics(model)
+}
+
+/// Running per-joint sums of squares of the torques and of the prediction errors, fed
+/// sample block by sample block: the metrics of a log without holding it.
+#[derive(Clone, Debug)]
+pub struct MetricSums {
+    /// `Σ (τ − τ̂)²` per joint.
+    e2: Vec<f64>,
+    /// `Σ τ²` per joint.
+    t2: Vec<f64>,
+    samples: usize,
+}
+
+impl MetricSums {
+    pub fn new(model: &Model) -> Self {
+        let n = model.dof();
+        MetricSums {
+            e2: vec![0.0; n],
+            t2: vec![0.0; n],
+            samples: 0,
         }
-        relative_error.push(if t2 > 0.0 { (e2 / t2).sqrt() } else { f64::NAN });
-        rms.push((e2 / rows.max(1) as f64).sqrt());
     }
-    JointMetrics {
-        joints: model.coordinates.clone(),
-        samples: rows,
-        relative_error,
-        rms,
+
+    /// Samples summed so far.
+    pub fn samples(&self) -> usize {
+        self.samples
+    }
+
+    /// Adds the errors of `params` on the next samples, up to `window` samples in all
+    /// (`None`: no limit).
+    pub fn add(
+        &mut self,
+        model: &Model,
+        params: &[f64],
+        samples: Samples<'_>,
+        window: Option<usize>,
+    ) {
+        let rows = window.map_or(samples.len(), |w| {
+            samples.len().min(w.saturating_sub(self.samples))
+        });
+        let n = model.dof();
+        let mut ws = Workspace::new(model);
+        let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut pred = DMatrix::zeros(rows, n);
+        let mut tau = vec![0.0; n];
+        for k in 0..rows {
+            samples.read(k, &mut q, &mut dq, &mut ddq);
+            model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
+            for j in 0..n {
+                pred[(k, j)] = tau[j];
+            }
+        }
+        for j in 0..n {
+            for k in 0..rows {
+                let t = samples.tau[(k, j)];
+                let e = t - pred[(k, j)];
+                self.e2[j] += e * e;
+                self.t2[j] += t * t;
+            }
+        }
+        self.samples += rows;
+    }
+
+    /// RMS error per joint, N·m or N.
+    fn rms(&self) -> Vec<f64> {
+        self.e2
+            .iter()
+            .map(|e2| (e2 / self.samples.max(1) as f64).sqrt())
+            .collect()
+    }
+
+    /// IRLS weights: `1 / rms` per joint (1 where the error is zero).
+    pub fn inverse_rms(&self) -> Vec<f64> {
+        self.rms()
+            .into_iter()
+            .map(|std| if std > 0.0 { 1.0 / std } else { 1.0 })
+            .collect()
+    }
+
+    pub fn metrics(&self, model: &Model) -> JointMetrics {
+        JointMetrics {
+            joints: model.coordinates.clone(),
+            samples: self.samples,
+            relative_error: self
+                .e2
+                .iter()
+                .zip(&self.t2)
+                .map(|(e2, t2)| {
+                    if *t2 > 0.0 {
+                        (e2 / t2).sqrt()
+                    } else {
+                        f64::NAN
+                    }
+                })
+                .collect(),
+            rms: self.rms(),
+        }
+    }
+}
+
+/// Running per-joint range of the processed torques: the WLS weights of a log read in
+/// blocks.
+#[derive(Clone, Debug)]
+pub struct TorqueRange {
+    min: Vec<f64>,
+    max: Vec<f64>,
+}
+
+impl TorqueRange {
+    pub fn new(joints: usize) -> Self {
+        TorqueRange {
+            min: vec![f64::INFINITY; joints],
+            max: vec![f64::NEG_INFINITY; joints],
+        }
+    }
+
+    /// The torques of more samples (one row per sample).
+    pub fn add(&mut self, tau: &DMatrix<f64>) {
+        for j in 0..tau.ncols() {
+            let c = tau.column(j);
+            if !c.is_empty() {
+                self.min[j] = self.min[j].min(c.min());
+                self.max[j] = self.max[j].max(c.max());
+            }
+        }
+    }
+
+    /// Joint weights `1 / (max − min)` (1/N·m or 1/N; 1 for a constant torque).
+    pub fn weights(&self) -> Vec<f64> {
+        self.min
+            .iter()
+            .zip(&self.max)
+            .map(|(lo, hi)| {
+                let range = hi - lo;
+                if range > 0.0 {
+                    1.0 / range
+                } else {
+                    1.0
+                }
+            })
+            .collect()
     }
 }
 
 /// Joint weights `1 / (max − min)` of the prepared torques (1/N·m or 1/N).
 pub fn range_weights(data: &Prepared) -> Vec<f64> {
-    (0..data.tau.ncols())
-        .map(|j| {
-            let c = data.tau.column(j);
-            let range = c.max() - c.min();
-            if range > 0.0 {
-                1.0 / range
-            } else {
-                1.0
-            }
-        })
-        .collect()
+    let mut r = TorqueRange::new(data.tau.ncols());
+    r.add(&data.tau);
+    r.weights()
 }
 
-fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> IdentError {
+pub(crate) fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> IdentError {
     IdentError::RankDeficient {
         source_name: source.to_string(),
         message: format!(
@@ -329,16 +464,10 @@ pub fn fit_with_progress(
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range_weights(&data),
     };
-    let passes = 1 + if settings.method == Method::Irls {
-        settings.irls_iterations
-    } else {
-        0
-    };
-    progress.stage(
-        "assembling the observation",
-        Some((passes * data.len()) as u64),
-    );
-    let mut obs = Observation::assemble_with_progress(model, data.samples(), &weights, progress);
+    // Per coordinate, then weighted: the same arithmetic as the streamed fit.
+    progress.stage("assembling the observation", Some(data.len() as u64));
+    let parts = Observation::assemble_per_coordinate(model, data.samples(), progress);
+    let mut obs = Observation::weighted(&parts, &weights);
     let mut estimate: BaseEstimate =
         base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
     let mut solver = SolverInfo {
@@ -351,20 +480,10 @@ pub fn fit_with_progress(
     if settings.method == Method::Irls {
         for it in 0..settings.irls_iterations {
             let pi = representative(&base, &estimate.beta, p);
-            let pred = predict(model, &pi, &data);
-            let new: Vec<f64> = (0..n)
-                .map(|j| {
-                    let res = data.tau.column(j) - pred.column(j);
-                    let std = (res.norm_squared() / res.len().max(1) as f64).sqrt();
-                    if std > 0.0 {
-                        1.0 / std
-                    } else {
-                        1.0
-                    }
-                })
-                .collect();
-            weights = new;
-            obs = Observation::assemble_with_progress(model, data.samples(), &weights, progress);
+            let mut residuals = MetricSums::new(model);
+            residuals.add(model, &pi, data.samples(), None);
+            weights = residuals.inverse_rms();
+            obs = Observation::weighted(&parts, &weights);
             estimate = base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
             solver.iterations = it as u32 + 2;
         }
@@ -415,7 +534,7 @@ pub fn fit_with_progress(
 }
 
 #[allow(clippy::too_many_arguments)]
-fn build_result(
+pub(crate) fn build_result(
     model: &Model,
     base: &dvrk_model::BaseParameters,
     settings: &FitSettings,

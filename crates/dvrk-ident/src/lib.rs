@@ -5,11 +5,17 @@
 //! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
 //! the parameters (least squares or the physically consistent semidefinite program),
 //! and [`fit`] runs the whole pipeline and builds the [`result`] document.
+//!
+//! Logs larger than memory go through the same steps block by block:
+//! [`log::LogReader`] reads any format in blocks, [`signal::stream`] processes them,
+//! and [`fit::stream::fit_stream`] reduces them into the observation in several passes
+//! over the files, with the same result as [`fit()`].
 
 pub mod error;
 pub mod estimate;
 pub mod excite;
 pub mod log;
+mod median;
 pub mod observation;
 pub mod progress;
 pub mod report;

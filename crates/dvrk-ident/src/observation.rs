@@ -11,6 +11,8 @@ use faer::Mat;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
+use crate::progress::{Progress, Silent};
+
 /// Samples per parallel chunk: 256 samples of a 7-DoF arm with 116 columns are 1.7 MB.
 pub const CHUNK_SAMPLES: usize = 256;
 
@@ -152,26 +154,130 @@ impl Observation {
     /// 1/N), assembled in parallel chunks and merged in order (the result does not
     /// depend on the number of threads).
     pub fn assemble(model: &Model, samples: Samples<'_>, weights: &[f64]) -> Observation {
-        Observation::assemble_with_progress(model, samples, weights, &crate::progress::Silent)
+        let n = model.dof();
+        assert_eq!(weights.len(), n, "one weight per coordinate");
+        let mut obs = Observation::new(model.n_params());
+        chunk_factors(
+            model,
+            samples,
+            &Silent,
+            |block| {
+                let rows = block.nrows();
+                let mut block = block;
+                for i in 0..rows {
+                    let w = weights[i % n];
+                    for c in 0..block.ncols() {
+                        block[(i, c)] *= w;
+                    }
+                }
+                vec![Observation {
+                    r: r_factor(&block),
+                    rows,
+                }]
+            },
+            |f| obs.merge(&f[0]),
+        );
+        obs
     }
 
-    /// [`Observation::assemble`] reporting the samples done to `progress` (from the
-    /// worker threads, one call per chunk).
-    pub fn assemble_with_progress(
+    /// One observation per coordinate, unweighted: the rows of [`Observation::assemble`]
+    /// split by the coordinate they belong to. Weights can then be chosen after the
+    /// data are read, with [`Observation::weighted`]: what a fit streamed over a long
+    /// log needs, where the weights come from the whole log.
+    ///
+    /// `progress` counts the samples done (from the worker threads, one call per chunk).
+    pub fn assemble_per_coordinate(
         model: &Model,
         samples: Samples<'_>,
-        weights: &[f64],
-        progress: &dyn crate::progress::Progress,
-    ) -> Observation {
-        let n = model.dof();
-        let p = model.n_params();
-        assert_eq!(weights.len(), n, "one weight per coordinate");
-        let count = samples.len();
-        let chunks: Vec<(usize, usize)> = (0..count)
-            .step_by(CHUNK_SAMPLES)
-            .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
-            .collect();
-        let factors: Vec<Observation> = chunks
+        progress: &dyn Progress,
+    ) -> Vec<Observation> {
+        let mut parts = vec![Observation::new(model.n_params()); model.dof()];
+        add_per_coordinate(&mut parts, model, samples, progress);
+        parts
+    }
+
+    /// Adds `samples` to the per-coordinate observations `parts`: each chunk of
+    /// [`CHUNK_SAMPLES`] samples is factored (in parallel) and merged into `parts` in
+    /// order. Samples added in batches of whole chunks therefore give the same factors,
+    /// to the last bit, as all at once: a log streamed in blocks and the same log in
+    /// memory are fitted alike.
+    pub fn add_per_coordinate(parts: &mut [Observation], model: &Model, samples: Samples<'_>) {
+        add_per_coordinate(parts, model, samples, &Silent);
+    }
+
+    /// The observation of the coordinates' rows (`parts`, one per coordinate, from
+    /// [`Observation::assemble_per_coordinate`]) each scaled by its weight: the factor
+    /// of `[w₁ R₁; …; wₙ Rₙ]`, which has the Gram matrix of the weighted rows (exact up
+    /// to rounding).
+    pub fn weighted(parts: &[Observation], weights: &[f64]) -> Observation {
+        assert_eq!(parts.len(), weights.len(), "one weight per coordinate");
+        let c = parts.first().map_or(1, |o| o.r.ncols());
+        let stacked = Mat::from_fn(c * parts.len(), c, |i, j| {
+            weights[i / c] * parts[i / c].r[(i % c, j)]
+        });
+        Observation {
+            r: r_factor(&stacked),
+            rows: parts.iter().map(|o| o.rows).sum(),
+        }
+    }
+}
+
+/// [`Observation::add_per_coordinate`] reporting the samples done to `progress`.
+fn add_per_coordinate(
+    parts: &mut [Observation],
+    model: &Model,
+    samples: Samples<'_>,
+    progress: &dyn Progress,
+) {
+    let n = model.dof();
+    assert_eq!(parts.len(), n, "one observation per coordinate");
+    chunk_factors(
+        model,
+        samples,
+        progress,
+        |block| {
+            let count = block.nrows() / n;
+            (0..n)
+                .map(|j| {
+                    let rows = Mat::from_fn(count, block.ncols(), |k, c| block[(k * n + j, c)]);
+                    Observation {
+                        r: r_factor(&rows),
+                        rows: count,
+                    }
+                })
+                .collect()
+        },
+        |f| {
+            for (o, part) in parts.iter_mut().zip(&f) {
+                o.merge(part);
+            }
+        },
+    );
+}
+
+/// Chunks factored in parallel before their factors are merged: bounds the factors
+/// held at once (a long log in memory has thousands of chunks).
+const CHUNKS_IN_FLIGHT: usize = 32;
+
+/// The rows `[H | τ]` of `samples` in parallel chunks of [`CHUNK_SAMPLES`] (row
+/// `k·n + j`: coordinate `j` of the chunk's sample `k`), each reduced by `reduce`;
+/// `merge` gets the chunks' results in order.
+fn chunk_factors(
+    model: &Model,
+    samples: Samples<'_>,
+    progress: &dyn Progress,
+    reduce: impl Fn(Mat<f64>) -> Vec<Observation> + Sync,
+    mut merge: impl FnMut(Vec<Observation>),
+) {
+    let n = model.dof();
+    let p = model.n_params();
+    let count = samples.len();
+    let chunks: Vec<(usize, usize)> = (0..count)
+        .step_by(CHUNK_SAMPLES)
+        .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
+        .collect();
+    for group in chunks.chunks(CHUNKS_IN_FLIGHT) {
+        let factors: Vec<Vec<Observation>> = group
             .par_iter()
             .map_init(
                 || {
@@ -191,27 +297,19 @@ impl Observation {
                         model.regressor_into(ws, q, dq, ddq, h);
                         for j in 0..n {
                             let row = (k - start) * n + j;
-                            let w = weights[j];
                             for c in 0..p {
-                                block[(row, c)] = w * h[j * p + c];
+                                block[(row, c)] = h[j * p + c];
                             }
-                            block[(row, p)] = w * samples.tau[(k, j)];
+                            block[(row, p)] = samples.tau[(k, j)];
                         }
                     }
-                    let factor = Observation {
-                        r: r_factor(&block),
-                        rows,
-                    };
+                    let factor = reduce(block);
                     progress.advance((end - start) as u64);
                     factor
                 },
             )
             .collect();
-        let mut obs = Observation::new(p);
-        for f in &factors {
-            obs.merge(f);
-        }
-        obs
+        factors.into_iter().for_each(&mut merge);
     }
 }
 
@@ -275,6 +373,39 @@ mod tests {
         assert!((r1 - r2).abs() < 1e-9 * r2);
         x[0] += 1.0;
         assert!(((obs.r() * &x).norm() - (&full * &x).norm()).abs() < 1e-9 * r2);
+    }
+
+    #[test]
+    fn per_coordinate_parts_weighted_equal_the_weighted_assembly() {
+        let model = Model::builtin("psm").unwrap();
+        let n = model.dof();
+        let [q, dq, ddq, tau] = random_samples(&model, 2 * CHUNK_SAMPLES + 5, 11);
+        let s = Samples {
+            q: &q,
+            dq: &dq,
+            ddq: &ddq,
+            tau: &tau,
+        };
+        let weights: Vec<f64> = (0..n).map(|j| 0.5 + 0.3 * j as f64).collect();
+        let direct = Observation::assemble(&model, s, &weights);
+        let parts = Observation::assemble_per_coordinate(&model, s, &Silent);
+        assert!(parts.iter().all(|o| o.rows() == q.nrows()));
+        let combined = Observation::weighted(&parts, &weights);
+        assert_eq!(combined.rows(), direct.rows());
+        let g1 = combined.r().transpose() * combined.r();
+        let g2 = direct.r().transpose() * direct.r();
+        assert!(
+            (&g1 - &g2).amax() < 1e-12 * g2.amax(),
+            "{}",
+            (&g1 - &g2).amax()
+        );
+        // One coordinate's factor holds that coordinate's residual: zero weight elsewhere.
+        let mut only = vec![0.0; n];
+        only[2] = 1.0;
+        let third = Observation::weighted(&parts, &only);
+        let g3 = third.r().transpose() * third.r();
+        let g = parts[2].r().transpose() * parts[2].r();
+        assert!((&g3 - &g).amax() < 1e-12 * g.amax());
     }
 
     #[test]

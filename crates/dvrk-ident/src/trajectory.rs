@@ -222,14 +222,26 @@ impl Trajectory {
     /// source, the signal and joint (column) and the 0-based sample (row).
     pub fn validate(&self) -> Result<(), TrajectoryError> {
         let (n, dof) = (self.q.nrows(), self.q.ncols());
-        let src = || self.source.clone();
         if n == 0 || dof == 0 {
             return Err(TrajectoryError::Empty {
-                source_name: src(),
+                source_name: self.source.clone(),
                 samples: n,
                 joints: dof,
             });
         }
+        self.validate_rows(0, None)
+    }
+
+    /// [`Trajectory::validate`] of a block of a longer log, without the emptiness
+    /// check: rows are numbered from `first_row`, and time must also increase from
+    /// `previous_time` (the log's sample before the block).
+    pub fn validate_rows(
+        &self,
+        first_row: usize,
+        previous_time: Option<f64>,
+    ) -> Result<(), TrajectoryError> {
+        let (n, dof) = (self.q.nrows(), self.q.ncols());
+        let src = || self.source.clone();
         let shape_err = |what, rows, cols| TrajectoryError::Shape {
             source_name: src(),
             what,
@@ -260,7 +272,7 @@ impl Trajectory {
                     source_name: src(),
                     signal: Signal::Time,
                     column: "time".into(),
-                    row,
+                    row: first_row + row,
                     value: t,
                 });
             }
@@ -278,17 +290,22 @@ impl Trajectory {
                             source_name: src(),
                             signal,
                             column: self.joint_names[col].clone(),
-                            row,
+                            row: first_row + row,
                             value: v,
                         });
                     }
                 }
             }
-            if row > 0 && t <= self.time[row - 1] {
+            let previous = if row > 0 {
+                Some(self.time[row - 1])
+            } else {
+                previous_time
+            };
+            if let Some(previous) = previous.filter(|&p| t <= p) {
                 return Err(TrajectoryError::NonMonotonicTime {
                     source_name: src(),
-                    row,
-                    previous: self.time[row - 1],
+                    row: first_row + row,
+                    previous,
                     current: t,
                 });
             }

@@ -1,7 +1,8 @@
 //! Acceptance on the real dVRK measurements, following the 2019 protocol
 //! (dvrk-models.md): fit on trajectory "one", test on "two" over the first period,
 //! 6th-order zero-phase Butterworth at the cut-offs the 2019 code effectively applied
-//! (π·fc: 16.965 Hz PSM, 5.655 Hz MTM), 200 samples trimmed. Prints the table; skips
+//! (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion and the torques, 200 samples
+//! trimmed. Prints the table; skips
 //! with a reason when ../shared is absent.
 
 use std::path::PathBuf;
@@ -94,6 +95,8 @@ fn settings(case: &Case, method: Method) -> FitSettings {
         cutoff_hz: Cutoff::All(case.cutoff_hz),
         ..LowPass::default()
     });
+    // The 2019 protocol filters the torques too.
+    s.processing.filter_torque = true;
     s
 }
 

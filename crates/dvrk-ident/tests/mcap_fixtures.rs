@@ -4,7 +4,8 @@
 
 use dvrk_ident::log::mcap::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, write_mcap, McapCompression,
-    McapOptions, McapProblem, McapWriteOptions, TimeSource, JOINT_STATE_SCHEMA, JOINT_STATE_TYPE,
+    McapOptions, McapProblem, McapReader, McapWriteOptions, TimeSource, JOINT_STATE_SCHEMA,
+    JOINT_STATE_TYPE,
 };
 use dvrk_ident::log::{detect_format, read, write, LogError, LogFormat};
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
@@ -1025,4 +1026,124 @@ fn mcap_cut_or_corrupted_files_never_panic() {
         }
     }
     assert!(errors > 250, "{errors} of 300 flips detected");
+}
+
+/// Every block of `reader` in blocks of `size`, concatenated.
+fn concatenated(reader: &McapReader, size: usize) -> Trajectory {
+    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
+    assert!(blocks.iter().all(|b| b.len() <= size));
+    let rows: usize = blocks.iter().map(Trajectory::len).sum();
+    let cat = |f: fn(&Trajectory) -> Option<&DMatrix<f64>>| {
+        f(&blocks[0]).map(|m0| {
+            let mut m = DMatrix::zeros(rows, m0.ncols());
+            let mut r = 0;
+            for b in &blocks {
+                let x = f(b).unwrap();
+                m.rows_mut(r, x.nrows()).copy_from(x);
+                r += x.nrows();
+            }
+            m
+        })
+    };
+    Trajectory {
+        time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
+        q: cat(|b| Some(&b.q)).unwrap(),
+        dq: cat(|b| b.dq.as_ref()),
+        tau: cat(|b| Some(&b.tau)).unwrap(),
+        ..blocks[0].clone()
+    }
+}
+
+#[test]
+fn mcap_blocks_of_any_size_are_the_whole_log() {
+    // A long jittered clock (more distinct steps than the median's exact first pass
+    // counts) and a jaw topic that starts late, stops early and is written behind the
+    // arm in the file: the blocks, merged on the fly, must give the whole log.
+    let dir = TempDir::new("blocks");
+    let path = dir.path("blocks.mcap");
+    let n: i64 = 20_000;
+    let mut state: u64 = 12345;
+    let mut jitter = move || {
+        state = state
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((state >> 33) % 400_001) as i64 - 200_000
+    };
+    let stamps: Vec<i64> = (0..n)
+        .map(|k| T0 + k * STEP + if k == 0 { 0 } else { jitter() })
+        .collect();
+    let mut f = Fixture::new(&path);
+    let mut jaw_backlog = Vec::new();
+    for (k, &s) in stamps.iter().enumerate() {
+        let (p, v, e) = arm_values((s - T0) as f64 / 1e9);
+        f.js("/PSM1/measured_js", &joint_state(s, &ARM, &p, &v, &e));
+        if (2..stamps.len() - 5).contains(&k) {
+            let sj = s + 1_500_000;
+            let t = (sj - T0) as f64 / 1e9;
+            jaw_backlog.push(joint_state(
+                sj,
+                &["jaw"],
+                &[0.3 + 0.2 * t],
+                &[0.2],
+                &[-0.1 + t],
+            ));
+        }
+        if k % 37 == 36 {
+            for m in jaw_backlog.drain(..) {
+                f.js("/PSM1/jaw/measured_js", &m);
+            }
+        }
+    }
+    for m in jaw_backlog.drain(..) {
+        f.js("/PSM1/jaw/measured_js", &m);
+    }
+    f.finish();
+    let merged = McapOptions {
+        topics: vec!["/PSM1/measured_js".into(), "/PSM1/jaw/measured_js".into()],
+        ..Default::default()
+    };
+    let resampled = McapOptions {
+        resample_hz: Some(150.0),
+        ..merged.clone()
+    };
+    let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    let arm = McapOptions {
+        topics: vec!["/PSM1/measured_js".into()],
+        ..Default::default()
+    };
+    for opts in [arm, merged, resampled] {
+        let whole = read_mcap_log(&path, &opts).unwrap();
+        let reader = McapReader::open(&path, &opts).unwrap();
+        assert_eq!(reader.samples(), whole.trajectory.len());
+        assert_eq!(reader.timing(), &whole.timing);
+        for size in [1, 777, 100_000] {
+            let b = concatenated(&reader, size);
+            let w = &whole.trajectory;
+            assert_eq!(b.time, w.time, "blocks of {size}");
+            assert_eq!(bits(&b.q), bits(&w.q));
+            assert_eq!(b.dq.as_ref().map(bits), w.dq.as_ref().map(bits));
+            assert_eq!(bits(&b.tau), bits(&w.tau));
+            assert_eq!((&b.joint_names, &b.source), (&w.joint_names, &w.source));
+        }
+        // The median step is exact: the clock's steps over the kept span, sorted.
+        let first = whole.trimmed.0;
+        let kept = &stamps[first..first + whole.timing.samples];
+        let mut steps: Vec<i64> = kept.windows(2).map(|w| w[1] - w[0]).collect();
+        steps.sort_unstable();
+        let m = steps.len();
+        let median2 = if m % 2 == 1 {
+            2 * steps[m / 2]
+        } else {
+            steps[m / 2 - 1] + steps[m / 2]
+        };
+        assert_eq!(whole.timing.median_step_s, median2 as f64 / 2e9);
+        assert_eq!(whole.timing.largest_step_s, steps[m - 1] as f64 / 1e9);
+        println!(
+            "{:?}: {} samples, trimmed {:?}, median step {} s",
+            opts.topics,
+            whole.trajectory.len(),
+            whole.trimmed,
+            whole.timing.median_step_s
+        );
+    }
 }

@@ -275,7 +275,8 @@ impl DataPy {
 
 /// Processed samples in model coordinates, as the estimators see them: the log mapped
 /// to model coordinates, known forces (e.g. the MTM cable) subtracted from the
-/// torques, low-pass filtered, differentiated and trimmed. Attributes ``time`` (s,
+/// torques, the motion low-pass filtered (the torques too with the ``filter_torque``
+/// setting), differentiated and trimmed. Attributes ``time`` (s,
 /// ``(N,)``), ``q``, ``dq``, ``ddq``, ``tau`` (``(N, dof)``), ``joint_names``.
 #[pyclass(name = "Prepared", module = "dvrk_ident", frozen)]
 pub struct PreparedPy {

@@ -114,9 +114,11 @@ impl Overrides<'_, '_> {
 ///
 /// - ``method``: ``"ols"``, ``"wls"``, ``"irls"`` or ``"sdp"`` (the default: the
 ///   physically consistent semidefinite fit);
-/// - ``cutoff``: low-pass cut-off, Hz, one number or one per coordinate (default
-///   5.4 Hz; the 2019 PSM/MTM fits effectively used 16.965/5.655), or ``"none"``
-///   (or ``False``) for no filter (clean or simulated logs);
+/// - ``cutoff``: low-pass cut-off of the motion (positions, velocities,
+///   accelerations), Hz, one number or one per coordinate (default 5.4 Hz; the 2019
+///   PSM/MTM fits effectively used 16.965/5.655), or ``"none"`` (or ``False``) for no
+///   filter; the torques are filtered too with
+///   ``settings={"processing": {"filter_torque": True}}`` (the 2019 protocol);
 /// - ``test``: a :class:`Data` to validate on, ``test_window``: metrics on its first
 ///   N processed samples only;
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),

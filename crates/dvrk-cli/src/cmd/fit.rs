@@ -4,8 +4,9 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
+use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
-use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::log::{self, LogFormat, LogReader};
 use dvrk_ident::result::{write_atomic, InputInfo};
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
@@ -84,6 +85,19 @@ impl McapArgs {
     }
 }
 
+/// The format of `path` (given, or from the extension and content); `--topic` only
+/// for MCAP logs.
+fn log_format(path: &str, format: Option<LogFormat>, mcap: &McapArgs) -> Result<LogFormat> {
+    let format = match format {
+        Some(f) => f,
+        None => log::detect_format(path)?,
+    };
+    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
+        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
+    }
+    Ok(format)
+}
+
 /// Reads a log in `format` (default: from the extension and content) with the MCAP
 /// options of `mcap`; `--resample` applies to every format (MCAP while reading).
 pub fn read_log(
@@ -92,13 +106,7 @@ pub fn read_log(
     rate: Option<f64>,
     mcap: &McapArgs,
 ) -> Result<dvrk_ident::Trajectory> {
-    let format = match format {
-        Some(f) => f,
-        None => log::detect_format(path)?,
-    };
-    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
-        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
-    }
+    let format = log_format(path, format, mcap)?;
     let traj = crate::progress::Bars::new().spin(&format!("reading {path}"), || {
         log::read_with(path, Some(format), rate, &mcap.options())
     })?;
@@ -114,12 +122,15 @@ pub struct LogArgs {
     /// Sampling rate of logs without time stamps (Hz)
     #[arg(long)]
     pub rate: Option<f64>,
-    /// Low-pass cut-off (Hz), zero-phase 6th-order Butterworth; one value or one per
-    /// coordinate, comma-separated, or `none` (no filter: for clean or simulated logs,
-    /// where the filter's smoothing of the Coulomb friction steps biases the fit).
-    /// The 2019 PSM/MTM fits effectively used 16.965/5.655.
+    /// Low-pass cut-off (Hz) of the positions, velocities and accelerations, zero-phase
+    /// 6th-order Butterworth; one value or one per coordinate, comma-separated, or
+    /// `none` (no filter). The 2019 PSM/MTM fits effectively used 16.965/5.655.
     #[arg(long)]
     pub cutoff: Option<String>,
+    /// Also low-pass the torques, as the 2019 protocol did (it smooths the Coulomb
+    /// friction steps on the measured side only, which biases the friction estimates)
+    #[arg(long)]
+    pub filter_torque: bool,
     /// Samples trimmed at each end after filtering
     #[arg(long)]
     pub trim: Option<usize>,
@@ -135,6 +146,17 @@ impl LogArgs {
             self.rate,
             &self.mcap,
         )
+    }
+
+    /// Opens a log for reading block by block (the checks of [`LogArgs::read`]).
+    pub fn open(&self, path: &str) -> Result<LogReader> {
+        let format = log_format(path, self.format.map(FormatArg::format), &self.mcap)?;
+        Ok(LogReader::open(
+            path,
+            Some(format),
+            self.rate,
+            &self.mcap.options(),
+        )?)
     }
 
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
@@ -159,6 +181,9 @@ impl LogArgs {
         }
         if let Some(t) = self.trim {
             s.processing.trim = t;
+        }
+        if self.filter_torque {
+            s.processing.filter_torque = true;
         }
         Ok(s)
     }
@@ -203,15 +228,25 @@ pub struct Args {
     /// Print the result document to stdout instead of the table
     #[arg(long)]
     pub json: bool,
+    /// Read the logs from disk block by block, in memory independent of their length,
+    /// instead of loading them (several passes over the files; the same result).
+    /// Automatic for a log larger than 256 MiB
+    #[arg(long)]
+    pub stream: bool,
+}
+
+/// Logs larger than this are fitted streamed (`--stream`): about a tenth of this
+/// machine's memory in samples and their processed copies.
+pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
+
+/// Whether a log file is large enough to be streamed (a file that cannot be examined
+/// is read the usual way, which reports the problem).
+fn is_large(path: &str) -> bool {
+    std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES)
 }
 
 pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
-    let train = args.logs.read(&args.log)?;
-    let test = match &args.test {
-        Some(t) => Some(args.logs.read(t)?),
-        None => None,
-    };
     let mut settings = args.logs.settings(FitSettings::default())?;
     settings.method = match args.method {
         MethodArg::Ols => Method::Ols,
@@ -219,6 +254,8 @@ pub fn run(args: Args) -> Result<()> {
         MethodArg::Irls => Method::Irls,
         MethodArg::Sdp => Method::Sdp,
     };
+    settings.stribeck_velocity = args.stribeck;
+    let model = settings.model(&model)?.into_owned();
     let excitation = match &args.excitation {
         Some(p) => Some(
             dvrk_ident::excite::FourierTrajectory::from_json_file(p)
@@ -226,27 +263,52 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => None,
     };
-    settings.test_window = match (args.test_window, &excitation, &test) {
-        (Some(w), _, _) => Some(w),
-        (None, Some(traj), Some(t)) => {
+    settings.test_window = args.test_window;
+    let stream = args.stream || is_large(&args.log) || args.test.as_deref().is_some_and(is_large);
+    let bars = crate::progress::Bars::new();
+    let mut in_memory = None;
+    let mut result = if stream {
+        if args.report.is_some() {
+            bail!(
+                "--report draws the logs, which a streamed fit does not hold in memory: \
+                 fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
+            );
+        }
+        if excitation.is_some() && args.test.is_some() && args.test_window.is_none() {
+            bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
+        }
+        let train = args.logs.open(&args.log)?;
+        let test = match &args.test {
+            Some(t) => Some(args.logs.open(t)?),
+            None => None,
+        };
+        fit_stream(
+            &model,
+            &train,
+            test.as_ref(),
+            &settings,
+            BLOCK_SAMPLES,
+            &bars,
+        )?
+    } else {
+        let train = args.logs.read(&args.log)?;
+        let test = match &args.test {
+            Some(t) => Some(args.logs.read(t)?),
+            None => None,
+        };
+        if let (None, Some(traj), Some(t)) = (args.test_window, &excitation, &test) {
             let rate = t
                 .rate_hz()
                 .context("the test log has no usable time stamps")?;
             // int(rate / f0) as in 2019 (1111 samples for the PSM at 200 Hz, 0.18 Hz).
             let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
-            Some(samples / settings.processing.decimate.max(1))
+            settings.test_window = Some(samples / settings.processing.decimate.max(1));
         }
-        _ => None,
+        let result =
+            dvrk_ident::fit::fit_with_progress(&model, &train, test.as_ref(), &settings, &bars)?;
+        in_memory = Some((train, test));
+        result
     };
-    settings.stribeck_velocity = args.stribeck;
-    let model = settings.model(&model)?.into_owned();
-    let mut result = dvrk_ident::fit::fit_with_progress(
-        &model,
-        &train,
-        test.as_ref(),
-        &settings,
-        &crate::progress::Bars::new(),
-    )?;
     result
         .inputs
         .push(InputInfo::from_file("train", Path::new(&args.log))?);
@@ -264,9 +326,9 @@ pub fn run(args: Args) -> Result<()> {
             let doc = dvrk_ident::result::wpi_params_json(&model, &params);
             write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
         }
-        if let Some(dir) = &args.report {
-            let mut logs = vec![("training", &train, None)];
-            if let Some(t) = &test {
+        if let (Some(dir), Some((train, test))) = (&args.report, &in_memory) {
+            let mut logs = vec![("training", train, None)];
+            if let Some(t) = test {
                 logs.push(("test", t, settings.test_window));
             }
             super::report::write(&model, &result, &logs, excitation.as_ref(), dir)?;

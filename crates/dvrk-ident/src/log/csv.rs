@@ -1,52 +1,79 @@
 //! CSV readers and writers: the 2019 (wpi) headerless layout and headered CSV.
+//!
+//! The readers stream the file: [`WpiBlocks`] and [`HeaderedBlocks`] parse it row by
+//! row into blocks of samples, and [`read_wpi`] / [`read_headered`] collect every block,
+//! so a log too long for memory and a short one go through the same parsing and checks.
 
-use super::{fmt_f64, read_bytes, strip_bom, write_atomic, LogError};
-use crate::trajectory::{uniform_time, Coordinates, Signal, Trajectory};
+use super::{fmt_f64, open_text, write_atomic, LogError, TrajectoryBuilder};
+use crate::trajectory::{Coordinates, Signal, Trajectory};
 use csv::{ReaderBuilder, StringRecord, Trim, WriterBuilder};
 use nalgebra::DMatrix;
-use std::path::Path;
+use std::io::BufRead;
+use std::path::{Path, PathBuf};
 
-/// Iterates the data records of a CSV byte buffer with their 1-based line numbers.
+/// The data records of a CSV file with their 1-based line numbers, read as needed.
 /// Blank lines and lines starting with `#` are skipped; fields are trimmed; rows may
 /// have differing lengths (checked by the callers, for precise messages).
-fn records<'a>(
-    path: &'a Path,
-    bytes: &'a [u8],
-) -> impl Iterator<Item = Result<(u64, StringRecord), LogError>> + 'a {
-    let mut rdr = ReaderBuilder::new()
-        .has_headers(false)
-        .flexible(true)
-        .trim(Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(strip_bom(bytes));
-    let mut done = false;
-    std::iter::from_fn(move || {
-        if done {
+struct Records {
+    path: PathBuf,
+    reader: csv::Reader<Box<dyn BufRead>>,
+    done: bool,
+}
+
+impl Records {
+    fn open(path: &Path) -> Result<Records, LogError> {
+        let reader = ReaderBuilder::new()
+            .has_headers(false)
+            .flexible(true)
+            .trim(Trim::All)
+            .comment(Some(b'#'))
+            .from_reader(open_text(path)?);
+        Ok(Records {
+            path: path.to_path_buf(),
+            reader,
+            done: false,
+        })
+    }
+}
+
+impl Iterator for Records {
+    type Item = Result<(u64, StringRecord), LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
             return None;
         }
         let mut record = StringRecord::new();
         loop {
-            match rdr.read_record(&mut record) {
+            match self.reader.read_record(&mut record) {
                 Ok(true) if record.iter().all(str::is_empty) => continue, // whitespace-only line
                 Ok(true) => {
                     let line = record.position().map(|p| p.line()).unwrap_or(0);
                     return Some(Ok((line, record)));
                 }
                 Ok(false) => {
-                    done = true;
+                    self.done = true;
                     return None;
                 }
                 Err(e) => {
-                    done = true;
-                    return Some(Err(LogError::Csv {
-                        path: path.to_path_buf(),
-                        line: e.position().map(|p| p.line()),
-                        message: e.to_string(),
+                    self.done = true;
+                    let (line, message) = (e.position().map(|p| p.line()), e.to_string());
+                    // An I/O error is the file's, not the CSV's.
+                    return Some(Err(match e.into_kind() {
+                        csv::ErrorKind::Io(source) => LogError::Io {
+                            path: self.path.clone(),
+                            source,
+                        },
+                        _ => LogError::Csv {
+                            path: self.path.clone(),
+                            line,
+                            message,
+                        },
                     }));
                 }
             }
         }
-    })
+    }
 }
 
 /// Parses one field as a finite number; the error names the file, line and column.
@@ -85,6 +112,118 @@ fn wpi_column_name(column: usize, dof: usize) -> String {
     }
 }
 
+/// A 2019 (wpi) layout log read block by block (see [`read_wpi`] for the layout).
+pub struct WpiBlocks {
+    path: PathBuf,
+    records: Records,
+    rate_hz: f64,
+    /// Joints requested by the caller.
+    dof: Option<usize>,
+    /// `(columns, joints)`, from the first row.
+    columns: Option<(usize, usize)>,
+    rows: usize,
+}
+
+impl WpiBlocks {
+    /// Opens `path`; `rate_hz` (Hz) is the implicit clock, `dof` the number of joints
+    /// (`None`: columns / 3 of the first row).
+    pub fn open(
+        path: impl AsRef<Path>,
+        rate_hz: f64,
+        dof: Option<usize>,
+    ) -> Result<Self, LogError> {
+        let path = path.as_ref();
+        if !(rate_hz.is_finite() && rate_hz > 0.0) {
+            return Err(LogError::InvalidRate {
+                path: path.to_path_buf(),
+                rate_hz,
+            });
+        }
+        Ok(WpiBlocks {
+            path: path.to_path_buf(),
+            records: Records::open(path)?,
+            rate_hz,
+            dof,
+            columns: None,
+            rows: 0,
+        })
+    }
+
+    /// The next block of at most `max_rows` samples (at least 1); `None` after the last.
+    /// A file without rows is an error.
+    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<Trajectory>, LogError> {
+        let path = self.path.clone();
+        let mut values: Vec<f64> = Vec::new();
+        let mut count = 0;
+        while count < max_rows.max(1) {
+            let Some(rec) = self.records.next() else {
+                break;
+            };
+            let (line, rec) = rec?;
+            let (ncols, n) = match self.columns {
+                Some(c) => c,
+                None => {
+                    let found = rec.len();
+                    let ok = match self.dof {
+                        Some(d) => d > 0 && found == 3 * d,
+                        None => found > 0 && found % 3 == 0,
+                    };
+                    if !ok {
+                        return Err(LogError::DofMismatch {
+                            path,
+                            line,
+                            columns: found,
+                            dof: self.dof,
+                        });
+                    }
+                    *self.columns.insert((found, found / 3))
+                }
+            };
+            if rec.len() != ncols {
+                return Err(LogError::ColumnCount {
+                    path,
+                    line,
+                    expected: ncols,
+                    found: rec.len(),
+                });
+            }
+            for (c, field) in rec.iter().enumerate() {
+                values.push(parse_field(
+                    &path,
+                    line,
+                    c,
+                    || wpi_column_name(c, n),
+                    field,
+                )?);
+            }
+            count += 1;
+        }
+        let Some((ncols, n)) = self.columns else {
+            return Err(LogError::Empty {
+                path,
+                what: "no rows",
+            });
+        };
+        if count == 0 {
+            return Ok(None);
+        }
+        let all = DMatrix::from_row_slice(count, ncols, &values);
+        let first = self.rows;
+        self.rows += count;
+        Ok(Some(Trajectory {
+            time: (first..self.rows)
+                .map(|k| k as f64 / self.rate_hz)
+                .collect(),
+            q: all.columns(0, n).into_owned(),
+            dq: Some(all.columns(n, n).into_owned()),
+            tau: all.columns(2 * n, n).into_owned(),
+            joint_names: (1..=n).map(|j| format!("q{j}")).collect(),
+            coordinates: Coordinates::Model,
+            source: path.display().to_string(),
+        }))
+    }
+}
+
 /// Reads the 2019 (wpi) layout: no header, each row `q1..qn, dq1..dqn, tau1..taun`
 /// (rad or m, rad/s or m/s, N·m or N), already in the model's coordinates. There are no
 /// time stamps: sample `k` is at `k / rate_hz` s. `dof` fixes the number of joints
@@ -106,67 +245,12 @@ pub fn read_wpi(
     rate_hz: f64,
     dof: Option<usize>,
 ) -> Result<Trajectory, LogError> {
-    let path = path.as_ref();
-    if !(rate_hz.is_finite() && rate_hz > 0.0) {
-        return Err(LogError::InvalidRate {
-            path: path.to_path_buf(),
-            rate_hz,
-        });
+    let mut blocks = WpiBlocks::open(path, rate_hz, dof)?;
+    let mut all = TrajectoryBuilder::default();
+    while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
+        all.push(&b);
     }
-    let bytes = read_bytes(path)?;
-    let mut values: Vec<f64> = Vec::new();
-    let mut columns: Option<(usize, usize)> = None; // (columns, dof)
-    let mut rows = 0;
-    for rec in records(path, &bytes) {
-        let (line, rec) = rec?;
-        let (ncols, n) = match columns {
-            Some(c) => c,
-            None => {
-                let found = rec.len();
-                let ok = match dof {
-                    Some(d) => d > 0 && found == 3 * d,
-                    None => found > 0 && found % 3 == 0,
-                };
-                if !ok {
-                    return Err(LogError::DofMismatch {
-                        path: path.to_path_buf(),
-                        line,
-                        columns: found,
-                        dof,
-                    });
-                }
-                *columns.insert((found, found / 3))
-            }
-        };
-        if rec.len() != ncols {
-            return Err(LogError::ColumnCount {
-                path: path.to_path_buf(),
-                line,
-                expected: ncols,
-                found: rec.len(),
-            });
-        }
-        for (c, field) in rec.iter().enumerate() {
-            values.push(parse_field(path, line, c, || wpi_column_name(c, n), field)?);
-        }
-        rows += 1;
-    }
-    let Some((ncols, n)) = columns else {
-        return Err(LogError::Empty {
-            path: path.to_path_buf(),
-            what: "no rows",
-        });
-    };
-    let all = DMatrix::from_row_slice(rows, ncols, &values);
-    Ok(Trajectory {
-        time: uniform_time(rows, rate_hz),
-        q: all.columns(0, n).into_owned(),
-        dq: Some(all.columns(n, n).into_owned()),
-        tau: all.columns(2 * n, n).into_owned(),
-        joint_names: (1..=n).map(|j| format!("q{j}")).collect(),
-        coordinates: Coordinates::Model,
-        source: path.display().to_string(),
-    })
+    Ok(all.build())
 }
 
 /// What a headered-CSV column holds.
@@ -176,14 +260,29 @@ enum Kind {
     Joint(Signal, usize), // signal, joint index (into the position-column order)
 }
 
-/// Coordinates stated in a leading `# ... coordinates: model|measured` comment.
-fn stated_coordinates(bytes: &[u8]) -> Option<Coordinates> {
-    let text = String::from_utf8_lossy(strip_bom(bytes));
-    for line in text.lines().map(str::trim) {
+/// Coordinates stated in a leading `# ... coordinates: model|measured` comment (read
+/// from the file's first lines only).
+fn stated_coordinates(path: &Path) -> Result<Option<Coordinates>, LogError> {
+    let io = |source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut text = open_text(path)?;
+    let mut raw = Vec::new();
+    loop {
+        raw.clear();
+        if text.read_until(b'\n', &mut raw).map_err(io)? == 0 {
+            return Ok(None);
+        }
+        let line = String::from_utf8_lossy(&raw);
+        let line = line.trim();
         if line.is_empty() {
             continue;
         }
-        let comment = line.strip_prefix('#')?.to_ascii_lowercase();
+        let Some(comment) = line.strip_prefix('#') else {
+            return Ok(None);
+        };
+        let comment = comment.to_ascii_lowercase();
         if let Some(rest) = comment.split("coordinates:").nth(1) {
             let word: String = rest
                 .trim_start()
@@ -191,13 +290,230 @@ fn stated_coordinates(bytes: &[u8]) -> Option<Coordinates> {
                 .take_while(|c| c.is_ascii_alphabetic())
                 .collect();
             match word.as_str() {
-                "model" => return Some(Coordinates::Model),
-                "measured" => return Some(Coordinates::Measured),
+                "model" => return Ok(Some(Coordinates::Model)),
+                "measured" => return Ok(Some(Coordinates::Measured)),
                 _ => {}
             }
         }
     }
-    None
+}
+
+/// A headered CSV log read block by block (see [`read_headered`] for the layout).
+pub struct HeaderedBlocks {
+    path: PathBuf,
+    records: Records,
+    names: Vec<String>,
+    kinds: Vec<Kind>,
+    joints: Vec<String>,
+    with_velocity: bool,
+    coordinates: Coordinates,
+    last: Option<f64>,
+    rows: usize,
+}
+
+impl HeaderedBlocks {
+    /// Opens `path` and reads its header (and the coordinates comment before it).
+    pub fn open(path: impl AsRef<Path>) -> Result<Self, LogError> {
+        let path = path.as_ref();
+        let p = || path.to_path_buf();
+        let mut records = Records::open(path)?;
+        let (header_line, header) = match records.next() {
+            None => {
+                return Err(LogError::Empty {
+                    path: p(),
+                    what: "no rows",
+                })
+            }
+            Some(r) => r?,
+        };
+        // Classify columns.
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        for (i, n) in names.iter().enumerate() {
+            if names[..i].contains(n) {
+                return Err(LogError::DuplicateColumn {
+                    path: p(),
+                    line: header_line,
+                    column: n.clone(),
+                });
+            }
+        }
+        let mut joints: Vec<String> = Vec::new();
+        let mut parsed: Vec<Option<(Signal, String)>> = Vec::with_capacity(names.len());
+        for n in &names {
+            if n == "time" {
+                parsed.push(None);
+                continue;
+            }
+            let (prefix, joint) = n.split_once('.').unwrap_or((n.as_str(), ""));
+            let signal = match prefix {
+                "position" => Signal::Position,
+                "velocity" => Signal::Velocity,
+                "effort" => Signal::Effort,
+                _ => Signal::Time,
+            };
+            if signal == Signal::Time || joint.is_empty() {
+                return Err(LogError::UnknownColumn {
+                    path: p(),
+                    line: header_line,
+                    column: n.clone(),
+                });
+            }
+            if signal == Signal::Position {
+                joints.push(joint.to_string());
+            }
+            parsed.push(Some((signal, joint.to_string())));
+        }
+        if !names.iter().any(|n| n == "time") {
+            return Err(LogError::MissingTime { path: p() });
+        }
+        if joints.is_empty() {
+            return Err(LogError::NoJoints { path: p() });
+        }
+        let dof = joints.len();
+        let mut kinds = Vec::with_capacity(names.len());
+        let mut have = vec![[false; 2]; dof]; // velocity, effort
+        for (n, pc) in names.iter().zip(&parsed) {
+            match pc {
+                None => kinds.push(Kind::Time),
+                Some((signal, joint)) => {
+                    let Some(j) = joints.iter().position(|x| x == joint) else {
+                        return Err(LogError::OrphanColumn {
+                            path: p(),
+                            column: n.clone(),
+                            joint: joint.clone(),
+                        });
+                    };
+                    match signal {
+                        Signal::Velocity => have[j][0] = true,
+                        Signal::Effort => have[j][1] = true,
+                        _ => {}
+                    }
+                    kinds.push(Kind::Joint(*signal, j));
+                }
+            }
+        }
+        if let Some(j) = have.iter().position(|h| !h[1]) {
+            return Err(LogError::MissingJointColumn {
+                path: p(),
+                signal: Signal::Effort,
+                joint: joints[j].clone(),
+            });
+        }
+        let with_velocity = have.iter().any(|h| h[0]);
+        if with_velocity {
+            if let Some(j) = have.iter().position(|h| !h[0]) {
+                return Err(LogError::PartialVelocity {
+                    path: p(),
+                    joint: joints[j].clone(),
+                });
+            }
+        }
+        Ok(HeaderedBlocks {
+            coordinates: stated_coordinates(path)?.unwrap_or(Coordinates::Measured),
+            path: p(),
+            records,
+            names,
+            kinds,
+            joints,
+            with_velocity,
+            last: None,
+            rows: 0,
+        })
+    }
+
+    /// The joints, in the order of the position columns.
+    pub fn joint_names(&self) -> &[String] {
+        &self.joints
+    }
+
+    /// The joint space the file states (measured unless a comment says otherwise).
+    pub fn coordinates(&self) -> Coordinates {
+        self.coordinates
+    }
+
+    /// Whether the file has velocity columns.
+    pub fn has_velocity(&self) -> bool {
+        self.with_velocity
+    }
+
+    /// The next block of at most `max_rows` samples (at least 1); `None` after the last.
+    /// A header without data rows is an error.
+    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<Trajectory>, LogError> {
+        let p = || self.path.clone();
+        let dof = self.joints.len();
+        let mut time = Vec::new();
+        let mut q = Vec::new();
+        let mut dq = Vec::new();
+        let mut tau = Vec::new();
+        let mut row = vec![0.0; self.names.len()];
+        while time.len() < max_rows.max(1) {
+            let Some(rec) = self.records.next() else {
+                break;
+            };
+            let (line, rec) = rec?;
+            if rec.len() != self.names.len() {
+                return Err(LogError::ColumnCount {
+                    path: p(),
+                    line,
+                    expected: self.names.len(),
+                    found: rec.len(),
+                });
+            }
+            for (c, field) in rec.iter().enumerate() {
+                row[c] = parse_field(&self.path, line, c, || self.names[c].clone(), field)?;
+            }
+            let base = q.len();
+            q.resize(base + dof, 0.0);
+            tau.resize(base + dof, 0.0);
+            if self.with_velocity {
+                dq.resize(base + dof, 0.0);
+            }
+            for (c, kind) in self.kinds.iter().enumerate() {
+                match *kind {
+                    Kind::Time => {
+                        let t = row[c];
+                        if let Some(prev) = self.last {
+                            if t <= prev {
+                                return Err(LogError::NonMonotonicTime {
+                                    path: p(),
+                                    line,
+                                    previous: prev,
+                                    current: t,
+                                });
+                            }
+                        }
+                        self.last = Some(t);
+                        time.push(t);
+                    }
+                    Kind::Joint(Signal::Position, j) => q[base + j] = row[c],
+                    Kind::Joint(Signal::Velocity, j) => dq[base + j] = row[c],
+                    Kind::Joint(_, j) => tau[base + j] = row[c],
+                }
+            }
+        }
+        let n = time.len();
+        if n == 0 {
+            if self.rows == 0 {
+                return Err(LogError::Empty {
+                    path: p(),
+                    what: "a header but no data rows",
+                });
+            }
+            return Ok(None);
+        }
+        self.rows += n;
+        Ok(Some(Trajectory {
+            time,
+            q: DMatrix::from_row_slice(n, dof, &q),
+            dq: self
+                .with_velocity
+                .then(|| DMatrix::from_row_slice(n, dof, &dq)),
+            tau: DMatrix::from_row_slice(n, dof, &tau),
+            joint_names: self.joints.clone(),
+            coordinates: self.coordinates,
+            source: self.path.display().to_string(),
+        }))
+    }
 }
 
 /// Reads a headered CSV log. The header has a `time` column (s), and for each joint
@@ -222,166 +538,12 @@ fn stated_coordinates(bytes: &[u8]) -> Option<Coordinates> {
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_headered(path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
-    let path = path.as_ref();
-    let p = || path.to_path_buf();
-    let bytes = read_bytes(path)?;
-    let mut recs = records(path, &bytes);
-    let (header_line, header) = match recs.next() {
-        None => {
-            return Err(LogError::Empty {
-                path: p(),
-                what: "no rows",
-            })
-        }
-        Some(r) => r?,
-    };
-    // Classify columns.
-    let names: Vec<String> = header.iter().map(str::to_string).collect();
-    for (i, n) in names.iter().enumerate() {
-        if names[..i].contains(n) {
-            return Err(LogError::DuplicateColumn {
-                path: p(),
-                line: header_line,
-                column: n.clone(),
-            });
-        }
+    let mut blocks = HeaderedBlocks::open(path)?;
+    let mut all = TrajectoryBuilder::default();
+    while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
+        all.push(&b);
     }
-    let mut joints: Vec<String> = Vec::new();
-    let mut parsed: Vec<Option<(Signal, String)>> = Vec::with_capacity(names.len());
-    for n in &names {
-        if n == "time" {
-            parsed.push(None);
-            continue;
-        }
-        let (prefix, joint) = n.split_once('.').unwrap_or((n.as_str(), ""));
-        let signal = match prefix {
-            "position" => Signal::Position,
-            "velocity" => Signal::Velocity,
-            "effort" => Signal::Effort,
-            _ => Signal::Time,
-        };
-        if signal == Signal::Time || joint.is_empty() {
-            return Err(LogError::UnknownColumn {
-                path: p(),
-                line: header_line,
-                column: n.clone(),
-            });
-        }
-        if signal == Signal::Position {
-            joints.push(joint.to_string());
-        }
-        parsed.push(Some((signal, joint.to_string())));
-    }
-    if !names.iter().any(|n| n == "time") {
-        return Err(LogError::MissingTime { path: p() });
-    }
-    if joints.is_empty() {
-        return Err(LogError::NoJoints { path: p() });
-    }
-    let dof = joints.len();
-    let mut kinds = Vec::with_capacity(names.len());
-    let mut have = vec![[false; 2]; dof]; // velocity, effort
-    for (n, pc) in names.iter().zip(&parsed) {
-        match pc {
-            None => kinds.push(Kind::Time),
-            Some((signal, joint)) => {
-                let Some(j) = joints.iter().position(|x| x == joint) else {
-                    return Err(LogError::OrphanColumn {
-                        path: p(),
-                        column: n.clone(),
-                        joint: joint.clone(),
-                    });
-                };
-                match signal {
-                    Signal::Velocity => have[j][0] = true,
-                    Signal::Effort => have[j][1] = true,
-                    _ => {}
-                }
-                kinds.push(Kind::Joint(*signal, j));
-            }
-        }
-    }
-    if let Some(j) = have.iter().position(|h| !h[1]) {
-        return Err(LogError::MissingJointColumn {
-            path: p(),
-            signal: Signal::Effort,
-            joint: joints[j].clone(),
-        });
-    }
-    let with_velocity = have.iter().any(|h| h[0]);
-    if with_velocity {
-        if let Some(j) = have.iter().position(|h| !h[0]) {
-            return Err(LogError::PartialVelocity {
-                path: p(),
-                joint: joints[j].clone(),
-            });
-        }
-    }
-    // Data rows.
-    let mut time = Vec::new();
-    let mut q = Vec::new();
-    let mut dq = Vec::new();
-    let mut tau = Vec::new();
-    let mut row = vec![0.0; names.len()];
-    let mut last: Option<f64> = None;
-    for rec in recs {
-        let (line, rec) = rec?;
-        if rec.len() != names.len() {
-            return Err(LogError::ColumnCount {
-                path: p(),
-                line,
-                expected: names.len(),
-                found: rec.len(),
-            });
-        }
-        for (c, field) in rec.iter().enumerate() {
-            row[c] = parse_field(path, line, c, || names[c].clone(), field)?;
-        }
-        let base = q.len();
-        q.resize(base + dof, 0.0);
-        tau.resize(base + dof, 0.0);
-        if with_velocity {
-            dq.resize(base + dof, 0.0);
-        }
-        for (c, kind) in kinds.iter().enumerate() {
-            match *kind {
-                Kind::Time => {
-                    let t = row[c];
-                    if let Some(prev) = last {
-                        if t <= prev {
-                            return Err(LogError::NonMonotonicTime {
-                                path: p(),
-                                line,
-                                previous: prev,
-                                current: t,
-                            });
-                        }
-                    }
-                    last = Some(t);
-                    time.push(t);
-                }
-                Kind::Joint(Signal::Position, j) => q[base + j] = row[c],
-                Kind::Joint(Signal::Velocity, j) => dq[base + j] = row[c],
-                Kind::Joint(_, j) => tau[base + j] = row[c],
-            }
-        }
-    }
-    let n = time.len();
-    if n == 0 {
-        return Err(LogError::Empty {
-            path: p(),
-            what: "a header but no data rows",
-        });
-    }
-    Ok(Trajectory {
-        time,
-        q: DMatrix::from_row_slice(n, dof, &q),
-        dq: with_velocity.then(|| DMatrix::from_row_slice(n, dof, &dq)),
-        tau: DMatrix::from_row_slice(n, dof, &tau),
-        joint_names: joints,
-        coordinates: stated_coordinates(&bytes).unwrap_or(Coordinates::Measured),
-        source: path.display().to_string(),
-    })
+    Ok(all.build())
 }
 
 fn validated(path: &Path, traj: &Trajectory) -> Result<(), LogError> {

@@ -2,20 +2,24 @@
 //!
 //! # Reading
 //!
-//! [`read_mcap`] (or [`read_mcap_log`], which also returns the absolute start time, the
-//! topics and a timing report) streams the file message by message: the `mcap` crate
-//! decompresses one chunk at a time (zstd or lz4) and checks the chunk, data and summary
-//! CRCs, and only the joint states of the wanted topics are decoded and kept. Messages
-//! may be CDR (`cdr` message encoding, what ROS 2 records) or JSON (`json`, Foxglove).
+//! [`McapReader`] reads a log block by block without holding it: [`McapReader::open`]
+//! makes every check below in passes over the file that keep no samples (usually one;
+//! see `survey`), and [`McapReader::blocks`] reads the samples, merged and resampled, in
+//! blocks. [`read_mcap`] (or [`read_mcap_log`], which also returns the absolute start
+//! time, the topics and a timing report) collects every block. The file is streamed
+//! message by message: the `mcap` crate decompresses one chunk at a time (zstd or lz4)
+//! and checks the chunk, data and summary CRCs, and only the joint states of the wanted
+//! topics are decoded. Messages may be CDR (`cdr` message encoding, what ROS 2 records)
+//! or JSON (`json`, Foxglove).
 //!
 //! **Topic choice** ([`McapOptions::topics`] empty): among the `sensor_msgs/msg/JointState`
 //! topics, the one whose messages have both positions and efforts; if several do, the
 //! one whose name ends in `measured_js` (the dVRK/CRTK convention); if that is still not
 //! a single topic, an error lists the candidates. A topic that is named explicitly must
-//! exist, hold JointState messages and not be empty. The choice takes the same single
-//! pass over the file: every candidate topic is decoded and kept until the end (a
+//! exist, hold JointState messages and not be empty. The choice takes the first pass
+//! over the file: every candidate topic is decoded and checked until the end (a
 //! JointState topic stops being a candidate at its first message without positions or
-//! efforts), so the memory is that of the candidates' samples, not of the file.
+//! efforts), keeping only statistics of its stamps.
 //!
 //! **Several topics** (e.g. dVRK 2.x publishes the PSM jaw on `/PSM1/jaw/measured_js`
 //! beside the six arm joints on `/PSM1/measured_js`): the joints are concatenated in the
@@ -25,7 +29,10 @@
 //! outside the time span of another topic (it may start a little later or stop a little
 //! earlier) are dropped at either end ([`McapLog::trimmed`]); a gap in another topic is
 //! refused like a gap of the clock unless resampling is asked for. Velocities are kept
-//! only if every topic has them; joint names must be unique across topics.
+//! only if every topic has them; joint names must be unique across topics. The topics
+//! are merged as their messages come: a clock sample waits for the other topics to
+//! reach its stamp, so memory is bounded by how far apart the topics are written in
+//! the file (a recorder interleaves them), not by the log.
 //!
 //! **Time**: [`TimeSource::HeaderStamp`] (default, the time the controller measured the
 //! joints) or the MCAP log or publish time of each message. [`Trajectory::time`] is in
@@ -60,19 +67,22 @@
 //! definition, CDR messages, zstd chunks with CRCs, summary and indexes), atomically
 //! (temporary file and rename).
 
+mod blocks;
 mod container;
 mod joint_state;
+mod survey;
+mod topic;
 
+pub use self::blocks::McapBlocks;
 pub use self::joint_state::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
 
-use self::container::{mcap_error, MessageRef};
+use self::container::mcap_error;
 use self::joint_state::{Header, JointStateMsg, Time};
 use crate::log::LogError;
 use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, HashMap};
-use std::fmt::Write as _;
+use std::collections::BTreeMap;
 use std::path::Path;
 use thiserror::Error;
 
@@ -474,7 +484,7 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<Trajec
 }
 
 /// [`read_mcap`], also returning the absolute start time, the topics read and the timing
-/// report.
+/// report: every block of an [`McapReader`], collected.
 ///
 /// ```rust
 /// use dvrk_ident::log::mcap::{read_mcap_log, write_mcap, McapOptions, McapWriteOptions};
@@ -503,22 +513,78 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<Trajec
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_mcap_log(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapLog, LogError> {
-    let path = path.as_ref();
-    if let Some(rate) = options.resample_hz {
-        if !(rate.is_finite() && rate > 0.0) {
-            return Err(LogError::InvalidRate {
-                path: path.to_path_buf(),
-                rate_hz: rate,
-            });
-        }
+    let reader = McapReader::open(path, options)?;
+    let mut all = crate::log::TrajectoryBuilder::default();
+    for block in reader.blocks(crate::log::BLOCK_SAMPLES)? {
+        all.push(&block?);
     }
-    let series = collect(path, &options.topics, options.time_source)?;
-    for s in &series {
-        if s.effort.is_none() {
-            return Err(mcap_error(path, Some(&s.topic), McapProblem::NoEffort));
-        }
+    Ok(McapLog {
+        trajectory: all.build(),
+        start_time_ns: reader.plan.start_time_ns,
+        topics: reader.plan.topics.clone(),
+        time_source: reader.plan.time_source,
+        timing: reader.plan.timing.clone(),
+        trimmed: reader.plan.trimmed,
+    })
+}
+
+/// An MCAP log read block by block: [`McapReader::open`] chooses the topics and makes
+/// every check of [`read_mcap`] (messages, stamps, gaps, overlap) in passes that keep no
+/// samples; [`McapReader::blocks`] then reads the samples in blocks, as many times as
+/// needed. Memory is bounded by the block, the largest chunk of the file and how far
+/// merged topics are apart in it, not by the log's length.
+#[derive(Clone, Debug)]
+pub struct McapReader {
+    path: std::path::PathBuf,
+    plan: survey::Plan,
+}
+
+impl McapReader {
+    /// Opens `path` and checks it (see the type docs); errors are those of
+    /// [`read_mcap`].
+    pub fn open(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapReader, LogError> {
+        let path = path.as_ref();
+        Ok(McapReader {
+            plan: survey::plan(path, options)?,
+            path: path.to_path_buf(),
+        })
     }
-    merge(path, series, options)
+
+    /// The samples in blocks of at most `block_samples`, in order, each validated like
+    /// the whole trajectory (rows numbered from the log's start); one pass over the file.
+    pub fn blocks(&self, block_samples: usize) -> Result<McapBlocks<'_>, LogError> {
+        McapBlocks::new(&self.path, &self.plan, block_samples)
+    }
+
+    /// The topics read, the clock first.
+    pub fn topics(&self) -> &[String] {
+        &self.plan.topics
+    }
+
+    /// The joints of the samples: every topic's, in topic order.
+    pub fn joint_names(&self) -> Vec<String> {
+        self.plan.joints.concat()
+    }
+
+    /// Whether the samples have velocities (every topic has them).
+    pub fn has_velocity(&self) -> bool {
+        self.plan.with_velocity
+    }
+
+    /// Number of samples the blocks hold.
+    pub fn samples(&self) -> usize {
+        self.plan.samples
+    }
+
+    /// The absolute time of the first sample, ns since the epoch.
+    pub fn start_time_ns(&self) -> i64 {
+        self.plan.start_time_ns
+    }
+
+    /// Timing of the clock topic.
+    pub fn timing(&self) -> &TimingReport {
+        &self.plan.timing
+    }
 }
 
 /// Reads the JointState messages of `topics` as they are, one [`JointStateSeries`] per
@@ -530,650 +596,10 @@ pub fn read_joint_states(
     topics: &[String],
     time_source: TimeSource,
 ) -> Result<Vec<JointStateSeries>, LogError> {
-    collect(path.as_ref(), topics, time_source)
-}
-
-/// Per-topic accumulation of decoded messages.
-struct Acc {
-    topic: String,
-    /// Automatic mode: not a candidate (no positions or no efforts in message 0), why.
-    rejected: Option<&'static str>,
-    /// Automatic mode: the first problem, reported only if the topic is chosen.
-    error: Option<LogError>,
-    count: usize,
-    names: Vec<String>,
-    index_of: HashMap<String, usize>,
-    /// Last message order that differed from `names`, and its permutation:
-    /// `perm[j]` = index in the message of `names[j]`.
-    reorder: Option<(Vec<String>, Vec<usize>)>,
-    frame_id: String,
-    has_velocity: bool,
-    has_effort: bool,
-    stamps: Vec<i64>,
-    position: Vec<f64>,
-    velocity: Vec<f64>,
-    effort: Vec<f64>,
-}
-
-impl Acc {
-    fn new(topic: &str) -> Acc {
-        Acc {
-            topic: topic.to_owned(),
-            rejected: None,
-            error: None,
-            count: 0,
-            names: Vec::new(),
-            index_of: HashMap::new(),
-            reorder: None,
-            frame_id: String::new(),
-            has_velocity: false,
-            has_effort: false,
-            stamps: Vec::new(),
-            position: Vec::new(),
-            velocity: Vec::new(),
-            effort: Vec::new(),
-        }
-    }
-
-    /// Checks and appends one message.
-    fn push(&mut self, msg: JointStateMsg, stamp: i64, auto: bool) -> Result<(), Box<McapProblem>> {
-        let index = self.count;
-        self.count += 1;
-        let names = if msg.name.is_empty() {
-            (1..=msg.position.len())
-                .map(|k| format!("joint_{k}"))
-                .collect()
-        } else {
-            msg.name
-        };
-        if index == 0 {
-            if auto && msg.position.is_empty() {
-                self.rejected = Some("no positions");
-                return Ok(());
-            }
-            if auto && msg.effort.is_empty() {
-                self.rejected = Some("no efforts");
-                return Ok(());
-            }
-            if names.is_empty() {
-                return Err(Box::new(McapProblem::NoJoints { index }));
-            }
-            for (k, n) in names.iter().enumerate() {
-                if self.index_of.insert(n.clone(), k).is_some() {
-                    return Err(Box::new(McapProblem::DuplicateJoint {
-                        joint: n.clone(),
-                        context: "in message 0".into(),
-                    }));
-                }
-            }
-            self.names = names.clone();
-            self.frame_id = msg.header.frame_id;
-            self.has_velocity = !msg.velocity.is_empty();
-            self.has_effort = !msg.effort.is_empty();
-        }
-        let joints = self.names.len();
-        // The permutation from this message's order to the first message's.
-        let perm: Option<&[usize]> = if names == self.names {
-            None
-        } else {
-            let cached = matches!(&self.reorder, Some((order, _)) if *order == names);
-            if !cached {
-                let changed = || {
-                    Box::new(McapProblem::JointsChanged {
-                        index,
-                        first: self.names.clone(),
-                        found: names.clone(),
-                    })
-                };
-                if names.len() != joints {
-                    return Err(changed());
-                }
-                let mut perm = vec![usize::MAX; joints];
-                for (k, n) in names.iter().enumerate() {
-                    match self.index_of.get(n) {
-                        Some(&j) if perm[j] == usize::MAX => perm[j] = k,
-                        _ => return Err(changed()),
-                    }
-                }
-                self.reorder = Some((names.clone(), perm));
-            }
-            self.reorder.as_ref().map(|(_, p)| p.as_slice())
-        };
-        let arrays = [
-            ("position", Signal::Position, &msg.position, true),
-            (
-                "velocity",
-                Signal::Velocity,
-                &msg.velocity,
-                self.has_velocity,
-            ),
-            ("effort", Signal::Effort, &msg.effort, self.has_effort),
-        ];
-        for (field, signal, values, expected) in arrays {
-            if values.is_empty() && field != "position" {
-                if expected {
-                    return Err(Box::new(McapProblem::Inconsistent {
-                        index,
-                        field,
-                        empty: true,
-                    }));
-                }
-                continue;
-            }
-            if !expected {
-                return Err(Box::new(McapProblem::Inconsistent {
-                    index,
-                    field,
-                    empty: false,
-                }));
-            }
-            if values.len() != joints {
-                return Err(Box::new(McapProblem::ArrayLength {
-                    index,
-                    field,
-                    len: values.len(),
-                    joints,
-                }));
-            }
-            if let Some(k) = values.iter().position(|v| !v.is_finite()) {
-                let time_s = self
-                    .stamps
-                    .first()
-                    .map_or(0.0, |&s0| (i128::from(stamp) - i128::from(s0)) as f64 / 1e9);
-                return Err(Box::new(McapProblem::NonFinite {
-                    index,
-                    time_s,
-                    signal,
-                    joint: names[k].clone(),
-                    value: values[k],
-                }));
-            }
-        }
-        let append = |out: &mut Vec<f64>, values: &[f64]| match perm {
-            None => out.extend_from_slice(values),
-            Some(p) => out.extend(p.iter().map(|&k| values[k])),
-        };
-        append(&mut self.position, &msg.position);
-        if self.has_velocity {
-            append(&mut self.velocity, &msg.velocity);
-        }
-        if self.has_effort {
-            append(&mut self.effort, &msg.effort);
-        }
-        self.stamps.push(stamp);
-        Ok(())
-    }
-
-    fn into_series(self) -> JointStateSeries {
-        let (n, dof) = (self.stamps.len(), self.names.len());
-        let matrix = |v: Vec<f64>| DMatrix::from_row_slice(n, dof, &v);
-        JointStateSeries {
-            topic: self.topic,
-            joint_names: self.names,
-            frame_id: self.frame_id,
-            stamps_ns: self.stamps,
-            position: matrix(self.position),
-            velocity: self.has_velocity.then(|| matrix(self.velocity)),
-            effort: self.has_effort.then(|| matrix(self.effort)),
-        }
-    }
-}
-
-fn is_joint_state(c: &container::ChannelInfo) -> bool {
-    let enc = c.message_encoding.as_str();
-    (c.schema_name == JOINT_STATE_TYPE && (enc == "cdr" || enc == "json"))
-        || (c.schema_name == "sensor_msgs/JointState" && enc == "json")
-}
-
-fn decode(c: &container::ChannelInfo, data: &[u8]) -> Result<JointStateMsg, String> {
-    if c.message_encoding == "json" {
-        joint_state::decode_json(data)
-    } else {
-        joint_state::decode_cdr(data)
-    }
-}
-
-/// One pass over the file: decodes and checks the JointStates of the requested topics
-/// (or of every candidate topic in automatic mode), then picks the topics.
-fn collect(
-    path: &Path,
-    topics: &[String],
-    time_source: TimeSource,
-) -> Result<Vec<JointStateSeries>, LogError> {
-    let auto = topics.is_empty();
-    let mut accs: BTreeMap<String, Acc> = BTreeMap::new();
-    if !auto {
-        for (k, t) in topics.iter().enumerate() {
-            if topics[..k].contains(t) {
-                return Err(mcap_error(path, Some(t), McapProblem::RepeatedTopic));
-            }
-            accs.insert(t.clone(), Acc::new(t));
-        }
-    }
-    let on_message = |m: MessageRef<'_>| -> Result<(), LogError> {
-        let topic = m.channel.topic.as_str();
-        if !is_joint_state(m.channel) {
-            if !auto && accs.contains_key(topic) {
-                return Err(mcap_error(
-                    path,
-                    Some(topic),
-                    McapProblem::WrongType {
-                        schema_name: m.channel.schema_name.clone(),
-                        message_encoding: m.channel.message_encoding.clone(),
-                    },
-                ));
-            }
-            return Ok(());
-        }
-        let acc = match accs.get_mut(topic) {
-            Some(a) => a,
-            None if auto => accs
-                .entry(topic.to_owned())
-                .or_insert_with(|| Acc::new(topic)),
-            None => return Ok(()),
-        };
-        if acc.rejected.is_some() || acc.error.is_some() {
-            return Ok(());
-        }
-        let index = acc.count;
-        let result = (|| {
-            let msg = decode(m.channel, m.data)
-                .map_err(|reason| Box::new(McapProblem::Decode { index, reason }))?;
-            let stamp = match time_source {
-                TimeSource::HeaderStamp => Ok(msg.header.stamp.as_nanos()),
-                TimeSource::LogTime => i64::try_from(m.log_time).map_err(|_| m.log_time),
-                TimeSource::PublishTime => {
-                    i64::try_from(m.publish_time).map_err(|_| m.publish_time)
-                }
-            }
-            .map_err(|value| {
-                Box::new(McapProblem::TimeOutOfRange {
-                    index,
-                    time_source,
-                    value,
-                })
-            })?;
-            acc.push(msg, stamp, auto)
-        })();
-        match result {
-            Ok(()) => Ok(()),
-            Err(problem) => {
-                let e = LogError::Mcap {
-                    path: path.to_path_buf(),
-                    topic: Some(topic.to_owned()),
-                    problem,
-                };
-                if auto {
-                    acc.error = Some(e);
-                    Ok(())
-                } else {
-                    Err(e)
-                }
-            }
-        }
-    };
-    let scan = container::scan(path, on_message)?;
-    let info = |t: &str| scan.topics.iter().find(|i| i.topic == t);
-    let chosen: Vec<Acc> = if auto {
-        let candidates: Vec<&Acc> = accs.values().filter(|a| a.rejected.is_none()).collect();
-        let pick = match candidates.len() {
-            0 => {
-                let rejected = accs
-                    .values()
-                    .filter_map(|a| a.rejected.map(|why| format!("{}: {why}", a.topic)))
-                    .collect();
-                return Err(mcap_error(
-                    path,
-                    None,
-                    McapProblem::NoJointStates {
-                        available: scan.topics,
-                        rejected,
-                    },
-                ));
-            }
-            1 => candidates[0].topic.clone(),
-            _ => {
-                let measured: Vec<&&Acc> = candidates
-                    .iter()
-                    .filter(|a| a.topic.ends_with("measured_js"))
-                    .collect();
-                if measured.len() == 1 {
-                    measured[0].topic.clone()
-                } else {
-                    return Err(mcap_error(
-                        path,
-                        None,
-                        McapProblem::Ambiguous {
-                            candidates: candidates.iter().map(|a| a.topic.clone()).collect(),
-                        },
-                    ));
-                }
-            }
-        };
-        vec![accs.remove(&pick).expect("picked from accs")]
-    } else {
-        topics
-            .iter()
-            .map(|t| accs.remove(t).expect("one accumulator per topic"))
-            .collect()
-    };
-    let mut out = Vec::with_capacity(chosen.len());
-    for acc in chosen {
-        if let Some(e) = acc.error {
-            return Err(e);
-        }
-        if acc.count == 0 {
-            let problem = match info(&acc.topic) {
-                None => McapProblem::TopicNotFound {
-                    available: scan.topics.clone(),
-                },
-                Some(_) => McapProblem::EmptyTopic,
-            };
-            return Err(mcap_error(path, Some(&acc.topic), problem));
-        }
-        out.push(acc.into_series());
-    }
-    Ok(out)
-}
-
-/// Order statistics of a stamp sequence.
-struct Order {
-    /// First offending index.
-    first: Option<usize>,
-    backwards: usize,
-    duplicates: usize,
-}
-
-fn order(stamps: &[i64]) -> Order {
-    let mut o = Order {
-        first: None,
-        backwards: 0,
-        duplicates: 0,
-    };
-    for (k, w) in stamps.windows(2).enumerate() {
-        if w[1] <= w[0] {
-            if w[1] == w[0] {
-                o.duplicates += 1;
-            } else {
-                o.backwards += 1;
-            }
-            o.first.get_or_insert(k + 1);
-        }
-    }
-    o
-}
-
-fn seconds_between(a: i64, b: i64) -> f64 {
-    (i128::from(b) - i128::from(a)) as f64 / 1e9
-}
-
-fn check_increasing(
-    path: &Path,
-    topic: &str,
-    stamps: &[i64],
-    time_source: TimeSource,
-) -> Result<(), LogError> {
-    let o = order(stamps);
-    if let Some(index) = o.first {
-        return Err(mcap_error(
-            path,
-            Some(topic),
-            McapProblem::NotIncreasing {
-                index,
-                time_s: seconds_between(stamps[0], stamps[index]),
-                previous_s: seconds_between(stamps[0], stamps[index - 1]),
-                backwards: o.backwards,
-                duplicates: o.duplicates,
-                samples: stamps.len(),
-                time_source,
-            },
-        ));
-    }
-    Ok(())
-}
-
-/// Gaps and jitter of strictly increasing stamps (integer arithmetic on ns steps).
-fn timing(stamps: &[i64]) -> TimingReport {
-    let steps: Vec<i128> = stamps
-        .windows(2)
-        .map(|w| i128::from(w[1]) - i128::from(w[0]))
-        .collect();
-    let mut report = TimingReport {
-        samples: stamps.len(),
-        median_step_s: 0.0,
-        gaps: 0,
-        jittered: 0,
-        largest_step_s: 0.0,
-        first_irregular: None,
-        resampled_hz: None,
-    };
-    if steps.is_empty() {
-        return report;
-    }
-    let mut sorted = steps.clone();
-    sorted.sort_unstable();
-    let m = sorted.len();
-    // Median in half-nanoseconds, to stay in integers for an even count.
-    let median2 = if m % 2 == 1 {
-        2 * sorted[m / 2]
-    } else {
-        sorted[m / 2 - 1] + sorted[m / 2]
-    };
-    report.median_step_s = median2 as f64 / 2e9;
-    report.largest_step_s = sorted[m - 1] as f64 / 1e9;
-    for (k, &s) in steps.iter().enumerate() {
-        let s2 = 2 * s;
-        let irregular = if s2 as f64 > GAP_FACTOR * median2 as f64 {
-            report.gaps += 1;
-            true
-        } else if ((s2 - median2).abs() as f64) > JITTER_TOLERANCE * median2 as f64 {
-            report.jittered += 1;
-            true
-        } else {
-            false
-        };
-        if irregular && report.first_irregular.is_none() {
-            report.first_irregular = Some(k + 1);
-        }
-    }
-    report
-}
-
-fn non_uniform(
-    path: &Path,
-    topic: &str,
-    stamps: &[i64],
-    report: &TimingReport,
-    time_source: TimeSource,
-) -> LogError {
-    let index = report.first_irregular.unwrap_or(1);
-    let suggested = if report.median_step_s > 0.0 {
-        (1.0 / report.median_step_s).round().max(1.0)
-    } else {
-        1.0
-    };
-    mcap_error(
-        path,
-        Some(topic),
-        McapProblem::NonUniform {
-            index,
-            time_s: seconds_between(stamps[0], stamps[index]),
-            step_s: seconds_between(stamps[index - 1], stamps[index]),
-            median_step_s: report.median_step_s,
-            gaps: report.gaps,
-            jittered: report.jittered,
-            largest_step_s: report.largest_step_s,
-            samples: report.samples,
-            time_source,
-            suggested_hz: suggested,
-        },
-    )
-}
-
-/// Values of `m` (rows at the strictly increasing `stamps`) at the clock stamps `at`
-/// (within `stamps[0]..=stamps[last]`): exact rows where a stamp matches, linear
-/// interpolation between the two neighbours otherwise.
-fn sample_at(stamps: &[i64], m: &DMatrix<f64>, at: &[i64]) -> DMatrix<f64> {
-    let mut out = DMatrix::zeros(at.len(), m.ncols());
-    let mut seg = 0;
-    for (i, &t) in at.iter().enumerate() {
-        while seg + 1 < stamps.len() && stamps[seg + 1] <= t {
-            seg += 1;
-        }
-        if stamps[seg] == t || seg + 1 == stamps.len() {
-            out.row_mut(i).copy_from(&m.row(seg));
-        } else {
-            let w = seconds_between(stamps[seg], t) / seconds_between(stamps[seg], stamps[seg + 1]);
-            for j in 0..m.ncols() {
-                out[(i, j)] = (1.0 - w) * m[(seg, j)] + w * m[(seg + 1, j)];
-            }
-        }
-    }
-    out
-}
-
-/// Checks timing, merges the topics on the first one's clock, resamples if asked.
-fn merge(
-    path: &Path,
-    series: Vec<JointStateSeries>,
-    options: &McapOptions,
-) -> Result<McapLog, LogError> {
-    let ts = options.time_source;
-    // Joint names unique across topics.
-    let mut owner: HashMap<&str, &str> = HashMap::new();
-    for s in &series {
-        for n in &s.joint_names {
-            if let Some(first) = owner.insert(n.as_str(), s.topic.as_str()) {
-                return Err(mcap_error(
-                    path,
-                    Some(&s.topic),
-                    McapProblem::DuplicateJoint {
-                        joint: n.clone(),
-                        context: format!(
-                            "also on topic {first}; merged topics need distinct joint names"
-                        ),
-                    },
-                ));
-            }
-        }
-    }
-    for s in &series {
-        check_increasing(path, &s.topic, &s.stamps_ns, ts)?;
-    }
-    // Gaps in the other topics would be bridged by interpolation: refuse them too.
-    if options.resample_hz.is_none() {
-        for s in &series[1..] {
-            let r = timing(&s.stamps_ns);
-            if r.gaps > 0 {
-                return Err(non_uniform(path, &s.topic, &s.stamps_ns, &r, ts));
-            }
-        }
-    }
-    let clock = &series[0];
-    let (mut lo, mut hi) = (i64::MIN, i64::MAX);
-    for s in &series[1..] {
-        lo = lo.max(s.stamps_ns[0]);
-        hi = hi.min(*s.stamps_ns.last().expect("non-empty"));
-    }
-    let first = clock.stamps_ns.partition_point(|&t| t < lo);
-    let end = clock.stamps_ns.partition_point(|&t| t <= hi);
-    if first >= end {
-        let mut detail = String::new();
-        let t0 = clock.stamps_ns[0];
-        for s in &series {
-            let _ = write!(
-                detail,
-                "{}{} from {} s to {} s",
-                if detail.is_empty() { "" } else { ", " },
-                s.topic,
-                seconds_between(t0, s.stamps_ns[0]),
-                seconds_between(t0, *s.stamps_ns.last().expect("non-empty"))
-            );
-        }
-        return Err(mcap_error(path, None, McapProblem::NoOverlap { detail }));
-    }
-    let trimmed = (first, clock.stamps_ns.len() - end);
-    let stamps = &clock.stamps_ns[first..end];
-    let mut timing_report = timing(stamps);
-    if options.resample_hz.is_none() && timing_report.first_irregular.is_some() {
-        return Err(non_uniform(path, &clock.topic, stamps, &timing_report, ts));
-    }
-    let n = stamps.len();
-    let dof: usize = series.iter().map(|s| s.joint_names.len()).sum();
-    let with_velocity = series.iter().all(|s| s.velocity.is_some());
-    let mut q = DMatrix::zeros(n, dof);
-    let mut dq = DMatrix::zeros(n, if with_velocity { dof } else { 0 });
-    let mut tau = DMatrix::zeros(n, dof);
-    let mut col = 0;
-    for (k, s) in series.iter().enumerate() {
-        let w = s.joint_names.len();
-        let take = |m: &DMatrix<f64>| {
-            if k == 0 {
-                m.rows(first, n).into_owned()
-            } else {
-                sample_at(&s.stamps_ns, m, stamps)
-            }
-        };
-        q.columns_mut(col, w).copy_from(&take(&s.position));
-        if let Some(v) = &s.velocity {
-            if with_velocity {
-                dq.columns_mut(col, w).copy_from(&take(v));
-            }
-        }
-        let e = s.effort.as_ref().expect("checked by the caller");
-        tau.columns_mut(col, w).copy_from(&take(e));
-        col += w;
-    }
-    let mut time: Vec<f64> = stamps
-        .iter()
-        .map(|&t| seconds_between(stamps[0], t))
-        .collect();
-    let mut dq = with_velocity.then_some(dq);
-    let topics: Vec<String> = series.iter().map(|s| s.topic.clone()).collect();
-    if let Some(rate) = options.resample_hz {
-        let resample = |m: &DMatrix<f64>| {
-            crate::signal::resample_linear(&time, m, rate).map_err(|e| {
-                mcap_error(
-                    path,
-                    Some(&clock.topic),
-                    McapProblem::Resample {
-                        reason: e.to_string(),
-                    },
-                )
-            })
-        };
-        let (t, q2) = resample(&q)?;
-        let (_, tau2) = resample(&tau)?;
-        let dq2 = match &dq {
-            Some(d) => Some(resample(d)?.1),
-            None => None,
-        };
-        time = t;
-        q = q2;
-        tau = tau2;
-        dq = dq2;
-        timing_report.resampled_hz = Some(rate);
-    }
-    let trajectory = Trajectory {
-        time,
-        q,
-        dq,
-        tau,
-        joint_names: series.iter().flat_map(|s| s.joint_names.clone()).collect(),
-        coordinates: Coordinates::Measured,
-        source: format!("{} ({})", path.display(), topics.join(" + ")),
-    };
-    trajectory
-        .validate()
-        .map_err(|e| mcap_error(path, Some(&clock.topic), McapProblem::Invalid(e)))?;
-    Ok(McapLog {
-        trajectory,
-        start_time_ns: stamps[0],
-        topics,
-        time_source: ts,
-        timing: timing_report,
-        trimmed,
-    })
+    Ok(survey::survey(path.as_ref(), topics, time_source, true)?
+        .into_iter()
+        .map(survey::TopicSurvey::into_series)
+        .collect())
 }
 
 /// Chunk compression of written files.
@@ -1358,30 +784,5 @@ mod tests {
             TimeSource::HeaderStamp
         );
         assert!("wall".parse::<TimeSource>().is_err());
-    }
-
-    #[test]
-    fn timing_counts_gaps_and_jitter() {
-        let mut s: Vec<i64> = (0..100).map(|k| k * 5_000_000).collect();
-        let r = timing(&s);
-        assert_eq!((r.gaps, r.jittered, r.first_irregular), (0, 0, None));
-        assert_eq!(r.median_step_s, 0.005);
-        s[50] += 1_000_000; // one step 6 ms, the next 4 ms: both jitter (20 %)
-        for t in &mut s[80..] {
-            *t += 10_000_000; // a 15 ms step: a gap
-        }
-        let r = timing(&s);
-        assert_eq!((r.gaps, r.jittered, r.first_irregular), (1, 2, Some(50)));
-        assert!((r.largest_step_s - 0.015).abs() < 1e-15);
-        let o = order(&[0, 1, 1, 0, 2]);
-        assert_eq!((o.first, o.duplicates, o.backwards), (Some(2), 1, 1));
-    }
-
-    #[test]
-    fn sample_at_exact_and_interpolated() {
-        let stamps = [0, 10, 20];
-        let m = DMatrix::from_column_slice(3, 1, &[0.0, 1.0, 3.0]);
-        let r = sample_at(&stamps, &m, &[0, 5, 10, 15, 20]);
-        assert_eq!(r.as_slice(), &[0.0, 0.5, 1.0, 2.0, 3.0]);
     }
 }

@@ -11,19 +11,27 @@
 //!   (dVRK `measured_js`), measured coordinates, header stamps. See [`mcap`]
 //!   ([`mcap::read_mcap`] / [`mcap::write_mcap`] for topics, time source, resampling).
 //!
+//! Every reader streams its file: [`LogReader`] gives a log of any format in blocks of
+//! samples (for logs larger than memory), and [`read`] / [`read_with`] collect every
+//! block, so both go through the same parsing and checks.
+//!
 //! Readers never panic on bad input: every problem is a [`LogError`] naming the file,
 //! the line (1-based, as an editor shows it) and what is wrong. Writers write to a
 //! temporary file in the target directory and rename it, so a crash never leaves a
 //! half-written log under the final name.
 
+mod blocks;
 mod csv;
 pub mod mcap;
 
-pub use self::csv::{read_headered, read_wpi, write_headered, write_wpi};
+pub use self::blocks::{LogBlocks, LogReader};
+pub use self::csv::{
+    read_headered, read_wpi, write_headered, write_wpi, HeaderedBlocks, WpiBlocks,
+};
 
 use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
 use serde::{Deserialize, Serialize};
-use std::io::Write;
+use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use thiserror::Error;
@@ -340,26 +348,12 @@ pub fn read_with(
     rate_hz: Option<f64>,
     mcap_options: &mcap::McapOptions,
 ) -> Result<Trajectory, LogError> {
-    let path = path.as_ref();
-    let format = match format {
-        Some(f) => f,
-        None => detect_format(path)?,
-    };
-    let traj = match format {
-        LogFormat::Wpi => {
-            let rate = rate_hz.ok_or_else(|| LogError::MissingRate {
-                path: path.to_path_buf(),
-            })?;
-            read_wpi(path, rate, None)?
-        }
-        LogFormat::Csv => read_headered(path)?,
-        // MCAP logs are resampled while read (options.resample_hz).
-        LogFormat::Mcap => return mcap::read_mcap(path, mcap_options),
-    };
-    match mcap_options.resample_hz {
-        Some(hz) => resample(path, traj, hz),
-        None => Ok(traj),
+    let reader = LogReader::open(path, format, rate_hz, mcap_options)?;
+    let mut all = TrajectoryBuilder::default();
+    for block in reader.blocks(BLOCK_SAMPLES)? {
+        all.push(&block?);
     }
+    Ok(all.build())
 }
 
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
@@ -369,28 +363,11 @@ pub fn resample(path: &Path, traj: Trajectory, hz: f64) -> Result<Trajectory, Lo
         path: path.to_path_buf(),
         source,
     })?;
-    let fail = |source| LogError::Resample {
-        path: path.to_path_buf(),
-        rate_hz: hz,
-        source,
-    };
-    let (time, q) = crate::signal::resample_linear(&traj.time, &traj.q, hz).map_err(fail)?;
-    let (_, tau) = crate::signal::resample_linear(&traj.time, &traj.tau, hz).map_err(fail)?;
-    let dq = match &traj.dq {
-        Some(d) => Some(
-            crate::signal::resample_linear(&traj.time, d, hz)
-                .map_err(fail)?
-                .1,
-        ),
-        None => None,
-    };
-    Ok(Trajectory {
-        time,
-        q,
-        dq,
-        tau,
-        ..traj
-    })
+    let mut r = blocks::BlockResampler::new(path, hz, traj.dof(), traj.dq.is_some())?;
+    let mut all = TrajectoryBuilder::default();
+    all.push(&r.push(&traj)?);
+    all.push(&r.finish(&traj)?);
+    Ok(all.build())
 }
 
 /// Writes a trajectory in the given layout (atomically). See [`write_wpi`],
@@ -422,39 +399,113 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
     {
         return Ok(LogFormat::Mcap);
     }
-    let bytes = read_bytes(path)?;
-    let text = String::from_utf8_lossy(strip_bom(&bytes));
-    let first = text
-        .lines()
-        .map(str::trim)
-        .find(|l| !l.is_empty() && !l.starts_with('#'));
-    match first {
-        None => Err(LogError::Empty {
-            path: path.to_path_buf(),
-            what: "no rows",
-        }),
-        Some(line) => {
-            let numeric = line
-                .split(',')
-                .all(|f| f.trim().trim_matches('"').parse::<f64>().is_ok());
-            Ok(if numeric {
-                LogFormat::Wpi
-            } else {
-                LogFormat::Csv
-            })
+    let mut text = open_text(path)?;
+    let mut raw = Vec::new();
+    loop {
+        raw.clear();
+        let read = text
+            .read_until(b'\n', &mut raw)
+            .map_err(|source| LogError::Io {
+                path: path.to_path_buf(),
+                source,
+            })?;
+        if read == 0 {
+            return Err(LogError::Empty {
+                path: path.to_path_buf(),
+                what: "no rows",
+            });
         }
+        let line = String::from_utf8_lossy(&raw);
+        let line = line.trim();
+        if line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let numeric = line
+            .split(',')
+            .all(|f| f.trim().trim_matches('"').parse::<f64>().is_ok());
+        return Ok(if numeric {
+            LogFormat::Wpi
+        } else {
+            LogFormat::Csv
+        });
     }
 }
 
-pub(crate) fn read_bytes(path: &Path) -> Result<Vec<u8>, LogError> {
-    std::fs::read(path).map_err(|source| LogError::Io {
+/// Samples per block when a reader's blocks are collected into a whole log.
+pub(crate) const BLOCK_SAMPLES: usize = 4096;
+
+/// A text file, buffered, past its UTF-8 byte-order mark if it has one.
+pub(crate) fn open_text(path: &Path) -> Result<Box<dyn BufRead>, LogError> {
+    let io = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
-    })
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    if reader.fill_buf().map_err(io)?.starts_with(b"\xEF\xBB\xBF") {
+        reader.consume(3);
+    }
+    Ok(Box::new(reader))
 }
 
-pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
-    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
+/// Blocks of one log appended into a whole trajectory (the first block gives the
+/// names, coordinates and source).
+#[derive(Default)]
+pub(crate) struct TrajectoryBuilder {
+    first: Option<Trajectory>,
+    time: Vec<f64>,
+    /// Row-major `q`, `dq` and `tau`.
+    values: [Vec<f64>; 3],
+}
+
+impl TrajectoryBuilder {
+    pub(crate) fn push(&mut self, block: &Trajectory) {
+        if self.first.is_none() {
+            let dof = block.dof();
+            self.first = Some(Trajectory {
+                time: Vec::new(),
+                q: nalgebra::DMatrix::zeros(0, dof),
+                dq: block.dq.as_ref().map(|_| nalgebra::DMatrix::zeros(0, dof)),
+                tau: nalgebra::DMatrix::zeros(0, dof),
+                joint_names: block.joint_names.clone(),
+                coordinates: block.coordinates,
+                source: block.source.clone(),
+            });
+        }
+        self.time.extend_from_slice(&block.time);
+        let signals = [Some(&block.q), block.dq.as_ref(), Some(&block.tau)];
+        for (out, m) in self.values.iter_mut().zip(signals) {
+            if let Some(m) = m {
+                for i in 0..m.nrows() {
+                    out.extend(m.row(i).iter());
+                }
+            }
+        }
+    }
+
+    pub(crate) fn build(self) -> Trajectory {
+        let Some(first) = self.first else {
+            return Trajectory {
+                time: Vec::new(),
+                q: nalgebra::DMatrix::zeros(0, 0),
+                dq: None,
+                tau: nalgebra::DMatrix::zeros(0, 0),
+                joint_names: Vec::new(),
+                coordinates: Coordinates::Measured,
+                source: String::new(),
+            };
+        };
+        let (n, dof) = (self.time.len(), first.dof());
+        let [q, dq, tau] = self.values;
+        let matrix = |v: &[f64]| nalgebra::DMatrix::from_row_slice(n, dof, v);
+        Trajectory {
+            q: matrix(&q),
+            dq: first.dq.as_ref().map(|_| matrix(&dq)),
+            tau: matrix(&tau),
+            time: self.time,
+            ..first
+        }
+    }
 }
 
 /// Formats a value so that parsing it gives back the same `f64` (shortest round-trip

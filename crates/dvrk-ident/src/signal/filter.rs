@@ -71,21 +71,118 @@ pub fn lfilter(
         }
         z.copy_from_slice(zi);
     }
-    let mut y = Vec::with_capacity(x.len());
-    for &xn in x {
-        if n > 1 {
-            // Same operation order as scipy's C loop.
-            let yn = z[0] + b[0] * xn;
-            for i in 0..n - 2 {
-                z[i] = z[i + 1] + xn * b[i + 1] - yn * a[i + 1];
-            }
-            z[n - 2] = xn * b[n - 1] - yn * a[n - 1];
-            y.push(yn);
-        } else {
-            y.push(xn * b[0]);
+    let y = x.iter().map(|&xn| tf_step(&b, &a, &mut z, xn)).collect();
+    Ok((y, z))
+}
+
+/// One sample through the direct-form II transposed filter with normalized, equally
+/// long `b` and `a` and state `z` (`len - 1` values); the operation order of scipy's C
+/// loop, shared by [`lfilter`] and the streamed filters so both round alike.
+fn tf_step(b: &[f64], a: &[f64], z: &mut [f64], xn: f64) -> f64 {
+    let n = b.len();
+    if n == 1 {
+        return xn * b[0];
+    }
+    let yn = z[0] + b[0] * xn;
+    for i in 0..n - 2 {
+        z[i] = z[i + 1] + xn * b[i + 1] - yn * a[i + 1];
+    }
+    z[n - 2] = xn * b[n - 1] - yn * a[n - 1];
+    yn
+}
+
+/// One sample through a cascade of second-order sections with states `z` (two per
+/// section); the operation order of scipy's `_sosfilt`, shared by [`sosfilt`] and the
+/// streamed filters.
+fn sos_step(sos: &[Section], z: &mut [[f64; 2]], xn: f64) -> f64 {
+    let mut x_cur = xn;
+    for (s, zs) in sos.iter().zip(z.iter_mut()) {
+        let x_new = s[0] * x_cur + zs[0];
+        zs[0] = s[1] * x_cur - s[4] * x_new + zs[1];
+        zs[1] = s[2] * x_cur - s[5] * x_new;
+        x_cur = x_new;
+    }
+    x_cur
+}
+
+/// A designed filter with its state, one sample at a time: what a zero-phase filter
+/// applied block by block needs (see `super::stream`).
+#[derive(Clone, Debug)]
+pub(crate) enum Stepper {
+    /// Normalized `(b, a)` of equal length and the state (`len - 1` values).
+    Ba {
+        b: Vec<f64>,
+        a: Vec<f64>,
+        z: Vec<f64>,
+        zi: Vec<f64>,
+        /// `filtfilt`'s default padding, from the coefficients as given.
+        padlen: usize,
+    },
+    /// Sections and their states.
+    Sos {
+        sos: Vec<Section>,
+        z: Vec<[f64; 2]>,
+        zi: Vec<[f64; 2]>,
+    },
+}
+
+impl Stepper {
+    /// The transfer function `(b, a)`, checked and normalized as [`lfilter`] does.
+    pub(crate) fn ba(b: &[f64], a: &[f64]) -> Result<Stepper, SignalError> {
+        let zi = lfilter_zi(b, a)?;
+        let padlen = 3 * a.len().max(b.len());
+        let (b, a) = check_coefficients(b, a)?;
+        Ok(Stepper::Ba {
+            z: vec![0.0; zi.len()],
+            b,
+            a,
+            zi,
+            padlen,
+        })
+    }
+
+    /// Second-order sections, checked as [`sosfilt`] does.
+    pub(crate) fn sos(sos: &[Section]) -> Result<Stepper, SignalError> {
+        let zi = sosfilt_zi(sos)?;
+        Ok(Stepper::Sos {
+            sos: sos.to_vec(),
+            z: vec![[0.0; 2]; zi.len()],
+            zi,
+        })
+    }
+
+    /// Padding of [`filtfilt`] / [`sosfiltfilt`] when `padlen` is `None`.
+    pub(crate) fn default_padlen(&self) -> usize {
+        match self {
+            Stepper::Ba { padlen, .. } => *padlen,
+            Stepper::Sos { sos, .. } => sos_default_padlen(sos),
         }
     }
-    Ok((y, z))
+
+    /// Sets the state to the steady state of a constant input `x0` (the initial
+    /// conditions of [`filtfilt`] and [`sosfiltfilt`], computed the same way).
+    pub(crate) fn settle(&mut self, x0: f64) {
+        match self {
+            Stepper::Ba { z, zi, .. } => {
+                for (s, u) in z.iter_mut().zip(zi.iter()) {
+                    *s = u * x0;
+                }
+            }
+            Stepper::Sos { z, zi, .. } => {
+                for (s, u) in z.iter_mut().zip(zi.iter()) {
+                    *s = [u[0] * x0, u[1] * x0];
+                }
+            }
+        }
+    }
+
+    /// One sample through the filter.
+    pub(crate) fn step(&mut self, x: f64) -> f64 {
+        match self {
+            Stepper::Ba { b, a, z, .. } => tf_step(b, a, z, x),
+            Stepper::Sos { sos, z, .. } => sos_step(sos, z, x),
+        }
+    }
 }
 
 /// Steady-state initial state of [`lfilter`] for a unit step input, scipy's
@@ -213,6 +310,13 @@ pub fn filtfilt(
     Ok(y[edge..edge + x.len()].to_vec())
 }
 
+/// scipy's default `sosfiltfilt` padding, `3 * (2 * n_sections + 1 - k)`.
+fn sos_default_padlen(sos: &[Section]) -> usize {
+    let zb = sos.iter().filter(|s| s[2] == 0.0).count();
+    let za = sos.iter().filter(|s| s[5] == 0.0).count();
+    3 * (2 * sos.len() + 1 - zb.min(za))
+}
+
 fn check_sos(sos: &[Section]) -> Result<(), SignalError> {
     if sos.is_empty() {
         return Err(SignalError::InvalidCoefficients {
@@ -256,20 +360,7 @@ pub fn sosfilt(
         }
         z.copy_from_slice(zi);
     }
-    let y = x
-        .iter()
-        .map(|&xn| {
-            let mut x_cur = xn;
-            for (s, zs) in sos.iter().zip(z.iter_mut()) {
-                // Same operation order as scipy's _sosfilt loop.
-                let x_new = s[0] * x_cur + zs[0];
-                zs[0] = s[1] * x_cur - s[4] * x_new + zs[1];
-                zs[1] = s[2] * x_cur - s[5] * x_new;
-                x_cur = x_new;
-            }
-            x_cur
-        })
-        .collect();
+    let y = x.iter().map(|&xn| sos_step(sos, &mut z, xn)).collect();
     Ok((y, z))
 }
 
@@ -308,10 +399,7 @@ pub fn sosfiltfilt(
     padlen: Option<usize>,
 ) -> Result<Vec<f64>, SignalError> {
     check_sos(sos)?;
-    let zb = sos.iter().filter(|s| s[2] == 0.0).count();
-    let za = sos.iter().filter(|s| s[5] == 0.0).count();
-    let ntaps = 2 * sos.len() + 1 - zb.min(za);
-    let edge = padlen.unwrap_or(3 * ntaps);
+    let edge = padlen.unwrap_or_else(|| sos_default_padlen(sos));
     check_pad(x.len(), edge)?;
     let ext = odd_ext(x, edge);
     let zi = sosfilt_zi(sos)?;

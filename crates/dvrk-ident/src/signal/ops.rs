@@ -50,21 +50,31 @@ pub fn central_difference(
     if n < 3 {
         return Err(SignalError::TooFewSamples { len: n, needed: 3 });
     }
-    let h = step_s;
-    let five = stencil == Stencil::FivePoint;
     Ok((0..n)
-        .map(|k| {
-            if five && k >= 2 && k + 2 < n {
-                (-x[k + 2] + 8.0 * x[k + 1] - 8.0 * x[k - 1] + x[k - 2]) / (12.0 * h)
-            } else if k >= 1 && k + 1 < n {
-                (x[k + 1] - x[k - 1]) / (2.0 * h)
-            } else if k == 0 {
-                (-3.0 * x[0] + 4.0 * x[1] - x[2]) / (2.0 * h)
-            } else {
-                (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) / (2.0 * h)
-            }
-        })
+        .map(|k| difference_at(|i| x[i], k, n, step_s, stencil))
         .collect())
+}
+
+/// The derivative at sample `k` of a signal of `n >= 3` samples (`x(i)` is sample `i`),
+/// by the formulas of [`central_difference`]. Only samples within two of `k` are read,
+/// and a stream that has seen sample `k + 2` may pass any `n > k + 2`: the formula
+/// does not change, so a log differentiated block by block rounds like a whole one.
+pub(crate) fn difference_at(
+    x: impl Fn(usize) -> f64,
+    k: usize,
+    n: usize,
+    h: f64,
+    stencil: Stencil,
+) -> f64 {
+    if stencil == Stencil::FivePoint && k >= 2 && k + 2 < n {
+        (-x(k + 2) + 8.0 * x(k + 1) - 8.0 * x(k - 1) + x(k - 2)) / (12.0 * h)
+    } else if k >= 1 && k + 1 < n {
+        (x(k + 1) - x(k - 1)) / (2.0 * h)
+    } else if k == 0 {
+        (-3.0 * x(0) + 4.0 * x(1) - x(2)) / (2.0 * h)
+    } else {
+        (3.0 * x(n - 1) - 4.0 * x(n - 2) + x(n - 3)) / (2.0 * h)
+    }
 }
 
 /// [`central_difference`] applied to every column of `m` (samples in rows).
@@ -162,7 +172,7 @@ pub fn resample_linear(
     m: &DMatrix<f64>,
     rate_hz: f64,
 ) -> Result<(Vec<f64>, DMatrix<f64>), SignalError> {
-    super::butter::check_rate(rate_hz)?;
+    let mut resampler = super::stream::Resampler::new(m.ncols(), rate_hz)?;
     let n = time.len();
     if n != m.nrows() {
         return Err(SignalError::InvalidSetting {
@@ -170,33 +180,16 @@ pub fn resample_linear(
             reason: format!("{} time stamps for {} samples", n, m.nrows()),
         });
     }
-    if n < 2 {
-        return Err(SignalError::TooFewSamples { len: n, needed: 2 });
-    }
-    let increasing = time.windows(2).all(|w| w[1] > w[0]);
-    if !increasing || time.iter().any(|t| !t.is_finite()) {
-        return Err(SignalError::InvalidSetting {
-            name: "time",
-            reason: "time stamps must be finite and strictly increasing".into(),
-        });
-    }
-    let (t0, t1) = (time[0], time[n - 1]);
-    let step = 1.0 / rate_hz;
-    // Include the end point despite rounding in k * step.
-    let count = ((t1 - t0) / step + 1e-9).floor() as usize + 1;
-    let grid: Vec<f64> = (0..count).map(|k| t0 + k as f64 * step).collect();
-    let mut out = DMatrix::zeros(count, m.ncols());
-    let mut seg = 0;
-    for (i, &t) in grid.iter().enumerate() {
-        while seg + 2 < n && time[seg + 1] < t {
-            seg += 1;
+    let (mut grid, mut values) = (Vec::new(), Vec::new());
+    let mut row = vec![0.0; m.ncols()];
+    for (i, &t) in time.iter().enumerate() {
+        for (j, v) in row.iter_mut().enumerate() {
+            *v = m[(i, j)];
         }
-        let (ta, tb) = (time[seg], time[seg + 1]);
-        let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-        for j in 0..m.ncols() {
-            out[(i, j)] = (1.0 - w) * m[(seg, j)] + w * m[(seg + 1, j)];
-        }
+        resampler.push(t, &row, &mut grid, &mut values)?;
     }
+    resampler.finish(&mut grid, &mut values)?;
+    let out = DMatrix::from_row_slice(grid.len(), m.ncols(), &values);
     Ok((grid, out))
 }
 

@@ -1,10 +1,12 @@
 //! Streaming over the records of an MCAP file: schemas, channels, messages.
 //!
 //! The file is read through a buffered reader and the `mcap` crate's sans-io
-//! [`LinearReader`], which decompresses one chunk at a time (zstd or lz4) and checks the
-//! chunk, data-section and summary CRCs; memory is bounded by the largest chunk, not the
-//! file. Messages are handed to a callback as borrowed slices, so messages of topics
-//! that are not wanted are never copied.
+//! [`LinearReader`] (mcap 0.26: a streaming reader over any `Read`, so no memory map),
+//! which decompresses one chunk at a time (zstd or lz4) and checks the chunk,
+//! data-section and summary CRCs; memory is bounded by the largest chunk, not the file.
+//! A [`Scanner`] hands the messages one at a time, on demand, to a callback as borrowed
+//! slices, so messages of topics that are not wanted are never copied, and a log can
+//! be read block by block and read again.
 
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
@@ -48,124 +50,163 @@ pub(crate) fn scan(
     path: &Path,
     mut on_message: impl FnMut(MessageRef<'_>) -> Result<(), LogError>,
 ) -> Result<Scan, LogError> {
-    let file = std::fs::File::open(path).map_err(|source| LogError::Io {
-        path: path.to_path_buf(),
-        source,
-    })?;
-    let mut src = std::io::BufReader::with_capacity(1 << 16, file);
-    let options = LinearReaderOptions::default()
-        .with_validate_chunk_crcs(true)
-        .with_validate_data_section_crc(true)
-        .with_validate_summary_section_crc(true)
-        .with_record_length_limit(RECORD_LENGTH_LIMIT);
-    let mut reader = LinearReader::new_with_options(options);
-    let mut schemas: BTreeMap<u16, String> = BTreeMap::new();
-    let mut channels: BTreeMap<u16, ChannelInfo> = BTreeMap::new();
-    let mut counts: BTreeMap<u16, u64> = BTreeMap::new();
-    let mut past_data_end = false;
-    let mut bytes_read: u64 = 0;
-    let container =
-        |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
-    while let Some(event) = reader.next_event() {
-        match event.map_err(|e| container(e, bytes_read))? {
-            LinearReadEvent::ReadRequest(need) => {
-                let buf = reader.insert(need);
-                let n = loop {
-                    match src.read(buf) {
-                        Ok(n) => break n,
-                        Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                        Err(source) => {
-                            return Err(LogError::Io {
-                                path: path.to_path_buf(),
-                                source,
-                            })
-                        }
-                    }
-                };
-                bytes_read += n as u64;
-                reader.notify_read(n);
-            }
-            LinearReadEvent::Record { opcode, data } => match opcode {
-                op::DATA_END => past_data_end = true,
-                op::SCHEMA | op::CHANNEL | op::MESSAGE => {
-                    let record =
-                        ::mcap::parse_record(opcode, data).map_err(|e| container(e, bytes_read))?;
-                    match record {
-                        Record::Schema { header, .. } => {
-                            schemas.entry(header.id).or_insert(header.name);
-                        }
-                        Record::Channel(c) => {
-                            if channels.contains_key(&c.id) {
-                                continue;
-                            }
-                            let schema_name = if c.schema_id == 0 {
-                                String::new()
-                            } else {
-                                schemas.get(&c.schema_id).cloned().ok_or_else(|| {
-                                    mcap_error(
-                                        path,
-                                        Some(&c.topic),
-                                        McapProblem::Container {
-                                            reason: format!(
-                                                "channel {} refers to schema {}, which is not defined before it",
-                                                c.id, c.schema_id
-                                            ),
-                                        },
-                                    )
-                                })?
-                            };
-                            channels.insert(
-                                c.id,
-                                ChannelInfo {
-                                    topic: c.topic,
-                                    schema_name,
-                                    message_encoding: c.message_encoding,
-                                },
-                            );
-                        }
-                        Record::Message { header, data } if !past_data_end => {
-                            let channel = channels.get(&header.channel_id).ok_or_else(|| {
-                                mcap_error(
-                                    path,
-                                    None,
-                                    McapProblem::Container {
-                                        reason: format!(
-                                            "a message refers to channel {}, which is not defined before it",
-                                            header.channel_id
-                                        ),
-                                    },
-                                )
-                            })?;
-                            *counts.entry(header.channel_id).or_insert(0) += 1;
-                            on_message(MessageRef {
-                                channel,
-                                log_time: header.log_time,
-                                publish_time: header.publish_time,
-                                data: &data,
-                            })?;
-                        }
-                        _ => {}
-                    }
-                }
-                _ => {}
-            },
-        }
-    }
-    // Topics: merge the channels of one topic.
-    let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-    for (id, c) in &channels {
-        let n = counts.get(id).copied().unwrap_or(0);
-        let t = topics.entry(c.topic.clone()).or_insert_with(|| TopicInfo {
-            topic: c.topic.clone(),
-            schema_name: c.schema_name.clone(),
-            message_encoding: c.message_encoding.clone(),
-            messages: 0,
-        });
-        t.messages += n;
-    }
+    let mut scanner = Scanner::open(path)?;
+    while scanner.next_message(&mut on_message)?.is_some() {}
     Ok(Scan {
-        topics: topics.into_values().collect(),
+        topics: scanner.topics(),
     })
+}
+
+/// A pass over the records of a file, one message at a time, on demand.
+pub(crate) struct Scanner {
+    path: std::path::PathBuf,
+    src: std::io::BufReader<std::fs::File>,
+    reader: LinearReader,
+    schemas: BTreeMap<u16, String>,
+    channels: BTreeMap<u16, ChannelInfo>,
+    counts: BTreeMap<u16, u64>,
+    past_data_end: bool,
+    bytes_read: u64,
+}
+
+impl Scanner {
+    pub(crate) fn open(path: &Path) -> Result<Scanner, LogError> {
+        let file = std::fs::File::open(path).map_err(|source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let options = LinearReaderOptions::default()
+            .with_validate_chunk_crcs(true)
+            .with_validate_data_section_crc(true)
+            .with_validate_summary_section_crc(true)
+            .with_record_length_limit(RECORD_LENGTH_LIMIT);
+        Ok(Scanner {
+            path: path.to_path_buf(),
+            src: std::io::BufReader::with_capacity(1 << 16, file),
+            reader: LinearReader::new_with_options(options),
+            schemas: BTreeMap::new(),
+            channels: BTreeMap::new(),
+            counts: BTreeMap::new(),
+            past_data_end: false,
+            bytes_read: 0,
+        })
+    }
+
+    /// Reads on to the next message of the data section and hands it to `f`; `None`
+    /// at the end of the file (which is then checked to the last CRC).
+    pub(crate) fn next_message<T>(
+        &mut self,
+        mut f: impl FnMut(MessageRef<'_>) -> Result<T, LogError>,
+    ) -> Result<Option<T>, LogError> {
+        let path = self.path.as_path();
+        let container =
+            |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
+        while let Some(event) = self.reader.next_event() {
+            match event.map_err(|e| container(e, self.bytes_read))? {
+                LinearReadEvent::ReadRequest(need) => {
+                    let buf = self.reader.insert(need);
+                    let n = loop {
+                        match self.src.read(buf) {
+                            Ok(n) => break n,
+                            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                            Err(source) => {
+                                return Err(LogError::Io {
+                                    path: path.to_path_buf(),
+                                    source,
+                                })
+                            }
+                        }
+                    };
+                    self.bytes_read += n as u64;
+                    self.reader.notify_read(n);
+                }
+                LinearReadEvent::Record { opcode, data } => match opcode {
+                    op::DATA_END => self.past_data_end = true,
+                    op::SCHEMA | op::CHANNEL | op::MESSAGE => {
+                        let record = ::mcap::parse_record(opcode, data)
+                            .map_err(|e| container(e, self.bytes_read))?;
+                        match record {
+                            Record::Schema { header, .. } => {
+                                self.schemas.entry(header.id).or_insert(header.name);
+                            }
+                            Record::Channel(c) => {
+                                if self.channels.contains_key(&c.id) {
+                                    continue;
+                                }
+                                let schema_name = if c.schema_id == 0 {
+                                    String::new()
+                                } else {
+                                    self.schemas.get(&c.schema_id).cloned().ok_or_else(|| {
+                                        mcap_error(
+                                            path,
+                                            Some(&c.topic),
+                                            McapProblem::Container {
+                                                reason: format!(
+                                                    "channel {} refers to schema {}, which is not defined before it",
+                                                    c.id, c.schema_id
+                                                ),
+                                            },
+                                        )
+                                    })?
+                                };
+                                self.channels.insert(
+                                    c.id,
+                                    ChannelInfo {
+                                        topic: c.topic,
+                                        schema_name,
+                                        message_encoding: c.message_encoding,
+                                    },
+                                );
+                            }
+                            Record::Message { header, data } if !self.past_data_end => {
+                                let channel =
+                                    self.channels.get(&header.channel_id).ok_or_else(|| {
+                                        mcap_error(
+                                            path,
+                                            None,
+                                            McapProblem::Container {
+                                                reason: format!(
+                                                    "a message refers to channel {}, which is not defined before it",
+                                                    header.channel_id
+                                                ),
+                                            },
+                                        )
+                                    })?;
+                                *self.counts.entry(header.channel_id).or_insert(0) += 1;
+                                return f(MessageRef {
+                                    channel,
+                                    log_time: header.log_time,
+                                    publish_time: header.publish_time,
+                                    data: &data,
+                                })
+                                .map(Some);
+                            }
+                            _ => {}
+                        }
+                    }
+                    _ => {}
+                },
+            }
+        }
+        Ok(None)
+    }
+
+    /// Every topic seen so far with its type and message count (channels of the same
+    /// topic merged), sorted by topic: the whole file's after the last message.
+    pub(crate) fn topics(&self) -> Vec<TopicInfo> {
+        let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+        for (id, c) in &self.channels {
+            let n = self.counts.get(id).copied().unwrap_or(0);
+            let t = topics.entry(c.topic.clone()).or_insert_with(|| TopicInfo {
+                topic: c.topic.clone(),
+                schema_name: c.schema_name.clone(),
+                message_encoding: c.message_encoding.clone(),
+                messages: 0,
+            });
+            t.messages += n;
+        }
+        topics.into_values().collect()
+    }
 }
 
 pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem) -> LogError {

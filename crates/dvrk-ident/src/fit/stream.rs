@@ -1,0 +1,409 @@
+//! The fit of logs larger than memory: [`fit`](super::fit) with the logs read from disk
+//! block by block, in memory independent of their length.
+//!
+//! Each pass reads a log from its file in blocks ([`LogReader::blocks`]), maps each
+//! block to model coordinates, subtracts the known forces and processes it
+//! ([`BlockProcessor`]); nothing of the log is kept but running sums. The passes:
+//!
+//! 1. a timing survey of each log (validation, median step; an extra pass only for
+//!    timing with very many distinct steps, see [`crate::median`]);
+//! 2. the observation: one R factor per coordinate ([`Observation::add_per_coordinate`],
+//!    fed batches of whole chunks counted from the log's start, so that the factors
+//!    are those of the log in memory to the last bit), and the range of each processed
+//!    torque. The weights are only known at the end of the log (WLS, SDP: the torque
+//!    ranges), so the weighted observation is formed afterwards from the
+//!    per-coordinate factors ([`Observation::weighted`], exact);
+//! 3. IRLS only: one pass per re-weighting for the residuals (the weights are then
+//!    applied to the same factors, without assembling again);
+//! 4. the metrics (sums of squares per coordinate) on the training log, and on the
+//!    test log (stopping after the test window).
+//!
+//! [`super::fit`] of the logs in memory processes them with the same block processor
+//! and reduces them with the same chunks, so the two give the same result to the last
+//! bit (the tests require 1e-9 relative); both differ from the exact whole-log
+//! [`crate::signal::process`] only by the filters' settling tolerance
+//! ([`crate::signal::stream::SETTLE_TOLERANCE`]).
+
+use std::ops::ControlFlow;
+
+use dvrk_model::Model;
+use nalgebra::DMatrix;
+
+use super::{
+    base_least_squares, build_result, not_excited, representative, subtract_known_forces,
+    to_model_coordinates, FitSettings, Method, MetricSums, TorqueRange,
+};
+use crate::error::IdentError;
+use crate::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::log::LogReader;
+use crate::observation::{Observation, Samples, CHUNK_SAMPLES};
+use crate::progress::Progress;
+use crate::result::{FitResult, Metrics, SolverInfo};
+use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
+use crate::signal::Processed;
+use crate::trajectory::{Coordinates, Trajectory};
+
+/// Samples per block read from a file: 4096 samples of a 7-joint log are about 1 MB
+/// through the processing, and each block's observation is assembled in parallel.
+pub const BLOCK_SAMPLES: usize = 4096;
+
+/// A log on disk and how to read it for a streamed fit.
+struct Source<'a> {
+    reader: &'a LogReader,
+    model: &'a Model,
+    block: usize,
+}
+
+impl Source<'_> {
+    /// The next block in model coordinates with the known forces subtracted (what
+    /// [`super::prepare`] processes).
+    fn model_blocks(
+        &self,
+    ) -> Result<impl Iterator<Item = Result<Trajectory, IdentError>> + '_, IdentError> {
+        Ok(self.reader.blocks(self.block)?.map(move |b| {
+            let mut t = to_model_coordinates(self.model, &b?)?;
+            subtract_known_forces(self.model, &mut t);
+            Ok(t)
+        }))
+    }
+
+    fn signal_error(source: &str) -> impl Fn(crate::signal::SignalError) -> IdentError + '_ {
+        move |error| IdentError::Signal {
+            source_name: source.to_string(),
+            error,
+        }
+    }
+
+    /// The timing survey: every block validated, the median step.
+    fn timing(&self, progress: &dyn Progress) -> Result<(LogTiming, String), IdentError> {
+        let mut survey = TimingSurvey::new();
+        let mut source = self.reader.path().display().to_string();
+        progress.stage(
+            &format!("reading {}", self.reader.path().display()),
+            self.reader.samples().map(|n| n as u64),
+        );
+        loop {
+            for block in self.model_blocks()? {
+                let block = block?;
+                source.clone_from(&block.source);
+                progress.advance(block.len() as u64);
+                survey
+                    .observe(&block)
+                    .map_err(|e| Self::signal_error(&block.source)(e.into()))?;
+            }
+            if let Some(timing) = survey
+                .end_pass()
+                .map_err(|e| Self::signal_error(&source)(e.into()))?
+            {
+                progress.finish();
+                return Ok((timing, source));
+            }
+        }
+    }
+
+    /// The processor of a pass; its errors are the settings' and the log length's.
+    fn processor(
+        &self,
+        settings: &FitSettings,
+        (timing, source): &(LogTiming, String),
+    ) -> Result<BlockProcessor, IdentError> {
+        BlockProcessor::new(
+            &settings.processing,
+            &self.model.coordinates,
+            Coordinates::Model,
+            self.reader.has_velocity(),
+            source,
+            timing,
+        )
+        .map_err(Self::signal_error(source))
+    }
+
+    /// One pass: every processed block to `f`, until it breaks (the whole log is read
+    /// anyway when its clock is not uniform, so that the gap is reported as by
+    /// [`super::prepare`]). Errors when no sample is left, as [`super::prepare`].
+    fn processed(
+        &self,
+        settings: &FitSettings,
+        timing: &(LogTiming, String),
+        stage: &str,
+        progress: &dyn Progress,
+        mut f: impl FnMut(&Processed) -> ControlFlow<()>,
+    ) -> Result<(), IdentError> {
+        let mut p = self.processor(settings, timing)?;
+        let (timing, source) = timing;
+        let fail = Self::signal_error(source);
+        let may_stop = settings.processing.resample_hz.is_some()
+            || timing.is_uniform(settings.processing.uniform_tolerance);
+        progress.stage(stage, Some(timing.samples as u64));
+        let mut kept = 0;
+        let mut go = |out: &Processed| {
+            kept += out.len();
+            if out.is_empty() {
+                ControlFlow::Continue(())
+            } else {
+                f(out)
+            }
+        };
+        let mut stopped = false;
+        for block in self.model_blocks()? {
+            let block = block?;
+            progress.advance(block.len() as u64);
+            if go(&p.push(&block).map_err(&fail)?).is_break() && may_stop {
+                stopped = true;
+                break;
+            }
+        }
+        if !stopped {
+            let _ = go(&p.finish().map_err(&fail)?);
+        }
+        progress.finish();
+        if kept == 0 {
+            return Err(IdentError::Mismatch {
+                source_name: source.clone(),
+                message: "no sample left after processing (log too short for the trimming?)".into(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The metrics of `params` over the first `window` processed samples (all: `None`).
+    fn metrics(
+        &self,
+        settings: &FitSettings,
+        timing: &(LogTiming, String),
+        params: &[f64],
+        window: Option<usize>,
+        stage: &str,
+        progress: &dyn Progress,
+    ) -> Result<MetricSums, IdentError> {
+        let mut sums = MetricSums::new(self.model);
+        self.processed(settings, timing, stage, progress, |p| {
+            sums.add(self.model, params, samples(p), window);
+            if window.is_some_and(|w| sums.samples() >= w) {
+                ControlFlow::Break(())
+            } else {
+                ControlFlow::Continue(())
+            }
+        })?;
+        Ok(sums)
+    }
+}
+
+/// Processed samples gathered into batches of whole observation chunks
+/// ([`CHUNK_SAMPLES`], counted from the log's first sample): the streamed observation
+/// then merges the very chunk factors, in the same order, as the log in memory.
+struct Batches {
+    joints: usize,
+    rows: usize,
+    /// Row-major q, dq, ddq, tau.
+    values: [Vec<f64>; 4],
+}
+
+/// Samples per batch: whole chunks.
+const BATCH_SAMPLES: usize = 16 * CHUNK_SAMPLES;
+
+impl Batches {
+    fn new(joints: usize) -> Batches {
+        Batches {
+            joints,
+            rows: 0,
+            values: Default::default(),
+        }
+    }
+
+    fn push(&mut self, p: &Processed) {
+        for k in 0..p.len() {
+            for (out, m) in self.values.iter_mut().zip([&p.q, &p.dq, &p.ddq, &p.tau]) {
+                out.extend(m.row(k).iter());
+            }
+        }
+        self.rows += p.len();
+    }
+
+    /// The whole batches gathered (every sample with `all`: the log's end), removed.
+    fn take(&mut self, all: bool) -> Option<[DMatrix<f64>; 4]> {
+        let rows = if all {
+            self.rows
+        } else {
+            self.rows / BATCH_SAMPLES * BATCH_SAMPLES
+        };
+        if rows == 0 {
+            return None;
+        }
+        let n = self.joints;
+        self.rows -= rows;
+        Some(self.values.each_mut().map(|v| {
+            let m = DMatrix::from_row_slice(rows, n, &v[..rows * n]);
+            v.drain(..rows * n);
+            m
+        }))
+    }
+}
+
+fn samples(p: &Processed) -> Samples<'_> {
+    Samples {
+        q: &p.q,
+        dq: &p.dq,
+        ddq: &p.ddq,
+        tau: &p.tau,
+    }
+}
+
+/// [`super::fit`] of logs read from their files block by block (see the module docs
+/// for the passes). `block_samples` is the block size ([`BLOCK_SAMPLES`]); `progress`
+/// hears a stage per pass, counted in the log's samples.
+pub fn fit_stream(
+    model: &Model,
+    train: &LogReader,
+    test: Option<&LogReader>,
+    settings: &FitSettings,
+    block_samples: usize,
+    progress: &dyn Progress,
+) -> Result<FitResult, IdentError> {
+    // The model options of the settings (Stribeck terms), as the in-memory fit.
+    let model_cow = settings.model(model)?;
+    let model: &Model = &model_cow;
+    let source = |reader| Source {
+        reader,
+        model,
+        block: block_samples,
+    };
+    let train_log = source(train);
+    let test_log = test.map(source);
+    let train_timing = train_log.timing(progress)?;
+    let test_timing = match &test_log {
+        Some(t) => Some(t.timing(progress)?),
+        None => None,
+    };
+    // Setting and length errors before the long passes, as the whole-log fit reports
+    // them before fitting.
+    train_log.processor(settings, &train_timing)?;
+    if let (Some(log), Some(timing)) = (&test_log, &test_timing) {
+        log.processor(settings, timing)?;
+    }
+    let base = model.base_parameters()?;
+    let n = model.dof();
+    let p = model.n_params();
+    let started = std::time::Instant::now();
+
+    let mut parts = vec![Observation::new(p); n];
+    let mut range = TorqueRange::new(n);
+    let mut batches = Batches::new(n);
+    let add = |parts: &mut [Observation], [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
+        let s = Samples {
+            q: &q,
+            dq: &dq,
+            ddq: &ddq,
+            tau: &tau,
+        };
+        Observation::add_per_coordinate(parts, model, s);
+    };
+    train_log.processed(
+        settings,
+        &train_timing,
+        "assembling the observation",
+        progress,
+        |block| {
+            range.add(&block.tau);
+            batches.push(block);
+            if let Some(batch) = batches.take(false) {
+                add(&mut parts, batch);
+            }
+            ControlFlow::Continue(())
+        },
+    )?;
+    if let Some(batch) = batches.take(true) {
+        add(&mut parts, batch);
+    }
+    let mut weights = match settings.method {
+        Method::Ols | Method::Irls => vec![1.0; n],
+        Method::Wls | Method::Sdp => range.weights(),
+    };
+    let mut obs = Observation::weighted(&parts, &weights);
+    let not_excited = |e| not_excited(&train_timing.1, e);
+    let mut estimate = base_least_squares(&obs, &base).map_err(not_excited)?;
+    let mut solver = SolverInfo {
+        name: "qr".into(),
+        status: "Solved".into(),
+        converged: true,
+        seconds: 0.0,
+        iterations: 1,
+    };
+    if settings.method == Method::Irls {
+        for it in 0..settings.irls_iterations {
+            let pi = representative(&base, &estimate.beta, p);
+            let stage = format!(
+                "re-weighting (pass {} of {})",
+                it + 1,
+                settings.irls_iterations
+            );
+            let sums = train_log.metrics(settings, &train_timing, &pi, None, &stage, progress)?;
+            weights = sums.inverse_rms();
+            obs = Observation::weighted(&parts, &weights);
+            estimate = base_least_squares(&obs, &base).map_err(not_excited)?;
+            solver.iterations = it as u32 + 2;
+        }
+    }
+    let params = if settings.method == Method::Sdp {
+        let options = SdpOptions {
+            regularization: settings.sdp_regularization,
+            ..SdpOptions::default()
+        };
+        progress.stage("solving", None);
+        let sol = solve_sdp(model, obs.r(), &options)?;
+        progress.finish();
+        solver = SolverInfo {
+            name: "clarabel".into(),
+            status: sol.status.clone(),
+            converged: sol.converged,
+            seconds: sol.seconds,
+            iterations: sol.iterations,
+        };
+        sol.params
+    } else {
+        representative(&base, &estimate.beta, p)
+    };
+    if settings.method != Method::Sdp {
+        solver.seconds = started.elapsed().as_secs_f64();
+    }
+    let beta = base.project(&params);
+    let train_metrics = train_log
+        .metrics(
+            settings,
+            &train_timing,
+            &params,
+            None,
+            "metrics (train)",
+            progress,
+        )?
+        .metrics(model);
+    let test_metrics = match (&test_log, &test_timing) {
+        (Some(log), Some(timing)) => Some(
+            log.metrics(
+                settings,
+                timing,
+                &params,
+                settings.test_window,
+                "metrics (test)",
+                progress,
+            )?
+            .metrics(model),
+        ),
+        _ => None,
+    };
+    Ok(build_result(
+        model,
+        &base,
+        settings,
+        params,
+        beta,
+        &estimate,
+        weights,
+        solver,
+        Metrics {
+            train: train_metrics,
+            test: test_metrics,
+        },
+        obs.rows(),
+    ))
+}

@@ -1,0 +1,304 @@
+//! Logs of any format read block by block: what a fit of a log larger than memory reads,
+//! and what [`super::read_with`] collects.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::DMatrix;
+
+use super::csv::{HeaderedBlocks, WpiBlocks};
+use super::mcap::{McapBlocks, McapOptions, McapReader};
+use super::{detect_format, LogError, LogFormat};
+use crate::signal::stream::Resampler;
+use crate::trajectory::{Coordinates, Trajectory};
+
+/// A log opened for reading in blocks, as many times as needed (each
+/// [`LogReader::blocks`] is one pass over the file). Opening reads the header (CSV), the
+/// first row (2019 layout) or makes every check of the MCAP reader
+/// ([`McapReader::open`]).
+#[derive(Debug)]
+pub struct LogReader {
+    path: PathBuf,
+    format: LogFormat,
+    /// The 2019 layout's sampling rate, Hz.
+    rate_hz: Option<f64>,
+    /// Resampling of the CSV formats (MCAP logs resample while merging).
+    resample_hz: Option<f64>,
+    mcap: Option<McapReader>,
+    joint_names: Vec<String>,
+    coordinates: Coordinates,
+    has_velocity: bool,
+}
+
+impl LogReader {
+    /// Opens `path` in `format` (`None`: [`detect_format`]). `rate_hz` is the 2019
+    /// layout's sampling rate; `mcap_options` are used for MCAP logs, and their
+    /// `resample_hz` for every format (as in [`super::read_with`]).
+    pub fn open(
+        path: impl AsRef<Path>,
+        format: Option<LogFormat>,
+        rate_hz: Option<f64>,
+        mcap_options: &McapOptions,
+    ) -> Result<LogReader, LogError> {
+        let path = path.as_ref();
+        let format = match format {
+            Some(f) => f,
+            None => detect_format(path)?,
+        };
+        let mut reader = LogReader {
+            path: path.to_path_buf(),
+            format,
+            rate_hz,
+            resample_hz: mcap_options.resample_hz,
+            mcap: None,
+            joint_names: Vec::new(),
+            coordinates: Coordinates::Measured,
+            has_velocity: false,
+        };
+        match format {
+            LogFormat::Wpi => {
+                let rate = rate_hz.ok_or_else(|| LogError::MissingRate {
+                    path: path.to_path_buf(),
+                })?;
+                let first = WpiBlocks::open(path, rate, None)?
+                    .next_block(1)?
+                    .ok_or_else(|| LogError::Empty {
+                        path: path.to_path_buf(),
+                        what: "no rows",
+                    })?;
+                reader.set_header(&first);
+            }
+            LogFormat::Csv => {
+                let b = HeaderedBlocks::open(path)?;
+                reader.joint_names = b.joint_names().to_vec();
+                reader.coordinates = b.coordinates();
+                reader.has_velocity = b.has_velocity();
+            }
+            LogFormat::Mcap => {
+                let m = McapReader::open(path, mcap_options)?;
+                reader.joint_names = m.joint_names();
+                reader.has_velocity = m.has_velocity();
+                reader.resample_hz = None;
+                reader.mcap = Some(m);
+            }
+        }
+        Ok(reader)
+    }
+
+    fn set_header(&mut self, block: &Trajectory) {
+        self.joint_names = block.joint_names.clone();
+        self.coordinates = block.coordinates;
+        self.has_velocity = block.dq.is_some();
+    }
+
+    /// The samples in blocks of about `block_samples` (exactly, unless resampled), in
+    /// order: one pass over the file.
+    pub fn blocks(&self, block_samples: usize) -> Result<LogBlocks<'_>, LogError> {
+        let path = self.path.as_path();
+        let source = match (&self.mcap, self.format) {
+            (Some(m), _) => Source::Mcap(Box::new(m.blocks(block_samples)?)),
+            (None, LogFormat::Wpi) => Source::Wpi(WpiBlocks::open(
+                path,
+                self.rate_hz.unwrap_or(f64::NAN),
+                None,
+            )?),
+            (None, _) => Source::Csv(HeaderedBlocks::open(path)?),
+        };
+        let resampler = match self.resample_hz {
+            Some(hz) => Some(BlockResampler::new(
+                path,
+                hz,
+                self.joint_names.len(),
+                self.has_velocity,
+            )?),
+            None => None,
+        };
+        Ok(LogBlocks {
+            source,
+            resampler,
+            block: block_samples.max(1),
+            last: None,
+            done: false,
+        })
+    }
+
+    /// The file.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Its format.
+    pub fn format(&self) -> LogFormat {
+        self.format
+    }
+
+    /// The joints of the samples.
+    pub fn joint_names(&self) -> &[String] {
+        &self.joint_names
+    }
+
+    /// The joint space of the samples.
+    pub fn coordinates(&self) -> Coordinates {
+        self.coordinates
+    }
+
+    /// Whether the samples have measured velocities.
+    pub fn has_velocity(&self) -> bool {
+        self.has_velocity
+    }
+
+    /// Number of samples, when known without a pass over the file (MCAP).
+    pub fn samples(&self) -> Option<usize> {
+        self.mcap.as_ref().map(McapReader::samples)
+    }
+}
+
+enum Source<'a> {
+    Wpi(WpiBlocks),
+    Csv(HeaderedBlocks),
+    Mcap(Box<McapBlocks<'a>>),
+}
+
+/// One pass over a log, block by block (see [`LogReader::blocks`]).
+pub struct LogBlocks<'a> {
+    source: Source<'a>,
+    resampler: Option<BlockResampler>,
+    block: usize,
+    /// The last block read, for the resampler's last samples.
+    last: Option<Trajectory>,
+    done: bool,
+}
+
+impl LogBlocks<'_> {
+    fn next_block(&mut self) -> Result<Option<Trajectory>, LogError> {
+        loop {
+            let raw = match &mut self.source {
+                Source::Wpi(b) => b.next_block(self.block)?,
+                Source::Csv(b) => b.next_block(self.block)?,
+                Source::Mcap(b) => b.next().transpose()?,
+            };
+            let Some(r) = &mut self.resampler else {
+                return Ok(raw);
+            };
+            let out = match raw {
+                Some(block) => {
+                    let out = r.push(&block)?;
+                    self.last = Some(block);
+                    out
+                }
+                None => match self.last.take() {
+                    Some(last) => r.finish(&last)?,
+                    None => return Ok(None),
+                },
+            };
+            if !out.is_empty() {
+                return Ok(Some(out));
+            }
+        }
+    }
+}
+
+impl Iterator for LogBlocks<'_> {
+    type Item = Result<Trajectory, LogError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        let r = self.next_block().transpose();
+        self.done = !matches!(r, Some(Ok(_)));
+        r
+    }
+}
+
+/// The `--resample` of logs without their own resampling, block by block: each block
+/// is validated (rows numbered from the log's start) and its samples interpolated onto
+/// the uniform grid.
+pub(crate) struct BlockResampler {
+    path: PathBuf,
+    rate_hz: f64,
+    dof: usize,
+    with_velocity: bool,
+    resampler: Resampler,
+    rows: usize,
+    last_time: Option<f64>,
+}
+
+impl BlockResampler {
+    pub(crate) fn new(
+        path: &Path,
+        rate_hz: f64,
+        dof: usize,
+        with_velocity: bool,
+    ) -> Result<BlockResampler, LogError> {
+        Ok(BlockResampler {
+            resampler: Resampler::new(3 * dof, rate_hz).map_err(|source| LogError::Resample {
+                path: path.to_path_buf(),
+                rate_hz,
+                source,
+            })?,
+            path: path.to_path_buf(),
+            rate_hz,
+            dof,
+            with_velocity,
+            rows: 0,
+            last_time: None,
+        })
+    }
+
+    fn error(&self, source: crate::signal::SignalError) -> LogError {
+        LogError::Resample {
+            path: self.path.clone(),
+            rate_hz: self.rate_hz,
+            source,
+        }
+    }
+
+    /// The grid samples that `block` completes (with the block's names and source).
+    pub(crate) fn push(&mut self, block: &Trajectory) -> Result<Trajectory, LogError> {
+        block
+            .validate_rows(self.rows, self.last_time)
+            .map_err(|source| LogError::Invalid {
+                path: self.path.clone(),
+                source,
+            })?;
+        self.rows += block.len();
+        self.last_time = block.time.last().copied().or(self.last_time);
+        let n = self.dof;
+        let (mut times, mut values) = (Vec::new(), Vec::new());
+        let mut row = vec![0.0; 3 * n];
+        for k in 0..block.len() {
+            for j in 0..n {
+                row[j] = block.q[(k, j)];
+                row[n + j] = block.dq.as_ref().map_or(0.0, |d| d[(k, j)]);
+                row[2 * n + j] = block.tau[(k, j)];
+            }
+            self.resampler
+                .push(block.time[k], &row, &mut times, &mut values)
+                .map_err(|e| self.error(e))?;
+        }
+        Ok(self.assemble(block, times, values))
+    }
+
+    /// The last grid samples (named like `last`, the log's last block).
+    pub(crate) fn finish(&mut self, last: &Trajectory) -> Result<Trajectory, LogError> {
+        let (mut times, mut values) = (Vec::new(), Vec::new());
+        self.resampler
+            .finish(&mut times, &mut values)
+            .map_err(|e| self.error(e))?;
+        Ok(self.assemble(last, times, values))
+    }
+
+    fn assemble(&self, like: &Trajectory, time: Vec<f64>, values: Vec<f64>) -> Trajectory {
+        let (rows, n) = (time.len(), self.dof);
+        let all = DMatrix::from_row_slice(rows, 3 * n, &values);
+        Trajectory {
+            time,
+            q: all.columns(0, n).into_owned(),
+            dq: self.with_velocity.then(|| all.columns(n, n).into_owned()),
+            tau: all.columns(2 * n, n).into_owned(),
+            joint_names: like.joint_names.clone(),
+            coordinates: like.coordinates,
+            source: like.source.clone(),
+        }
+    }
+}

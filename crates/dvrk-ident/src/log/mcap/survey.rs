@@ -1,0 +1,644 @@
+//! The passes over an MCAP file that come before its samples: choosing the topics,
+//! checking every message, and the timing checks of the merged clock, all without
+//! keeping the samples.
+//!
+//! The first pass decodes and checks the messages of every candidate topic and keeps,
+//! per topic, its stamp statistics: count, first and last stamps, order violations and
+//! the median step ([`crate::median`]). Further passes read only the chosen topics'
+//! stamps, and only when needed: to finish a median over very many distinct steps, to
+//! redo the clock's statistics over the span the other topics cover, and to count and
+//! locate irregular steps for an error message or the report of a resampled log.
+
+use std::collections::{BTreeMap, HashMap};
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nalgebra::DMatrix;
+
+use super::container::{mcap_error, scan, MessageRef, Scanner};
+use super::topic::{decode, is_joint_state, JointRow, TopicState};
+use super::{
+    JointStateSeries, McapOptions, McapProblem, TimeSource, TimingReport, GAP_FACTOR,
+    JITTER_TOLERANCE,
+};
+use crate::log::LogError;
+use crate::median::{ExactMedian, MedianPass};
+
+/// Order, count and step statistics of a stamp sequence, fed one stamp at a time.
+#[derive(Clone, Debug, Default)]
+pub(super) struct StampStats {
+    pub count: usize,
+    pub first: i64,
+    pub last: i64,
+    /// The first stamp that does not increase: its index, the previous and its stamp.
+    pub first_bad: Option<(usize, i64, i64)>,
+    pub backwards: usize,
+    pub duplicates: usize,
+    median: ExactMedian,
+    /// Twice the median step, ns (half-nanoseconds stay integers), once known.
+    pub median2: Option<i128>,
+    /// Shortest and longest steps, ns.
+    pub steps: Option<(i128, i128)>,
+}
+
+impl StampStats {
+    fn observe(&mut self, stamp: i64) {
+        if self.count == 0 {
+            self.first = stamp;
+        } else {
+            if stamp <= self.last {
+                if stamp == self.last {
+                    self.duplicates += 1;
+                } else {
+                    self.backwards += 1;
+                }
+                self.first_bad.get_or_insert((self.count, self.last, stamp));
+            } else {
+                self.median
+                    .observe((i128::from(stamp) - i128::from(self.last)) as u64);
+            }
+        }
+        self.last = stamp;
+        self.count += 1;
+    }
+
+    /// Ends a pass; `true` once the median is known.
+    fn end_pass(&mut self) -> bool {
+        if self.steps.is_none() {
+            self.steps = self
+                .median
+                .range()
+                .map(|(lo, hi)| (i128::from(lo), i128::from(hi)));
+        }
+        match self.median.end_pass() {
+            MedianPass::Again => false,
+            MedianPass::Done(m) => {
+                self.median2 = m.map(|(a, b)| {
+                    if self.median.count() % 2 == 1 {
+                        2 * i128::from(a)
+                    } else {
+                        i128::from(a) + i128::from(b)
+                    }
+                });
+                true
+            }
+        }
+    }
+
+    /// Another pass over the steps, for the median (stamps already checked).
+    fn observe_step(&mut self, previous: i64, stamp: i64) {
+        self.median
+            .observe((i128::from(stamp) - i128::from(previous)) as u64);
+    }
+
+    /// Whether a step is a gap (longer than [`GAP_FACTOR`] median steps).
+    fn has_gap(&self) -> bool {
+        match (self.median2, self.steps) {
+            (Some(m2), Some((_, hi))) => is_gap(hi, m2),
+            _ => false,
+        }
+    }
+
+    /// Whether a step is a gap or jittered.
+    fn is_irregular(&self) -> bool {
+        match (self.median2, self.steps) {
+            (Some(m2), Some((lo, hi))) => {
+                [lo, hi].iter().any(|&s| is_gap(s, m2) || is_jitter(s, m2))
+            }
+            _ => false,
+        }
+    }
+}
+
+fn is_gap(step: i128, median2: i128) -> bool {
+    (2 * step) as f64 > GAP_FACTOR * median2 as f64
+}
+
+fn is_jitter(step: i128, median2: i128) -> bool {
+    ((2 * step - median2).abs() as f64) > JITTER_TOLERANCE * median2 as f64
+}
+
+pub(super) fn seconds_between(a: i64, b: i64) -> f64 {
+    (i128::from(b) - i128::from(a)) as f64 / 1e9
+}
+
+/// Rows of a topic kept by [`read_joint_states`](super::read_joint_states).
+#[derive(Debug, Default)]
+struct SeriesRows {
+    stamps: Vec<i64>,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    effort: Vec<f64>,
+}
+
+/// A topic during the first pass.
+#[derive(Debug)]
+pub(super) struct TopicSurvey {
+    pub state: TopicState,
+    /// Automatic mode: the first problem, reported only if the topic is chosen.
+    error: Option<LogError>,
+    pub stats: StampStats,
+    rows: Option<SeriesRows>,
+}
+
+impl TopicSurvey {
+    fn new(topic: &str, keep_rows: bool) -> TopicSurvey {
+        TopicSurvey {
+            state: TopicState::new(topic),
+            error: None,
+            stats: StampStats::default(),
+            rows: keep_rows.then(SeriesRows::default),
+        }
+    }
+
+    /// The kept rows as a series.
+    pub(super) fn into_series(self) -> JointStateSeries {
+        let rows = self.rows.unwrap_or_default();
+        let (n, dof) = (rows.stamps.len(), self.state.names.len());
+        let matrix = |v: Vec<f64>| DMatrix::from_row_slice(n, dof, &v);
+        JointStateSeries {
+            topic: self.state.topic,
+            joint_names: self.state.names,
+            frame_id: self.state.frame_id,
+            stamps_ns: rows.stamps,
+            position: matrix(rows.position),
+            velocity: self.state.has_velocity.then(|| matrix(rows.velocity)),
+            effort: self.state.has_effort.then(|| matrix(rows.effort)),
+        }
+    }
+}
+
+/// The first pass: decodes and checks the JointStates of the requested topics (or of
+/// every candidate topic in automatic mode), then picks the topics (see the module
+/// docs of [`super`]). With `keep_rows` the chosen topics' rows are kept.
+pub(super) fn survey(
+    path: &Path,
+    topics: &[String],
+    time_source: TimeSource,
+    keep_rows: bool,
+) -> Result<Vec<TopicSurvey>, LogError> {
+    let auto = topics.is_empty();
+    let mut surveys: BTreeMap<String, TopicSurvey> = BTreeMap::new();
+    if !auto {
+        for (k, t) in topics.iter().enumerate() {
+            if topics[..k].contains(t) {
+                return Err(mcap_error(path, Some(t), McapProblem::RepeatedTopic));
+            }
+            surveys.insert(t.clone(), TopicSurvey::new(t, keep_rows));
+        }
+    }
+    let mut row = JointRow::default();
+    let on_message = |m: MessageRef<'_>| -> Result<(), LogError> {
+        let topic = m.channel.topic.as_str();
+        if !is_joint_state(m.channel) {
+            if !auto && surveys.contains_key(topic) {
+                return Err(mcap_error(
+                    path,
+                    Some(topic),
+                    McapProblem::WrongType {
+                        schema_name: m.channel.schema_name.clone(),
+                        message_encoding: m.channel.message_encoding.clone(),
+                    },
+                ));
+            }
+            return Ok(());
+        }
+        let s = match surveys.get_mut(topic) {
+            Some(s) => s,
+            None if auto => surveys
+                .entry(topic.to_owned())
+                .or_insert_with(|| TopicSurvey::new(topic, keep_rows)),
+            None => return Ok(()),
+        };
+        if s.state.rejected.is_some() || s.error.is_some() {
+            return Ok(());
+        }
+        let checked = decode(&m, s.state.count, time_source)
+            .and_then(|(msg, stamp)| s.state.check(msg, stamp, auto, &mut row));
+        match checked {
+            Ok(false) => Ok(()),
+            Ok(true) => {
+                s.stats.observe(row.stamp);
+                if let Some(r) = &mut s.rows {
+                    r.stamps.push(row.stamp);
+                    r.position.extend_from_slice(&row.position);
+                    r.velocity.extend_from_slice(&row.velocity);
+                    r.effort.extend_from_slice(&row.effort);
+                }
+                Ok(())
+            }
+            Err(problem) => {
+                let e = LogError::Mcap {
+                    path: path.to_path_buf(),
+                    topic: Some(topic.to_owned()),
+                    problem,
+                };
+                if auto {
+                    s.error = Some(e);
+                    Ok(())
+                } else {
+                    Err(e)
+                }
+            }
+        }
+    };
+    let scanned = scan(path, on_message)?;
+    let chosen: Vec<TopicSurvey> = if auto {
+        let candidates: Vec<&TopicSurvey> = surveys
+            .values()
+            .filter(|s| s.state.rejected.is_none())
+            .collect();
+        let pick = match candidates.len() {
+            0 => {
+                let rejected = surveys
+                    .values()
+                    .filter_map(|s| {
+                        s.state
+                            .rejected
+                            .map(|why| format!("{}: {why}", s.state.topic))
+                    })
+                    .collect();
+                return Err(mcap_error(
+                    path,
+                    None,
+                    McapProblem::NoJointStates {
+                        available: scanned.topics,
+                        rejected,
+                    },
+                ));
+            }
+            1 => candidates[0].state.topic.clone(),
+            _ => {
+                let measured: Vec<&&TopicSurvey> = candidates
+                    .iter()
+                    .filter(|s| s.state.topic.ends_with("measured_js"))
+                    .collect();
+                if measured.len() == 1 {
+                    measured[0].state.topic.clone()
+                } else {
+                    return Err(mcap_error(
+                        path,
+                        None,
+                        McapProblem::Ambiguous {
+                            candidates: candidates.iter().map(|s| s.state.topic.clone()).collect(),
+                        },
+                    ));
+                }
+            }
+        };
+        vec![surveys.remove(&pick).expect("picked from the surveys")]
+    } else {
+        topics
+            .iter()
+            .map(|t| surveys.remove(t).expect("one survey per topic"))
+            .collect()
+    };
+    let mut out = Vec::with_capacity(chosen.len());
+    for mut s in chosen {
+        if let Some(e) = s.error.take() {
+            return Err(e);
+        }
+        if s.state.count == 0 {
+            let problem = if scanned.topics.iter().any(|i| i.topic == s.state.topic) {
+                McapProblem::EmptyTopic
+            } else {
+                McapProblem::TopicNotFound {
+                    available: scanned.topics.clone(),
+                }
+            };
+            return Err(mcap_error(path, Some(&s.state.topic), problem));
+        }
+        out.push(s);
+    }
+    Ok(out)
+}
+
+/// Calls `f(topic, stamp)` for every message of the chosen topics, in file order (a
+/// pass that only needs the stamps; the messages were checked by the first pass).
+fn stamp_pass(
+    path: &Path,
+    topics: &[String],
+    time_source: TimeSource,
+    mut f: impl FnMut(usize, i64),
+) -> Result<(), LogError> {
+    let mut counts = vec![0usize; topics.len()];
+    let mut scanner = Scanner::open(path)?;
+    loop {
+        let step = scanner.next_message(|m| {
+            let Some(k) = topics.iter().position(|t| *t == m.channel.topic) else {
+                return Ok(());
+            };
+            if !is_joint_state(m.channel) {
+                return Ok(());
+            }
+            let (_, stamp) =
+                decode(&m, counts[k], time_source).map_err(|problem| LogError::Mcap {
+                    path: path.to_path_buf(),
+                    topic: Some(topics[k].clone()),
+                    problem,
+                })?;
+            counts[k] += 1;
+            f(k, stamp);
+            Ok(())
+        })?;
+        if step.is_none() {
+            return Ok(());
+        }
+    }
+}
+
+/// Passes over topic `k`'s stamps within `lo..=hi` until the median of `stats` is
+/// known (`stats` has seen the first pass).
+fn finish_median(
+    path: &Path,
+    topics: &[String],
+    time_source: TimeSource,
+    k: usize,
+    (lo, hi): (i64, i64),
+    stats: &mut StampStats,
+) -> Result<(), LogError> {
+    while !stats.end_pass() {
+        let mut previous: Option<i64> = None;
+        stamp_pass(path, topics, time_source, |t, stamp| {
+            if t == k && (lo..=hi).contains(&stamp) {
+                if let Some(p) = previous {
+                    stats.observe_step(p, stamp);
+                }
+                previous = Some(stamp);
+            }
+        })?;
+    }
+    Ok(())
+}
+
+/// Where the first irregular step of a stamp sequence is, ns.
+#[derive(Clone, Copy, Debug, Default)]
+struct Irregular {
+    /// The sequence's first stamp.
+    first: i64,
+    /// The stamps before and after the step.
+    previous: i64,
+    stamp: i64,
+}
+
+/// The timing report of topic `k`'s stamps within `lo..=hi` (strictly increasing,
+/// median known), and where its first irregular step is.
+fn classify(
+    path: &Path,
+    topics: &[String],
+    time_source: TimeSource,
+    k: usize,
+    (lo, hi): (i64, i64),
+    stats: &StampStats,
+) -> Result<(TimingReport, Option<Irregular>), LogError> {
+    let median2 = stats.median2.unwrap_or(0);
+    let mut report = TimingReport {
+        samples: stats.count,
+        median_step_s: median2 as f64 / 2e9,
+        gaps: 0,
+        jittered: 0,
+        largest_step_s: stats.steps.map_or(0.0, |(_, hi)| hi as f64 / 1e9),
+        first_irregular: None,
+        resampled_hz: None,
+    };
+    let mut around = None;
+    if !stats.is_irregular() {
+        return Ok((report, around));
+    }
+    let (mut index, mut previous) = (0usize, None::<i64>);
+    let mut first = None;
+    stamp_pass(path, topics, time_source, |t, stamp| {
+        if t != k || !(lo..=hi).contains(&stamp) {
+            return;
+        }
+        first.get_or_insert(stamp);
+        if let Some(p) = previous {
+            let step = i128::from(stamp) - i128::from(p);
+            let irregular = if is_gap(step, median2) {
+                report.gaps += 1;
+                true
+            } else if is_jitter(step, median2) {
+                report.jittered += 1;
+                true
+            } else {
+                false
+            };
+            if irregular && report.first_irregular.is_none() {
+                report.first_irregular = Some(index);
+                around = Some(Irregular {
+                    first: first.unwrap_or(stamp),
+                    previous: p,
+                    stamp,
+                });
+            }
+        }
+        previous = Some(stamp);
+        index += 1;
+    })?;
+    Ok((report, around))
+}
+
+fn non_uniform(
+    path: &Path,
+    topic: &str,
+    report: &TimingReport,
+    around: Option<Irregular>,
+    time_source: TimeSource,
+) -> LogError {
+    let Irregular {
+        first,
+        previous,
+        stamp,
+    } = around.unwrap_or_default();
+    let suggested = if report.median_step_s > 0.0 {
+        (1.0 / report.median_step_s).round().max(1.0)
+    } else {
+        1.0
+    };
+    mcap_error(
+        path,
+        Some(topic),
+        McapProblem::NonUniform {
+            index: report.first_irregular.unwrap_or(1),
+            time_s: seconds_between(first, stamp),
+            step_s: seconds_between(previous, stamp),
+            median_step_s: report.median_step_s,
+            gaps: report.gaps,
+            jittered: report.jittered,
+            largest_step_s: report.largest_step_s,
+            samples: report.samples,
+            time_source,
+            suggested_hz: suggested,
+        },
+    )
+}
+
+/// What the block reader needs to know about a file before its first sample.
+#[derive(Clone, Debug)]
+pub(super) struct Plan {
+    /// The topics read, the clock first.
+    pub topics: Vec<String>,
+    /// Joint names per topic.
+    pub joints: Vec<Vec<String>>,
+    /// Every topic has velocities.
+    pub with_velocity: bool,
+    /// Clock samples are kept within `lo..=hi` (the span of the other topics).
+    pub span: (i64, i64),
+    /// The first kept clock stamp: `t = 0`.
+    pub start_time_ns: i64,
+    pub trimmed: (usize, usize),
+    pub timing: TimingReport,
+    pub time_source: TimeSource,
+    pub resample_hz: Option<f64>,
+    /// Samples the reader will give (after resampling).
+    pub samples: usize,
+}
+
+/// The passes before the samples: topic choice and message checks, then the checks of
+/// the merged clock (joint names unique across topics, stamps increasing, no gap in the
+/// other topics, overlapping spans, a uniform clock unless resampling), in the order the
+/// whole-log reader made them.
+pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError> {
+    if let Some(rate) = options.resample_hz {
+        if !(rate.is_finite() && rate > 0.0) {
+            return Err(LogError::InvalidRate {
+                path: path.to_path_buf(),
+                rate_hz: rate,
+            });
+        }
+    }
+    let ts = options.time_source;
+    let mut surveys = survey(path, &options.topics, ts, false)?;
+    for s in &surveys {
+        if !s.state.has_effort {
+            return Err(mcap_error(
+                path,
+                Some(&s.state.topic),
+                McapProblem::NoEffort,
+            ));
+        }
+    }
+    let topics: Vec<String> = surveys.iter().map(|s| s.state.topic.clone()).collect();
+    // Joint names unique across topics.
+    let mut owner: HashMap<&str, &str> = HashMap::new();
+    for s in &surveys {
+        for n in &s.state.names {
+            if let Some(first) = owner.insert(n.as_str(), s.state.topic.as_str()) {
+                return Err(mcap_error(
+                    path,
+                    Some(&s.state.topic),
+                    McapProblem::DuplicateJoint {
+                        joint: n.clone(),
+                        context: format!(
+                            "also on topic {first}; merged topics need distinct joint names"
+                        ),
+                    },
+                ));
+            }
+        }
+    }
+    for s in &surveys {
+        if let Some((index, previous, stamp)) = s.stats.first_bad {
+            let st = &s.stats;
+            return Err(mcap_error(
+                path,
+                Some(&s.state.topic),
+                McapProblem::NotIncreasing {
+                    index,
+                    time_s: seconds_between(st.first, stamp),
+                    previous_s: seconds_between(st.first, previous),
+                    backwards: st.backwards,
+                    duplicates: st.duplicates,
+                    samples: st.count,
+                    time_source: ts,
+                },
+            ));
+        }
+    }
+    // Gaps in the other topics would be bridged by interpolation: refuse them too.
+    for k in 0..surveys.len() {
+        let full = (surveys[k].stats.first, surveys[k].stats.last);
+        finish_median(path, &topics, ts, k, full, &mut surveys[k].stats)?;
+        if k > 0 && options.resample_hz.is_none() && surveys[k].stats.has_gap() {
+            let (report, around) = classify(path, &topics, ts, k, full, &surveys[k].stats)?;
+            return Err(non_uniform(path, &topics[k], &report, around, ts));
+        }
+    }
+    let (mut lo, mut hi) = (i64::MIN, i64::MAX);
+    for s in &surveys[1..] {
+        lo = lo.max(s.stats.first);
+        hi = hi.min(s.stats.last);
+    }
+    let clock = &surveys[0].stats;
+    let span = (lo.max(clock.first), hi.min(clock.last));
+    let (stats, trimmed) = if span == (clock.first, clock.last) {
+        (clock.clone(), (0, 0))
+    } else {
+        // The clock's statistics over the span the other topics cover.
+        let (mut below, mut above) = (0, 0);
+        let mut stats = StampStats::default();
+        stamp_pass(path, &topics, ts, |t, stamp| {
+            if t != 0 {
+            } else if stamp < lo {
+                below += 1;
+            } else if stamp > hi {
+                above += 1;
+            } else {
+                stats.observe(stamp);
+            }
+        })?;
+        if stats.count == 0 {
+            let mut detail = String::new();
+            let t0 = clock.first;
+            for s in &surveys {
+                let _ = write!(
+                    detail,
+                    "{}{} from {} s to {} s",
+                    if detail.is_empty() { "" } else { ", " },
+                    s.state.topic,
+                    seconds_between(t0, s.stats.first),
+                    seconds_between(t0, s.stats.last)
+                );
+            }
+            return Err(mcap_error(path, None, McapProblem::NoOverlap { detail }));
+        }
+        finish_median(path, &topics, ts, 0, (lo, hi), &mut stats)?;
+        (stats, (below, above))
+    };
+    let (mut timing, around) = classify(path, &topics, ts, 0, span, &stats)?;
+    if options.resample_hz.is_none() && timing.first_irregular.is_some() {
+        return Err(non_uniform(path, &topics[0], &timing, around, ts));
+    }
+    let samples = match options.resample_hz {
+        Some(rate) => {
+            let r = crate::signal::stream::Resampler::new(1, rate).map_err(|e| {
+                mcap_error(
+                    path,
+                    Some(&topics[0]),
+                    McapProblem::Resample {
+                        reason: e.to_string(),
+                    },
+                )
+            })?;
+            timing.resampled_hz = Some(rate);
+            if stats.count < 2 {
+                0
+            } else {
+                r.grid_len(0.0, seconds_between(stats.first, stats.last))
+            }
+        }
+        None => stats.count,
+    };
+    Ok(Plan {
+        with_velocity: surveys.iter().all(|s| s.state.has_velocity),
+        joints: surveys.iter().map(|s| s.state.names.clone()).collect(),
+        topics,
+        span,
+        start_time_ns: stats.first,
+        trimmed,
+        timing,
+        time_source: ts,
+        resample_hz: options.resample_hz,
+        samples,
+    })
+}

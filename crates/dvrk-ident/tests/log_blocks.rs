@@ -1,0 +1,138 @@
+//! Logs read block by block ([`LogReader`]) give the whole log whatever the block size,
+//! for the CSV layouts (with and without `--resample`), and name bad rows by their line
+//! in the file wherever the block boundaries fall.
+
+use dvrk_ident::log::mcap::McapOptions;
+use dvrk_ident::log::{read_with, write, LogError, LogFormat, LogReader};
+use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+use nalgebra::DMatrix;
+use std::path::PathBuf;
+
+fn temp(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("dvrk-ident-blocks-{}-{name}", std::process::id()))
+}
+
+fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> Trajectory {
+    let time = uniform_time(n, 200.0);
+    Trajectory {
+        q: DMatrix::from_fn(n, 3, |i, j| (0.01 * i as f64 + j as f64).sin()),
+        dq: with_dq.then(|| DMatrix::from_fn(n, 3, |i, j| (0.02 * i as f64 - j as f64).cos())),
+        tau: DMatrix::from_fn(n, 3, |i, j| (i % 17) as f64 * 0.1 - j as f64),
+        time,
+        joint_names: ["q1", "q2", "q3"].map(String::from).to_vec(),
+        coordinates,
+        source: "test".into(),
+    }
+}
+
+fn read_blocks(reader: &LogReader, size: usize) -> Trajectory {
+    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
+    let rows: usize = blocks.iter().map(Trajectory::len).sum();
+    let cat = |f: &dyn Fn(&Trajectory) -> Option<&DMatrix<f64>>| {
+        f(&blocks[0]).map(|_| {
+            let mut m = DMatrix::zeros(rows, 3);
+            let mut r = 0;
+            for b in &blocks {
+                let x = f(b).unwrap();
+                m.rows_mut(r, x.nrows()).copy_from(x);
+                r += x.nrows();
+            }
+            m
+        })
+    };
+    Trajectory {
+        time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
+        q: cat(&|b| Some(&b.q)).unwrap(),
+        dq: cat(&|b| b.dq.as_ref()),
+        tau: cat(&|b| Some(&b.tau)).unwrap(),
+        ..blocks[0].clone()
+    }
+}
+
+#[test]
+fn blocks_of_any_size_are_the_whole_log() {
+    let cases = [
+        (
+            "wpi.csv",
+            LogFormat::Wpi,
+            log(3001, true, Coordinates::Model),
+        ),
+        (
+            "csv.csv",
+            LogFormat::Csv,
+            log(3001, true, Coordinates::Measured),
+        ),
+        (
+            "nodq.csv",
+            LogFormat::Csv,
+            log(2500, false, Coordinates::Model),
+        ),
+    ];
+    for (name, format, traj) in cases {
+        let path = temp(name);
+        write(&path, &traj, format).unwrap();
+        for resample_hz in [None, Some(130.0)] {
+            let opts = McapOptions {
+                resample_hz,
+                ..McapOptions::default()
+            };
+            let whole = read_with(&path, None, Some(200.0), &opts).unwrap();
+            if resample_hz.is_none() {
+                assert_eq!((&whole.q, &whole.tau), (&traj.q, &traj.tau));
+            } else {
+                whole.check_uniform(1e-9).unwrap();
+            }
+            let reader = LogReader::open(&path, None, Some(200.0), &opts).unwrap();
+            assert_eq!(reader.format(), format);
+            assert_eq!(reader.joint_names(), &whole.joint_names[..]);
+            assert_eq!(reader.coordinates(), traj.coordinates);
+            assert_eq!(reader.has_velocity(), traj.dq.is_some());
+            for size in [1, 7, 4000] {
+                assert_eq!(read_blocks(&reader, size), whole, "{name} blocks of {size}");
+            }
+        }
+        std::fs::remove_file(&path).unwrap();
+    }
+}
+
+#[test]
+fn bad_rows_are_named_by_line_in_any_block() {
+    let path = temp("bad.csv");
+    // Header on line 1, sample k on line k + 2: sample 56 repeats sample 55's time, and
+    // sample 60 is NaN (after it, so the time is the first problem).
+    let mut text = String::from("time,position.a,velocity.a,effort.a\n");
+    for k in 0..100 {
+        let t = if k == 56 { 55 } else { k } as f64 * 0.005;
+        let p = if k == 60 {
+            "nan".to_string()
+        } else {
+            format!("{}", k as f64 * 0.1)
+        };
+        text += &format!("{t},{p},1.0,2.0\n");
+    }
+    std::fs::write(&path, text).unwrap();
+    let opts = McapOptions::default();
+    let whole = read_with(&path, None, None, &opts).unwrap_err();
+    assert!(
+        matches!(whole, LogError::NonMonotonicTime { line: 58, .. }),
+        "{whole}"
+    );
+    let reader = LogReader::open(&path, None, None, &opts).unwrap();
+    for size in [1, 10, 56, 57, 1000] {
+        let e = reader.blocks(size).unwrap().find_map(Result::err).unwrap();
+        assert_eq!(e.to_string(), whole.to_string(), "blocks of {size}");
+    }
+    std::fs::remove_file(&path).unwrap();
+    // An empty file and a header without rows.
+    let empty = temp("empty.csv");
+    std::fs::write(&empty, "# nothing\n").unwrap();
+    assert!(matches!(
+        LogReader::open(&empty, None, None, &opts).unwrap_err(),
+        LogError::Empty { .. }
+    ));
+    std::fs::write(&empty, "time,position.a,effort.a\n").unwrap();
+    let reader = LogReader::open(&empty, None, None, &opts).unwrap();
+    let e = reader.blocks(10).unwrap().next().unwrap().unwrap_err();
+    assert!(e.to_string().contains("a header but no data rows"), "{e}");
+    std::fs::remove_file(&empty).unwrap();
+}

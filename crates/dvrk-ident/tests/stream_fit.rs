@@ -1,0 +1,288 @@
+//! The streamed fit (logs read from disk block by block) gives the in-memory fit: the
+//! bundled MCAP example and simulated CSV logs (headered without velocities, the 2019
+//! layout as the test log), every estimator, several block sizes; parameters, base
+//! parameters and metrics to 1e-9 relative.
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Mutex;
+
+use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::stream::fit_stream;
+use dvrk_ident::fit::to_model_coordinates;
+use dvrk_ident::log::mcap::McapOptions;
+use dvrk_ident::log::{self, LogFormat, LogReader};
+use dvrk_ident::progress::{Progress, Silent};
+use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::{fit, FitResult, FitSettings, Method, Trajectory};
+use dvrk_model::{inertia, Model};
+
+fn example() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap")
+}
+
+/// Largest relative difference, each entry against `max(|b|, 1e-3 max|b|)` (entries
+/// near zero are compared at the vector's scale).
+fn worst(a: &[f64], b: &[f64]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = b.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs() / y.abs().max(1e-3 * scale).max(1e-300))
+        .fold(0.0, f64::max)
+}
+
+/// Compares two results; returns the worst relative difference of the parameters and
+/// of the metrics.
+fn compare(streamed: &FitResult, whole: &FitResult, what: &str) -> (f64, f64) {
+    assert_eq!(streamed.rows, whole.rows, "{what}: rows");
+    assert_eq!(streamed.solver.converged, whole.solver.converged, "{what}");
+    let values = |r: &FitResult| r.parameters.values().copied().collect::<Vec<_>>();
+    let base = |r: &FitResult| {
+        r.base_parameters
+            .iter()
+            .map(|b| b.value)
+            .collect::<Vec<_>>()
+    };
+    let p = worst(&values(streamed), &values(whole)).max(worst(&base(streamed), &base(whole)));
+    let mut m = worst(&streamed.weights, &whole.weights);
+    let mut metrics = vec![(&streamed.metrics.train, &whole.metrics.train)];
+    if let (Some(a), Some(b)) = (&streamed.metrics.test, &whole.metrics.test) {
+        metrics.push((a, b));
+    }
+    assert_eq!(
+        streamed.metrics.test.is_some(),
+        whole.metrics.test.is_some(),
+        "{what}"
+    );
+    for (a, b) in metrics {
+        assert_eq!(a.samples, b.samples, "{what}: metric samples");
+        m = m
+            .max(worst(&a.relative_error, &b.relative_error))
+            .max(worst(&a.rms, &b.rms));
+    }
+    assert!(p < 1e-9, "{what}: parameters differ by {p:e}");
+    assert!(m < 1e-9, "{what}: weights or metrics differ by {m:e}");
+    (p, m)
+}
+
+/// Counts the stages and samples a streamed fit reports.
+#[derive(Default)]
+struct Counter {
+    stages: Mutex<Vec<String>>,
+    units: AtomicU64,
+}
+
+impl Progress for Counter {
+    fn stage(&self, name: &str, _total: Option<u64>) {
+        self.stages.lock().unwrap().push(name.to_string());
+    }
+    fn advance(&self, units: u64) {
+        self.units.fetch_add(units, Ordering::Relaxed);
+    }
+}
+
+#[test]
+fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
+    let model = Model::builtin("psm").unwrap();
+    let whole_log = log::read(example(), None, None).unwrap();
+    let reader = LogReader::open(example(), None, None, &McapOptions::default()).unwrap();
+    for method in [Method::Ols, Method::Wls, Method::Irls, Method::Sdp] {
+        let settings = FitSettings {
+            method,
+            ..FitSettings::default()
+        };
+        let whole = fit(&model, &whole_log, None, &settings).unwrap();
+        for block in [1000, 333] {
+            let counter = Counter::default();
+            let streamed = fit_stream(&model, &reader, None, &settings, block, &counter).unwrap();
+            let (p, m) = compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
+            println!("example {method:?}, blocks of {block}: parameters {p:.1e}, metrics {m:.1e}");
+            let stages = counter.stages.lock().unwrap();
+            assert!(stages[0].starts_with("reading"), "{stages:?}");
+            assert!(stages.iter().any(|s| s == "assembling the observation"));
+            assert_eq!(stages.iter().any(|s| s == "solving"), method == Method::Sdp);
+            let irls = stages
+                .iter()
+                .filter(|s| s.starts_with("re-weighting"))
+                .count();
+            assert_eq!(irls, if method == Method::Irls { 5 } else { 0 });
+            // Every pass reads the whole log: the survey, the observation, the metrics,
+            // and each re-weighting.
+            let passes = 3 + irls as u64;
+            assert_eq!(counter.units.load(Ordering::Relaxed), passes * 2222);
+        }
+    }
+}
+
+/// Consistent MTM parameters (the cable is a known force: it is subtracted too).
+fn mtm_params(model: &Model) -> Vec<f64> {
+    let mut pi = vec![0.0; model.n_params()];
+    for f in &model.frames {
+        if let Some(p0) = f.inertia {
+            let m = f.bounds.mass.map_or(1.0, |[a, _]| 1.5 * a);
+            let c = f.bounds.com.map_or([0.0; 3], |b| {
+                [
+                    0.5 * (b[0][0] + b[0][1]),
+                    0.5 * (b[1][0] + b[1][1]),
+                    0.5 * (b[2][0] + b[2][1]),
+                ]
+            });
+            let d = 0.05 * m;
+            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(
+                m,
+                c,
+                [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
+            ));
+        }
+        if let Some(fr) = &f.friction {
+            pi[fr.param] = 0.05;
+            pi[fr.param + 1] = 0.02;
+            pi[fr.param + 2] = 0.01;
+        }
+        if let Some(mi) = &f.motor_inertia {
+            pi[mi.param] = 0.005;
+        }
+        if let Some(sp) = &f.spring {
+            pi[sp.param] = 270.0;
+        }
+    }
+    pi
+}
+
+fn excitation(n: usize, phase: f64) -> FourierTrajectory {
+    FourierTrajectory {
+        order: 3,
+        base_frequency_hz: 0.2,
+        q0: (0..n).map(|j| 0.1 + 0.05 * j as f64).collect(),
+        a: (0..n)
+            .map(|j| vec![0.5 + phase, -0.3 + 0.05 * j as f64, 0.2])
+            .collect(),
+        b: (0..n)
+            .map(|j| vec![0.2, 0.1 - phase, -0.1 * j as f64])
+            .collect(),
+        coordinates: Vec::new(),
+    }
+}
+
+fn simulated(model: &Model, phase: f64, seconds: f64, seed: u64) -> Trajectory {
+    let sim = Simulation {
+        duration_s: Some(seconds),
+        noise_std: vec![0.01],
+        seed,
+        ..Simulation::default()
+    };
+    simulate(
+        model,
+        &mtm_params(model),
+        &excitation(model.dof(), phase),
+        &sim,
+    )
+    .unwrap()
+}
+
+#[test]
+fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
+    let model = Model::builtin("mtm").unwrap();
+    let dir = std::env::temp_dir().join(format!("dvrk-ident-stream-fit-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    // Training: headered CSV in measured joints, without velocities (differentiated).
+    let mut train = simulated(&model, 0.0, 14.0, 3);
+    train.dq = None;
+    let train_path = dir.join("train.csv");
+    log::write(&train_path, &train, LogFormat::Csv).unwrap();
+    // Test: the 2019 layout (model coordinates, velocities).
+    let test = to_model_coordinates(&model, &simulated(&model, 0.1, 9.0, 4)).unwrap();
+    let test_path = dir.join("test.csv");
+    log::write(&test_path, &test, LogFormat::Wpi).unwrap();
+    let opts = McapOptions::default();
+    let train_whole = log::read(&train_path, None, None).unwrap();
+    let test_whole = log::read(&test_path, None, Some(200.0)).unwrap();
+    let train_reader = LogReader::open(&train_path, None, None, &opts).unwrap();
+    let test_reader = LogReader::open(&test_path, None, Some(200.0), &opts).unwrap();
+    for (method, filter_torque) in [
+        (Method::Ols, false),
+        (Method::Wls, true),
+        (Method::Sdp, false),
+    ] {
+        let mut settings = FitSettings {
+            method,
+            test_window: Some(700),
+            ..FitSettings::default()
+        };
+        settings.processing.filter_torque = filter_torque;
+        settings.processing.decimate = 3;
+        let whole = fit(&model, &train_whole, Some(&test_whole), &settings).unwrap();
+        for block in [4096, 250] {
+            let streamed = fit_stream(
+                &model,
+                &train_reader,
+                Some(&test_reader),
+                &settings,
+                block,
+                &Silent,
+            )
+            .unwrap();
+            let (p, m) = compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
+            println!("csv {method:?}, blocks of {block}: parameters {p:.1e}, metrics {m:.1e}");
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn streamed_fit_errors_name_the_file() {
+    let model = Model::builtin("psm").unwrap();
+    let dir = std::env::temp_dir().join(format!("dvrk-ident-stream-err-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let opts = McapOptions::default();
+    // Too short for the trimming: the same error as in memory, before any long pass.
+    let short = dir.join("short.mcap");
+    let whole = log::read(example(), None, None).unwrap();
+    let first: Trajectory = Trajectory {
+        time: whole.time[..300].to_vec(),
+        q: whole.q.rows(0, 300).into_owned(),
+        dq: whole.dq.as_ref().map(|d| d.rows(0, 300).into_owned()),
+        tau: whole.tau.rows(0, 300).into_owned(),
+        ..whole.clone()
+    };
+    log::write(&short, &first, LogFormat::Mcap).unwrap();
+    let reader = LogReader::open(&short, None, None, &opts).unwrap();
+    let settings = FitSettings::default();
+    let e = fit_stream(&model, &reader, None, &settings, 100, &Silent).unwrap_err();
+    let in_memory = fit(
+        &model,
+        &log::read(&short, None, None).unwrap(),
+        None,
+        &settings,
+    )
+    .unwrap_err();
+    assert_eq!(e.to_string(), in_memory.to_string());
+    assert!(e.to_string().contains("short.mcap"), "{e}");
+    // A truncated file: named, never a panic.
+    let bytes = std::fs::read(example()).unwrap();
+    let cut = dir.join("cut.mcap");
+    std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
+    let e = LogReader::open(&cut, None, None, &opts).unwrap_err();
+    assert!(
+        e.to_string().contains("cut.mcap") && e.to_string().contains("truncated"),
+        "{e}"
+    );
+    // A NaN in a CSV log: the file and line.
+    let nan = dir.join("nan.csv");
+    log::write(&nan, &first, LogFormat::Csv).unwrap();
+    let text = std::fs::read_to_string(&nan).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut fields: Vec<&str> = lines[100].split(',').collect();
+    fields[3] = "NaN";
+    let bad = fields.join(",");
+    let mut out: Vec<&str> = lines.clone();
+    out[100] = &bad;
+    std::fs::write(&nan, out.join("\n")).unwrap();
+    let reader = LogReader::open(&nan, None, None, &opts).unwrap();
+    let e = fit_stream(&model, &reader, None, &settings, 64, &Silent).unwrap_err();
+    assert!(e.to_string().contains("nan.csv:101"), "{e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,275 @@
+//! Processing a log block by block gives the whole-log processing: every variant of the
+//! settings, blocks from one sample to more than the log, a long synthetic signal with
+//! friction-like steps, noise and several frequencies.
+
+use dvrk_ident::signal::stream::{BlockProcessor, TimingSurvey};
+use dvrk_ident::signal::{
+    process, AccelerationSource, Cutoff, LowPass, Processed, Processing, SignalError, Stencil,
+};
+use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory, TrajectoryError};
+use nalgebra::DMatrix;
+
+/// 3 joints, `n` samples at 200 Hz: slow and fast sines, a square wave and noise.
+fn synthetic(n: usize, with_dq: bool) -> Trajectory {
+    let time = uniform_time(n, 200.0);
+    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
+    let mut noise = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    let q = DMatrix::from_fn(n, 3, |i, j| {
+        let t = time[i];
+        (0.4 + 0.3 * j as f64) * (1.1 * t + j as f64).sin() + 0.05 * (13.0 * t).cos()
+    });
+    let dq = DMatrix::from_fn(n, 3, |i, j| {
+        let t = time[i];
+        (0.4 + 0.3 * j as f64) * 1.1 * (1.1 * t + j as f64).cos() + 0.01 * noise()
+    });
+    let tau = DMatrix::from_fn(n, 3, |i, j| {
+        let t = time[i];
+        let step = if (t * (0.7 + 0.2 * j as f64)).sin() > 0.0 {
+            0.3
+        } else {
+            -0.3
+        };
+        2.0 * (0.9 * t).cos() + step + 0.02 * noise()
+    });
+    Trajectory {
+        time,
+        q,
+        dq: with_dq.then_some(dq),
+        tau,
+        joint_names: vec!["a".into(), "b".into(), "c".into()],
+        coordinates: Coordinates::Model,
+        source: "synthetic".into(),
+    }
+}
+
+fn block(traj: &Trajectory, start: usize, len: usize) -> Trajectory {
+    let rows = |m: &DMatrix<f64>| m.rows(start, len).into_owned();
+    Trajectory {
+        time: traj.time[start..start + len].to_vec(),
+        q: rows(&traj.q),
+        dq: traj.dq.as_ref().map(rows),
+        tau: rows(&traj.tau),
+        joint_names: traj.joint_names.clone(),
+        coordinates: traj.coordinates,
+        source: traj.source.clone(),
+    }
+}
+
+fn blocks(traj: &Trajectory, size: usize) -> Vec<Trajectory> {
+    (0..traj.len())
+        .step_by(size)
+        .map(|s| block(traj, s, size.min(traj.len() - s)))
+        .collect()
+}
+
+/// The streamed processing of `traj` in blocks of `size`, concatenated.
+fn streamed(
+    traj: &Trajectory,
+    settings: &Processing,
+    size: usize,
+) -> Result<Processed, SignalError> {
+    let parts = blocks(traj, size);
+    let mut survey = TimingSurvey::new();
+    let timing = loop {
+        for b in &parts {
+            survey.observe(b)?;
+        }
+        if let Some(t) = survey.end_pass()? {
+            break t;
+        }
+    };
+    let mut p = BlockProcessor::new(
+        settings,
+        &traj.joint_names,
+        traj.coordinates,
+        traj.dq.is_some(),
+        &traj.source,
+        &timing,
+    )?;
+    let mut out = Vec::new();
+    for b in &parts {
+        out.push(p.push(b)?);
+    }
+    out.push(p.finish()?);
+    let rows: usize = out.iter().map(Processed::len).sum();
+    let cat = |f: fn(&Processed) -> &DMatrix<f64>| {
+        let mut m = DMatrix::zeros(rows, traj.dof());
+        let mut r = 0;
+        for o in &out {
+            m.rows_mut(r, o.len()).copy_from(f(o));
+            r += o.len();
+        }
+        m
+    };
+    Ok(Processed {
+        time: out.iter().flat_map(|o| o.time.iter().copied()).collect(),
+        q: cat(|o| &o.q),
+        dq: cat(|o| &o.dq),
+        ddq: cat(|o| &o.ddq),
+        tau: cat(|o| &o.tau),
+        ..out[0].clone()
+    })
+}
+
+/// Largest difference relative to the signal's largest magnitude, over q, dq, ddq, tau.
+fn worst_relative(a: &Processed, b: &Processed) -> f64 {
+    let rel = |x: &DMatrix<f64>, y: &DMatrix<f64>| (x - y).amax() / y.amax().max(1e-300);
+    [
+        rel(&a.q, &b.q),
+        rel(&a.dq, &b.dq),
+        rel(&a.ddq, &b.ddq),
+        rel(&a.tau, &b.tau),
+    ]
+    .into_iter()
+    .fold(0.0, f64::max)
+}
+
+fn variants() -> Vec<(&'static str, Processing, bool)> {
+    let base = Processing::default();
+    vec![
+        ("default", base.clone(), true),
+        ("no velocity", base.clone(), false),
+        (
+            "torques filtered, filtered-velocity accelerations, 3-point",
+            Processing {
+                filter_torque: true,
+                acceleration_from: AccelerationSource::FilteredVelocity,
+                velocity_stencil: Stencil::ThreePoint,
+                acceleration_stencil: Stencil::ThreePoint,
+                ..base.clone()
+            },
+            true,
+        ),
+        ("2019 (b, a), padlen 20", Processing::wpi2019(1.8), true),
+        (
+            "per-joint cut-offs, decimate 7, min speed",
+            Processing {
+                filter: Some(LowPass {
+                    cutoff_hz: Cutoff::PerJoint(vec![2.0, 5.4, 11.0]),
+                    ..LowPass::default()
+                }),
+                decimate: 7,
+                min_speed: Some(0.05),
+                trim: 33,
+                ..base.clone()
+            },
+            true,
+        ),
+        (
+            "resampled to 150 Hz",
+            Processing {
+                resample_hz: Some(150.0),
+                ..base.clone()
+            },
+            true,
+        ),
+        (
+            "no filter, no trim",
+            Processing {
+                filter: None,
+                trim: 0,
+                ..base
+            },
+            false,
+        ),
+    ]
+}
+
+#[test]
+fn streamed_processing_equals_whole_log_processing() {
+    let n = 30_000;
+    for (name, settings, with_dq) in variants() {
+        let traj = synthetic(n, with_dq);
+        let whole = process(&traj, &settings).unwrap();
+        let mut worst: f64 = 0.0;
+        for size in [1, 7, 500, 4096, n + 1] {
+            let s = streamed(&traj, &settings, size).unwrap();
+            assert_eq!(s.time, whole.time, "{name}, blocks of {size}: kept samples");
+            assert_eq!(s.rate_hz, whole.rate_hz);
+            let e = worst_relative(&s, &whole);
+            assert!(e < 1e-9, "{name}, blocks of {size}: {e:e}");
+            worst = worst.max(e);
+        }
+        println!("{name}: worst relative difference {worst:.1e}");
+    }
+}
+
+#[test]
+fn streamed_errors_are_the_whole_log_errors() {
+    let traj = synthetic(1000, true);
+    let cases: Vec<(Processing, Trajectory)> = vec![
+        (
+            Processing {
+                trim: 500,
+                ..Processing::default()
+            },
+            traj.clone(),
+        ),
+        (
+            Processing {
+                decimate: 0,
+                ..Processing::default()
+            },
+            traj.clone(),
+        ),
+        (
+            Processing {
+                filter: Some(LowPass {
+                    cutoff_hz: Cutoff::PerJoint(vec![5.0, 150.0, 5.0]),
+                    ..LowPass::default()
+                }),
+                ..Processing::default()
+            },
+            traj.clone(),
+        ),
+        (
+            Processing {
+                trim: 5,
+                ..Processing::default()
+            },
+            block(&traj, 0, 20),
+        ),
+        (
+            Processing {
+                min_speed: Some(100.0),
+                ..Processing::default()
+            },
+            traj.clone(),
+        ),
+    ];
+    for (settings, t) in cases {
+        let whole = process(&t, &settings).unwrap_err();
+        for size in [1, 64, 5000] {
+            let s = streamed(&t, &settings, size).unwrap_err();
+            assert_eq!(s, whole, "blocks of {size}");
+        }
+        println!("{whole}");
+    }
+    // A gap, a NaN: named at the same sample.
+    let mut gap = traj.clone();
+    for t in &mut gap.time[600..] {
+        *t += 0.02;
+    }
+    let mut nan = traj.clone();
+    nan.tau[(777, 2)] = f64::NAN;
+    for t in [gap, nan] {
+        let whole = process(&t, &Processing::default()).unwrap_err();
+        assert!(matches!(
+            whole,
+            SignalError::Trajectory(
+                TrajectoryError::NonUniform { row: 600, .. }
+                    | TrajectoryError::NonFinite { row: 777, .. }
+            )
+        ));
+        // (Debug text: NaN values are not equal to themselves.)
+        for size in [1, 100, 5000] {
+            let s = streamed(&t, &Processing::default(), size).unwrap_err();
+            assert_eq!(format!("{s:?}"), format!("{whole:?}"));
+        }
+    }
+}
