@@ -135,7 +135,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
         let raw = prepare(model, log.trajectory, &unfiltered)?;
         if k == 0 {
             let t = to_model_coordinates(model, log.trajectory)?;
-            if t.len() > 0 {
+            if !t.is_empty() {
                 for (j, v) in q_draw.iter_mut().enumerate() {
                     *v = t.q[(0, j)];
                 }
