@@ -99,3 +99,119 @@ fn bad_plot_path_is_an_error_naming_it() {
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A planar 2-link arm with a tip frame (the excitation tests' arm).
+const ARM: &str = r#"
+name = "two_link"
+convention = "modified"
+coordinates = ["q1", "q2"]
+gravity = [0.0, -9.81, 0.0]
+
+[[frames]]
+name = "upper"
+parent = "base"
+theta = "q1"
+inertia = true
+friction = true
+
+[[frames]]
+name = "lower"
+parent = "upper"
+a = 0.3
+theta = "q2 - q1"
+inertia = true
+friction = true
+
+[[frames]]
+name = "tip"
+parent = "lower"
+a = 0.25
+"#;
+
+#[test]
+fn limits_file_with_a_cartesian_box() {
+    let dir = temp_dir("box");
+    let (robot, limits, traj) = (
+        dir.join("arm.toml"),
+        dir.join("lim.toml"),
+        dir.join("t.json"),
+    );
+    std::fs::write(&robot, ARM).unwrap();
+    let joint = "[[limits]]\nexpr = \"q1\"\nposition = [-1.0, 1.2]\nvelocity = [-1.5, 1.5]\n\n\
+                 [[limits]]\nexpr = \"q2 - q1\"\nposition = [0.2, 1.6]\n\n";
+    let boxed = |ymax: f64| {
+        format!("{joint}[[cartesian_limits]]\nframe = \"tip\"\nmin = [-1, -1, -1]\nmax = [1, {ymax}, 1]\n")
+    };
+    std::fs::write(&limits, boxed(0.2)).unwrap();
+    let (ok, _, err) = run(&[
+        "excite",
+        "--robot",
+        robot.to_str().unwrap(),
+        "--limits",
+        limits.to_str().unwrap(),
+        "--order",
+        "2",
+        "--f0",
+        "0.25",
+        "--starts",
+        "2",
+        "--refine",
+        "1",
+        "--iterations",
+        "15",
+        "--refine-iterations",
+        "15",
+        "--out",
+        traj.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&traj).unwrap()).unwrap();
+    assert_eq!(doc["feasibility"]["feasible"], true);
+    let evaluate = |limits: &std::path::Path| {
+        let (ok, out, err) = run(&[
+            "excite",
+            "--robot",
+            robot.to_str().unwrap(),
+            "--limits",
+            limits.to_str().unwrap(),
+            "--evaluate",
+            traj.to_str().unwrap(),
+            "--json",
+        ]);
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(&out).unwrap()
+    };
+    assert_eq!(evaluate(&limits)["feasible"], true);
+    // A lower box that the optimized tip path leaves: reported by name.
+    let lower = dir.join("lower.toml");
+    std::fs::write(&lower, boxed(-0.6)).unwrap();
+    let ev = evaluate(&lower);
+    assert_eq!(ev["feasible"], false);
+    assert_eq!(ev["worst_violation"]["limit"], "frame tip y");
+    assert_eq!(ev["worst_violation"]["bound"], -0.6);
+    // A box on a frame the robot does not have: the file and the frame are named, and
+    // nothing is written.
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[[cartesian_limits]]\nframe = \"hand\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\n",
+    )
+    .unwrap();
+    let out = dir.join("never.json");
+    let (ok, _, err) = run(&[
+        "excite",
+        "--robot",
+        robot.to_str().unwrap(),
+        "--limits",
+        bad.to_str().unwrap(),
+        "--order",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(err.contains("bad.toml") && err.contains("hand"), "{err}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -4,7 +4,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
-use dvrk_ident::excite::optimize::{optimize, ExciteOptions};
+use dvrk_ident::excite::optimize::{optimize, ExciteOptions, Limits};
 use dvrk_ident::fit::{fit_with_progress, prepare};
 use dvrk_ident::progress::Progress;
 use dvrk_ident::{FitSettings, Method};
@@ -74,15 +74,20 @@ fn optimizer_counts_its_starts() {
         order: 2,
         base_frequency_hz: 0.2,
         starts: 3,
+        refine: 2,
         iterations_per_stage: 5,
+        refine_iterations_per_stage: 5,
         ..ExciteOptions::default()
     };
     let rec = Recorder::default();
-    optimize(&model, &base, &model.limits, &opts, &rec).unwrap();
+    optimize(&model, &base, &Limits::of_model(&model), &opts, &rec).unwrap();
     assert_eq!(
         *rec.stages.lock().unwrap(),
-        [("optimizing (starts)".to_string(), Some(3))]
+        [
+            ("exploring starts".to_string(), Some(3)),
+            ("refining the best starts".to_string(), Some(2))
+        ]
     );
-    assert_eq!(rec.units.load(Ordering::Relaxed), 3);
-    assert_eq!(rec.finished.load(Ordering::Relaxed), 1);
+    assert_eq!(rec.units.load(Ordering::Relaxed), 5);
+    assert_eq!(rec.finished.load(Ordering::Relaxed), 2);
 }

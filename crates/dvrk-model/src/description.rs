@@ -48,6 +48,8 @@ struct FileDesc {
     #[serde(default)]
     limits: Vec<LimitDesc>,
     #[serde(default)]
+    cartesian_limits: Vec<CartesianLimitDesc>,
+    #[serde(default)]
     bounds: GlobalBounds,
 }
 
@@ -99,6 +101,14 @@ struct LimitDesc {
     position: Option<[NumOrExpr; 2]>,
     velocity: Option<[NumOrExpr; 2]>,
     acceleration: Option<[NumOrExpr; 2]>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CartesianLimitDesc {
+    frame: String,
+    min: [NumOrExpr; 3],
+    max: [NumOrExpr; 3],
 }
 
 /// Resolves constants that may refer to each other, in dependency order.
@@ -596,6 +606,22 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         });
     }
 
+    let mut cartesian_limits = Vec::new();
+    for (i, cd) in desc.cartesian_limits.iter().enumerate() {
+        let place = format!("cartesian_limits[{i}] ({})", cd.frame);
+        let mut corners = [[0.0; 3]; 2];
+        for (corner, (field, values)) in
+            corners.iter_mut().zip([("min", &cd.min), ("max", &cd.max)])
+        {
+            for (v, raw) in corner.iter_mut().zip(values) {
+                *v = ctx.number(&place, field, raw)?;
+            }
+        }
+        let limit = CartesianLimit::new(&names, &cd.frame, corners[0], corners[1])
+            .map_err(|(field, message)| ModelError::field(file, &place, field, message))?;
+        cartesian_limits.push(limit);
+    }
+
     let coordinate_is_length = (0..n)
         .map(|k| {
             frames
@@ -612,6 +638,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         gravity,
         measured,
         limits,
+        cartesian_limits,
         bounds: desc.bounds,
         params,
         links: Vec::new(),

@@ -248,6 +248,74 @@ pub struct Limit {
     pub acceleration: Option<[f64; 2]>,
 }
 
+/// A box the origin of a frame must stay in, in base-frame coordinates (an excitation
+/// limit: e.g. keep the wrist away from the table or the other arm). Unlike [`Limit`] it
+/// is nonlinear in the coordinates, so the optimizer treats it through the frame-origin
+/// Jacobian.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CartesianLimit {
+    /// Frame index (1-based; the base never moves, so it cannot be limited).
+    pub frame: usize,
+    /// The frame's name, for messages.
+    pub frame_name: String,
+    /// Lower corner `[x, y, z]`, m; `-inf` leaves an axis unbounded below.
+    pub min: [f64; 3],
+    /// Upper corner `[x, y, z]`, m; `inf` leaves an axis unbounded above.
+    pub max: [f64; 3],
+}
+
+impl CartesianLimit {
+    /// Checks a box on frame `frame` (a name of `frame_names`, base first as in
+    /// [`Model::frame_names`]). The error is `(field, message)` so that each caller can
+    /// name its own file and entry.
+    pub fn new(
+        frame_names: &[String],
+        frame: &str,
+        min: [f64; 3],
+        max: [f64; 3],
+    ) -> Result<CartesianLimit, (&'static str, String)> {
+        let index = match frame_names.iter().position(|f| f == frame) {
+            Some(0) => {
+                return Err((
+                    "frame",
+                    "the base frame does not move: limit a frame of [[frames]]".into(),
+                ))
+            }
+            Some(i) => i,
+            None => {
+                return Err((
+                    "frame",
+                    format!(
+                        "no frame named `{frame}` (frames: {})",
+                        frame_names[1..].join(", ")
+                    ),
+                ))
+            }
+        };
+        for (k, axis) in ["x", "y", "z"].iter().enumerate() {
+            let (lo, hi) = (min[k], max[k]);
+            if lo.is_nan() || lo == f64::INFINITY {
+                return Err(("min", format!("{axis}: {lo} is not a lower bound")));
+            }
+            if hi.is_nan() || hi == f64::NEG_INFINITY {
+                return Err(("max", format!("{axis}: {hi} is not an upper bound")));
+            }
+            if lo > hi {
+                return Err((
+                    "min",
+                    format!("{axis}: lower bound {lo} is above upper bound {hi}"),
+                ));
+            }
+        }
+        Ok(CartesianLimit {
+            frame: index,
+            frame_name: frame.to_string(),
+            min,
+            max,
+        })
+    }
+}
+
 /// One frame of the tree (frame index = position in [`Model::frames`] + 1; 0 is the base).
 #[derive(Clone, Debug)]
 pub struct Frame {
@@ -345,6 +413,8 @@ pub struct Model {
     pub gravity: Vector3<f64>,
     pub measured: Measured,
     pub limits: Vec<Limit>,
+    /// Boxes on frame origins (`[[cartesian_limits]]`).
+    pub cartesian_limits: Vec<CartesianLimit>,
     pub bounds: GlobalBounds,
     pub params: Vec<Param>,
     // Derived, for the per-sample algorithms.

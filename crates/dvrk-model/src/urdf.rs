@@ -302,6 +302,7 @@ impl Model {
             frames,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             limits,
+            cartesian_limits: Vec::new(),
             bounds: GlobalBounds::default(),
             params,
             links: Vec::new(),

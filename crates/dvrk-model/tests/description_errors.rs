@@ -335,6 +335,57 @@ fn bounds_lower_above_upper() {
 }
 
 #[test]
+fn cartesian_limits_load_and_name_their_mistakes() {
+    let boxed = |frame: &str, min: &str, max: &str| {
+        format!("{VALID}\n[[cartesian_limits]]\nframe = \"{frame}\"\nmin = {min}\nmax = {max}\n")
+    };
+    let model = load(&boxed("lower", "[-1, \"-l1\", -inf]", "[1, 0.25, inf]"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(model.cartesian_limits.len(), 1);
+    let c = &model.cartesian_limits[0];
+    assert_eq!((c.frame, c.frame_name.as_str()), (2, "lower"));
+    assert_eq!(c.min, [-1.0, -0.3, f64::NEG_INFINITY]);
+    assert_eq!(c.max, [1.0, 0.25, f64::INFINITY]);
+    expect_error(
+        &boxed("hand", "[0, 0, 0]", "[1, 1, 1]"),
+        &[
+            "cartesian_limits[0] (hand)",
+            "`frame`",
+            "no frame named `hand`",
+            "upper, lower",
+        ],
+    );
+    expect_error(
+        &boxed("base", "[0, 0, 0]", "[1, 1, 1]"),
+        &["cartesian_limits[0] (base)", "`frame`", "does not move"],
+    );
+    expect_error(
+        &boxed("lower", "[0, 2, 0]", "[1, 1, 1]"),
+        &[
+            "cartesian_limits[0] (lower)",
+            "`min`",
+            "y: lower bound 2 is above upper bound 1",
+        ],
+    );
+    expect_error(
+        &boxed("lower", "[0, 0, inf]", "[1, 1, inf]"),
+        &[
+            "cartesian_limits[0] (lower)",
+            "`min`",
+            "z: inf is not a lower bound",
+        ],
+    );
+    expect_error(
+        &boxed("lower", "[0, 0, 0]", "[1, \"q1\", 1]"),
+        &["cartesian_limits[0] (lower)", "`max`"],
+    );
+    expect_error(
+        &format!("{VALID}\n[[cartesian_limits]]\nframe = \"lower\"\nmin = [0, 0, 0]\n"),
+        &["missing field `max`"],
+    );
+}
+
+#[test]
 fn limit_expression_must_be_affine() {
     let text = with("expr = \"q2 - q1\"", "expr = \"cos(q2)\"");
     expect_error(&text, &["limits[0]", "`expr`", "affine"]);

@@ -6,7 +6,7 @@
 //! positions in the MEASURED joint space (`q_meas = M q`; rad or m), no effort columns.
 
 use anyhow::{bail, Context, Result};
-use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions};
+use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions, Limits};
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::report::figures::excitation_figure;
 use dvrk_ident::report::write_figure;
@@ -43,8 +43,9 @@ pub struct Args {
     /// Base frequency f0 (Hz)
     #[arg(long, default_value_t = 0.18)]
     pub f0: f64,
-    /// Limits file ([[limits]] tables: expr, position, velocity, acceleration); default:
-    /// the description's
+    /// Limits file ([[limits]] tables: expr, position, velocity, acceleration;
+    /// [[cartesian_limits]] tables: frame, min = [x, y, z], max = [x, y, z] in metres, base
+    /// frame); default: the description's
     #[arg(long, value_name = "FILE")]
     pub limits: Option<String>,
     /// Optimality criterion
@@ -53,12 +54,18 @@ pub struct Args {
     /// Seed of the random starts
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Number of random starts
-    #[arg(long, default_value_t = 4)]
+    /// Number of random starts (each explored with a weak limit penalty)
+    #[arg(long, default_value_t = 8)]
     pub starts: usize,
-    /// L-BFGS iterations per penalty stage (5 stages)
-    #[arg(long, default_value_t = 150)]
+    /// Number of explored starts (the best) refined to a feasible trajectory
+    #[arg(long, default_value_t = 3)]
+    pub refine: usize,
+    /// L-BFGS iterations of each of the 2 exploring stages
+    #[arg(long, default_value_t = 110)]
     pub iterations: usize,
+    /// L-BFGS iterations of each of the 5 refining stages
+    #[arg(long, default_value_t = 180)]
+    pub refine_iterations: usize,
     /// Regressor samples per period per harmonic for the criterion
     #[arg(long, default_value_t = 15)]
     pub samples_per_harmonic: usize,
@@ -167,7 +174,7 @@ pub fn run(args: Args) -> Result<()> {
                 std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
             optimize::limits_from_toml_str(&model, &text, path)?
         }
-        None => model.limits.clone(),
+        None => Limits::of_model(&model),
     };
     let criterion = args.criterion.criterion();
 
@@ -186,7 +193,7 @@ pub fn run(args: Args) -> Result<()> {
             args.check_rate,
         )?;
         if let Some(path) = &args.plot {
-            plot(&model, &traj, &limits, path)?;
+            plot(&model, &traj, &limits.joint, path)?;
         }
         return print_evaluation(&ev, args.json);
     }
@@ -200,8 +207,10 @@ pub fn run(args: Args) -> Result<()> {
         criterion,
         samples_per_harmonic: args.samples_per_harmonic,
         starts: args.starts,
+        refine: args.refine,
         seed: args.seed,
         iterations_per_stage: args.iterations,
+        refine_iterations_per_stage: args.refine_iterations,
         rest: args.rest,
         smooth: !args.no_smooth,
         init: match (&args.init, &args.init_pick) {
@@ -227,21 +236,22 @@ pub fn run(args: Args) -> Result<()> {
         write_atomic(std::path::Path::new(path), &csv)?;
     }
     if let Some(path) = &args.plot {
-        plot(&model, &result.trajectory, &limits, path)?;
+        plot(&model, &result.trajectory, &limits.joint, path)?;
     }
     let ev = &result.evaluation;
     let w = ev.feasibility.worst.as_ref();
     eprintln!(
-        "excite: {} = {:.6} ({} starts: {}), feasible on {} samples at {} Hz{}, {:.1} s",
+        "excite: {} = {:.6} ({} starts, refined: {}), feasible on {} samples at {} Hz{}, {:.1} s",
         ev.criterion.name,
         ev.criterion.value,
         result.starts.len(),
         result
             .starts
             .iter()
-            .map(|s| s.map_or("failed".to_string(), |v| format!("{v:.4}")))
+            .enumerate()
+            .filter_map(|(i, s)| s.map(|v| format!("#{i} {v:.4}")))
             .collect::<Vec<_>>()
-            .join(" "),
+            .join(", "),
         ev.feasibility.samples,
         ev.feasibility.rate_hz,
         w.map_or(String::new(), |w| format!(

@@ -4,6 +4,8 @@
 //! coefficient files.
 
 pub mod fourier;
+mod grid;
+pub mod limits;
 pub mod optimize;
 
 pub use fourier::{FourierError, FourierTrajectory};

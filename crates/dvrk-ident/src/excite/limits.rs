@@ -1,0 +1,875 @@
+//! The limits an excitation trajectory must respect, compiled for the optimizer and the
+//! dense feasibility check.
+//!
+//! Two kinds, both checked at every sample of a time grid:
+//!
+//! * joint limits (the description's `[[limits]]`): ranges of position, velocity and
+//!   acceleration of affine combinations of the coordinates. They are linear in the
+//!   Fourier coefficients, so the largest feasible step along a segment is exact;
+//! * Cartesian boxes (`[[cartesian_limits]]`): the origin of a frame stays within
+//!   `[min, max]` per base-frame axis. They are nonlinear; their gradient goes through
+//!   the frame-origin Jacobian, and steps along a segment are found by bisection against
+//!   the grid.
+//!
+//! Every bounded scalar is an [`Item`]; on a grid of `T` samples the constraint values
+//! are indexed `2·(k·m + i) + side` (`m` items, side 0 = lower, 1 = upper), normalized by
+//! the item's range so that one penalty weight suits radians, metres and rates alike.
+
+// `!(x > 0.0)`-style tests are deliberate: they also catch NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
+
+use std::f64::consts::PI;
+
+use dvrk_model::expr::{Expr, Scope};
+use dvrk_model::{CartesianLimit, Limit, Model, Workspace};
+use serde::{Deserialize, Serialize};
+
+use super::grid::Grid;
+use super::optimize::ExciteError;
+
+/// The limits of an excitation trajectory: joint limits and Cartesian boxes.
+#[derive(Clone, Debug, Default)]
+pub struct Limits {
+    pub joint: Vec<Limit>,
+    pub cartesian: Vec<CartesianLimit>,
+}
+
+impl Limits {
+    /// The description's `[[limits]]` and `[[cartesian_limits]]`.
+    pub fn of_model(model: &Model) -> Limits {
+        Limits {
+            joint: model.limits.clone(),
+            cartesian: model.cartesian_limits.clone(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.joint.is_empty() && self.cartesian.is_empty()
+    }
+
+    /// Reads limits from a TOML file of `[[limits]]` tables (`expr`, and optional
+    /// `position`, `velocity`, `acceleration` ranges of numbers or constant expressions
+    /// such as `"-57*deg"`) and `[[cartesian_limits]]` tables (`frame`, `min = [x, y, z]`,
+    /// `max = [x, y, z]`, m, base frame), as in a description. Expressions use the
+    /// model's coordinate names; `deg` and `pi` are known constants. `source` names the
+    /// file in messages.
+    pub fn from_toml_str(model: &Model, text: &str, source: &str) -> Result<Limits, ExciteError> {
+        let bad = |m: String| ExciteError::ImpossibleLimits(format!("{source}: {m}"));
+        let doc: toml::Table = text
+            .parse()
+            .map_err(|e| bad(format!("not valid TOML: {e}")))?;
+        if let Some(k) = doc
+            .keys()
+            .find(|k| !["limits", "cartesian_limits"].contains(&k.as_str()))
+        {
+            return Err(bad(format!(
+                "unknown key {k} (expected [[limits]] and [[cartesian_limits]] tables)"
+            )));
+        }
+        let constants = vec![("deg".to_string(), PI / 180.0), ("pi".to_string(), PI)];
+        let scope = Scope {
+            constants: &constants,
+            coordinates: &model.coordinates,
+        };
+        let tables = |key: &str| -> Result<Vec<&toml::Table>, ExciteError> {
+            match doc.get(key) {
+                None => Ok(Vec::new()),
+                Some(toml::Value::Array(list)) => list
+                    .iter()
+                    .enumerate()
+                    .map(|(i, item)| {
+                        item.as_table()
+                            .ok_or_else(|| bad(format!("{key}[{i}] is not a table")))
+                    })
+                    .collect(),
+                Some(_) => Err(bad(format!("{key}: expected [[{key}]] tables"))),
+            }
+        };
+        let (joint_tables, box_tables) = (tables("limits")?, tables("cartesian_limits")?);
+        if joint_tables.is_empty() && box_tables.is_empty() {
+            return Err(bad(
+                "expected [[limits]] or [[cartesian_limits]] tables".into()
+            ));
+        }
+        let num = |v: &toml::Value, place: &str| -> Result<f64, ExciteError> {
+            match v {
+                toml::Value::Float(x) => Ok(*x),
+                toml::Value::Integer(i) => Ok(*i as f64),
+                toml::Value::String(s) => {
+                    let e = Expr::parse(s, &scope).map_err(|e| bad(format!("{place}: {e}")))?;
+                    if !e.is_constant() {
+                        return Err(bad(format!("{place}: `{s}` is not a constant")));
+                    }
+                    Ok(e.eval(&vec![0.0; model.dof()]))
+                }
+                _ => Err(bad(format!(
+                    "{place}: expected a number or a constant expression"
+                ))),
+            }
+        };
+        let mut out = Limits::default();
+        for (i, t) in joint_tables.into_iter().enumerate() {
+            for k in t.keys() {
+                if !["expr", "position", "velocity", "acceleration"].contains(&k.as_str()) {
+                    return Err(bad(format!("limits[{i}]: unknown key {k}")));
+                }
+            }
+            let text = t
+                .get("expr")
+                .and_then(|v| v.as_str())
+                .ok_or_else(|| bad(format!("limits[{i}]: missing expr")))?;
+            let e =
+                Expr::parse(text, &scope).map_err(|e| bad(format!("limits[{i}] ({text}): {e}")))?;
+            let expr = e
+                .affine(model.dof())
+                .map_err(|e| bad(format!("limits[{i}] ({text}): not affine: {e}")))?;
+            let mut ranges = [None; 3];
+            for (r, key) in ["position", "velocity", "acceleration"].iter().enumerate() {
+                if let Some(v) = t.get(*key) {
+                    let place = format!("limits[{i}].{key}");
+                    let arr = v
+                        .as_array()
+                        .filter(|a| a.len() == 2)
+                        .ok_or_else(|| bad(format!("{place}: expected [low, high]")))?;
+                    ranges[r] = Some([num(&arr[0], &place)?, num(&arr[1], &place)?]);
+                }
+            }
+            out.joint.push(Limit {
+                label: text.to_string(),
+                expr,
+                position: ranges[0],
+                velocity: ranges[1],
+                acceleration: ranges[2],
+            });
+        }
+        let frame_names = model.frame_names();
+        for (i, t) in box_tables.into_iter().enumerate() {
+            for k in t.keys() {
+                if !["frame", "min", "max"].contains(&k.as_str()) {
+                    return Err(bad(format!("cartesian_limits[{i}]: unknown key {k}")));
+                }
+            }
+            let frame = t
+                .get("frame")
+                .and_then(|v| v.as_str())
+                .ok_or_else(|| bad(format!("cartesian_limits[{i}]: missing frame")))?;
+            let place = format!("cartesian_limits[{i}] ({frame})");
+            let mut corners = [[0.0; 3]; 2];
+            for (corner, key) in corners.iter_mut().zip(["min", "max"]) {
+                let arr = t
+                    .get(key)
+                    .and_then(|v| v.as_array())
+                    .filter(|a| a.len() == 3)
+                    .ok_or_else(|| bad(format!("{place}.{key}: expected [x, y, z] (m)")))?;
+                for (c, v) in corner.iter_mut().zip(arr) {
+                    *c = num(v, &format!("{place}.{key}"))?;
+                }
+            }
+            let limit = CartesianLimit::new(&frame_names, frame, corners[0], corners[1])
+                .map_err(|(field, m)| bad(format!("{place}.{field}: {m}")))?;
+            out.cartesian.push(limit);
+        }
+        Ok(out)
+    }
+}
+
+/// The worst (largest) limit excess on a grid; positive = violated.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Violation {
+    /// The limit: a joint limit's expression (e.g. `1.2177*(q7 - q6)`), or `frame NAME
+    /// AXIS` for a Cartesian box (e.g. `frame wrist_pitch x`).
+    pub limit: String,
+    /// `position`, `velocity` or `acceleration` (a box limits a position).
+    pub quantity: String,
+    /// Time of the worst sample, s.
+    pub time_s: f64,
+    /// Value there (rad, m, or their rates; a box: the origin's coordinate, m).
+    pub value: f64,
+    /// The bound it is compared with.
+    pub bound: f64,
+    /// `value - bound` beyond the bound (positive: violated; negative: the tightest
+    /// margin).
+    pub excess: f64,
+}
+
+/// Result of the dense feasibility check.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Feasibility {
+    pub feasible: bool,
+    /// Samples checked (whole period).
+    pub samples: usize,
+    pub rate_hz: f64,
+    /// The largest excess over all limits and samples (None: no limits).
+    pub worst: Option<Violation>,
+    /// Every violated limit (position, velocity or acceleration of one expression, or
+    /// one axis of a box) with its own worst sample, largest excess first.
+    pub violated: Vec<Violation>,
+}
+
+/// An excess up to this is rounding, not a violation (values are rad, m and rates of
+/// order 1).
+pub(crate) const TOLERANCE: f64 = 1e-9;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Quantity {
+    Position,
+    Velocity,
+    Acceleration,
+}
+
+impl Quantity {
+    pub fn name(&self) -> &'static str {
+        match self {
+            Quantity::Position => "position",
+            Quantity::Velocity => "velocity",
+            Quantity::Acceleration => "acceleration",
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub(crate) enum Source {
+    /// `offset + Σ c·(q, q̇ or q̈)[j]` (the offset only for positions).
+    Linear {
+        terms: Vec<(usize, f64)>,
+        offset: f64,
+    },
+    /// Coordinate `axis` of frame `frame`'s origin in the base frame.
+    Origin { frame: usize, axis: usize },
+}
+
+/// One bounded scalar of the motion.
+#[derive(Clone, Debug)]
+pub(crate) struct Item {
+    pub label: String,
+    pub quantity: Quantity,
+    pub source: Source,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Item {
+    /// The unit of the normalized constraint values: the range, or 1 (m) for a box axis
+    /// bounded on one side only.
+    fn scale(&self) -> f64 {
+        let r = self.hi - self.lo;
+        if r.is_finite() {
+            r.max(1e-12)
+        } else {
+            1.0
+        }
+    }
+
+    /// The bounds moved inward by `margin` of the range ([`Item::scale`] for a half-open
+    /// one).
+    pub fn shrunk(&self, margin: f64) -> (f64, f64) {
+        let m = margin * self.scale();
+        (self.lo + m, self.hi - m)
+    }
+}
+
+/// A joint position limit: the item, its terms and its offset.
+type LinearItem<'a> = (&'a Item, &'a Vec<(usize, f64)>, f64);
+
+/// The limits of one model as items, with what evaluating them needs.
+pub(crate) struct Constraints {
+    pub items: Vec<Item>,
+    /// Whether any item is a frame origin (then every sample needs forward kinematics).
+    origins: bool,
+}
+
+impl Constraints {
+    pub fn new(model: &Model, limits: &Limits) -> Result<Constraints, ExciteError> {
+        let n = model.dof();
+        let mut items = Vec::new();
+        for lim in &limits.joint {
+            if let Some(&(k, _)) = lim.expr.terms.iter().find(|(k, _)| *k >= n) {
+                return Err(ExciteError::ImpossibleLimits(format!(
+                    "limit {}: coordinate index {k} beyond the model's {n}",
+                    lim.label
+                )));
+            }
+            for (q, range) in [
+                (Quantity::Position, lim.position),
+                (Quantity::Velocity, lim.velocity),
+                (Quantity::Acceleration, lim.acceleration),
+            ] {
+                let Some([lo, hi]) = range else { continue };
+                if !(lo <= hi) {
+                    return Err(ExciteError::ImpossibleLimits(format!(
+                        "limit {}: {} range [{lo}, {hi}] is empty",
+                        lim.label,
+                        q.name()
+                    )));
+                }
+                items.push(Item {
+                    label: lim.label.clone(),
+                    quantity: q,
+                    source: Source::Linear {
+                        terms: lim.expr.terms.clone(),
+                        offset: if q == Quantity::Position {
+                            lim.expr.offset
+                        } else {
+                            0.0
+                        },
+                    },
+                    lo,
+                    hi,
+                });
+            }
+        }
+        for c in &limits.cartesian {
+            if c.frame == 0 || c.frame > model.frames.len() {
+                return Err(ExciteError::ImpossibleLimits(format!(
+                    "Cartesian limit on frame {}: index {} is not a moving frame of {}",
+                    c.frame_name, c.frame, model.name
+                )));
+            }
+            for (axis, name) in ["x", "y", "z"].iter().enumerate() {
+                let (lo, hi) = (c.min[axis], c.max[axis]);
+                if !(lo <= hi) {
+                    return Err(ExciteError::ImpossibleLimits(format!(
+                        "frame {} {name}: range [{lo}, {hi}] is empty",
+                        c.frame_name
+                    )));
+                }
+                if lo == f64::NEG_INFINITY && hi == f64::INFINITY {
+                    continue;
+                }
+                items.push(Item {
+                    label: format!("frame {} {name}", c.frame_name),
+                    quantity: Quantity::Position,
+                    source: Source::Origin {
+                        frame: c.frame,
+                        axis,
+                    },
+                    lo,
+                    hi,
+                });
+            }
+        }
+        let origins = items
+            .iter()
+            .any(|i| matches!(i.source, Source::Origin { .. }));
+        Ok(Constraints { items, origins })
+    }
+
+    pub fn len(&self) -> usize {
+        self.items.len()
+    }
+
+    /// Every item's value at one sample, into `v`; leaves `ws` at this sample's
+    /// kinematics (for [`Constraints::add_gradient`]).
+    pub fn sample(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        q: &[f64],
+        dq: &[f64],
+        ddq: &[f64],
+        v: &mut [f64],
+    ) {
+        if self.origins {
+            model.forward_kinematics(ws, q);
+        }
+        for (out, item) in v.iter_mut().zip(&self.items) {
+            *out = match &item.source {
+                Source::Linear { terms, offset } => {
+                    let src = match item.quantity {
+                        Quantity::Position => q,
+                        Quantity::Velocity => dq,
+                        Quantity::Acceleration => ddq,
+                    };
+                    offset + terms.iter().map(|&(j, c)| c * src[j]).sum::<f64>()
+                }
+                Source::Origin { frame, axis } => ws.pose(*frame).translation[*axis],
+            };
+        }
+    }
+
+    /// Adds `weight · ∂v_item/∂(q, q̇, q̈)` of one sample to its gradient slices; `ws`
+    /// must hold that sample's kinematics ([`Constraints::sample`]).
+    #[allow(clippy::too_many_arguments)]
+    fn add_gradient(
+        &self,
+        model: &Model,
+        ws: &Workspace,
+        item: usize,
+        weight: f64,
+        gq: &mut [f64],
+        gdq: &mut [f64],
+        gddq: &mut [f64],
+    ) {
+        let it = &self.items[item];
+        match &it.source {
+            Source::Linear { terms, .. } => {
+                let dst = match it.quantity {
+                    Quantity::Position => gq,
+                    Quantity::Velocity => gdq,
+                    Quantity::Acceleration => gddq,
+                };
+                for &(j, c) in terms {
+                    dst[j] += weight * c;
+                }
+            }
+            Source::Origin { frame, axis } => {
+                let jac = model.frame_jacobian(ws, *frame);
+                for (j, g) in gq.iter_mut().enumerate() {
+                    *g += weight * jac[(*axis, j)];
+                }
+            }
+        }
+    }
+
+    /// The augmented-Lagrangian term of the limits on `grid` (bounds shrunk by
+    /// `margin`): `Σ (max(0, λ + μ c)² − λ²) / (2μ)` over the normalized constraint
+    /// values `c ≤ 0`; with `λ = 0` it is the quadratic exterior penalty `μ/2 Σ max(0,
+    /// c)²`. The gradient with respect to `x` is added to `gx` when given.
+    #[allow(clippy::too_many_arguments)]
+    pub fn lagrangian(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x: &[f64],
+        grid: &Grid,
+        margin: f64,
+        lambda: &[f64],
+        mu: f64,
+        gx: Option<&mut [f64]>,
+    ) -> f64 {
+        let n = model.dof();
+        let m = self.len();
+        if m == 0 {
+            return 0.0;
+        }
+        let (q, dq, ddq) = grid.eval(x, n);
+        let want = gx.is_some();
+        let (mut gq, mut gdq, mut gddq) = if want {
+            (vec![0.0; q.len()], vec![0.0; q.len()], vec![0.0; q.len()])
+        } else {
+            (Vec::new(), Vec::new(), Vec::new())
+        };
+        let mut v = vec![0.0; m];
+        let mut total = 0.0;
+        for k in 0..grid.len() {
+            let s = k * n..(k + 1) * n;
+            self.sample(
+                model,
+                ws,
+                &q[s.clone()],
+                &dq[s.clone()],
+                &ddq[s.clone()],
+                &mut v,
+            );
+            for (i, item) in self.items.iter().enumerate() {
+                let (lo, hi) = item.shrunk(margin);
+                let sc = item.scale();
+                let idx = 2 * (k * m + i);
+                let mut dv = 0.0;
+                for (side, c) in [(0, (lo - v[i]) / sc), (1, (v[i] - hi) / sc)] {
+                    if !c.is_finite() {
+                        continue;
+                    }
+                    let l = lambda.get(idx + side).copied().unwrap_or(0.0);
+                    let t = (l + mu * c).max(0.0);
+                    if t == 0.0 && l == 0.0 {
+                        continue;
+                    }
+                    total += (t * t - l * l) / (2.0 * mu);
+                    dv += if side == 0 { -t / sc } else { t / sc };
+                }
+                if want && dv != 0.0 {
+                    let (a, b, c) = (
+                        &mut gq[s.clone()],
+                        &mut gdq[s.clone()],
+                        &mut gddq[s.clone()],
+                    );
+                    self.add_gradient(model, ws, i, dv, a, b, c);
+                }
+            }
+        }
+        if let Some(gx) = gx {
+            grid.backprop(n, &gq, &gdq, &gddq, gx);
+        }
+        total
+    }
+
+    /// Updates the multipliers after an inner minimization, `λ ← max(0, λ + μ c)`, and
+    /// returns the largest normalized violation `max(0, c)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_multipliers(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x: &[f64],
+        grid: &Grid,
+        margin: f64,
+        lambda: &mut [f64],
+        mu: f64,
+    ) -> f64 {
+        let mut worst = 0.0f64;
+        self.for_each_value(model, ws, x, grid, |k, i, v| {
+            let item = &self.items[i];
+            let (lo, hi) = item.shrunk(margin);
+            let sc = item.scale();
+            let idx = 2 * (k * self.len() + i);
+            for (side, c) in [(0, (lo - v) / sc), (1, (v - hi) / sc)] {
+                if c.is_finite() {
+                    lambda[idx + side] = (lambda[idx + side] + mu * c).max(0.0);
+                    worst = worst.max(c);
+                }
+            }
+        });
+        worst
+    }
+
+    /// Number of multipliers on a grid of `samples` instants.
+    pub fn multipliers(&self, samples: usize) -> usize {
+        2 * samples * self.len()
+    }
+
+    /// Calls `f(sample, item, value)` for every item at every sample of `grid`.
+    fn for_each_value(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x: &[f64],
+        grid: &Grid,
+        mut f: impl FnMut(usize, usize, f64),
+    ) {
+        let n = model.dof();
+        let m = self.len();
+        if m == 0 {
+            return;
+        }
+        let (q, dq, ddq) = grid.eval(x, n);
+        let mut v = vec![0.0; m];
+        for k in 0..grid.len() {
+            let s = k * n..(k + 1) * n;
+            self.sample(model, ws, &q[s.clone()], &dq[s.clone()], &ddq[s], &mut v);
+            for (i, &vi) in v.iter().enumerate() {
+                f(k, i, vi);
+            }
+        }
+    }
+
+    /// The largest excess of the position items' bounds shrunk by `margin` at a static
+    /// pose `q` (≤ 0: inside), in units of each range, with the worst item.
+    fn static_excess(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        q: &[f64],
+        margin: f64,
+    ) -> (f64, usize) {
+        let zeros = vec![0.0; q.len()];
+        let mut v = vec![0.0; self.len()];
+        self.sample(model, ws, q, &zeros, &zeros, &mut v);
+        let mut worst = (f64::NEG_INFINITY, 0);
+        for (i, item) in self.items.iter().enumerate() {
+            if item.quantity != Quantity::Position {
+                continue;
+            }
+            let (lo, hi) = item.shrunk(margin);
+            let e = ((v[i] - hi).max(lo - v[i])) / item.scale();
+            if e > worst.0 {
+                worst = (e, i);
+            }
+        }
+        worst
+    }
+
+    /// Whether every item holds on `grid` (bounds shrunk by `margin`).
+    fn holds(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x: &[f64],
+        grid: &Grid,
+        margin: f64,
+    ) -> bool {
+        let mut ok = true;
+        self.for_each_value(model, ws, x, grid, |_, i, v| {
+            let (lo, hi) = self.items[i].shrunk(margin);
+            ok &= lo <= v && v <= hi;
+        });
+        ok
+    }
+
+    /// The largest `s ≥ 0` such that `x0 + s (x1 − x0)` satisfies every item on `grid`
+    /// (bounds shrunk by `margin`), assuming `x0` does; `inf` when unbounded. Exact for
+    /// the joint limits (linear in `s`); with Cartesian boxes, the segment is bisected
+    /// against the grid, which finds a feasible point (not always the farthest: a box
+    /// may be left and re-entered along the segment).
+    #[allow(clippy::too_many_arguments)]
+    pub fn feasible_step(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x0: &[f64],
+        x1: &[f64],
+        grid: &Grid,
+        margin: f64,
+    ) -> f64 {
+        let n = model.dof();
+        let (q0, dq0, ddq0) = grid.eval(x0, n);
+        let (q1, dq1, ddq1) = grid.eval(x1, n);
+        let mut s = f64::INFINITY;
+        for item in &self.items {
+            let Source::Linear { terms, offset } = &item.source else {
+                continue;
+            };
+            let (a, b) = match item.quantity {
+                Quantity::Position => (&q0, &q1),
+                Quantity::Velocity => (&dq0, &dq1),
+                Quantity::Acceleration => (&ddq0, &ddq1),
+            };
+            let (lo, hi) = item.shrunk(margin);
+            for k in 0..grid.len() {
+                let at = |src: &[f64]| {
+                    offset + terms.iter().map(|&(j, c)| c * src[k * n + j]).sum::<f64>()
+                };
+                let (v0, v1) = (at(a), at(b));
+                let d = v1 - v0;
+                if d > 0.0 {
+                    s = s.min(((hi - v0) / d).max(0.0));
+                } else if d < 0.0 {
+                    s = s.min(((lo - v0) / d).max(0.0));
+                }
+            }
+        }
+        if !self.origins {
+            return s;
+        }
+        let mut point = vec![0.0; x0.len()];
+        let mut holds_at = |s: f64, ws: &mut Workspace| {
+            for (p, (a, b)) in point.iter_mut().zip(x0.iter().zip(x1)) {
+                *p = a + s * (b - a);
+            }
+            self.holds(model, ws, &point, grid, margin)
+        };
+        // Bracket [lo feasible, hi infeasible], then bisect.
+        let (mut lo, mut hi) = if s.is_finite() {
+            if holds_at(s, ws) {
+                return s;
+            }
+            (0.0, s)
+        } else {
+            let mut t = 1.0;
+            loop {
+                if !holds_at(t, ws) {
+                    break (t / 2.0, t);
+                }
+                if t >= 1024.0 {
+                    return f64::INFINITY;
+                }
+                t *= 2.0;
+            }
+        };
+        if lo > 0.0 && !holds_at(lo, ws) {
+            lo = 0.0;
+        }
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if holds_at(mid, ws) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    }
+
+    /// The dense check: every item at every sample of `grid` (no margin).
+    pub fn check(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        x: &[f64],
+        grid: &Grid,
+        rate_hz: f64,
+    ) -> Feasibility {
+        let mut per_item: Vec<Option<Violation>> = vec![None; self.len()];
+        self.for_each_value(model, ws, x, grid, |k, i, v| {
+            let item = &self.items[i];
+            let (excess, bound) = if v - item.hi >= item.lo - v {
+                (v - item.hi, item.hi)
+            } else {
+                (item.lo - v, item.lo)
+            };
+            let slot = &mut per_item[i];
+            if slot.as_ref().is_none_or(|w| excess > w.excess) {
+                *slot = Some(Violation {
+                    limit: item.label.clone(),
+                    quantity: item.quantity.name().into(),
+                    time_s: grid.times[k],
+                    value: v,
+                    bound,
+                    excess,
+                });
+            }
+        });
+        let mut all: Vec<Violation> = per_item.into_iter().flatten().collect();
+        all.sort_by(|a, b| b.excess.total_cmp(&a.excess));
+        let worst = all.first().cloned();
+        Feasibility {
+            feasible: worst.as_ref().is_none_or(|w| w.excess <= TOLERANCE),
+            samples: grid.len(),
+            rate_hz: rate_hz.max(1000.0),
+            worst,
+            violated: all.into_iter().filter(|v| v.excess > TOLERANCE).collect(),
+        }
+    }
+
+    /// A static pose inside every position item (bounds shrunk by `margin` of each
+    /// range); rate limits must allow 0, since a periodic motion's mean velocity and
+    /// acceleration are 0. Joint limits alone: cyclic projections onto their slabs.
+    /// With Cartesian boxes, that pose is then moved by L-BFGS on the squared excesses
+    /// (through the frame Jacobians), from it and from deterministic random poses; no
+    /// pose found is an error naming the closest miss.
+    pub fn static_pose(&self, model: &Model, margin: f64) -> Result<Vec<f64>, ExciteError> {
+        let n = model.dof();
+        for r in &self.items {
+            if r.quantity != Quantity::Position && !(r.lo <= 0.0 && 0.0 <= r.hi) {
+                return Err(ExciteError::ImpossibleLimits(format!(
+                    "limit {}: the {} range [{}, {}] excludes 0, but a periodic motion's mean {} is 0",
+                    r.label,
+                    r.quantity.name(),
+                    r.lo,
+                    r.hi,
+                    r.quantity.name()
+                )));
+            }
+        }
+        let q = self.linear_static_pose(n, margin)?;
+        if !self.origins {
+            return Ok(q);
+        }
+        let mut ws = Workspace::new(model);
+        if self.static_excess(model, &mut ws, &q, margin).0 <= 0.0 {
+            return Ok(q);
+        }
+        // Aim a little inside the margin so that a converged pose is strictly inside.
+        let aim = margin + 0.01;
+        let mut rng = super::optimize::Rng(0x5eed);
+        let mut best = (f64::INFINITY, q.clone(), 0usize);
+        for attempt in 0..24 {
+            let mut p = q.clone();
+            if attempt > 0 {
+                p.iter_mut().for_each(|v| *v += rng.normal());
+            }
+            let mut f = |p: &[f64], g: &mut [f64]| -> f64 {
+                self.static_penalty(model, &mut ws, p, aim, g)
+            };
+            super::optimize::lbfgs(&mut f, &mut p, 300);
+            let (e, i) = self.static_excess(model, &mut ws, &p, margin);
+            if e <= 0.0 {
+                return Ok(p);
+            }
+            if e < best.0 {
+                best = (e, p, i);
+            }
+        }
+        let item = &self.items[best.2];
+        let mut v = vec![0.0; self.len()];
+        let zeros = vec![0.0; n];
+        self.sample(model, &mut ws, &best.1, &zeros, &zeros, &mut v);
+        Err(ExciteError::ImpossibleLimits(format!(
+            "no static pose satisfies the position limits and Cartesian boxes at once; the \
+             closest pose found has {} = {:.6} outside [{}, {}]",
+            item.label, v[best.2], item.lo, item.hi
+        )))
+    }
+
+    /// `Σ max(0, c)²` of the position items at a static pose `q` (bounds shrunk by
+    /// `margin`), gradient into `g`.
+    fn static_penalty(
+        &self,
+        model: &Model,
+        ws: &mut Workspace,
+        q: &[f64],
+        margin: f64,
+        g: &mut [f64],
+    ) -> f64 {
+        let n = q.len();
+        let zeros = vec![0.0; n];
+        let mut v = vec![0.0; self.len()];
+        self.sample(model, ws, q, &zeros, &zeros, &mut v);
+        g.fill(0.0);
+        let (mut gdq, mut gddq) = (vec![0.0; n], vec![0.0; n]);
+        let mut total = 0.0;
+        for (i, item) in self.items.iter().enumerate() {
+            if item.quantity != Quantity::Position {
+                continue;
+            }
+            let (lo, hi) = item.shrunk(margin);
+            let sc = item.scale();
+            let e = if v[i] > hi {
+                (v[i] - hi) / sc
+            } else if v[i] < lo {
+                (v[i] - lo) / sc
+            } else {
+                continue;
+            };
+            total += e * e;
+            self.add_gradient(model, ws, i, 2.0 * e / sc, g, &mut gdq, &mut gddq);
+        }
+        total
+    }
+
+    /// The joint position limits' static pose: cyclic projections onto the slabs, with a
+    /// large margin first so that the pose is central when the limits allow it.
+    fn linear_static_pose(&self, n: usize, margin: f64) -> Result<Vec<f64>, ExciteError> {
+        let pos: Vec<LinearItem> = self
+            .items
+            .iter()
+            .filter(|r| r.quantity == Quantity::Position)
+            .filter_map(|r| match &r.source {
+                Source::Linear { terms, offset } => Some((r, terms, *offset)),
+                Source::Origin { .. } => None,
+            })
+            .collect();
+        let worst = |q: &[f64], margin: f64| {
+            pos.iter()
+                .map(|(r, terms, offset)| {
+                    let (lo, hi) = r.shrunk(margin);
+                    let v = offset + terms.iter().map(|&(k, c)| c * q[k]).sum::<f64>();
+                    (v - hi).max(lo - v)
+                })
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
+        for m in [0.2f64, 0.05, 0.0] {
+            let m = m.max(margin);
+            let mut q = vec![0.0; n];
+            for _sweep in 0..20_000 {
+                for (r, terms, offset) in &pos {
+                    let (lo, hi) = r.shrunk(m);
+                    let v = offset + terms.iter().map(|&(k, c)| c * q[k]).sum::<f64>();
+                    let target = v.clamp(lo, hi);
+                    let nn: f64 = terms.iter().map(|&(_, c)| c * c).sum();
+                    if target != v && nn > 0.0 {
+                        for &(k, c) in terms.iter() {
+                            q[k] += c * (target - v) / nn;
+                        }
+                    }
+                }
+                if pos.is_empty() || worst(&q, m) <= 1e-12 {
+                    break;
+                }
+            }
+            if pos.is_empty() || worst(&q, margin) <= 0.0 {
+                return Ok(q);
+            }
+        }
+        let bad: Vec<String> = pos
+            .iter()
+            .filter(|(r, terms, offset)| terms.is_empty() && !(r.lo <= *offset && *offset <= r.hi))
+            .map(|(r, _, _)| r.label.clone())
+            .collect();
+        Err(ExciteError::ImpossibleLimits(if bad.is_empty() {
+            "no pose satisfies all position limits at once".to_string()
+        } else {
+            format!("constant limits out of range: {}", bad.join(", "))
+        }))
+    }
+}
