@@ -81,6 +81,11 @@ class Robot:
     def frame_names(self) -> List[str]:
         """Frame names, base first (the frame axis of ``forward_kinematics``)."""
     @property
+    def limits(self) -> Dict[str, Any]:
+        """The description's excitation limits in the layout of a limits file:
+        ``{"limits": [...], "cartesian_limits": [...]}``; edit a copy and pass it to
+        :func:`excite` as ``limits=``."""
+    @property
     def gravity_vector(self) -> FloatArray:
         """Gravity in the base frame, m/s², ``(3,)``."""
     @property
@@ -324,3 +329,110 @@ def prepare(
     settings: Optional[Mapping[str, Any]] = None,
 ) -> Prepared:
     """The processed samples the estimators see."""
+
+#: Limits of an excitation: None (the robot description's), a limits file (TOML with
+#: ``[[limits]]`` and ``[[cartesian_limits]]`` tables) or a dict in that layout.
+LimitsArg = Optional[Union[PathLike, Mapping[str, Any]]]
+
+class Trajectory:
+    """A periodic Fourier excitation trajectory per model coordinate (the JSON of
+    ``dvrk-ident excite``): ``q_j(t) = q0_j + Σ_l (a_jl sin(l w t) − b_jl cos(l w t))
+    / (l w)``, ``w = 2π f0``."""
+
+    def __init__(
+        self,
+        order: int,
+        base_frequency_hz: float,
+        q0: ArrayLike,
+        a: ArrayLike,
+        b: ArrayLike,
+        coordinates: Optional[Sequence[str]] = None,
+    ) -> None: ...
+    @staticmethod
+    def read(path: PathLike, pick: Optional[str] = None) -> "Trajectory":
+        """A trajectory JSON file, or with ``pick`` one trajectory of a 2019-layout
+        coefficient file."""
+    @staticmethod
+    def from_json(text: str, source: str = "<string>") -> "Trajectory": ...
+    @staticmethod
+    def wpi2019_names(path: PathLike) -> List[str]: ...
+    @property
+    def order(self) -> int: ...
+    @property
+    def base_frequency_hz(self) -> float: ...
+    @property
+    def period(self) -> float:
+        """``1 / f0``, s."""
+    @property
+    def dof(self) -> int: ...
+    @property
+    def q0(self) -> FloatArray:
+        """``(dof,)``, rad or m."""
+    @property
+    def a(self) -> FloatArray:
+        """``(dof, order)``, rad/s or m/s."""
+    @property
+    def b(self) -> FloatArray:
+        """``(dof, order)``, rad/s or m/s."""
+    @property
+    def coordinates(self) -> List[str]: ...
+    def sample(self, time: ArrayLike) -> "tuple[FloatArray, FloatArray, FloatArray]":
+        """``(q, dq, ddq)``, each ``(N, dof)``, at the times (s)."""
+    def setpoints(self, robot: Robot, rate: float = 200.0) -> "tuple[FloatArray, FloatArray]":
+        """One period at ``rate`` Hz in measured joint space: ``(time (N,), q (N, m))``."""
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def write(self, path: PathLike) -> None: ...
+
+class Excitation:
+    """An optimized trajectory with its criterion and dense feasibility check."""
+
+    @property
+    def trajectory(self) -> Trajectory: ...
+    @property
+    def criterion(self) -> Dict[str, Any]:
+        """``{"name": "condition" | "log_det", "value": float}``."""
+    @property
+    def feasible(self) -> bool: ...
+    @property
+    def feasibility(self) -> Dict[str, Any]:
+        """``{feasible, samples, rate_hz, worst, violated}``."""
+    @property
+    def starts(self) -> List[Optional[float]]: ...
+    def to_json(self) -> str: ...
+    def to_dict(self) -> Dict[str, Any]: ...
+    def write(self, path: PathLike) -> None: ...
+
+def excite(
+    robot: Robot,
+    order: int = 6,
+    f0: float = 0.18,
+    *,
+    limits: LimitsArg = None,
+    criterion: str = "condition",
+    seed: int = 0,
+    starts: int = 8,
+    refine: int = 3,
+    iterations: int = 110,
+    refine_iterations: int = 180,
+    samples_per_harmonic: int = 15,
+    rest: bool = False,
+    smooth: bool = True,
+    init: Optional[Trajectory] = None,
+    check_rate: float = 1000.0,
+) -> Excitation:
+    """Optimizes an excitation trajectory (``dvrk-ident excite``): condition number
+    (or ``"log_det"``) of the base regressor under the limits; raises ``SolverError``
+    when no feasible trajectory is found, ``InputError`` for impossible limits."""
+
+def evaluate_trajectory(
+    robot: Robot,
+    trajectory: Trajectory,
+    *,
+    limits: LimitsArg = None,
+    criterion: str = "condition",
+    samples_per_harmonic: int = 15,
+    check_rate: float = 1000.0,
+) -> Dict[str, Any]:
+    """``dvrk-ident excite --evaluate --json``: ``{criterion, feasible,
+    worst_violation, violated, check_samples, check_rate_hz}``."""

@@ -51,10 +51,12 @@ def test_stubs_match_the_module():
 
 def test_docstrings():
     for name in ("Robot", "Data", "Result", "BaseParameters", "Prepared", "fit", "read_log",
-                 "prepare", "list_topics"):
+                 "prepare", "list_topics", "Trajectory", "Excitation", "excite",
+                 "evaluate_trajectory"):
         assert inspect.getdoc(getattr(di, name)), name
     for name in ("regressor", "inverse_dynamics", "mass_matrix", "forward_kinematics", "base"):
         assert inspect.getdoc(getattr(di.Robot, name)), name
     assert "Example" in di.fit.__doc__ and "Example" in di.Robot.__doc__
+    assert "Example" in di.excite.__doc__ and "Example" in di.Trajectory.__doc__
     assert "predict" in di.Result.__doc__ or di.Result.predict.__doc__
     assert "prepare(data).time" in di.Result.predict.__doc__

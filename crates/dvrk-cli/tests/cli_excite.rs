@@ -100,33 +100,11 @@ fn bad_plot_path_is_an_error_naming_it() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A planar 2-link arm with a tip frame (the excitation tests' arm).
-const ARM: &str = r#"
-name = "two_link"
-convention = "modified"
-coordinates = ["q1", "q2"]
-gravity = [0.0, -9.81, 0.0]
-
-[[frames]]
-name = "upper"
-parent = "base"
-theta = "q1"
-inertia = true
-friction = true
-
-[[frames]]
-name = "lower"
-parent = "upper"
-a = 0.3
-theta = "q2 - q1"
-inertia = true
-friction = true
-
-[[frames]]
-name = "tip"
-parent = "lower"
-a = 0.25
-"#;
+/// The planar 2-link arm with a `tip` frame of the excitation tests.
+const ARM: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/two_link_tip.toml"
+));
 
 #[test]
 fn limits_file_with_a_cartesian_box() {

@@ -1,7 +1,7 @@
 //! Excitation optimizer (`excite::optimize`): the criterion's and the limit penalty's
 //! gradients against finite differences, limit handling on a small planar 2-link arm
 //! (dense-grid feasibility, rest at the ends, Cartesian boxes on the tip, impossible
-//! limits are errors), limits files, setpoint CSV; and (ignored: release only) the
+//! limits are errors), limits files, setpoint CSV; and (release builds only) the
 //! PSM/MTM comparison with the 2019 trajectories.
 
 use dvrk_ident::excite::optimize::{
@@ -12,45 +12,12 @@ use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::progress::Silent;
 use dvrk_model::Model;
 
-const ARM: &str = r#"
-name = "two_link"
-convention = "modified"
-coordinates = ["q1", "q2"]
-gravity = [0.0, -9.81, 0.0]
-
-[constants]
-l1 = 0.3
-
-[measured]
-joints = ["shoulder", "elbow"]
-coupling = [[1.0, 0.0], [-1.0, 1.0]]
-
-[[frames]]
-name = "upper"
-parent = "base"
-theta = "q1"
-inertia = true
-friction = true
-
-[[frames]]
-name = "lower"
-parent = "upper"
-a = "l1"
-theta = "q2 - q1"
-inertia = true
-friction = true
-
-[[limits]]
-expr = "q1"
-position = [-1.0, 1.2]
-velocity = [-1.5, 1.5]
-acceleration = [-4.0, 4.0]
-
-[[limits]]
-expr = "q2 - q1"
-position = [0.2, 1.6]
-velocity = [-2.0, 2.0]
-"#;
+/// The planar 2-link arm with a massless `tip` frame and joint limits, shared with the
+/// CLI and Python tests.
+const ARM: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/two_link_tip.toml"
+));
 
 fn arm() -> Model {
     Model::from_toml_str(ARM, "two_link.toml").expect("valid arm")
@@ -196,6 +163,22 @@ fn criterion_gradient_matches_finite_differences_psm() {
     check_gradient(&model, &traj, Criterion::Condition, 30.0, 0.01);
 }
 
+/// Independent re-check of the arm's limits at 20 kHz (between the samples of the
+/// optimizer's 1 kHz dense grid), with the trajectory's own evaluation.
+fn assert_arm_limits_hold(t: &FourierTrajectory) {
+    let (mut q, mut dq, mut ddq) = ([0.0; 2], [0.0; 2], [0.0; 2]);
+    let count = (20_000.0 * t.period_s()) as usize;
+    for k in 0..count {
+        t.eval(k as f64 / 20_000.0, &mut q, &mut dq, &mut ddq);
+        assert!((-1.0 - 1e-9..=1.2 + 1e-9).contains(&q[0]), "q1 {}", q[0]);
+        assert!(dq[0].abs() <= 1.5 + 1e-9, "dq1 {} at sample {k}", dq[0]);
+        assert!(ddq[0].abs() <= 4.0 + 1e-9, "ddq1 {} at sample {k}", ddq[0]);
+        let e = q[1] - q[0];
+        assert!((0.2 - 1e-9..=1.6 + 1e-9).contains(&e), "q2 - q1 {e}");
+        assert!((dq[1] - dq[0]).abs() <= 2.0 + 1e-9);
+    }
+}
+
 #[test]
 fn optimized_trajectory_respects_limits_on_dense_grid() {
     let model = arm();
@@ -204,18 +187,8 @@ fn optimized_trajectory_respects_limits_on_dense_grid() {
     let res = optimize::optimize(&model, &base, &Limits::of_model(&model), &o, &Silent)
         .expect("feasible");
     assert!(res.evaluation.feasibility.feasible);
-    // Independent re-check at 5 kHz, with the trajectory's own evaluation.
     let t = &res.trajectory;
-    let (mut q, mut dq, mut ddq) = ([0.0; 2], [0.0; 2], [0.0; 2]);
-    let count = (5000.0 * t.period_s()) as usize;
-    for k in 0..count {
-        t.eval(k as f64 / 5000.0, &mut q, &mut dq, &mut ddq);
-        assert!((-1.0..=1.2).contains(&q[0]), "q1 {}", q[0]);
-        assert!(dq[0].abs() <= 1.5 + 1e-9 && ddq[0].abs() <= 4.0 + 1e-9);
-        let e = q[1] - q[0];
-        assert!((0.2 - 1e-9..=1.6 + 1e-9).contains(&e), "q2 - q1 {e}");
-        assert!((dq[1] - dq[0]).abs() <= 2.0 + 1e-9);
-    }
+    assert_arm_limits_hold(t);
     // Better than a random feasible-ish start, and reported consistently.
     let crit = criterion_value(&model, &base, t, Criterion::Condition, 15).unwrap();
     assert!((crit.value - res.evaluation.criterion.value).abs() < 1e-9 * crit.value);
@@ -263,6 +236,17 @@ fn rest_option_gives_zero_rates_at_the_ends() {
     assert!(res.evaluation.feasibility.feasible);
     assert_eq!(res.evaluation.criterion.name, "log_det");
     assert!(res.evaluation.criterion.value < 0.0);
+    assert_arm_limits_hold(t);
+    // At rest with the condition criterion, the velocity limit binds between two
+    // samples of the 1 kHz grid (it exceeded 1.5 rad/s by 7.8e-7 before the
+    // between-samples slack).
+    let o = ExciteOptions {
+        rest: true,
+        ..opts(3, 0.25)
+    };
+    let res = optimize::optimize(&model, &base, &Limits::of_model(&model), &o, &Silent)
+        .expect("feasible");
+    assert_arm_limits_hold(&res.trajectory);
 }
 
 #[test]
@@ -324,15 +308,13 @@ fn setpoints_are_in_measured_space() {
     assert!((vals[1] - q[0]).abs() < 1e-8 && (vals[2] - (q[1] - q[0])).abs() < 1e-8);
 }
 
-/// The arm with a `tip` frame 0.25 m along the lower link and, in the description, a
-/// box keeping the tip below y = 0.2 m (the arm reaches y = 0.53 within its joint
-/// limits, and the centre of the joint ranges already puts the tip at y = 0.24).
+/// The arm with, in the description, a box keeping the tip below y = 0.2 m (the arm
+/// reaches y = 0.53 within its joint limits, and the centre of the joint ranges already
+/// puts the tip at y = 0.24).
 fn arm_with_tip() -> Model {
-    let text = ARM.replacen(
-        "[[limits]]",
-        "[[frames]]\nname = \"tip\"\nparent = \"lower\"\na = 0.25\n\n[[limits]]",
-        1,
-    ) + "\n[[cartesian_limits]]\nframe = \"tip\"\nmin = [-1.0, -1.0, -1.0]\nmax = [1.0, 0.2, 1.0]\n";
+    let text = format!(
+        "{ARM}\n[[cartesian_limits]]\nframe = \"tip\"\nmin = [-1.0, -1.0, -1.0]\nmax = [1.0, 0.2, 1.0]\n"
+    );
     Model::from_toml_str(&text, "two_link_tip.toml").expect("valid arm")
 }
 
@@ -528,17 +510,26 @@ fn evaluate_reports_a_trajectory_leaving_the_box() {
     }
 }
 
-const WPI2019: &str = "/work/shared/anchors/wpi2019_excitation_trajectories.json";
+/// The 2019 coefficient file, beside the repository (`../shared`).
+const WPI2019: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../../shared/anchors/wpi2019_excitation_trajectories.json"
+);
 
-/// Release only (`cargo test --release -p dvrk-ident --test excite_optimize -- --ignored
-/// --nocapture`): ours (default settings, seed 0) vs the 2019 trajectories, both on the
-/// same criterion grid and dense check. Ours must be feasible, no worse than the 2019
-/// trajectory as published (which violates limits), and take under 2 minutes.
+/// Ours (default settings, seed 0) vs the 2019 trajectories, both on the same criterion
+/// grid and dense check: ours must be feasible and no worse than the 2019 trajectory as
+/// published (which violates limits). Release builds only (about a minute; a debug
+/// build would take tens of minutes): `cargo test --release -p dvrk-ident --test
+/// excite_optimize -- --nocapture` prints the numbers. The runtime goal (under 2
+/// minutes each) is measured by `cargo bench -p dvrk-ident --bench excite`.
 #[test]
-#[ignore]
 fn acceptance_psm_and_mtm_vs_2019() {
+    if cfg!(debug_assertions) {
+        eprintln!("SKIPPED: the PSM/MTM optimizations run in release builds only");
+        return;
+    }
     let Ok(names) = FourierTrajectory::wpi2019_names(WPI2019) else {
-        eprintln!("SKIPPED: {WPI2019} not available");
+        eprintln!("SKIPPED: {WPI2019} not found (../shared absent)");
         return;
     };
     assert!(names.contains(&"mtm_one".to_string()));
@@ -615,6 +606,41 @@ fn acceptance_psm_and_mtm_vs_2019() {
             "{robot}: {ours} is worse than the 2019 {pick} ({})",
             ev_old.criterion.value
         );
-        assert!(secs < 120.0, "{robot}: {secs} s");
     }
+}
+
+/// Limits written in the file layout read back to the same limits: the built-in arms,
+/// and a box plus a limit whose label uses a description constant (`l1`, unknown to a
+/// limits file, so the affine function is written out instead).
+#[test]
+fn limits_round_trip_through_the_file_layout() {
+    let with_constant = {
+        let text = format!(
+            "{ARM}\n[[limits]]\nexpr = \"2*q1 - l1\"\nposition = [-1.5, 1.5]\n\n\
+             [[cartesian_limits]]\nframe = \"tip\"\nmin = [-1.0, -inf, -1.0]\nmax = [1.0, 0.2, inf]\n"
+        );
+        Model::from_toml_str(&text, "two_link_tip.toml").unwrap()
+    };
+    let models = ["psm", "psm_simplified", "mtm"]
+        .map(|name| Model::builtin(name).unwrap())
+        .into_iter()
+        .chain([with_constant]);
+    for model in models {
+        let limits = Limits::of_model(&model);
+        let text = toml::to_string(&limits.to_toml_table(&model)).unwrap();
+        let back = Limits::from_toml_str(&model, &text, "written.toml")
+            .unwrap_or_else(|e| panic!("{}: {e}\n{text}", model.name));
+        assert_eq!(back.joint.len(), limits.joint.len());
+        for (a, b) in back.joint.iter().zip(&limits.joint) {
+            assert_eq!(a.expr, b.expr, "{}: {}", model.name, b.label);
+            assert_eq!(
+                (a.position, a.velocity, a.acceleration),
+                (b.position, b.velocity, b.acceleration)
+            );
+        }
+        assert_eq!(back.cartesian, limits.cartesian);
+    }
+    let model = Model::builtin("psm").unwrap();
+    let text = toml::to_string(&Limits::of_model(&model).to_toml_table(&model)).unwrap();
+    assert!(text.contains("expr = \"1.2177*(q7 - q6)\""), "{text}");
 }

@@ -159,6 +159,11 @@ fn io_kind(e: &std::io::Error) -> Kind {
     }
 }
 
+/// A file that cannot be read: `DvrkFileNotFoundError` or `DvrkIOError`, naming it.
+pub fn from_io(path: &std::path::Path, e: &std::io::Error) -> PyErr {
+    error(io_kind(e), format!("{}: {e}", path.display()))
+}
+
 pub fn model_kind(e: &ModelError) -> Kind {
     match e {
         ModelError::Io { source, .. } => io_kind(source),

@@ -14,7 +14,7 @@ use pyo3::types::PyDict;
 
 use crate::convert::{array, background, matrix, py_bool, py_str};
 use crate::data::{fail_ident, DataPy, PreparedPy};
-use crate::errors::{error, from_ident, from_model, input, Kind};
+use crate::errors::{error, from_ident, from_io, from_model, input, Kind};
 use crate::json::{from_python, to_python};
 use crate::robot::Robot;
 
@@ -327,14 +327,7 @@ impl FitResultPy {
     #[staticmethod]
     #[pyo3(signature = (path, robot = None))]
     fn read(path: PathBuf, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path).map_err(|e| {
-            let kind = if e.kind() == std::io::ErrorKind::NotFound {
-                Kind::NotFound
-            } else {
-                Kind::Io
-            };
-            error(kind, format!("{}: {e}", path.display()))
-        })?;
+        let text = std::fs::read_to_string(&path).map_err(|e| from_io(&path, &e))?;
         let inner = FitResult::from_json(&text, &path.display().to_string())
             .map_err(|e| input(e.to_string()))?;
         Ok(with_robot(inner, robot))

@@ -9,6 +9,7 @@
 mod convert;
 mod data;
 mod errors;
+mod excite;
 mod fit;
 mod json;
 mod robot;
@@ -17,7 +18,7 @@ use pyo3::prelude::*;
 
 /// Dynamic parameter identification for robot arms (dVRK PSM/MTM, DH and URDF
 /// robots): models, regressors and dynamics over numpy arrays, log reading, and the
-/// fit of ``dvrk-ident fit``.
+/// fit of ``dvrk-ident fit``, and the excitation trajectories of ``dvrk-ident excite``.
 ///
 /// Example::
 ///
@@ -38,6 +39,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::fit::{fit, prepare, FitResultPy};
+
+    #[pymodule_export]
+    use crate::excite::{evaluate_trajectory, excite, ExcitationPy, TrajectoryPy};
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

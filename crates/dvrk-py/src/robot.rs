@@ -249,6 +249,17 @@ impl Robot {
         self.model.frame_names()
     }
 
+    /// The description's excitation limits as a dict in the layout of a limits file:
+    /// ``{"limits": [{"expr", "position", "velocity", "acceleration"}, ...],
+    /// "cartesian_limits": [{"frame", "min", "max"}, ...]}`` (rad, m and their rates;
+    /// box corners in metres, base frame). Edit a copy and pass it to
+    /// :func:`excite` as ``limits=`` (which replaces the robot's limits), e.g. to add a
+    /// box on a frame origin.
+    #[getter]
+    fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        crate::excite::limits_dict(py, &self.model)
+    }
+
     /// Gravity in the base frame, m/s², shape ``(3,)``.
     #[getter]
     fn gravity_vector<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {

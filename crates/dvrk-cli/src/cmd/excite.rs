@@ -110,14 +110,7 @@ pub struct Args {
 
 fn print_evaluation(ev: &Evaluation, json: bool) -> Result<()> {
     if json {
-        let doc = serde_json::json!({
-            "criterion": ev.criterion,
-            "feasible": ev.feasibility.feasible,
-            "worst_violation": ev.feasibility.worst,
-            "violated": ev.feasibility.violated,
-            "check_samples": ev.feasibility.samples,
-            "check_rate_hz": ev.feasibility.rate_hz,
-        });
+        let doc = ev.to_json_value();
         return emit(&serde_json::to_string_pretty(&doc)?);
     }
     let mut s = format!(

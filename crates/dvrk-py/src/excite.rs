@@ -1,0 +1,549 @@
+//! Excitation trajectories: `Trajectory` (a Fourier trajectory file), `excite` (the
+//! optimizer of `dvrk-ident excite`) and `evaluate_trajectory` (its `--evaluate`).
+
+use std::path::PathBuf;
+
+use dvrk_ident::excite::optimize::{
+    self, Criterion, Excitation, ExciteError, ExciteOptions, Limits,
+};
+use dvrk_ident::excite::{FourierError, FourierTrajectory};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::result::write_atomic;
+use dvrk_model::Model;
+use numpy::{PyArrayDyn, PyArrayMethods};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use crate::convert::{array, background, float_array, fmt_shape, matrix, vector, Failure};
+use crate::errors::{error, from_ident, from_io, input, Kind};
+use crate::json::to_python;
+use crate::robot::Robot;
+
+/// A float64 numpy array.
+type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
+
+fn excite_kind(e: &ExciteError) -> Kind {
+    match e {
+        ExciteError::Infeasible(_) => Kind::Solver,
+        ExciteError::Fourier(f) => fourier_kind(f),
+        ExciteError::ImpossibleLimits(_) | ExciteError::Invalid(_) => Kind::Input,
+    }
+}
+
+fn fourier_kind(e: &FourierError) -> Kind {
+    match e {
+        FourierError::Io { path, .. } if !std::path::Path::new(path).exists() => Kind::NotFound,
+        FourierError::Io { .. } => Kind::Io,
+        _ => Kind::Input,
+    }
+}
+
+fn fail_excite(e: ExciteError) -> Failure {
+    (excite_kind(&e), e.to_string())
+}
+
+fn from_excite(e: ExciteError) -> PyErr {
+    error(excite_kind(&e), e.to_string())
+}
+
+fn from_fourier(e: FourierError) -> PyErr {
+    error(fourier_kind(&e), e.to_string())
+}
+
+fn parse_criterion(text: &str) -> PyResult<Criterion> {
+    match text.to_ascii_lowercase().replace('-', "_").as_str() {
+        "condition" => Ok(Criterion::Condition),
+        "log_det" | "logdet" => Ok(Criterion::LogDet),
+        other => Err(input(format!(
+            "criterion: unknown criterion {other:?}: expected \"condition\" or \"log_det\""
+        ))),
+    }
+}
+
+/// A Python value of a limits dict as TOML (floats stay floats, `inf` included, which
+/// JSON could not carry).
+fn toml_value(obj: &Bound<'_, PyAny>, place: &str) -> PyResult<toml::Value> {
+    if obj.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyInt>() {
+        return Ok(toml::Value::Integer(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(obj.extract()?));
+    }
+    if obj.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(obj.extract()?));
+    }
+    if let Ok(d) = obj.cast::<PyDict>() {
+        let mut t = toml::Table::new();
+        for (k, v) in d.iter() {
+            let key: String = k
+                .extract()
+                .map_err(|_| input(format!("{place}: keys must be strings")))?;
+            let value = toml_value(&v, &format!("{place}.{key}"))?;
+            t.insert(key, value);
+        }
+        return Ok(toml::Value::Table(t));
+    }
+    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
+        let items = obj
+            .try_iter()?
+            .enumerate()
+            .map(|(i, v)| toml_value(&v?, &format!("{place}[{i}]")))
+            .collect::<PyResult<Vec<_>>>()?;
+        return Ok(toml::Value::Array(items));
+    }
+    // numpy scalars and anything else float-like.
+    obj.extract::<f64>().map(toml::Value::Float).map_err(|_| {
+        input(format!(
+            "{place}: expected a number, a string, a list or a dict, got {}",
+            obj.get_type()
+                .name()
+                .map(|n| n.to_string())
+                .unwrap_or_default()
+        ))
+    })
+}
+
+/// A TOML value as the Python object [`toml_value`] reads back (floats stay floats,
+/// infinities included).
+fn python_value<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match v {
+        toml::Value::String(s) => PyString::new(py, s).into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Float(f) => PyFloat::new(py, *f).into_any(),
+        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
+        toml::Value::Datetime(d) => PyString::new(py, &d.to_string()).into_any(),
+        toml::Value::Array(items) => PyList::new(
+            py,
+            items
+                .iter()
+                .map(|x| python_value(py, x))
+                .collect::<PyResult<Vec<_>>>()?,
+        )?
+        .into_any(),
+        toml::Value::Table(t) => {
+            let d = PyDict::new(py);
+            for (k, x) in t {
+                d.set_item(k, python_value(py, x)?)?;
+            }
+            d.into_any()
+        }
+    })
+}
+
+/// `robot`'s limits (description `[[limits]]` and `[[cartesian_limits]]`) as a dict in
+/// the layout of a limits file, which `excite(..., limits=...)` reads back to the same
+/// limits.
+pub fn limits_dict<'py>(py: Python<'py>, model: &Model) -> PyResult<Bound<'py, PyAny>> {
+    python_value(
+        py,
+        &toml::Value::Table(Limits::of_model(model).to_toml_table(model)),
+    )
+}
+
+/// The limits of `excite`/`evaluate_trajectory`: the description's (None), a limits
+/// file (a path), or a dict in the file's layout.
+fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Limits> {
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Limits::of_model(model));
+    };
+    if obj.is_instance_of::<PyDict>() {
+        let toml::Value::Table(table) = toml_value(obj, "limits")? else {
+            unreachable!("a dict converts to a table")
+        };
+        let text = toml::to_string(&table)
+            .map_err(|e| input(format!("limits: cannot be written as TOML: {e}")))?;
+        return Limits::from_toml_str(model, &text, "limits").map_err(from_excite);
+    }
+    let path: PathBuf = obj.extract().map_err(|_| {
+        input("limits: expected None (the robot's limits), a limits file path or a dict")
+    })?;
+    let text = std::fs::read_to_string(&path).map_err(|e| from_io(&path, &e))?;
+    Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_excite)
+}
+
+/// A `(rows, cols)` array-like as rows of `cols` values each.
+fn coefficient_rows(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec<f64>>> {
+    let arr = float_array(py, obj, name)?;
+    let ro = arr.readonly();
+    let view = ro.as_array();
+    let shape = view.shape().to_vec();
+    let [_, cols] = shape.as_slice() else {
+        return Err(input(format!(
+            "{name}: expected a 2-D array (coordinates, order), got shape {}",
+            fmt_shape(&shape)
+        )));
+    };
+    let data: Vec<f64> = view.iter().copied().collect();
+    Ok(data.chunks(*cols.max(&1)).map(<[f64]>::to_vec).collect())
+}
+
+/// A periodic excitation trajectory: per model coordinate ``j``, ``q_j(t) = q0_j +
+/// Σ_l (a_jl sin(l w t) − b_jl cos(l w t)) / (l w)`` with ``w = 2π f0``, ``l = 1..order``
+/// (the 2019 package's formula; ``a``, ``b`` are velocity amplitudes, rad/s or m/s).
+/// The JSON layout of ``dvrk-ident excite --out`` (``order``, ``base_frequency_hz``,
+/// ``q0``, ``a``, ``b``, optional ``coordinates``).
+///
+/// Example::
+///
+///     >>> t = di.Trajectory(order=1, base_frequency_hz=0.5, q0=[0.2], a=[[1.0]], b=[[0.0]])
+///     >>> q, dq, ddq = t.sample([0.0, 0.5])
+///     >>> dq[0, 0]
+///     1.0
+#[pyclass(name = "Trajectory", module = "dvrk_ident", frozen)]
+pub struct TrajectoryPy {
+    pub inner: FourierTrajectory,
+}
+
+#[pymethods]
+impl TrajectoryPy {
+    #[new]
+    #[pyo3(signature = (order, base_frequency_hz, q0, a, b, coordinates = None))]
+    fn py_new(
+        py: Python<'_>,
+        order: usize,
+        base_frequency_hz: f64,
+        q0: &Bound<'_, PyAny>,
+        a: &Bound<'_, PyAny>,
+        b: &Bound<'_, PyAny>,
+        coordinates: Option<Vec<String>>,
+    ) -> PyResult<Self> {
+        let inner = FourierTrajectory {
+            order,
+            base_frequency_hz,
+            q0: vector(py, q0, None, "q0", &[])?,
+            a: coefficient_rows(py, a, "a")?,
+            b: coefficient_rows(py, b, "b")?,
+            coordinates: coordinates.unwrap_or_default(),
+        };
+        inner.validate("Trajectory").map_err(from_fourier)?;
+        Ok(TrajectoryPy { inner })
+    }
+
+    /// Reads a trajectory file: the JSON of ``dvrk-ident excite`` (any file with the
+    /// five keys), or with ``pick`` the named trajectory (e.g. ``"psm_one"``) of a
+    /// 2019-layout coefficient file.
+    #[staticmethod]
+    #[pyo3(signature = (path, pick = None))]
+    fn read(path: PathBuf, pick: Option<&str>) -> PyResult<Self> {
+        let inner = match pick {
+            Some(name) => FourierTrajectory::from_wpi2019_file(&path, name),
+            None => FourierTrajectory::from_json_file(&path),
+        }
+        .map_err(from_fourier)?;
+        Ok(TrajectoryPy { inner })
+    }
+
+    /// Parses the JSON layout; ``source`` names the text in error messages.
+    #[staticmethod]
+    #[pyo3(signature = (text, source = "<string>"))]
+    fn from_json(text: &str, source: &str) -> PyResult<Self> {
+        let inner = FourierTrajectory::from_json_str(text, source).map_err(from_fourier)?;
+        Ok(TrajectoryPy { inner })
+    }
+
+    /// The trajectory names of a 2019-layout coefficient file (sorted).
+    #[staticmethod]
+    fn wpi2019_names(path: PathBuf) -> PyResult<Vec<String>> {
+        FourierTrajectory::wpi2019_names(&path).map_err(from_fourier)
+    }
+
+    /// Number of harmonics ``L``.
+    #[getter]
+    fn order(&self) -> usize {
+        self.inner.order
+    }
+
+    /// Base frequency ``f0``, Hz.
+    #[getter]
+    fn base_frequency_hz(&self) -> f64 {
+        self.inner.base_frequency_hz
+    }
+
+    /// Period ``1 / f0``, s.
+    #[getter]
+    fn period(&self) -> f64 {
+        self.inner.period_s()
+    }
+
+    /// Number of coordinates.
+    #[getter]
+    fn dof(&self) -> usize {
+        self.inner.dof()
+    }
+
+    /// Offsets, rad or m: shape ``(dof,)``.
+    #[getter]
+    fn q0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let n = self.inner.dof();
+        array(py, self.inner.q0.clone(), &[n])
+    }
+
+    /// Sine coefficients, rad/s or m/s: shape ``(dof, order)``.
+    #[getter]
+    fn a<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let (n, l) = (self.inner.dof(), self.inner.order);
+        array(py, self.inner.a.concat(), &[n, l])
+    }
+
+    /// Cosine coefficients, rad/s or m/s: shape ``(dof, order)``.
+    #[getter]
+    fn b<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
+        let (n, l) = (self.inner.dof(), self.inner.order);
+        array(py, self.inner.b.concat(), &[n, l])
+    }
+
+    /// Coordinate names (empty when the file has none).
+    #[getter]
+    fn coordinates(&self) -> Vec<String> {
+        self.inner.coordinates.clone()
+    }
+
+    /// Positions, velocities and accelerations (model coordinates: rad or m, and their
+    /// rates) at the times ``time`` (s, 1-D): three arrays of shape ``(N, dof)``.
+    fn sample<'py>(
+        &self,
+        py: Python<'py>,
+        time: &Bound<'py, PyAny>,
+    ) -> PyResult<(Array<'py>, Array<'py>, Array<'py>)> {
+        let t = vector(py, time, None, "time", &[])?;
+        let inner = &self.inner;
+        let (q, dq, ddq) = py.detach(|| inner.sample(&t));
+        Ok((matrix(py, &q), matrix(py, &dq), matrix(py, &ddq)))
+    }
+
+    /// One period of setpoints at ``rate`` Hz in ``robot``'s MEASURED joint space (what a
+    /// dVRK script plays back, the CSV of ``excite --csv``): ``(time, positions)`` with
+    /// ``time`` of shape ``(N,)`` (s, from 0) and ``positions`` ``(N,
+    /// len(robot.measured_joints))`` (rad or m).
+    #[pyo3(signature = (robot, rate = 200.0))]
+    fn setpoints<'py>(
+        &self,
+        py: Python<'py>,
+        robot: &Bound<'py, Robot>,
+        rate: f64,
+    ) -> PyResult<(Array<'py>, Array<'py>)> {
+        let model = &robot.get().model;
+        let (t, q) = optimize::setpoints(model, &self.inner, rate).map_err(from_excite)?;
+        let n = t.len();
+        Ok((array(py, t, &[n]), matrix(py, &q)))
+    }
+
+    /// The JSON document (values round-trip exactly).
+    fn to_json(&self) -> String {
+        self.inner.to_json()
+    }
+
+    /// The document as a dict.
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner)
+    }
+
+    /// Writes :meth:`to_json` to ``path`` atomically (temporary file and rename).
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let text = self.inner.to_json();
+        py.detach(move || write_atomic(&path, &text))
+            .map_err(from_ident)
+    }
+
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<TrajectoryPy>()
+            .is_ok_and(|o| o.get().inner == self.inner)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "Trajectory(order={}, base_frequency_hz={}, dof={})",
+            self.inner.order,
+            self.inner.base_frequency_hz,
+            self.inner.dof()
+        )
+    }
+}
+
+/// An optimized excitation trajectory (:func:`excite`) with its criterion and the
+/// dense feasibility check.
+#[pyclass(name = "Excitation", module = "dvrk_ident", frozen)]
+pub struct ExcitationPy {
+    inner: Excitation,
+}
+
+#[pymethods]
+impl ExcitationPy {
+    /// The optimized :class:`Trajectory`.
+    #[getter]
+    fn trajectory(&self) -> TrajectoryPy {
+        TrajectoryPy {
+            inner: self.inner.trajectory.clone(),
+        }
+    }
+
+    /// ``{"name": "condition" | "log_det", "value": float}``.
+    #[getter]
+    fn criterion<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.evaluation.criterion)
+    }
+
+    /// Always ``True``: an infeasible optimum raises ``SolverError`` instead.
+    #[getter]
+    fn feasible(&self) -> bool {
+        self.inner.evaluation.feasibility.feasible
+    }
+
+    /// The dense check (``samples``, ``rate_hz``, ``worst``: the tightest margin,
+    /// ``violated``), as in :func:`evaluate_trajectory`.
+    #[getter]
+    fn feasibility<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.evaluation.feasibility)
+    }
+
+    /// The criterion of each start's final trajectory (``None``: not refined).
+    #[getter]
+    fn starts(&self) -> Vec<Option<f64>> {
+        self.inner.starts.clone()
+    }
+
+    /// The document of ``dvrk-ident excite --out``: the trajectory keys plus
+    /// ``criterion`` and ``feasibility``.
+    fn to_json(&self) -> String {
+        serde_json::to_string_pretty(&self.inner.to_json_value()).expect("serializable")
+    }
+
+    fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.to_json_value())
+    }
+
+    /// Writes :meth:`to_json` to ``path`` atomically.
+    fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        let text = self.to_json();
+        py.detach(move || write_atomic(&path, &text))
+            .map_err(from_ident)
+    }
+
+    fn __repr__(&self) -> String {
+        let c = &self.inner.evaluation.criterion;
+        format!(
+            "Excitation({}={:.6}, order={}, base_frequency_hz={})",
+            c.name, c.value, self.inner.trajectory.order, self.inner.trajectory.base_frequency_hz
+        )
+    }
+}
+
+/// Optimizes an excitation trajectory for ``robot``: ``dvrk-ident excite`` (same
+/// options and defaults, same result for the same seed).
+///
+/// Minimizes the condition number of the column-normalized base regressor over one
+/// period (``criterion="log_det"``: maximizes its log-determinant) subject to the
+/// limits: ``None`` (the robot description's ``[[limits]]`` and
+/// ``[[cartesian_limits]]``), a limits file path, or a dict in that file's layout, e.g.
+/// ``{"limits": [{"expr": "q1", "position": [-1, 1], "velocity": [-2, 2]}],
+/// "cartesian_limits": [{"frame": "tip", "min": [-1, -1, 0.1], "max": [1, 1, 1]}]}``
+/// (box corners in metres, base frame; ``float("inf")`` leaves a side open). A file
+/// or dict replaces the robot's limits: start from a copy of :attr:`Robot.limits` to
+/// add to them.
+/// ``rest=True``: zero velocity and acceleration at the start and end of the period.
+/// ``init``: a :class:`Trajectory` (same order and base frequency) refined by the
+/// first start. Deterministic for a ``seed``.
+///
+/// The result passed the dense check (``check_rate`` Hz, at least 1 kHz); when no
+/// start gives a feasible trajectory, ``SolverError`` is raised; limits that admit no
+/// motion raise ``InputError``. Runs without the GIL; Ctrl-C raises
+/// ``KeyboardInterrupt`` (the optimization finishes in the background, discarded).
+///
+/// Example::
+///
+///     >>> ex = di.excite(di.Robot.load("psm_simplified"), order=6, f0=0.18, seed=0)
+///     >>> ex.criterion["value"], ex.feasible
+///     >>> ex.trajectory.write("traj.json")
+#[pyfunction]
+#[pyo3(signature = (robot, order = 6, f0 = 0.18, *, limits = None, criterion = "condition", seed = 0, starts = 8, refine = 3, iterations = 110, refine_iterations = 180, samples_per_harmonic = 15, rest = false, smooth = true, init = None, check_rate = 1000.0))]
+#[allow(clippy::too_many_arguments)]
+pub fn excite(
+    py: Python<'_>,
+    robot: &Bound<'_, Robot>,
+    order: usize,
+    f0: f64,
+    limits: Option<&Bound<'_, PyAny>>,
+    criterion: &str,
+    seed: u64,
+    starts: usize,
+    refine: usize,
+    iterations: usize,
+    refine_iterations: usize,
+    samples_per_harmonic: usize,
+    rest: bool,
+    smooth: bool,
+    init: Option<&Bound<'_, TrajectoryPy>>,
+    check_rate: f64,
+) -> PyResult<ExcitationPy> {
+    let model = robot.get().model.clone();
+    let base = robot.get().base_parameters(py)?;
+    let limits = limits_of(&model, limits)?;
+    let opts = ExciteOptions {
+        order,
+        base_frequency_hz: f0,
+        criterion: parse_criterion(criterion)?,
+        samples_per_harmonic,
+        starts,
+        refine,
+        seed,
+        iterations_per_stage: iterations,
+        refine_iterations_per_stage: refine_iterations,
+        rest,
+        smooth,
+        init: init.map(|t| t.get().inner.clone()),
+        check_rate_hz: check_rate,
+        ..ExciteOptions::default()
+    };
+    let inner = background(py, move || {
+        optimize::optimize(&model, &base, &limits, &opts, &Silent).map_err(fail_excite)
+    })?;
+    Ok(ExcitationPy { inner })
+}
+
+/// Evaluates any trajectory against ``robot``: ``dvrk-ident excite --evaluate --json``.
+/// Returns ``{"criterion": {"name", "value"}, "feasible", "worst_violation",
+/// "violated", "check_samples", "check_rate_hz"}``; ``worst_violation`` is the largest
+/// excess over every limit and sample of the dense check (``limit``, ``quantity``,
+/// ``time_s``, ``value``, ``bound``, ``excess``; a negative excess is the tightest
+/// margin), ``violated`` lists every violated limit, worst first. ``limits`` as in
+/// :func:`excite`.
+///
+/// Example::
+///
+///     >>> old = di.Trajectory.read("wpi2019_excitation_trajectories.json", pick="psm_one")
+///     >>> di.evaluate_trajectory(di.Robot.load("psm_simplified"), old)["feasible"]
+///     False
+#[pyfunction]
+#[pyo3(signature = (robot, trajectory, *, limits = None, criterion = "condition", samples_per_harmonic = 15, check_rate = 1000.0))]
+pub fn evaluate_trajectory<'py>(
+    py: Python<'py>,
+    robot: &Bound<'py, Robot>,
+    trajectory: &Bound<'py, TrajectoryPy>,
+    limits: Option<&Bound<'py, PyAny>>,
+    criterion: &str,
+    samples_per_harmonic: usize,
+    check_rate: f64,
+) -> PyResult<Bound<'py, PyAny>> {
+    let model = robot.get().model.clone();
+    let base = robot.get().base_parameters(py)?;
+    let limits = limits_of(&model, limits)?;
+    let criterion = parse_criterion(criterion)?;
+    let traj = trajectory.get().inner.clone();
+    let ev = background(py, move || {
+        optimize::evaluate(
+            &model,
+            &base,
+            &traj,
+            &limits,
+            criterion,
+            samples_per_harmonic,
+            check_rate,
+        )
+        .map_err(fail_excite)
+    })?;
+    to_python(py, &ev.to_json_value())
+}
