@@ -644,3 +644,38 @@ fn limits_round_trip_through_the_file_layout() {
     let text = toml::to_string(&Limits::of_model(&model).to_toml_table(&model)).unwrap();
     assert!(text.contains("expr = \"1.2177*(q7 - q6)\""), "{text}");
 }
+
+/// A limit may name measured joints: on the arm, `elbow = q2 − q1` (coupling row
+/// `[-1, 1]`), in a limits file and in a description alike; on the PSM, `jaw` is the
+/// description's `1.2177*(q7 - q6)`.
+#[test]
+fn limits_on_measured_joints() {
+    let model = arm();
+    let file = "[[limits]]\nexpr = \"elbow\"\nposition = [0.2, 1.6]\n\n\
+                [[limits]]\nexpr = \"2*shoulder + elbow - q2\"\nvelocity = [-1, 1]\n";
+    let limits = Limits::from_toml_str(&model, file, "measured.toml").unwrap();
+    assert_eq!(limits.joint[0].expr, model.limits[1].expr);
+    assert_eq!(limits.joint[0].expr.terms, vec![(0, -1.0), (1, 1.0)]);
+    assert_eq!(limits.joint[1].expr.terms, vec![(0, 1.0)]);
+    let described = Model::from_toml_str(
+        &ARM.replace("expr = \"q2 - q1\"", "expr = \"elbow\""),
+        "two_link_measured.toml",
+    )
+    .unwrap();
+    assert_eq!(described.limits[1].expr, model.limits[1].expr);
+    let psm = Model::builtin("psm").unwrap();
+    let jaw = Limits::from_toml_str(&psm, "[[limits]]\nexpr = \"jaw\"\n", "jaw.toml").unwrap();
+    let builtin = psm
+        .limits
+        .iter()
+        .find(|l| l.label == "1.2177*(q7 - q6)")
+        .unwrap();
+    assert_eq!(jaw.joint[0].expr, builtin.expr);
+    let err = Limits::from_toml_str(&psm, "[[limits]]\nexpr = \"gripper\"\n", "bad.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("bad.toml") && err.contains("`gripper`"),
+        "{err}"
+    );
+}

@@ -596,7 +596,9 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     let mut limits = Vec::new();
     for (i, ld) in desc.limits.iter().enumerate() {
         let place = format!("limits[{i}] ({})", ld.expr);
-        let expr = ctx.affine(&place, "expr", &NumOrExpr::Expr(ld.expr.clone()))?;
+        let expr = measured
+            .affine(&ld.expr, &ctx.constants, ctx.coordinates)
+            .map_err(|e| ModelError::field(file, &place, "expr", e.to_string()))?;
         limits.push(Limit {
             label: ld.expr.clone(),
             expr,

@@ -7,7 +7,7 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-use crate::expr::{Affine, Expr};
+use crate::expr::{Affine, Expr, ExprError, Scope};
 use crate::ModelError;
 
 /// How a frame moves relative to its parent.
@@ -347,6 +347,58 @@ pub struct Measured {
     pub joints: Vec<String>,
     /// `q_measured = M · q_model`, n×n.
     pub coupling: DMatrix<f64>,
+}
+
+impl Measured {
+    /// An affine function of the model coordinates from `text`, which may name model
+    /// coordinates and measured joints: a measured joint stands for its row of the
+    /// coupling (`q_measured,i = Σ_j M_ij q_j`), so that a limit on the dVRK jaw reads
+    /// `jaw` rather than `1.2177*(q7 - q6)`. A measured joint named like a coordinate is
+    /// that coordinate.
+    ///
+    /// ```
+    /// use dvrk_model::Model;
+    /// let psm = Model::builtin("psm").unwrap();
+    /// let jaw = psm.measured.affine("jaw", &[], &psm.coordinates).unwrap();
+    /// assert_eq!(jaw.terms, vec![(5, -1.2177), (6, 1.2177)]);
+    /// ```
+    pub fn affine(
+        &self,
+        text: &str,
+        constants: &[(String, f64)],
+        coordinates: &[String],
+    ) -> Result<Affine, ExprError> {
+        let n = coordinates.len();
+        let extra: Vec<usize> = (0..self.joints.len())
+            .filter(|&i| !coordinates.contains(&self.joints[i]))
+            .collect();
+        let mut names = coordinates.to_vec();
+        names.extend(extra.iter().map(|&i| self.joints[i].clone()));
+        let scope = Scope {
+            constants,
+            coordinates: &names,
+        };
+        let a = Expr::parse(text, &scope)?.affine(names.len())?;
+        let mut q = vec![0.0; n];
+        for (k, c) in a.terms {
+            if k < n {
+                q[k] += c;
+            } else {
+                let i = extra[k - n];
+                for (j, qj) in q.iter_mut().enumerate() {
+                    *qj += c * self.coupling[(i, j)];
+                }
+            }
+        }
+        Ok(Affine {
+            terms: q
+                .into_iter()
+                .enumerate()
+                .filter(|&(_, c)| c != 0.0)
+                .collect(),
+            offset: a.offset,
+        })
+    }
 }
 
 /// The kind of a parameter, for estimators that treat them differently (bounds, LMIs).

@@ -54,19 +54,15 @@ impl Limits {
     /// written out.
     pub fn to_toml_table(&self, model: &Model) -> toml::Table {
         let constants = file_constants();
-        let scope = Scope {
-            constants: &constants,
-            coordinates: &model.coordinates,
-        };
         let pair = |r: [f64; 2]| toml::Value::Array(vec![r[0].into(), r[1].into()]);
         let joint: Vec<toml::Value> = self
             .joint
             .iter()
             .map(|lim| {
-                let same = Expr::parse(&lim.label, &scope)
-                    .ok()
-                    .and_then(|e| e.affine(model.dof()).ok())
-                    .is_some_and(|a| a == lim.expr);
+                let same = model
+                    .measured
+                    .affine(&lim.label, &constants, &model.coordinates)
+                    .is_ok_and(|a| a == lim.expr);
                 let expr = if same {
                     lim.label.clone()
                 } else {
@@ -118,8 +114,9 @@ impl Limits {
     /// `position`, `velocity`, `acceleration` ranges of numbers or constant expressions
     /// such as `"-57*deg"`) and `[[cartesian_limits]]` tables (`frame`, `min = [x, y, z]`,
     /// `max = [x, y, z]`, m, base frame), as in a description. Expressions use the
-    /// model's coordinate names; `deg` and `pi` are known constants. `source` names the
-    /// file in messages.
+    /// model's coordinate names and its measured joint names (see
+    /// [`dvrk_model::Measured::affine`]); `deg` and `pi` are known constants. `source`
+    /// names the file in messages.
     pub fn from_toml_str(model: &Model, text: &str, source: &str) -> Result<Limits, ExciteError> {
         let bad = |m: String| ExciteError::ImpossibleLimits(format!("{source}: {m}"));
         let doc: toml::Table = text
@@ -185,11 +182,10 @@ impl Limits {
                 .get("expr")
                 .and_then(|v| v.as_str())
                 .ok_or_else(|| bad(format!("limits[{i}]: missing expr")))?;
-            let e =
-                Expr::parse(text, &scope).map_err(|e| bad(format!("limits[{i}] ({text}): {e}")))?;
-            let expr = e
-                .affine(model.dof())
-                .map_err(|e| bad(format!("limits[{i}] ({text}): not affine: {e}")))?;
+            let expr = model
+                .measured
+                .affine(text, &constants, &model.coordinates)
+                .map_err(|e| bad(format!("limits[{i}] ({text}): {e}")))?;
             let mut ranges = [None; 3];
             for (r, key) in ["position", "velocity", "acceleration"].iter().enumerate() {
                 if let Some(v) = t.get(*key) {
