@@ -43,7 +43,8 @@ pub struct Args {
     /// Base frequency f0 (Hz)
     #[arg(long, default_value_t = 0.18)]
     pub f0: f64,
-    /// Limits file ([[limits]] tables: expr, position, velocity, acceleration;
+    /// Limits file, replacing the description's ([[limits]] tables: expr of model
+    /// coordinates or measured joints, position, velocity, acceleration;
     /// [[cartesian_limits]] tables: frame, min = [x, y, z], max = [x, y, z] in metres, base
     /// frame); default: the description's
     #[arg(long, value_name = "FILE")]
