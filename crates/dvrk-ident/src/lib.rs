@@ -4,7 +4,7 @@
 //! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
 //! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
 //! the parameters (least squares or the physically consistent semidefinite program),
-//! and [`fit`] runs the whole pipeline and builds the [`result`] document.
+//! and [`fit()`] runs the whole pipeline and builds the [`result`] document.
 //!
 //! Logs larger than memory go through the same steps block by block:
 //! [`log::LogReader`] reads any format in blocks, [`signal::stream`] processes them,

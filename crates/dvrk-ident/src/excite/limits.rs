@@ -11,7 +11,7 @@
 //!   the frame-origin Jacobian, and steps along a segment are found by bisection against
 //!   the grid.
 //!
-//! Every bounded scalar is an [`Item`]; on a grid of `T` samples the constraint values
+//! Every bounded scalar is an `Item`; on a grid of `T` samples the constraint values
 //! are indexed `2·(k·m + i) + side` (`m` items, side 0 = lower, 1 = upper), normalized by
 //! the item's range so that one penalty weight suits radians, metres and rates alike.
 

@@ -6,7 +6,7 @@
 //! ([`BlockProcessor`]); nothing of the log is kept but running sums. The passes:
 //!
 //! 1. a timing survey of each log (validation, median step; an extra pass only for
-//!    timing with very many distinct steps, see [`crate::median`]);
+//!    timing with very many distinct steps, see `median`);
 //! 2. the observation: one R factor per coordinate ([`Observation::add_per_coordinate`],
 //!    fed batches of whole chunks counted from the log's start, so that the factors
 //!    are those of the log in memory to the last bit), and the range of each processed

@@ -12,7 +12,7 @@ use crate::signal::{AccelerationSource, Processed, Processing, SignalError};
 use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};
 
 /// Relative size of the backward passes' start error within a block (see
-/// [`settle_margin`]): far below the 1e-9 agreement promised with the whole-log
+/// `settle_margin`): far below the 1e-9 agreement promised with the whole-log
 /// processing.
 pub const SETTLE_TOLERANCE: f64 = 1e-12;
 

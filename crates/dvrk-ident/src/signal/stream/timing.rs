@@ -34,7 +34,7 @@ impl LogTiming {
 }
 
 /// Validates a log given block by block and finds its timing, in one or more passes
-/// (more only when the steps take very many distinct values: see [`crate::median`]).
+/// (more only when the steps take very many distinct values: see `median`).
 ///
 /// The first pass validates every block like [`Trajectory::validate`] (rows numbered
 /// from the start of the log, time increasing across blocks); later passes only read
