@@ -5,7 +5,7 @@
 
 pub mod stream;
 
-use dvrk_model::{inertia, Model, ParamKind, Workspace};
+use dvrk_model::{inertia, BaseParameters, Model, ParamKind, Workspace};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
@@ -457,19 +457,82 @@ pub fn fit_with_progress(
     progress.finish();
     let base = model.base_parameters()?;
     let n = model.dof();
-    let p = model.n_params();
     let started = std::time::Instant::now();
 
-    let mut weights = match settings.method {
+    let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range_weights(&data),
     };
     // Per coordinate, then weighted: the same arithmetic as the streamed fit.
     progress.stage("assembling the observation", Some(data.len() as u64));
     let parts = Observation::assemble_per_coordinate(model, data.samples(), progress);
-    let mut obs = Observation::weighted(&parts, &weights);
+    progress.finish();
+    let estimated = estimate(
+        model,
+        &base,
+        &parts,
+        weights,
+        settings,
+        &data.source,
+        started,
+        progress,
+        |pi, _| {
+            let mut residuals = MetricSums::new(model);
+            residuals.add(model, pi, data.samples(), None);
+            Ok(residuals)
+        },
+    )?;
+    let train_metrics = joint_metrics(model, &estimated.params, &data, None);
+    let test_metrics = test_data
+        .as_ref()
+        .map(|t| joint_metrics(model, &estimated.params, t, settings.test_window));
+    Ok(build_result(
+        model,
+        &base,
+        settings,
+        estimated,
+        Metrics {
+            train: train_metrics,
+            test: test_metrics,
+        },
+    ))
+}
+
+/// What the estimator made of an observation.
+pub(crate) struct Estimated {
+    /// Every parameter (the SDP's, or the least-squares representative).
+    pub params: Vec<f64>,
+    /// The (last) weighted least-squares estimate of the base parameters.
+    pub estimate: BaseEstimate,
+    /// The per-coordinate weights of that estimate.
+    pub weights: Vec<f64>,
+    pub solver: SolverInfo,
+    /// Rows of the weighted observation.
+    pub rows: usize,
+}
+
+/// The estimator on the per-coordinate observation parts, shared by the in-memory and
+/// the streamed fit so that both give the same document: weighted least squares from
+/// `weights`; for IRLS, passes re-weighted by the inverse residual RMS of each
+/// coordinate, whose sums `residuals(pi, pass)` computes (from memory or by reading
+/// the log again); then the semidefinite program or the least-squares representative.
+/// `source` names the data when they do not determine the base parameters.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn estimate(
+    model: &Model,
+    base: &BaseParameters,
+    parts: &[Observation],
+    mut weights: Vec<f64>,
+    settings: &FitSettings,
+    source: &str,
+    started: std::time::Instant,
+    progress: &dyn Progress,
+    mut residuals: impl FnMut(&[f64], usize) -> Result<MetricSums, IdentError>,
+) -> Result<Estimated, IdentError> {
+    let p = model.n_params();
+    let mut obs = Observation::weighted(parts, &weights);
     let mut estimate: BaseEstimate =
-        base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
+        base_least_squares(&obs, base).map_err(|e| not_excited(source, e))?;
     let mut solver = SolverInfo {
         name: "qr".into(),
         status: "Solved".into(),
@@ -479,16 +542,13 @@ pub fn fit_with_progress(
     };
     if settings.method == Method::Irls {
         for it in 0..settings.irls_iterations {
-            let pi = representative(&base, &estimate.beta, p);
-            let mut residuals = MetricSums::new(model);
-            residuals.add(model, &pi, data.samples(), None);
-            weights = residuals.inverse_rms();
-            obs = Observation::weighted(&parts, &weights);
-            estimate = base_least_squares(&obs, &base).map_err(|e| not_excited(&data.source, e))?;
+            let pi = representative(base, &estimate.beta, p);
+            weights = residuals(&pi, it)?.inverse_rms();
+            obs = Observation::weighted(parts, &weights);
+            estimate = base_least_squares(&obs, base).map_err(|e| not_excited(source, e))?;
             solver.iterations = it as u32 + 2;
         }
     }
-    progress.finish();
     let params = if settings.method == Method::Sdp {
         progress.stage("solving the semidefinite program", None);
         let options = SdpOptions {
@@ -506,46 +566,33 @@ pub fn fit_with_progress(
         };
         sol.params
     } else {
-        representative(&base, &estimate.beta, p)
-    };
-    if settings.method != Method::Sdp {
         solver.seconds = started.elapsed().as_secs_f64();
-    }
-    let beta = base.project(&params);
-    let train_metrics = joint_metrics(model, &params, &data, None);
-    let test_metrics = test_data
-        .as_ref()
-        .map(|t| joint_metrics(model, &params, t, settings.test_window));
-    Ok(build_result(
-        model,
-        &base,
-        settings,
+        representative(base, &estimate.beta, p)
+    };
+    Ok(Estimated {
         params,
-        beta,
-        &estimate,
+        estimate,
         weights,
         solver,
-        Metrics {
-            train: train_metrics,
-            test: test_metrics,
-        },
-        obs.rows(),
-    ))
+        rows: obs.rows(),
+    })
 }
 
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn build_result(
     model: &Model,
-    base: &dvrk_model::BaseParameters,
+    base: &BaseParameters,
     settings: &FitSettings,
-    params: Vec<f64>,
-    beta: Vec<f64>,
-    estimate: &BaseEstimate,
-    weights: Vec<f64>,
-    solver: SolverInfo,
+    estimated: Estimated,
     metrics: Metrics,
-    rows: usize,
 ) -> FitResult {
+    let Estimated {
+        params,
+        estimate,
+        weights,
+        solver,
+        rows,
+    } = estimated;
+    let beta = base.project(&params);
     let names = model.param_names();
     let mut links = Vec::new();
     let mut consistency = Vec::new();

@@ -101,7 +101,12 @@ fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
             let stages = counter.stages.lock().unwrap();
             assert!(stages[0].starts_with("reading"), "{stages:?}");
             assert!(stages.iter().any(|s| s == "assembling the observation"));
-            assert_eq!(stages.iter().any(|s| s == "solving"), method == Method::Sdp);
+            assert_eq!(
+                stages
+                    .iter()
+                    .any(|s| s == "solving the semidefinite program"),
+                method == Method::Sdp
+            );
             let irls = stages
                 .iter()
                 .filter(|s| s.starts_with("re-weighting"))

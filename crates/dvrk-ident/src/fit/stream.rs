@@ -30,15 +30,14 @@ use dvrk_model::Model;
 use nalgebra::DMatrix;
 
 use super::{
-    base_least_squares, build_result, not_excited, representative, subtract_known_forces,
-    to_model_coordinates, FitSettings, Method, MetricSums, TorqueRange,
+    build_result, estimate, subtract_known_forces, to_model_coordinates, FitSettings, Method,
+    MetricSums, TorqueRange,
 };
 use crate::error::IdentError;
-use crate::estimate::sdp::{solve_sdp, SdpOptions};
 use crate::log::LogReader;
 use crate::observation::{Observation, Samples, CHUNK_SAMPLES};
 use crate::progress::Progress;
-use crate::result::{FitResult, Metrics, SolverInfo};
+use crate::result::{FitResult, Metrics};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
 use crate::trajectory::{Coordinates, Trajectory};
@@ -315,63 +314,34 @@ pub fn fit_stream(
     if let Some(batch) = batches.take(true) {
         add(&mut parts, batch);
     }
-    let mut weights = match settings.method {
+    let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range.weights(),
     };
-    let mut obs = Observation::weighted(&parts, &weights);
-    let not_excited = |e| not_excited(&train_timing.1, e);
-    let mut estimate = base_least_squares(&obs, &base).map_err(not_excited)?;
-    let mut solver = SolverInfo {
-        name: "qr".into(),
-        status: "Solved".into(),
-        converged: true,
-        seconds: 0.0,
-        iterations: 1,
-    };
-    if settings.method == Method::Irls {
-        for it in 0..settings.irls_iterations {
-            let pi = representative(&base, &estimate.beta, p);
+    let estimated = estimate(
+        model,
+        &base,
+        &parts,
+        weights,
+        settings,
+        &train_timing.1,
+        started,
+        progress,
+        |pi, it| {
             let stage = format!(
                 "re-weighting (pass {} of {})",
                 it + 1,
                 settings.irls_iterations
             );
-            let sums = train_log.metrics(settings, &train_timing, &pi, None, &stage, progress)?;
-            weights = sums.inverse_rms();
-            obs = Observation::weighted(&parts, &weights);
-            estimate = base_least_squares(&obs, &base).map_err(not_excited)?;
-            solver.iterations = it as u32 + 2;
-        }
-    }
-    let params = if settings.method == Method::Sdp {
-        let options = SdpOptions {
-            regularization: settings.sdp_regularization,
-            ..SdpOptions::default()
-        };
-        progress.stage("solving", None);
-        let sol = solve_sdp(model, obs.r(), &options)?;
-        progress.finish();
-        solver = SolverInfo {
-            name: "clarabel".into(),
-            status: sol.status.clone(),
-            converged: sol.converged,
-            seconds: sol.seconds,
-            iterations: sol.iterations,
-        };
-        sol.params
-    } else {
-        representative(&base, &estimate.beta, p)
-    };
-    if settings.method != Method::Sdp {
-        solver.seconds = started.elapsed().as_secs_f64();
-    }
-    let beta = base.project(&params);
+            train_log.metrics(settings, &train_timing, pi, None, &stage, progress)
+        },
+    )?;
+    let params = &estimated.params;
     let train_metrics = train_log
         .metrics(
             settings,
             &train_timing,
-            &params,
+            params,
             None,
             "metrics (train)",
             progress,
@@ -382,7 +352,7 @@ pub fn fit_stream(
             log.metrics(
                 settings,
                 timing,
-                &params,
+                params,
                 settings.test_window,
                 "metrics (test)",
                 progress,
@@ -395,15 +365,10 @@ pub fn fit_stream(
         model,
         &base,
         settings,
-        params,
-        beta,
-        &estimate,
-        weights,
-        solver,
+        estimated,
         Metrics {
             train: train_metrics,
             test: test_metrics,
         },
-        obs.rows(),
     ))
 }
