@@ -450,6 +450,30 @@ impl Default for Processing {
 }
 
 impl Processing {
+    /// Checks the settings that do not depend on the data (cut-offs for `dof`
+    /// coordinates, decimation, minimum speed), for the whole-log and the block
+    /// processing alike.
+    pub(crate) fn check(&self, dof: usize) -> Result<(), SignalError> {
+        if let Some(f) = &self.filter {
+            f.cutoff_hz.check(dof)?;
+        }
+        if self.decimate == 0 {
+            return Err(SignalError::InvalidSetting {
+                name: "decimate",
+                reason: "the decimation factor must be at least 1".into(),
+            });
+        }
+        if let Some(s) = self.min_speed {
+            if !(s.is_finite() && s >= 0.0) {
+                return Err(SignalError::InvalidSetting {
+                    name: "min_speed",
+                    reason: format!("must be finite and non-negative, got {s}"),
+                });
+            }
+        }
+        Ok(())
+    }
+
     /// The 2019 protocol for a stated cut-off (5.4 Hz PSM, 1.8 Hz MTM): 6th-order
     /// `(b, a)` Butterworth with the 2019 `Wn = 2 pi fc / fs` conversion (effective
     /// cut-off `pi * fc`) and 20-sample padding on q, measured dq, tau (`filter_torque`)
@@ -547,23 +571,7 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 /// ```
 pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, SignalError> {
     traj.validate()?;
-    if let Some(f) = &settings.filter {
-        f.cutoff_hz.check(traj.dof())?;
-    }
-    if settings.decimate == 0 {
-        return Err(SignalError::InvalidSetting {
-            name: "decimate",
-            reason: "the decimation factor must be at least 1".into(),
-        });
-    }
-    if let Some(s) = settings.min_speed {
-        if !(s.is_finite() && s >= 0.0) {
-            return Err(SignalError::InvalidSetting {
-                name: "min_speed",
-                reason: format!("must be finite and non-negative, got {s}"),
-            });
-        }
-    }
+    settings.check(traj.dof())?;
     let (time, q, dq_raw, tau, rate_hz) = match settings.resample_hz {
         Some(rate) => {
             let (t, q) = resample_linear(&traj.time, &traj.q, rate)?;

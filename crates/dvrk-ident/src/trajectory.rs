@@ -193,6 +193,17 @@ impl Trajectory {
         self.q.ncols()
     }
 
+    /// Sample `k` as one row `[q, dq, tau]` (`3·dof` values; dq zeros when not
+    /// measured) into `row`: the layout the block resampler and processor take.
+    pub(crate) fn stacked_row(&self, k: usize, row: &mut [f64]) {
+        let n = self.dof();
+        for j in 0..n {
+            row[j] = self.q[(k, j)];
+            row[n + j] = self.dq.as_ref().map_or(0.0, |d| d[(k, j)]);
+            row[2 * n + j] = self.tau[(k, j)];
+        }
+    }
+
     /// Sampling rate estimate, Hz: the inverse of the median time step, so that a few gaps
     /// or jittery stamps do not bias it. `None` with fewer than two samples or a
     /// non-positive median step.

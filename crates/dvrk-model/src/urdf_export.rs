@@ -168,6 +168,23 @@ struct JointSpec {
     dynamics: Option<urdf_rs::Dynamics>,
 }
 
+impl JointSpec {
+    /// A fixed joint placing `child` at `origin` in `parent`.
+    fn fixed(name: String, origin: Transform, parent: String, child: String) -> JointSpec {
+        JointSpec {
+            name,
+            kind: JointKind::Fixed,
+            origin,
+            parent,
+            child,
+            axis: Vector3::z(),
+            range: Range::default(),
+            mimic: None,
+            dynamics: None,
+        }
+    }
+}
+
 /// The URDF being generated, with unique names.
 #[derive(Default)]
 struct Builder {
@@ -602,20 +619,15 @@ impl Model {
                 let r = Rotation3::rotation_between(&g, &down).unwrap_or_else(|| {
                     Rotation3::from_axis_angle(&Vector3::x_axis(), std::f64::consts::PI)
                 });
-                out.joint(JointSpec {
-                    name: format!("{}_joint", root),
-                    kind: JointKind::Fixed,
-                    origin: Transform {
+                out.joint(JointSpec::fixed(
+                    format!("{}_joint", root),
+                    Transform {
                         rotation: *r.matrix(),
                         translation: Vector3::zeros(),
                     },
-                    parent: root.clone(),
-                    child: names[0].clone(),
-                    axis: Vector3::z(),
-                    range: Range::default(),
-                    mimic: None,
-                    dynamics: None,
-                })?;
+                    root.clone(),
+                    names[0].clone(),
+                ))?;
             }
             if (g.norm() - URDF_GRAVITY).abs() > 1e-12 {
                 notes.push(format!(
@@ -655,17 +667,12 @@ impl Model {
             let i = fi + 1;
             let parent = names[f.parent].clone();
             if f.kind == JointKind::Fixed {
-                out.joint(JointSpec {
-                    name: format!("{}_joint", f.name),
-                    kind: JointKind::Fixed,
-                    origin: self.fixed[i],
+                out.joint(JointSpec::fixed(
+                    format!("{}_joint", f.name),
+                    self.fixed[i],
                     parent,
-                    child: f.name.clone(),
-                    axis: Vector3::z(),
-                    range: Range::default(),
-                    mimic: None,
-                    dynamics: None,
-                })?;
+                    f.name.clone(),
+                ))?;
                 continue;
             }
             // pre·J(s)·post = (pre·post)·J_u(s) when post keeps the z axis line.
@@ -678,17 +685,12 @@ impl Model {
             } else {
                 let end = format!("{}_motion", f.name);
                 out.link(&end, None)?;
-                out.joint(JointSpec {
-                    name: format!("{}_post", f.name),
-                    kind: JointKind::Fixed,
-                    origin: f.post,
-                    parent: end.clone(),
-                    child: f.name.clone(),
-                    axis: Vector3::z(),
-                    range: Range::default(),
-                    mimic: None,
-                    dynamics: None,
-                })?;
+                out.joint(JointSpec::fixed(
+                    format!("{}_post", f.name),
+                    f.post,
+                    end.clone(),
+                    f.name.clone(),
+                ))?;
                 (Vector3::z(), end)
             };
             let origin = |c: f64| {

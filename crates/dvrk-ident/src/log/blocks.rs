@@ -267,11 +267,7 @@ impl BlockResampler {
         let (mut times, mut values) = (Vec::new(), Vec::new());
         let mut row = vec![0.0; 3 * n];
         for k in 0..block.len() {
-            for j in 0..n {
-                row[j] = block.q[(k, j)];
-                row[n + j] = block.dq.as_ref().map_or(0.0, |d| d[(k, j)]);
-                row[2 * n + j] = block.tau[(k, j)];
-            }
+            block.stacked_row(k, &mut row);
             self.resampler
                 .push(block.time[k], &row, &mut times, &mut values)
                 .map_err(|e| self.error(e))?;

@@ -99,23 +99,7 @@ impl BlockProcessor {
         timing: &LogTiming,
     ) -> Result<BlockProcessor, SignalError> {
         let dof = joint_names.len();
-        if let Some(f) = &settings.filter {
-            f.cutoff_hz.check(dof)?;
-        }
-        if settings.decimate == 0 {
-            return Err(SignalError::InvalidSetting {
-                name: "decimate",
-                reason: "the decimation factor must be at least 1".into(),
-            });
-        }
-        if let Some(s) = settings.min_speed {
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(SignalError::InvalidSetting {
-                    name: "min_speed",
-                    reason: format!("must be finite and non-negative, got {s}"),
-                });
-            }
-        }
+        settings.check(dof)?;
         let (resampler, rate_hz, samples, median_step_s) = match settings.resample_hz {
             Some(rate) => {
                 let r = Resampler::new(3 * dof, rate)?;
@@ -294,11 +278,7 @@ impl BlockProcessor {
         let mut out = Output::default();
         let mut row = vec![0.0; 3 * n];
         for k in 0..block.len() {
-            for j in 0..n {
-                row[j] = block.q[(k, j)];
-                row[n + j] = block.dq.as_ref().map_or(0.0, |d| d[(k, j)]);
-                row[2 * n + j] = block.tau[(k, j)];
-            }
+            block.stacked_row(k, &mut row);
             self.input(block.time[k], &row, &mut out)?;
         }
         Ok(self.collect(out))
