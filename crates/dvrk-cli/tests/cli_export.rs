@@ -6,10 +6,13 @@
 mod support;
 use std::path::{Path, PathBuf};
 use support::{example, run, temp_dir};
+#[path = "../../dvrk-model/tests/dynamics_support.rs"]
+mod dynamics_support;
+use dynamics_support::{rigid_only, torque_difference};
 
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_ident::FitResult;
-use dvrk_model::{Model, ParamKind, Workspace};
+use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
 
 fn s(p: &Path) -> String {
@@ -41,53 +44,6 @@ fn fit_example(dir: &Path, method: &str) -> (PathBuf, PathBuf) {
     (out, wpi)
 }
 
-/// Largest |τ_a − τ_b| (rigid-body inverse dynamics, coordinates matched by name) over
-/// deterministic pseudo-random states.
-fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64]) -> f64 {
-    let perm: Vec<usize> = b
-        .coordinates
-        .iter()
-        .map(|c| a.coordinates.iter().position(|d| d == c).unwrap())
-        .collect();
-    let (mut wa, mut wb) = (Workspace::new(a), Workspace::new(b));
-    let n = a.dof();
-    let mut x = 0.25f64;
-    let mut next = || {
-        x = (x * 9301.0 + 0.49297).fract();
-        2.0 * x - 1.0
-    };
-    let mut worst = 0.0f64;
-    for _ in 0..30 {
-        let q: Vec<f64> = (0..n).map(|_| next()).collect();
-        let dq: Vec<f64> = (0..n).map(|_| 2.0 * next()).collect();
-        let ddq: Vec<f64> = (0..n).map(|_| 3.0 * next()).collect();
-        let pick = |v: &[f64]| perm.iter().map(|&k| v[k]).collect::<Vec<f64>>();
-        let (mut ta, mut tb) = (vec![0.0; n], vec![0.0; n]);
-        a.inverse_dynamics(&mut wa, pa, &q, &dq, &ddq, &mut ta);
-        b.inverse_dynamics(&mut wb, pb, &pick(&q), &pick(&dq), &pick(&ddq), &mut tb);
-        assert!(
-            ta.iter().any(|t| t.abs() > 1e-3),
-            "the test moves something"
-        );
-        for (j, &k) in perm.iter().enumerate() {
-            worst = worst.max((ta[k] - tb[j]).abs());
-        }
-    }
-    worst
-}
-
-fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
-    model
-        .params
-        .iter()
-        .zip(params)
-        .map(|(p, &v)| match p.kind {
-            ParamKind::Inertia { .. } => v,
-            _ => 0.0,
-        })
-        .collect()
-}
-
 #[test]
 fn psm_fit_exports_a_generated_urdf_and_the_2019_layout() {
     let dir = temp_dir("export-psm");
@@ -113,7 +69,13 @@ fn psm_fit_exports_a_generated_urdf_and_the_2019_layout() {
     let fit = FitResult::read(&result).unwrap();
     let params = rigid_only(&model, &fit.params_for(&model).unwrap());
     let back = Model::load(&s(&urdf)).unwrap();
-    let worst = torque_difference(&model, &params, &back, &back.nominal_parameters().unwrap());
+    let worst = torque_difference(
+        &model,
+        &params,
+        &back,
+        &back.nominal_parameters().unwrap(),
+        1,
+    );
     eprintln!("psm sdp result → generated URDF: max |Δτ| = {worst:e}");
     assert!(worst < 1e-9, "torques differ by {worst:e}");
     let text = std::fs::read_to_string(&urdf).unwrap();
@@ -266,7 +228,7 @@ fn urdf_robot_fit_exports_into_its_own_urdf() {
             .iter()
             .zip(&params)
             .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        let worst = torque_difference(&model, &params, &back, &nominal);
+        let worst = torque_difference(&model, &params, &back, &nominal, 2);
         eprintln!(
             "arm sdp result → {}: max |Δπ| = {worst_param:e}, max |Δτ| = {worst:e}",
             out.display()

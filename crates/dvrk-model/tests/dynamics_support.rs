@@ -2,7 +2,7 @@
 //! seeded generator, random states, random (and physically consistent) parameters.
 #![allow(dead_code)]
 
-use dvrk_model::{inertia, Model, ParamKind};
+use dvrk_model::{inertia, Model, ParamKind, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector4};
 
 /// SplitMix64: tiny, seeded, the same on every machine.
@@ -143,7 +143,7 @@ pub fn is_friction_or_spring(kind: ParamKind) -> bool {
 /// Inverse dynamics into a new vector.
 pub fn id(
     model: &Model,
-    ws: &mut dvrk_model::Workspace,
+    ws: &mut Workspace,
     params: &[f64],
     q: &[f64],
     dq: &[f64],
@@ -167,4 +167,43 @@ pub fn assert_close(what: &str, a: &[f64], b: &[f64], tol: f64) {
             tol * scale
         );
     }
+}
+
+/// Largest |τ_a − τ_b| (inverse dynamics) over 40 random states, coordinates matched by
+/// name; `a` uses `pa` and `b` uses `pb` (e.g. a model and the same robot read back
+/// from an exported URDF).
+pub fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64], seed: u64) -> f64 {
+    assert_eq!(a.dof(), b.dof(), "number of coordinates");
+    let perm: Vec<usize> = b
+        .coordinates
+        .iter()
+        .map(|c| {
+            a.coordinates
+                .iter()
+                .position(|d| d == c)
+                .unwrap_or_else(|| panic!("coordinate {c} of the URDF is not the model's"))
+        })
+        .collect();
+    let mut rng = Rng::new(seed);
+    let (mut wa, mut wb) = (Workspace::new(a), Workspace::new(b));
+    let mut worst = 0.0f64;
+    for _ in 0..40 {
+        let (q, dq, ddq) = random_state(a, &mut rng);
+        let pick = |v: &[f64]| perm.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        let ta = id(a, &mut wa, pa, &q, &dq, &ddq);
+        let tb = id(b, &mut wb, pb, &pick(&q), &pick(&dq), &pick(&ddq));
+        assert!(
+            ta.iter().any(|t| t.abs() > 1e-3),
+            "the test moves something"
+        );
+        for (j, &k) in perm.iter().enumerate() {
+            worst = worst.max((ta[k] - tb[j]).abs());
+        }
+    }
+    worst
+}
+
+/// The rigid-body parameters of `params` (friction, motor inertias, springs zeroed).
+pub fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
+    filter_params(model, params, |k| matches!(k, ParamKind::Inertia { .. }))
 }

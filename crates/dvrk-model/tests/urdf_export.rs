@@ -15,7 +15,7 @@ mod common;
 #[path = "dynamics_support.rs"]
 mod support;
 
-use dvrk_model::{Model, ParamKind, Workspace};
+use dvrk_model::Model;
 use support::*;
 
 const TOL: f64 = 1e-9;
@@ -147,43 +147,6 @@ fn outside_inertials(text: &str) -> Vec<String> {
             }
         })
         .collect()
-}
-
-/// Largest |τ_a − τ_b| over `samples` random states, coordinates matched by name; `a`
-/// uses `pa` and `b` uses `pb`.
-fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64], seed: u64) -> f64 {
-    assert_eq!(a.dof(), b.dof(), "number of coordinates");
-    let perm: Vec<usize> = b
-        .coordinates
-        .iter()
-        .map(|c| {
-            a.coordinates
-                .iter()
-                .position(|d| d == c)
-                .unwrap_or_else(|| panic!("coordinate {c} of the URDF is not the model's"))
-        })
-        .collect();
-    let mut rng = Rng::new(seed);
-    let (mut wa, mut wb) = (Workspace::new(a), Workspace::new(b));
-    let mut worst = 0.0f64;
-    for _ in 0..40 {
-        let (q, dq, ddq) = random_state(a, &mut rng);
-        let pick = |v: &[f64]| perm.iter().map(|&k| v[k]).collect::<Vec<f64>>();
-        let ta = id(a, &mut wa, pa, &q, &dq, &ddq);
-        let tb = id(b, &mut wb, pb, &pick(&q), &pick(&dq), &pick(&ddq));
-        assert!(
-            ta.iter().any(|t| t.abs() > 1e-3),
-            "the test moves something"
-        );
-        for (j, &k) in perm.iter().enumerate() {
-            worst = worst.max((ta[k] - tb[j]).abs());
-        }
-    }
-    worst
-}
-
-fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
-    filter_params(model, params, |k| matches!(k, ParamKind::Inertia { .. }))
 }
 
 fn replace_round_trip(text: &str, file: &str, seed: u64) -> String {
