@@ -5,7 +5,7 @@
 
 mod support;
 use std::path::{Path, PathBuf};
-use support::{example, run, temp_dir};
+use support::{example, run, s, temp_dir};
 #[path = "../../dvrk-model/tests/dynamics_support.rs"]
 mod dynamics_support;
 use dynamics_support::{rigid_only, torque_difference};
@@ -14,10 +14,6 @@ use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_ident::FitResult;
 use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
-}
 
 /// Fits the bundled PSM log (noise-free processing, quick) and writes the result and the
 /// params.json of `fit --wpi-json`.

@@ -3,50 +3,19 @@
 //! between MCAP, headered CSV and the 2019 layout, and bad inputs fail with a message
 //! naming the problem, a non-zero exit and no output file.
 
+mod support;
 use std::path::{Path, PathBuf};
-use std::process::Command;
+use support::{example, run, s, temp_dir};
 
 use dvrk_ident::log;
 use dvrk_model::Model;
-
-fn run(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
-        .args(args)
-        .output()
-        .expect("run dvrk-ident");
-    (
-        out.status.success(),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
-}
-
-fn examples() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
-fn example(name: &str) -> String {
-    examples().join(name).display().to_string()
-}
-
-/// A fresh temporary directory per test.
-fn tmp(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-logs-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
-}
 
 /// Noise of the bundled log, N·m or N per model coordinate (see examples/README.md).
 const NOISE: f64 = 0.002;
 
 /// The generating parameters of the bundled log, projected on the base parameters.
 fn true_base_parameters(model: &Model) -> Vec<f64> {
-    let text = std::fs::read_to_string(examples().join("psm_params.json")).unwrap();
+    let text = std::fs::read_to_string(example("psm_params.json")).unwrap();
     let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
     let map = doc["parameters"].as_object().unwrap();
     let pi = model
@@ -95,7 +64,7 @@ fn ols_fit_of_the_example_recovers_the_generating_base_parameters() {
         r["condition_number"]
     );
     // The README's main command is this fit with the default processing.
-    let readme = std::fs::read_to_string(examples().join("../README.md")).unwrap();
+    let readme = std::fs::read_to_string(example("../README.md")).unwrap();
     assert!(readme.contains(
         "cargo run --release -p dvrk-cli -- fit examples/psm_excitation.mcap --robot psm\n"
     ));
@@ -164,7 +133,7 @@ fn sdp_fit_of_the_example_converges_and_is_physically_consistent() {
 
 #[test]
 fn the_example_log_is_what_its_readme_command_writes() {
-    let dir = tmp("regenerate");
+    let dir = temp_dir("logs-regenerate");
     let out = dir.join("again.mcap");
     let (ok, _, err) = run(&[
         "simulate",
@@ -224,14 +193,14 @@ fn the_example_log_is_what_its_readme_command_writes() {
     } else {
         println!("SKIPPED: --pick check, {} not found", anchor.display());
     }
-    let readme = std::fs::read_to_string(examples().join("README.md")).unwrap();
+    let readme = std::fs::read_to_string(example("README.md")).unwrap();
     assert!(readme.contains("--periods 2 --rate 200 --noise 0.002 --seed 1"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
 #[test]
 fn simulate_then_convert_round_trips_values() {
-    let dir = tmp("roundtrip");
+    let dir = temp_dir("logs-roundtrip");
     let mcap = dir.join("sim.mcap");
     let (ok, out, err) = run(&[
         "simulate",
@@ -389,7 +358,7 @@ fn assert_fails(args: &[&str], words: &[&str], output: Option<&Path>) {
 
 #[test]
 fn bad_logs_fail_naming_the_problem_and_write_nothing() {
-    let dir = tmp("errors");
+    let dir = temp_dir("logs-errors");
     let mcap = dir.join("sim.mcap");
     let (ok, _, err) = run(&[
         "simulate",

@@ -35,6 +35,11 @@ pub fn example(name: &str) -> String {
         .to_string()
 }
 
+/// A path as a command-line argument.
+pub fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
 /// The file names in `dir`, sorted.
 pub fn files(dir: &Path) -> Vec<String> {
     let mut v: Vec<String> = std::fs::read_dir(dir)
