@@ -262,7 +262,7 @@ position = [-1.0, 1.2]
 expr = "q1"
 position = [1.5, 2.0]
 "#;
-    let limits = optimize::limits_from_toml_str(&model, text, "bad.toml").unwrap();
+    let limits = Limits::from_toml_str(&model, text, "bad.toml").unwrap();
     let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
     assert!(matches!(e, ExciteError::ImpossibleLimits(_)), "{e}");
     // A velocity range excluding 0: a periodic motion cannot satisfy it.
@@ -271,13 +271,12 @@ position = [1.5, 2.0]
 expr = "q2 - q1"
 velocity = ["10*deg", "30*deg"]
 "#;
-    let limits = optimize::limits_from_toml_str(&model, text, "bad.toml").unwrap();
+    let limits = Limits::from_toml_str(&model, text, "bad.toml").unwrap();
     assert!((limits.joint[0].velocity.unwrap()[0] - 10f64.to_radians()).abs() < 1e-12);
     let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
     assert!(e.to_string().contains("excludes 0"), "{e}");
     // Malformed files name the file.
-    let e = optimize::limits_from_toml_str(&model, "[[limits]]\nexpr = \"q9\"\n", "x.toml")
-        .unwrap_err();
+    let e = Limits::from_toml_str(&model, "[[limits]]\nexpr = \"q9\"\n", "x.toml").unwrap_err();
     assert!(e.to_string().contains("x.toml"), "{e}");
 }
 

@@ -10,11 +10,11 @@ use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::write_atomic;
 use dvrk_model::Model;
-use numpy::{PyArrayDyn, PyArrayMethods};
+use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
-use crate::convert::{array, background, float_array, fmt_shape, matrix, vector, Failure};
+use crate::convert::{array, background, matrix, rows, vector, Failure};
 use crate::errors::{error, from_ident, from_io, input, Kind};
 use crate::json::to_python;
 use crate::robot::Robot;
@@ -164,20 +164,20 @@ fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Limits> 
     Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_excite)
 }
 
-/// A `(rows, cols)` array-like as rows of `cols` values each.
-fn coefficient_rows(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<Vec<f64>>> {
-    let arr = float_array(py, obj, name)?;
-    let ro = arr.readonly();
-    let view = ro.as_array();
-    let shape = view.shape().to_vec();
-    let [_, cols] = shape.as_slice() else {
+/// Coefficients `a` or `b`: a 2-D array of `order` columns, one row per coordinate.
+fn coefficient_rows(
+    py: Python<'_>,
+    obj: &Bound<'_, PyAny>,
+    order: usize,
+    name: &str,
+) -> PyResult<Vec<Vec<f64>>> {
+    let r = rows(py, obj, order, name, &[])?;
+    if r.single {
         return Err(input(format!(
-            "{name}: expected a 2-D array (coordinates, order), got shape {}",
-            fmt_shape(&shape)
+            "{name}: expected a 2-D array (coordinates, order {order}), got shape ({order},)"
         )));
-    };
-    let data: Vec<f64> = view.iter().copied().collect();
-    Ok(data.chunks(*cols.max(&1)).map(<[f64]>::to_vec).collect())
+    }
+    Ok(r.data.chunks(order.max(1)).map(<[f64]>::to_vec).collect())
 }
 
 /// A periodic excitation trajectory: per model coordinate ``j``, ``q_j(t) = q0_j +
@@ -214,8 +214,8 @@ impl TrajectoryPy {
             order,
             base_frequency_hz,
             q0: vector(py, q0, None, "q0", &[])?,
-            a: coefficient_rows(py, a, "a")?,
-            b: coefficient_rows(py, b, "b")?,
+            a: coefficient_rows(py, a, order, "a")?,
+            b: coefficient_rows(py, b, order, "b")?,
             coordinates: coordinates.unwrap_or_default(),
         };
         inner.validate("Trajectory").map_err(from_fourier)?;

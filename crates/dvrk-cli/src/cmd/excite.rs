@@ -166,7 +166,7 @@ pub fn run(args: Args) -> Result<()> {
         Some(path) => {
             let text =
                 std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
-            optimize::limits_from_toml_str(&model, &text, path)?
+            Limits::from_toml_str(&model, &text, path)?
         }
         None => Limits::of_model(&model),
     };

@@ -1202,15 +1202,6 @@ impl Setup<'_> {
     }
 }
 
-/// Reads a limits file (see [`Limits::from_toml_str`]).
-pub fn limits_from_toml_str(
-    model: &Model,
-    text: &str,
-    source: &str,
-) -> Result<Limits, ExciteError> {
-    Limits::from_toml_str(model, text, source)
-}
-
 /// Setpoints of one period at `rate_hz` in the MEASURED joint space (`q_meas = M q`,
 /// what a dVRK script plays back): the times (s, from 0, `round(period · rate)` of
 /// them) and one row of measured joint positions (rad or m) per time, columns in
