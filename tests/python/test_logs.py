@@ -2,12 +2,13 @@
 written and read back, measured ↔ model coordinates, MCAP options."""
 
 import json
+import subprocess
 
 import numpy as np
 import pytest
 
 import dvrk_ident as di
-from conftest import shared_file
+from conftest import REPO, shared_file
 
 
 def small(psm, n=50, velocities=True):
@@ -155,3 +156,32 @@ def test_shared_mcap_anchor(psm):
         np.testing.assert_allclose(data.dq[k], spot["velocity"], rtol=0, atol=1e-15)
     names = [t["topic"] for t in di.list_topics(path)]
     assert "/PSM1/measured_js" in names and "/PSM1/setpoint_js" in names
+
+
+def test_csv_written_by_convert_reads_in_pandas_and_numpy(psm, cli, tmp_path):
+    # The header is the first line: no options needed in any CSV reader.
+    pandas = pytest.importorskip("pandas")
+
+    def run_cli(*args):
+        subprocess.run([cli, *args], check=True, capture_output=True)
+
+    out = tmp_path / "log.csv"
+    run_cli("convert", str(REPO / "examples" / "psm_excitation.mcap"), str(out))
+    df = pandas.read_csv(out)
+    joints = psm.measured_joints
+    assert list(df.columns) == (["time"] + [f"position.{j}" for j in joints]
+                                + [f"velocity.{j}" for j in joints]
+                                + [f"effort.{j}" for j in joints])
+    back = di.read_log(out, psm)
+    assert len(df) == len(back)
+    np.testing.assert_array_equal(df[[f"effort.{j}" for j in joints]].to_numpy(),
+                                  di.read_log(out).tau)
+    table = np.genfromtxt(out, names=True, delimiter=",")
+    assert table.dtype.names[0] == "time" and len(table) == len(df)
+    np.testing.assert_array_equal(table["time"], df["time"].to_numpy())
+    # Model coordinates are written as q1..qn and read back as such.
+    model = tmp_path / "model.csv"
+    run_cli("convert", str(out), str(model), "--robot", "psm", "--coordinates", "model")
+    dm = pandas.read_csv(model)
+    assert list(dm.columns[:8]) == ["time"] + [f"position.q{k}" for k in range(1, 8)]
+    assert di.read_log(model).coordinates == "model"

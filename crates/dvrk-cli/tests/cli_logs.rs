@@ -380,7 +380,7 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
 
     // A CSV without the jaw: the robot's joint is named.
     let keep: Vec<usize> = {
-        let header = text.lines().nth(1).unwrap();
+        let header = text.lines().next().unwrap();
         header
             .split(',')
             .enumerate()
@@ -391,12 +391,8 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
     let no_jaw: String = text
         .lines()
         .map(|l| {
-            if l.starts_with('#') {
-                l.to_string()
-            } else {
-                let f: Vec<&str> = l.split(',').collect();
-                keep.iter().map(|&i| f[i]).collect::<Vec<_>>().join(",")
-            }
+            let f: Vec<&str> = l.split(',').collect();
+            keep.iter().map(|&i| f[i]).collect::<Vec<_>>().join(",")
         })
         .collect::<Vec<_>>()
         .join("\n");
@@ -422,7 +418,7 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
         None,
     );
     // A CSV missing one effort column.
-    let header = text.lines().nth(1).unwrap();
+    let header = text.lines().next().unwrap();
     let k = header
         .split(',')
         .position(|h| h == "effort.outer_roll")
@@ -430,13 +426,9 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
     let no_effort: String = text
         .lines()
         .map(|l| {
-            if l.starts_with('#') {
-                l.to_string()
-            } else {
-                let mut f: Vec<&str> = l.split(',').collect();
-                f.remove(k);
-                f.join(",")
-            }
+            let mut f: Vec<&str> = l.split(',').collect();
+            f.remove(k);
+            f.join(",")
         })
         .collect::<Vec<_>>()
         .join("\n");

@@ -134,6 +134,19 @@ pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajecto
         message,
     };
     if traj.coordinates == Coordinates::Model {
+        // A headered CSV tells model coordinates by their names `q1..qn`; a robot whose
+        // measured joints carry those very names through a non-identity coupling would
+        // make such a file ambiguous.
+        if model.measured.joints == traj.joint_names
+            && model.measured.coupling != DMatrix::identity(n, n)
+        {
+            return Err(mismatch(format!(
+                "the log's joints `{}` are both robot {}'s model coordinates and its measured \
+                 joints, which differ by a coupling: rename the measured joints",
+                traj.joint_names.join(", "),
+                model.name
+            )));
+        }
         if traj.dof() != n {
             return Err(mismatch(format!(
                 "the log has {} joints in model coordinates but robot {} has {n} coordinates",

@@ -93,8 +93,16 @@ fn headered_round_trip_is_exact() {
         t.joint_names = vec!["outer.yaw".into(), "jaw, left".into()]; // dots and commas
         t.time = (0..11).map(|k| 1.7e9 + k as f64 * 0.005).collect(); // ROS-like stamps
         write_headered(&path, &t).unwrap();
+        // The header is the first line (every CSV reader takes it as the header).
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(text.starts_with("time,position."), "{text}");
         let back = read_headered(&path).unwrap();
-        assert_eq!(back.joint_names, t.joint_names);
+        // Model coordinates are told by their names.
+        let names = match coords {
+            Coordinates::Model => vec!["q1".to_string(), "q2".to_string()],
+            Coordinates::Measured => t.joint_names.clone(),
+        };
+        assert_eq!(back.joint_names, names);
         assert_eq!(back.coordinates, coords);
         assert_eq!(back.time, t.time);
         assert_bits_eq(&back.q, &t.q);
@@ -108,6 +116,45 @@ fn headered_round_trip_is_exact() {
         // `write` dispatches by format.
         write(&path, &t, LogFormat::Csv).unwrap();
         assert_eq!(read_headered(&path).unwrap(), back);
+    }
+}
+
+#[test]
+fn headered_files_of_earlier_versions_still_read() {
+    // Before 0.2 the writer put the coordinates in a comment line above the header.
+    let dir = test_dir("earlier_versions");
+    let header = "time,position.a,position.b,effort.a,effort.b\n0,1,2,3,4\n0.005,1,2,3,4\n";
+    for (stated, expected) in [
+        ("model", Coordinates::Model),
+        ("measured", Coordinates::Measured),
+    ] {
+        let comment = format!(
+            "# dvrk-ident joint log; coordinates: {stated}; time s, position rad|m, velocity \
+             rad/s|m/s, effort N*m|N\n"
+        );
+        let path = write_file(&dir, &format!("{stated}.csv"), &(comment + header));
+        let t = read_headered(&path).unwrap();
+        assert_eq!(t.coordinates, expected);
+        assert_eq!(t.joint_names, vec!["a", "b"]);
+        assert_eq!(t.tau[(1, 1)], 4.0);
+    }
+    // Without the comment, `q1..qn` in order are model coordinates; anything else, or the
+    // same names out of order, measured joints.
+    for (names, expected) in [
+        (["q1", "q2"], Coordinates::Model),
+        (["q2", "q1"], Coordinates::Measured),
+        (["q1", "yaw"], Coordinates::Measured),
+    ] {
+        let text = format!(
+            "time,position.{0},position.{1},effort.{0},effort.{1}\n0,1,2,3,4\n",
+            names[0], names[1]
+        );
+        let path = write_file(&dir, "inferred.csv", &text);
+        assert_eq!(
+            read_headered(&path).unwrap().coordinates,
+            expected,
+            "{names:?}"
+        );
     }
 }
 

@@ -260,8 +260,19 @@ enum Kind {
     Joint(Signal, usize), // signal, joint index (into the position-column order)
 }
 
+/// Whether `joints` are the model coordinates' names `q1, q2, ..., qn` in order: what
+/// [`write_headered`] writes for a log in model coordinates (measured joints carry the
+/// robot's joint names).
+pub(crate) fn are_model_coordinate_names(joints: &[String]) -> bool {
+    !joints.is_empty()
+        && joints
+            .iter()
+            .enumerate()
+            .all(|(k, j)| j.strip_prefix('q') == Some((k + 1).to_string().as_str()))
+}
+
 /// Coordinates stated in a leading `# ... coordinates: model|measured` comment (read
-/// from the file's first lines only).
+/// from the file's first lines only), as files written before 0.2 have it.
 fn stated_coordinates(path: &Path) -> Result<Option<Coordinates>, LogError> {
     let io = |source| LogError::Io {
         path: path.to_path_buf(),
@@ -408,8 +419,16 @@ impl HeaderedBlocks {
                 });
             }
         }
+        // Files of earlier versions state the coordinates in a leading comment; today's
+        // carry them in the column names alone (model coordinates are `q1..qn`), so that
+        // every CSV reader sees the header on the first line.
+        let coordinates = match stated_coordinates(path)? {
+            Some(c) => c,
+            None if are_model_coordinate_names(&joints) => Coordinates::Model,
+            None => Coordinates::Measured,
+        };
         Ok(HeaderedBlocks {
-            coordinates: stated_coordinates(path)?.unwrap_or(Coordinates::Measured),
+            coordinates,
             path: p(),
             records,
             names,
@@ -523,9 +542,10 @@ impl HeaderedBlocks {
 /// after the first dot). Unknown or duplicate columns are errors (a typo would
 /// otherwise silently drop data). Time must strictly increase.
 ///
-/// Columns are in measured joint space unless a comment line before the header says
-/// `coordinates: model` (as [`write_headered`] writes it). Lines starting with `#`
-/// are comments.
+/// Columns are in model coordinates when the joints are named `q1, ..., qn` in order (as
+/// [`write_headered`] writes a log in model coordinates), in measured joint space
+/// otherwise; a comment line before the header saying `coordinates: model|measured` (as
+/// earlier versions wrote) decides instead. Lines starting with `#` are comments.
 ///
 /// ```rust
 /// use dvrk_ident::log::read_headered;
@@ -585,19 +605,25 @@ pub fn write_wpi(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogErr
     })
 }
 
-/// Writes a headered CSV (see [`read_headered`]) atomically: a comment line stating the
-/// coordinates, then `time, position.<joint>..., [velocity.<joint>...,]
-/// effort.<joint>...`. Values are written with the shortest representation that reads
-/// back to the same `f64`, so a write-read round trip is exact.
+/// Writes a headered CSV (see [`read_headered`]) atomically: the header `time,
+/// position.<joint>..., [velocity.<joint>...,] effort.<joint>...` on the first line, so
+/// that pandas, numpy and spreadsheets read it with no options (units: s, rad or m, rad/s
+/// or m/s, N·m or N). A log in model coordinates is written with the joints named `q1..qn`,
+/// which is how the reader tells the two joint spaces apart. Values are written with the
+/// shortest representation that reads back to the same `f64`, so a write-read round trip
+/// is exact.
 pub fn write_headered(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogError> {
     let path = path.as_ref();
     validated(path, traj)?;
+    let model_names: Vec<String>;
+    let joint_names = match traj.coordinates {
+        Coordinates::Model => {
+            model_names = (1..=traj.dof()).map(|k| format!("q{k}")).collect();
+            &model_names
+        }
+        Coordinates::Measured => &traj.joint_names,
+    };
     write_atomic(path, |w| {
-        writeln!(
-            w,
-            "# dvrk-ident joint log; coordinates: {}; time s, position rad|m, velocity rad/s|m/s, effort N*m|N",
-            traj.coordinates
-        )?;
         let mut wr = WriterBuilder::new().has_headers(false).from_writer(w);
         let mut header = vec!["time".to_string()];
         let mut signals: Vec<(&str, &DMatrix<f64>)> = vec![("position", &traj.q)];
@@ -606,7 +632,7 @@ pub fn write_headered(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), L
         }
         signals.push(("effort", &traj.tau));
         for (prefix, _) in &signals {
-            header.extend(traj.joint_names.iter().map(|j| format!("{prefix}.{j}")));
+            header.extend(joint_names.iter().map(|j| format!("{prefix}.{j}")));
         }
         wr.write_record(&header)?;
         let mut rec: Vec<String> = Vec::with_capacity(header.len());
