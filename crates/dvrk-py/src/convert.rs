@@ -3,6 +3,7 @@
 //! chunks, and whole calls on a worker thread that the caller polls for Ctrl-C.
 
 use std::panic::AssertUnwindSafe;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::mpsc;
 use std::time::Duration;
 
@@ -20,6 +21,60 @@ pub const CHUNK: usize = 1024;
 
 /// How often a caller waiting for a worker thread checks for signals.
 const POLL: Duration = Duration::from_millis(50);
+
+/// Set by [`hold_computations`]: long computations stop making progress until it is
+/// cleared, so a test can interrupt one whatever the machine's speed.
+static HOLD: AtomicBool = AtomicBool::new(false);
+
+/// Test hook (``dvrk_ident._hold_computations(True)``): while held, a per-sample loop
+/// stops after its first chunk and a background computation before it starts, both
+/// still answering Ctrl-C. Tests of the interrupt use it so that the computation cannot
+/// finish before the signal arrives, however fast the machine.
+#[pyfunction]
+#[pyo3(name = "_hold_computations")]
+pub fn hold_computations(hold: bool) {
+    HOLD.store(hold, Ordering::SeqCst);
+}
+
+/// How many computations wait in the hold right now.
+static HELD: AtomicUsize = AtomicUsize::new(0);
+
+/// Test hook (``dvrk_ident._held_computations()``): how many computations are waiting
+/// in the hold, so a test sends its interrupt only once the call is under way.
+#[pyfunction]
+#[pyo3(name = "_held_computations")]
+pub fn held_computations() -> usize {
+    HELD.load(Ordering::SeqCst)
+}
+
+/// Blocks the calling thread while [`HOLD`] is set, counted in [`HELD`].
+fn block_while_held() {
+    if HOLD.load(Ordering::SeqCst) {
+        HELD.fetch_add(1, Ordering::SeqCst);
+        while HOLD.load(Ordering::SeqCst) {
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        HELD.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// Waits, without the GIL and answering signals, while [`HOLD`] is set.
+fn wait_while_held(py: Python<'_>) -> PyResult<()> {
+    if !HOLD.load(Ordering::SeqCst) {
+        return Ok(());
+    }
+    HELD.fetch_add(1, Ordering::SeqCst);
+    let mut r = Ok(());
+    while HOLD.load(Ordering::SeqCst) {
+        py.detach(|| std::thread::sleep(Duration::from_millis(5)));
+        r = py.check_signals();
+        if r.is_err() {
+            break;
+        }
+    }
+    HELD.fetch_sub(1, Ordering::SeqCst);
+    r
+}
 
 /// A batch of samples: `rows` rows of `width` values, row-major. `single`: the input
 /// was one 1-D sample, so outputs drop the batch axis.
@@ -229,6 +284,7 @@ where
             }
         });
         py.check_signals()?;
+        wait_while_held(py)?;
         start = end;
     }
     Ok(out)
@@ -250,6 +306,7 @@ where
     std::thread::Builder::new()
         .name("dvrk-ident".into())
         .spawn(move || {
+            block_while_held();
             let r = std::panic::catch_unwind(AssertUnwindSafe(f));
             let _ = tx.send(r);
         })

@@ -43,6 +43,9 @@ mod dvrk_ident_module {
     #[pymodule_export]
     use crate::excite::{evaluate_trajectory, excite, ExcitationPy, TrajectoryPy};
 
+    #[pymodule_export]
+    use crate::convert::{held_computations, hold_computations};
+
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         crate::errors::register(m)?;
