@@ -102,7 +102,9 @@ fn settings(case: &Case, method: Method) -> FitSettings {
 
 fn check_sdp(model: &Model, r: &FitResult) {
     assert!(r.solver.converged, "SDP status {}", r.solver.status);
-    assert!(r.solver.seconds < 1.0, "SDP took {} s", r.solver.seconds);
+    // The solve time is printed, never asserted: a test's outcome must not depend on
+    // the machine's speed (the bench binaries measure it).
+    println!("SDP solve {:.3} s ({})", r.solver.seconds, r.solver.status);
     let eps = model.bounds.pseudo_inertia_eps;
     for c in &r.consistency {
         assert!(
