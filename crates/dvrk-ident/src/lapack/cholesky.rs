@@ -3,13 +3,14 @@
 
 use std::ffi::{c_char, c_int};
 
-use faer::dyn_stack::MemStack;
 use faer::linalg::cholesky::llt;
 use faer::linalg::cholesky::llt::factor::LltError;
+use faer::linalg::{temp_mat_scratch, temp_mat_zeroed};
+use faer::mat::AsMatMut;
 use faer::reborrow::{Reborrow, ReborrowMut};
-use faer::{Mat, MatMut, MatRef, Par};
+use faer::{MatMut, MatRef, Par};
 
-use super::{dim, lapack_done, leading, mat_mut, mat_ref, scratch, upper, Illegal, Real};
+use super::{dim, lapack_done, leading, mat_mut, mat_ref, upper, with_scratch, Illegal, Real};
 
 /// Factors the symmetric `A` (n×n, the `uplo` triangle) in place: `A = Uᵀ·U` ('U') or
 /// `L·Lᵀ` ('L') in that triangle, the other triangle untouched. `info = i > 0` when the
@@ -35,22 +36,26 @@ unsafe fn potrf<T: Real>(
         let mut lower = if up { a.transpose_mut() } else { a };
         // faer works on a copy: its in-place factorization also writes above the
         // diagonal, where LAPACK promises to leave the caller's other triangle alone.
-        let mut factor = Mat::<T>::zeros(n, n);
-        copy_lower(factor.as_mut(), lower.rb());
-        let mut mem = scratch(llt::factor::cholesky_in_place_scratch::<T>(
+        let req = temp_mat_scratch::<T>(n, n).and(llt::factor::cholesky_in_place_scratch::<T>(
             n,
             Par::Seq,
             Default::default(),
         ));
-        let factored = llt::factor::cholesky_in_place(
-            factor.as_mut(),
-            Default::default(),
-            Par::Seq,
-            MemStack::new(&mut mem),
-            Default::default(),
-        );
-        // Also after a failure, as LAPACK leaves the part it factored.
-        copy_lower(lower.rb_mut(), factor.as_ref());
+        let factored = with_scratch(req, |stack| {
+            let (mut factor, stack) = temp_mat_zeroed::<T, _, _>(n, n, stack);
+            let mut factor = factor.as_mat_mut();
+            copy_lower(factor.rb_mut(), lower.rb());
+            let factored = llt::factor::cholesky_in_place(
+                factor.rb_mut(),
+                Default::default(),
+                Par::Seq,
+                stack,
+                Default::default(),
+            );
+            // Also after a failure, as LAPACK leaves the part it factored.
+            copy_lower(lower.rb_mut(), factor.rb());
+            factored
+        });
         Ok(match factored {
             Ok(_) => 0,
             Err(LltError::NonPositivePivot { index }) => index as i32 + 1,
@@ -92,8 +97,10 @@ unsafe fn potrs<T: Real>(
         let a = mat_ref(a, n, n, lda, 4)?;
         let b = mat_mut(b, n, nrhs, ldb, 6)?;
         let lower = if up { a.transpose() } else { a };
-        let mut mem = scratch(llt::solve::solve_in_place_scratch::<T>(n, nrhs, Par::Seq));
-        llt::solve::solve_in_place(lower, b, Par::Seq, MemStack::new(&mut mem));
+        with_scratch(
+            llt::solve::solve_in_place_scratch::<T>(n, nrhs, Par::Seq),
+            |stack| llt::solve::solve_in_place(lower, b, Par::Seq, stack),
+        );
         Ok(0)
     }
 }

@@ -3,14 +3,15 @@
 
 use std::ffi::{c_char, c_int};
 
-use faer::diag::Diag;
-use faer::dyn_stack::MemStack;
+use faer::dyn_stack::StackReq;
 use faer::linalg::evd::{self, ComputeEigenvectors};
-use faer::reborrow::ReborrowMut;
-use faer::{Mat, Par};
+use faer::linalg::{temp_mat_scratch, temp_mat_zeroed};
+use faer::mat::AsMatMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::Par;
 
-use super::{dim, lapack_done, leading, mat_mut, mat_ref, option, scalar, scratch, slice_mut};
-use super::{upper, Illegal, Real};
+use super::{dim, lapack_done, leading, mat_mut, mat_ref, option, scalar, slice_mut};
+use super::{upper, with_scratch, Illegal, Real};
 
 /// Eigenvalues (ascending in `w[..m]`) and optionally eigenvectors (columns of `z`,
 /// orthonormal) of the symmetric `A` (n×n, the `uplo` triangle read; `A` is not
@@ -103,60 +104,64 @@ unsafe fn syevr<T: Real>(
         let a = mat_ref(a, n, n, lda, 5)?;
         let lower = if up { a.transpose() } else { a };
         let w = slice_mut(w, n, 13)?;
-        let mut values = Diag::<T>::zeros(n);
-        let mut vectors = wantz.then(|| Mat::<T>::zeros(n, n));
         let compute = if wantz {
             ComputeEigenvectors::Yes
         } else {
             ComputeEigenvectors::No
         };
-        let mut mem = scratch(evd::self_adjoint_evd_scratch::<T>(
-            n,
-            compute,
-            Par::Seq,
-            Default::default(),
-        ));
-        let solved = evd::self_adjoint_evd(
-            lower,
-            values.as_mut(),
-            vectors.as_mut().map(|v| v.as_mut()),
-            Par::Seq,
-            MemStack::new(&mut mem),
-            Default::default(),
-        );
-        if solved.is_err() {
-            m_out[0] = 0;
-            return Ok(1);
-        }
-        let values = values.column_vector();
-        let selected = match range {
-            b'A' => 0..n,
-            b'I' => indices.0 - 1..indices.1,
-            _ => {
-                let inside = |i: &usize| values[*i] > bounds.0 && values[*i] <= bounds.1;
-                let first = (0..n).find(inside).unwrap_or(n);
-                first..(first..n).find(|i| !inside(i)).unwrap_or(n)
+        let vectors_cols = if wantz { n } else { 0 };
+        let req = StackReq::all_of(&[
+            temp_mat_scratch::<T>(n, 1),
+            temp_mat_scratch::<T>(n, vectors_cols),
+            evd::self_adjoint_evd_scratch::<T>(n, compute, Par::Seq, Default::default()),
+        ]);
+        with_scratch(req, |stack| -> Result<i32, Illegal> {
+            let (mut values, stack) = temp_mat_zeroed::<T, _, _>(n, 1, stack);
+            let mut values = values.as_mat_mut();
+            let (mut vectors, stack) = temp_mat_zeroed::<T, _, _>(n, vectors_cols, stack);
+            let mut vectors = vectors.as_mat_mut();
+            let solved = evd::self_adjoint_evd(
+                lower,
+                values.rb_mut().col_mut(0).as_diagonal_mut(),
+                wantz.then_some(vectors.rb_mut()),
+                Par::Seq,
+                stack,
+                Default::default(),
+            );
+            if solved.is_err() {
+                m_out[0] = 0;
+                return Ok(1);
             }
-        };
-        let count = selected.len();
-        if let Some(vectors) = &vectors {
-            let mut z = mat_mut(z, n, count, ldz, 14)?;
-            let support = slice_mut(isuppz, 2 * count.max(1), 16)?;
-            for (col, i) in selected.clone().enumerate() {
-                let v = vectors.col(i);
-                z.rb_mut().col_mut(col).copy_from(v);
-                let nonzero = |r: &usize| v[*r] != T::zero();
-                let first = (0..n).find(nonzero).unwrap_or(0);
-                let last = (0..n).rev().find(nonzero).unwrap_or(0);
-                support[2 * col] = first as c_int + 1;
-                support[2 * col + 1] = last as c_int + 1;
+            let values = values.rb().col(0);
+            let selected = match range {
+                b'A' => 0..n,
+                b'I' => indices.0 - 1..indices.1,
+                _ => {
+                    let inside = |i: &usize| values[*i] > bounds.0 && values[*i] <= bounds.1;
+                    let first = (0..n).find(inside).unwrap_or(n);
+                    first..(first..n).find(|i| !inside(i)).unwrap_or(n)
+                }
+            };
+            let count = selected.len();
+            if wantz {
+                let mut z = mat_mut(z, n, count, ldz, 14)?;
+                let support = slice_mut(isuppz, 2 * count.max(1), 16)?;
+                for (col, i) in selected.clone().enumerate() {
+                    let v = vectors.rb().col(i);
+                    z.rb_mut().col_mut(col).copy_from(v);
+                    let nonzero = |r: &usize| v[*r] != T::zero();
+                    let first = (0..n).find(nonzero).unwrap_or(0);
+                    let last = (0..n).rev().find(nonzero).unwrap_or(0);
+                    support[2 * col] = first as c_int + 1;
+                    support[2 * col + 1] = last as c_int + 1;
+                }
             }
-        }
-        for (k, i) in selected.enumerate() {
-            w[k] = values[i];
-        }
-        m_out[0] = count as c_int;
-        Ok(0)
+            for (k, i) in selected.enumerate() {
+                w[k] = values[i];
+            }
+            m_out[0] = count as c_int;
+            Ok(0)
+        })
     }
 }
 

@@ -2,12 +2,11 @@
 
 use std::ffi::c_int;
 
-use faer::dyn_stack::MemStack;
 use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Par, Spec};
 
-use super::{dim, lapack_done, leading, mat_mut, scratch, slice_mut, Illegal, Real};
+use super::{dim, lapack_done, leading, mat_mut, slice_mut, with_scratch, Illegal, Real};
 
 /// Solves `A·X = B` (A n×n, B n×nrhs): `A` is overwritten by `L` (unit, below the
 /// diagonal) and `U` of `P·A = L·U`, `ipiv` receives LAPACK's row interchanges (row i
@@ -40,27 +39,26 @@ unsafe fn gesv<T: Real>(
         let b = mat_mut(b, n, nrhs, ldb, 6)?;
         let mut perm = vec![0usize; n];
         let mut perm_inv = vec![0usize; n];
-        let mut mem = scratch(
-            factor::lu_in_place_scratch::<usize, T>(n, n, Par::Seq, Spec::default())
-                .or(solve::solve_in_place_scratch::<usize, T>(n, nrhs, Par::Seq)),
-        );
-        let (_, p) = factor::lu_in_place(
-            a.rb_mut(),
-            &mut perm,
-            &mut perm_inv,
-            Par::Seq,
-            MemStack::new(&mut mem),
-            Spec::default(),
-        );
-        interchanges(p.arrays().0, ipiv);
-        if let Some(i) = (0..n).find(|&i| a[(i, i)] == T::zero()) {
-            return Ok(i as i32 + 1);
-        }
-        if nrhs > 0 {
-            let a = a.rb();
-            solve::solve_in_place(a, a, p, b, Par::Seq, MemStack::new(&mut mem));
-        }
-        Ok(0)
+        let req = factor::lu_in_place_scratch::<usize, T>(n, n, Par::Seq, Spec::default())
+            .or(solve::solve_in_place_scratch::<usize, T>(n, nrhs, Par::Seq));
+        let singular = with_scratch(req, |stack| {
+            let (_, p) = factor::lu_in_place(
+                a.rb_mut(),
+                &mut perm,
+                &mut perm_inv,
+                Par::Seq,
+                stack,
+                Spec::default(),
+            );
+            interchanges(p.arrays().0, ipiv);
+            let singular = (0..n).find(|&i| a[(i, i)] == T::zero());
+            if singular.is_none() && nrhs > 0 {
+                let a = a.rb();
+                solve::solve_in_place(a, a, p, b, Par::Seq, stack);
+            }
+            singular
+        });
+        Ok(singular.map_or(0, |i| i as i32 + 1))
     }
 }
 

@@ -4,14 +4,16 @@
 
 use std::ffi::{c_char, c_int};
 
-use faer::dyn_stack::MemStack;
+use faer::dyn_stack::StackReq;
 use faer::linalg::svd::{self, ComputeSvdVectors};
+use faer::linalg::{temp_mat_scratch, temp_mat_zeroed};
+use faer::mat::AsMatMut;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::traits::ext::ComplexFieldExt;
-use faer::{Mat, MatMut, MatRef, Par};
+use faer::{MatMut, MatRef, Par};
 
-use super::{dim, lapack_done, leading, mat_mut, option, scalar, scratch, slice_mut};
-use super::{Illegal, Real};
+use super::{dim, lapack_done, leading, mat_mut, option, scalar, slice_mut};
+use super::{with_scratch, Illegal, Real};
 
 /// Where a driver puts one side's singular vectors (`jobu`/`jobvt` of `?gesvd`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -70,63 +72,75 @@ unsafe fn decompose<T: Real>(
             Job::All | Job::Thin => Some(mat_mut(vt, vt_rows, n, ldvt, arg_vt)?),
             _ => None,
         };
-        // Vectors that go over A are computed aside first: faer reads A throughout.
-        let mut u_aside = (ju == Job::Overwrite).then(|| Mat::<T>::zeros(m, k));
-        let mut v_aside = (jv == Job::Overwrite).then(|| Mat::<T>::zeros(n, k));
         let compute = |job: Job| match job {
             Job::All => ComputeSvdVectors::Full,
             Job::Thin | Job::Overwrite => ComputeSvdVectors::Thin,
             Job::None => ComputeSvdVectors::No,
         };
-        let mut mem = scratch(svd::svd_scratch::<T>(
-            m,
-            n,
-            compute(ju),
-            compute(jv),
-            Par::Seq,
-            Default::default(),
-        ));
-        let mut values = Mat::<T>::zeros(k, 1);
-        let mut u_view = match (&mut u, &mut u_aside) {
-            (Some(u), _) => Some(u.rb_mut()),
-            (None, Some(aside)) => Some(aside.as_mut()),
-            (None, None) => None,
-        };
-        // faer returns V; Vᵀ's array seen transposed is V's.
-        let mut v_view = match (&mut vt, &mut v_aside) {
-            (Some(vt), _) => Some(vt.rb_mut().transpose_mut()),
-            (None, Some(aside)) => Some(aside.as_mut()),
-            (None, None) => None,
-        };
-        // faer's QR path leaves the block of a full U right of its first min(m, n)
-        // columns unwritten (it expects zeroed outputs, which its own wrappers give).
-        for view in [u_view.as_mut(), v_view.as_mut()].into_iter().flatten() {
-            view.fill(T::zero());
-        }
-        let solved = svd::svd(
-            a.rb(),
-            values.as_mut().col_mut(0).as_diagonal_mut(),
-            u_view,
-            v_view,
-            Par::Seq,
-            MemStack::new(&mut mem),
-            Default::default(),
-        );
-        if solved.is_err() {
-            return Ok(false);
-        }
-        for (i, si) in s.iter_mut().enumerate() {
-            *si = values[(i, 0)];
-        }
-        let mut a = a;
-        if let Some(aside) = u_aside {
-            a.rb_mut().get_mut(.., ..k).copy_from(aside);
-        }
-        if let Some(aside) = v_aside {
-            a.rb_mut().get_mut(..k, ..).copy_from(aside.transpose());
-        }
-        Ok(true)
+        // Vectors that go over A are computed aside first: faer reads A throughout.
+        let u_aside_cols = if ju == Job::Overwrite { k } else { 0 };
+        let v_aside_cols = if jv == Job::Overwrite { k } else { 0 };
+        let req = StackReq::all_of(&[
+            temp_mat_scratch::<T>(k, 1),
+            temp_mat_scratch::<T>(m, u_aside_cols),
+            temp_mat_scratch::<T>(n, v_aside_cols),
+            svd::svd_scratch::<T>(m, n, compute(ju), compute(jv), Par::Seq, Default::default()),
+        ]);
+        Ok(with_scratch(req, |stack| {
+            let (mut values, stack) = temp_mat_zeroed::<T, _, _>(k, 1, stack);
+            let mut values = values.as_mat_mut();
+            let (mut u_aside, stack) = temp_mat_zeroed::<T, _, _>(m, u_aside_cols, stack);
+            let mut u_aside = u_aside.as_mat_mut();
+            let (mut v_aside, stack) = temp_mat_zeroed::<T, _, _>(n, v_aside_cols, stack);
+            let mut v_aside = v_aside.as_mat_mut();
+            let u_view = match (&mut u, ju) {
+                (Some(u), _) => Some(u.rb_mut()),
+                (None, Job::Overwrite) => Some(u_aside.rb_mut()),
+                (None, _) => None,
+            };
+            // faer returns V; Vᵀ's array seen transposed is V's.
+            let v_view = match (&mut vt, jv) {
+                (Some(vt), _) => Some(vt.rb_mut().transpose_mut()),
+                (None, Job::Overwrite) => Some(v_aside.rb_mut()),
+                (None, _) => None,
+            };
+            let solved = svd::svd(
+                a.rb(),
+                values.rb_mut().col_mut(0).as_diagonal_mut(),
+                zeroed(u_view),
+                zeroed(v_view),
+                Par::Seq,
+                stack,
+                Default::default(),
+            );
+            if solved.is_err() {
+                return false;
+            }
+            for (i, si) in s.iter_mut().enumerate() {
+                *si = values[(i, 0)];
+            }
+            let mut a = a;
+            if ju == Job::Overwrite {
+                a.rb_mut().get_mut(.., ..k).copy_from(u_aside.rb());
+            }
+            if jv == Job::Overwrite {
+                a.rb_mut()
+                    .get_mut(..k, ..)
+                    .copy_from(v_aside.rb().transpose());
+            }
+            true
+        }))
     }
+}
+
+/// `view` filled with zeros: faer's QR path leaves the block of a full U right of its
+/// first min(m, n) columns unwritten (it expects zeroed outputs, which its own wrappers
+/// allocate).
+fn zeroed<T: Real>(view: Option<MatMut<'_, T>>) -> Option<MatMut<'_, T>> {
+    view.map(|mut v| {
+        v.fill(T::zero());
+        v
+    })
 }
 
 /// Whether every entry is finite (faer's iteration is not meant for NaN or infinity).
