@@ -14,6 +14,8 @@
 pub mod error;
 pub mod estimate;
 pub mod excite;
+#[cfg(feature = "rust-lapack")]
+mod lapack;
 pub mod log;
 mod median;
 pub mod observation;

@@ -1,33 +1,19 @@
 //! Acceptance on the real dVRK measurements, following the 2019 protocol
-//! (dvrk-models.md): fit on trajectory "one", test on "two" over the first period,
-//! 6th-order zero-phase Butterworth at the cut-offs the 2019 code effectively applied
-//! (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion and the torques, 200 samples
-//! trimmed. Prints the table; skips
-//! with a reason when ../shared is absent.
+//! (dvrk-models.md, `support/protocol_2019.rs`): fit on trajectory "one", test on "two"
+//! over the first period, 6th-order zero-phase Butterworth at the cut-offs the 2019 code
+//! effectively applied (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion and the
+//! torques, 200 samples trimmed. Prints the table; skips with a reason when ../shared
+//! is absent.
 
-use std::path::PathBuf;
+#[path = "support/protocol_2019.rs"]
+mod protocol_2019;
 
-use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::signal::{Cutoff, LowPass};
-use dvrk_ident::{fit, FitResult, FitSettings, Method, Trajectory};
+use dvrk_ident::{fit, FitResult, Method, Trajectory};
 use dvrk_model::Model;
-
-fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/dvrk")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: {} not found (../shared absent)", p.display());
-        None
-    }
-}
+use protocol_2019::{settings, stribeck_settings, zero_lower_bounds, Protocol};
 
 struct Case {
-    robot: &'static str,
-    cutoff_hz: f64,
-    window: usize,
+    protocol: Protocol,
     /// Published 2019 test errors (MTM OLS: the 2019 code rerun).
     published: [(Method, [f64; 7]); 3],
     /// Our SDP test errors with the 2019 bounds (regression guard, see `run`).
@@ -40,9 +26,7 @@ struct Case {
 }
 
 const PSM: Case = Case {
-    robot: "psm",
-    cutoff_hz: 16.965,
-    window: 1111,
+    protocol: protocol_2019::PSM,
     published: [
         (
             Method::Ols,
@@ -63,9 +47,7 @@ const PSM: Case = Case {
 };
 
 const MTM: Case = Case {
-    robot: "mtm",
-    cutoff_hz: 5.655,
-    window: 2000,
+    protocol: protocol_2019::MTM,
     published: [
         (
             Method::Ols,
@@ -84,21 +66,6 @@ const MTM: Case = Case {
     stribeck_wls_guard: [0.0794, 0.1535, 0.1845, 0.1866, 0.2439, 0.2437, 0.3196],
     stribeck_sdp_guard: [0.0738, 0.1461, 0.1626, 0.2010, 0.2413, 0.2218, 0.3093],
 };
-
-fn settings(case: &Case, method: Method) -> FitSettings {
-    let mut s = FitSettings {
-        method,
-        test_window: Some(case.window),
-        ..FitSettings::default()
-    };
-    s.processing.filter = Some(LowPass {
-        cutoff_hz: Cutoff::All(case.cutoff_hz),
-        ..LowPass::default()
-    });
-    // The 2019 protocol filters the torques too.
-    s.processing.filter_torque = true;
-    s
-}
 
 fn check_sdp(model: &Model, r: &FitResult) {
     assert!(r.solver.converged, "SDP status {}", r.solver.status);
@@ -140,18 +107,21 @@ fn check_sdp(model: &Model, r: &FitResult) {
 }
 
 fn run(case: &Case) {
-    let (Some(one), Some(two)) = (
-        data(&format!("{}/one_results.csv", case.robot)),
-        data(&format!("{}/two_results.csv", case.robot)),
-    ) else {
+    let Some((model, train, test)) = protocol_2019::load(&case.protocol) else {
         return;
     };
-    let model = Model::builtin(case.robot).unwrap();
-    let train = log::read(&one, Some(LogFormat::Wpi), Some(200.0)).unwrap();
-    let test = log::read(&two, Some(LogFormat::Wpi), Some(200.0)).unwrap();
-    println!("{} test errors (first period), ours vs 2019:", case.robot);
+    println!(
+        "{} test errors (first period), ours vs 2019:",
+        case.protocol.robot
+    );
     for (method, published) in &case.published {
-        let r = fit(&model, &train, Some(&test), &settings(case, *method)).unwrap();
+        let r = fit(
+            &model,
+            &train,
+            Some(&test),
+            &settings(&case.protocol, *method),
+        )
+        .unwrap();
         let ours = &r.metrics.test.as_ref().unwrap().relative_error;
         let row: Vec<String> = ours
             .iter()
@@ -180,7 +150,7 @@ fn run(case: &Case) {
             assert!(
                 *o <= p + 0.005,
                 "{} {} joint {}: {o:.4} > {p:.4} + 0.005",
-                case.robot,
+                case.protocol.robot,
                 r.method,
                 j + 1
             );
@@ -197,10 +167,7 @@ fn run(case: &Case) {
 /// for the physically consistent fit also zero lower bounds on Fc, Fv and Ia (the 2019
 /// bounds of 0.001 exceed what the wrist data support, see `run`).
 fn beyond_2019(case: &Case, model: &Model, train: &Trajectory, test: &Trajectory) {
-    let mut relaxed = model.clone();
-    relaxed.bounds.fc_min = 0.0;
-    relaxed.bounds.fv_min = 0.0;
-    relaxed.bounds.ia_min = 0.0;
+    let relaxed = zero_lower_bounds(model);
     let sdp_published = case.published[2].1;
     for (label, m, method, guard) in [
         (
@@ -216,8 +183,7 @@ fn beyond_2019(case: &Case, model: &Model, train: &Trajectory, test: &Trajectory
             case.stribeck_sdp_guard,
         ),
     ] {
-        let mut s = settings(case, method);
-        s.stribeck_velocity = Some(0.3);
+        let s = stribeck_settings(&case.protocol, method);
         let r = fit(m, train, Some(test), &s).unwrap();
         let ours = &r.metrics.test.as_ref().unwrap().relative_error;
         let better = ours
@@ -236,7 +202,7 @@ fn beyond_2019(case: &Case, model: &Model, train: &Trajectory, test: &Trajectory
             assert!(
                 *o <= g + 0.002,
                 "{} {label} joint {}: {o:.4} > {g:.4}",
-                case.robot,
+                case.protocol.robot,
                 j + 1
             );
         }
@@ -245,7 +211,7 @@ fn beyond_2019(case: &Case, model: &Model, train: &Trajectory, test: &Trajectory
             check_sdp(&m, &r);
             assert!(r.physically_consistent);
             // On the MTM this beats the published 2019 SDP on every joint.
-            if case.robot == "mtm" {
+            if case.protocol.robot == "mtm" {
                 assert_eq!(better, 7, "{ours:?}");
             }
         }

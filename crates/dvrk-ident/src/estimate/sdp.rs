@@ -66,9 +66,6 @@ use dvrk_model::{Model, ParamKind};
 use nalgebra::DMatrix;
 use thiserror::Error;
 
-// Link the system OpenBLAS that provides Clarabel's BLAS/LAPACK (no download).
-use openblas_src as _;
-
 /// Options of [`solve_sdp`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct SdpOptions {
@@ -339,6 +336,8 @@ pub fn solve_sdp(
     options: &SdpOptions,
 ) -> Result<SdpSolution, SdpError> {
     let started = Instant::now();
+    #[cfg(feature = "rust-lapack")]
+    crate::lapack::link();
     let p = model.n_params();
     let np1 = p + 1;
     if r.nrows() != np1 || r.ncols() != np1 {

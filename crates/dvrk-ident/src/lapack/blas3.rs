@@ -1,0 +1,302 @@
+//! Level-3 BLAS: `?gemm` (Clarabel's dense products), `?syrk` and `?syr2k` (its
+//! symmetric updates in the PSD cone's scaling), over faer's (triangular) matmul.
+
+use std::ffi::{c_char, c_int};
+
+use faer::linalg::matmul::matmul;
+use faer::linalg::matmul::triangular::{self, BlockStructure};
+use faer::reborrow::ReborrowMut;
+use faer::{Accum, MatRef, Par};
+
+use super::{accumulate, blas_done, dim, leading, mat_mut, mat_ref, scalar, scale, transposed};
+use super::{upper, Illegal, Part, Real};
+
+/// `C ← alpha·op(A)·op(B) + beta·C`, `C` m×n. Quick returns as the reference: nothing
+/// when `m = 0`, `n = 0` or (`alpha = 0` or `k = 0`) with `beta = 1`; `A` and `B` are
+/// not read when `alpha = 0` or `k = 0`.
+#[allow(clippy::too_many_arguments)]
+unsafe fn gemm<T: Real>(
+    transa: *const c_char,
+    transb: *const c_char,
+    m: *const c_int,
+    n: *const c_int,
+    k: *const c_int,
+    alpha: *const T,
+    a: *const T,
+    lda: *const c_int,
+    b: *const T,
+    ldb: *const c_int,
+    beta: *const T,
+    c: *mut T,
+    ldc: *const c_int,
+) -> Result<(), Illegal> {
+    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // read or viewed through the checked helpers with the extent its dimensions imply.
+    unsafe {
+        let ta = transposed(transa, 1)?;
+        let tb = transposed(transb, 2)?;
+        let m = dim(m, 3)?;
+        let n = dim(n, 4)?;
+        let k = dim(k, 5)?;
+        let (a_rows, a_cols) = if ta { (k, m) } else { (m, k) };
+        let (b_rows, b_cols) = if tb { (n, k) } else { (k, n) };
+        let lda = leading(lda, 8, a_rows)?;
+        let ldb = leading(ldb, 10, b_rows)?;
+        let ldc = leading(ldc, 13, m)?;
+        if m == 0 || n == 0 {
+            return Ok(());
+        }
+        let alpha = scalar(alpha, 6)?;
+        let beta = scalar(beta, 11)?;
+        let no_product = alpha == T::zero() || k == 0;
+        if no_product && beta == T::one() {
+            return Ok(());
+        }
+        let mut c = mat_mut(c, m, n, ldc, 12)?;
+        if no_product {
+            scale(c, beta, Part::All);
+            return Ok(());
+        }
+        let a = op(mat_ref(a, a_rows, a_cols, lda, 7)?, ta);
+        let b = op(mat_ref(b, b_rows, b_cols, ldb, 9)?, tb);
+        let accum = accumulate(c.rb_mut(), beta, Part::All);
+        matmul(c, accum, a, b, alpha, Par::Seq);
+        Ok(())
+    }
+}
+
+/// `C ← alpha·A·Aᵀ + beta·C` (`trans = 'N'`, `A` n×k) or `alpha·Aᵀ·A + beta·C` (`A`
+/// k×n), only the `uplo` triangle of `C` referenced and written.
+#[allow(clippy::too_many_arguments)]
+unsafe fn syrk<T: Real>(
+    uplo: *const c_char,
+    trans: *const c_char,
+    n: *const c_int,
+    k: *const c_int,
+    alpha: *const T,
+    a: *const T,
+    lda: *const c_int,
+    beta: *const T,
+    c: *mut T,
+    ldc: *const c_int,
+) -> Result<(), Illegal> {
+    // SAFETY: as in `gemm`.
+    unsafe {
+        let up = upper(uplo, 1)?;
+        let t = transposed(trans, 2)?;
+        let n = dim(n, 3)?;
+        let k = dim(k, 4)?;
+        let (a_rows, a_cols) = if t { (k, n) } else { (n, k) };
+        let lda = leading(lda, 7, a_rows)?;
+        let ldc = leading(ldc, 10, n)?;
+        if n == 0 {
+            return Ok(());
+        }
+        let alpha = scalar(alpha, 5)?;
+        let beta = scalar(beta, 8)?;
+        let no_product = alpha == T::zero() || k == 0;
+        if no_product && beta == T::one() {
+            return Ok(());
+        }
+        let mut c = mat_mut(c, n, n, ldc, 9)?;
+        let (part, structure) = triangle(up);
+        if no_product {
+            scale(c, beta, part);
+            return Ok(());
+        }
+        // op(A) is n×k either way: C ← alpha·op(A)·op(A)ᵀ.
+        let a = op(mat_ref(a, a_rows, a_cols, lda, 6)?, t);
+        let accum = accumulate(c.rb_mut(), beta, part);
+        triangular::matmul(
+            c,
+            structure,
+            accum,
+            a,
+            BlockStructure::Rectangular,
+            a.transpose(),
+            BlockStructure::Rectangular,
+            alpha,
+            Par::Seq,
+        );
+        Ok(())
+    }
+}
+
+/// `C ← alpha·(A·Bᵀ + B·Aᵀ) + beta·C` (`trans = 'N'`, `A`, `B` n×k) or
+/// `alpha·(Aᵀ·B + Bᵀ·A) + beta·C` (k×n), only the `uplo` triangle of `C` referenced
+/// and written.
+#[allow(clippy::too_many_arguments)]
+unsafe fn syr2k<T: Real>(
+    uplo: *const c_char,
+    trans: *const c_char,
+    n: *const c_int,
+    k: *const c_int,
+    alpha: *const T,
+    a: *const T,
+    lda: *const c_int,
+    b: *const T,
+    ldb: *const c_int,
+    beta: *const T,
+    c: *mut T,
+    ldc: *const c_int,
+) -> Result<(), Illegal> {
+    // SAFETY: as in `gemm`.
+    unsafe {
+        let up = upper(uplo, 1)?;
+        let t = transposed(trans, 2)?;
+        let n = dim(n, 3)?;
+        let k = dim(k, 4)?;
+        let (rows, cols) = if t { (k, n) } else { (n, k) };
+        let lda = leading(lda, 7, rows)?;
+        let ldb = leading(ldb, 9, rows)?;
+        let ldc = leading(ldc, 12, n)?;
+        if n == 0 {
+            return Ok(());
+        }
+        let alpha = scalar(alpha, 5)?;
+        let beta = scalar(beta, 10)?;
+        let no_product = alpha == T::zero() || k == 0;
+        if no_product && beta == T::one() {
+            return Ok(());
+        }
+        let mut c = mat_mut(c, n, n, ldc, 11)?;
+        let (part, structure) = triangle(up);
+        if no_product {
+            scale(c, beta, part);
+            return Ok(());
+        }
+        let a = op(mat_ref(a, rows, cols, lda, 6)?, t);
+        let b = op(mat_ref(b, rows, cols, ldb, 8)?, t);
+        let accum = accumulate(c.rb_mut(), beta, part);
+        for (x, y, accum) in [(a, b, accum), (b, a, Accum::Add)] {
+            triangular::matmul(
+                c.rb_mut(),
+                structure,
+                accum,
+                x,
+                BlockStructure::Rectangular,
+                y.transpose(),
+                BlockStructure::Rectangular,
+                alpha,
+                Par::Seq,
+            );
+        }
+        Ok(())
+    }
+}
+
+/// `A` or `Aᵀ`.
+fn op<T>(a: MatRef<'_, T>, transposed: bool) -> MatRef<'_, T> {
+    if transposed {
+        a.transpose()
+    } else {
+        a
+    }
+}
+
+/// The updated part of `C` for `uplo`, as this module and faer name it.
+fn triangle(upper: bool) -> (Part, BlockStructure) {
+    if upper {
+        (Part::Upper, BlockStructure::TriangularUpper)
+    } else {
+        (Part::Lower, BlockStructure::TriangularLower)
+    }
+}
+
+macro_rules! export_gemm {
+    ($name:ident, $T:ty, $routine:literal) => {
+        #[doc = concat!("`", $routine, "`: general matrix product (see `gemm`).")]
+        ///
+        /// # Safety
+        /// Fortran BLAS contract: valid arguments, arrays of the extents the dimensions
+        /// imply, `c` not overlapping the inputs.
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            transa: *const c_char,
+            transb: *const c_char,
+            m: *const c_int,
+            n: *const c_int,
+            k: *const c_int,
+            alpha: *const $T,
+            a: *const $T,
+            lda: *const c_int,
+            b: *const $T,
+            ldb: *const c_int,
+            beta: *const $T,
+            c: *mut $T,
+            ldc: *const c_int,
+        ) {
+            // SAFETY: forwarded contract.
+            let result =
+                unsafe { gemm::<$T>(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc) };
+            blas_done($routine, result);
+        }
+    };
+}
+
+export_gemm!(sgemm_, f32, "SGEMM");
+export_gemm!(dgemm_, f64, "DGEMM");
+
+macro_rules! export_syrk {
+    ($name:ident, $T:ty, $routine:literal) => {
+        #[doc = concat!("`", $routine, "`: symmetric rank-k update (see `syrk`).")]
+        ///
+        /// # Safety
+        /// As [`dgemm_`].
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            uplo: *const c_char,
+            trans: *const c_char,
+            n: *const c_int,
+            k: *const c_int,
+            alpha: *const $T,
+            a: *const $T,
+            lda: *const c_int,
+            beta: *const $T,
+            c: *mut $T,
+            ldc: *const c_int,
+        ) {
+            // SAFETY: forwarded contract.
+            let result = unsafe { syrk::<$T>(uplo, trans, n, k, alpha, a, lda, beta, c, ldc) };
+            blas_done($routine, result);
+        }
+    };
+}
+
+export_syrk!(ssyrk_, f32, "SSYRK");
+export_syrk!(dsyrk_, f64, "DSYRK");
+
+macro_rules! export_syr2k {
+    ($name:ident, $T:ty, $routine:literal) => {
+        #[doc = concat!("`", $routine, "`: symmetric rank-2k update (see `syr2k`).")]
+        ///
+        /// # Safety
+        /// As [`dgemm_`].
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            uplo: *const c_char,
+            trans: *const c_char,
+            n: *const c_int,
+            k: *const c_int,
+            alpha: *const $T,
+            a: *const $T,
+            lda: *const c_int,
+            b: *const $T,
+            ldb: *const c_int,
+            beta: *const $T,
+            c: *mut $T,
+            ldc: *const c_int,
+        ) {
+            // SAFETY: forwarded contract.
+            let result =
+                unsafe { syr2k::<$T>(uplo, trans, n, k, alpha, a, lda, b, ldb, beta, c, ldc) };
+            blas_done($routine, result);
+        }
+    };
+}
+
+export_syr2k!(ssyr2k_, f32, "SSYR2K");
+export_syr2k!(dsyr2k_, f64, "DSYR2K");

@@ -1,0 +1,404 @@
+//! `?gesdd` and `?gesvd`: Clarabel's singular value decompositions (its PSD completion
+//! and rank-deficient solves), both over faer's SVD: the two LAPACK drivers differ in
+//! algorithm, not in what they return.
+
+use std::ffi::{c_char, c_int};
+
+use faer::dyn_stack::StackReq;
+use faer::linalg::svd::{self, ComputeSvdVectors};
+use faer::linalg::{temp_mat_scratch, temp_mat_zeroed};
+use faer::mat::AsMatMut;
+use faer::reborrow::{Reborrow, ReborrowMut};
+use faer::traits::ext::ComplexFieldExt;
+use faer::{MatMut, MatRef, Par};
+
+use super::{dim, lapack_done, leading, mat_mut, option, scalar, slice_mut};
+use super::{with_scratch, Illegal, Real};
+
+/// Where a driver puts one side's singular vectors (`jobu`/`jobvt` of `?gesvd`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Job {
+    /// All m (or n) vectors, in `u` (or `vt`).
+    All,
+    /// The first min(m, n), in `u` (or `vt`).
+    Thin,
+    /// The first min(m, n), over the first columns (rows for `vt`) of `a`.
+    Overwrite,
+    /// Not computed.
+    None,
+}
+
+impl Job {
+    fn parse(c: u8) -> Option<Job> {
+        match c {
+            b'A' => Some(Job::All),
+            b'S' => Some(Job::Thin),
+            b'O' => Some(Job::Overwrite),
+            b'N' => Some(Job::None),
+            _ => None,
+        }
+    }
+}
+
+/// `A = U·Σ·Vᵀ` of the m×n `A` (lda): singular values descending in `s`, `U` and `Vᵀ`
+/// placed per `ju`/`jv` (`ldu`, `ldvt` already checked against LAPACK's rules by the
+/// driver; `args` are the argument positions of `s`, `u`, `vt`). Returns false when faer's iteration did not converge. `A` is left as it was
+/// unless a side is [`Job::Overwrite`].
+///
+/// # Safety
+/// The arrays are valid for the extents the dimensions imply.
+#[allow(clippy::too_many_arguments)]
+unsafe fn decompose<T: Real>(
+    (ju, jv): (Job, Job),
+    (m, n): (usize, usize),
+    args: [i32; 3],
+    a: MatMut<'_, T>,
+    s: *mut T,
+    (u, ldu): (*mut T, usize),
+    (vt, ldvt): (*mut T, usize),
+) -> Result<bool, Illegal> {
+    let [arg_s, arg_u, arg_vt] = args;
+    let k = m.min(n);
+    // SAFETY: forwarded contract; every view goes through the checked helpers.
+    unsafe {
+        let s = slice_mut(s, k, arg_s)?;
+        let u_cols = if ju == Job::All { m } else { k };
+        let vt_rows = if jv == Job::All { n } else { k };
+        let mut u = match ju {
+            Job::All | Job::Thin => Some(mat_mut(u, m, u_cols, ldu, arg_u)?),
+            _ => None,
+        };
+        let mut vt = match jv {
+            Job::All | Job::Thin => Some(mat_mut(vt, vt_rows, n, ldvt, arg_vt)?),
+            _ => None,
+        };
+        let compute = |job: Job| match job {
+            Job::All => ComputeSvdVectors::Full,
+            Job::Thin | Job::Overwrite => ComputeSvdVectors::Thin,
+            Job::None => ComputeSvdVectors::No,
+        };
+        // Vectors that go over A are computed aside first: faer reads A throughout.
+        let u_aside_cols = if ju == Job::Overwrite { k } else { 0 };
+        let v_aside_cols = if jv == Job::Overwrite { k } else { 0 };
+        let req = StackReq::all_of(&[
+            temp_mat_scratch::<T>(k, 1),
+            temp_mat_scratch::<T>(m, u_aside_cols),
+            temp_mat_scratch::<T>(n, v_aside_cols),
+            svd::svd_scratch::<T>(m, n, compute(ju), compute(jv), Par::Seq, Default::default()),
+        ]);
+        Ok(with_scratch(req, |stack| {
+            let (mut values, stack) = temp_mat_zeroed::<T, _, _>(k, 1, stack);
+            let mut values = values.as_mat_mut();
+            let (mut u_aside, stack) = temp_mat_zeroed::<T, _, _>(m, u_aside_cols, stack);
+            let mut u_aside = u_aside.as_mat_mut();
+            let (mut v_aside, stack) = temp_mat_zeroed::<T, _, _>(n, v_aside_cols, stack);
+            let mut v_aside = v_aside.as_mat_mut();
+            let u_view = match (&mut u, ju) {
+                (Some(u), _) => Some(u.rb_mut()),
+                (None, Job::Overwrite) => Some(u_aside.rb_mut()),
+                (None, _) => None,
+            };
+            // faer returns V; Vᵀ's array seen transposed is V's.
+            let v_view = match (&mut vt, jv) {
+                (Some(vt), _) => Some(vt.rb_mut().transpose_mut()),
+                (None, Job::Overwrite) => Some(v_aside.rb_mut()),
+                (None, _) => None,
+            };
+            let solved = svd::svd(
+                a.rb(),
+                values.rb_mut().col_mut(0).as_diagonal_mut(),
+                zeroed(u_view),
+                zeroed(v_view),
+                Par::Seq,
+                stack,
+                Default::default(),
+            );
+            if solved.is_err() {
+                return false;
+            }
+            for (i, si) in s.iter_mut().enumerate() {
+                *si = values[(i, 0)];
+            }
+            let mut a = a;
+            if ju == Job::Overwrite {
+                a.rb_mut().get_mut(.., ..k).copy_from(u_aside.rb());
+            }
+            if jv == Job::Overwrite {
+                a.rb_mut()
+                    .get_mut(..k, ..)
+                    .copy_from(v_aside.rb().transpose());
+            }
+            true
+        }))
+    }
+}
+
+/// `view` filled with zeros: faer's QR path leaves the block of a full U right of its
+/// first min(m, n) columns unwritten (it expects zeroed outputs, which its own wrappers
+/// allocate).
+fn zeroed<T: Real>(view: Option<MatMut<'_, T>>) -> Option<MatMut<'_, T>> {
+    view.map(|mut v| {
+        v.fill(T::zero());
+        v
+    })
+}
+
+/// Whether every entry is finite (faer's iteration is not meant for NaN or infinity).
+fn finite<T: Real>(a: MatRef<'_, T>) -> bool {
+    (0..a.ncols()).all(|j| (0..a.nrows()).all(|i| a[(i, j)].is_finite()))
+}
+
+/// LAPACK's minimum `lwork` of `?gesdd` for `jobz` (its path choice included, so that
+/// any size LAPACK accepts is accepted).
+fn gesdd_min_work(jobz: u8, m: usize, n: usize) -> usize {
+    let (small, large) = (m.min(n), m.max(n));
+    if small == 0 {
+        return 1;
+    }
+    let bdspac = if jobz == b'N' {
+        7 * small
+    } else {
+        3 * small * small + 4 * small
+    };
+    let much_larger = large >= small * 11 / 6;
+    match (much_larger, jobz) {
+        (true, b'N') => bdspac + small,
+        (true, b'O') => bdspac + 2 * small * small + 3 * small,
+        (true, b'S') => bdspac + small * small + 3 * small,
+        (true, _) => small * small + (3 * small + bdspac).max(small + large),
+        (false, b'O') => 3 * small + large.max(small * small + bdspac),
+        (false, _) => 3 * small + large.max(bdspac),
+    }
+}
+
+/// LAPACK's minimum `lwork` of `?gesvd` (its path choice included): `5·min(m, n)` when
+/// the long side's vectors are not wanted and it is much longer, else
+/// `max(3·min + max, 5·min)`.
+fn gesvd_min_work(ju: Job, jv: Job, m: usize, n: usize) -> usize {
+    let (small, large) = (m.min(n), m.max(n));
+    if small == 0 {
+        return 1;
+    }
+    let long_side_unwanted = if m >= n {
+        ju == Job::None
+    } else {
+        jv == Job::None
+    };
+    let much_larger = large >= (small as f32 * 1.6) as usize;
+    if much_larger && long_side_unwanted {
+        5 * small
+    } else {
+        (3 * small + large).max(5 * small)
+    }
+}
+
+/// `?gesdd`: `jobz` 'A' (all of U and Vᵀ), 'S' (the first min(m, n)), 'O' (those over
+/// `A`: U's when m ≥ n, with all of Vᵀ in `vt`; else Vᵀ's, with all of U in `u`), 'N'
+/// (values only). `info = -4` for a non-finite `A` (as LAPACK), `1` when the iteration
+/// did not converge.
+#[allow(clippy::too_many_arguments)]
+unsafe fn gesdd<T: Real>(
+    jobz: *const c_char,
+    m: *const c_int,
+    n: *const c_int,
+    a: *mut T,
+    lda: *const c_int,
+    s: *mut T,
+    u: *mut T,
+    ldu: *const c_int,
+    vt: *mut T,
+    ldvt: *const c_int,
+    work: *mut T,
+    lwork: *const c_int,
+    iwork: *mut c_int,
+) -> Result<i32, Illegal> {
+    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // read or viewed through the checked helpers with the extent its dimensions imply.
+    unsafe {
+        let job = option(jobz, 1)?;
+        if !matches!(job, b'A' | b'S' | b'O' | b'N') {
+            return Err(Illegal(1));
+        }
+        let m = dim(m, 2)?;
+        let n = dim(n, 3)?;
+        let k = m.min(n);
+        let lda = leading(lda, 5, m)?;
+        let ldu = dim(ldu, 8)?;
+        let u_in_u = matches!(job, b'A' | b'S') || (job == b'O' && m < n);
+        if ldu < 1 || (u_in_u && ldu < m) {
+            return Err(Illegal(8));
+        }
+        let ldvt = dim(ldvt, 10)?;
+        if ldvt < 1
+            || (job == b'A' && ldvt < n)
+            || (job == b'S' && ldvt < k)
+            || (job == b'O' && m >= n && ldvt < n)
+        {
+            return Err(Illegal(10));
+        }
+        let lwork = scalar(lwork, 12)?;
+        let min_work = gesdd_min_work(job, m, n);
+        slice_mut(work, 1, 11)?[0] = T::from_size(min_work);
+        if lwork == -1 {
+            // `iwork` holds 8·min(m, n) integers; LAPACK has no query for it, Clarabel
+            // reads it back anyway.
+            if k > 0 {
+                slice_mut(iwork, 1, 13)?[0] = (8 * k) as c_int;
+            }
+            return Ok(0);
+        }
+        if lwork < 0 || (lwork as usize) < min_work {
+            return Err(Illegal(12));
+        }
+        if k == 0 {
+            return Ok(0);
+        }
+        let a = mat_mut(a, m, n, lda, 4)?;
+        if !finite(a.rb()) {
+            return Err(Illegal(4));
+        }
+        let jobs = match (job, m >= n) {
+            (b'A', _) => (Job::All, Job::All),
+            (b'S', _) => (Job::Thin, Job::Thin),
+            (b'O', true) => (Job::Overwrite, Job::Thin),
+            (b'O', false) => (Job::Thin, Job::Overwrite),
+            _ => (Job::None, Job::None),
+        };
+        let solved = decompose(jobs, (m, n), [6, 7, 9], a, s, (u, ldu), (vt, ldvt))?;
+        Ok(if solved { 0 } else { 1 })
+    }
+}
+
+/// `?gesvd`: `jobu`/`jobvt` each 'A', 'S', 'O', 'N' as [`Job`] (not both 'O').
+/// `info = 1` when the iteration did not converge or `A` is not finite (LAPACK: the
+/// number of superdiagonals that did not converge).
+#[allow(clippy::too_many_arguments)]
+unsafe fn gesvd<T: Real>(
+    jobu: *const c_char,
+    jobvt: *const c_char,
+    m: *const c_int,
+    n: *const c_int,
+    a: *mut T,
+    lda: *const c_int,
+    s: *mut T,
+    u: *mut T,
+    ldu: *const c_int,
+    vt: *mut T,
+    ldvt: *const c_int,
+    work: *mut T,
+    lwork: *const c_int,
+) -> Result<i32, Illegal> {
+    // SAFETY: as in `gesdd`.
+    unsafe {
+        let ju = Job::parse(option(jobu, 1)?).ok_or(Illegal(1))?;
+        let jv = Job::parse(option(jobvt, 2)?).ok_or(Illegal(2))?;
+        if ju == Job::Overwrite && jv == Job::Overwrite {
+            return Err(Illegal(2));
+        }
+        let m = dim(m, 3)?;
+        let n = dim(n, 4)?;
+        let k = m.min(n);
+        let lda = leading(lda, 6, m)?;
+        let ldu = dim(ldu, 9)?;
+        if ldu < 1 || (matches!(ju, Job::All | Job::Thin) && ldu < m) {
+            return Err(Illegal(9));
+        }
+        let ldvt = dim(ldvt, 11)?;
+        if ldvt < 1 || (jv == Job::All && ldvt < n) || (jv == Job::Thin && ldvt < k) {
+            return Err(Illegal(11));
+        }
+        let lwork = scalar(lwork, 13)?;
+        let min_work = gesvd_min_work(ju, jv, m, n);
+        slice_mut(work, 1, 12)?[0] = T::from_size(min_work);
+        if lwork == -1 {
+            return Ok(0);
+        }
+        if lwork < 0 || (lwork as usize) < min_work {
+            return Err(Illegal(13));
+        }
+        if k == 0 {
+            return Ok(0);
+        }
+        let a = mat_mut(a, m, n, lda, 5)?;
+        if !finite(a.rb()) {
+            return Ok(1);
+        }
+        let solved = decompose((ju, jv), (m, n), [7, 8, 10], a, s, (u, ldu), (vt, ldvt))?;
+        Ok(if solved { 0 } else { 1 })
+    }
+}
+
+macro_rules! export_gesdd {
+    ($name:ident, $T:ty, $routine:literal) => {
+        #[doc = concat!("`", $routine, "`: SVD, divide and conquer in LAPACK (see `gesdd`).")]
+        ///
+        /// # Safety
+        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
+        /// dimensions imply, no output overlapping another argument.
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            jobz: *const c_char,
+            m: *const c_int,
+            n: *const c_int,
+            a: *mut $T,
+            lda: *const c_int,
+            s: *mut $T,
+            u: *mut $T,
+            ldu: *const c_int,
+            vt: *mut $T,
+            ldvt: *const c_int,
+            work: *mut $T,
+            lwork: *const c_int,
+            iwork: *mut c_int,
+            info: *mut c_int,
+        ) {
+            // SAFETY: forwarded contract.
+            unsafe {
+                let result =
+                    gesdd::<$T>(jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork);
+                lapack_done($routine, info, result);
+            }
+        }
+    };
+}
+
+export_gesdd!(sgesdd_, f32, "SGESDD");
+export_gesdd!(dgesdd_, f64, "DGESDD");
+
+macro_rules! export_gesvd {
+    ($name:ident, $T:ty, $routine:literal) => {
+        #[doc = concat!("`", $routine, "`: SVD, QR iteration in LAPACK (see `gesvd`).")]
+        ///
+        /// # Safety
+        /// As [`dgesdd_`].
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $name(
+            jobu: *const c_char,
+            jobvt: *const c_char,
+            m: *const c_int,
+            n: *const c_int,
+            a: *mut $T,
+            lda: *const c_int,
+            s: *mut $T,
+            u: *mut $T,
+            ldu: *const c_int,
+            vt: *mut $T,
+            ldvt: *const c_int,
+            work: *mut $T,
+            lwork: *const c_int,
+            info: *mut c_int,
+        ) {
+            // SAFETY: forwarded contract.
+            unsafe {
+                let result =
+                    gesvd::<$T>(jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork);
+                lapack_done($routine, info, result);
+            }
+        }
+    };
+}
+
+export_gesvd!(sgesvd_, f32, "SGESVD");
+export_gesvd!(dgesvd_, f64, "DGESVD");

@@ -1,0 +1,107 @@
+//! The 2019 protocol on the real dVRK measurements (dvrk-models.md), shared by the
+//! acceptance test, the OpenBLAS-reference test of the semidefinite fit and the SDP
+//! timing bench, so all three fit exactly the same problems: fit on trajectory "one",
+//! test on "two" over the first period, 6th-order zero-phase Butterworth at the cut-offs
+//! the 2019 code effectively applied (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion
+//! and the torques, 200 samples trimmed.
+#![allow(dead_code)] // each includer uses its own part
+
+use std::path::PathBuf;
+
+use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::{FitSettings, Method, Trajectory};
+use dvrk_model::Model;
+
+/// One robot's protocol.
+pub struct Protocol {
+    pub robot: &'static str,
+    /// Low-pass cut-off (Hz).
+    pub cutoff_hz: f64,
+    /// Test metrics over the first period of "two" (samples).
+    pub window: usize,
+}
+
+pub const PSM: Protocol = Protocol {
+    robot: "psm",
+    cutoff_hz: 16.965,
+    window: 1111,
+};
+
+pub const MTM: Protocol = Protocol {
+    robot: "mtm",
+    cutoff_hz: 5.655,
+    window: 2000,
+};
+
+/// A file of `../shared/data/dvrk`, or `None` after printing `SKIPPED` when the
+/// shared folder is not beside the repository.
+pub fn data(rel: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/data/dvrk")
+        .join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        eprintln!("SKIPPED: {} not found (../shared absent)", p.display());
+        None
+    }
+}
+
+/// The robot and its training ("one") and test ("two") logs, `None` (skipped) without
+/// `../shared`.
+pub fn load(protocol: &Protocol) -> Option<(Model, Trajectory, Trajectory)> {
+    let one = data(&format!("{}/one_results.csv", protocol.robot))?;
+    let two = data(&format!("{}/two_results.csv", protocol.robot))?;
+    let model = Model::builtin(protocol.robot).unwrap();
+    let train = log::read(&one, Some(LogFormat::Wpi), Some(200.0)).unwrap();
+    let test = log::read(&two, Some(LogFormat::Wpi), Some(200.0)).unwrap();
+    Some((model, train, test))
+}
+
+/// The fit settings of the protocol for `method`.
+pub fn settings(protocol: &Protocol, method: Method) -> FitSettings {
+    let mut s = FitSettings {
+        method,
+        test_window: Some(protocol.window),
+        ..FitSettings::default()
+    };
+    s.processing.filter = Some(LowPass {
+        cutoff_hz: Cutoff::All(protocol.cutoff_hz),
+        ..LowPass::default()
+    });
+    // The 2019 protocol filters the torques too.
+    s.processing.filter_torque = true;
+    s
+}
+
+/// What helped beyond the 2019 models: a Stribeck term (vs = 0.3 rad/s or m/s) on every
+/// friction element, with `method`'s protocol settings.
+pub fn stribeck_settings(protocol: &Protocol, method: Method) -> FitSettings {
+    let mut s = settings(protocol, method);
+    s.stribeck_velocity = Some(0.3);
+    s
+}
+
+/// `model` with zero lower bounds on Fc, Fv and Ia (the 2019 bounds of 0.001 exceed what
+/// the wrist data support).
+pub fn zero_lower_bounds(model: &Model) -> Model {
+    let mut relaxed = model.clone();
+    relaxed.bounds.fc_min = 0.0;
+    relaxed.bounds.fv_min = 0.0;
+    relaxed.bounds.ia_min = 0.0;
+    relaxed
+}
+
+/// The two semidefinite fits of the protocol: `(label, model, settings)` with the 2019
+/// bounds, and with a Stribeck term and zero lower bounds.
+pub fn sdp_variants(protocol: &Protocol, model: &Model) -> [(&'static str, Model, FitSettings); 2] {
+    [
+        ("SDP", model.clone(), settings(protocol, Method::Sdp)),
+        (
+            "SDP + Stribeck, zero lower bounds",
+            zero_lower_bounds(model),
+            stribeck_settings(protocol, Method::Sdp),
+        ),
+    ]
+}
