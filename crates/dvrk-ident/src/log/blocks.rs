@@ -122,6 +122,15 @@ impl LogReader {
         })
     }
 
+    /// Every sample in memory: the blocks of one pass, collected.
+    pub fn read_all(&self) -> Result<Trajectory, LogError> {
+        let mut all = super::TrajectoryBuilder::default();
+        for block in self.blocks(super::BLOCK_SAMPLES)? {
+            all.push(&block?);
+        }
+        Ok(all.build())
+    }
+
     /// The file.
     pub fn path(&self) -> &Path {
         &self.path

@@ -376,12 +376,7 @@ pub fn read_with(
     rate_hz: Option<f64>,
     mcap_options: &mcap::McapOptions,
 ) -> Result<Trajectory, LogError> {
-    let reader = LogReader::open(path, format, rate_hz, mcap_options)?;
-    let mut all = TrajectoryBuilder::default();
-    for block in reader.blocks(BLOCK_SAMPLES)? {
-        all.push(&block?);
-    }
-    Ok(all.build())
+    LogReader::open(path, format, rate_hz, mcap_options)?.read_all()
 }
 
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
@@ -481,6 +476,17 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
             LogFormat::Csv
         });
     }
+}
+
+/// The files that hold the log at `path`: the file itself, or a rosbag2 folder's
+/// `metadata.yaml` and recording files in order (what the result's provenance hashes).
+pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
+    let path = path.as_ref();
+    if detect_format(path)? != LogFormat::Rosbag2 {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let located = mcap::bag::locate(path)?;
+    Ok(located.metadata.into_iter().chain(located.files).collect())
 }
 
 /// Samples per block when a reader's blocks are collected into a whole log.

@@ -200,35 +200,8 @@ impl Bag {
     /// Finds the files of the recording at `path` (see the module docs). A file that is
     /// no recording is a [`McapProblem::NotARecording`] error saying what it looks like.
     pub fn open(path: &Path) -> Result<Bag, LogError> {
-        let meta = std::fs::metadata(path).map_err(io_error(path))?;
-        let (paths, format) = if meta.is_dir() {
-            let yaml = path.join("metadata.yaml");
-            if yaml.exists() {
-                (metadata_files(&yaml, path)?, LogFormat::Rosbag2)
-            } else {
-                (folder_files(path)?, LogFormat::Rosbag2)
-            }
-        } else {
-            match sniff(path)? {
-                Content::Rosbag2Metadata => {
-                    let dir = match path.parent() {
-                        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-                        _ => PathBuf::from("."),
-                    };
-                    (metadata_files(path, &dir)?, LogFormat::Rosbag2)
-                }
-                Content::Bag(storage, _) => (
-                    vec![path.to_path_buf()],
-                    match storage {
-                        Storage::Mcap => LogFormat::Mcap,
-                        Storage::Sqlite3 => LogFormat::Sqlite3,
-                        Storage::Ros1 => LogFormat::Ros1,
-                    },
-                ),
-                Content::Text => return Err(not_a_recording(path, "a text file (a CSV log?)")),
-                Content::Other(what) => return Err(not_a_recording(path, &what)),
-            }
-        };
+        let located = locate(path)?;
+        let (paths, format) = (located.files, located.format);
         let mut files = Vec::with_capacity(paths.len());
         for p in paths {
             let (storage, packing) = match sniff(&p)? {
@@ -253,6 +226,61 @@ impl Bag {
             files,
             format,
         })
+    }
+}
+
+/// The files of a recording, found without reading them.
+pub(crate) struct Located {
+    /// The rosbag2 metadata.yaml, if there is one.
+    pub metadata: Option<PathBuf>,
+    /// The recording files, in order.
+    pub files: Vec<PathBuf>,
+    pub format: LogFormat,
+}
+
+/// Finds the files of the recording at `path` (a file, a rosbag2 folder or its
+/// metadata.yaml).
+pub(crate) fn locate(path: &Path) -> Result<Located, LogError> {
+    let meta = std::fs::metadata(path).map_err(io_error(path))?;
+    if meta.is_dir() {
+        let yaml = path.join("metadata.yaml");
+        return Ok(if yaml.exists() {
+            Located {
+                files: metadata_files(&yaml, path)?,
+                metadata: Some(yaml),
+                format: LogFormat::Rosbag2,
+            }
+        } else {
+            Located {
+                metadata: None,
+                files: folder_files(path)?,
+                format: LogFormat::Rosbag2,
+            }
+        });
+    }
+    match sniff(path)? {
+        Content::Rosbag2Metadata => {
+            let dir = match path.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+                _ => PathBuf::from("."),
+            };
+            Ok(Located {
+                files: metadata_files(path, &dir)?,
+                metadata: Some(path.to_path_buf()),
+                format: LogFormat::Rosbag2,
+            })
+        }
+        Content::Bag(storage, _) => Ok(Located {
+            metadata: None,
+            files: vec![path.to_path_buf()],
+            format: match storage {
+                Storage::Mcap => LogFormat::Mcap,
+                Storage::Sqlite3 => LogFormat::Sqlite3,
+                Storage::Ros1 => LogFormat::Ros1,
+            },
+        }),
+        Content::Text => Err(not_a_recording(path, "a text file (a CSV log?)")),
+        Content::Other(what) => Err(not_a_recording(path, &what)),
     }
 }
 
