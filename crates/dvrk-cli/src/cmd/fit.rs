@@ -310,16 +310,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     let log_args = args.log_args.for_robot(&model);
     let open = |paths: &[String]| -> Result<Vec<LogReader>> {
-        paths
-            .iter()
-            .map(|p| {
-                let reader = log_args.open(p)?;
-                if !reader.topics().is_empty() {
-                    eprintln!("{p}: topics {}", reader.topics().join(" + "));
-                }
-                Ok(reader)
-            })
-            .collect()
+        paths.iter().map(|p| log_args.open(p)).collect()
     };
     let train = open(&args.logs)?;
     let test = open(&args.test)?;
@@ -468,24 +459,21 @@ pub fn table(r: &FitResult) -> String {
         };
         let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");
     }
-    if r.inputs.len() > 1 {
-        let _ = writeln!(s, "per log (relative error per joint):");
-        for i in &r.inputs {
-            let name = if i.path.is_empty() { &i.source } else { &i.path };
-            let errors = i.metrics.as_ref().map_or(String::new(), |m| {
-                m.relative_error
-                    .iter()
-                    .map(|e| format!("{e:.4}"))
-                    .collect::<Vec<_>>()
-                    .join(" ")
-            });
-            let _ = writeln!(
-                s,
-                "  {:<5} {name} ({} samples, sha256 {}): {errors}",
-                i.role,
-                i.metrics.as_ref().map_or(0, |m| m.samples),
-                &i.sha256[..12.min(i.sha256.len())]
-            );
+    // Each log with what was read of it (a recording's topics) and, when there are
+    // several, its own errors.
+    let _ = writeln!(s, "logs (samples after processing, sha256):");
+    for i in &r.inputs {
+        let name = if i.source.is_empty() { &i.path } else { &i.source };
+        let _ = writeln!(
+            s,
+            "  {:<5} {name} ({} samples, {})",
+            i.role,
+            i.metrics.as_ref().map_or(0, |m| m.samples),
+            &i.sha256[..12.min(i.sha256.len())]
+        );
+        if let (true, Some(m)) = (r.inputs.len() > 1, &i.metrics) {
+            let errors: Vec<String> = m.relative_error.iter().map(|e| format!("{e:.4}")).collect();
+            let _ = writeln!(s, "        relative error {}", errors.join(" "));
         }
     }
     s
