@@ -126,17 +126,28 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
     let joined = Trajectory {
         time: a.time.iter().chain(&b.time).copied().collect(),
         q: DMatrix::from_fn(a.len() + b.len(), n, |i, j| {
-            if i < a.len() { a.q[(i, j)] } else { b.q[(i - a.len(), j)] }
+            if i < a.len() {
+                a.q[(i, j)]
+            } else {
+                b.q[(i - a.len(), j)]
+            }
         }),
         dq: None,
         tau: DMatrix::from_fn(a.len() + b.len(), n, |i, j| {
-            if i < a.len() { a.tau[(i, j)] } else { b.tau[(i - a.len(), j)] }
+            if i < a.len() {
+                a.tau[(i, j)]
+            } else {
+                b.tau[(i - a.len(), j)]
+            }
         }),
         ..a.clone()
     };
     // (Its 100-sample hole is a gap: refused as a single log without resampling.)
     let e = fit_logs(&model, &[LogData::new(&joined)], &[], &settings, &Silent).unwrap_err();
-    assert!(e.to_string().contains("gap") || e.to_string().contains("uniform"), "{e}");
+    assert!(
+        e.to_string().contains("gap") || e.to_string().contains("uniform"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -156,7 +167,10 @@ fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
         log::write(&path, t, *format).unwrap();
         paths.push(path);
     }
-    let read: Vec<Trajectory> = paths.iter().map(|p| log::read(p, None, None).unwrap()).collect();
+    let read: Vec<Trajectory> = paths
+        .iter()
+        .map(|p| log::read(p, None, None).unwrap())
+        .collect();
     let data: Vec<LogData> = read
         .iter()
         .zip(&paths)

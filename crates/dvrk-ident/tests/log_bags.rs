@@ -59,7 +59,10 @@ const FIXTURES: [(&str, LogFormat); 11] = [
 const MORE: [(&str, LogFormat); 4] = [
     ("psm.mcap.lz4", LogFormat::Mcap),
     ("file_zstd/file_zstd_0.mcap.zstd", LogFormat::Mcap),
-    ("sqlite_file_zstd/sqlite_file_zstd_0.db3.zstd", LogFormat::Sqlite3),
+    (
+        "sqlite_file_zstd/sqlite_file_zstd_0.db3.zstd",
+        LogFormat::Sqlite3,
+    ),
     ("noetic_lz4.bag", LogFormat::Ros1),
 ];
 
@@ -121,7 +124,10 @@ fn topics_of_every_format_are_listed() {
             ],
             "{name}"
         );
-        let js = topics.iter().find(|t| t.topic == "/PSM1/measured_js").unwrap();
+        let js = topics
+            .iter()
+            .find(|t| t.topic == "/PSM1/measured_js")
+            .unwrap();
         if name.ends_with(".bag") {
             assert_eq!(
                 (js.schema_name.as_str(), js.message_encoding.as_str()),
@@ -146,7 +152,10 @@ fn without_the_robot_the_single_measured_topic_is_read() {
         matches!(&e, LogError::Mcap { problem, .. } if matches!(**problem, McapProblem::Ambiguous { .. })),
         "{msg}"
     );
-    assert!(msg.contains("/PSM1/jaw/measured_js, /PSM1/measured_js"), "{msg}");
+    assert!(
+        msg.contains("/PSM1/jaw/measured_js, /PSM1/measured_js"),
+        "{msg}"
+    );
     // Joints on one topic only: that topic.
     let arm_only = McapOptions {
         joints: psm_joints()[..6].to_vec(),
@@ -220,9 +229,17 @@ fn split_folder_without_metadata_and_bad_metadata() {
     let e = read_mcap_log(&bag, &options).unwrap_err();
     assert!(matches!(problem(&e), McapProblem::Metadata { .. }), "{e}");
     assert!(e.to_string().contains("gone_1.mcap"), "{e}");
-    std::fs::write(bag.join("metadata.yaml"), "rosbag2_bagfile_information: [1, 2\n").unwrap();
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information: [1, 2\n",
+    )
+    .unwrap();
     let e = read_mcap_log(&bag, &options).unwrap_err();
-    assert!(e.to_string().contains("metadata.yaml: invalid rosbag2 metadata.yaml"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("metadata.yaml: invalid rosbag2 metadata.yaml"),
+        "{e}"
+    );
     // One file of a split recording is a log of its own, its first half.
     let first = read_mcap_log(bag.join("split_0.mcap"), &options).unwrap();
     assert!(first.trajectory.len() < N && !first.trajectory.is_empty());
@@ -236,11 +253,23 @@ fn split_folder_without_metadata_and_bad_metadata() {
 fn what_is_not_a_log_says_what_it_looks_like() {
     let dir = TempDir::new("foreign");
     let cases: [(&str, &[u8], &str); 5] = [
-        ("a.mcap", b"\x1f\x8b\x08\x00\x00\x00\x00\x00", "gzip-compressed data"),
+        (
+            "a.mcap",
+            b"\x1f\x8b\x08\x00\x00\x00\x00\x00",
+            "gzip-compressed data",
+        ),
         ("b.bag", b"#ROSRECORD V1.2\n\x00\x00", "old 1.2 format"),
-        ("c.db3", b"\x00\x01\x02\x03\xff\xfe\x00\x00binary", "binary data of no known log format"),
+        (
+            "c.db3",
+            b"\x00\x01\x02\x03\xff\xfe\x00\x00binary",
+            "binary data of no known log format",
+        ),
         ("d.zip", b"PK\x03\x04\x14\x00", "zip archive"),
-        ("e.mcap.zstd", &[0x28, 0xb5, 0x2f, 0xfd, 0x00, 0x01], "does not decompress"),
+        (
+            "e.mcap.zstd",
+            &[0x28, 0xb5, 0x2f, 0xfd, 0x00, 0x01],
+            "does not decompress",
+        ),
     ];
     for (name, bytes, expect) in cases {
         let p = dir.0.join(name);
@@ -258,19 +287,30 @@ fn what_is_not_a_log_says_what_it_looks_like() {
     let csv = dir.0.join("log.csv.zst");
     std::fs::write(&csv, zstd_of(b"time,position.a,effort.a\n0,1,2\n")).unwrap();
     let e = detect_format(&csv).unwrap_err();
-    assert!(e.to_string().contains("zstd-compressed data that is not a recording"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("zstd-compressed data that is not a recording"),
+        "{e}"
+    );
     // A text file is a CSV whatever its name.
     let named = dir.0.join("log.mcap");
     std::fs::write(&named, "time,position.q1,effort.q1\n0,1,2\n0.005,1,2\n").unwrap();
     assert_eq!(detect_format(&named).unwrap(), LogFormat::Csv);
     // Asked to read it as a recording: it says so.
     let e = McapReader::open(&named, &McapOptions::default()).unwrap_err();
-    assert!(matches!(problem(&e), McapProblem::NotARecording { .. }), "{e}");
+    assert!(
+        matches!(problem(&e), McapProblem::NotARecording { .. }),
+        "{e}"
+    );
     // An empty folder.
     let empty = dir.0.join("empty");
     std::fs::create_dir(&empty).unwrap();
     let e = read_with(&empty, None, None, &McapOptions::default()).unwrap_err();
-    assert!(e.to_string().contains("neither a metadata.yaml nor a recording file"), "{e}");
+    assert!(
+        e.to_string()
+            .contains("neither a metadata.yaml nor a recording file"),
+        "{e}"
+    );
 }
 
 fn zstd_of(bytes: &[u8]) -> Vec<u8> {

@@ -13,8 +13,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PySlice, PyTuple};
 
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
-use crate::frame;
 use crate::errors::{from_ident, from_log, ident_kind, input, log_kind, Kind};
+use crate::frame;
 use crate::json::to_python;
 use crate::robot::Robot;
 
@@ -103,7 +103,12 @@ impl DataPy {
 }
 
 /// Columns of `m` reordered from `names` to `order` (the same joints), or an error.
-fn reorder(m: DMatrix<f64>, names: &[String], order: &[String], what: &str) -> PyResult<DMatrix<f64>> {
+fn reorder(
+    m: DMatrix<f64>,
+    names: &[String],
+    order: &[String],
+    what: &str,
+) -> PyResult<DMatrix<f64>> {
     if names == order {
         return Ok(m);
     }
@@ -115,7 +120,9 @@ fn reorder(m: DMatrix<f64>, names: &[String], order: &[String], what: &str) -> P
     }
     for (j, name) in order.iter().enumerate() {
         let k = names.iter().position(|n| n == name).ok_or_else(|| {
-            input(format!("{what}: columns {names:?} are not the joints of q {order:?}"))
+            input(format!(
+                "{what}: columns {names:?} are not the joints of q {order:?}"
+            ))
         })?;
         out.set_column(j, &m.column(k));
     }
@@ -155,11 +162,9 @@ impl DataPy {
             (Some(names), _) => names,
             (None, Some(cols)) => cols.clone(),
             (None, None) => match coordinates.map(parse_coordinates).transpose()? {
-                Some(Coordinates::Measured) => {
-                    return Err(input(
-                        "joint_names are required in measured coordinates (e.g. robot.measured_joints)",
-                    ))
-                }
+                Some(Coordinates::Measured) => return Err(input(
+                    "joint_names are required in measured coordinates (e.g. robot.measured_joints)",
+                )),
                 _ => (1..=dof_q.ncols()).map(|j| format!("q{j}")).collect(),
             },
         };
@@ -243,14 +248,17 @@ impl DataPy {
             .map_err(|_| input("Data: index with a slice of samples, e.g. data[100:500]"))?;
         let ind = slice.indices(self.traj.len() as isize)?;
         if ind.step <= 0 {
-            return Err(input("Data: a slice must keep the time order (positive step)"));
+            return Err(input(
+                "Data: a slice must keep the time order (positive step)",
+            ));
         }
         let rows: Vec<usize> = (ind.start..ind.stop)
             .step_by(ind.step as usize)
             .map(|k| k as usize)
             .collect();
         let t = &self.traj;
-        let pick = |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
+        let pick =
+            |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
         Ok(DataPy::new(
             Trajectory {
                 time: rows.iter().map(|&k| t.time[k]).collect(),
@@ -326,7 +334,9 @@ impl DataPy {
     }
 
     /// Pickling (and ``copy.deepcopy``): the arrays and names.
-    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let d = slf.get();
         let t = &d.traj;

@@ -6,8 +6,8 @@ use std::sync::Arc;
 use dvrk_ident::fit::{fit_logs, joint_metrics, predict, prepare as prepare_data, LogData};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::{wpi_params_json, write_atomic};
-use dvrk_ident::Trajectory;
 use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::Trajectory;
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
 use numpy::PyArrayDyn;
@@ -39,7 +39,10 @@ fn logs_arg(
 ) -> PyResult<Vec<(Arc<Trajectory>, Option<PathBuf>)>> {
     let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<Trajectory>, Option<PathBuf>)> {
         let d = d.cast::<DataPy>().map_err(|_| {
-            input(format!("{name}: expected a Data or a list of Data, got {}", d.get_type()))
+            input(format!(
+                "{name}: expected a Data or a list of Data, got {}",
+                d.get_type()
+            ))
         })?;
         Ok((d.get().traj.clone(), d.get().path.clone()))
     };
@@ -219,8 +222,14 @@ pub fn fit(
         None => Vec::new(),
     };
     let inner = background(py, move || {
-        fit_logs(&model, &log_data(&train), &log_data(&test), &settings, &Silent)
-            .map_err(fail_ident)
+        fit_logs(
+            &model,
+            &log_data(&train),
+            &log_data(&test),
+            &settings,
+            &Silent,
+        )
+        .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;
     let status = inner.solver.status.clone();
@@ -527,7 +536,10 @@ impl FitResultPy {
             return Ok(r.clone_ref(py));
         }
         let stribeck = self.inner.settings.stribeck_velocity;
-        Py::new(py, Robot::of_result(py, &self.inner.robot_source, stribeck)?)
+        Py::new(
+            py,
+            Robot::of_result(py, &self.inner.robot_source, stribeck)?,
+        )
     }
 
     /// The processed samples of ``data`` with this result's processing settings (see

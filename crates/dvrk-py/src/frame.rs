@@ -204,7 +204,9 @@ pub fn read_frame<'py>(
             ))
         })?;
         if by_signal.iter().any(|(k, j, _)| *k == kind && *j == joint) {
-            return Err(input(format!("df: two {signal} columns for joint {joint:?}")));
+            return Err(input(format!(
+                "df: two {signal} columns for joint {joint:?}"
+            )));
         }
         by_signal.push((kind, joint, df.get_item(&c)?));
     }
@@ -246,7 +248,10 @@ pub fn read_frame<'py>(
         let mut m = DMatrix::zeros(n, joints.len());
         let mut missing = Vec::new();
         for (j, joint) in joints.iter().enumerate() {
-            match by_signal.iter().find(|(k, jn, _)| *k == kind && jn == joint) {
+            match by_signal
+                .iter()
+                .find(|(k, jn, _)| *k == kind && jn == joint)
+            {
                 Some((_, _, col)) => {
                     let arr = float_array(py, col, &format!("{what}.{joint}"))?;
                     let ro = numpy::PyArrayMethods::readonly(&arr);
@@ -272,7 +277,9 @@ pub fn read_frame<'py>(
     };
     let (tau, no_effort) = gather(Column::Effort, "effort")?;
     if !no_effort.is_empty() {
-        return Err(input(format!("df: no effort column for joints {no_effort:?}")));
+        return Err(input(format!(
+            "df: no effort column for joints {no_effort:?}"
+        )));
     }
     Ok(Columns {
         joints,
@@ -304,10 +311,19 @@ pub fn dataframe<'py>(
 }
 
 /// Columns `"{prefix}.{joint}"` of a samples × joints matrix.
-pub fn matrix_columns(prefix: &str, joints: &[String], m: &DMatrix<f64>) -> Vec<(String, Vec<f64>)> {
+pub fn matrix_columns(
+    prefix: &str,
+    joints: &[String],
+    m: &DMatrix<f64>,
+) -> Vec<(String, Vec<f64>)> {
     joints
         .iter()
         .enumerate()
-        .map(|(j, name)| (format!("{prefix}.{name}"), m.column(j).iter().copied().collect()))
+        .map(|(j, name)| {
+            (
+                format!("{prefix}.{name}"),
+                m.column(j).iter().copied().collect(),
+            )
+        })
         .collect()
 }

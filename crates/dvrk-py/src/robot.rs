@@ -73,12 +73,11 @@ impl Origin {
             ));
         }
         let model = Model::load(name_or_path)?;
-        let text = std::fs::read_to_string(name_or_path).map_err(|source| {
-            dvrk_model::ModelError::Io {
+        let text =
+            std::fs::read_to_string(name_or_path).map_err(|source| dvrk_model::ModelError::Io {
                 file: name_or_path.to_string(),
                 source,
-            }
-        })?;
+            })?;
         let source = name_or_path.to_string();
         let origin = if dvrk_model::is_urdf_document(std::path::Path::new(name_or_path), &text) {
             Origin::Urdf { text, source }
@@ -101,11 +100,7 @@ impl Robot {
 
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
-    pub fn of_result(
-        py: Python<'_>,
-        robot_source: &str,
-        stribeck: Option<f64>,
-    ) -> PyResult<Robot> {
+    pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<Robot> {
         let name = robot_source
             .strip_prefix("builtin:")
             .unwrap_or(robot_source)

@@ -463,7 +463,11 @@ pub fn table(r: &FitResult) -> String {
     // several, its own errors.
     let _ = writeln!(s, "logs (samples after processing, sha256):");
     for i in &r.inputs {
-        let name = if i.source.is_empty() { &i.path } else { &i.source };
+        let name = if i.source.is_empty() {
+            &i.path
+        } else {
+            &i.source
+        };
         let _ = writeln!(
             s,
             "  {:<5} {name} ({} samples, {})",

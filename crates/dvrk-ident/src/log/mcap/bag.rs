@@ -89,7 +89,10 @@ pub(crate) fn sniff(path: &Path) -> Result<Content, LogError> {
     } else {
         (Packing::None, bytes)
     };
-    let storage = if inner.starts_with(MCAP_MAGIC) {
+    // A file cut inside the MCAP magic is a truncated MCAP (its reader says so).
+    let cut_magic =
+        !inner.is_empty() && inner.len() < MCAP_MAGIC.len() && MCAP_MAGIC.starts_with(&inner);
+    let storage = if inner.starts_with(MCAP_MAGIC) || cut_magic {
         Some(Storage::Mcap)
     } else if inner.starts_with(SQLITE_MAGIC) {
         Some(Storage::Sqlite3)
@@ -114,7 +117,9 @@ fn unreadable(path: &Path, what: &str, e: &std::io::Error) -> LogError {
         path,
         None,
         McapProblem::Container {
-            reason: format!("the file starts like {what}-compressed data but does not decompress: {e}"),
+            reason: format!(
+                "the file starts like {what}-compressed data but does not decompress: {e}"
+            ),
         },
     )
 }
@@ -122,15 +127,33 @@ fn unreadable(path: &Path, what: &str, e: &std::io::Error) -> LogError {
 /// What uncompressed bytes look like.
 fn describe(bytes: &[u8]) -> Content {
     const KNOWN: [(&[u8], &str); 13] = [
-        (b"#ROSRECORD V1.2", "a ROS 1 bag in the old 1.2 format (convert it with `rosbag fix` to 2.0)"),
+        (
+            b"#ROSRECORD V1.2",
+            "a ROS 1 bag in the old 1.2 format (convert it with `rosbag fix` to 2.0)",
+        ),
         (b"#ROSBAG V", "a ROS 1 bag of an unknown format version"),
-        (b"\x1f\x8b", "gzip-compressed data (decompress it, or compress with zstd or lz4)"),
-        (b"BZh", "bzip2-compressed data (decompress it, or compress with zstd or lz4)"),
-        (b"\xfd7zXZ\x00", "xz-compressed data (decompress it, or compress with zstd or lz4)"),
+        (
+            b"\x1f\x8b",
+            "gzip-compressed data (decompress it, or compress with zstd or lz4)",
+        ),
+        (
+            b"BZh",
+            "bzip2-compressed data (decompress it, or compress with zstd or lz4)",
+        ),
+        (
+            b"\xfd7zXZ\x00",
+            "xz-compressed data (decompress it, or compress with zstd or lz4)",
+        ),
         (b"PK\x03\x04", "a zip archive (extract it first)"),
         (b"\x89HDF\r\n\x1a\n", "an HDF5 file"),
-        (b"\x93NUMPY", "a numpy .npy array (load it in Python and use dvrk_ident.Data)"),
-        (b"PAR1", "a Parquet file (load it with pandas and use dvrk_ident.Data.from_dataframe)"),
+        (
+            b"\x93NUMPY",
+            "a numpy .npy array (load it in Python and use dvrk_ident.Data)",
+        ),
+        (
+            b"PAR1",
+            "a Parquet file (load it with pandas and use dvrk_ident.Data.from_dataframe)",
+        ),
         (b"\x89PNG", "a PNG image"),
         (b"%PDF", "a PDF document"),
         (b"\x7fELF", "an executable"),
@@ -206,6 +229,10 @@ impl Bag {
         for p in paths {
             let (storage, packing) = match sniff(&p)? {
                 Content::Bag(s, k) => (s, k),
+                // Empty: cut before its first byte (the MCAP reader says so).
+                Content::Text if std::fs::metadata(&p).is_ok_and(|m| m.len() == 0) => {
+                    (Storage::Mcap, Packing::None)
+                }
                 Content::Text => return Err(not_a_recording(&p, "a text file")),
                 Content::Rosbag2Metadata => return Err(not_a_recording(&p, "a metadata.yaml")),
                 Content::Other(what) => return Err(not_a_recording(&p, &what)),
@@ -279,6 +306,12 @@ pub(crate) fn locate(path: &Path) -> Result<Located, LogError> {
                 Storage::Ros1 => LogFormat::Ros1,
             },
         }),
+        // An empty file read as a recording: one that was cut before its first byte.
+        Content::Text if meta.len() == 0 => Ok(Located {
+            metadata: None,
+            files: vec![path.to_path_buf()],
+            format: LogFormat::Mcap,
+        }),
         Content::Text => Err(not_a_recording(path, "a text file (a CSV log?)")),
         Content::Other(what) => Err(not_a_recording(path, &what)),
     }
@@ -296,13 +329,7 @@ fn not_a_recording(path: &Path, looks_like: &str) -> LogError {
 
 /// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`).
 fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
-    let bad = |reason: String| {
-        mcap_error(
-            yaml,
-            None,
-            McapProblem::Metadata { reason },
-        )
-    };
+    let bad = |reason: String| mcap_error(yaml, None, McapProblem::Metadata { reason });
     let text = std::fs::read_to_string(yaml).map_err(io_error(yaml))?;
     let docs = yaml_rust2::YamlLoader::load_from_str(&text)
         .map_err(|e| bad(format!("not valid YAML: {e}")))?;
@@ -360,7 +387,10 @@ fn folder_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
         ));
     }
     let split_index = |p: &PathBuf| -> (u64, String) {
-        let name = p.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default();
+        let name = p
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_default();
         let stem = name.split('.').next().unwrap_or_default();
         let index = stem
             .rsplit('_')
@@ -400,7 +430,11 @@ impl TempCopy {
             .create_new(true)
             .open(&copy.path)
             .map_err(io_error(&copy.path))?;
-        let what = if packing == Packing::Zstd { "zstd" } else { "lz4" };
+        let what = if packing == Packing::Zstd {
+            "zstd"
+        } else {
+            "lz4"
+        };
         let copied = match packing {
             Packing::Zstd => zstd::stream::read::Decoder::new(file)
                 .and_then(|mut d| std::io::copy(&mut d, &mut out)),

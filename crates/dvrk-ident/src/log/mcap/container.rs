@@ -77,9 +77,16 @@ pub(crate) struct Channels {
 
 impl Channels {
     /// The index of a channel, added if new.
-    pub(crate) fn index(&mut self, topic: &str, schema_name: &str, message_encoding: &str) -> usize {
+    pub(crate) fn index(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        message_encoding: &str,
+    ) -> usize {
         if let Some(k) = self.list.iter().position(|c| {
-            c.topic == topic && c.schema_name == schema_name && c.message_encoding == message_encoding
+            c.topic == topic
+                && c.schema_name == schema_name
+                && c.message_encoding == message_encoding
         }) {
             return k;
         }
@@ -332,8 +339,7 @@ impl McapFile {
                                         )
                                     })?
                                 };
-                                let k =
-                                    registry.index(&c.topic, &schema_name, &c.message_encoding);
+                                let k = registry.index(&c.topic, &schema_name, &c.message_encoding);
                                 self.channels.insert(c.id, k);
                             }
                             Record::Message { header, data } if !self.past_data_end => {

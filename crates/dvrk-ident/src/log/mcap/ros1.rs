@@ -72,7 +72,8 @@ impl Ros1File {
         let pos = self.chunks[self.next_chunk];
         self.next_chunk += 1;
         let path = &self.path;
-        let fail = |e: rosbag::Error| container(path, format!("ROS 1 bag chunk at byte {pos}: {e}"));
+        let fail =
+            |e: rosbag::Error| container(path, format!("ROS 1 bag chunk at byte {pos}: {e}"));
         let mut records = self.bag.chunk_records();
         records.seek(pos).map_err(fail)?;
         let chunk = match records.next() {
@@ -96,7 +97,10 @@ impl Ros1File {
                     let &channel = self.connections.get(&m.conn_id).ok_or_else(|| {
                         container(
                             path,
-                            format!("a message refers to connection {}, which the bag does not define", m.conn_id),
+                            format!(
+                                "a message refers to connection {}, which the bag does not define",
+                                m.conn_id
+                            ),
                         )
                     })?;
                     self.queue.push_back((channel, m.time, m.data.to_vec()));
@@ -106,7 +110,10 @@ impl Ros1File {
         Ok(())
     }
 
-    pub(crate) fn next(&mut self, channels: &mut Channels) -> Result<Option<RawMessage<'_>>, LogError> {
+    pub(crate) fn next(
+        &mut self,
+        channels: &mut Channels,
+    ) -> Result<Option<RawMessage<'_>>, LogError> {
         while self.queue.is_empty() && self.next_chunk < self.chunks.len() {
             self.read_chunk(channels)?;
         }

@@ -32,9 +32,8 @@ pub(crate) struct SqliteFile {
 impl SqliteFile {
     pub(crate) fn open(file: &BagFile, channels: &mut Channels) -> Result<SqliteFile, LogError> {
         let path = file.path.clone();
-        check_size(file.readable()).map_err(|reason| {
-            mcap_error(&path, None, McapProblem::Container { reason })
-        })?;
+        check_size(file.readable())
+            .map_err(|reason| mcap_error(&path, None, McapProblem::Container { reason }))?;
         let fail = |e: rusqlite::Error| sqlite_error(&path, &e);
         let conn = Connection::open_with_flags(
             file.readable(),
@@ -157,7 +156,9 @@ fn check_size(path: &std::path::Path) -> Result<(), String> {
         1 => 65536,
         p => u64::from(p),
     };
-    let pages = u64::from(u32::from_be_bytes(head[28..32].try_into().expect("4 bytes")));
+    let pages = u64::from(u32::from_be_bytes(
+        head[28..32].try_into().expect("4 bytes"),
+    ));
     let count_valid = head[92..96] == head[24..28];
     let mut wal = path.as_os_str().to_owned();
     wal.push("-wal");

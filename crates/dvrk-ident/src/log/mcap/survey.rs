@@ -270,9 +270,8 @@ pub(super) fn survey(
                 },
             ));
         }
-        let picked = auto_pick(&candidates, joints).map_err(|candidates| {
-            mcap_error(path, None, McapProblem::Ambiguous { candidates })
-        })?;
+        let picked = auto_pick(&candidates, joints)
+            .map_err(|candidates| mcap_error(path, None, McapProblem::Ambiguous { candidates }))?;
         picked
             .iter()
             .map(|t| surveys.remove(t).expect("picked from the surveys"))
@@ -321,11 +320,8 @@ fn auto_pick(candidates: &[&TopicSurvey], joints: &[String]) -> Result<Vec<Strin
         (m.len() == 1).then(|| m[0].state.topic.clone())
     };
     if !joints.is_empty() {
-        let holds = |names: &[&[String]]| {
-            joints
-                .iter()
-                .all(|j| names.iter().any(|n| n.contains(j)))
-        };
+        let holds =
+            |names: &[&[String]]| joints.iter().all(|j| names.iter().any(|n| n.contains(j)));
         let full: Vec<&TopicSurvey> = candidates
             .iter()
             .copied()
