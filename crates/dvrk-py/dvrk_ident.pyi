@@ -178,7 +178,6 @@ class Data:
     @staticmethod
     def concat(logs: Sequence["Data"], *, source: Optional[str] = None) -> "Data":
         """The samples of several logs as one log (one clock)."""
-    def __getitem__(self, index: slice) -> "Data": ...
     @property
     def time(self) -> FloatArray:
         """Sample times, s, ``(N,)``."""
