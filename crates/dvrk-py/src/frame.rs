@@ -218,7 +218,7 @@ pub fn read_frame<'py>(
         None => {
             let index = df.getattr("index")?;
             let kind: String = index.getattr("dtype")?.getattr("kind")?.extract()?;
-            let range = index.get_type().name()?.to_string() == "RangeIndex";
+            let range = index.get_type().name()? == "RangeIndex";
             if range || !matches!(kind.as_str(), "M" | "m" | "f" | "i" | "u") {
                 return Err(input(
                     "df: no sample times: give a time column (s, datetime64, timedelta64 or integer ns) or a datetime, timedelta or float index",
