@@ -459,32 +459,69 @@ impl Drop for TempCopy {
     }
 }
 
-/// The payload of a message compressed on its own (rosbag2's `compression_mode:
-/// message`), decompressed into `out`; `None` if it is not compressed. Only for CDR
-/// and JSON payloads, which cannot start with a zstd or lz4 frame magic.
-pub(crate) fn unpack_message(data: &[u8], out: &mut Vec<u8>) -> Option<Result<(), String>> {
+/// Decompresses payloads of messages compressed on their own (rosbag2's
+/// `compression_mode: message`), reusing one zstd context: creating one per message
+/// would cost more than the message.
+#[derive(Default)]
+pub(crate) struct Unpacker {
+    zstd: Option<zstd::bulk::Decompressor<'static>>,
+    /// The last payload decompressed.
+    pub out: Vec<u8>,
+}
+
+impl Unpacker {
     /// Largest decompressed message, bytes: bounds what a corrupted frame can allocate.
     const LIMIT: u64 = 1 << 28;
-    let decoded: std::io::Result<Box<dyn Read + '_>> = if data.starts_with(ZSTD_MAGIC) {
-        zstd::stream::read::Decoder::new(data).map(|d| Box::new(d) as Box<dyn Read>)
-    } else if data.starts_with(LZ4_MAGIC) {
-        lz4::Decoder::new(data).map(|d| Box::new(d) as Box<dyn Read>)
-    } else {
-        return None;
-    };
-    out.clear();
-    Some(
-        decoded
-            .and_then(|d| d.take(LIMIT + 1).read_to_end(out))
-            .map_err(|e| format!("a compressed message does not decompress: {e}"))
-            .and_then(|n| {
-                if n as u64 > LIMIT {
-                    Err(format!("a compressed message is larger than {LIMIT} bytes"))
-                } else {
-                    Ok(())
+
+    /// Decompresses `data` into [`Unpacker::out`]; `None` if it is not compressed. Only
+    /// for CDR and JSON payloads, which cannot start with a zstd or lz4 frame magic.
+    pub(crate) fn unpack(&mut self, data: &[u8]) -> Option<Result<(), String>> {
+        let limit = Self::LIMIT;
+        let fail = |e: std::io::Error| format!("a compressed message does not decompress: {e}");
+        self.out.clear();
+        if data.starts_with(ZSTD_MAGIC) {
+            if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
+                if size > limit {
+                    return Some(Err(format!(
+                        "a compressed message of {size} bytes is larger than {limit}"
+                    )));
                 }
-            }),
-    )
+                let decompressor = match &mut self.zstd {
+                    Some(d) => d,
+                    None => match zstd::bulk::Decompressor::new() {
+                        Ok(d) => self.zstd.insert(d),
+                        Err(e) => return Some(Err(fail(e))),
+                    },
+                };
+                self.out.reserve(size as usize);
+                return Some(
+                    decompressor
+                        .decompress_to_buffer(data, &mut self.out)
+                        .map(|_| ())
+                        .map_err(fail),
+                );
+            }
+        }
+        let decoded: std::io::Result<Box<dyn Read + '_>> = if data.starts_with(ZSTD_MAGIC) {
+            zstd::stream::read::Decoder::new(data).map(|d| Box::new(d) as Box<dyn Read>)
+        } else if data.starts_with(LZ4_MAGIC) {
+            lz4::Decoder::new(data).map(|d| Box::new(d) as Box<dyn Read>)
+        } else {
+            return None;
+        };
+        Some(
+            decoded
+                .and_then(|d| d.take(limit + 1).read_to_end(&mut self.out))
+                .map_err(fail)
+                .and_then(|n| {
+                    if n as u64 > limit {
+                        Err(format!("a compressed message is larger than {limit} bytes"))
+                    } else {
+                        Ok(())
+                    }
+                }),
+        )
+    }
 }
 
 #[cfg(test)]
@@ -512,18 +549,28 @@ mod tests {
     fn message_unpacking() {
         let payload = b"\x00\x01\x00\x00some CDR bytes".repeat(20);
         let z = zstd::bulk::compress(&payload, 3).unwrap();
-        let mut out = Vec::new();
-        unpack_message(&z, &mut out).unwrap().unwrap();
-        assert_eq!(out, payload);
+        let mut u = Unpacker::default();
+        u.unpack(&z).unwrap().unwrap();
+        assert_eq!(u.out, payload);
+        // A frame without its content size (streamed): the streaming decoder.
+        let mut streamed = Vec::new();
+        let mut enc = zstd::stream::write::Encoder::new(&mut streamed, 3).unwrap();
+        std::io::Write::write_all(&mut enc, &payload).unwrap();
+        enc.finish().unwrap();
+        u.unpack(&streamed).unwrap().unwrap();
+        assert_eq!(u.out, payload);
         let mut enc = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
         std::io::Write::write_all(&mut enc, &payload).unwrap();
         let (l, r) = enc.finish();
         r.unwrap();
-        unpack_message(&l, &mut out).unwrap().unwrap();
-        assert_eq!(out, payload);
-        assert!(unpack_message(&payload, &mut out).is_none());
+        u.unpack(&l).unwrap().unwrap();
+        assert_eq!(u.out, payload);
+        assert!(u.unpack(&payload).is_none());
         let mut bad = z.clone();
         bad.truncate(z.len() / 2);
-        assert!(unpack_message(&bad, &mut out).unwrap().is_err());
+        assert!(u.unpack(&bad).unwrap().is_err());
+        // Twice the same context: the second message is right too.
+        u.unpack(&z).unwrap().unwrap();
+        assert_eq!(u.out, payload);
     }
 }

@@ -1,7 +1,7 @@
 //! Streaming over the messages of a recording, file after file: MCAP files here,
 //! rosbag2's sqlite3 files in [`super::sqlite`], ROS 1 bags in [`super::ros1`], all handed
 //! out alike (topic, type, encoding, times, payload), messages compressed on their own
-//! decompressed ([`super::bag::unpack_message`]).
+//! decompressed ([`super::bag::Unpacker`]).
 //!
 //! MCAP files:
 //!
@@ -23,7 +23,7 @@ use std::io::Read;
 use std::path::Path;
 use std::sync::Arc;
 
-use super::bag::{unpack_message, Bag, BagFile, Packing, Storage};
+use super::bag::{Bag, BagFile, Packing, Storage, Unpacker};
 use super::ros1::Ros1File;
 use super::sqlite::SqliteFile;
 
@@ -140,8 +140,8 @@ pub(crate) struct Scanner {
     next_file: usize,
     backend: Option<Backend>,
     channels: Channels,
-    /// A message compressed on its own, decompressed.
-    unpacked: Vec<u8>,
+    /// Messages compressed on their own, decompressed.
+    unpacker: Unpacker,
 }
 
 impl Scanner {
@@ -151,7 +151,7 @@ impl Scanner {
             next_file: 0,
             backend: None,
             channels: Channels::default(),
-            unpacked: Vec::new(),
+            unpacker: Unpacker::default(),
         })
     }
 
@@ -174,7 +174,7 @@ impl Scanner {
                 next_file,
                 backend,
                 channels,
-                unpacked,
+                unpacker,
             } = self;
             let raw = backend.as_mut().expect("opened above").next(channels)?;
             let Some(raw) = raw else {
@@ -186,7 +186,7 @@ impl Scanner {
             let mut data = raw.data;
             // ROS 1 messages carry no encapsulation header: never compressed alone.
             if channel.message_encoding != "ros1" {
-                if let Some(r) = unpack_message(data, unpacked) {
+                if let Some(r) = unpacker.unpack(data) {
                     r.map_err(|reason| {
                         mcap_error(
                             &bag.files[*next_file - 1].path,
@@ -194,7 +194,7 @@ impl Scanner {
                             McapProblem::Container { reason },
                         )
                     })?;
-                    data = unpacked.as_slice();
+                    data = unpacker.out.as_slice();
                 }
             }
             return f(MessageRef {
