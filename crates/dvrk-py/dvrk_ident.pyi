@@ -150,7 +150,9 @@ class BaseParameters:
     def to_dict(self) -> Dict[str, Any]: ...
 
 class Data:
-    """A joint-space log: times, positions, velocities (optional), efforts."""
+    """A joint-space log: times, positions, velocities (optional), efforts. Times are
+    float seconds, datetime64/timedelta64 or integer nanoseconds (exact); DataFrame
+    columns give the joint names; slices, :meth:`concat`, pickling."""
 
     def __init__(
         self,
@@ -160,9 +162,22 @@ class Data:
         dq: Optional[ArrayLike] = None,
         *,
         joint_names: Optional[Sequence[str]] = None,
-        coordinates: str = "model",
+        coordinates: Optional[str] = None,
         source: str = "numpy",
     ) -> None: ...
+    @staticmethod
+    def from_dataframe(
+        df: Any, robot: Optional[Robot] = None, *, time: Optional[str] = None,
+        source: str = "dataframe",
+    ) -> "Data":
+        """``time``, ``position.<joint>``, ``velocity.<joint>``, ``effort.<joint>``
+        columns (or a ``(signal, joint)`` MultiIndex; the time as a column or the index);
+        model or measured coordinates from the names."""
+    def to_dataframe(self) -> Any:
+        """A pandas DataFrame in the layout :meth:`from_dataframe` reads."""
+    @staticmethod
+    def concat(logs: Sequence["Data"], *, source: Optional[str] = None) -> "Data":
+        """The samples of several logs as one log (one clock)."""
     @property
     def time(self) -> FloatArray:
         """Sample times, s, ``(N,)``."""
@@ -215,6 +230,9 @@ class Prepared:
     def joint_names(self) -> List[str]: ...
     @property
     def source(self) -> str: ...
+    def to_dataframe(self) -> Any:
+        """``time``, ``position.<q>``, ``velocity.<q>``, ``acceleration.<q>``,
+        ``effort.<q>``."""
     def __len__(self) -> int: ...
 
 class Result:
@@ -273,10 +291,12 @@ class Result:
     def load_robot(self) -> Robot: ...
     def prepare(self, data: Data, robot: Optional[Robot] = None) -> Prepared: ...
     def predict(
-        self, data: Union[Data, Prepared], robot: Optional[Robot] = None
-    ) -> FloatArray:
+        self, data: Union[Data, Prepared], robot: Optional[Robot] = None, *,
+        as_dataframe: bool = False,
+    ) -> Any:
         """Predicted torques ``(N, dof)`` at the processed samples of ``data``
-        (rows of ``self.prepare(data)``), known forces excluded."""
+        (rows of ``self.prepare(data)``), known forces excluded; with
+        ``as_dataframe``, a DataFrame with ``time`` and ``effort.<q>`` columns."""
     def validate(
         self, data: Data, test_window: Optional[int] = None, robot: Optional[Robot] = None
     ) -> Dict[str, Any]: ...
@@ -291,19 +311,20 @@ def read_log(
     time_source: Optional[str] = None,
     resample: Optional[float] = None,
 ) -> Data:
-    """Reads a 2019 CSV (``format="wpi-csv"``, ``rate`` required), headered CSV or
-    ROS 2 MCAP log; ``resample`` (Hz) resamples any format."""
+    """Reads a log recognized by content: a rosbag2 folder (or its metadata.yaml), an
+    MCAP, sqlite3 .db3 or ROS 1 .bag file (zstd/lz4 compressed too), a 2019 CSV
+    (``rate`` required) or a headered CSV; ``resample`` (Hz) resamples any format."""
 
 def list_topics(path: PathLike) -> List[Dict[str, Any]]:
-    """The topics of an MCAP file."""
+    """The topics of a recording (MCAP, sqlite3, ROS 1 bag or rosbag2 folder)."""
 
 def fit(
     robot: Robot,
-    data: Data,
+    data: Union[Data, Sequence[Data]],
     method: Optional[str] = None,
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    test: Optional[Data] = None,
+    test: Optional[Union[Data, Sequence[Data]]] = None,
     test_window: Optional[int] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
@@ -314,8 +335,9 @@ def fit(
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
 ) -> Result:
-    """Identifies the parameters (``method``: ``ols``, ``wls``, ``irls``, ``sdp``
-    (default)); ``cutoff``: Hz, per coordinate, or ``"none"``/``False`` (no filter)."""
+    """Identifies the parameters from one log or a list of logs, each processed on its
+    own (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
+    per coordinate, or ``"none"``/``False`` (no filter)."""
 
 def prepare(
     robot: Robot,

@@ -106,7 +106,7 @@ def test_log_errors(psm, tmp_path):
         di.read_log(p, format="wpi", rate=200)
     with pytest.raises(di.InputError, match="unknown log format"):
         di.read_log(p, format="xls")
-    with pytest.raises(di.InputError, match="MCAP logs only"):
+    with pytest.raises(di.InputError, match="recordings .MCAP, rosbag2, sqlite3, ROS 1 bags. only"):
         di.read_log(p, format="wpi", rate=200, topic="/x")
     with pytest.raises(di.InputError, match="time_source"):
         di.read_log(p, time_source="wall")

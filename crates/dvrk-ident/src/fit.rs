@@ -305,6 +305,17 @@ impl MetricSums {
         self.samples
     }
 
+    /// Adds the sums of other samples (another log): the sums of both.
+    pub fn merge(&mut self, other: &MetricSums) {
+        for (a, b) in self.e2.iter_mut().zip(&other.e2) {
+            *a += b;
+        }
+        for (a, b) in self.t2.iter_mut().zip(&other.t2) {
+            *a += b;
+        }
+        self.samples += other.samples;
+    }
+
     /// Adds the errors of `params` on the next samples, up to `window` samples in all
     /// (`None`: no limit).
     pub fn add(
@@ -440,7 +451,26 @@ pub(crate) fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> 
     }
 }
 
-/// Runs the whole fit. `test` (optional) is validated with `settings.test_window`.
+/// A log given to a fit: its samples and, when they were read from one, the file or
+/// rosbag2 folder (hashed into the result's provenance; without one, the samples are).
+#[derive(Clone, Copy, Debug)]
+pub struct LogData<'a> {
+    pub samples: &'a Trajectory,
+    pub file: Option<&'a std::path::Path>,
+}
+
+impl<'a> LogData<'a> {
+    /// Samples without a file.
+    pub fn new(samples: &'a Trajectory) -> Self {
+        LogData {
+            samples,
+            file: None,
+        }
+    }
+}
+
+/// Runs the whole fit on one log. `test` (optional) is validated with
+/// `settings.test_window`. See [`fit_logs`] for several logs.
 pub fn fit(
     model: &Model,
     train: &Trajectory,
@@ -459,14 +489,39 @@ pub fn fit_with_progress(
     settings: &FitSettings,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {
+    let test: Vec<LogData> = test.into_iter().map(LogData::new).collect();
+    fit_logs(model, &[LogData::new(train)], &test, settings, progress)
+}
+
+/// The fit of several logs (the entry point of the command line and of Python): each
+/// log is processed on its own (filters, trimming and differentiation never cross a
+/// log boundary), then the observations of the training logs are merged, the WLS
+/// weights come from all their torques, and the metrics are summed over the logs. The
+/// test metrics cover the first `settings.test_window` samples of each test log. The
+/// result's `inputs` lists every log (training first) with its hash and its own
+/// metrics; `metrics` holds those of all the training (test) logs together.
+///
+/// [`stream::fit_stream_logs`] reads the same logs from disk with the same result.
+pub fn fit_logs(
+    model: &Model,
+    train: &[LogData<'_>],
+    test: &[LogData<'_>],
+    settings: &FitSettings,
+    progress: &dyn Progress,
+) -> Result<FitResult, IdentError> {
+    if train.is_empty() {
+        return Err(no_training_log());
+    }
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
     progress.stage("processing", None);
-    let data = prepare(model, train, &settings.processing)?;
-    let test_data = match test {
-        Some(t) => Some(prepare(model, t, &settings.processing)?),
-        None => None,
+    let prepare_all = |logs: &[LogData<'_>]| -> Result<Vec<Prepared>, IdentError> {
+        logs.iter()
+            .map(|l| prepare(model, l.samples, &settings.processing))
+            .collect()
     };
+    let data = prepare_all(train)?;
+    let test_data = prepare_all(test)?;
     progress.finish();
     let base = model.base_parameters()?;
     let n = model.dof();
@@ -474,41 +529,109 @@ pub fn fit_with_progress(
 
     let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
-        Method::Wls | Method::Sdp => range_weights(&data),
+        Method::Wls | Method::Sdp => {
+            let mut range = TorqueRange::new(n);
+            for d in &data {
+                range.add(&d.tau);
+            }
+            range.weights()
+        }
     };
-    // Per coordinate, then weighted: the same arithmetic as the streamed fit.
-    progress.stage("assembling the observation", Some(data.len() as u64));
-    let parts = Observation::assemble_per_coordinate(model, data.samples(), progress);
+    // Per coordinate and per log, then merged and weighted: the same arithmetic as the
+    // streamed fit.
+    let total: usize = data.iter().map(Prepared::len).sum();
+    progress.stage("assembling the observation", Some(total as u64));
+    let mut parts: Option<Vec<Observation>> = None;
+    for d in &data {
+        let log = Observation::assemble_per_coordinate(model, d.samples(), progress);
+        merge_parts(&mut parts, log);
+    }
+    let parts = parts.expect("at least one training log");
     progress.finish();
+    let source = joined_sources(data.iter().map(|d| d.source.as_str()));
+    let metrics_of = |pi: &[f64], logs: &[Prepared], window: Option<usize>| {
+        logs.iter()
+            .map(|d| {
+                let mut sums = MetricSums::new(model);
+                sums.add(model, pi, d.samples(), window);
+                sums
+            })
+            .collect::<Vec<_>>()
+    };
     let estimated = estimate(
         model,
         &base,
         &parts,
         weights,
         settings,
-        &data.source,
+        &source,
         started,
         progress,
-        |pi, _| {
-            let mut residuals = MetricSums::new(model);
-            residuals.add(model, pi, data.samples(), None);
-            Ok(residuals)
-        },
+        |pi, _| Ok(summed(model, &metrics_of(pi, &data, None))),
     )?;
-    let train_metrics = joint_metrics(model, &estimated.params, &data, None);
-    let test_metrics = test_data
-        .as_ref()
-        .map(|t| joint_metrics(model, &estimated.params, t, settings.test_window));
-    Ok(build_result(
+    let train_sums = metrics_of(&estimated.params, &data, None);
+    let test_sums = metrics_of(&estimated.params, &test_data, settings.test_window);
+    let mut inputs = Vec::with_capacity(train.len() + test.len());
+    for (role, logs, sums, prepared) in [
+        ("train", train, &train_sums, &data),
+        ("test", test, &test_sums, &test_data),
+    ] {
+        for ((log, sums), p) in logs.iter().zip(sums).zip(prepared) {
+            let mut info = match log.file {
+                Some(file) => InputInfo::from_file(role, file)?,
+                None => InputInfo::from_samples(role, log.samples),
+            };
+            info.source.clone_from(&p.source);
+            info.metrics = Some(sums.metrics(model));
+            inputs.push(info);
+        }
+    }
+    let mut result = build_result(
         model,
         &base,
         settings,
         estimated,
         Metrics {
-            train: train_metrics,
-            test: test_metrics,
+            train: summed(model, &train_sums).metrics(model),
+            test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
         },
-    ))
+    );
+    result.inputs = inputs;
+    Ok(result)
+}
+
+pub(crate) fn no_training_log() -> IdentError {
+    IdentError::Mismatch {
+        source_name: "fit".into(),
+        message: "no training log".into(),
+    }
+}
+
+/// The per-coordinate observations of one more log merged into those of the logs
+/// before it (the first log's are taken as they are).
+pub(crate) fn merge_parts(total: &mut Option<Vec<Observation>>, log: Vec<Observation>) {
+    match total {
+        None => *total = Some(log),
+        Some(parts) => {
+            for (o, l) in parts.iter_mut().zip(&log) {
+                o.merge(l);
+            }
+        }
+    }
+}
+
+/// The sums of several logs together, in order.
+pub(crate) fn summed(model: &Model, logs: &[MetricSums]) -> MetricSums {
+    let mut total = MetricSums::new(model);
+    for s in logs {
+        total.merge(s);
+    }
+    total
+}
+
+/// The logs' names for messages, joined by ` + `.
+pub(crate) fn joined_sources<'a>(sources: impl Iterator<Item = &'a str>) -> String {
+    sources.collect::<Vec<_>>().join(" + ")
 }
 
 /// What the estimator made of an observation.

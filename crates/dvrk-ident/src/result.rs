@@ -78,24 +78,73 @@ pub struct Metrics {
 pub struct InputInfo {
     /// `train` or `test`
     pub role: String,
+    /// The file or rosbag2 folder; empty for samples that were not read from one.
     pub path: String,
+    /// SHA-256 of the file (of a rosbag2 folder: of its metadata.yaml and its files in
+    /// order, concatenated), or of the samples (time, q, dq, tau as little-endian f64,
+    /// row by row) when there is no file.
     pub sha256: String,
+    /// Bytes hashed.
     pub bytes: u64,
+    /// Where the samples came from (e.g. the file and the topics read).
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub source: String,
+    /// This log's own metrics.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub metrics: Option<JointMetrics>,
 }
 
 impl InputInfo {
-    /// Hashes a file (SHA-256) for the result's provenance.
+    /// Hashes a log file, or the files of a rosbag2 folder, reading them in pieces.
     pub fn from_file(role: &str, path: &Path) -> Result<InputInfo, IdentError> {
-        let bytes = std::fs::read(path).map_err(|e| IdentError::Io {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        })?;
+        let files = crate::log::files_of(path)?;
+        let mut hash = Sha256::new();
+        let mut bytes = 0;
+        for f in &files {
+            let io = |e: std::io::Error| IdentError::Io {
+                file: f.display().to_string(),
+                message: e.to_string(),
+            };
+            let mut file = std::fs::File::open(f).map_err(io)?;
+            bytes += std::io::copy(&mut file, &mut hash).map_err(io)?;
+        }
         Ok(InputInfo {
             role: role.into(),
             path: path.display().to_string(),
-            sha256: format!("{:x}", Sha256::digest(&bytes)),
-            bytes: bytes.len() as u64,
+            sha256: format!("{:x}", hash.finalize()),
+            bytes,
+            source: String::new(),
+            metrics: None,
         })
+    }
+
+    /// Hashes samples that were not read from a file (see [`InputInfo::sha256`]).
+    pub fn from_samples(role: &str, traj: &crate::Trajectory) -> InputInfo {
+        let mut hash = Sha256::new();
+        let mut bytes = 0u64;
+        let mut put = |v: f64| {
+            hash.update(v.to_le_bytes());
+            bytes += 8;
+        };
+        for k in 0..traj.len() {
+            put(traj.time[k]);
+            for m in [Some(&traj.q), traj.dq.as_ref(), Some(&traj.tau)]
+                .into_iter()
+                .flatten()
+            {
+                for v in m.row(k).iter() {
+                    put(*v);
+                }
+            }
+        }
+        InputInfo {
+            role: role.into(),
+            path: String::new(),
+            sha256: format!("{:x}", hash.finalize()),
+            bytes,
+            source: String::new(),
+            metrics: None,
+        }
     }
 }
 

@@ -433,11 +433,12 @@ fn rate_and_format_errors() {
         read(&path, Some(LogFormat::Csv), None).unwrap_err(),
         LogError::UnknownColumn { .. }
     ));
+    // By content, not by extension: a text file named .mcap is a CSV.
     let mcap = write_file(&dir, "x.mcap", "not really");
-    assert_eq!(detect_format(&mcap).unwrap(), LogFormat::Mcap);
-    let e = read(&mcap, None, None).unwrap_err();
+    assert_eq!(detect_format(&mcap).unwrap(), LogFormat::Csv);
+    let e = read(&mcap, Some(LogFormat::Mcap), None).unwrap_err();
     assert!(matches!(e, LogError::Mcap { .. }), "{e}");
-    assert!(e.to_string().contains("x.mcap"), "{e}");
+    assert!(e.to_string().contains("x.mcap: not a supported log"), "{e}");
     let missing = dir.join("missing.csv");
     let e = read(&missing, None, Some(200.0)).unwrap_err();
     assert!(matches!(e, LogError::Io { .. }));

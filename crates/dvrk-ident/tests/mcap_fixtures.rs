@@ -625,12 +625,21 @@ fn mcap_truncated_and_foreign_files_are_errors() {
     std::fs::write(&cut, &corrupt).unwrap();
     let e = read_mcap(&cut, &McapOptions::default()).unwrap_err();
     assert!(matches!(problem(&e), McapProblem::Container { .. }), "{e}");
-    // Not an MCAP at all.
+    // Not an MCAP at all: by content a CSV, whatever its name; read as a recording, an
+    // error saying what it is.
     let csv = dir.path("log.mcap");
     std::fs::write(&csv, "time,position.q1,effort.q1\n0,1,2\n").unwrap();
-    let e = read(&csv, None, None).unwrap_err();
-    assert!(matches!(problem(&e), McapProblem::NotMcap), "{e}");
-    assert!(e.to_string().contains("log.mcap: not an MCAP file"), "{e}");
+    assert_eq!(read(&csv, None, None).unwrap().len(), 1);
+    let e = read_mcap(&csv, &McapOptions::default()).unwrap_err();
+    assert!(
+        matches!(problem(&e), McapProblem::NotARecording { .. }),
+        "{e}"
+    );
+    assert!(
+        e.to_string()
+            .contains("log.mcap: not a supported log: it looks like a text file"),
+        "{e}"
+    );
     // Missing file.
     let e = read_mcap(dir.path("nope.mcap"), &McapOptions::default()).unwrap_err();
     assert!(matches!(e, LogError::Io { .. }), "{e}");

@@ -8,30 +8,43 @@ use dvrk_ident::fit::{to_model_coordinates, Prepared};
 use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::trajectory::{Coordinates, Trajectory};
 use nalgebra::DMatrix;
-use numpy::{PyArrayDyn, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
+use pyo3::types::{PySlice, PyTuple};
 
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
 use crate::errors::{from_ident, from_log, ident_kind, input, log_kind, Kind};
+use crate::frame;
 use crate::json::to_python;
 use crate::robot::Robot;
 
 /// A joint-space log: sample times and one row per sample of positions, velocities
 /// (optional) and efforts, in the robot's measured joints or in its model coordinates.
 ///
-/// Read one with :func:`read_log`, or build one from numpy arrays::
+/// Read one with :func:`read_log`, build one from numpy arrays or pandas DataFrames::
 ///
 ///     >>> t = np.arange(2000) / 200.0                       # s, uniform
 ///     >>> data = di.Data(t, q, tau, dq=dq)                   # model coordinates q1..qn
-///     >>> data = di.Data(t, q_meas, tau_meas, joint_names=psm.measured_joints,
-///     ...                coordinates="measured")
+///     >>> data = di.Data(t, q_meas, tau_meas, joint_names=psm.measured_joints)
+///     >>> data = di.Data.from_dataframe(df, psm)             # position.<joint> columns
 ///
-/// ``time`` (s) must increase strictly; ``q`` (rad or m), ``tau`` (N·m or N) and ``dq``
-/// (rad/s or m/s; ``None``: differentiate the filtered positions) have shape
-/// ``(N, joints)``; every value must be finite. ``joint_names`` default to the
-/// coordinate names ``q1..qn`` in model coordinates and are required in measured
-/// ones, where they are matched to the robot's measured joints by name (any order,
-/// extra joints ignored). Arrays returned by the attributes are copies.
+/// ``time``: float seconds, or ``datetime64``/``timedelta64`` (any unit, pandas
+/// datetimes too) or integer nanoseconds, which are converted exactly to seconds from
+/// the first sample (ROS stamps as float seconds have lost their nanoseconds
+/// already). Times must increase strictly. ``q`` (rad or m), ``tau`` (N·m or N) and
+/// ``dq`` (rad/s or m/s; ``None``: differentiate the filtered positions) have shape
+/// ``(N, joints)``; every value must be finite. Joint names come from
+/// ``joint_names``, else from the columns of DataFrames (a ``position.`` prefix
+/// dropped; ``tau`` and ``dq`` columns are matched to ``q``'s by name), else are the
+/// coordinate names ``q1..qn``. ``coordinates`` (``"model"`` or ``"measured"``)
+/// defaults to ``"model"`` when every name is ``q<k>``, else ``"measured"``: measured
+/// joints are matched to the robot's by name (any order, extra joints ignored).
+///
+/// ``data[a:b]`` is a slice of the samples (times kept), :meth:`concat` joins logs
+/// into one (one clock: the filters then run across the joints; give a fit a list of
+/// logs to keep them apart), :meth:`to_dataframe` gives a DataFrame; ``Data`` pickles
+/// (multiprocessing, joblib, ``copy.deepcopy``). Arrays returned by the attributes
+/// are copies.
 #[pyclass(name = "Data", module = "dvrk_ident", frozen)]
 pub struct DataPy {
     pub traj: Arc<Trajectory>,
@@ -89,10 +102,44 @@ impl DataPy {
     }
 }
 
+/// Columns of `m` reordered from `names` to `order` (the same joints), or an error.
+fn reorder(
+    m: DMatrix<f64>,
+    names: &[String],
+    order: &[String],
+    what: &str,
+) -> PyResult<DMatrix<f64>> {
+    if names == order {
+        return Ok(m);
+    }
+    let mut out = DMatrix::zeros(m.nrows(), order.len());
+    if names.len() != order.len() {
+        return Err(input(format!(
+            "{what}: columns {names:?} are not the joints of q {order:?}"
+        )));
+    }
+    for (j, name) in order.iter().enumerate() {
+        let k = names.iter().position(|n| n == name).ok_or_else(|| {
+            input(format!(
+                "{what}: columns {names:?} are not the joints of q {order:?}"
+            ))
+        })?;
+        out.set_column(j, &m.column(k));
+    }
+    Ok(out)
+}
+
+fn coordinates_arg(text: Option<&str>, names: &[String]) -> PyResult<Coordinates> {
+    match text {
+        Some(t) => parse_coordinates(t),
+        None => frame::infer_coordinates(names, None),
+    }
+}
+
 #[pymethods]
 impl DataPy {
     #[new]
-    #[pyo3(signature = (time, q, tau, dq = None, *, joint_names = None, coordinates = "model", source = "numpy"))]
+    #[pyo3(signature = (time, q, tau, dq = None, *, joint_names = None, coordinates = None, source = "numpy"))]
     #[allow(clippy::too_many_arguments)]
     fn py_new(
         py: Python<'_>,
@@ -101,45 +148,244 @@ impl DataPy {
         tau: &Bound<'_, PyAny>,
         dq: Option<&Bound<'_, PyAny>>,
         joint_names: Option<Vec<String>>,
-        coordinates: &str,
+        coordinates: Option<&str>,
         source: &str,
     ) -> PyResult<Self> {
-        let coordinates = parse_coordinates(coordinates)?;
-        let q = matrix_arg(py, q, "q")?;
-        let tau = matrix_arg(py, tau, "tau")?;
-        let dq = match dq.filter(|d| !d.is_none()) {
-            Some(d) => Some(matrix_arg(py, d, "dq")?),
-            None => None,
-        };
-        let time_arr = float_array(py, time, "time")?;
-        let time_ro = time_arr.readonly();
-        if time_ro.ndim() != 1 {
-            return Err(input(format!(
-                "time: expected a 1-D array of N sample times, got shape {}",
-                fmt_shape(time_ro.shape())
-            )));
-        }
-        let time: Vec<f64> = time_ro.as_array().iter().copied().collect();
-        let dof = q.ncols();
-        let joint_names =
-            match (joint_names, coordinates) {
-                (Some(names), _) => names,
-                (None, Coordinates::Model) => (1..=dof).map(|j| format!("q{j}")).collect(),
-                (None, Coordinates::Measured) => return Err(input(
+        let q_names = frame::column_names(q)?;
+        let dof_q = matrix_arg(py, q, "q")?;
+        let names = match (joint_names, &q_names) {
+            (Some(names), Some(cols)) if names != *cols => {
+                return Err(input(format!(
+                    "joint_names {names:?} differ from q's columns {cols:?}"
+                )))
+            }
+            (Some(names), _) => names,
+            (None, Some(cols)) => cols.clone(),
+            (None, None) => match coordinates.map(parse_coordinates).transpose()? {
+                Some(Coordinates::Measured) => return Err(input(
                     "joint_names are required in measured coordinates (e.g. robot.measured_joints)",
                 )),
-            };
+                _ => (1..=dof_q.ncols()).map(|j| format!("q{j}")).collect(),
+            },
+        };
+        let coordinates = coordinates_arg(coordinates, &names)?;
+        let with_names = |obj: &Bound<'_, PyAny>, what: &str| -> PyResult<DMatrix<f64>> {
+            let m = matrix_arg(py, obj, what)?;
+            match frame::column_names(obj)? {
+                Some(cols) => reorder(m, &cols, &names, what),
+                None => Ok(m),
+            }
+        };
+        let tau = with_names(tau, "tau")?;
+        let dq = match dq.filter(|d| !d.is_none()) {
+            Some(d) => Some(with_names(d, "dq")?),
+            None => None,
+        };
         let traj = Trajectory {
-            time,
-            q,
+            time: frame::times(py, time, "time")?,
+            q: dof_q,
             dq,
             tau,
-            joint_names,
+            joint_names: names,
             coordinates,
             source: source.to_string(),
         };
         traj.validate().map_err(|e| input(e.to_string()))?;
         Ok(DataPy::new(traj, None))
+    }
+
+    /// A log from a pandas DataFrame laid out as the headered CSV: a ``time`` column
+    /// (or ``time=`` another one, or the index: datetime, timedelta or float), and
+    /// ``position.<joint>``, ``effort.<joint>`` and optionally ``velocity.<joint>``
+    /// columns for each joint (also ``q.``, ``tau.``, ``dq.``), or a two-level column
+    /// MultiIndex ``(signal, joint)``. Times as in :class:`Data`. With ``robot``, the
+    /// joints must all be its coordinates (model coordinates) or all its measured
+    /// joints (measured coordinates); without, names ``q<k>`` are model coordinates.
+    /// :meth:`to_dataframe` gives this layout back.
+    #[staticmethod]
+    #[pyo3(signature = (df, robot = None, *, time = None, source = "dataframe"))]
+    fn from_dataframe(
+        py: Python<'_>,
+        df: &Bound<'_, PyAny>,
+        robot: Option<&Bound<'_, Robot>>,
+        time: Option<&str>,
+        source: &str,
+    ) -> PyResult<Self> {
+        let c = frame::read_frame(py, df, time)?;
+        let model = robot.map(|r| r.get().model.clone());
+        let coordinates = frame::infer_coordinates(&c.joints, model.as_deref())?;
+        let traj = Trajectory {
+            time: frame::times(py, &c.time, "time")?,
+            q: c.q,
+            dq: c.dq,
+            tau: c.tau,
+            joint_names: c.joints,
+            coordinates,
+            source: source.to_string(),
+        };
+        traj.validate().map_err(|e| input(e.to_string()))?;
+        Ok(DataPy::new(traj, None))
+    }
+
+    /// The samples as a pandas DataFrame: ``time`` (s), ``position.<joint>``,
+    /// ``velocity.<joint>`` (when measured), ``effort.<joint>``, the headered CSV's
+    /// layout (:meth:`from_dataframe` reads it back).
+    fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let t = &self.traj;
+        let mut cols = vec![("time".to_string(), t.time.clone())];
+        cols.extend(frame::matrix_columns("position", &t.joint_names, &t.q));
+        if let Some(dq) = &t.dq {
+            cols.extend(frame::matrix_columns("velocity", &t.joint_names, dq));
+        }
+        cols.extend(frame::matrix_columns("effort", &t.joint_names, &t.tau));
+        frame::dataframe(py, cols)
+    }
+
+    /// ``data[a:b]`` (a slice, positive step): those samples, times kept.
+    fn __getitem__(&self, index: &Bound<'_, PyAny>) -> PyResult<DataPy> {
+        let slice = index
+            .cast::<PySlice>()
+            .map_err(|_| input("Data: index with a slice of samples, e.g. data[100:500]"))?;
+        let ind = slice.indices(self.traj.len() as isize)?;
+        if ind.step <= 0 {
+            return Err(input(
+                "Data: a slice must keep the time order (positive step)",
+            ));
+        }
+        let rows: Vec<usize> = (ind.start..ind.stop)
+            .step_by(ind.step as usize)
+            .map(|k| k as usize)
+            .collect();
+        let t = &self.traj;
+        let pick =
+            |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
+        Ok(DataPy::new(
+            Trajectory {
+                time: rows.iter().map(|&k| t.time[k]).collect(),
+                q: pick(&t.q),
+                dq: t.dq.as_ref().map(pick),
+                tau: pick(&t.tau),
+                joint_names: t.joint_names.clone(),
+                coordinates: t.coordinates,
+                source: t.source.clone(),
+            },
+            None,
+        ))
+    }
+
+    /// The samples of several logs as one (same joints, coordinates and velocities;
+    /// each log's times after the previous log's). One log has one clock: processing
+    /// will filter across the joins. To fit logs that were recorded apart, give
+    /// :func:`fit` the list instead.
+    #[staticmethod]
+    #[pyo3(signature = (logs, *, source = None))]
+    fn concat(logs: Vec<Bound<'_, DataPy>>, source: Option<String>) -> PyResult<DataPy> {
+        let Some(first) = logs.first() else {
+            return Err(input("concat: no logs"));
+        };
+        let f = first.get().traj.clone();
+        let mut time = Vec::new();
+        let (mut q, mut dq, mut tau) = (Vec::new(), Vec::new(), Vec::new());
+        let mut sources = Vec::new();
+        for (k, d) in logs.iter().enumerate() {
+            let t = &d.get().traj;
+            if t.joint_names != f.joint_names || t.coordinates != f.coordinates {
+                return Err(input(format!(
+                    "concat: log {k} has joints {:?} ({} coordinates), log 0 {:?} ({})",
+                    t.joint_names, t.coordinates, f.joint_names, f.coordinates
+                )));
+            }
+            if t.dq.is_some() != f.dq.is_some() {
+                return Err(input(format!(
+                    "concat: log {k} {} velocities, log 0 {}",
+                    if t.dq.is_some() { "has" } else { "has no" },
+                    if f.dq.is_some() { "has" } else { "has none" }
+                )));
+            }
+            if let (Some(last), Some(next)) = (time.last(), t.time.first()) {
+                if next <= last {
+                    return Err(input(format!(
+                        "concat: log {k} starts at {next} s, not after the previous log's end at {last} s"
+                    )));
+                }
+            }
+            time.extend_from_slice(&t.time);
+            for i in 0..t.len() {
+                q.extend(t.q.row(i).iter());
+                tau.extend(t.tau.row(i).iter());
+                if let Some(d) = &t.dq {
+                    dq.extend(d.row(i).iter());
+                }
+            }
+            sources.push(t.source.clone());
+        }
+        let (n, dof) = (time.len(), f.dof());
+        let traj = Trajectory {
+            time,
+            q: DMatrix::from_row_slice(n, dof, &q),
+            dq: f.dq.as_ref().map(|_| DMatrix::from_row_slice(n, dof, &dq)),
+            tau: DMatrix::from_row_slice(n, dof, &tau),
+            joint_names: f.joint_names.clone(),
+            coordinates: f.coordinates,
+            source: source.unwrap_or_else(|| sources.join(" + ")),
+        };
+        traj.validate().map_err(|e| input(e.to_string()))?;
+        Ok(DataPy::new(traj, None))
+    }
+
+    /// Pickling (and ``copy.deepcopy``): the arrays and names.
+    fn __reduce__<'py>(
+        slf: &Bound<'py, Self>,
+    ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
+        let py = slf.py();
+        let d = slf.get();
+        let t = &d.traj;
+        let args = PyTuple::new(
+            py,
+            [
+                array(py, t.time.clone(), &[t.len()]).into_any(),
+                matrix(py, &t.q).into_any(),
+                matrix(py, &t.tau).into_any(),
+                match &t.dq {
+                    Some(m) => matrix(py, m).into_any(),
+                    None => py.None().into_bound(py),
+                },
+                t.joint_names.clone().into_pyobject(py)?.into_any(),
+                t.coordinates.to_string().into_pyobject(py)?.into_any(),
+                t.source.clone().into_pyobject(py)?.into_any(),
+                d.path.clone().into_pyobject(py)?.into_any(),
+            ],
+        )?;
+        Ok((slf.get_type().getattr("_restore")?, args))
+    }
+
+    /// The inverse of ``__reduce__``.
+    #[staticmethod]
+    #[allow(clippy::too_many_arguments)]
+    fn _restore(
+        py: Python<'_>,
+        time: &Bound<'_, PyAny>,
+        q: &Bound<'_, PyAny>,
+        tau: &Bound<'_, PyAny>,
+        dq: Option<&Bound<'_, PyAny>>,
+        joint_names: Vec<String>,
+        coordinates: &str,
+        source: String,
+        path: Option<PathBuf>,
+    ) -> PyResult<DataPy> {
+        let arr = float_array(py, time, "time")?;
+        let time: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
+        let traj = Trajectory {
+            time,
+            q: matrix_arg(py, q, "q")?,
+            dq: dq.map(|d| matrix_arg(py, d, "dq")).transpose()?,
+            tau: matrix_arg(py, tau, "tau")?,
+            joint_names,
+            coordinates: parse_coordinates(coordinates)?,
+            source,
+        };
+        traj.validate().map_err(|e| input(e.to_string()))?;
+        Ok(DataPy::new(traj, path))
     }
 
     /// Sample times, s, shape ``(N,)``.
@@ -329,6 +575,19 @@ impl PreparedPy {
         self.inner.source.clone()
     }
 
+    /// The samples as a pandas DataFrame: ``time`` (s), then ``position.<q>``,
+    /// ``velocity.<q>``, ``acceleration.<q>`` and ``effort.<q>`` per coordinate.
+    fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        let p = &self.inner;
+        let names = &self.joint_names;
+        let mut cols = vec![("time".to_string(), p.time.clone())];
+        cols.extend(frame::matrix_columns("position", names, &p.q));
+        cols.extend(frame::matrix_columns("velocity", names, &p.dq));
+        cols.extend(frame::matrix_columns("acceleration", names, &p.ddq));
+        cols.extend(frame::matrix_columns("effort", names, &p.tau));
+        frame::dataframe(py, cols)
+    }
+
     fn __len__(&self) -> usize {
         self.inner.len()
     }
@@ -353,19 +612,22 @@ pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
 
 /// Reads a log into :class:`Data`.
 ///
-/// ``format``: ``None`` (from the file: ``.mcap`` is MCAP; a first row of numbers is
-/// the 2019 layout, anything else a headered CSV), ``"wpi"``/``"wpi-csv"`` (the 2019
-/// layout: no header, ``q, dq, tau`` columns in model coordinates, no time stamps:
-/// ``rate`` in Hz is required), ``"csv"`` (headered: ``time``, ``position.<joint>``,
-/// optional ``velocity.<joint>``, ``effort.<joint>``) or ``"mcap"`` (ROS 2
-/// ``sensor_msgs/msg/JointState``, measured joints). ``rate`` is ignored for logs with
-/// time stamps.
+/// ``path`` is a file or a rosbag2 folder, recognized by content (``format=None``): a
+/// rosbag2 folder or its ``metadata.yaml`` (MCAP or sqlite3 files, split recordings,
+/// zstd/lz4 compressed files or messages), an MCAP file, a sqlite3 ``.db3``, a ROS 1
+/// ``.bag`` (``sensor_msgs/JointState``), the 2019 layout (a first row of numbers: no
+/// header, ``q, dq, tau`` columns in model coordinates, no time stamps: ``rate`` in Hz
+/// is required) or a headered CSV (``time``, ``position.<joint>``, optional
+/// ``velocity.<joint>``, ``effort.<joint>``). ``format`` forces one: ``"wpi"``
+/// (``"wpi-csv"``), ``"csv"``, ``"mcap"``, ``"rosbag2"``, ``"sqlite3"``, ``"ros1"``.
+/// ``rate`` is ignored for logs with time stamps.
 ///
-/// MCAP only: ``topic`` (a topic or a list, merged, the first one the clock; default:
-/// the automatic choice), ``time_source`` (``"header"`` stamps, default, ``"log"`` or
-/// ``"publish"`` times). ``resample`` (Hz, any format): resample to a uniform rate by
-/// linear interpolation, as the CLI's ``--resample``; otherwise a log with gaps or
-/// jitter is refused by the processing.
+/// Recordings only: ``topic`` (a topic or a list, merged, the first one the clock;
+/// default: the automatic choice, which with ``robot`` pairs a dVRK arm topic with its
+/// jaw topic when the robot's joints need both), ``time_source`` (``"header"`` stamps,
+/// default, ``"log"`` or ``"publish"`` times). ``resample`` (Hz, any format): resample
+/// to a uniform rate by linear interpolation; otherwise a log with gaps or jitter is
+/// refused by the processing.
 ///
 /// With ``robot``, the log is checked against it (its measured joints present, or the
 /// right number of model coordinates; the 2019 layout's number of joints is the
@@ -413,11 +675,11 @@ pub fn read_log(
             Some(f) => f,
             None => log::detect_format(&file).map_err(fail_log)?,
         };
-        if format != LogFormat::Mcap && (!topics.is_empty() || given_time_source) {
+        if !format.has_topics() && (!topics.is_empty() || given_time_source) {
             return Err((
                 Kind::Input,
                 format!(
-                    "{}: topic and time_source apply to MCAP logs only, this is a {format} log",
+                    "{}: topic and time_source apply to recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) only, this is a {format} log",
                     file.display()
                 ),
             ));
@@ -426,21 +688,23 @@ pub fn read_log(
             (LogFormat::Wpi, Some(rate)) => {
                 log::read_wpi(&file, rate, model.as_ref().map(|m| m.dof()))
             }
-            (LogFormat::Mcap, _) => mcap::read_mcap(
+            (format, _) if format.has_topics() => mcap::read_mcap(
                 &file,
                 &mcap::McapOptions {
                     topics,
                     time_source,
                     resample_hz: resample,
+                    joints: model
+                        .as_ref()
+                        .map(|m| m.measured.joints.clone())
+                        .unwrap_or_default(),
                 },
             ),
             (format, rate) => log::read(&file, Some(format), rate),
         }
         .map_err(fail_log)?;
         let traj = match resample {
-            Some(hz) if format != LogFormat::Mcap => {
-                log::resample(&file, traj, hz).map_err(fail_log)?
-            }
+            Some(hz) if !format.has_topics() => log::resample(&file, traj, hz).map_err(fail_log)?,
             _ => traj,
         };
         if let Some(model) = &model {
@@ -455,8 +719,8 @@ fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 
-/// The topics of an MCAP file: a list of dicts ``{topic, schema_name,
-/// message_encoding, messages}``.
+/// The topics of a recording (an MCAP, sqlite3 or ROS 1 file, or a rosbag2 folder): a
+/// list of dicts ``{topic, schema_name, message_encoding, messages}``.
 #[pyfunction]
 pub fn list_topics<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyAny>> {
     let topics = py

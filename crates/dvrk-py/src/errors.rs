@@ -128,9 +128,40 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// An exception of `kind` with `message`.
+/// The library's messages are written for the command line; from Python, the flags
+/// they suggest are the keyword arguments of the same name.
+fn keywords(message: String) -> String {
+    const PHRASES: [(&str, &str); 2] = [
+        (
+            "choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)",
+            "choose one with topic=\"...\" (a list of topics merges their joints, e.g. an arm and its jaw)",
+        ),
+        (
+            "resample with --resample HZ (McapOptions::resample_hz), e.g. --resample ",
+            "resample with resample=HZ, e.g. resample=",
+        ),
+    ];
+    const FLAGS: [(&str, &str); 7] = [
+        ("--topic", "topic="),
+        ("--resample", "resample="),
+        ("--test-window", "test_window="),
+        ("--cutoff", "cutoff="),
+        ("--trim", "trim="),
+        ("--rate", "rate="),
+        ("--time ", "time_source="),
+    ];
+    let mut m = message;
+    for (cli, py) in PHRASES.iter().chain(&FLAGS) {
+        if m.contains(cli) {
+            m = m.replace(cli, py);
+        }
+    }
+    m
+}
+
+/// An exception of `kind` with `message` (command-line flags named as keywords).
 pub fn error(kind: Kind, message: impl Into<String>) -> PyErr {
-    let message = message.into();
+    let message = keywords(message.into());
     Python::attach(|py| match exceptions(py) {
         Ok(e) => {
             let ty = match kind {

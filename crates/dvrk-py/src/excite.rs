@@ -199,6 +199,22 @@ pub struct TrajectoryPy {
 
 #[pymethods]
 impl TrajectoryPy {
+    /// Pickling (and ``copy.deepcopy``): the JSON document of :meth:`write`.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let args = (slf.get().inner.to_json(),).into_pyobject(py)?.into_any();
+        Ok((slf.get_type().getattr("_restore")?, args))
+    }
+
+    /// The inverse of ``__reduce__``.
+    #[staticmethod]
+    fn _restore(text: &str) -> PyResult<Self> {
+        Ok(TrajectoryPy {
+            inner: FourierTrajectory::from_json_str(text, "<pickle>")
+                .map_err(|e| input(e.to_string()))?,
+        })
+    }
+
     #[new]
     #[pyo3(signature = (order, base_frequency_hz, q0, a, b, coordinates = None))]
     fn py_new(

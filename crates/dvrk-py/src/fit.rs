@@ -3,9 +3,11 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
-use dvrk_ident::result::{wpi_params_json, write_atomic, InputInfo};
+use dvrk_ident::fit::{fit_logs, joint_metrics, predict, prepare as prepare_data, LogData};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::result::{wpi_params_json, write_atomic};
 use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::Trajectory;
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
 use numpy::PyArrayDyn;
@@ -28,6 +30,43 @@ fn parse_method(text: &str) -> PyResult<Method> {
             "method: unknown estimator {other:?}: expected ols, wls, irls or sdp"
         ))),
     }
+}
+
+/// A :class:`Data` or a list of them: the samples and the files they were read from.
+fn logs_arg(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<Vec<(Arc<Trajectory>, Option<PathBuf>)>> {
+    let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<Trajectory>, Option<PathBuf>)> {
+        let d = d.cast::<DataPy>().map_err(|_| {
+            input(format!(
+                "{name}: expected a Data or a list of Data, got {}",
+                d.get_type()
+            ))
+        })?;
+        Ok((d.get().traj.clone(), d.get().path.clone()))
+    };
+    if obj.cast::<DataPy>().is_ok() {
+        return Ok(vec![one(obj)?]);
+    }
+    let logs = obj
+        .try_iter()
+        .map_err(|_| input(format!("{name}: expected a Data or a list of Data")))?
+        .map(|d| one(&d?))
+        .collect::<PyResult<Vec<_>>>()?;
+    if logs.is_empty() {
+        return Err(input(format!("{name}: an empty list of logs")));
+    }
+    Ok(logs)
+}
+
+fn log_data(logs: &[(Arc<Trajectory>, Option<PathBuf>)]) -> Vec<LogData<'_>> {
+    logs.iter()
+        .map(|(samples, path)| LogData {
+            samples,
+            file: path.as_deref(),
+        })
+        .collect()
 }
 
 /// The keyword arguments that change the settings, shared by `fit` and `prepare`.
@@ -107,7 +146,7 @@ impl Overrides<'_, '_> {
     }
 }
 
-/// Identifies the robot's parameters from a log: the pipeline of ``dvrk-ident fit``
+/// Identifies the robot's parameters from logs: the pipeline of ``dvrk-ident fit``
 /// (model coordinates, known forces subtracted, zero-phase low-pass, derivatives,
 /// trimming, the R factor of the weighted regressor, the estimator) and the same
 /// result document.
@@ -119,8 +158,12 @@ impl Overrides<'_, '_> {
 ///   PSM/MTM fits effectively used 16.965/5.655), or ``"none"`` (or ``False``) for no
 ///   filter; the torques are filtered too with
 ///   ``settings={"processing": {"filter_torque": True}}`` (the 2019 protocol);
-/// - ``test``: a :class:`Data` to validate on, ``test_window``: metrics on its first
-///   N processed samples only;
+/// - ``data``: a :class:`Data` or a list of them (``dvrk-ident fit a b c``): each log is
+///   processed on its own (filters and trimming never cross from one to the next) and
+///   their observations merged; ``result.inputs`` lists every log with its hash (of
+///   the file it was read from, else of its samples) and its own metrics;
+/// - ``test``: a :class:`Data` or a list to validate on, ``test_window``: metrics on
+///   the first N processed samples of each only;
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
 ///   ``resample`` (Hz), ``irls_iterations``, ``sdp_regularization``;
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
@@ -145,10 +188,10 @@ impl Overrides<'_, '_> {
 pub fn fit(
     py: Python<'_>,
     robot: &Bound<'_, Robot>,
-    data: &Bound<'_, DataPy>,
+    data: &Bound<'_, PyAny>,
     method: Option<&str>,
     cutoff: Option<&Bound<'_, PyAny>>,
-    test: Option<&Bound<'_, DataPy>>,
+    test: Option<&Bound<'_, PyAny>>,
     test_window: Option<usize>,
     trim: Option<usize>,
     decimate: Option<usize>,
@@ -173,22 +216,20 @@ pub fn fit(
     }
     .apply(py)?;
     let model = robot.get().model.clone();
-    let train = data.get().traj.clone();
-    let train_path = data.get().path.clone();
-    let (test_traj, test_path) = match test {
-        Some(t) => (Some(t.get().traj.clone()), t.get().path.clone()),
-        None => (None, None),
+    let train = logs_arg(data, "data")?;
+    let test = match test.filter(|t| !t.is_none()) {
+        Some(t) => logs_arg(t, "test")?,
+        None => Vec::new(),
     };
     let inner = background(py, move || {
-        let mut r =
-            dvrk_ident::fit(&model, &train, test_traj.as_deref(), &settings).map_err(fail_ident)?;
-        for (role, path) in [("train", train_path), ("test", test_path)] {
-            if let Some(p) = path {
-                r.inputs
-                    .push(InputInfo::from_file(role, &p).map_err(fail_ident)?);
-            }
-        }
-        Ok(r)
+        fit_logs(
+            &model,
+            &log_data(&train),
+            &log_data(&test),
+            &settings,
+            &Silent,
+        )
+        .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;
     let status = inner.solver.status.clone();
@@ -338,6 +379,23 @@ impl FitResultPy {
         self.inner.to_json()
     }
 
+    /// Pickling (and ``copy.deepcopy``): the document and the robot.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let r = slf.get();
+        let robot = r.robot.as_ref().map(|x| x.clone_ref(py));
+        let args = (r.inner.to_json(), robot).into_pyobject(py)?.into_any();
+        Ok((slf.get_type().getattr("_restore")?, args))
+    }
+
+    /// The inverse of ``__reduce__``.
+    #[staticmethod]
+    #[pyo3(signature = (text, robot = None))]
+    fn _restore(text: &str, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+        let inner = FitResult::from_json(text, "<pickle>").map_err(|e| input(e.to_string()))?;
+        Ok(with_robot(inner, robot))
+    }
+
     /// The whole result document as a dict (``json.loads(to_json())``).
     fn to_dict<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner)
@@ -477,8 +535,11 @@ impl FitResultPy {
         if let Some(r) = &self.robot {
             return Ok(r.clone_ref(py));
         }
-        let model = self.model(py, None)?;
-        Py::new(py, Robot::new((*model).clone()))
+        let stribeck = self.inner.settings.stribeck_velocity;
+        Py::new(
+            py,
+            Robot::of_result(py, &self.inner.robot_source, stribeck)?,
+        )
     }
 
     /// The processed samples of ``data`` with this result's processing settings (see
@@ -503,13 +564,17 @@ impl FitResultPy {
     /// row ``k`` is the sample at ``self.prepare(data).time[k]`` and compares with
     /// ``self.prepare(data).tau`` (the measured torques in model coordinates, known
     /// forces such as the MTM cable subtracted). A ``Prepared`` is used as it is.
-    #[pyo3(signature = (data, robot = None))]
+    ///
+    /// ``as_dataframe=True``: a pandas DataFrame with the row's ``time`` (s) and one
+    /// ``effort.<q>`` column per coordinate instead of the array.
+    #[pyo3(signature = (data, robot = None, *, as_dataframe = false))]
     fn predict<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
         robot: Option<&Bound<'py, Robot>>,
-    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+        as_dataframe: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let prepared = if let Ok(p) = data.cast::<PreparedPy>() {
@@ -526,8 +591,15 @@ impl FitResultPy {
         } else {
             return Err(input("data: expected a Data or a Prepared"));
         };
+        let times = prepared.time.clone();
+        let names = model.coordinates.clone();
         let pred = background(py, move || Ok(predict(&model, &params, &prepared)))?;
-        Ok(matrix(py, &pred))
+        if as_dataframe {
+            let mut cols = vec![("time".to_string(), times)];
+            cols.extend(crate::frame::matrix_columns("effort", &names, &pred));
+            return crate::frame::dataframe(py, cols);
+        }
+        Ok(matrix(py, &pred).into_any())
     }
 
     /// Metrics of this result on another log, as ``dvrk-ident validate``: ``{joints,

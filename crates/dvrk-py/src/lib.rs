@@ -11,6 +11,7 @@ mod data;
 mod errors;
 mod excite;
 mod fit;
+mod frame;
 mod json;
 mod robot;
 

@@ -35,14 +35,90 @@ use crate::json::to_python;
 pub struct Robot {
     pub model: Arc<Model>,
     base: OnceLock<Arc<BaseParameters>>,
+    /// What the model was built from, and the Stribeck velocity a fit added to it
+    /// (rad/s or m/s), for pickling.
+    origin: Origin,
+    stribeck: Option<f64>,
+}
+
+/// What a robot was built from: enough to build it again in another process (a file
+/// is kept as its text, so the copy does not depend on the file).
+#[derive(Clone, Debug)]
+pub enum Origin {
+    Builtin(String),
+    Toml { text: String, source: String },
+    Urdf { text: String, source: String },
+}
+
+impl Origin {
+    /// The model it describes, with Stribeck terms of velocity `stribeck` if given.
+    fn build(&self, stribeck: Option<f64>) -> Result<Model, dvrk_model::ModelError> {
+        let model = match self {
+            Origin::Builtin(name) => Model::builtin(name)?,
+            Origin::Toml { text, source } => Model::from_toml_str(text, source)?,
+            Origin::Urdf { text, source } => Model::from_urdf_str(text, source)?,
+        };
+        match stribeck {
+            Some(v) => model.with_stribeck(v),
+            None => Ok(model),
+        }
+    }
+
+    /// A built-in name or a description file, as `Model::load` takes it.
+    pub fn load(name_or_path: &str) -> Result<(Model, Origin), dvrk_model::ModelError> {
+        if Model::builtin_names().contains(&name_or_path) {
+            return Ok((
+                Model::builtin(name_or_path)?,
+                Origin::Builtin(name_or_path.to_string()),
+            ));
+        }
+        let model = Model::load(name_or_path)?;
+        let text =
+            std::fs::read_to_string(name_or_path).map_err(|source| dvrk_model::ModelError::Io {
+                file: name_or_path.to_string(),
+                source,
+            })?;
+        let source = name_or_path.to_string();
+        let origin = if dvrk_model::is_urdf_document(std::path::Path::new(name_or_path), &text) {
+            Origin::Urdf { text, source }
+        } else {
+            Origin::Toml { text, source }
+        };
+        Ok((model, origin))
+    }
 }
 
 impl Robot {
-    pub fn new(model: Model) -> Self {
+    pub fn new(model: Model, origin: Origin) -> Self {
         Robot {
             model: Arc::new(model),
             base: OnceLock::new(),
+            origin,
+            stribeck: None,
         }
+    }
+
+    /// The robot of a fit result: its robot (built-in name or file) with the fit's
+    /// Stribeck terms.
+    pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<Robot> {
+        let name = robot_source
+            .strip_prefix("builtin:")
+            .unwrap_or(robot_source)
+            .to_string();
+        let (model, origin) = py
+            .detach(move || {
+                let (model, origin) = Origin::load(&name)?;
+                let model = match stribeck {
+                    Some(v) => model.with_stribeck(v)?,
+                    None => model,
+                };
+                Ok::<_, dvrk_model::ModelError>((model, origin))
+            })
+            .map_err(from_model)?;
+        Ok(Robot {
+            stribeck,
+            ..Robot::new(model, origin)
+        })
     }
 
     /// The base parameters, computed once (about 10 ms for the PSM) without the GIL.
@@ -123,8 +199,8 @@ fn state_of(
 
 fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Robot> {
     let name = name_or_path.to_string_lossy().to_string();
-    let model = py.detach(move || Model::load(&name)).map_err(from_model)?;
-    Ok(Robot::new(model))
+    let (model, origin) = py.detach(move || Origin::load(&name)).map_err(from_model)?;
+    Ok(Robot::new(model, origin))
 }
 
 /// Full regressor rows of `n` samples into `out` (`n·dof × p`), shared with
@@ -175,6 +251,10 @@ impl Robot {
     fn from_toml(text: &str, source: &str) -> PyResult<Self> {
         Ok(Robot::new(
             Model::from_toml_str(text, source).map_err(from_model)?,
+            Origin::Toml {
+                text: text.to_string(),
+                source: source.to_string(),
+            },
         ))
     }
 
@@ -184,7 +264,49 @@ impl Robot {
     fn from_urdf(text: &str, source: &str) -> PyResult<Self> {
         Ok(Robot::new(
             Model::from_urdf_str(text, source).map_err(from_model)?,
+            Origin::Urdf {
+                text: text.to_string(),
+                source: source.to_string(),
+            },
         ))
+    }
+
+    /// Pickling (and ``copy.deepcopy``): a built-in robot by name, a description by its
+    /// text, so the copy does not depend on the file.
+    fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+        let py = slf.py();
+        let r = slf.get();
+        let (kind, text, source) = match &r.origin {
+            Origin::Builtin(name) => ("builtin", name.clone(), String::new()),
+            Origin::Toml { text, source } => ("toml", text.clone(), source.clone()),
+            Origin::Urdf { text, source } => ("urdf", text.clone(), source.clone()),
+        };
+        let stribeck = r.stribeck;
+        let args = (kind, text, source, stribeck).into_pyobject(py)?.into_any();
+        Ok((slf.get_type().getattr("_restore")?, args))
+    }
+
+    /// The inverse of ``__reduce__``.
+    #[staticmethod]
+    fn _restore(
+        py: Python<'_>,
+        kind: &str,
+        text: String,
+        source: String,
+        stribeck: Option<f64>,
+    ) -> PyResult<Self> {
+        let origin = match kind {
+            "builtin" => Origin::Builtin(text),
+            "toml" => Origin::Toml { text, source },
+            "urdf" => Origin::Urdf { text, source },
+            other => return Err(input(format!("Robot: unknown pickled kind {other:?}"))),
+        };
+        let o = origin.clone();
+        let model = py.detach(move || o.build(stribeck)).map_err(from_model)?;
+        Ok(Robot {
+            stribeck,
+            ..Robot::new(model, origin)
+        })
     }
 
     /// Names of the built-in robots.

@@ -4,10 +4,11 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
+use dvrk_ident::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
+use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat, LogReader};
-use dvrk_ident::result::{write_atomic, InputInfo};
+use dvrk_ident::result::write_atomic;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
@@ -69,6 +70,10 @@ pub struct McapArgs {
     /// (bridges gaps and jitter; without it such logs are refused)
     #[arg(long, value_name = "HZ")]
     pub resample: Option<f64>,
+    /// The robot's measured joints, for the automatic topic choice (set by the commands
+    /// that know the robot, see [`LogArgs::for_robot`]).
+    #[arg(skip)]
+    pub joints: Vec<String>,
 }
 
 impl McapArgs {
@@ -81,25 +86,25 @@ impl McapArgs {
                 TimeArg::Publish => TimeSource::PublishTime,
             },
             resample_hz: self.resample,
+            joints: self.joints.clone(),
         }
     }
 }
 
-/// The format of `path` (given, or from the extension and content); `--topic` only
-/// for MCAP logs.
+/// The format of `path` (given, or from its content); `--topic` only for recordings.
 fn log_format(path: &str, format: Option<LogFormat>, mcap: &McapArgs) -> Result<LogFormat> {
     let format = match format {
         Some(f) => f,
         None => log::detect_format(path)?,
     };
-    if !mcap.topics.is_empty() && format != LogFormat::Mcap {
-        bail!("{path}: --topic applies to MCAP logs only, this is a {format} log");
+    if !mcap.topics.is_empty() && !format.has_topics() {
+        bail!("{path}: --topic applies to recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) only, this is a {format} log");
     }
     Ok(format)
 }
 
-/// Reads a log in `format` (default: from the extension and content) with the MCAP
-/// options of `mcap`; `--resample` applies to every format (MCAP while reading).
+/// Reads a log in `format` (default: from its content) with the recording options of
+/// `mcap`; `--resample` applies to every format (recordings while reading).
 pub fn read_log(
     path: &str,
     format: Option<LogFormat>,
@@ -159,6 +164,14 @@ impl LogArgs {
         )?)
     }
 
+    /// These options for reading `model`'s logs: its measured joints guide the
+    /// automatic topic choice (a dVRK 2.x PSM's arm and jaw topics are paired).
+    pub fn for_robot(&self, model: &Model) -> LogArgs {
+        let mut args = self.clone();
+        args.mcap.joints.clone_from(&model.measured.joints);
+        args
+    }
+
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
         let mut s = base;
         if self.cutoff.as_deref().map(str::trim) == Some("none") {
@@ -191,20 +204,23 @@ impl LogArgs {
 
 #[derive(clap::Args)]
 pub struct Args {
-    /// Training log
-    pub log: String,
+    /// Training logs: files (2019 CSV, headered CSV, MCAP, sqlite3 .db3, ROS 1 .bag) or
+    /// rosbag2 folders, recognized by content. Each is processed on its own (filters
+    /// and trimming never cross from one to the next), their observations merged
+    #[arg(required = true, num_args = 1.., value_name = "LOG")]
+    pub logs: Vec<String>,
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     #[arg(long)]
     pub robot: String,
     #[command(flatten)]
-    pub logs: LogArgs,
+    pub log_args: LogArgs,
     /// Estimator
     #[arg(long, value_enum, default_value = "sdp")]
     pub method: MethodArg,
-    /// Test (validation) log
-    #[arg(long)]
-    pub test: Option<String>,
-    /// Metrics on the first N processed test samples only
+    /// Test (validation) logs: `--test a b` or `--test a --test b`
+    #[arg(long, num_args = 1.., value_name = "LOG")]
+    pub test: Vec<String>,
+    /// Metrics on the first N processed samples of each test log only
     #[arg(long)]
     pub test_window: Option<usize>,
     /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
@@ -239,15 +255,33 @@ pub struct Args {
 /// machine's memory in samples and their processed copies.
 pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
 
-/// Whether a log file is large enough to be streamed (a file that cannot be examined
-/// is read the usual way, which reports the problem).
+/// Whether a log (its files, for a rosbag2 folder) is large enough to be streamed (a
+/// log that cannot be examined is read the usual way, which reports the problem).
 fn is_large(path: &str) -> bool {
-    std::fs::metadata(path).is_ok_and(|m| m.len() > STREAM_ABOVE_BYTES)
+    log::files_of(path).is_ok_and(|files| {
+        files
+            .iter()
+            .filter_map(|f| std::fs::metadata(f).ok())
+            .map(|m| m.len())
+            .sum::<u64>()
+            > STREAM_ABOVE_BYTES
+    })
+}
+
+/// The logs read from `paths`, for the fit and its provenance.
+fn log_data<'a>(data: &'a [dvrk_ident::Trajectory], paths: &'a [String]) -> Vec<LogData<'a>> {
+    data.iter()
+        .zip(paths)
+        .map(|(samples, path)| LogData {
+            samples,
+            file: Some(Path::new(path)),
+        })
+        .collect()
 }
 
 pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
-    let mut settings = args.logs.settings(FitSettings::default())?;
+    let mut settings = args.log_args.settings(FitSettings::default())?;
     settings.method = match args.method {
         MethodArg::Ols => Method::Ols,
         MethodArg::Wls => Method::Wls,
@@ -264,39 +298,46 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     settings.test_window = args.test_window;
-    let stream = args.stream || is_large(&args.log) || args.test.as_deref().is_some_and(is_large);
+    let stream = args.stream || args.logs.iter().chain(&args.test).any(|p| is_large(p));
+    if stream && args.report.is_some() {
+        bail!(
+            "--report draws the logs, which a streamed fit does not hold in memory: \
+             fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
+        );
+    }
+    if stream && excitation.is_some() && !args.test.is_empty() && args.test_window.is_none() {
+        bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
+    }
+    let log_args = args.log_args.for_robot(&model);
+    let open = |paths: &[String]| -> Result<Vec<LogReader>> {
+        paths.iter().map(|p| log_args.open(p)).collect()
+    };
+    let train = open(&args.logs)?;
+    let test = open(&args.test)?;
     let bars = crate::progress::Bars::new();
     let mut in_memory = None;
-    let mut result = if stream {
-        if args.report.is_some() {
-            bail!(
-                "--report draws the logs, which a streamed fit does not hold in memory: \
-                 fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
-            );
-        }
-        if excitation.is_some() && args.test.is_some() && args.test_window.is_none() {
-            bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
-        }
-        let train = args.logs.open(&args.log)?;
-        let test = match &args.test {
-            Some(t) => Some(args.logs.open(t)?),
-            None => None,
-        };
-        fit_stream(
+    let result = if stream {
+        fit_stream_logs(
             &model,
-            &train,
-            test.as_ref(),
+            &train.iter().collect::<Vec<_>>(),
+            &test.iter().collect::<Vec<_>>(),
             &settings,
             BLOCK_SAMPLES,
             &bars,
         )?
     } else {
-        let train = args.logs.read(&args.log)?;
-        let test = match &args.test {
-            Some(t) => Some(args.logs.read(t)?),
-            None => None,
+        let read = |readers: &[LogReader]| -> Result<Vec<dvrk_ident::Trajectory>> {
+            readers
+                .iter()
+                .map(|r| {
+                    let name = format!("reading {}", r.path().display());
+                    Ok(bars.spin(&name, || r.read_all())?)
+                })
+                .collect()
         };
-        if let (None, Some(traj), Some(t)) = (args.test_window, &excitation, &test) {
+        let train_data = read(&train)?;
+        let test_data = read(&test)?;
+        if let (None, Some(traj), Some(t)) = (args.test_window, &excitation, test_data.first()) {
             let rate = t
                 .rate_hz()
                 .context("the test log has no usable time stamps")?;
@@ -304,19 +345,16 @@ pub fn run(args: Args) -> Result<()> {
             let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
             settings.test_window = Some(samples / settings.processing.decimate.max(1));
         }
-        let result =
-            dvrk_ident::fit::fit_with_progress(&model, &train, test.as_ref(), &settings, &bars)?;
-        in_memory = Some((train, test));
+        let result = fit_logs(
+            &model,
+            &log_data(&train_data, &args.logs),
+            &log_data(&test_data, &args.test),
+            &settings,
+            &bars,
+        )?;
+        in_memory = Some((train_data, test_data));
         result
     };
-    result
-        .inputs
-        .push(InputInfo::from_file("train", Path::new(&args.log))?);
-    if let Some(t) = &args.test {
-        result
-            .inputs
-            .push(InputInfo::from_file("test", Path::new(t))?);
-    }
     if result.solver.converged {
         if let Some(out) = &args.out {
             write_atomic(Path::new(out), &result.to_json())?;
@@ -327,9 +365,25 @@ pub fn run(args: Args) -> Result<()> {
             write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &in_memory) {
-            let mut logs = vec![("training", train, None)];
-            if let Some(t) = test {
-                logs.push(("test", t, settings.test_window));
+            let roles = |role: &str, count: usize| -> Vec<String> {
+                (1..=count)
+                    .map(|k| {
+                        if count == 1 {
+                            role.to_string()
+                        } else {
+                            format!("{role} {k}")
+                        }
+                    })
+                    .collect()
+            };
+            let train_roles = roles("training", train.len());
+            let test_roles = roles("test", test.len());
+            let mut logs: Vec<(&str, &dvrk_ident::Trajectory, Option<usize>)> = Vec::new();
+            for (role, t) in train_roles.iter().zip(train) {
+                logs.push((role, t, None));
+            }
+            for (role, t) in test_roles.iter().zip(test) {
+                logs.push((role, t, settings.test_window));
             }
             super::report::write(&model, &result, &logs, excitation.as_ref(), dir)?;
         }
@@ -404,6 +458,27 @@ pub fn table(r: &FitResult) -> String {
             None => ("-".into(), "-".into()),
         };
         let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");
+    }
+    // Each log with what was read of it (a recording's topics) and, when there are
+    // several, its own errors.
+    let _ = writeln!(s, "logs (samples after processing, sha256):");
+    for i in &r.inputs {
+        let name = if i.source.is_empty() {
+            &i.path
+        } else {
+            &i.source
+        };
+        let _ = writeln!(
+            s,
+            "  {:<5} {name} ({} samples, {})",
+            i.role,
+            i.metrics.as_ref().map_or(0, |m| m.samples),
+            &i.sha256[..12.min(i.sha256.len())]
+        );
+        if let (true, Some(m)) = (r.inputs.len() > 1, &i.metrics) {
+            let errors: Vec<String> = m.relative_error.iter().map(|e| format!("{e:.4}")).collect();
+            let _ = writeln!(s, "        relative error {}", errors.join(" "));
+        }
     }
     s
 }

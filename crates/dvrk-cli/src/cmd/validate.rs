@@ -40,8 +40,9 @@ pub fn run(args: Args) -> Result<()> {
     let settings = args.log_args.settings(result.settings.clone())?;
     let mut reports = Vec::new();
     let mut text = String::new();
+    let log_args = args.log_args.for_robot(&model);
     for path in &args.logs {
-        let traj = args.log_args.read(path)?;
+        let traj = log_args.read(path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
         let _ = writeln!(text, "{path} ({} samples)", m.samples);

@@ -30,14 +30,14 @@ use dvrk_model::Model;
 use nalgebra::DMatrix;
 
 use super::{
-    build_result, estimate, subtract_known_forces, to_model_coordinates, FitSettings, Method,
-    MetricSums, TorqueRange,
+    build_result, estimate, joined_sources, merge_parts, no_training_log, subtract_known_forces,
+    summed, to_model_coordinates, FitSettings, Method, MetricSums, TorqueRange,
 };
 use crate::error::IdentError;
 use crate::log::LogReader;
 use crate::observation::{Observation, Samples, CHUNK_SAMPLES};
 use crate::progress::Progress;
-use crate::result::{FitResult, Metrics};
+use crate::result::{FitResult, InputInfo, Metrics};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
 use crate::trajectory::{Coordinates, Trajectory};
@@ -250,7 +250,8 @@ fn samples(p: &Processed) -> Samples<'_> {
 
 /// [`super::fit`] of logs read from their files block by block (see the module docs
 /// for the passes). `block_samples` is the block size ([`BLOCK_SAMPLES`]); `progress`
-/// hears a stage per pass, counted in the log's samples.
+/// hears a stage per pass, counted in the log's samples. See [`fit_stream_logs`] for
+/// several logs.
 pub fn fit_stream(
     model: &Model,
     train: &LogReader,
@@ -259,25 +260,50 @@ pub fn fit_stream(
     block_samples: usize,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {
+    let test: Vec<&LogReader> = test.into_iter().collect();
+    fit_stream_logs(model, &[train], &test, settings, block_samples, progress)
+}
+
+/// [`super::fit_logs`] of logs read from their files block by block: each log processed
+/// on its own, the observations merged, the same result to the last bit (the inputs
+/// hashed from the files).
+pub fn fit_stream_logs(
+    model: &Model,
+    train: &[&LogReader],
+    test: &[&LogReader],
+    settings: &FitSettings,
+    block_samples: usize,
+    progress: &dyn Progress,
+) -> Result<FitResult, IdentError> {
+    if train.is_empty() {
+        return Err(no_training_log());
+    }
     // The model options of the settings (Stribeck terms), as the in-memory fit.
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
-    let source = |reader| Source {
-        reader,
-        model,
-        block: block_samples,
+    fn sources<'a>(logs: &[&'a LogReader], model: &'a Model, block: usize) -> Vec<Source<'a>> {
+        logs.iter()
+            .map(|&reader| Source {
+                reader,
+                model,
+                block,
+            })
+            .collect()
+    }
+    let train_logs = sources(train, model, block_samples);
+    let test_logs = sources(test, model, block_samples);
+    let timings = |logs: &[Source]| -> Result<Vec<(LogTiming, String)>, IdentError> {
+        logs.iter().map(|l| l.timing(progress)).collect()
     };
-    let train_log = source(train);
-    let test_log = test.map(source);
-    let train_timing = train_log.timing(progress)?;
-    let test_timing = match &test_log {
-        Some(t) => Some(t.timing(progress)?),
-        None => None,
-    };
+    let train_timing = timings(&train_logs)?;
+    let test_timing = timings(&test_logs)?;
     // Setting and length errors before the long passes, as the whole-log fit reports
     // them before fitting.
-    train_log.processor(settings, &train_timing)?;
-    if let (Some(log), Some(timing)) = (&test_log, &test_timing) {
+    for (log, timing) in train_logs
+        .iter()
+        .zip(&train_timing)
+        .chain(test_logs.iter().zip(&test_timing))
+    {
         log.processor(settings, timing)?;
     }
     let base = model.base_parameters()?;
@@ -285,9 +311,8 @@ pub fn fit_stream(
     let p = model.n_params();
     let started = std::time::Instant::now();
 
-    let mut parts = vec![Observation::new(p); n];
+    let mut total: Option<Vec<Observation>> = None;
     let mut range = TorqueRange::new(n);
-    let mut batches = Batches::new(n);
     let add = |parts: &mut [Observation], [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
         let s = Samples {
             q: &q,
@@ -297,34 +322,52 @@ pub fn fit_stream(
         };
         Observation::add_per_coordinate(parts, model, s);
     };
-    train_log.processed(
-        settings,
-        &train_timing,
-        "assembling the observation",
-        progress,
-        |block| {
-            range.add(&block.tau);
-            batches.push(block);
-            if let Some(batch) = batches.take(false) {
-                add(&mut parts, batch);
-            }
-            ControlFlow::Continue(())
-        },
-    )?;
-    if let Some(batch) = batches.take(true) {
-        add(&mut parts, batch);
+    for (log, timing) in train_logs.iter().zip(&train_timing) {
+        let mut parts = vec![Observation::new(p); n];
+        let mut batches = Batches::new(n);
+        log.processed(
+            settings,
+            timing,
+            "assembling the observation",
+            progress,
+            |block| {
+                range.add(&block.tau);
+                batches.push(block);
+                if let Some(batch) = batches.take(false) {
+                    add(&mut parts, batch);
+                }
+                ControlFlow::Continue(())
+            },
+        )?;
+        if let Some(batch) = batches.take(true) {
+            add(&mut parts, batch);
+        }
+        merge_parts(&mut total, parts);
     }
+    let parts = total.expect("at least one training log");
     let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range.weights(),
     };
+    let metrics_of = |logs: &[Source],
+                      timings: &[(LogTiming, String)],
+                      pi: &[f64],
+                      window: Option<usize>,
+                      stage: &str|
+     -> Result<Vec<MetricSums>, IdentError> {
+        logs.iter()
+            .zip(timings)
+            .map(|(log, timing)| log.metrics(settings, timing, pi, window, stage, progress))
+            .collect()
+    };
+    let source = joined_sources(train_timing.iter().map(|(_, s)| s.as_str()));
     let estimated = estimate(
         model,
         &base,
         &parts,
         weights,
         settings,
-        &train_timing.1,
+        &source,
         started,
         progress,
         |pi, it| {
@@ -333,42 +376,43 @@ pub fn fit_stream(
                 it + 1,
                 settings.irls_iterations
             );
-            train_log.metrics(settings, &train_timing, pi, None, &stage, progress)
+            Ok(summed(
+                model,
+                &metrics_of(&train_logs, &train_timing, pi, None, &stage)?,
+            ))
         },
     )?;
     let params = &estimated.params;
-    let train_metrics = train_log
-        .metrics(
-            settings,
-            &train_timing,
-            params,
-            None,
-            "metrics (train)",
-            progress,
-        )?
-        .metrics(model);
-    let test_metrics = match (&test_log, &test_timing) {
-        (Some(log), Some(timing)) => Some(
-            log.metrics(
-                settings,
-                timing,
-                params,
-                settings.test_window,
-                "metrics (test)",
-                progress,
-            )?
-            .metrics(model),
-        ),
-        _ => None,
-    };
-    Ok(build_result(
+    let train_sums = metrics_of(&train_logs, &train_timing, params, None, "metrics (train)")?;
+    let test_sums = metrics_of(
+        &test_logs,
+        &test_timing,
+        params,
+        settings.test_window,
+        "metrics (test)",
+    )?;
+    let mut inputs = Vec::with_capacity(train.len() + test.len());
+    for (role, logs, sums, timings) in [
+        ("train", train, &train_sums, &train_timing),
+        ("test", test, &test_sums, &test_timing),
+    ] {
+        for ((log, sums), (_, source)) in logs.iter().zip(sums).zip(timings) {
+            let mut info = InputInfo::from_file(role, log.path())?;
+            info.source.clone_from(source);
+            info.metrics = Some(sums.metrics(model));
+            inputs.push(info);
+        }
+    }
+    let mut result = build_result(
         model,
         &base,
         settings,
         estimated,
         Metrics {
-            train: train_metrics,
-            test: test_metrics,
+            train: summed(model, &train_sums).metrics(model),
+            test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
         },
-    ))
+    );
+    result.inputs = inputs;
+    Ok(result)
 }

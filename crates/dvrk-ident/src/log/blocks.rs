@@ -31,7 +31,7 @@ pub struct LogReader {
 
 impl LogReader {
     /// Opens `path` in `format` (`None`: [`detect_format`]). `rate_hz` is the 2019
-    /// layout's sampling rate; `mcap_options` are used for MCAP logs, and their
+    /// layout's sampling rate; `mcap_options` are used for recordings, and their
     /// `resample_hz` for every format (as in [`super::read_with`]).
     pub fn open(
         path: impl AsRef<Path>,
@@ -73,8 +73,9 @@ impl LogReader {
                 reader.coordinates = b.coordinates();
                 reader.has_velocity = b.has_velocity();
             }
-            LogFormat::Mcap => {
+            _ => {
                 let m = McapReader::open(path, mcap_options)?;
+                reader.format = m.format();
                 reader.joint_names = m.joint_names();
                 reader.has_velocity = m.has_velocity();
                 reader.resample_hz = None;
@@ -121,6 +122,15 @@ impl LogReader {
         })
     }
 
+    /// Every sample in memory: the blocks of one pass, collected.
+    pub fn read_all(&self) -> Result<Trajectory, LogError> {
+        let mut all = super::TrajectoryBuilder::default();
+        for block in self.blocks(super::BLOCK_SAMPLES)? {
+            all.push(&block?);
+        }
+        Ok(all.build())
+    }
+
     /// The file.
     pub fn path(&self) -> &Path {
         &self.path
@@ -144,6 +154,11 @@ impl LogReader {
     /// Whether the samples have measured velocities.
     pub fn has_velocity(&self) -> bool {
         self.has_velocity
+    }
+
+    /// The topics read (recordings; the clock first), empty for CSV logs.
+    pub fn topics(&self) -> &[String] {
+        self.mcap.as_ref().map_or(&[], |m| m.topics())
     }
 
     /// Number of samples, when known without a pass over the file (MCAP).

@@ -1,4 +1,11 @@
-//! ROS 2 MCAP logs of `sensor_msgs/msg/JointState` (dVRK 2.x / CRTK `measured_js`).
+//! Recordings of `sensor_msgs/msg/JointState` (dVRK 2.x / CRTK `measured_js`): ROS 2
+//! MCAP files, rosbag2 folders (`metadata.yaml` and its MCAP or sqlite3 `.db3` files,
+//! in order: split recordings are one log), single `.db3` files, and ROS 1 bags of
+//! `sensor_msgs/JointState`; files compressed as a whole (zstd, lz4: rosbag2's
+//! `compression_mode: file`, e.g. `*.mcap.zstd`) and messages compressed one by one
+//! (`compression_mode: message`). All are recognized by content (`bag`), read message by
+//! message in file order (`container`, `sqlite`, `ros1`) and decoded to the same
+//! JointState (CDR, JSON or ROS 1 serialization), so everything below holds for each.
 //!
 //! # Reading
 //!
@@ -6,16 +13,19 @@
 //! makes every check below in passes over the file that keep no samples (usually one;
 //! see `survey`), and [`McapReader::blocks`] reads the samples, merged and resampled, in
 //! blocks. [`read_mcap`] (or [`read_mcap_log`], which also returns the absolute start
-//! time, the topics and a timing report) collects every block. The file is streamed
+//! time, the topics and a timing report) collects every block. An MCAP file is streamed
 //! message by message: the `mcap` crate decompresses one chunk at a time (zstd or lz4)
 //! and checks the chunk, data and summary CRCs, and only the joint states of the wanted
-//! topics are decoded. Messages may be CDR (`cdr` message encoding, what ROS 2 records)
-//! or JSON (`json`, Foxglove).
+//! topics are decoded. Messages may be CDR (`cdr` message encoding, what ROS 2 records),
+//! JSON (`json`, Foxglove) or ROS 1 (`ros1`).
 //!
 //! **Topic choice** ([`McapOptions::topics`] empty): among the `sensor_msgs/msg/JointState`
 //! topics, the one whose messages have both positions and efforts; if several do, the
 //! one whose name ends in `measured_js` (the dVRK/CRTK convention); if that is still not
-//! a single topic, an error lists the candidates. A topic that is named explicitly must
+//! a single topic, an error lists the candidates. When the joints the caller needs are
+//! known ([`McapOptions::joints`], a robot's measured joints), a topic that holds them
+//! all comes first, then the dVRK 2.x pair `X/measured_js` + `X/jaw/measured_js` (the
+//! PSM's jaw on its own topic) that holds them together, merged as below. A topic that is named explicitly must
 //! exist, hold JointState messages and not be empty. The choice takes the first pass
 //! over the file: every candidate topic is decoded and checked until the end (a
 //! JointState topic stops being a candidate at its first message without positions or
@@ -67,9 +77,12 @@
 //! definition, CDR messages, zstd chunks with CRCs, summary and indexes), atomically
 //! (temporary file and rename).
 
+pub(crate) mod bag;
 mod blocks;
 mod container;
 mod joint_state;
+mod ros1;
+mod sqlite;
 mod survey;
 mod topic;
 
@@ -84,6 +97,7 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::Arc;
 use thiserror::Error;
 
 /// Largest accepted relative deviation of a time step from the median step before a log
@@ -148,6 +162,10 @@ pub struct McapOptions {
     /// Resample to this uniform rate, Hz, by linear interpolation; `None`: a log with
     /// gaps or jitter is refused.
     pub resample_hz: Option<f64>,
+    /// The joints the caller needs (e.g. a robot's measured joints), for the automatic
+    /// topic choice: a topic holding them all, else a dVRK arm topic and its jaw topic
+    /// (`X/measured_js` + `X/jaw/measured_js`) holding them together. Empty: unknown.
+    pub joints: Vec<String>,
 }
 
 /// A topic of an MCAP file.
@@ -245,6 +263,18 @@ pub enum McapProblem {
     /// The file does not start with the MCAP magic.
     #[error("not an MCAP file (it does not start with the MCAP magic bytes)")]
     NotMcap,
+    /// A file (or folder) that is no recording of a supported format.
+    #[error("not a supported log: it looks like {looks_like}; {}", bag::SUPPORTED)]
+    NotARecording {
+        /// What it looks like.
+        looks_like: String,
+    },
+    /// A rosbag2 metadata.yaml that cannot be used.
+    #[error("invalid rosbag2 metadata.yaml: {reason}")]
+    Metadata {
+        /// What is wrong.
+        reason: String,
+    },
     /// The file ends in the middle of a record or lacks its footer.
     #[error("truncated MCAP file: it ends in the middle of a record or before its footer ({bytes_read} bytes read); was the recording interrupted? (`mcap recover` can salvage the complete chunks)")]
     Truncated {
@@ -270,7 +300,7 @@ pub enum McapProblem {
     #[error("the topic has no messages")]
     EmptyTopic,
     /// A requested topic is not a JointState topic.
-    #[error("the topic holds {} messages in {message_encoding:?} encoding, not {JOINT_STATE_TYPE} in cdr or json encoding", if schema_name.is_empty() { "schemaless" } else { schema_name })]
+    #[error("the topic holds {} messages in {message_encoding:?} encoding, not {JOINT_STATE_TYPE} in cdr or json encoding (or sensor_msgs/JointState in ros1 encoding)", if schema_name.is_empty() { "schemaless" } else { schema_name })]
     WrongType {
         /// Its schema name.
         schema_name: String,
@@ -286,7 +316,7 @@ pub enum McapProblem {
         rejected: Vec<String>,
     },
     /// Automatic choice: several candidate topics.
-    #[error("several {JOINT_STATE_TYPE} topics have positions and efforts: {}; choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)", candidates.join(", "))]
+    #[error("several {JOINT_STATE_TYPE} topics (or arm and jaw topic pairs) have positions and efforts: {}; choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)", candidates.join(", "))]
     Ambiguous {
         /// The candidate topics.
         candidates: Vec<String>,
@@ -474,7 +504,8 @@ fn fmt_ms(s: f64) -> String {
 /// Lists the topics of an MCAP file with their types and message counts (one pass over
 /// the file).
 pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>, LogError> {
-    Ok(container::scan(path.as_ref(), |_| Ok(()))?.topics)
+    let bag = Arc::new(bag::Bag::open(path.as_ref())?);
+    Ok(container::scan(&bag, |_| Ok(()))?.topics)
 }
 
 /// Reads an MCAP log into a [`Trajectory`] in measured coordinates (see the module docs
@@ -535,25 +566,36 @@ pub fn read_mcap_log(path: impl AsRef<Path>, options: &McapOptions) -> Result<Mc
 /// merged topics are apart in it, not by the log's length.
 #[derive(Clone, Debug)]
 pub struct McapReader {
-    path: std::path::PathBuf,
+    bag: Arc<bag::Bag>,
     plan: survey::Plan,
 }
 
 impl McapReader {
-    /// Opens `path` and checks it (see the type docs); errors are those of
-    /// [`read_mcap`].
+    /// Opens `path` (a file or a rosbag2 folder, see the module docs) and checks it
+    /// (see the type docs); errors are those of [`read_mcap`].
     pub fn open(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapReader, LogError> {
-        let path = path.as_ref();
+        let bag = Arc::new(bag::Bag::open(path.as_ref())?);
         Ok(McapReader {
-            plan: survey::plan(path, options)?,
-            path: path.to_path_buf(),
+            plan: survey::plan(&bag, options)?,
+            bag,
         })
     }
 
     /// The samples in blocks of at most `block_samples`, in order, each validated like
     /// the whole trajectory (rows numbered from the log's start); one pass over the file.
     pub fn blocks(&self, block_samples: usize) -> Result<McapBlocks<'_>, LogError> {
-        McapBlocks::new(&self.path, &self.plan, block_samples)
+        McapBlocks::new(&self.bag, &self.plan, block_samples)
+    }
+
+    /// The recording's format: [`LogFormat::Mcap`], [`LogFormat::Rosbag2`] (a folder),
+    /// [`LogFormat::Sqlite3`] or [`LogFormat::Ros1`].
+    pub fn format(&self) -> crate::log::LogFormat {
+        self.bag.format
+    }
+
+    /// The files read, in order (one, or those of a rosbag2 folder).
+    pub fn files(&self) -> Vec<std::path::PathBuf> {
+        self.bag.files.iter().map(|f| f.path.clone()).collect()
     }
 
     /// The topics read, the clock first.
@@ -596,7 +638,8 @@ pub fn read_joint_states(
     topics: &[String],
     time_source: TimeSource,
 ) -> Result<Vec<JointStateSeries>, LogError> {
-    Ok(survey::survey(path.as_ref(), topics, time_source, true)?
+    let bag = Arc::new(bag::Bag::open(path.as_ref())?);
+    Ok(survey::survey(&bag, topics, &[], time_source, true)?
         .into_iter()
         .map(survey::TopicSurvey::into_series)
         .collect())

@@ -10,6 +10,14 @@
 //! - [`LogFormat::Mcap`]: ROS 2 MCAP recordings of `sensor_msgs/msg/JointState`
 //!   (dVRK `measured_js`), measured coordinates, header stamps. See [`mcap`]
 //!   ([`mcap::read_mcap`] / [`mcap::write_mcap`] for topics, time source, resampling).
+//! - [`LogFormat::Rosbag2`] (a `ros2 bag record` folder: `metadata.yaml` and its MCAP or
+//!   sqlite3 files, split recordings included), [`LogFormat::Sqlite3`] (rosbag2's `.db3`)
+//!   and [`LogFormat::Ros1`] (a ROS 1 `.bag` of `sensor_msgs/JointState`): the same
+//!   messages in other containers, read by the same [`mcap`] reader. Files compressed
+//!   as a whole (zstd, lz4) and messages compressed one by one are decompressed.
+//!
+//! Formats are recognized by content ([`detect_format`]), never by extension; a file of
+//! no supported format is an error saying what it looks like.
 //!
 //! Every reader streams its file: [`LogReader`] gives a log of any format in blocks of
 //! samples (for logs larger than memory), and [`read`] / [`read_with`] collect every
@@ -47,6 +55,20 @@ pub enum LogFormat {
     Csv,
     /// ROS 2 MCAP with `sensor_msgs/msg/JointState` messages (see [`mcap`]).
     Mcap,
+    /// A rosbag2 folder (`metadata.yaml` and its MCAP or sqlite3 files).
+    Rosbag2,
+    /// rosbag2's sqlite3 storage, one `.db3` file.
+    Sqlite3,
+    /// A ROS 1 bag (format 2.0) of `sensor_msgs/JointState`.
+    Ros1,
+}
+
+impl LogFormat {
+    /// Whether the format is a recording of messages on topics (every format but the
+    /// CSV layouts): read by [`mcap::McapReader`], with topics and a time source.
+    pub fn has_topics(self) -> bool {
+        !matches!(self, LogFormat::Wpi | LogFormat::Csv)
+    }
 }
 
 impl std::fmt::Display for LogFormat {
@@ -55,6 +77,9 @@ impl std::fmt::Display for LogFormat {
             LogFormat::Wpi => "wpi",
             LogFormat::Csv => "csv",
             LogFormat::Mcap => "mcap",
+            LogFormat::Rosbag2 => "rosbag2",
+            LogFormat::Sqlite3 => "sqlite3",
+            LogFormat::Ros1 => "ros1",
         })
     }
 }
@@ -62,14 +87,18 @@ impl std::fmt::Display for LogFormat {
 impl std::str::FromStr for LogFormat {
     type Err = String;
 
-    /// Parses `wpi` (also `2019`), `csv` or `mcap`, case-insensitively.
+    /// Parses `wpi` (also `2019`), `csv`, `mcap`, `rosbag2`, `sqlite3` (also `db3`) or
+    /// `ros1` (also `bag`), case-insensitively.
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s.to_ascii_lowercase().as_str() {
             "wpi" | "2019" => Ok(LogFormat::Wpi),
             "csv" => Ok(LogFormat::Csv),
             "mcap" => Ok(LogFormat::Mcap),
+            "rosbag2" => Ok(LogFormat::Rosbag2),
+            "sqlite3" | "db3" => Ok(LogFormat::Sqlite3),
+            "ros1" | "bag" => Ok(LogFormat::Ros1),
             other => Err(format!(
-                "unknown log format {other:?}: expected wpi, csv or mcap"
+                "unknown log format {other:?}: expected wpi, csv, mcap, rosbag2, sqlite3 or ros1"
             )),
         }
     }
@@ -302,12 +331,11 @@ pub enum LogError {
     },
 }
 
-/// Reads a log, choosing the layout from `format` or, when `None`, from the file:
-/// `.mcap` is MCAP; otherwise a file whose first non-comment row parses as all numbers
-/// is the 2019 (wpi) layout and anything else a headered CSV.
+/// Reads a log, choosing the layout from `format` or, when `None`, from its content
+/// ([`detect_format`]).
 ///
 /// `rate_hz` (Hz) is required for the 2019 layout, which has no time stamps (the dVRK
-/// logs are 200 Hz), and ignored for formats with time stamps. MCAP files are read with
+/// logs are 200 Hz), and ignored for formats with time stamps. Recordings are read with
 /// [`mcap::McapOptions::default`] (automatic topic, header stamps, no resampling; use
 /// [`read_with`] or [`mcap::read_mcap`] for more). The 2019 layout's number
 /// of joints is inferred as columns / 3 (use [`read_wpi`] to force it).
@@ -348,12 +376,7 @@ pub fn read_with(
     rate_hz: Option<f64>,
     mcap_options: &mcap::McapOptions,
 ) -> Result<Trajectory, LogError> {
-    let reader = LogReader::open(path, format, rate_hz, mcap_options)?;
-    let mut all = TrajectoryBuilder::default();
-    for block in reader.blocks(BLOCK_SAMPLES)? {
-        all.push(&block?);
-    }
-    Ok(all.build())
+    LogReader::open(path, format, rate_hz, mcap_options)?.read_all()
 }
 
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
@@ -385,19 +408,43 @@ pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Re
             mcap::DEFAULT_TOPIC,
             &mcap::McapWriteOptions::default(),
         ),
+        other => Err(LogError::Unsupported {
+            path: path.to_path_buf(),
+            format: other,
+            reason: "only read: write MCAP (a rosbag2 folder can hold MCAP files)",
+        }),
     }
 }
 
-/// Guesses a file's layout: `.mcap` extension is MCAP; otherwise the first row that is
+/// Recognizes a log by its content: a folder (or its `metadata.yaml`) is a rosbag2
+/// recording, a file starting with the MCAP, SQLite or ROS 1 bag magic (possibly inside
+/// a zstd or lz4 frame) is that recording; a text file is a CSV, whose first row that is
 /// not blank or a `#` comment decides: all fields numbers means the headerless 2019
-/// layout, else a headered CSV.
+/// layout, else a headered CSV. Anything else is an error saying what the file looks
+/// like and what is supported.
 pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
+    use self::mcap::bag::{sniff, Content, Storage};
     let path = path.as_ref();
-    if path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
-    {
-        return Ok(LogFormat::Mcap);
+    let meta = std::fs::metadata(path).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    if meta.is_dir() {
+        return Ok(LogFormat::Rosbag2);
+    }
+    match sniff(path)? {
+        Content::Bag(Storage::Mcap, _) => return Ok(LogFormat::Mcap),
+        Content::Bag(Storage::Sqlite3, _) => return Ok(LogFormat::Sqlite3),
+        Content::Bag(Storage::Ros1, _) => return Ok(LogFormat::Ros1),
+        Content::Rosbag2Metadata => return Ok(LogFormat::Rosbag2),
+        Content::Other(looks_like) => {
+            return Err(LogError::Mcap {
+                path: path.to_path_buf(),
+                topic: None,
+                problem: Box::new(mcap::McapProblem::NotARecording { looks_like }),
+            })
+        }
+        Content::Text => {}
     }
     let mut text = open_text(path)?;
     let mut raw = Vec::new();
@@ -429,6 +476,17 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
             LogFormat::Csv
         });
     }
+}
+
+/// The files that hold the log at `path`: the file itself, or a rosbag2 folder's
+/// `metadata.yaml` and recording files in order (what the result's provenance hashes).
+pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
+    let path = path.as_ref();
+    if detect_format(path)? != LogFormat::Rosbag2 {
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let located = mcap::bag::locate(path)?;
+    Ok(located.metadata.into_iter().chain(located.files).collect())
 }
 
 /// Samples per block when a reader's blocks are collected into a whole log.
@@ -590,7 +648,14 @@ mod tests {
 
     #[test]
     fn format_names() {
-        for f in [LogFormat::Wpi, LogFormat::Csv, LogFormat::Mcap] {
+        for f in [
+            LogFormat::Wpi,
+            LogFormat::Csv,
+            LogFormat::Mcap,
+            LogFormat::Rosbag2,
+            LogFormat::Sqlite3,
+            LogFormat::Ros1,
+        ] {
             assert_eq!(f.to_string().parse::<LogFormat>().unwrap(), f);
         }
         assert_eq!("2019".parse::<LogFormat>().unwrap(), LogFormat::Wpi);

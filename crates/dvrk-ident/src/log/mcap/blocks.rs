@@ -9,7 +9,9 @@
 
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
+use super::bag::Bag;
 use super::container::{mcap_error, Scanner};
 use super::survey::{seconds_between, Plan};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
@@ -154,7 +156,8 @@ pub struct McapBlocks<'a> {
 }
 
 impl<'a> McapBlocks<'a> {
-    pub(super) fn new(path: &Path, plan: &'a Plan, block: usize) -> Result<Self, LogError> {
+    pub(super) fn new(bag: &Arc<Bag>, plan: &'a Plan, block: usize) -> Result<Self, LogError> {
+        let path = bag.path.as_path();
         let widths: Vec<usize> = plan.joints.iter().map(Vec::len).collect();
         let resampler = match plan.resample_hz {
             Some(rate) => Some(
@@ -165,7 +168,7 @@ impl<'a> McapBlocks<'a> {
         };
         Ok(McapBlocks {
             path: path.to_path_buf(),
-            scanner: Scanner::open(path)?,
+            scanner: Scanner::open(bag)?,
             states: plan.topics.iter().map(|t| TopicState::new(t)).collect(),
             merge: Merge {
                 span: plan.span,

@@ -1,12 +1,17 @@
-//! Streaming over the records of an MCAP file: schemas, channels, messages.
+//! Streaming over the messages of a recording, file after file: MCAP files here,
+//! rosbag2's sqlite3 files in [`super::sqlite`], ROS 1 bags in [`super::ros1`], all handed
+//! out alike (topic, type, encoding, times, payload), messages compressed on their own
+//! decompressed ([`super::bag::Unpacker`]).
+//!
+//! MCAP files:
 //!
 //! The file is read through a buffered reader and the `mcap` crate's sans-io
 //! [`LinearReader`] (mcap 0.26: a streaming reader over any `Read`, so no memory map),
 //! which decompresses one chunk at a time (zstd or lz4) and checks the chunk,
 //! data-section and summary CRCs; memory is bounded by the largest chunk, not the file.
 //! A [`Scanner`] hands the messages one at a time, on demand, to a callback as borrowed
-//! slices, so messages of topics that are not wanted are never copied, and a log can
-//! be read block by block and read again.
+//! slices (each payload copied once out of its chunk), so a log can be read block by
+//! block and read again.
 
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
@@ -16,6 +21,11 @@ use ::mcap::McapError;
 use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
+use std::sync::Arc;
+
+use super::bag::{Bag, BagFile, Packing, Storage, Unpacker};
+use super::ros1::Ros1File;
+use super::sqlite::SqliteFile;
 
 /// Largest record (or chunk) accepted, bytes: bounds the allocations a corrupted length
 /// field can cause.
@@ -44,64 +54,232 @@ pub(crate) struct Scan {
     pub topics: Vec<TopicInfo>,
 }
 
-/// Reads `path` from start to end, calling `on_message` for every message of the data
-/// section in file order. Stops at the first error (of the file or of the callback).
+/// Reads the recording from start to end, calling `on_message` for every message in
+/// file order. Stops at the first error (of the file or of the callback).
 pub(crate) fn scan(
-    path: &Path,
+    bag: &Arc<Bag>,
     mut on_message: impl FnMut(MessageRef<'_>) -> Result<(), LogError>,
 ) -> Result<Scan, LogError> {
-    let mut scanner = Scanner::open(path)?;
+    let mut scanner = Scanner::open(bag)?;
     while scanner.next_message(&mut on_message)?.is_some() {}
     Ok(Scan {
         topics: scanner.topics(),
     })
 }
 
-/// A pass over the records of a file, one message at a time, on demand.
+/// The channels of every file of a recording, merged by topic, type and encoding (a
+/// split recording repeats them in each file, under ids of that file).
+#[derive(Default)]
+pub(crate) struct Channels {
+    list: Vec<ChannelInfo>,
+    counts: Vec<u64>,
+}
+
+impl Channels {
+    /// The index of a channel, added if new.
+    pub(crate) fn index(
+        &mut self,
+        topic: &str,
+        schema_name: &str,
+        message_encoding: &str,
+    ) -> usize {
+        if let Some(k) = self.list.iter().position(|c| {
+            c.topic == topic
+                && c.schema_name == schema_name
+                && c.message_encoding == message_encoding
+        }) {
+            return k;
+        }
+        self.list.push(ChannelInfo {
+            topic: topic.to_owned(),
+            schema_name: schema_name.to_owned(),
+            message_encoding: message_encoding.to_owned(),
+        });
+        self.counts.push(0);
+        self.list.len() - 1
+    }
+}
+
+/// A message as a storage backend gives it: its channel's index in [`Channels`].
+pub(crate) struct RawMessage<'a> {
+    pub channel: usize,
+    pub log_time: u64,
+    pub publish_time: u64,
+    pub data: &'a [u8],
+}
+
+/// One file of a recording being read.
+enum Backend {
+    Mcap(McapFile),
+    Sqlite(SqliteFile),
+    Ros1(Ros1File),
+}
+
+impl Backend {
+    fn open(file: &BagFile, channels: &mut Channels) -> Result<Backend, LogError> {
+        Ok(match file.storage {
+            Storage::Mcap => Backend::Mcap(McapFile::open(file)?),
+            Storage::Sqlite3 => Backend::Sqlite(SqliteFile::open(file, channels)?),
+            Storage::Ros1 => Backend::Ros1(Ros1File::open(file, channels)?),
+        })
+    }
+
+    fn next<'a>(&'a mut self, channels: &mut Channels) -> Result<Option<RawMessage<'a>>, LogError> {
+        match self {
+            Backend::Mcap(f) => f.next(channels),
+            Backend::Sqlite(f) => f.next(),
+            Backend::Ros1(f) => f.next(channels),
+        }
+    }
+}
+
+/// A pass over the messages of a recording, one message at a time, on demand, file
+/// after file.
 pub(crate) struct Scanner {
-    path: std::path::PathBuf,
-    src: std::io::BufReader<std::fs::File>,
-    reader: LinearReader,
-    schemas: BTreeMap<u16, String>,
-    channels: BTreeMap<u16, ChannelInfo>,
-    counts: BTreeMap<u16, u64>,
-    past_data_end: bool,
-    bytes_read: u64,
+    bag: Arc<Bag>,
+    next_file: usize,
+    backend: Option<Backend>,
+    channels: Channels,
+    /// Messages compressed on their own, decompressed.
+    unpacker: Unpacker,
 }
 
 impl Scanner {
-    pub(crate) fn open(path: &Path) -> Result<Scanner, LogError> {
-        let file = std::fs::File::open(path).map_err(|source| LogError::Io {
+    pub(crate) fn open(bag: &Arc<Bag>) -> Result<Scanner, LogError> {
+        Ok(Scanner {
+            bag: bag.clone(),
+            next_file: 0,
+            backend: None,
+            channels: Channels::default(),
+            unpacker: Unpacker::default(),
+        })
+    }
+
+    /// Reads on to the next message and hands it to `f`; `None` at the end of the last
+    /// file (each file then checked to its end, e.g. an MCAP's last CRC).
+    pub(crate) fn next_message<T>(
+        &mut self,
+        mut f: impl FnMut(MessageRef<'_>) -> Result<T, LogError>,
+    ) -> Result<Option<T>, LogError> {
+        loop {
+            if self.backend.is_none() {
+                let Some(file) = self.bag.files.get(self.next_file) else {
+                    return Ok(None);
+                };
+                self.backend = Some(Backend::open(file, &mut self.channels)?);
+                self.next_file += 1;
+            }
+            let Scanner {
+                bag,
+                next_file,
+                backend,
+                channels,
+                unpacker,
+            } = self;
+            let raw = backend.as_mut().expect("opened above").next(channels)?;
+            let Some(raw) = raw else {
+                *backend = None;
+                continue;
+            };
+            channels.counts[raw.channel] += 1;
+            let channel = &channels.list[raw.channel];
+            let mut data = raw.data;
+            // ROS 1 messages carry no encapsulation header: never compressed alone.
+            if channel.message_encoding != "ros1" {
+                if let Some(r) = unpacker.unpack(data) {
+                    r.map_err(|reason| {
+                        mcap_error(
+                            &bag.files[*next_file - 1].path,
+                            Some(&channel.topic),
+                            McapProblem::Container { reason },
+                        )
+                    })?;
+                    data = unpacker.out.as_slice();
+                }
+            }
+            return f(MessageRef {
+                channel,
+                log_time: raw.log_time,
+                publish_time: raw.publish_time,
+                data,
+            })
+            .map(Some);
+        }
+    }
+
+    /// Every topic seen so far with its type and message count (channels of the same
+    /// topic merged), sorted by topic: the whole recording's after the last message.
+    pub(crate) fn topics(&self) -> Vec<TopicInfo> {
+        let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
+        for (c, &n) in self.channels.list.iter().zip(&self.channels.counts) {
+            let t = topics.entry(c.topic.clone()).or_insert_with(|| TopicInfo {
+                topic: c.topic.clone(),
+                schema_name: c.schema_name.clone(),
+                message_encoding: c.message_encoding.clone(),
+                messages: 0,
+            });
+            t.messages += n;
+        }
+        topics.into_values().collect()
+    }
+}
+
+/// An MCAP file, read through the `mcap` crate's sans-io reader (decompressed on the
+/// fly when the whole file is zstd or lz4 compressed).
+struct McapFile {
+    path: std::path::PathBuf,
+    packed: bool,
+    src: Box<dyn Read>,
+    reader: LinearReader,
+    schemas: BTreeMap<u16, String>,
+    /// Channel id to the index in [`Channels`].
+    channels: BTreeMap<u16, usize>,
+    past_data_end: bool,
+    bytes_read: u64,
+    /// The last message's payload.
+    current: Vec<u8>,
+}
+
+impl McapFile {
+    fn open(file: &BagFile) -> Result<McapFile, LogError> {
+        let path = file.readable();
+        let io = |source| LogError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
+        };
+        let raw =
+            std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(path).map_err(io)?);
+        let src: Box<dyn Read> = match file.packing {
+            Packing::None => Box::new(raw),
+            Packing::Zstd => Box::new(zstd::stream::read::Decoder::with_buffer(raw).map_err(io)?),
+            Packing::Lz4 => Box::new(lz4::Decoder::new(raw).map_err(io)?),
+        };
         let options = LinearReaderOptions::default()
             .with_validate_chunk_crcs(true)
             .with_validate_data_section_crc(true)
             .with_validate_summary_section_crc(true)
             .with_record_length_limit(RECORD_LENGTH_LIMIT);
-        Ok(Scanner {
-            path: path.to_path_buf(),
-            src: std::io::BufReader::with_capacity(1 << 16, file),
+        Ok(McapFile {
+            path: file.path.clone(),
+            packed: file.packing != Packing::None,
+            src,
             reader: LinearReader::new_with_options(options),
             schemas: BTreeMap::new(),
             channels: BTreeMap::new(),
-            counts: BTreeMap::new(),
             past_data_end: false,
             bytes_read: 0,
+            current: Vec::new(),
         })
     }
 
-    /// Reads on to the next message of the data section and hands it to `f`; `None`
-    /// at the end of the file (which is then checked to the last CRC).
-    pub(crate) fn next_message<T>(
-        &mut self,
-        mut f: impl FnMut(MessageRef<'_>) -> Result<T, LogError>,
-    ) -> Result<Option<T>, LogError> {
+    fn next(&mut self, registry: &mut Channels) -> Result<Option<RawMessage<'_>>, LogError> {
         let path = self.path.as_path();
         let container =
             |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
-        while let Some(event) = self.reader.next_event() {
+        let found = loop {
+            let Some(event) = self.reader.next_event() else {
+                return Ok(None);
+            };
             match event.map_err(|e| container(e, self.bytes_read))? {
                 LinearReadEvent::ReadRequest(need) => {
                     let buf = self.reader.insert(need);
@@ -109,6 +287,18 @@ impl Scanner {
                         match self.src.read(buf) {
                             Ok(n) => break n,
                             Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                            // A compressed file that stops decompressing is corrupted.
+                            Err(e) if self.packed && e.kind() != std::io::ErrorKind::NotFound => {
+                                return Err(mcap_error(
+                                    path,
+                                    None,
+                                    McapProblem::Container {
+                                        reason: format!(
+                                            "the compressed file does not decompress: {e}"
+                                        ),
+                                    },
+                                ))
+                            }
                             Err(source) => {
                                 return Err(LogError::Io {
                                     path: path.to_path_buf(),
@@ -149,17 +339,11 @@ impl Scanner {
                                         )
                                     })?
                                 };
-                                self.channels.insert(
-                                    c.id,
-                                    ChannelInfo {
-                                        topic: c.topic,
-                                        schema_name,
-                                        message_encoding: c.message_encoding,
-                                    },
-                                );
+                                let k = registry.index(&c.topic, &schema_name, &c.message_encoding);
+                                self.channels.insert(c.id, k);
                             }
                             Record::Message { header, data } if !self.past_data_end => {
-                                let channel =
+                                let &channel =
                                     self.channels.get(&header.channel_id).ok_or_else(|| {
                                         mcap_error(
                                             path,
@@ -172,14 +356,9 @@ impl Scanner {
                                             },
                                         )
                                     })?;
-                                *self.counts.entry(header.channel_id).or_insert(0) += 1;
-                                return f(MessageRef {
-                                    channel,
-                                    log_time: header.log_time,
-                                    publish_time: header.publish_time,
-                                    data: &data,
-                                })
-                                .map(Some);
+                                self.current.clear();
+                                self.current.extend_from_slice(&data);
+                                break (channel, header.log_time, header.publish_time);
                             }
                             _ => {}
                         }
@@ -187,25 +366,14 @@ impl Scanner {
                     _ => {}
                 },
             }
-        }
-        Ok(None)
-    }
-
-    /// Every topic seen so far with its type and message count (channels of the same
-    /// topic merged), sorted by topic: the whole file's after the last message.
-    pub(crate) fn topics(&self) -> Vec<TopicInfo> {
-        let mut topics: BTreeMap<String, TopicInfo> = BTreeMap::new();
-        for (id, c) in &self.channels {
-            let n = self.counts.get(id).copied().unwrap_or(0);
-            let t = topics.entry(c.topic.clone()).or_insert_with(|| TopicInfo {
-                topic: c.topic.clone(),
-                schema_name: c.schema_name.clone(),
-                message_encoding: c.message_encoding.clone(),
-                messages: 0,
-            });
-            t.messages += n;
-        }
-        topics.into_values().collect()
+        };
+        let (channel, log_time, publish_time) = found;
+        Ok(Some(RawMessage {
+            channel,
+            log_time,
+            publish_time,
+            data: &self.current,
+        }))
     }
 }
 

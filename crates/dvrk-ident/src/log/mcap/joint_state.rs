@@ -141,6 +141,7 @@ pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, String> {
         data: &data[4..],
         pos: 0,
         little_endian,
+        aligned: true,
     };
     let sec = r.u32("header.stamp.sec")? as i32;
     let nanosec = r.u32("header.stamp.nanosec")?;
@@ -154,6 +155,36 @@ pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, String> {
             stamp: Time { sec, nanosec },
             frame_id,
         },
+        name,
+        position,
+        velocity,
+        effort,
+    })
+}
+
+/// Decodes a `sensor_msgs/JointState` in ROS 1 serialization (what ROS 1 bags hold):
+/// little-endian, no alignment, no encapsulation header; the header has a `seq` before
+/// its stamp, whose seconds are unsigned.
+pub(crate) fn decode_ros1(data: &[u8]) -> Result<JointStateMsg, String> {
+    let mut r = CdrReader {
+        data,
+        pos: 0,
+        little_endian: true,
+        aligned: false,
+    };
+    let _seq = r.u32("header.seq")?;
+    let sec = r.u32("header.stamp.secs")?;
+    let nanosec = r.u32("header.stamp.nsecs")?;
+    let frame_id = r.string("header.frame_id")?;
+    let name = r.string_seq("name")?;
+    let position = r.f64_seq("position")?;
+    let velocity = r.f64_seq("velocity")?;
+    let effort = r.f64_seq("effort")?;
+    let ns = i64::from(sec) * 1_000_000_000 + i64::from(nanosec);
+    let stamp = Time::from_nanos(ns)
+        .ok_or_else(|| format!("stamp {sec}.{nanosec:09} s is beyond the year 2038"))?;
+    Ok(JointStateMsg {
+        header: Header { stamp, frame_id },
         name,
         position,
         velocity,
@@ -223,16 +254,20 @@ pub(crate) fn decode_json(data: &[u8]) -> Result<JointStateMsg, String> {
 }
 
 /// A bounds-checked plain-CDR reader over the payload after the encapsulation header
-/// (alignment is relative to the payload start).
+/// (alignment is relative to the payload start); without alignment, the ROS 1
+/// serialization.
 struct CdrReader<'a> {
     data: &'a [u8],
     pos: usize,
     little_endian: bool,
+    aligned: bool,
 }
 
 impl<'a> CdrReader<'a> {
     fn align(&mut self, n: usize) {
-        self.pos = self.pos.div_ceil(n) * n;
+        if self.aligned {
+            self.pos = self.pos.div_ceil(n) * n;
+        }
     }
 
     fn remaining(&self) -> usize {
@@ -365,6 +400,39 @@ mod tests {
         assert!(e.contains("does not fit"), "{e}");
         let e = decode_cdr(&[0, 7, 0, 0, 1, 2, 3, 4]).unwrap_err();
         assert!(e.contains("XCDR2"), "{e}");
+    }
+
+    /// ROS 1 serialization written out by hand from the message definition.
+    #[test]
+    fn ros1() {
+        let mut b = Vec::new();
+        let u32le = |b: &mut Vec<u8>, v: u32| b.extend_from_slice(&v.to_le_bytes());
+        u32le(&mut b, 17); // seq
+        u32le(&mut b, 1_700_000_000);
+        u32le(&mut b, 5_000_000);
+        u32le(&mut b, 3);
+        b.extend_from_slice(b"psm");
+        u32le(&mut b, 2);
+        for n in ["outer_yaw", "jaw"] {
+            u32le(&mut b, n.len() as u32);
+            b.extend_from_slice(n.as_bytes());
+        }
+        for values in [&[0.5, -0.25][..], &[], &[1.5, 2.0]] {
+            u32le(&mut b, values.len() as u32);
+            for v in values {
+                b.extend_from_slice(&f64::to_le_bytes(*v));
+            }
+        }
+        let m = decode_ros1(&b).unwrap();
+        assert_eq!(m.header.stamp.as_nanos(), 1_700_000_000_005_000_000);
+        assert_eq!(m.header.frame_id, "psm");
+        assert_eq!(m.name, ["outer_yaw", "jaw"]);
+        assert_eq!(m.position, [0.5, -0.25]);
+        assert!(m.velocity.is_empty());
+        assert_eq!(m.effort, [1.5, 2.0]);
+        for cut in 0..b.len() {
+            assert!(decode_ros1(&b[..cut]).is_err(), "cut at {cut}");
+        }
     }
 
     #[test]

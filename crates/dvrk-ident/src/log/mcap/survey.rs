@@ -12,9 +12,11 @@
 use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 
 use nalgebra::DMatrix;
 
+use super::bag::Bag;
 use super::container::{mcap_error, scan, MessageRef, Scanner};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::{
@@ -172,11 +174,13 @@ impl TopicSurvey {
 /// every candidate topic in automatic mode), then picks the topics (see the module
 /// docs of [`super`]). With `keep_rows` the chosen topics' rows are kept.
 pub(super) fn survey(
-    path: &Path,
+    bag: &Arc<Bag>,
     topics: &[String],
+    joints: &[String],
     time_source: TimeSource,
     keep_rows: bool,
 ) -> Result<Vec<TopicSurvey>, LogError> {
+    let path = bag.path.as_path();
     let auto = topics.is_empty();
     let mut surveys: BTreeMap<String, TopicSurvey> = BTreeMap::new();
     if !auto {
@@ -242,51 +246,36 @@ pub(super) fn survey(
             }
         }
     };
-    let scanned = scan(path, on_message)?;
+    let scanned = scan(bag, on_message)?;
     let chosen: Vec<TopicSurvey> = if auto {
         let candidates: Vec<&TopicSurvey> = surveys
             .values()
             .filter(|s| s.state.rejected.is_none())
             .collect();
-        let pick = match candidates.len() {
-            0 => {
-                let rejected = surveys
-                    .values()
-                    .filter_map(|s| {
-                        s.state
-                            .rejected
-                            .map(|why| format!("{}: {why}", s.state.topic))
-                    })
-                    .collect();
-                return Err(mcap_error(
-                    path,
-                    None,
-                    McapProblem::NoJointStates {
-                        available: scanned.topics,
-                        rejected,
-                    },
-                ));
-            }
-            1 => candidates[0].state.topic.clone(),
-            _ => {
-                let measured: Vec<&&TopicSurvey> = candidates
-                    .iter()
-                    .filter(|s| s.state.topic.ends_with("measured_js"))
-                    .collect();
-                if measured.len() == 1 {
-                    measured[0].state.topic.clone()
-                } else {
-                    return Err(mcap_error(
-                        path,
-                        None,
-                        McapProblem::Ambiguous {
-                            candidates: candidates.iter().map(|s| s.state.topic.clone()).collect(),
-                        },
-                    ));
-                }
-            }
-        };
-        vec![surveys.remove(&pick).expect("picked from the surveys")]
+        if candidates.is_empty() {
+            let rejected = surveys
+                .values()
+                .filter_map(|s| {
+                    s.state
+                        .rejected
+                        .map(|why| format!("{}: {why}", s.state.topic))
+                })
+                .collect();
+            return Err(mcap_error(
+                path,
+                None,
+                McapProblem::NoJointStates {
+                    available: scanned.topics,
+                    rejected,
+                },
+            ));
+        }
+        let picked = auto_pick(&candidates, joints)
+            .map_err(|candidates| mcap_error(path, None, McapProblem::Ambiguous { candidates }))?;
+        picked
+            .iter()
+            .map(|t| surveys.remove(t).expect("picked from the surveys"))
+            .collect()
     } else {
         topics
             .iter()
@@ -313,16 +302,77 @@ pub(super) fn survey(
     Ok(out)
 }
 
+/// The automatic topic choice among the candidates (JointState topics with positions
+/// and efforts), the clock first; `Err` lists the candidates when there is no single
+/// answer.
+///
+/// Knowing the joints the caller needs (`joints`, e.g. a robot's measured joints): the
+/// one candidate that holds them all (one ending in `measured_js` if several do); else
+/// the dVRK 2.x convention, `X/measured_js` with `X/jaw/measured_js`, if exactly one such
+/// pair holds them together. Otherwise (or without `joints`): the only candidate, or
+/// the only one ending in `measured_js`.
+fn auto_pick(candidates: &[&TopicSurvey], joints: &[String]) -> Result<Vec<String>, Vec<String>> {
+    let measured = |list: &[&TopicSurvey]| -> Option<String> {
+        let m: Vec<&&TopicSurvey> = list
+            .iter()
+            .filter(|s| s.state.topic.ends_with("measured_js"))
+            .collect();
+        (m.len() == 1).then(|| m[0].state.topic.clone())
+    };
+    if !joints.is_empty() {
+        let holds =
+            |names: &[&[String]]| joints.iter().all(|j| names.iter().any(|n| n.contains(j)));
+        let full: Vec<&TopicSurvey> = candidates
+            .iter()
+            .copied()
+            .filter(|s| holds(&[&s.state.names]))
+            .collect();
+        match full.len() {
+            1 => return Ok(vec![full[0].state.topic.clone()]),
+            0 => {}
+            _ => {
+                return measured(&full)
+                    .map(|t| vec![t])
+                    .ok_or_else(|| full.iter().map(|s| s.state.topic.clone()).collect())
+            }
+        }
+        let mut pairs = Vec::new();
+        for arm in candidates {
+            let Some(prefix) = arm.state.topic.strip_suffix("measured_js") else {
+                continue;
+            };
+            let jaw_topic = format!("{prefix}jaw/measured_js");
+            if let Some(jaw) = candidates.iter().find(|s| s.state.topic == jaw_topic) {
+                if holds(&[&arm.state.names, &jaw.state.names]) {
+                    pairs.push(vec![arm.state.topic.clone(), jaw_topic]);
+                }
+            }
+        }
+        match pairs.len() {
+            1 => return Ok(pairs.remove(0)),
+            0 => {}
+            _ => return Err(pairs.iter().map(|p| p.join(" + ")).collect()),
+        }
+    }
+    if candidates.len() == 1 {
+        return Ok(vec![candidates[0].state.topic.clone()]);
+    }
+    measured(candidates)
+        .map(|t| vec![t])
+        .ok_or_else(|| candidates.iter().map(|s| s.state.topic.clone()).collect())
+}
+
 /// Calls `f(topic, stamp)` for every message of the chosen topics, in file order (a
 /// pass that only needs the stamps; the messages were checked by the first pass).
 fn stamp_pass(
-    path: &Path,
+    bag: &Arc<Bag>,
     topics: &[String],
     time_source: TimeSource,
     mut f: impl FnMut(usize, i64),
 ) -> Result<(), LogError> {
+    let path = bag.path.as_path();
     let mut counts = vec![0usize; topics.len()];
-    let mut scanner = Scanner::open(path)?;
+    let mut scanner = Scanner::open(bag)?;
     loop {
         let step = scanner.next_message(|m| {
             let Some(k) = topics.iter().position(|t| *t == m.channel.topic) else {
@@ -350,7 +400,7 @@ fn stamp_pass(
 /// Passes over topic `k`'s stamps within `lo..=hi` until the median of `stats` is
 /// known (`stats` has seen the first pass).
 fn finish_median(
-    path: &Path,
+    bag: &Arc<Bag>,
     topics: &[String],
     time_source: TimeSource,
     k: usize,
@@ -359,7 +409,7 @@ fn finish_median(
 ) -> Result<(), LogError> {
     while !stats.end_pass() {
         let mut previous: Option<i64> = None;
-        stamp_pass(path, topics, time_source, |t, stamp| {
+        stamp_pass(bag, topics, time_source, |t, stamp| {
             if t == k && (lo..=hi).contains(&stamp) {
                 if let Some(p) = previous {
                     stats.observe_step(p, stamp);
@@ -384,7 +434,7 @@ struct Irregular {
 /// The timing report of topic `k`'s stamps within `lo..=hi` (strictly increasing,
 /// median known), and where its first irregular step is.
 fn classify(
-    path: &Path,
+    bag: &Arc<Bag>,
     topics: &[String],
     time_source: TimeSource,
     k: usize,
@@ -407,7 +457,7 @@ fn classify(
     }
     let (mut index, mut previous) = (0usize, None::<i64>);
     let mut first = None;
-    stamp_pass(path, topics, time_source, |t, stamp| {
+    stamp_pass(bag, topics, time_source, |t, stamp| {
         if t != k || !(lo..=hi).contains(&stamp) {
             return;
         }
@@ -498,7 +548,8 @@ pub(super) struct Plan {
 /// the merged clock (joint names unique across topics, stamps increasing, no gap in the
 /// other topics, overlapping spans, a uniform clock unless resampling), in the order the
 /// whole-log reader made them.
-pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError> {
+pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogError> {
+    let path = bag.path.as_path();
     if let Some(rate) = options.resample_hz {
         if !(rate.is_finite() && rate > 0.0) {
             return Err(LogError::InvalidRate {
@@ -508,7 +559,7 @@ pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError>
         }
     }
     let ts = options.time_source;
-    let mut surveys = survey(path, &options.topics, ts, false)?;
+    let mut surveys = survey(bag, &options.topics, &options.joints, ts, false)?;
     for s in &surveys {
         if !s.state.has_effort {
             return Err(mcap_error(
@@ -558,9 +609,9 @@ pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError>
     // Gaps in the other topics would be bridged by interpolation: refuse them too.
     for k in 0..surveys.len() {
         let full = (surveys[k].stats.first, surveys[k].stats.last);
-        finish_median(path, &topics, ts, k, full, &mut surveys[k].stats)?;
+        finish_median(bag, &topics, ts, k, full, &mut surveys[k].stats)?;
         if k > 0 && options.resample_hz.is_none() && surveys[k].stats.has_gap() {
-            let (report, around) = classify(path, &topics, ts, k, full, &surveys[k].stats)?;
+            let (report, around) = classify(bag, &topics, ts, k, full, &surveys[k].stats)?;
             return Err(non_uniform(path, &topics[k], &report, around, ts));
         }
     }
@@ -577,7 +628,7 @@ pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError>
         // The clock's statistics over the span the other topics cover.
         let (mut below, mut above) = (0, 0);
         let mut stats = StampStats::default();
-        stamp_pass(path, &topics, ts, |t, stamp| {
+        stamp_pass(bag, &topics, ts, |t, stamp| {
             if t != 0 {
             } else if stamp < lo {
                 below += 1;
@@ -602,10 +653,10 @@ pub(super) fn plan(path: &Path, options: &McapOptions) -> Result<Plan, LogError>
             }
             return Err(mcap_error(path, None, McapProblem::NoOverlap { detail }));
         }
-        finish_median(path, &topics, ts, 0, (lo, hi), &mut stats)?;
+        finish_median(bag, &topics, ts, 0, (lo, hi), &mut stats)?;
         (stats, (below, above))
     };
-    let (mut timing, around) = classify(path, &topics, ts, 0, span, &stats)?;
+    let (mut timing, around) = classify(bag, &topics, ts, 0, span, &stats)?;
     if options.resample_hz.is_none() && timing.first_irregular.is_some() {
         return Err(non_uniform(path, &topics[0], &timing, around, ts));
     }

@@ -13,7 +13,7 @@ use crate::trajectory::Signal;
 pub(super) fn is_joint_state(c: &ChannelInfo) -> bool {
     let enc = c.message_encoding.as_str();
     (c.schema_name == JOINT_STATE_TYPE && (enc == "cdr" || enc == "json"))
-        || (c.schema_name == "sensor_msgs/JointState" && enc == "json")
+        || (c.schema_name == "sensor_msgs/JointState" && (enc == "json" || enc == "ros1"))
 }
 
 /// Decodes message `index` of its topic and takes its time from `time_source`, ns.
@@ -22,10 +22,10 @@ pub(super) fn decode(
     index: usize,
     time_source: TimeSource,
 ) -> Result<(JointStateMsg, i64), Box<McapProblem>> {
-    let msg = if m.channel.message_encoding == "json" {
-        joint_state::decode_json(m.data)
-    } else {
-        joint_state::decode_cdr(m.data)
+    let msg = match m.channel.message_encoding.as_str() {
+        "json" => joint_state::decode_json(m.data),
+        "ros1" => joint_state::decode_ros1(m.data),
+        _ => joint_state::decode_cdr(m.data),
     }
     .map_err(|reason| Box::new(McapProblem::Decode { index, reason }))?;
     let stamp = match time_source {

@@ -1,0 +1,169 @@
+//! `dvrk-ident fit a b --test c`: several logs of mixed formats (an MCAP, a rosbag2
+//! folder written by hand around an MCAP, a headered CSV), the same document as the
+//! library's fit of the same logs, in memory and streamed; a file that is no log is an
+//! error saying what it is, with nothing written.
+
+mod support;
+
+use dvrk_ident::fit::{fit_logs, LogData};
+use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::{FitSettings, Method, Trajectory};
+use dvrk_model::Model;
+use support::{example, files, run, s, temp_dir};
+
+fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+    let rows = |m: &nalgebra::DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
+    Trajectory {
+        time: t.time[lo..hi].to_vec(),
+        q: rows(&t.q),
+        dq: t.dq.as_ref().map(rows),
+        tau: rows(&t.tau),
+        ..t.clone()
+    }
+}
+
+#[test]
+fn several_logs_of_mixed_formats() {
+    let dir = temp_dir("several");
+    let whole = log::read(example("psm_excitation.mcap"), None, None).unwrap();
+    let a = dir.join("a.mcap");
+    log::write(&a, &part(&whole, 0, 900), LogFormat::Mcap).unwrap();
+    // A rosbag2 folder: metadata.yaml listing its one MCAP file.
+    let bag = dir.join("b_bag");
+    std::fs::create_dir(&bag).unwrap();
+    log::write(
+        bag.join("b_bag_0.mcap"),
+        &part(&whole, 900, 1700),
+        LogFormat::Mcap,
+    )
+    .unwrap();
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: 9\n  storage_identifier: mcap\n  relative_file_paths:\n  - b_bag_0.mcap\n",
+    )
+    .unwrap();
+    let c = dir.join("c.csv");
+    log::write(&c, &part(&whole, 1700, whole.len()), LogFormat::Csv).unwrap();
+
+    let out = dir.join("r.json");
+    let (ok, stdout, err) = run(&[
+        "fit",
+        &s(&a),
+        &s(&bag),
+        "--robot",
+        "psm",
+        "--method",
+        "wls",
+        "--test",
+        &s(&c),
+        "--test-window",
+        "100",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        stdout.contains("logs (samples after processing, sha256)"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("b_bag (/measured_js)"), "{stdout}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let inputs = doc["inputs"].as_array().unwrap();
+    let roles: Vec<&str> = inputs.iter().map(|i| i["role"].as_str().unwrap()).collect();
+    assert_eq!(roles, ["train", "train", "test"]);
+    // The folder's hash covers metadata.yaml and the MCAP file.
+    let folder_bytes = std::fs::metadata(bag.join("metadata.yaml")).unwrap().len()
+        + std::fs::metadata(bag.join("b_bag_0.mcap")).unwrap().len();
+    assert_eq!(inputs[1]["bytes"].as_u64().unwrap(), folder_bytes);
+    assert_eq!(inputs[2]["metrics"]["samples"].as_u64().unwrap(), 100);
+    assert_eq!(
+        doc["metrics"]["train"]["samples"].as_u64().unwrap(),
+        inputs[0]["metrics"]["samples"].as_u64().unwrap()
+            + inputs[1]["metrics"]["samples"].as_u64().unwrap()
+    );
+
+    // The library on the same logs: the same parameters and metrics.
+    let model = Model::builtin("psm").unwrap();
+    let read: Vec<Trajectory> = [&a, &bag, &c]
+        .iter()
+        .map(|p| log::read(p, None, None).unwrap())
+        .collect();
+    let data: Vec<LogData> = read
+        .iter()
+        .zip([&a, &bag, &c])
+        .map(|(samples, p)| LogData {
+            samples,
+            file: Some(p),
+        })
+        .collect();
+    let settings = FitSettings {
+        method: Method::Wls,
+        test_window: Some(100),
+        ..FitSettings::default()
+    };
+    let lib = fit_logs(&model, &data[..2], &data[2..], &settings, &Silent).unwrap();
+    let lib: serde_json::Value = serde_json::from_str(&lib.to_json()).unwrap();
+    assert_eq!(doc["parameters"], lib["parameters"]);
+    assert_eq!(doc["metrics"], lib["metrics"]);
+    assert_eq!(doc["inputs"], lib["inputs"]);
+
+    // Streamed: the same document but for the solver's time.
+    let streamed = dir.join("s.json");
+    let (ok, _, err) = run(&[
+        "fit",
+        &s(&a),
+        &s(&bag),
+        "--robot",
+        "psm",
+        "--method",
+        "wls",
+        "--test",
+        &s(&c),
+        "--test-window",
+        "100",
+        "--out",
+        &s(&streamed),
+        "--stream",
+    ]);
+    assert!(ok, "{err}");
+    let sdoc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&streamed).unwrap()).unwrap();
+    for key in [
+        "parameters",
+        "metrics",
+        "inputs",
+        "weights",
+        "base_parameters",
+    ] {
+        assert_eq!(sdoc[key], doc[key], "{key}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_file_that_is_no_log_is_named_and_nothing_is_written() {
+    let dir = temp_dir("no-log");
+    let junk = dir.join("run_0.db3");
+    std::fs::write(&junk, b"PK\x03\x04\x14\x00\x00\x00zipped").unwrap();
+    let out = dir.join("r.json");
+    let (ok, _, err) = run(&[
+        "fit",
+        &example("psm_excitation.mcap"),
+        &s(&junk),
+        "--robot",
+        "psm",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("run_0.db3: not a supported log: it looks like a zip archive"),
+        "{err}"
+    );
+    assert!(err.contains("supported: a rosbag2 folder"), "{err}");
+    assert!(!err.contains("CSV parse"), "{err}");
+    assert_eq!(files(&dir), ["run_0.db3"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,173 @@
+//! ROS 1 bags (format 2.0, what `rosbag record` writes on Noetic and earlier), read
+//! through the `rosbag` crate: connections from the index section, then the chunks in
+//! file order, one at a time (bz2 or lz4 chunks decompressed by the crate), their
+//! messages handed out in record order. Messages are in ROS 1 serialization
+//! (`ros1` encoding), their time the record's (when the recorder received them).
+
+use std::collections::{HashMap, VecDeque};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
+
+use super::bag::BagFile;
+use super::container::{mcap_error, Channels, RawMessage};
+use super::McapProblem;
+use crate::log::LogError;
+
+/// A ROS 1 bag being read.
+pub(crate) struct Ros1File {
+    path: PathBuf,
+    bag: RosBag,
+    /// Chunk record positions, in file order.
+    chunks: Vec<u64>,
+    next_chunk: usize,
+    /// Connection id to the index in [`Channels`].
+    connections: HashMap<u32, usize>,
+    /// The current chunk's messages: channel, time (ns), payload.
+    queue: VecDeque<(usize, u64, Vec<u8>)>,
+    current: Vec<u8>,
+}
+
+fn container(path: &Path, reason: String) -> LogError {
+    mcap_error(path, None, McapProblem::Container { reason })
+}
+
+impl Ros1File {
+    pub(crate) fn open(file: &BagFile, channels: &mut Channels) -> Result<Ros1File, LogError> {
+        let path = file.path.clone();
+        let readable = file.readable();
+        // The crate slices its memory map at the header's index position without
+        // checking it: check it first, so a bag that was never closed is an error.
+        check_header(readable).map_err(|reason| container(&path, reason))?;
+        let bag = RosBag::new(readable).map_err(|e| container(&path, format!("ROS 1 bag: {e}")))?;
+        let fail = |e: rosbag::Error| container(&path, format!("ROS 1 bag index: {e}"));
+        let mut connections = HashMap::new();
+        let mut chunks = Vec::new();
+        for record in bag.index_records() {
+            match record.map_err(fail)? {
+                IndexRecord::Connection(c) => {
+                    connections
+                        .entry(c.id)
+                        .or_insert_with(|| channels.index(c.topic, c.tp, "ros1"));
+                }
+                IndexRecord::ChunkInfo(info) => chunks.push(info.chunk_pos),
+                IndexRecord::IndexData(_) => {}
+            }
+        }
+        chunks.sort_unstable();
+        Ok(Ros1File {
+            path,
+            bag,
+            chunks,
+            next_chunk: 0,
+            connections,
+            queue: VecDeque::new(),
+            current: Vec::new(),
+        })
+    }
+
+    /// The messages of the next chunk into the queue.
+    fn read_chunk(&mut self, channels: &mut Channels) -> Result<(), LogError> {
+        let pos = self.chunks[self.next_chunk];
+        self.next_chunk += 1;
+        let path = &self.path;
+        let fail =
+            |e: rosbag::Error| container(path, format!("ROS 1 bag chunk at byte {pos}: {e}"));
+        let mut records = self.bag.chunk_records();
+        records.seek(pos).map_err(fail)?;
+        let chunk = match records.next() {
+            Some(Ok(ChunkRecord::Chunk(c))) => c,
+            Some(Ok(ChunkRecord::IndexData(_))) | None => {
+                return Err(container(
+                    path,
+                    format!("the index points to byte {pos}, where there is no chunk"),
+                ))
+            }
+            Some(Err(e)) => return Err(fail(e)),
+        };
+        for record in chunk.messages() {
+            match record.map_err(fail)? {
+                MessageRecord::Connection(c) => {
+                    self.connections
+                        .entry(c.id)
+                        .or_insert_with(|| channels.index(c.topic, c.tp, "ros1"));
+                }
+                MessageRecord::MessageData(m) => {
+                    let &channel = self.connections.get(&m.conn_id).ok_or_else(|| {
+                        container(
+                            path,
+                            format!(
+                                "a message refers to connection {}, which the bag does not define",
+                                m.conn_id
+                            ),
+                        )
+                    })?;
+                    self.queue.push_back((channel, m.time, m.data.to_vec()));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    pub(crate) fn next(
+        &mut self,
+        channels: &mut Channels,
+    ) -> Result<Option<RawMessage<'_>>, LogError> {
+        while self.queue.is_empty() && self.next_chunk < self.chunks.len() {
+            self.read_chunk(channels)?;
+        }
+        let Some((channel, time, data)) = self.queue.pop_front() else {
+            return Ok(None);
+        };
+        self.current = data;
+        Ok(Some(RawMessage {
+            channel,
+            log_time: time,
+            publish_time: time,
+            data: &self.current,
+        }))
+    }
+}
+
+/// Checks the bag header record: its index position must lie after the header and
+/// within the file (0 while `rosbag record` is still writing, or was killed).
+fn check_header(path: &Path) -> Result<(), String> {
+    let io = |e: std::io::Error| format!("ROS 1 bag: {e}");
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut head = [0u8; 13 + 4];
+    file.read_exact(&mut head)
+        .map_err(|_| "ROS 1 bag: the file ends inside its header (truncated)".to_string())?;
+    let header_len = u32::from_le_bytes(head[13..17].try_into().expect("4 bytes")) as u64;
+    if header_len > 1 << 20 || 17 + header_len + 4 > len {
+        return Err("ROS 1 bag: invalid or truncated header record".into());
+    }
+    let mut header = vec![0u8; header_len as usize];
+    let mut data_len = [0u8; 4];
+    file.read_exact(&mut header).map_err(io)?;
+    file.read_exact(&mut data_len).map_err(io)?;
+    let start = 17 + header_len + 4 + u64::from(u32::from_le_bytes(data_len));
+    let mut fields = header.as_slice();
+    let mut index_pos = None;
+    while fields.len() >= 4 {
+        let n = u32::from_le_bytes(fields[..4].try_into().expect("4 bytes")) as usize;
+        let Some(field) = fields.get(4..4 + n) else {
+            break;
+        };
+        if let Some(v) = field.strip_prefix(b"index_pos=") {
+            if let Ok(b) = <[u8; 8]>::try_from(v) {
+                index_pos = Some(u64::from_le_bytes(b));
+            }
+        }
+        fields = &fields[4 + n..];
+    }
+    match index_pos {
+        None => Err("ROS 1 bag: the header has no index position".into()),
+        Some(0) => Err("ROS 1 bag without an index: the recording was not closed (`rosbag reindex` rebuilds it)".into()),
+        Some(p) if p < start || p > len => Err(format!(
+            "ROS 1 bag: the header's index position {p} is outside the file ({len} bytes): truncated? (`rosbag reindex` may rebuild it)"
+        )),
+        Some(_) => Ok(()),
+    }
+}

@@ -1,0 +1,216 @@
+//! Several logs per fit: each processed on its own, observations merged. Checked
+//! against an independent least squares on the stacked base regressor of each log's
+//! processed samples (nalgebra SVD, no R factor), against each log's own metrics, and
+//! the streamed fit of the same logs from files of different formats.
+
+use std::path::PathBuf;
+
+use dvrk_ident::fit::stream::fit_stream_logs;
+use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, LogData};
+use dvrk_ident::log::{self, mcap::McapOptions, LogFormat, LogReader};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::{FitSettings, Method, Trajectory};
+use dvrk_model::{Model, Workspace};
+use nalgebra::{DMatrix, DVector};
+
+fn example() -> Trajectory {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
+    log::read(path, None, None).unwrap()
+}
+
+/// Rows `lo..hi` of a log, times kept.
+fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+    let rows = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
+    Trajectory {
+        time: t.time[lo..hi].to_vec(),
+        q: rows(&t.q),
+        dq: t.dq.as_ref().map(rows),
+        tau: rows(&t.tau),
+        joint_names: t.joint_names.clone(),
+        coordinates: t.coordinates,
+        source: format!("{} [{lo}..{hi}]", t.source),
+    }
+}
+
+fn rel(a: f64, b: f64, scale: f64) -> f64 {
+    (a - b).abs() / b.abs().max(scale)
+}
+
+#[test]
+fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
+    let model = Model::builtin("psm").unwrap();
+    let whole = example();
+    let (a, b) = (part(&whole, 0, 1000), part(&whole, 1100, whole.len()));
+    let settings = FitSettings {
+        method: Method::Ols,
+        ..FitSettings::default()
+    };
+    let r = fit_logs(
+        &model,
+        &[LogData::new(&a), LogData::new(&b)],
+        &[],
+        &settings,
+        &Silent,
+    )
+    .unwrap();
+    // Each log trimmed at both of its ends: 200 samples at each end of each.
+    let trim = settings.processing.trim;
+    let (na, nb) = (a.len() - 2 * trim, b.len() - 2 * trim);
+    assert_eq!(r.metrics.train.samples, na + nb);
+    assert_eq!(r.rows, (na + nb) * model.dof());
+
+    // Independent least squares on the stacked base regressor of each log's samples.
+    let base = model.base_parameters().unwrap();
+    let (n, p, k) = (model.dof(), model.n_params(), base.rank());
+    let prepared: Vec<_> = [&a, &b]
+        .iter()
+        .map(|t| prepare(&model, t, &settings.processing).unwrap())
+        .collect();
+    let rows: usize = prepared.iter().map(|d| d.len() * n).sum();
+    let mut y = DMatrix::zeros(rows, k);
+    let mut tau = DVector::zeros(rows);
+    let mut ws = Workspace::new(&model);
+    let (mut h, mut hb) = (vec![0.0; n * p], vec![0.0; n * k]);
+    let mut row = 0;
+    for d in &prepared {
+        let s = d.samples();
+        let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        for i in 0..d.len() {
+            s.read(i, &mut q, &mut dq, &mut ddq);
+            model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+            base.select_into(&h, p, &mut hb);
+            for j in 0..n {
+                for c in 0..k {
+                    y[(row, c)] = hb[j * k + c];
+                }
+                tau[row] = d.tau[(i, j)];
+                row += 1;
+            }
+        }
+    }
+    let beta = y.svd(true, true).solve(&tau, 1e-14).unwrap();
+    let scale = beta.amax() * 1e-6;
+    let worst = r
+        .base_parameters
+        .iter()
+        .zip(beta.iter())
+        .map(|(got, want)| rel(got.value, *want, scale))
+        .fold(0.0, f64::max);
+    println!("two logs: base parameters against the stacked least squares: {worst:.1e}");
+    assert!(worst < 1e-8, "{worst:e}");
+
+    // Every input listed with its own metrics, equal to the metrics of that log alone.
+    assert_eq!(r.inputs.len(), 2);
+    let params = r.params_for(&model).unwrap();
+    for (info, d) in r.inputs.iter().zip(&prepared) {
+        assert_eq!(info.role, "train");
+        assert!(info.path.is_empty());
+        assert_eq!(info.sha256.len(), 64);
+        let own = joint_metrics(&model, &params, d, None);
+        assert_eq!(info.metrics.as_ref().unwrap(), &own);
+    }
+    assert_ne!(r.inputs[0].sha256, r.inputs[1].sha256);
+    // The totals are the sums of the logs': rms² · samples adds up.
+    let (ma, mb) = (
+        r.inputs[0].metrics.as_ref().unwrap(),
+        r.inputs[1].metrics.as_ref().unwrap(),
+    );
+    for j in 0..n {
+        let total = r.metrics.train.rms[j].powi(2) * (na + nb) as f64;
+        let sum = ma.rms[j].powi(2) * na as f64 + mb.rms[j].powi(2) * nb as f64;
+        assert!(rel(total, sum, 1e-300) < 1e-12, "joint {j}");
+    }
+
+    // The two halves as one log (filtered across the cut, one trimming) differ: the
+    // boundary matters, and it is respected.
+    let joined = Trajectory {
+        time: a.time.iter().chain(&b.time).copied().collect(),
+        q: DMatrix::from_fn(a.len() + b.len(), n, |i, j| {
+            if i < a.len() {
+                a.q[(i, j)]
+            } else {
+                b.q[(i - a.len(), j)]
+            }
+        }),
+        dq: None,
+        tau: DMatrix::from_fn(a.len() + b.len(), n, |i, j| {
+            if i < a.len() {
+                a.tau[(i, j)]
+            } else {
+                b.tau[(i - a.len(), j)]
+            }
+        }),
+        ..a.clone()
+    };
+    // (Its 100-sample hole is a gap: refused as a single log without resampling.)
+    let e = fit_logs(&model, &[LogData::new(&joined)], &[], &settings, &Silent).unwrap_err();
+    assert!(
+        e.to_string().contains("gap") || e.to_string().contains("uniform"),
+        "{e}"
+    );
+}
+
+#[test]
+fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
+    let model = Model::builtin("psm").unwrap();
+    let whole = example();
+    let dir = std::env::temp_dir().join(format!("dvrk-fit-logs-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let logs = [
+        (part(&whole, 0, 900), "a.mcap", LogFormat::Mcap),
+        (part(&whole, 900, 1700), "b.csv", LogFormat::Csv),
+        (part(&whole, 1700, whole.len()), "c.mcap", LogFormat::Mcap),
+    ];
+    let mut paths = Vec::new();
+    for (t, name, format) in &logs {
+        let path = dir.join(name);
+        log::write(&path, t, *format).unwrap();
+        paths.push(path);
+    }
+    let read: Vec<Trajectory> = paths
+        .iter()
+        .map(|p| log::read(p, None, None).unwrap())
+        .collect();
+    let data: Vec<LogData> = read
+        .iter()
+        .zip(&paths)
+        .map(|(samples, p)| LogData {
+            samples,
+            file: Some(p),
+        })
+        .collect();
+    let readers: Vec<LogReader> = paths
+        .iter()
+        .map(|p| LogReader::open(p, None, None, &McapOptions::default()).unwrap())
+        .collect();
+    for method in [Method::Wls, Method::Irls, Method::Sdp] {
+        let settings = FitSettings {
+            method,
+            test_window: Some(100),
+            ..FitSettings::default()
+        };
+        let memory = fit_logs(&model, &data[..2], &data[2..], &settings, &Silent).unwrap();
+        let streamed = fit_stream_logs(
+            &model,
+            &[&readers[0], &readers[1]],
+            &[&readers[2]],
+            &settings,
+            700,
+            &Silent,
+        )
+        .unwrap();
+        // To the last bit: the same per-log processing and chunk factors.
+        assert_eq!(memory.parameters, streamed.parameters, "{method:?}");
+        assert_eq!(memory.metrics, streamed.metrics, "{method:?}");
+        assert_eq!(memory.inputs, streamed.inputs, "{method:?}");
+        assert_eq!(memory.weights, streamed.weights, "{method:?}");
+        let roles: Vec<&str> = memory.inputs.iter().map(|i| i.role.as_str()).collect();
+        assert_eq!(roles, ["train", "train", "test"]);
+        assert_eq!(memory.metrics.test.as_ref().unwrap().samples, 100);
+        for (info, p) in memory.inputs.iter().zip(&paths) {
+            assert_eq!(info.path, p.display().to_string());
+            assert_eq!(info.bytes, std::fs::metadata(p).unwrap().len());
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -1,0 +1,356 @@
+//! Every recording format, read from small files written by tools this project did not
+//! write (`fixtures/bags/gen_bags.py`: rosbags for rosbag2 folders and ROS 1 bags, the
+//! official mcap-ros2-support writer), each holding the same 16 PSM samples whose
+//! values the generator's formulas give exactly (dyadic fractions).
+
+use std::path::{Path, PathBuf};
+
+use dvrk_ident::log::mcap::{list_topics, read_mcap_log, McapOptions, McapProblem, McapReader};
+use dvrk_ident::log::{detect_format, read_with, LogError, LogFormat, LogReader};
+
+const N: usize = 16;
+const T0_NS: i64 = 1_700_000_000 * 1_000_000_000;
+const NAMES: [&str; 7] = [
+    "outer_yaw",
+    "outer_pitch",
+    "outer_insertion",
+    "outer_roll",
+    "outer_wrist_pitch",
+    "outer_wrist_yaw",
+    "jaw",
+];
+
+fn fixture(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/bags")
+        .join(name)
+}
+
+fn psm_joints() -> Vec<String> {
+    NAMES.iter().map(|s| s.to_string()).collect()
+}
+
+fn position(k: usize, j: usize) -> f64 {
+    ((k * (j + 1)) % 17) as f64 / 32.0 - 0.25
+}
+fn velocity(k: usize, j: usize) -> f64 {
+    ((k + j) % 5) as f64 / 8.0 - 0.25
+}
+fn effort(k: usize, j: usize) -> f64 {
+    ((3 * k + 2 * j) % 11) as f64 / 16.0 - 5.0 / 16.0
+}
+
+/// Every fixture with the format it must be recognized as.
+const FIXTURES: [(&str, LogFormat); 11] = [
+    ("rosbag2_mcap", LogFormat::Rosbag2),
+    ("rosbag2_mcap/metadata.yaml", LogFormat::Rosbag2),
+    ("rosbag2_mcap/rosbag2_mcap_0.mcap", LogFormat::Mcap),
+    ("rosbag2_sqlite", LogFormat::Rosbag2),
+    ("rosbag2_sqlite/rosbag2_sqlite_0.db3", LogFormat::Sqlite3),
+    ("split", LogFormat::Rosbag2),
+    ("file_zstd", LogFormat::Rosbag2),
+    ("message_zstd", LogFormat::Rosbag2),
+    ("sqlite_file_zstd", LogFormat::Rosbag2),
+    ("noetic.bag", LogFormat::Ros1),
+    ("official.mcap", LogFormat::Mcap),
+];
+
+/// The other fixtures: compressed single files, a second ROS 1 bag.
+const MORE: [(&str, LogFormat); 4] = [
+    ("psm.mcap.lz4", LogFormat::Mcap),
+    ("file_zstd/file_zstd_0.mcap.zstd", LogFormat::Mcap),
+    (
+        "sqlite_file_zstd/sqlite_file_zstd_0.db3.zstd",
+        LogFormat::Sqlite3,
+    ),
+    ("noetic_lz4.bag", LogFormat::Ros1),
+];
+
+#[test]
+fn every_format_reads_the_same_samples_exactly() {
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    for (name, format) in FIXTURES.iter().chain(&MORE) {
+        let path = fixture(name);
+        assert_eq!(detect_format(&path).unwrap(), *format, "{name}");
+        let log = read_mcap_log(&path, &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        // The dVRK 2.x pairing: arm and jaw topics, the arm the clock.
+        assert_eq!(
+            log.topics,
+            ["/PSM1/measured_js", "/PSM1/jaw/measured_js"],
+            "{name}"
+        );
+        assert_eq!(log.start_time_ns, T0_NS, "{name}");
+        let t = &log.trajectory;
+        assert_eq!(t.joint_names, NAMES, "{name}");
+        assert_eq!(t.len(), N, "{name}");
+        let dq = t.dq.as_ref().expect("velocities");
+        for k in 0..N {
+            assert_eq!(t.time[k], (k as i64 * 5_000_000) as f64 / 1e9, "{name} {k}");
+            for j in 0..7 {
+                assert_eq!(t.q[(k, j)], position(k, j), "{name} q {k} {j}");
+                assert_eq!(dq[(k, j)], velocity(k, j), "{name} dq {k} {j}");
+                assert_eq!(t.tau[(k, j)], effort(k, j), "{name} tau {k} {j}");
+            }
+        }
+        // The same through the generic reader, format detected.
+        let reader = LogReader::open(&path, None, None, &options).unwrap();
+        assert_eq!(reader.format(), *format, "{name}");
+        assert_eq!(reader.topics(), log.topics.as_slice());
+        let again = read_with(&path, None, None, &options).unwrap();
+        assert_eq!(again.q, t.q, "{name}");
+    }
+}
+
+#[test]
+fn topics_of_every_format_are_listed() {
+    for (name, _) in FIXTURES.iter().chain(&MORE) {
+        let topics = list_topics(fixture(name)).unwrap();
+        let mut names: Vec<(&str, u64)> = topics
+            .iter()
+            .map(|t| (t.topic.as_str(), t.messages))
+            .collect();
+        names.sort();
+        assert_eq!(
+            names,
+            [
+                ("/PSM1/jaw/measured_js", N as u64),
+                ("/PSM1/measured_cp", N as u64 / 2),
+                ("/PSM1/measured_js", N as u64),
+                ("/PSM1/setpoint_js", N as u64 / 2),
+                ("/PSM1/status", N as u64 / 8),
+            ],
+            "{name}"
+        );
+        let js = topics
+            .iter()
+            .find(|t| t.topic == "/PSM1/measured_js")
+            .unwrap();
+        if name.ends_with(".bag") {
+            assert_eq!(
+                (js.schema_name.as_str(), js.message_encoding.as_str()),
+                ("sensor_msgs/JointState", "ros1")
+            );
+        } else {
+            assert_eq!(
+                (js.schema_name.as_str(), js.message_encoding.as_str()),
+                ("sensor_msgs/msg/JointState", "cdr")
+            );
+        }
+    }
+}
+
+#[test]
+fn without_the_robot_the_single_measured_topic_is_read() {
+    // Not knowing the robot's joints, the arm topic alone (the measured_js candidate
+    // ending: both arm and jaw end in measured_js, so that is ambiguous).
+    let e = read_mcap_log(fixture("split"), &McapOptions::default()).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(&e, LogError::Mcap { problem, .. } if matches!(**problem, McapProblem::Ambiguous { .. })),
+        "{msg}"
+    );
+    assert!(
+        msg.contains("/PSM1/jaw/measured_js, /PSM1/measured_js"),
+        "{msg}"
+    );
+    // Joints on one topic only: that topic.
+    let arm_only = McapOptions {
+        joints: psm_joints()[..6].to_vec(),
+        ..Default::default()
+    };
+    let log = read_mcap_log(fixture("noetic.bag"), &arm_only).unwrap();
+    assert_eq!(log.topics, ["/PSM1/measured_js"]);
+    assert_eq!(log.trajectory.dof(), 6);
+    // Explicit topics are read as given.
+    let explicit = McapOptions {
+        topics: vec!["/PSM1/jaw/measured_js".into()],
+        ..Default::default()
+    };
+    let log = read_mcap_log(fixture("rosbag2_sqlite"), &explicit).unwrap();
+    assert_eq!(log.trajectory.joint_names, ["jaw"]);
+}
+
+/// A temporary folder removed on drop.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> TempDir {
+        let p = std::env::temp_dir().join(format!("dvrk-bags-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&p);
+        std::fs::create_dir_all(&p).unwrap();
+        TempDir(p)
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+    }
+}
+
+fn problem(e: &LogError) -> &McapProblem {
+    match e {
+        LogError::Mcap { problem, .. } => problem,
+        other => panic!("not a recording error: {other}"),
+    }
+}
+
+#[test]
+fn split_folder_without_metadata_and_bad_metadata() {
+    let dir = TempDir::new("split");
+    let bag = dir.0.join("rec");
+    copy_dir(&fixture("split"), &bag);
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    let whole = read_mcap_log(&bag, &options).unwrap();
+    // An interrupted recording has no metadata.yaml: the files by their split index.
+    std::fs::remove_file(bag.join("metadata.yaml")).unwrap();
+    let found = read_mcap_log(&bag, &options).unwrap();
+    assert_eq!(found.trajectory.q, whole.trajectory.q);
+    // metadata.yaml naming a missing file, or not rosbag2's.
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  relative_file_paths: [split_0.mcap, gone_1.mcap]\n",
+    )
+    .unwrap();
+    let e = read_mcap_log(&bag, &options).unwrap_err();
+    assert!(matches!(problem(&e), McapProblem::Metadata { .. }), "{e}");
+    assert!(e.to_string().contains("gone_1.mcap"), "{e}");
+    std::fs::write(
+        bag.join("metadata.yaml"),
+        "rosbag2_bagfile_information: [1, 2\n",
+    )
+    .unwrap();
+    let e = read_mcap_log(&bag, &options).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("metadata.yaml: invalid rosbag2 metadata.yaml"),
+        "{e}"
+    );
+    // One file of a split recording is a log of its own, its first half.
+    let first = read_mcap_log(bag.join("split_0.mcap"), &options).unwrap();
+    assert!(first.trajectory.len() < N && !first.trajectory.is_empty());
+    assert_eq!(
+        first.trajectory.q,
+        whole.trajectory.q.rows(0, first.trajectory.len())
+    );
+}
+
+#[test]
+fn what_is_not_a_log_says_what_it_looks_like() {
+    let dir = TempDir::new("foreign");
+    let cases: [(&str, &[u8], &str); 5] = [
+        (
+            "a.mcap",
+            b"\x1f\x8b\x08\x00\x00\x00\x00\x00",
+            "gzip-compressed data",
+        ),
+        ("b.bag", b"#ROSRECORD V1.2\n\x00\x00", "old 1.2 format"),
+        (
+            "c.db3",
+            b"\x00\x01\x02\x03\xff\xfe\x00\x00binary",
+            "binary data of no known log format",
+        ),
+        ("d.zip", b"PK\x03\x04\x14\x00", "zip archive"),
+        (
+            "e.mcap.zstd",
+            &[0x28, 0xb5, 0x2f, 0xfd, 0x00, 0x01],
+            "does not decompress",
+        ),
+    ];
+    for (name, bytes, expect) in cases {
+        let p = dir.0.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        let e = read_with(&p, None, None, &McapOptions::default()).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains(name), "{msg}");
+        assert!(msg.contains(expect), "{name}: {msg}");
+        assert!(!msg.contains("CSV parse"), "{name}: {msg}");
+        if !name.ends_with(".zstd") {
+            assert!(msg.contains("supported: a rosbag2 folder"), "{msg}");
+        }
+    }
+    // A zstd-compressed CSV is no recording.
+    let csv = dir.0.join("log.csv.zst");
+    std::fs::write(&csv, zstd_of(b"time,position.a,effort.a\n0,1,2\n")).unwrap();
+    let e = detect_format(&csv).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("zstd-compressed data that is not a recording"),
+        "{e}"
+    );
+    // A text file is a CSV whatever its name.
+    let named = dir.0.join("log.mcap");
+    std::fs::write(&named, "time,position.q1,effort.q1\n0,1,2\n0.005,1,2\n").unwrap();
+    assert_eq!(detect_format(&named).unwrap(), LogFormat::Csv);
+    // Asked to read it as a recording: it says so.
+    let e = McapReader::open(&named, &McapOptions::default()).unwrap_err();
+    assert!(
+        matches!(problem(&e), McapProblem::NotARecording { .. }),
+        "{e}"
+    );
+    // An empty folder.
+    let empty = dir.0.join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let e = read_with(&empty, None, None, &McapOptions::default()).unwrap_err();
+    assert!(
+        e.to_string()
+            .contains("neither a metadata.yaml nor a recording file"),
+        "{e}"
+    );
+}
+
+fn zstd_of(bytes: &[u8]) -> Vec<u8> {
+    zstd::bulk::compress(bytes, 3).unwrap()
+}
+
+#[test]
+fn cut_or_corrupted_bags_are_errors_not_panics() {
+    let dir = TempDir::new("cut");
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    for name in [
+        "noetic.bag",
+        "noetic_lz4.bag",
+        "rosbag2_sqlite/rosbag2_sqlite_0.db3",
+        "official.mcap",
+        "psm.mcap.lz4",
+        "file_zstd/file_zstd_0.mcap.zstd",
+    ] {
+        let bytes = std::fs::read(fixture(name)).unwrap();
+        let cut = dir.0.join(Path::new(name).file_name().unwrap());
+        for len in [20, bytes.len() / 3, bytes.len() / 2, bytes.len() - 7] {
+            std::fs::write(&cut, &bytes[..len]).unwrap();
+            let e = read_mcap_log(&cut, &options)
+                .expect_err(&format!("{name} cut at {len} bytes read"));
+            assert!(
+                e.to_string()
+                    .contains(cut.file_name().unwrap().to_str().unwrap()),
+                "{e}"
+            );
+        }
+        for at in [bytes.len() / 4, bytes.len() / 2, 3 * bytes.len() / 4] {
+            let mut bad = bytes.clone();
+            bad[at] ^= 0x5a;
+            std::fs::write(&cut, &bad).unwrap();
+            // Either an error or the log (a flipped byte in a payload can decode);
+            // never a panic.
+            let _ = read_mcap_log(&cut, &options);
+        }
+    }
+}
