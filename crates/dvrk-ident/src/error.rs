@@ -16,6 +16,8 @@ pub enum IdentError {
     Sdp(#[from] crate::estimate::sdp::SdpError),
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
     #[error("{source_name}: {error}")]
     Signal {
         source_name: String,

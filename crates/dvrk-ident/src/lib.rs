@@ -17,6 +17,7 @@ pub mod excite;
 pub mod log;
 mod median;
 pub mod observation;
+pub mod output;
 pub mod progress;
 pub mod report;
 pub mod signal;

@@ -4,10 +4,11 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dvrk_ident::result::{wpi_params_json, write_atomic};
+use dvrk_ident::output::Outputs;
+use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
 
-use super::{emit, load_result, LoadedResult};
+use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
 #[command(group(
@@ -35,6 +36,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(
+        &[
+            ("--urdf", args.urdf.as_deref()),
+            ("--wpi-json", args.wpi_json.as_deref()),
+        ],
+        &[],
+    )?;
     let loaded = load_result(&args.result, args.robot.as_deref())?;
     // Everything is built before anything is written: an error leaves no output.
     let urdf = match &args.urdf {
@@ -49,15 +57,17 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     let mut report = String::new();
+    let mut outputs = Outputs::new();
     if let Some((out, (text, how))) = &urdf {
-        write_atomic(Path::new(out), text)?;
+        outputs.add(Path::new(out), text)?;
         report += &format!("wrote {out}: {how}\n");
     }
     if let Some((out, text)) = &wpi {
-        write_atomic(Path::new(out), text)?;
+        outputs.add(Path::new(out), text)?;
         report += &format!("wrote {out}: 2019 params.json layout\n");
     }
-    emit(&report)
+    outputs.commit()?;
+    emit_summary(&report, stdout_taken)
 }
 
 /// The URDF text and how it was made: the inertials replaced in `from` (or the robot's own

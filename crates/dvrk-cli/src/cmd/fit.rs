@@ -7,7 +7,8 @@ use anyhow::{bail, Context, Result};
 use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat, LogReader};
-use dvrk_ident::result::{write_atomic, InputInfo};
+use dvrk_ident::output::Outputs;
+use dvrk_ident::result::InputInfo;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
@@ -246,6 +247,16 @@ fn is_large(path: &str) -> bool {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(
+        &[
+            ("--out", args.out.as_deref()),
+            ("--wpi-json", args.wpi_json.as_deref()),
+        ],
+        &[("--report", args.report.as_deref())],
+    )?;
+    if stdout_taken && args.json {
+        bail!("--json prints the result to stdout, and so does an output `-`: give one of them");
+    }
     let model = Model::load(&args.robot)?;
     let mut settings = args.logs.settings(FitSettings::default())?;
     settings.method = match args.method {
@@ -318,26 +329,39 @@ pub fn run(args: Args) -> Result<()> {
             .push(InputInfo::from_file("test", Path::new(t))?);
     }
     if result.solver.converged {
+        // Every output built and staged before the first is put in place.
+        let mut outputs = Outputs::new();
+        let mut report_note = None;
         if let Some(out) = &args.out {
-            write_atomic(Path::new(out), &result.to_json())?;
+            outputs.add(Path::new(out), result.to_json())?;
         }
         if let Some(out) = &args.wpi_json {
             let params = result.params_for(&model)?;
             let doc = dvrk_ident::result::wpi_params_json(&model, &params);
-            write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
+            outputs.add(Path::new(out), serde_json::to_string_pretty(&doc)?)?;
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &in_memory) {
             let mut logs = vec![("training", train, None)];
             if let Some(t) = test {
                 logs.push(("test", t, settings.test_window));
             }
-            super::report::write(&model, &result, &logs, excitation.as_ref(), dir)?;
+            let built = super::report::build(&model, &result, &logs, excitation.as_ref())?;
+            let written = built.stage(&mut outputs, Path::new(dir))?;
+            report_note = Some(format!(
+                "report: {} ({} files)",
+                Path::new(dir).join("report.html").display(),
+                written.len()
+            ));
+        }
+        outputs.commit()?;
+        if let Some(note) = report_note {
+            eprintln!("{note}");
         }
     }
     if args.json {
         emit(&result.to_json())?;
     } else {
-        emit(&table(&result))?;
+        super::emit_summary(&table(&result), stdout_taken)?;
     }
     if !result.solver.converged {
         bail!(

@@ -27,6 +27,48 @@ pub fn emit(text: &str) -> Result<()> {
     Ok(())
 }
 
+/// The summary of a command: on stdout, or on stderr when an output (`-`) has stdout.
+pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
+    if stdout_taken {
+        eprintln!("{}", text.trim_end());
+        Ok(())
+    } else {
+        emit(text)
+    }
+}
+
+/// Checks every output of a command before any work is done (see
+/// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
+/// writable destinations whose folder exists, no two the same, at most one `-`
+/// (standard output). Returns whether one of them is standard output.
+pub fn check_outputs(files: &[(&str, Option<&str>)], dirs: &[(&str, Option<&str>)]) -> Result<bool> {
+    use dvrk_ident::output::{check_dir, Destination};
+    let mut seen: Vec<(Option<std::path::PathBuf>, &str)> = Vec::new();
+    for &(flag, path) in files {
+        let Some(path) = path else { continue };
+        let key = match Destination::of(std::path::Path::new(path))
+            .with_context(|| format!("{flag} {path}"))?
+        {
+            Destination::Stdout => None,
+            Destination::File(p) | Destination::Special(p) => Some(p),
+        };
+        if let Some((_, other)) = seen.iter().find(|(k, _)| *k == key) {
+            bail!("{flag} {path}: the same destination as {other}");
+        }
+        seen.push((key, flag));
+    }
+    for &(flag, path) in dirs {
+        let Some(path) = path else { continue };
+        let (resolved, _) =
+            check_dir(std::path::Path::new(path)).with_context(|| format!("{flag} {path}"))?;
+        if let Some((_, other)) = seen.iter().find(|(k, _)| k.as_ref() == Some(&resolved)) {
+            bail!("{flag} {path}: the same destination as {other}");
+        }
+        seen.push((Some(resolved), flag));
+    }
+    Ok(seen.iter().any(|(k, _)| k.is_none()))
+}
+
 /// Parses a comma-separated list of numbers such as `0.1,-0.2,0.3` of length `n`.
 pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     let v: Vec<f64> = text

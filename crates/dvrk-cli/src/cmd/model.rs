@@ -107,9 +107,10 @@ fn draw(model: &Model, args: &Args) -> Result<()> {
         None => vec![0.0; model.dof()],
     };
     let out = args.out.as_deref().context("--draw needs --out")?;
+    let stdout_taken = super::check_outputs(&[("--out", Some(out))], &[])?;
     let drawing = kinematic_drawing(model, &q).map_err(anyhow::Error::msg)?;
     write_figure(&drawing, std::path::Path::new(out))?;
-    emit(out)
+    super::emit_summary(out, stdout_taken)
 }
 
 fn evaluate(model: &Model, args: &Args) -> Result<()> {

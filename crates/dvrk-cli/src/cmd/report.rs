@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use dvrk_ident::excite::fourier::FourierTrajectory;
+use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
 use dvrk_ident::{FitResult, Trajectory};
 use dvrk_model::Model;
@@ -31,15 +32,14 @@ pub struct Args {
     pub log_args: LogArgs,
 }
 
-/// Writes the report of `result` on `logs` (role, trajectory, metric window) into `dir`
-/// and prints where it is.
-pub fn write(
+/// Builds the report of `result` on `logs` (role, trajectory, metric window) in memory,
+/// under a spinner; nothing is written.
+pub fn build(
     model: &Model,
     result: &FitResult,
     logs: &[(&str, &Trajectory, Option<usize>)],
     excitation: Option<&FourierTrajectory>,
-    dir: &str,
-) -> Result<()> {
+) -> Result<report::Report> {
     let input = ReportInput {
         model,
         result,
@@ -53,18 +53,11 @@ pub fn write(
             .collect(),
         excitation,
     };
-    let built =
-        crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?;
-    let written = built.write(Path::new(dir))?;
-    eprintln!(
-        "report: {} ({} files)",
-        Path::new(dir).join("report.html").display(),
-        written.len()
-    );
-    Ok(())
+    Ok(crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?)
 }
 
 pub fn run(args: Args) -> Result<()> {
+    super::check_outputs(&[], &[("--out", Some(&args.out))])?;
     let super::LoadedResult { result, model, .. } =
         super::load_result(&args.result, args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
@@ -106,7 +99,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    write(&model, &result, &logs, excitation.as_ref(), &args.out)?;
+    let built = build(&model, &result, &logs, excitation.as_ref())?;
+    let mut outputs = Outputs::new();
+    let written = built.stage(&mut outputs, Path::new(&args.out))?;
+    outputs.commit()?;
+    eprintln!("report: {} files", written.len());
     emit(
         &Path::new(&args.out)
             .join("report.html")
