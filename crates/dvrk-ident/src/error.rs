@@ -18,7 +18,7 @@ pub enum IdentError {
     Report(#[from] crate::report::ReportError),
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
-    #[error("{source_name}: {error}")]
+    #[error("{}", prefixed(source_name, error))]
     Signal {
         source_name: String,
         error: crate::signal::SignalError,
@@ -40,4 +40,15 @@ pub enum IdentError {
     Setting { name: String, message: String },
     #[error("{file}: {message}")]
     Io { file: String, message: String },
+}
+
+/// `source: error`, unless the error already starts with the source (errors of one
+/// column name the log themselves).
+fn prefixed(source: &str, error: &impl std::fmt::Display) -> String {
+    let text = error.to_string();
+    if text.starts_with(source) {
+        text
+    } else {
+        format!("{source}: {text}")
+    }
 }

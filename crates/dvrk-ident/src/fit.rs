@@ -486,7 +486,7 @@ pub fn fit_with_progress(
     let test_metrics = test_data
         .as_ref()
         .map(|t| joint_metrics(model, &estimated.params, t, settings.test_window));
-    Ok(build_result(
+    build_result(
         model,
         &base,
         settings,
@@ -495,7 +495,7 @@ pub fn fit_with_progress(
             train: train_metrics,
             test: test_metrics,
         },
-    ))
+    )
 }
 
 /// What the estimator made of an observation.
@@ -584,7 +584,7 @@ pub(crate) fn build_result(
     settings: &FitSettings,
     estimated: Estimated,
     metrics: Metrics,
-) -> FitResult {
+) -> Result<FitResult, IdentError> {
     let Estimated {
         params,
         estimate,
@@ -627,7 +627,8 @@ pub(crate) fn build_result(
     // Sign conditions hold to the solver's feasibility tolerance: an interior-point
     // solution sits a hair outside a bound that is active at zero.
     let tol = -ELEMENT_TOLERANCE;
-    let elements_ok = model.params.iter().zip(&params).all(|(p, v)| match p.kind {
+    let elements_ok = params.iter().all(|v| v.is_finite())
+        && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
         ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
         _ => true,
     }) && model.frames.iter().all(|f| match &f.friction {
@@ -636,7 +637,7 @@ pub(crate) fn build_result(
             .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
         None => true,
     });
-    FitResult {
+    let result = FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
         robot: model.name.clone(),
         robot_source: model.source.clone(),
@@ -659,5 +660,7 @@ pub(crate) fn build_result(
         condition_number: estimate.condition_number,
         sigma2: estimate.sigma2,
         metrics,
-    }
+    };
+    result.check_finite()?;
+    Ok(result)
 }

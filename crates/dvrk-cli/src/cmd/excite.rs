@@ -34,6 +34,9 @@ impl CriterionArg {
 }
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     #[arg(long)]
@@ -176,13 +179,26 @@ pub fn run(args: Args) -> Result<()> {
     let base = model.base_parameters()?;
     let limits = match &args.limits {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
+            let text = dvrk_model::input::read_text(Path::new(path))
+                .with_context(|| format!("{path}: cannot read"))?;
             Limits::from_toml_str(&model, &text, path)?
         }
         None => Limits::of_model(&model),
     };
     let criterion = args.criterion.criterion();
+    // Limit errors found while optimizing name where the limits come from.
+    let limits_source = match &args.limits {
+        Some(path) => path.clone(),
+        None => format!("{} (limits of the description)", model.source),
+    };
+    let name_limits = |e: optimize::ExciteError| -> anyhow::Error {
+        match e {
+            optimize::ExciteError::ImpossibleLimits(m) if !m.starts_with(&limits_source) => {
+                anyhow::anyhow!("{limits_source}: impossible limits: {m}")
+            }
+            other => other.into(),
+        }
+    };
 
     if let Some(path) = &args.evaluate {
         let traj = match &args.pick {
@@ -197,7 +213,8 @@ pub fn run(args: Args) -> Result<()> {
             criterion,
             args.samples_per_harmonic,
             args.check_rate,
-        )?;
+        )
+        .map_err(name_limits)?;
         if let Some(path) = &args.plot {
             let mut outputs = Outputs::new();
             outputs.add(Path::new(path), plot(&model, &traj, &limits.joint, path)?)?;
@@ -233,7 +250,8 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--rate must be positive");
     }
     let started = std::time::Instant::now();
-    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())?;
+    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())
+        .map_err(name_limits)?;
     let doc = serde_json::to_string_pretty(&result.to_json_value())?;
     // Every output built before the first is written.
     let mut outputs = Outputs::new();

@@ -11,6 +11,9 @@ use dvrk_model::Model;
 use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 #[command(group(
     clap::ArgGroup::new("outputs")
         .args(["urdf", "wpi_json"])
@@ -96,7 +99,7 @@ fn urdf_text(loaded: &LoadedResult, from: Option<&str>, result: &str) -> Result<
     match source {
         Some(path) => {
             let text =
-                std::fs::read_to_string(&path).with_context(|| format!("{path}: cannot read"))?;
+                dvrk_model::input::read_text(Path::new(&path)).with_context(|| format!("{path}: cannot read"))?;
             let out = model
                 .urdf_with_inertials(params, &text, &path)
                 .with_context(context)?;
@@ -126,6 +129,6 @@ fn robot_urdf(robot: &str) -> Option<String> {
     if Model::builtin_names().contains(&robot) {
         return None;
     }
-    let text = std::fs::read_to_string(robot).ok()?;
+    let text = dvrk_model::input::read_text(Path::new(robot)).ok()?;
     dvrk_model::is_urdf_document(Path::new(robot), &text).then(|| robot.to_string())
 }

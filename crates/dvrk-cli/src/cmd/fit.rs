@@ -191,6 +191,9 @@ impl LogArgs {
 }
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Training log
     pub log: String,
@@ -205,8 +208,8 @@ pub struct Args {
     /// Test (validation) log
     #[arg(long)]
     pub test: Option<String>,
-    /// Metrics on the first N processed test samples only
-    #[arg(long)]
+    /// Metrics on the first N processed test samples only (N ≥ 1)
+    #[arg(long, value_parser = super::at_least_one)]
     pub test_window: Option<usize>,
     /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
     /// --report, and with --test but no --test-window the test metrics cover its first

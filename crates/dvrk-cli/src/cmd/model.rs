@@ -11,6 +11,9 @@ use std::fmt::Write as _;
 use super::{emit, parse_vector, read_params};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a path to a .toml description or .urdf
     pub robot: String,
@@ -137,6 +140,9 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
         } else {
             (model.param_names(), h)
         };
+        if h.iter().any(|x| !x.is_finite()) {
+            bail!("the regressor at these coordinates overflows (not finite): smaller --q, --dq, --ddq");
+        }
         let rows: Vec<Vec<f64>> = (0..h.nrows())
             .map(|r| h.row(r).iter().copied().collect())
             .collect();
@@ -153,5 +159,8 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
     };
     let mut tau = vec![0.0; n];
     model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
+    if let Some(t) = tau.iter().find(|t| !t.is_finite()) {
+        bail!("the torque at these coordinates is {t}: the parameters and motion overflow");
+    }
     emit(&json!({ "tau": tau }).to_string())
 }

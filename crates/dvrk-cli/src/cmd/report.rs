@@ -14,6 +14,9 @@ use super::emit;
 use super::fit::LogArgs;
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,

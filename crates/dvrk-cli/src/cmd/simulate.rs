@@ -13,6 +13,9 @@ use super::fit::FormatArg;
 use super::{emit_summary, read_params};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     pub robot: String,

@@ -361,7 +361,7 @@ pub fn fit_stream(
         ),
         _ => None,
     };
-    Ok(build_result(
+    build_result(
         model,
         &base,
         settings,
@@ -370,5 +370,5 @@ pub fn fit_stream(
             train: train_metrics,
             test: test_metrics,
         },
-    ))
+    )
 }
