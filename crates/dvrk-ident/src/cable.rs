@@ -146,7 +146,12 @@ pub fn fit_cable(
             settings.degree
         )));
     }
-    if half <= settings.drop.saturating_mul(2).saturating_add(settings.degree + 1) {
+    if half
+        <= settings
+            .drop
+            .saturating_mul(2)
+            .saturating_add(settings.degree + 1)
+    {
         return Err(err(format!(
             "{m} samples are too few for degree {} with {} dropped at each end of each half",
             settings.degree, settings.drop
@@ -192,7 +197,11 @@ pub fn fit_cable(
         .collect();
     let kept: Vec<usize> = first.chain(second).collect();
     // The expansion into powers of q must still be the fitted curve.
-    let scale = kept.iter().map(|&i| tau[i].abs()).fold(0.0, f64::max).max(1e-12);
+    let scale = kept
+        .iter()
+        .map(|&i| tau[i].abs())
+        .fold(0.0, f64::max)
+        .max(1e-12);
     let expansion_error = kept
         .iter()
         .map(|&i| {
@@ -296,14 +305,37 @@ mod tests {
         // instead of 0.02.
         let cable = [0.1, 0.02];
         let [q, dq, tau] = sweep(&cable, |t| -1.0 + 2.0 * t, 2000);
-        let e = fit_cable(&q, &dq, &tau, &CableSettings { degree: 1, drop: 50 }, "s")
-            .unwrap_err()
-            .to_string();
+        let e = fit_cable(
+            &q,
+            &dq,
+            &tau,
+            &CableSettings {
+                degree: 1,
+                drop: 50,
+            },
+            "s",
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("not a sweep one way and back"), "{e}");
         // The same curve swept out and back gives it.
         let [q, dq, tau] = sweep(&cable, |t| 1.0 - 2.0 * (2.0 * t - 1.0).abs(), 2000);
-        let fit = fit_cable(&q, &dq, &tau, &CableSettings { degree: 1, drop: 50 }, "s").unwrap();
-        assert!((fit.polynomial[1] - 0.02).abs() < 1e-3, "{:?}", fit.polynomial);
+        let fit = fit_cable(
+            &q,
+            &dq,
+            &tau,
+            &CableSettings {
+                degree: 1,
+                drop: 50,
+            },
+            "s",
+        )
+        .unwrap();
+        assert!(
+            (fit.polynomial[1] - 0.02).abs() < 1e-3,
+            "{:?}",
+            fit.polynomial
+        );
     }
 
     #[test]

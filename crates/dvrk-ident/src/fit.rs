@@ -629,14 +629,15 @@ pub(crate) fn build_result(
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
         && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
-        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
-        _ => true,
-    }) && model.frames.iter().all(|f| match &f.friction {
-        Some(fr) => fr
-            .stribeck
-            .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
-        None => true,
-    });
+            ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
+            _ => true,
+        })
+        && model.frames.iter().all(|f| match &f.friction {
+            Some(fr) => fr
+                .stribeck
+                .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
+            None => true,
+        });
     let result = FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
         robot: model.name.clone(),

@@ -59,7 +59,10 @@ impl Destination {
             Ok(_) => Ok(Destination::Special(resolved)),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
                 if resolved.file_name().is_none()
-                    || matches!(resolved.components().next_back(), Some(Component::ParentDir))
+                    || matches!(
+                        resolved.components().next_back(),
+                        Some(Component::ParentDir)
+                    )
                 {
                     return Err(invalid("not a file path"));
                 }
@@ -403,7 +406,11 @@ impl Outputs {
                 }
             }
             (resolved, false) => {
-                if self.taken.iter().any(|(k, _)| k.as_deref() == Some(&resolved)) {
+                if self
+                    .taken
+                    .iter()
+                    .any(|(k, _)| k.as_deref() == Some(&resolved))
+                {
                     return Err(err(invalid(
                         "the same destination as another output of this command",
                     )));
@@ -504,10 +511,8 @@ mod tests {
     use super::*;
 
     fn dir(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!(
-            "dvrk-ident-output-{name}-{}",
-            std::process::id()
-        ));
+        let d =
+            std::env::temp_dir().join(format!("dvrk-ident-output-{name}-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&d);
         std::fs::create_dir_all(&d).unwrap();
         d
@@ -540,7 +545,10 @@ mod tests {
         let dangling = d.join("dangling.json");
         std::os::unix::fs::symlink("made.json", &dangling).unwrap();
         write_with(&dangling, |w| w.write_all(b"made")).unwrap();
-        assert_eq!(std::fs::read_to_string(d.join("made.json")).unwrap(), "made");
+        assert_eq!(
+            std::fs::read_to_string(d.join("made.json")).unwrap(),
+            "made"
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -84,17 +84,21 @@ pub struct InputInfo {
 }
 
 impl InputInfo {
-    /// Hashes a file (SHA-256) for the result's provenance.
+    /// Hashes a file (SHA-256) for the result's provenance, reading it in pieces (a
+    /// streamed log may be larger than memory).
     pub fn from_file(role: &str, path: &Path) -> Result<InputInfo, IdentError> {
-        let bytes = std::fs::read(path).map_err(|e| IdentError::Io {
+        let io = |e: std::io::Error| IdentError::Io {
             file: path.display().to_string(),
             message: e.to_string(),
-        })?;
+        };
+        let mut file = std::fs::File::open(path).map_err(io)?;
+        let mut hasher = Sha256::new();
+        let bytes = std::io::copy(&mut file, &mut hasher).map_err(io)?;
         Ok(InputInfo {
             role: role.into(),
             path: path.display().to_string(),
-            sha256: format!("{:x}", Sha256::digest(&bytes)),
-            bytes: bytes.len() as u64,
+            sha256: format!("{:x}", hasher.finalize()),
+            bytes,
         })
     }
 }
@@ -178,7 +182,10 @@ impl FitResult {
             put(format!("base_parameters.{}.std", b.name), b.std);
         }
         for c in &self.consistency {
-            put(format!("consistency.{}.min_eigenvalue", c.link), c.min_eigenvalue);
+            put(
+                format!("consistency.{}.min_eigenvalue", c.link),
+                c.min_eigenvalue,
+            );
         }
         put("solver.seconds".into(), self.solver.seconds);
         for (i, w) in self.weights.iter().enumerate() {
@@ -186,7 +193,10 @@ impl FitResult {
         }
         put("condition_number".into(), self.condition_number);
         put("sigma2".into(), self.sigma2);
-        let roles = [("train", Some(&self.metrics.train)), ("test", self.metrics.test.as_ref())];
+        let roles = [
+            ("train", Some(&self.metrics.train)),
+            ("test", self.metrics.test.as_ref()),
+        ];
         for (role, m) in roles {
             let Some(m) = m else { continue };
             for (j, name) in m.joints.iter().enumerate() {

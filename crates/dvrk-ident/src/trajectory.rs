@@ -129,7 +129,7 @@ pub enum TrajectoryError {
         value: f64,
     },
     /// A finite value beyond [`Signal::max_magnitude`].
-    #[error("{source_name}: {signal} value {value} for joint {column:?} at sample {row} (0-based) is beyond the accepted ±{} {}", signal.max_magnitude(), signal.unit())]
+    #[error("{source_name}: {signal} value {} for joint {column:?} at sample {row} (0-based) is beyond the accepted ±{:e} {}", dvrk_model::input::show(*value), signal.max_magnitude(), signal.unit())]
     OutOfRange {
         /// The trajectory's `source`.
         source_name: String,

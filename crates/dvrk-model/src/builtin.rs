@@ -38,8 +38,8 @@ impl Model {
         let path = Path::new(name_or_path);
         // A bare word that is no file is a misspelt built-in name; anything that looks
         // like a path is a file that cannot be read.
-        let looks_like_path = name_or_path.contains(std::path::MAIN_SEPARATOR)
-            || path.extension().is_some();
+        let looks_like_path =
+            name_or_path.contains(std::path::MAIN_SEPARATOR) || path.extension().is_some();
         if !looks_like_path && !path.exists() {
             return Err(ModelError::UnknownRobot(name_or_path.to_string()));
         }

@@ -138,9 +138,9 @@ fn resolve_constants(
         let mut last_err = None;
         pending.retain(|(name, val)| {
             let v = match val {
-                NumOrExpr::Num(x) if !x.is_finite() => {
-                    Err(ExprError::Eval(format!("value is {x}, not a finite number")))
-                }
+                NumOrExpr::Num(x) if !x.is_finite() => Err(ExprError::Eval(format!(
+                    "value is {x}, not a finite number"
+                ))),
                 NumOrExpr::Num(x) => Ok(*x),
                 NumOrExpr::Expr(s) => {
                     let scope = Scope {
@@ -355,7 +355,10 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             file,
             "top level",
             "coordinates",
-            format!("{n} coordinates; at most {} are accepted", input::MAX_COORDINATES),
+            format!(
+                "{n} coordinates; at most {} are accepted",
+                input::MAX_COORDINATES
+            ),
         ));
     }
     if desc.frames.len() > input::MAX_FRAMES {
@@ -748,8 +751,18 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         limits.push(Limit {
             label: ld.expr.clone(),
             expr,
-            position: ctx.range(&place, "position", &ld.position, (input::MAX_ANGLE_RAD, "rad or m"))?,
-            velocity: ctx.range(&place, "velocity", &ld.velocity, (input::MAX_VALUE, "rad/s or m/s"))?,
+            position: ctx.range(
+                &place,
+                "position",
+                &ld.position,
+                (input::MAX_ANGLE_RAD, "rad or m"),
+            )?,
+            velocity: ctx.range(
+                &place,
+                "velocity",
+                &ld.velocity,
+                (input::MAX_VALUE, "rad/s or m/s"),
+            )?,
             acceleration: ctx.range(
                 &place,
                 "acceleration",

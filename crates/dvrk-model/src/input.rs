@@ -82,14 +82,31 @@ pub fn check_parameter_count(parameters: usize) -> Result<(), String> {
 /// Checks that `value` is finite and at most `max` in magnitude; the message says what
 /// is wrong (the caller names the file and field).
 pub fn check_magnitude(value: f64, max: f64, unit: &str) -> Result<f64, String> {
+    let unit = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
     if !value.is_finite() {
         Err(format!("must be a finite number, got {value}"))
     } else if value.abs() > max {
         Err(format!(
-            "{value} {unit} is beyond the accepted ±{max:e} {unit}"
+            "{}{unit} is beyond the accepted ±{max:e}{unit}",
+            show(value)
         ))
     } else {
         Ok(value)
+    }
+}
+
+/// A number as people write it: plain for ordinary magnitudes, with an exponent for
+/// very large or small ones (`1e300`, not 301 digits).
+pub fn show(value: f64) -> String {
+    let a = value.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{value}")
+    } else {
+        format!("{value:e}")
     }
 }
 

@@ -232,9 +232,15 @@ impl Model {
             if kind != JointKind::Fixed {
                 // Limits on the joint value s (for a mimic joint, multiplier·q + offset).
                 let lim = &j.limit;
-                if [lim.lower, lim.upper, lim.velocity, lim.acceleration, lim.effort]
-                    .iter()
-                    .any(|v| v.is_nan())
+                if [
+                    lim.lower,
+                    lim.upper,
+                    lim.velocity,
+                    lim.acceleration,
+                    lim.effort,
+                ]
+                .iter()
+                .any(|v| v.is_nan())
                 {
                     return Err(err(format!("joint `{}`: <limit> has a NaN value", j.name)));
                 }

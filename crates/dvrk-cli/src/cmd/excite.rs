@@ -8,9 +8,9 @@
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions, Limits};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::report::figures::excitation_figure;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::figure_bytes;
+use dvrk_ident::report::figures::excitation_figure;
 use dvrk_model::{Limit, Model};
 use std::path::Path;
 

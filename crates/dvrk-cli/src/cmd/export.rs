@@ -98,8 +98,8 @@ fn urdf_text(loaded: &LoadedResult, from: Option<&str>, result: &str) -> Result<
     let source = from.map(str::to_string).or_else(|| robot_urdf(robot));
     match source {
         Some(path) => {
-            let text =
-                dvrk_model::input::read_text(Path::new(&path)).with_context(|| format!("{path}: cannot read"))?;
+            let text = dvrk_model::input::read_text(Path::new(&path))
+                .with_context(|| format!("{path}: cannot read"))?;
             let out = model
                 .urdf_with_inertials(params, &text, &path)
                 .with_context(context)?;

@@ -41,7 +41,10 @@ pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
 /// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
 /// writable destinations whose folder exists, no two the same, at most one `-`
 /// (standard output). Returns whether one of them is standard output.
-pub fn check_outputs(files: &[(&str, Option<&str>)], dirs: &[(&str, Option<&str>)]) -> Result<bool> {
+pub fn check_outputs(
+    files: &[(&str, Option<&str>)],
+    dirs: &[(&str, Option<&str>)],
+) -> Result<bool> {
     use dvrk_ident::output::{check_dir, Destination};
     let mut seen: Vec<(Option<std::path::PathBuf>, &str)> = Vec::new();
     for &(flag, path) in files {
@@ -120,7 +123,10 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     // The range of logged values (positions, velocities; accelerations alike).
     let max = dvrk_ident::trajectory::Signal::Position.max_magnitude();
     if let Some(x) = v.iter().find(|x| x.abs() > max) {
-        bail!("{flag}: value {x} is beyond the accepted ±{max:e}");
+        bail!(
+            "{flag}: value {} is beyond the accepted ±{max:e}",
+            dvrk_model::input::show(*x)
+        );
     }
     Ok(v)
 }

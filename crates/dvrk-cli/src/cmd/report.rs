@@ -3,10 +3,11 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::fourier::FourierTrajectory;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
+use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, Trajectory};
 use dvrk_model::Model;
 
@@ -68,10 +69,32 @@ pub fn run(args: Args) -> Result<()> {
     let mut result = result;
     result.settings = settings;
     let sources: Vec<(String, String)> = if args.logs.is_empty() {
+        // The result's own logs, as they were when fitted: a missing one or one whose
+        // content changed is an error, not a figure silently dropped or drawn from other
+        // data.
+        for i in &result.inputs {
+            let now = InputInfo::from_file(&i.role, Path::new(&i.path)).with_context(|| {
+                format!(
+                    "{}: the result's {} log is not readable: give the logs to draw \
+                     (dvrk-ident report RESULT LOG...)",
+                    args.result, i.role
+                )
+            })?;
+            if now.sha256 != i.sha256 {
+                bail!(
+                    "{}: the result's {} log {} changed since the fit (SHA-256 {} instead of \
+                     {}): give the logs to draw explicitly to draw it anyway",
+                    args.result,
+                    i.role,
+                    i.path,
+                    now.sha256,
+                    i.sha256
+                );
+            }
+        }
         result
             .inputs
             .iter()
-            .filter(|i| Path::new(&i.path).exists())
             .map(|i| (i.role.clone(), i.path.clone()))
             .collect()
     } else {

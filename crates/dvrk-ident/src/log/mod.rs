@@ -22,7 +22,10 @@
 
 mod blocks;
 mod csv;
+mod line_limit;
 pub mod mcap;
+
+pub use self::line_limit::MAX_LINE_BYTES;
 
 pub use self::blocks::{LogBlocks, LogReader};
 pub use self::csv::{
@@ -433,14 +436,18 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
 /// Samples per block when a reader's blocks are collected into a whole log.
 pub(crate) const BLOCK_SAMPLES: usize = 4096;
 
-/// A text file, buffered, past its UTF-8 byte-order mark if it has one.
+/// A text file, buffered, past its UTF-8 byte-order mark if it has one, with lines of
+/// at most [`MAX_LINE_BYTES`].
 pub(crate) fn open_text(path: &Path) -> Result<Box<dyn BufRead>, LogError> {
     let io = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
     };
     let file = std::fs::File::open(path).map_err(io)?;
-    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut reader = line_limit::LineLimit::new(
+        std::io::BufReader::with_capacity(1 << 16, file),
+        MAX_LINE_BYTES,
+    );
     if reader.fill_buf().map_err(io)?.starts_with(b"\xEF\xBB\xBF") {
         reader.consume(3);
     }
