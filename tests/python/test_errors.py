@@ -23,7 +23,8 @@ def test_hierarchy():
 def test_unknown_robot():
     with pytest.raises(di.InputError, match=r"unknown robot `nope` \(built-in robots: psm"):
         di.Robot.load("nope")
-    with pytest.raises(ValueError):
+    # A path that does not exist is a missing file, not an unknown robot name.
+    with pytest.raises(di.DvrkFileNotFoundError, match="no/such/file.toml"):
         di.Robot("no/such/file.toml")
 
 

@@ -16,7 +16,9 @@ pub enum IdentError {
     Sdp(#[from] crate::estimate::sdp::SdpError),
     #[error(transparent)]
     Report(#[from] crate::report::ReportError),
-    #[error("{source_name}: {error}")]
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
+    #[error("{}", prefixed(source_name, error))]
     Signal {
         source_name: String,
         error: crate::signal::SignalError,
@@ -38,4 +40,15 @@ pub enum IdentError {
     Setting { name: String, message: String },
     #[error("{file}: {message}")]
     Io { file: String, message: String },
+}
+
+/// `source: error`, unless the error already starts with the source (errors of one
+/// column name the log themselves).
+fn prefixed(source: &str, error: &impl std::fmt::Display) -> String {
+    let text = error.to_string();
+    if text.starts_with(source) {
+        text
+    } else {
+        format!("{source}: {text}")
+    }
 }

@@ -595,8 +595,9 @@ pub fn fit_logs(
             train: summed(model, &train_sums).metrics(model),
             test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
         },
-    );
+    )?;
     result.inputs = inputs;
+    result.check_finite()?;
     Ok(result)
 }
 
@@ -720,7 +721,7 @@ pub(crate) fn build_result(
     settings: &FitSettings,
     estimated: Estimated,
     metrics: Metrics,
-) -> FitResult {
+) -> Result<FitResult, IdentError> {
     let Estimated {
         params,
         estimate,
@@ -763,16 +764,18 @@ pub(crate) fn build_result(
     // Sign conditions hold to the solver's feasibility tolerance: an interior-point
     // solution sits a hair outside a bound that is active at zero.
     let tol = -ELEMENT_TOLERANCE;
-    let elements_ok = model.params.iter().zip(&params).all(|(p, v)| match p.kind {
-        ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
-        _ => true,
-    }) && model.frames.iter().all(|f| match &f.friction {
-        Some(fr) => fr
-            .stribeck
-            .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
-        None => true,
-    });
-    FitResult {
+    let elements_ok = params.iter().all(|v| v.is_finite())
+        && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
+            ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
+            _ => true,
+        })
+        && model.frames.iter().all(|f| match &f.friction {
+            Some(fr) => fr
+                .stribeck
+                .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
+            None => true,
+        });
+    let result = FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
         robot: model.name.clone(),
         robot_source: model.source.clone(),
@@ -795,5 +798,7 @@ pub(crate) fn build_result(
         condition_number: estimate.condition_number,
         sigma2: estimate.sigma2,
         metrics,
-    }
+    };
+    result.check_finite()?;
+    Ok(result)
 }

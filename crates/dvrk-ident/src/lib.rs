@@ -19,6 +19,7 @@ mod lapack;
 pub mod log;
 mod median;
 pub mod observation;
+pub mod output;
 pub mod progress;
 pub mod report;
 pub mod signal;

@@ -206,16 +206,111 @@ impl FitResult {
         serde_json::to_string_pretty(self).expect("serializable")
     }
 
-    pub fn from_json(text: &str, source: &str) -> Result<FitResult, IdentError> {
-        serde_json::from_str(text).map_err(|e| IdentError::Io {
-            file: source.into(),
-            message: format!("not a dvrk-ident result: {e}"),
+    /// Every number of the document with its place, e.g. `("links[2].mass", 1.5)`.
+    fn numbers(&self) -> Vec<(String, f64)> {
+        let mut out: Vec<(String, f64)> = Vec::new();
+        let mut put = |place: String, v: f64| out.push((place, v));
+        for (k, v) in &self.parameters {
+            put(format!("parameters.{k}"), *v);
+        }
+        for l in &self.links {
+            put(format!("links.{}.mass", l.link), l.mass);
+            for (i, c) in l.com.iter().enumerate() {
+                put(format!("links.{}.com[{i}]", l.link), *c);
+            }
+            for (i, c) in l.inertia_com.iter().enumerate() {
+                put(format!("links.{}.inertia_com[{i}]", l.link), *c);
+            }
+        }
+        for b in &self.base_parameters {
+            put(format!("base_parameters.{}.value", b.name), b.value);
+            put(format!("base_parameters.{}.std", b.name), b.std);
+        }
+        for c in &self.consistency {
+            put(
+                format!("consistency.{}.min_eigenvalue", c.link),
+                c.min_eigenvalue,
+            );
+        }
+        put("solver.seconds".into(), self.solver.seconds);
+        for (i, w) in self.weights.iter().enumerate() {
+            put(format!("weights[{i}]"), *w);
+        }
+        put("condition_number".into(), self.condition_number);
+        put("sigma2".into(), self.sigma2);
+        let roles = [
+            ("train", Some(&self.metrics.train)),
+            ("test", self.metrics.test.as_ref()),
+        ];
+        for (role, m) in roles {
+            let Some(m) = m else { continue };
+            for (j, name) in m.joints.iter().enumerate() {
+                if let Some(v) = m.relative_error.get(j) {
+                    put(format!("metrics.{role}.relative_error.{name}"), *v);
+                }
+                if let Some(v) = m.rms.get(j) {
+                    put(format!("metrics.{role}.rms.{name}"), *v);
+                }
+            }
+        }
+        out
+    }
+
+    /// Checks that every number of the result is finite: a result is only ever written,
+    /// printed or returned when it is. The error names the first bad field and, for the
+    /// usual causes, why.
+    pub fn check_finite(&self) -> Result<(), IdentError> {
+        let Some((place, v)) = self.numbers().into_iter().find(|(_, v)| !v.is_finite()) else {
+            return Ok(());
+        };
+        let why = if place.starts_with("metrics.") {
+            let role = if place.starts_with("metrics.test") {
+                self.metrics.test.as_ref()
+            } else {
+                Some(&self.metrics.train)
+            };
+            if role.is_some_and(|m| m.samples == 0) {
+                " (no processed sample is left for these metrics: a longer log, a smaller \
+                 --trim or a larger --test-window)"
+            } else if place.contains(".relative_error.") {
+                " (the torques of this joint are all zero, so an error relative to them is \
+                 undefined)"
+            } else {
+                ""
+            }
+        } else {
+            " (the data overflow the estimator: check the log's units and magnitudes)"
+        };
+        Err(IdentError::Mismatch {
+            source_name: self.robot.clone(),
+            message: format!("the fit gives {place} = {v}{why}: no result is written"),
         })
     }
 
-    /// Reads a result file.
+    /// Reads a result document; `source` names it in errors. Every number must be finite
+    /// and the parameters within ±[`dvrk_model::input::MAX_VALUE`].
+    pub fn from_json(text: &str, source: &str) -> Result<FitResult, IdentError> {
+        let result: FitResult = serde_json::from_str(text).map_err(|e| IdentError::Io {
+            file: source.into(),
+            message: format!("not a dvrk-ident result: {e}"),
+        })?;
+        for (place, v) in result.numbers() {
+            let max = if place.starts_with("parameters.") || place.starts_with("links.") {
+                dvrk_model::input::MAX_VALUE
+            } else {
+                f64::MAX
+            };
+            dvrk_model::input::check_magnitude(v, max, "").map_err(|m| IdentError::Io {
+                file: source.into(),
+                message: format!("{place}: {m}"),
+            })?;
+        }
+        Ok(result)
+    }
+
+    /// Reads a result file (at most [`dvrk_model::input::MAX_TEXT_BYTES`]).
     pub fn read(path: &Path) -> Result<FitResult, IdentError> {
-        let text = std::fs::read_to_string(path).map_err(|e| IdentError::Io {
+        let text = dvrk_model::input::read_text(path).map_err(|e| IdentError::Io {
             file: path.display().to_string(),
             message: e.to_string(),
         })?;

@@ -47,6 +47,30 @@ pub enum Signal {
     Effort,
 }
 
+impl Signal {
+    /// The largest magnitude a logged value of this signal may have: time 1e11 s (absolute
+    /// Unix stamps, 3000 years), positions 1e6 rad or m, velocities 1e6 rad/s or m/s,
+    /// efforts 1e6 N·m or N. Every arm is orders of magnitude below; above, sums of
+    /// squares over a log (and products in the regressor) would lose every digit or
+    /// overflow, so a value beyond is refused, not scaled.
+    pub fn max_magnitude(self) -> f64 {
+        match self {
+            Signal::Time => 1e11,
+            Signal::Position | Signal::Velocity | Signal::Effort => 1e6,
+        }
+    }
+
+    /// The unit of the signal, for messages.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Signal::Time => "s",
+            Signal::Position => "rad or m",
+            Signal::Velocity => "rad/s or m/s",
+            Signal::Effort => "N·m or N",
+        }
+    }
+}
+
 impl std::fmt::Display for Signal {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
@@ -93,6 +117,20 @@ pub enum TrajectoryError {
     /// A NaN or infinite value.
     #[error("{source_name}: non-finite {signal} value {value} for joint {column:?} at sample {row} (0-based)")]
     NonFinite {
+        /// The trajectory's `source`.
+        source_name: String,
+        /// Which signal.
+        signal: Signal,
+        /// Joint name (or `"time"`).
+        column: String,
+        /// Sample index, 0-based.
+        row: usize,
+        /// The offending value.
+        value: f64,
+    },
+    /// A finite value beyond [`Signal::max_magnitude`].
+    #[error("{source_name}: {signal} value {} for joint {column:?} at sample {row} (0-based) is beyond the accepted ±{:e} {}", dvrk_model::input::show(*value), signal.max_magnitude(), signal.unit())]
+    OutOfRange {
         /// The trajectory's `source`.
         source_name: String,
         /// Which signal.
@@ -229,7 +267,7 @@ impl Trajectory {
     }
 
     /// Checks that the trajectory is usable: non-empty, consistent shapes, all values
-    /// finite, time strictly increasing. The first problem found is returned; it names the
+    /// finite and within [`Signal::max_magnitude`], time strictly increasing. The first problem found is returned; it names the
     /// source, the signal and joint (column) and the 0-based sample (row).
     pub fn validate(&self) -> Result<(), TrajectoryError> {
         let (n, dof) = (self.q.nrows(), self.q.ncols());
@@ -287,6 +325,15 @@ impl Trajectory {
                     value: t,
                 });
             }
+            if t.abs() > Signal::Time.max_magnitude() {
+                return Err(TrajectoryError::OutOfRange {
+                    source_name: src(),
+                    signal: Signal::Time,
+                    column: "time".into(),
+                    row: first_row + row,
+                    value: t,
+                });
+            }
             let signals = [
                 (Signal::Position, Some(&self.q)),
                 (Signal::Velocity, self.dq.as_ref()),
@@ -298,6 +345,15 @@ impl Trajectory {
                     let v = m[(row, col)];
                     if !v.is_finite() {
                         return Err(TrajectoryError::NonFinite {
+                            source_name: src(),
+                            signal,
+                            column: self.joint_names[col].clone(),
+                            row: first_row + row,
+                            value: v,
+                        });
+                    }
+                    if v.abs() > signal.max_magnitude() {
+                        return Err(TrajectoryError::OutOfRange {
                             source_name: src(),
                             signal,
                             column: self.joint_names[col].clone(),

@@ -201,7 +201,8 @@ fn trajectory(n: usize, with_dq: bool) -> Trajectory {
         tau: DMatrix::from_fn(n, dof, |i, j| match (i, j) {
             (0, 0) => 1e-300,
             (1, 0) => -0.0,
-            (2, 0) => f64::MAX,
+            // The largest effort a log may hold (Signal::max_magnitude), to the bit.
+            (2, 0) => -1e6,
             (3, 0) => f64::MIN_POSITIVE / 2.0, // subnormal
             _ => (i as f64 - 3.0 * j as f64) / 7.0,
         }),

@@ -291,3 +291,50 @@ fn streamed_fit_errors_name_the_file() {
     assert!(e.to_string().contains("nan.csv:101"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+mod properties {
+    //! Property (proptest): for any block size, trajectory, noise seed, decimation and
+    //! least-squares estimator, the streamed fit of a log file equals the in-memory fit.
+
+    use super::*;
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, RngSeed};
+
+    proptest! {
+        #![proptest_config(Config {
+            cases: 12,
+            rng_seed: RngSeed::Fixed(0x5eed_19),
+            failure_persistence: None,
+            ..Config::default()
+        })]
+
+        #[test]
+        fn streamed_fit_equals_in_memory_fit_for_any_block_size(
+            block in 1usize..6000,
+            phase in -0.2f64..0.2,
+            seed: u64,
+            decimate in 1usize..4,
+            method in prop_oneof![Just(Method::Ols), Just(Method::Wls), Just(Method::Irls)],
+            with_dq: bool,
+        ) {
+            let model = Model::builtin("mtm").unwrap();
+            let dir = std::env::temp_dir()
+                .join(format!("dvrk-ident-stream-prop-{}", std::process::id()));
+            std::fs::create_dir_all(&dir).unwrap();
+            let mut train = simulated(&model, phase, 8.0, seed);
+            if !with_dq {
+                train.dq = None;
+            }
+            let path = dir.join("train.csv");
+            log::write(&path, &train, LogFormat::Csv).unwrap();
+            let mut settings = FitSettings { method, ..FitSettings::default() };
+            settings.processing.decimate = decimate;
+            let whole = fit(&model, &log::read(&path, None, None).unwrap(), None, &settings)
+                .unwrap();
+            let reader = LogReader::open(&path, None, None, &McapOptions::default()).unwrap();
+            let streamed = fit_stream(&model, &reader, None, &settings, block, &Silent).unwrap();
+            compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+    }
+}

@@ -36,10 +36,14 @@ impl Model {
             return Model::builtin(name_or_path);
         }
         let path = Path::new(name_or_path);
-        if !path.exists() {
+        // A bare word that is no file is a misspelt built-in name; anything that looks
+        // like a path is a file that cannot be read.
+        let looks_like_path =
+            name_or_path.contains(std::path::MAIN_SEPARATOR) || path.extension().is_some();
+        if !looks_like_path && !path.exists() {
             return Err(ModelError::UnknownRobot(name_or_path.to_string()));
         }
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        let text = crate::input::read_text(path).map_err(|source| ModelError::Io {
             file: name_or_path.to_string(),
             source,
         })?;

@@ -9,6 +9,7 @@ use serde::Deserialize;
 
 use crate::error::ModelError;
 use crate::expr::{Affine, Expr, ExprError, Scope};
+use crate::input;
 use crate::model::*;
 
 /// A number, or an expression string evaluated at load time.
@@ -137,6 +138,9 @@ fn resolve_constants(
         let mut last_err = None;
         pending.retain(|(name, val)| {
             let v = match val {
+                NumOrExpr::Num(x) if !x.is_finite() => Err(ExprError::Eval(format!(
+                    "value is {x}, not a finite number"
+                ))),
                 NumOrExpr::Num(x) => Ok(*x),
                 NumOrExpr::Expr(s) => {
                     let scope = Scope {
@@ -159,10 +163,40 @@ fn resolve_constants(
         });
         if pending.len() == before {
             let (name, e) = last_err.expect("a constant failed");
+            // Constants that only wait for each other form a cycle: say so rather than
+            // "unknown name" of the first of them.
+            let waiting: Vec<&str> = pending.iter().map(|(n, _)| n.as_str()).collect();
+            if pending.iter().all(|(_, v)| match v {
+                NumOrExpr::Expr(text) => waiting.iter().any(|w| mentions(text, w)),
+                NumOrExpr::Num(_) => false,
+            }) {
+                return Err(ModelError::field(
+                    file,
+                    "constants",
+                    &waiting.join(", "),
+                    format!(
+                        "these constants are defined in terms of each other (a cycle): {}",
+                        pending
+                            .iter()
+                            .map(|(n, v)| match v {
+                                NumOrExpr::Expr(t) => format!("{n} = \"{t}\""),
+                                NumOrExpr::Num(x) => format!("{n} = {x}"),
+                            })
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                ));
+            }
             return Err(ModelError::field(file, "constants", &name, e.to_string()));
         }
     }
     Ok(known)
+}
+
+/// Whether the expression `text` uses the name `name` (as a whole identifier).
+fn mentions(text: &str, name: &str) -> bool {
+    text.split(|c: char| !(c.is_alphanumeric() || c == '_'))
+        .any(|token| token == name)
 }
 
 struct Ctx<'a> {
@@ -184,24 +218,48 @@ impl Ctx<'_> {
             .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))
     }
 
-    fn number(&self, place: &str, field: &str, v: &NumOrExpr) -> Result<f64, ModelError> {
-        match v {
-            NumOrExpr::Num(x) => Ok(*x),
+    /// A number or constant expression, finite and at most `max` (`unit`) in magnitude.
+    fn number(
+        &self,
+        place: &str,
+        field: &str,
+        v: &NumOrExpr,
+        (max, unit): (f64, &str),
+    ) -> Result<f64, ModelError> {
+        let x = match v {
+            NumOrExpr::Num(x) => *x,
             NumOrExpr::Expr(s) => self
                 .expr(place, field, s)?
                 .constant_value(self.coordinates)
-                .map_err(|e| ModelError::field(self.file, place, field, e.to_string())),
-        }
+                .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))?,
+        };
+        input::check_magnitude(x, max, unit)
+            .map_err(|m| ModelError::field(self.file, place, field, m))
     }
 
-    fn affine(&self, place: &str, field: &str, v: &NumOrExpr) -> Result<Affine, ModelError> {
-        match v {
-            NumOrExpr::Num(x) => Ok(Affine::constant(*x)),
+    /// An affine joint value whose offset is at most `max` (`unit`) and whose
+    /// coefficients are at most [`input::MAX_ANGLE_RAD`] in magnitude, all finite.
+    fn affine(
+        &self,
+        place: &str,
+        field: &str,
+        v: &NumOrExpr,
+        (max, unit): (f64, &str),
+    ) -> Result<Affine, ModelError> {
+        let a = match v {
+            NumOrExpr::Num(x) => Affine::constant(*x),
             NumOrExpr::Expr(s) => self
                 .expr(place, field, s)?
                 .affine(self.coordinates.len())
-                .map_err(|e| ModelError::field(self.file, place, field, e.to_string())),
+                .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))?,
+        };
+        let bad = |m: String| ModelError::field(self.file, place, field, m);
+        input::check_magnitude(a.offset, max, unit).map_err(bad)?;
+        for &(k, c) in &a.terms {
+            input::check_magnitude(c, input::MAX_ANGLE_RAD, "")
+                .map_err(|m| bad(format!("coefficient of {}: {m}", self.coordinates[k])))?;
         }
+        Ok(a)
     }
 
     fn range(
@@ -209,10 +267,11 @@ impl Ctx<'_> {
         place: &str,
         field: &str,
         v: &Option<[NumOrExpr; 2]>,
+        range: (f64, &str),
     ) -> Result<Option<[f64; 2]>, ModelError> {
         let Some([lo, hi]) = v else { return Ok(None) };
-        let lo = self.number(place, field, lo)?;
-        let hi = self.number(place, field, hi)?;
+        let lo = self.number(place, field, lo, range)?;
+        let hi = self.number(place, field, hi, range)?;
         if lo > hi {
             return Err(ModelError::field(
                 self.file,
@@ -223,6 +282,40 @@ impl Ctx<'_> {
         }
         Ok(Some([lo, hi]))
     }
+}
+
+/// A frame's nominal values: a rigid body where they give one (mass, centre of mass and
+/// inertia), every other value finite and within range.
+fn check_nominal(n: &Nominal) -> Result<(), String> {
+    if let Some(m) = n.mass.filter(|&m| m < 0.0) {
+        return Err(format!("mass {m} kg: must be non-negative"));
+    }
+    if let (Some(mass), Some(com), Some(inertia)) = (n.mass, n.com, n.inertia) {
+        input::check_rigid_body(mass, com, inertia)?;
+    }
+    let scalars = [
+        ("mass", n.mass),
+        ("fc", n.fc),
+        ("fv", n.fv),
+        ("fo", n.fo),
+        ("fs", n.fs),
+        ("ia", n.ia),
+        ("k", n.k),
+    ];
+    for (name, v) in scalars {
+        if let Some(v) = v {
+            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
+        }
+    }
+    for (name, values) in [
+        ("com", n.com.as_ref().map(|c| &c[..])),
+        ("inertia", n.inertia.as_ref().map(|i| &i[..])),
+    ] {
+        for &v in values.unwrap_or(&[]) {
+            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
+        }
+    }
+    Ok(())
 }
 
 fn check_range(
@@ -257,6 +350,29 @@ impl Model {
 
 fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     let n = desc.coordinates.len();
+    if n > input::MAX_COORDINATES {
+        return Err(ModelError::field(
+            file,
+            "top level",
+            "coordinates",
+            format!(
+                "{n} coordinates; at most {} are accepted",
+                input::MAX_COORDINATES
+            ),
+        ));
+    }
+    if desc.frames.len() > input::MAX_FRAMES {
+        return Err(ModelError::field(
+            file,
+            "frames",
+            "",
+            format!(
+                "{} frames; at most {} are accepted",
+                desc.frames.len(),
+                input::MAX_FRAMES
+            ),
+        ));
+    }
     if n == 0 {
         return Err(ModelError::field(
             file,
@@ -285,7 +401,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         Some(g) => {
             let mut v = Vector3::zeros();
             for k in 0..3 {
-                v[k] = ctx.number("top level", "gravity", &g[k])?;
+                v[k] = ctx.number("top level", "gravity", &g[k], (input::MAX_GRAVITY, "m/s²"))?;
             }
             v
         }
@@ -315,10 +431,11 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
                 format!("`{}` is not the base nor an earlier frame", fd.parent),
             )
         })?;
-        let a = ctx.number(&place, "a", &fd.a)?;
-        let alpha = ctx.number(&place, "alpha", &fd.alpha)?;
-        let theta = ctx.affine(&place, "theta", &fd.theta)?;
-        let d = ctx.affine(&place, "d", &fd.d)?;
+        let (length, angle) = ((input::MAX_LENGTH_M, "m"), (input::MAX_ANGLE_RAD, "rad"));
+        let a = ctx.number(&place, "a", &fd.a, length)?;
+        let alpha = ctx.number(&place, "alpha", &fd.alpha, angle)?;
+        let theta = ctx.affine(&place, "theta", &fd.theta, angle)?;
+        let d = ctx.affine(&place, "d", &fd.d, length)?;
         if !theta.is_constant() && !d.is_constant() {
             return Err(ModelError::field(
                 file,
@@ -428,7 +545,12 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
                     "needs `friction = true` on the frame",
                 ));
             }
-            let v = ctx.number(&place, "stribeck_velocity", v)?;
+            let v = ctx.number(
+                &place,
+                "stribeck_velocity",
+                v,
+                (input::MAX_VALUE, "rad/s or m/s"),
+            )?;
             if !(v > 0.0 && v.is_finite()) {
                 return Err(ModelError::field(
                     file,
@@ -508,7 +630,20 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             }
             None => None,
         };
+        let nominal = fd.nominal.clone().unwrap_or_default();
+        check_nominal(&nominal).map_err(|m| ModelError::field(file, &place, "nominal", m))?;
         let bounds = fd.bounds.clone().unwrap_or_default();
+        for (field, v) in [
+            ("bounds.fc_max", bounds.fc_max),
+            ("bounds.fv_max", bounds.fv_max),
+            ("bounds.fo_max", bounds.fo_max),
+            ("bounds.ia_max", bounds.ia_max),
+        ] {
+            if let Some(v) = v {
+                input::check_magnitude(v, input::MAX_VALUE, "")
+                    .map_err(|m| ModelError::field(file, &place, field, m))?;
+            }
+        }
         if (bounds.mass.is_some() || bounds.com.is_some()) && inertia.is_none() {
             return Err(ModelError::field(
                 file,
@@ -536,7 +671,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             motor_inertia,
             spring,
             known_force,
-            nominal: fd.nominal.clone().unwrap_or_default(),
+            nominal,
             bounds,
         });
         names.push(fd.name.clone());
@@ -549,6 +684,8 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             "the model has no parameter",
         ));
     }
+    input::check_parameter_count(params.len() + stribeck.len())
+        .map_err(|m| ModelError::field(file, "frames", "", m))?;
 
     let measured = match &desc.measured {
         Some(m) => {
@@ -569,6 +706,18 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
                             "coupling",
                             format!("must be {n} rows of {n} numbers"),
                         ));
+                    }
+                    for (r, row) in rows.iter().enumerate() {
+                        for (c, &x) in row.iter().enumerate() {
+                            input::check_magnitude(x, input::MAX_ANGLE_RAD, "").map_err(|m| {
+                                ModelError::field(
+                                    file,
+                                    "measured",
+                                    "coupling",
+                                    format!("row {}, column {}: {m}", r + 1, c + 1),
+                                )
+                            })?;
+                        }
                     }
                     DMatrix::from_fn(n, n, |r, c| rows[r][c])
                 }
@@ -602,9 +751,24 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         limits.push(Limit {
             label: ld.expr.clone(),
             expr,
-            position: ctx.range(&place, "position", &ld.position)?,
-            velocity: ctx.range(&place, "velocity", &ld.velocity)?,
-            acceleration: ctx.range(&place, "acceleration", &ld.acceleration)?,
+            position: ctx.range(
+                &place,
+                "position",
+                &ld.position,
+                (input::MAX_ANGLE_RAD, "rad or m"),
+            )?,
+            velocity: ctx.range(
+                &place,
+                "velocity",
+                &ld.velocity,
+                (input::MAX_VALUE, "rad/s or m/s"),
+            )?,
+            acceleration: ctx.range(
+                &place,
+                "acceleration",
+                &ld.acceleration,
+                (input::MAX_VALUE, "rad/s² or m/s²"),
+            )?,
         });
     }
 
@@ -616,7 +780,11 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             corners.iter_mut().zip([("min", &cd.min), ("max", &cd.max)])
         {
             for (v, raw) in corner.iter_mut().zip(values) {
-                *v = ctx.number(&place, field, raw)?;
+                // An infinite side leaves the box open (documented); NaN is refused.
+                *v = match raw {
+                    NumOrExpr::Num(x) if x.is_infinite() => *x,
+                    raw => ctx.number(&place, field, raw, (input::MAX_LENGTH_M, "m"))?,
+                };
             }
         }
         let limit = CartesianLimit::new(&names, &cd.frame, corners[0], corners[1])

@@ -33,6 +33,7 @@ mod dynamics;
 mod error;
 pub mod expr;
 pub mod inertia;
+pub mod input;
 mod kinematics;
 mod model;
 mod regressor;

@@ -15,6 +15,7 @@ use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
 use crate::error::ModelError;
 use crate::expr::Affine;
+use crate::input;
 use crate::model::*;
 
 fn rpy(r: &[f64; 3]) -> Matrix3<f64> {
@@ -45,6 +46,15 @@ impl Model {
                 "cannot parse the document (malformed XML or a missing element): {e}"
             ))
         })?;
+        if robot.joints.len() > input::MAX_FRAMES {
+            return Err(err(format!(
+                "{} joints; at most {} are accepted",
+                robot.joints.len(),
+                input::MAX_FRAMES
+            )));
+        }
+        // Every joint's child link carries 10 parameters.
+        input::check_parameter_count(10 * robot.joints.len()).map_err(err)?;
         let mut seen = std::collections::HashSet::new();
         if let Some(l) = robot.links.iter().find(|l| !seen.insert(l.name.as_str())) {
             return Err(err(format!("link `{}` is defined twice", l.name)));
@@ -125,7 +135,14 @@ impl Model {
                 }
             }
         }
-        let finite = |v: &[f64; 3]| v.iter().all(|x| x.is_finite());
+        if coordinates.len() > input::MAX_COORDINATES {
+            return Err(err(format!(
+                "{} moving joints; at most {} are accepted",
+                coordinates.len(),
+                input::MAX_COORDINATES
+            )));
+        }
+        let finite = |v: &[f64; 3], max: f64| v.iter().all(|x| x.is_finite() && x.abs() <= max);
         let coord_of = |name: &str| coordinates.iter().position(|c| c == name);
         let mut frames = Vec::new();
         let mut params = Vec::new();
@@ -133,8 +150,18 @@ impl Model {
         for (fi, &ji) in order.iter().enumerate() {
             let idx = fi + 1;
             let j = &robot.joints[ji];
-            if !finite(&j.origin.xyz.0) || !finite(&j.origin.rpy.0) {
-                return Err(err(format!("joint `{}`: origin is not finite", j.name)));
+            if !finite(&j.origin.xyz.0, input::MAX_LENGTH_M)
+                || !finite(&j.origin.rpy.0, input::MAX_ANGLE_RAD)
+            {
+                return Err(err(format!(
+                    "joint `{}`: origin xyz {:?} m, rpy {:?} rad: must be finite, within ±{:e} m \
+                     and ±{:e} rad",
+                    j.name,
+                    j.origin.xyz.0,
+                    j.origin.rpy.0,
+                    input::MAX_LENGTH_M,
+                    input::MAX_ANGLE_RAD
+                )));
             }
             let origin = Transform {
                 rotation: rpy(&j.origin.rpy.0),
@@ -180,9 +207,15 @@ impl Model {
                 })?;
                 let multiplier = m.multiplier.unwrap_or(1.0);
                 let offset = m.offset.unwrap_or(0.0);
-                if !multiplier.is_finite() || !offset.is_finite() {
+                let max = input::MAX_ANGLE_RAD;
+                if !(multiplier.is_finite()
+                    && offset.is_finite()
+                    && multiplier.abs() <= max
+                    && offset.abs() <= max)
+                {
                     return Err(err(format!(
-                        "joint `{}`: mimic multiplier and offset must be finite",
+                        "joint `{}`: mimic multiplier {multiplier} and offset {offset} must be \
+                         finite and within ±{max:e}",
                         j.name
                     )));
                 }
@@ -199,6 +232,18 @@ impl Model {
             if kind != JointKind::Fixed {
                 // Limits on the joint value s (for a mimic joint, multiplier·q + offset).
                 let lim = &j.limit;
+                if [
+                    lim.lower,
+                    lim.upper,
+                    lim.velocity,
+                    lim.acceleration,
+                    lim.effort,
+                ]
+                .iter()
+                .any(|v| v.is_nan())
+                {
+                    return Err(err(format!("joint `{}`: <limit> has a NaN value", j.name)));
+                }
                 let position = (j.joint_type != urdf_rs::JointType::Continuous
                     && lim.lower.is_finite()
                     && lim.upper.is_finite()
@@ -238,14 +283,15 @@ impl Model {
                 i.iyz,
                 i.izz,
             ];
-            if inertial.mass.value < 0.0
-                || !values.iter().all(|x| x.is_finite())
-                || !finite(&inertial.origin.xyz.0)
-                || !finite(&inertial.origin.rpy.0)
+            if !values.iter().all(|x| x.is_finite())
+                || !finite(&inertial.origin.xyz.0, input::MAX_LENGTH_M)
+                || !finite(&inertial.origin.rpy.0, input::MAX_ANGLE_RAD)
             {
                 return Err(err(format!(
-                    "link `{}`: inertial mass must be non-negative and all inertial values finite",
-                    link.name
+                    "link `{}`: inertial values must be finite (origin within ±{:e} m, ±{:e} rad)",
+                    link.name,
+                    input::MAX_LENGTH_M,
+                    input::MAX_ANGLE_RAD
                 )));
             }
             // Inertia about the centre of mass, rotated from the inertial frame to the link frame.
@@ -254,6 +300,12 @@ impl Model {
                 ri * Matrix3::new(
                     i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
                 ) * ri.transpose();
+            input::check_rigid_body(
+                inertial.mass.value,
+                inertial.origin.xyz.0,
+                [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz],
+            )
+            .map_err(|m| err(format!("link `{}`: <inertial>: {m}", link.name)))?;
             let nominal = Nominal {
                 mass: Some(inertial.mass.value),
                 com: Some(inertial.origin.xyz.0),

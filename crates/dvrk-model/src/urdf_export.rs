@@ -327,6 +327,10 @@ impl Model {
                          cannot be written exactly)",
                         f.name
                     ));
+                } else if let Err(why) =
+                    crate::input::check_rigid_body(s.mass, s.com, s.inertia_com)
+                {
+                    bad.push(format!("{} ({why})", f.name));
                 }
                 out.push(Some(s));
                 continue;
@@ -338,7 +342,8 @@ impl Model {
                 model: self.name.clone(),
                 message: format!(
                     "cannot write URDF inertials for link{} {}: a URDF inertial is a rigid \
-                     body (mass ≥ 0, no first moment without mass); these parameters are not \
+                     body (mass ≥ 0, no first moment without mass, principal moments ≥ 0 within \
+                     the triangle inequality); these parameters are not \
                      (e.g. a least-squares representative of the base parameters), use \
                      physically consistent ones",
                     if bad.len() > 1 { "s" } else { "" },

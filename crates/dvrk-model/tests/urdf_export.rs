@@ -45,7 +45,7 @@ const ARM: &str = r#"<?xml version="1.0"?>
     <inertial>
       <origin xyz="0.01 0.02 0.1" rpy="0.3 -0.2 1.1"/>
       <mass value="2.5"/>
-      <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0.002" izz="0.01"/>
+      <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0.002" izz="0.015"/>
     </inertial>
     <visual><geometry><mesh filename="package://arm/meshes/shoulder.stl"/></geometry></visual>
     <collision><geometry><box size="0.1 0.1 0.2"/></geometry></collision>

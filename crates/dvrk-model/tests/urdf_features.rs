@@ -96,7 +96,7 @@ fn prismatic_joint() {
             2.5,
             [0.1, -0.2, 0.05],
             [0.3, 0.2, 0.1],
-            [0.1, 0.01, 0.02, 0.2, 0.03, 0.3]
+            [0.1, 0.01, 0.02, 0.2, 0.03, 0.25]
         )
     );
     let model = Model::from_urdf_str(&text, "slider.urdf").unwrap();

@@ -216,6 +216,7 @@ pub fn ident_kind(e: &IdentError) -> Kind {
         IdentError::Log(l) => log_kind(l),
         IdentError::Sdp(_) => Kind::Solver,
         IdentError::Io { .. } => Kind::Io,
+        IdentError::Output(o) => io_kind(&o.source),
         _ => Kind::Input,
     }
 }

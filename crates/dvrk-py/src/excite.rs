@@ -160,7 +160,7 @@ fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Limits> 
     let path: PathBuf = obj.extract().map_err(|_| {
         input("limits: expected None (the robot's limits), a limits file path or a dict")
     })?;
-    let text = std::fs::read_to_string(&path).map_err(|e| from_io(&path, &e))?;
+    let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
     Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_excite)
 }
 

@@ -368,7 +368,7 @@ impl FitResultPy {
     #[staticmethod]
     #[pyo3(signature = (path, robot = None))]
     fn read(path: PathBuf, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
-        let text = std::fs::read_to_string(&path).map_err(|e| from_io(&path, &e))?;
+        let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
         let inner = FitResult::from_json(&text, &path.display().to_string())
             .map_err(|e| input(e.to_string()))?;
         Ok(with_robot(inner, robot))

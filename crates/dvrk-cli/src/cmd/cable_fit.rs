@@ -3,10 +3,14 @@
 
 use anyhow::{Context, Result};
 use dvrk_ident::cable::{fit_cable, CableSettings};
+use dvrk_ident::trajectory::Signal;
 
 use super::emit;
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Sweep file: rows of `position, velocity, effort` (no header), one way then back
     pub sweep: String,
@@ -22,9 +26,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let text = std::fs::read_to_string(&args.sweep)
+    let text = dvrk_model::input::read_text(std::path::Path::new(&args.sweep))
         .with_context(|| format!("{}: cannot read", args.sweep))?;
-    let (mut q, mut tau) = (Vec::new(), Vec::new());
+    let (mut q, mut dq, mut tau) = (Vec::new(), Vec::new(), Vec::new());
     for (i, line) in text.lines().enumerate() {
         if line.trim().is_empty() {
             continue;
@@ -37,16 +41,20 @@ pub fn run(args: Args) -> Result<()> {
                 i + 1
             );
         }
-        let num = |s: &str| {
-            s.trim().parse::<f64>().with_context(|| {
+        let num = |s: &str, signal: Signal| -> Result<f64> {
+            let x = s.trim().parse::<f64>().with_context(|| {
                 format!("{}:{}: `{}` is not a number", args.sweep, i + 1, s.trim())
-            })
+            })?;
+            dvrk_model::input::check_magnitude(x, signal.max_magnitude(), signal.unit())
+                .map_err(|m| anyhow::anyhow!("{}:{}: {signal}: {m}", args.sweep, i + 1))
         };
-        q.push(num(cols[0])?);
-        tau.push(num(cols[2])?);
+        q.push(num(cols[0], Signal::Position)?);
+        dq.push(num(cols[1], Signal::Velocity)?);
+        tau.push(num(cols[2], Signal::Effort)?);
     }
     let fit = fit_cable(
         &q,
+        &dq,
         &tau,
         &CableSettings {
             degree: args.degree,

@@ -7,7 +7,7 @@ use dvrk_ident::simulate::to_measured_coordinates;
 use dvrk_ident::Coordinates;
 use dvrk_model::Model;
 
-use super::emit;
+use super::emit_summary;
 use super::fit::{read_log, FormatArg, McapArgs};
 use super::simulate::{output_format, write_log};
 
@@ -20,6 +20,9 @@ pub enum CoordinatesArg {
 }
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Input log
     pub input: String,
@@ -49,6 +52,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[])?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
     let traj = read_log(
         &args.input,
@@ -88,11 +92,14 @@ pub fn run(args: Args) -> Result<()> {
     }
     write_log(model.as_ref(), &out, &args.output, format, &args.out_topic)?;
     let rate = out.rate_hz().unwrap_or(f64::NAN);
-    emit(&format!(
-        "wrote {} ({format}, {} coordinates, {} samples at {rate:.6} Hz, joints {})",
-        args.output,
-        out.coordinates,
-        out.len(),
-        out.joint_names.join(" ")
-    ))
+    emit_summary(
+        &format!(
+            "wrote {} ({format}, {} coordinates, {} samples at {rate:.6} Hz, joints {})",
+            args.output,
+            out.coordinates,
+            out.len(),
+            out.joint_names.join(" ")
+        ),
+        stdout_taken,
+    )
 }

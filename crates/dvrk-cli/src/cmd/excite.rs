@@ -8,12 +8,13 @@
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions, Limits};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::output::Outputs;
+use dvrk_ident::report::figure_bytes;
 use dvrk_ident::report::figures::excitation_figure;
-use dvrk_ident::report::write_figure;
-use dvrk_ident::result::write_atomic;
 use dvrk_model::{Limit, Model};
+use std::path::Path;
 
-use super::emit;
+use super::{emit, emit_summary};
 
 #[derive(Clone, Copy, Debug, clap::ValueEnum)]
 pub enum CriterionArg {
@@ -33,6 +34,9 @@ impl CriterionArg {
 }
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     #[arg(long)]
@@ -109,10 +113,10 @@ pub struct Args {
     pub json: bool,
 }
 
-fn print_evaluation(ev: &Evaluation, json: bool) -> Result<()> {
+fn print_evaluation(ev: &Evaluation, json: bool, stdout_taken: bool) -> Result<()> {
     if json {
         let doc = ev.to_json_value();
-        return emit(&serde_json::to_string_pretty(&doc)?);
+        return emit_summary(&serde_json::to_string_pretty(&doc)?, stdout_taken);
     }
     let mut s = format!(
         "criterion: {} = {:.6}\nfeasible: {} (dense check: {} samples at {} Hz)\n",
@@ -152,25 +156,49 @@ fn print_evaluation(ev: &Evaluation, json: bool) -> Result<()> {
             );
         }
     }
-    emit(&s)
+    emit_summary(&s, stdout_taken)
 }
 
 pub fn run(args: Args) -> Result<()> {
+    // Refuse bad outputs before minutes of optimization, not after.
+    let stdout_taken = super::check_outputs(
+        &[
+            ("--out", args.out.as_deref()),
+            ("--csv", args.csv.as_deref()),
+            ("--plot", args.plot.as_deref()),
+        ],
+        &[],
+    )?;
+    if stdout_taken && args.out.is_none() && args.evaluate.is_none() {
+        bail!("the trajectory goes to stdout without --out, and so does an output `-`: give --out");
+    }
     if let Some(path) = &args.plot {
-        // Refuse a bad plot path before minutes of optimization, not after.
         dvrk_ident::report::plot::ImageFormat::from_path(std::path::Path::new(path))?;
     }
     let model = Model::load(&args.robot)?;
     let base = model.base_parameters()?;
     let limits = match &args.limits {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
+            let text = dvrk_model::input::read_text(Path::new(path))
+                .with_context(|| format!("{path}: cannot read"))?;
             Limits::from_toml_str(&model, &text, path)?
         }
         None => Limits::of_model(&model),
     };
     let criterion = args.criterion.criterion();
+    // Limit errors found while optimizing name where the limits come from.
+    let limits_source = match &args.limits {
+        Some(path) => path.clone(),
+        None => format!("{} (limits of the description)", model.source),
+    };
+    let name_limits = |e: optimize::ExciteError| -> anyhow::Error {
+        match e {
+            optimize::ExciteError::ImpossibleLimits(m) if !m.starts_with(&limits_source) => {
+                anyhow::anyhow!("{limits_source}: impossible limits: {m}")
+            }
+            other => other.into(),
+        }
+    };
 
     if let Some(path) = &args.evaluate {
         let traj = match &args.pick {
@@ -185,11 +213,14 @@ pub fn run(args: Args) -> Result<()> {
             criterion,
             args.samples_per_harmonic,
             args.check_rate,
-        )?;
+        )
+        .map_err(name_limits)?;
         if let Some(path) = &args.plot {
-            plot(&model, &traj, &limits.joint, path)?;
+            let mut outputs = Outputs::new();
+            outputs.add(Path::new(path), plot(&model, &traj, &limits.joint, path)?)?;
+            outputs.commit()?;
         }
-        return print_evaluation(&ev, args.json);
+        return print_evaluation(&ev, args.json, stdout_taken);
     }
 
     if limits.is_empty() {
@@ -219,18 +250,27 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--rate must be positive");
     }
     let started = std::time::Instant::now();
-    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())?;
+    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())
+        .map_err(name_limits)?;
     let doc = serde_json::to_string_pretty(&result.to_json_value())?;
-    match &args.out {
-        Some(path) => write_atomic(std::path::Path::new(path), &(doc + "\n"))?,
-        None => emit(&doc)?,
+    // Every output built before the first is written.
+    let mut outputs = Outputs::new();
+    if let Some(path) = &args.out {
+        outputs.add(Path::new(path), doc.clone() + "\n")?;
     }
     if let Some(path) = &args.csv {
         let csv = optimize::setpoints_csv(&model, &result.trajectory, args.rate)?;
-        write_atomic(std::path::Path::new(path), &csv)?;
+        outputs.add(Path::new(path), csv)?;
     }
     if let Some(path) = &args.plot {
-        plot(&model, &result.trajectory, &limits.joint, path)?;
+        outputs.add(
+            Path::new(path),
+            plot(&model, &result.trajectory, &limits.joint, path)?,
+        )?;
+    }
+    outputs.commit()?;
+    if args.out.is_none() {
+        emit(&doc)?;
     }
     let ev = &result.evaluation;
     let w = ev.feasibility.worst.as_ref();
@@ -257,9 +297,9 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The preview figure of `traj` against `limits`, 500 samples per second.
-fn plot(model: &Model, traj: &FourierTrajectory, limits: &[Limit], path: &str) -> Result<()> {
+/// The preview figure of `traj` against `limits`, 500 samples per second, rendered for
+/// `path` (.svg or .png).
+fn plot(model: &Model, traj: &FourierTrajectory, limits: &[Limit], path: &str) -> Result<Vec<u8>> {
     let figure = excitation_figure(model, traj, limits, 500.0);
-    write_figure(&figure, std::path::Path::new(path))?;
-    Ok(())
+    Ok(figure_bytes(&figure, Path::new(path))?)
 }

@@ -4,12 +4,16 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dvrk_ident::result::{wpi_params_json, write_atomic};
+use dvrk_ident::output::Outputs;
+use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
 
-use super::{emit, load_result, LoadedResult};
+use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 #[command(group(
     clap::ArgGroup::new("outputs")
         .args(["urdf", "wpi_json"])
@@ -35,6 +39,13 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(
+        &[
+            ("--urdf", args.urdf.as_deref()),
+            ("--wpi-json", args.wpi_json.as_deref()),
+        ],
+        &[],
+    )?;
     let loaded = load_result(&args.result, args.robot.as_deref())?;
     // Everything is built before anything is written: an error leaves no output.
     let urdf = match &args.urdf {
@@ -49,15 +60,17 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     let mut report = String::new();
+    let mut outputs = Outputs::new();
     if let Some((out, (text, how))) = &urdf {
-        write_atomic(Path::new(out), text)?;
+        outputs.add(Path::new(out), text)?;
         report += &format!("wrote {out}: {how}\n");
     }
     if let Some((out, text)) = &wpi {
-        write_atomic(Path::new(out), text)?;
+        outputs.add(Path::new(out), text)?;
         report += &format!("wrote {out}: 2019 params.json layout\n");
     }
-    emit(&report)
+    outputs.commit()?;
+    emit_summary(&report, stdout_taken)
 }
 
 /// The URDF text and how it was made: the inertials replaced in `from` (or the robot's own
@@ -85,8 +98,8 @@ fn urdf_text(loaded: &LoadedResult, from: Option<&str>, result: &str) -> Result<
     let source = from.map(str::to_string).or_else(|| robot_urdf(robot));
     match source {
         Some(path) => {
-            let text =
-                std::fs::read_to_string(&path).with_context(|| format!("{path}: cannot read"))?;
+            let text = dvrk_model::input::read_text(Path::new(&path))
+                .with_context(|| format!("{path}: cannot read"))?;
             let out = model
                 .urdf_with_inertials(params, &text, &path)
                 .with_context(context)?;
@@ -116,6 +129,6 @@ fn robot_urdf(robot: &str) -> Option<String> {
     if Model::builtin_names().contains(&robot) {
         return None;
     }
-    let text = std::fs::read_to_string(robot).ok()?;
+    let text = dvrk_model::input::read_text(Path::new(robot)).ok()?;
     dvrk_model::is_urdf_document(Path::new(robot), &text).then(|| robot.to_string())
 }

@@ -8,7 +8,7 @@ use dvrk_ident::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat, LogReader};
-use dvrk_ident::result::write_atomic;
+use dvrk_ident::output::Outputs;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
@@ -203,6 +203,9 @@ impl LogArgs {
 }
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Training logs: files (2019 CSV, headered CSV, MCAP, sqlite3 .db3, ROS 1 .bag) or
     /// rosbag2 folders, recognized by content. Each is processed on its own (filters
@@ -220,8 +223,8 @@ pub struct Args {
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG")]
     pub test: Vec<String>,
-    /// Metrics on the first N processed samples of each test log only
-    #[arg(long)]
+    /// Metrics on the first N processed samples of each test log only (N ≥ 1)
+    #[arg(long, value_parser = super::at_least_one)]
     pub test_window: Option<usize>,
     /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
     /// --report, and with --test but no --test-window the test metrics cover its first
@@ -280,6 +283,16 @@ fn log_data<'a>(data: &'a [dvrk_ident::Trajectory], paths: &'a [String]) -> Vec<
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(
+        &[
+            ("--out", args.out.as_deref()),
+            ("--wpi-json", args.wpi_json.as_deref()),
+        ],
+        &[("--report", args.report.as_deref())],
+    )?;
+    if stdout_taken && args.json {
+        bail!("--json prints the result to stdout, and so does an output `-`: give one of them");
+    }
     let model = Model::load(&args.robot)?;
     let mut settings = args.log_args.settings(FitSettings::default())?;
     settings.method = match args.method {
@@ -356,13 +369,16 @@ pub fn run(args: Args) -> Result<()> {
         result
     };
     if result.solver.converged {
+        // Every output built and staged before the first is put in place.
+        let mut outputs = Outputs::new();
+        let mut report_note = None;
         if let Some(out) = &args.out {
-            write_atomic(Path::new(out), &result.to_json())?;
+            outputs.add(Path::new(out), result.to_json())?;
         }
         if let Some(out) = &args.wpi_json {
             let params = result.params_for(&model)?;
             let doc = dvrk_ident::result::wpi_params_json(&model, &params);
-            write_atomic(Path::new(out), &serde_json::to_string_pretty(&doc)?)?;
+            outputs.add(Path::new(out), serde_json::to_string_pretty(&doc)?)?;
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &in_memory) {
             let roles = |role: &str, count: usize| -> Vec<String> {
@@ -385,13 +401,23 @@ pub fn run(args: Args) -> Result<()> {
             for (role, t) in test_roles.iter().zip(test) {
                 logs.push((role, t, settings.test_window));
             }
-            super::report::write(&model, &result, &logs, excitation.as_ref(), dir)?;
+            let built = super::report::build(&model, &result, &logs, excitation.as_ref())?;
+            let written = built.stage(&mut outputs, Path::new(dir))?;
+            report_note = Some(format!(
+                "report: {} ({} files)",
+                Path::new(dir).join("report.html").display(),
+                written.len()
+            ));
+        }
+        outputs.commit()?;
+        if let Some(note) = report_note {
+            eprintln!("{note}");
         }
     }
     if args.json {
         emit(&result.to_json())?;
     } else {
-        emit(&table(&result))?;
+        super::emit_summary(&table(&result), stdout_taken)?;
     }
     if !result.solver.converged {
         bail!(

@@ -27,6 +27,80 @@ pub fn emit(text: &str) -> Result<()> {
     Ok(())
 }
 
+/// The summary of a command: on stdout, or on stderr when an output (`-`) has stdout.
+pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
+    if stdout_taken {
+        eprintln!("{}", text.trim_end());
+        Ok(())
+    } else {
+        emit(text)
+    }
+}
+
+/// Checks every output of a command before any work is done (see
+/// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
+/// writable destinations whose folder exists, no two the same, at most one `-`
+/// (standard output). Returns whether one of them is standard output.
+pub fn check_outputs(
+    files: &[(&str, Option<&str>)],
+    dirs: &[(&str, Option<&str>)],
+) -> Result<bool> {
+    use dvrk_ident::output::{check_dir, Destination};
+    let mut seen: Vec<(Option<std::path::PathBuf>, &str)> = Vec::new();
+    for &(flag, path) in files {
+        let Some(path) = path else { continue };
+        let key = match Destination::of(std::path::Path::new(path))
+            .with_context(|| format!("{flag} {path}"))?
+        {
+            Destination::Stdout => None,
+            Destination::File(p) | Destination::Special(p) => Some(p),
+        };
+        if let Some((_, other)) = seen.iter().find(|(k, _)| *k == key) {
+            bail!("{flag} {path}: the same destination as {other}");
+        }
+        seen.push((key, flag));
+    }
+    for &(flag, path) in dirs {
+        let Some(path) = path else { continue };
+        let (resolved, _) =
+            check_dir(std::path::Path::new(path)).with_context(|| format!("{flag} {path}"))?;
+        if let Some((_, other)) = seen.iter().find(|(k, _)| k.as_ref() == Some(&resolved)) {
+            bail!("{flag} {path}: the same destination as {other}");
+        }
+        seen.push((Some(resolved), flag));
+    }
+    Ok(seen.iter().any(|(k, _)| k.is_none()))
+}
+
+/// A count flag that must be at least 1 (e.g. `--test-window`: 0 samples have no
+/// metrics).
+pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(0) => Err("must be at least 1".into()),
+        Ok(n) => Ok(n),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// Refuses metrics with a non-finite number (no sample in the window, a joint whose
+/// torques are all zero) rather than printing NaN.
+pub fn check_metrics(m: &dvrk_ident::result::JointMetrics, log: &str) -> Result<()> {
+    if m.samples == 0 {
+        bail!("{log}: no processed sample is left for the metrics");
+    }
+    for (j, name) in m.joints.iter().enumerate() {
+        if !m.relative_error[j].is_finite() || !m.rms[j].is_finite() {
+            bail!(
+                "{log}: joint {name}: relative error {} and RMS {} are not finite (the \
+                 torques of the joint are all zero, so an error relative to them is undefined)",
+                m.relative_error[j],
+                m.rms[j]
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Parses a comma-separated list of numbers such as `0.1,-0.2,0.3` of length `n`.
 pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     let v: Vec<f64> = text
@@ -46,13 +120,22 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     if let Some(x) = v.iter().find(|x| !x.is_finite()) {
         bail!("{flag}: value {x} is not finite");
     }
+    // The range of logged values (positions, velocities; accelerations alike).
+    let max = dvrk_ident::trajectory::Signal::Position.max_magnitude();
+    if let Some(x) = v.iter().find(|x| x.abs() > max) {
+        bail!(
+            "{flag}: value {} is beyond the accepted ±{max:e}",
+            dvrk_model::input::show(*x)
+        );
+    }
     Ok(v)
 }
 
 /// Reads a parameter file: a JSON object `{"parameters": {name: value, ...}}` (a result
 /// file) or a plain `{name: value}` object.
 pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("{path}: cannot read"))?;
+    let text = dvrk_model::input::read_text(std::path::Path::new(path))
+        .with_context(|| format!("{path}: cannot read"))?;
     let doc: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{path}: not valid JSON"))?;
     let map = doc
@@ -65,6 +148,8 @@ pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
         let x = v
             .as_f64()
             .with_context(|| format!("{path}: parameter {k} is not a number"))?;
+        let x = dvrk_model::input::check_magnitude(x, dvrk_model::input::MAX_VALUE, "")
+            .map_err(|m| anyhow::anyhow!("{path}: parameter {k}: {m}"))?;
         values.push((k.as_str(), x));
     }
     Ok(model.params_from_named(values, path)?)

@@ -11,6 +11,9 @@ use std::fmt::Write as _;
 use super::{emit, parse_vector, read_params};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a path to a .toml description or .urdf
     pub robot: String,
@@ -107,9 +110,10 @@ fn draw(model: &Model, args: &Args) -> Result<()> {
         None => vec![0.0; model.dof()],
     };
     let out = args.out.as_deref().context("--draw needs --out")?;
+    let stdout_taken = super::check_outputs(&[("--out", Some(out))], &[])?;
     let drawing = kinematic_drawing(model, &q).map_err(anyhow::Error::msg)?;
     write_figure(&drawing, std::path::Path::new(out))?;
-    emit(out)
+    super::emit_summary(out, stdout_taken)
 }
 
 fn evaluate(model: &Model, args: &Args) -> Result<()> {
@@ -136,6 +140,9 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
         } else {
             (model.param_names(), h)
         };
+        if h.iter().any(|x| !x.is_finite()) {
+            bail!("the regressor at these coordinates overflows (not finite): smaller --q, --dq, --ddq");
+        }
         let rows: Vec<Vec<f64>> = (0..h.nrows())
             .map(|r| h.row(r).iter().copied().collect())
             .collect();
@@ -152,5 +159,8 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
     };
     let mut tau = vec![0.0; n];
     model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
+    if let Some(t) = tau.iter().find(|t| !t.is_finite()) {
+        bail!("the torque at these coordinates is {t}: the parameters and motion overflow");
+    }
     emit(&json!({ "tau": tau }).to_string())
 }

@@ -3,9 +3,11 @@
 
 use std::path::Path;
 
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::fourier::FourierTrajectory;
+use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
+use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, Trajectory};
 use dvrk_model::Model;
 
@@ -13,6 +15,9 @@ use super::emit;
 use super::fit::LogArgs;
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,
@@ -31,15 +36,14 @@ pub struct Args {
     pub log_args: LogArgs,
 }
 
-/// Writes the report of `result` on `logs` (role, trajectory, metric window) into `dir`
-/// and prints where it is.
-pub fn write(
+/// Builds the report of `result` on `logs` (role, trajectory, metric window) in memory,
+/// under a spinner; nothing is written.
+pub fn build(
     model: &Model,
     result: &FitResult,
     logs: &[(&str, &Trajectory, Option<usize>)],
     excitation: Option<&FourierTrajectory>,
-    dir: &str,
-) -> Result<()> {
+) -> Result<report::Report> {
     let input = ReportInput {
         model,
         result,
@@ -53,18 +57,11 @@ pub fn write(
             .collect(),
         excitation,
     };
-    let built =
-        crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?;
-    let written = built.write(Path::new(dir))?;
-    eprintln!(
-        "report: {} ({} files)",
-        Path::new(dir).join("report.html").display(),
-        written.len()
-    );
-    Ok(())
+    Ok(crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?)
 }
 
 pub fn run(args: Args) -> Result<()> {
+    super::check_outputs(&[], &[("--out", Some(&args.out))])?;
     let super::LoadedResult { result, model, .. } =
         super::load_result(&args.result, args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
@@ -72,10 +69,32 @@ pub fn run(args: Args) -> Result<()> {
     let mut result = result;
     result.settings = settings;
     let sources: Vec<(String, String)> = if args.logs.is_empty() {
+        // The result's own logs, as they were when fitted: a missing one or one whose
+        // content changed is an error, not a figure silently dropped or drawn from other
+        // data.
+        for i in &result.inputs {
+            let now = InputInfo::from_file(&i.role, Path::new(&i.path)).with_context(|| {
+                format!(
+                    "{}: the result's {} log is not readable: give the logs to draw \
+                     (dvrk-ident report RESULT LOG...)",
+                    args.result, i.role
+                )
+            })?;
+            if now.sha256 != i.sha256 {
+                bail!(
+                    "{}: the result's {} log {} changed since the fit (SHA-256 {} instead of \
+                     {}): give the logs to draw explicitly to draw it anyway",
+                    args.result,
+                    i.role,
+                    i.path,
+                    now.sha256,
+                    i.sha256
+                );
+            }
+        }
         result
             .inputs
             .iter()
-            .filter(|i| Path::new(&i.path).exists())
             .map(|i| (i.role.clone(), i.path.clone()))
             .collect()
     } else {
@@ -107,7 +126,11 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    write(&model, &result, &logs, excitation.as_ref(), &args.out)?;
+    let built = build(&model, &result, &logs, excitation.as_ref())?;
+    let mut outputs = Outputs::new();
+    let written = built.stage(&mut outputs, Path::new(&args.out))?;
+    outputs.commit()?;
+    eprintln!("report: {} files", written.len());
     emit(
         &Path::new(&args.out)
             .join("report.html")

@@ -10,9 +10,12 @@ use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_model::Model;
 
 use super::fit::FormatArg;
-use super::{emit, read_params};
+use super::{emit_summary, read_params};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     pub robot: String,
@@ -91,6 +94,7 @@ pub fn write_log(
 }
 
 pub fn run(args: Args) -> Result<()> {
+    let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[])?;
     let model = Model::load(&args.robot)?;
     let params = read_params(&model, &args.params)?;
     let traj = match &args.pick {
@@ -122,14 +126,21 @@ pub fn run(args: Args) -> Result<()> {
     let format = output_format(&args.out, args.format);
     let log = simulate(&model, &params, &traj, &sim)?;
     write_log(Some(&model), &log, &args.out, format, &args.topic)?;
-    let bytes = std::fs::metadata(&args.out).map(|m| m.len()).unwrap_or(0);
-    emit(&format!(
-        "wrote {} ({format}, {} samples, {:.4} s at {} Hz, {} joints, {} bytes)",
-        args.out,
-        log.len(),
-        log.time.last().copied().unwrap_or(0.0) + 1.0 / args.rate,
-        args.rate,
-        log.dof(),
-        bytes
-    ))
+    let bytes = match dvrk_ident::output::Destination::of(Path::new(&args.out)) {
+        Ok(dvrk_ident::output::Destination::File(p)) => std::fs::metadata(p)
+            .map(|m| format!(", {} bytes", m.len()))
+            .unwrap_or_default(),
+        _ => String::new(),
+    };
+    emit_summary(
+        &format!(
+            "wrote {} ({format}, {} samples, {:.4} s at {} Hz, {} joints{bytes})",
+            args.out,
+            log.len(),
+            log.time.last().copied().unwrap_or(0.0) + 1.0 / args.rate,
+            args.rate,
+            log.dof(),
+        ),
+        stdout_taken,
+    )
 }

@@ -10,6 +10,9 @@ use super::fit::LogArgs;
 use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
+// A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
+// message, not an unknown flag.
+#[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,
@@ -21,8 +24,8 @@ pub struct Args {
     pub robot: Option<String>,
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Metrics on the first N processed samples only
-    #[arg(long)]
+    /// Metrics on the first N processed samples only (N ≥ 1)
+    #[arg(long, value_parser = super::at_least_one)]
     pub test_window: Option<usize>,
     /// Print JSON
     #[arg(long)]
@@ -45,6 +48,7 @@ pub fn run(args: Args) -> Result<()> {
         let traj = log_args.read(path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
+        super::check_metrics(&m, path)?;
         let _ = writeln!(text, "{path} ({} samples)", m.samples);
         let _ = writeln!(text, "{:<8} {:>12} {:>12}", "joint", "relative", "rms");
         for (j, name) in m.joints.iter().enumerate() {

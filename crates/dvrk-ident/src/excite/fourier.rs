@@ -98,7 +98,7 @@ struct Wpi2019File {
 }
 
 fn read_text(path: &Path) -> Result<String, FourierError> {
-    std::fs::read_to_string(path).map_err(|e| FourierError::Io {
+    dvrk_model::input::read_text(path).map_err(|e| FourierError::Io {
         path: path.display().to_string(),
         message: e.to_string(),
     })

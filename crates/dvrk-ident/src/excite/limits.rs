@@ -332,13 +332,25 @@ impl Item {
     /// one).
     pub fn shrunk(&self, margin: f64) -> (f64, f64) {
         let m = margin * self.scale();
-        (self.lo + m, self.hi - m)
+        Item::ordered(self.lo + m, self.hi - m)
     }
 
     /// [`Item::shrunk`], then moved inward by `slack` (absolute units).
     pub fn within(&self, margin: f64, slack: f64) -> (f64, f64) {
         let (lo, hi) = self.shrunk(margin);
-        (lo + slack, hi - slack)
+        Item::ordered(lo + slack, hi - slack)
+    }
+
+    /// A range moved inward past its own width collapses to its midpoint instead of
+    /// turning inside out (a narrow limit shrunk by a margin; `f64::clamp` panics on an
+    /// inverted range).
+    fn ordered(lo: f64, hi: f64) -> (f64, f64) {
+        if lo <= hi {
+            (lo, hi)
+        } else {
+            let mid = 0.5 * (lo + hi);
+            (mid, mid)
+        }
     }
 }
 
@@ -372,6 +384,14 @@ impl Constraints {
                 if !(lo <= hi) {
                     return Err(ExciteError::ImpossibleLimits(format!(
                         "limit {}: {} range [{lo}, {hi}] is empty",
+                        lim.label,
+                        q.name()
+                    )));
+                }
+                if lo == hi {
+                    return Err(ExciteError::ImpossibleLimits(format!(
+                        "limit {}: {} range [{lo}, {hi}] has zero width: nothing that it \
+                         limits could move, so the motion could not excite it",
                         lim.label,
                         q.name()
                     )));

@@ -631,6 +631,64 @@ impl Rng {
 // ---------------------------------------------------------------------------------
 
 /// Number of samples of the dense check of a trajectory of base frequency `f0`.
+/// Most harmonics of a Fourier trajectory the optimizer and evaluator accept (the
+/// 2019 trajectories have 6).
+pub const MAX_ORDER: usize = 100;
+
+/// Most values (samples × harmonics) of one sampling grid of a period: the dense check
+/// at `check_rate` over `1 / f0` seconds, or the criterion's samples; 1e7 values are
+/// 160 MB of sines and cosines (the PSM's default dense grid has 33 000).
+pub const MAX_GRID_VALUES: usize = 10_000_000;
+
+/// Most random starts, and L-BFGS iterations per stage.
+pub const MAX_STARTS: usize = 10_000;
+pub const MAX_ITERATIONS: usize = 100_000;
+
+/// Checks the sizes of the grids a trajectory of `order` harmonics at `f0` Hz needs
+/// (criterion samples, dense check at `check_rate_hz`) before any is allocated.
+fn check_grids(
+    order: usize,
+    f0: f64,
+    samples_per_harmonic: usize,
+    check_rate_hz: f64,
+) -> Result<(), ExciteError> {
+    if order == 0 || order > MAX_ORDER {
+        return Err(ExciteError::Invalid(format!(
+            "order {order}: between 1 and {MAX_ORDER} harmonics are accepted"
+        )));
+    }
+    if !(f0 > 0.0 && f0.is_finite()) {
+        return Err(ExciteError::Invalid(format!(
+            "the base frequency must be positive and finite, got {f0} Hz"
+        )));
+    }
+    if !(check_rate_hz.is_finite() && check_rate_hz > 0.0) {
+        return Err(ExciteError::Invalid(format!(
+            "the check rate must be positive and finite, got {check_rate_hz} Hz"
+        )));
+    }
+    let dense = (check_rate_hz.max(1000.0) / f0).ceil() * order as f64;
+    let criterion = samples_per_harmonic as f64 * (order * order) as f64;
+    for (what, values) in [
+        (
+            "the dense feasibility check (check rate / f0 samples)",
+            dense,
+        ),
+        (
+            "the criterion (samples per harmonic × order samples)",
+            criterion,
+        ),
+    ] {
+        if values > MAX_GRID_VALUES as f64 {
+            return Err(ExciteError::Invalid(format!(
+                "{what} would need {values:.3e} values (samples × harmonics) for order \
+                 {order} at f0 = {f0} Hz; at most {MAX_GRID_VALUES:e} are accepted"
+            )));
+        }
+    }
+    Ok(())
+}
+
 fn dense_grid(order: usize, f0: f64, rate_hz: f64) -> Grid {
     let rate = rate_hz.max(1000.0);
     let count = ((rate / f0).ceil() as usize).max(2);
@@ -659,6 +717,7 @@ pub fn check_feasibility(
     rate_hz: f64,
 ) -> Result<Feasibility, ExciteError> {
     check_dof(model, traj)?;
+    check_grids(traj.order, traj.base_frequency_hz, 1, rate_hz)?;
     let cons = Constraints::new(model, limits)?;
     let grid = dense_grid(traj.order, traj.base_frequency_hz, rate_hz);
     let mut ws = Workspace::new(model);
@@ -675,6 +734,12 @@ pub fn criterion_value(
     samples_per_harmonic: usize,
 ) -> Result<CriterionValue, ExciteError> {
     check_dof(model, traj)?;
+    check_grids(
+        traj.order,
+        traj.base_frequency_hz,
+        samples_per_harmonic,
+        1000.0,
+    )?;
     let samples = samples_per_harmonic.max(1) * traj.order;
     let mut ev = CriterionEval::new(
         model,
@@ -784,15 +849,21 @@ pub fn optimize(
     let n = model.dof();
     let order = opts.order;
     let f0 = opts.base_frequency_hz;
-    if order == 0 || !(f0 > 0.0 && f0.is_finite()) {
-        return Err(ExciteError::Invalid(format!(
-            "order must be ≥ 1 and the base frequency positive (got {order}, {f0})"
-        )));
-    }
+    check_grids(order, f0, opts.samples_per_harmonic, opts.check_rate_hz)?;
     if opts.starts == 0 || opts.refine == 0 {
         return Err(ExciteError::Invalid(
             "at least one start and one refined start are needed".into(),
         ));
+    }
+    if opts.starts > MAX_STARTS
+        || opts.iterations_per_stage > MAX_ITERATIONS
+        || opts.refine_iterations_per_stage > MAX_ITERATIONS
+    {
+        return Err(ExciteError::Invalid(format!(
+            "at most {MAX_STARTS} starts and {MAX_ITERATIONS} iterations per stage are \
+             accepted (got {} starts, {} and {} iterations)",
+            opts.starts, opts.iterations_per_stage, opts.refine_iterations_per_stage
+        )));
     }
     if !(opts.margin >= 0.0 && opts.margin < 0.5 && opts.coulomb_smoothing >= 0.0) {
         return Err(ExciteError::Invalid(format!(

@@ -412,7 +412,8 @@ pub fn fit_stream_logs(
             train: summed(model, &train_sums).metrics(model),
             test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
         },
-    );
+    )?;
     result.inputs = inputs;
+    result.check_finite()?;
     Ok(result)
 }

@@ -30,7 +30,10 @@
 
 mod blocks;
 mod csv;
+mod line_limit;
 pub mod mcap;
+
+pub use self::line_limit::MAX_LINE_BYTES;
 
 pub use self::blocks::{LogBlocks, LogReader};
 pub use self::csv::{
@@ -41,7 +44,6 @@ use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 use thiserror::Error;
 
 /// A log file layout.
@@ -492,14 +494,18 @@ pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
 /// Samples per block when a reader's blocks are collected into a whole log.
 pub(crate) const BLOCK_SAMPLES: usize = 4096;
 
-/// A text file, buffered, past its UTF-8 byte-order mark if it has one.
+/// A text file, buffered, past its UTF-8 byte-order mark if it has one, with lines of
+/// at most [`MAX_LINE_BYTES`].
 pub(crate) fn open_text(path: &Path) -> Result<Box<dyn BufRead>, LogError> {
     let io = |source| LogError::Io {
         path: path.to_path_buf(),
         source,
     };
     let file = std::fs::File::open(path).map_err(io)?;
-    let mut reader = std::io::BufReader::with_capacity(1 << 16, file);
+    let mut reader = line_limit::LineLimit::new(
+        std::io::BufReader::with_capacity(1 << 16, file),
+        MAX_LINE_BYTES,
+    );
     if reader.fill_buf().map_err(io)?.starts_with(b"\xEF\xBB\xBF") {
         reader.consume(3);
     }
@@ -578,68 +584,32 @@ pub(crate) fn fmt_f64(v: f64) -> String {
     }
 }
 
-static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
-
-/// Writes `path` atomically: the content goes to a new temporary file in the same
-/// directory (same file system, so the rename is atomic), is flushed to disk, then
-/// renamed over `path`. On failure the temporary file is removed and `path` is left
-/// untouched.
+/// Writes `path` with `fill` through [`crate::output::write_with`]: a regular file
+/// atomically (temporary file in the same directory, synced, renamed; on failure `path`
+/// is left untouched), a symbolic link through to its target, a device or pipe in place,
+/// `-` to standard output.
 pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
-    write_atomic_file(path, |mut w| {
-        fill(&mut w).map_err(|source| LogError::Io {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        Ok(w)
+    crate::output::write_with(path, fill).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
     })
 }
 
 /// [`write_atomic`] for writers that need the file itself (the MCAP writer seeks back to
-/// fill in lengths): `fill` gets the buffered temporary file and returns it when done.
+/// fill in lengths): `fill` gets a buffered file and returns it when done.
 pub(crate) fn write_atomic_file(
     path: &Path,
     fill: impl FnOnce(
         std::io::BufWriter<std::fs::File>,
     ) -> Result<std::io::BufWriter<std::fs::File>, LogError>,
 ) -> Result<(), LogError> {
-    let io_err = |source| LogError::Io {
+    crate::output::write_seekable(path, fill, |source| LogError::Io {
         path: path.to_path_buf(),
         source,
-    };
-    let dir = match path.parent() {
-        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
-        _ => PathBuf::from("."),
-    };
-    let name = path.file_name().ok_or_else(|| {
-        io_err(std::io::Error::new(
-            std::io::ErrorKind::InvalidInput,
-            "not a file path",
-        ))
-    })?;
-    let tmp = dir.join(format!(
-        ".{}.{}.{}.tmp",
-        name.to_string_lossy(),
-        std::process::id(),
-        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
-    ));
-    let result = (|| -> Result<(), LogError> {
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&tmp)
-            .map_err(io_err)?;
-        let w = fill(std::io::BufWriter::new(file))?;
-        let file = w.into_inner().map_err(|e| io_err(e.into_error()))?;
-        file.sync_all().map_err(io_err)?;
-        std::fs::rename(&tmp, path).map_err(io_err)
-    })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
+    })
 }
 
 #[cfg(test)]

@@ -94,9 +94,14 @@ pub fn render_both(
     })
 }
 
+/// Renders one figure for `path` (SVG or PNG by its extension).
+pub fn figure_bytes(figure: &impl Figure, path: &Path) -> Result<Vec<u8>, IdentError> {
+    Ok(render(figure, ImageFormat::from_path(path)?)?)
+}
+
 /// Renders one figure to `path` (SVG or PNG by extension), atomically.
 pub fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), IdentError> {
-    let bytes = render(figure, ImageFormat::from_path(path)?)?;
+    let bytes = figure_bytes(figure, path)?;
     crate::log::write_atomic(path, |w| w.write_all(&bytes)).map_err(IdentError::from)
 }
 
@@ -212,25 +217,35 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
 }
 
 impl Report {
-    /// Writes `report.html` and every figure as SVG and PNG into `dir` (created if
-    /// missing), each file atomically; returns the paths written, the page last.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, IdentError> {
-        std::fs::create_dir_all(dir).map_err(|e| IdentError::Io {
-            file: dir.display().to_string(),
-            message: format!("cannot create the report folder: {e}"),
-        })?;
-        let mut written = Vec::new();
-        let mut put = |name: String, bytes: &[u8]| -> Result<(), IdentError> {
-            let path = dir.join(name);
-            crate::log::write_atomic(&path, |w| w.write_all(bytes))?;
-            written.push(path);
-            Ok(())
-        };
+    /// The files of the report: every figure as SVG and PNG, then `report.html`.
+    pub fn files(&self) -> Vec<(String, &[u8])> {
+        let mut files = Vec::with_capacity(2 * self.figures.len() + 1);
         for f in &self.figures {
-            put(format!("{}.svg", f.stem), f.svg.as_bytes())?;
-            put(format!("{}.png", f.stem), &f.png)?;
+            files.push((format!("{}.svg", f.stem), f.svg.as_bytes()));
+            files.push((format!("{}.png", f.stem), f.png.as_slice()));
         }
-        put("report.html".into(), self.html.as_bytes())?;
+        files.push(("report.html".into(), self.html.as_bytes()));
+        files
+    }
+
+    /// Stages the report's files into `dir` among a command's other outputs (see
+    /// [`crate::output::Outputs::add_dir`]: a new `dir` is created at the commit, its
+    /// parent folder must exist); returns the paths, the page last.
+    pub fn stage(
+        &self,
+        outputs: &mut crate::output::Outputs,
+        dir: &Path,
+    ) -> Result<Vec<PathBuf>, IdentError> {
+        Ok(outputs.add_dir(dir, &self.files())?)
+    }
+
+    /// Writes `report.html` and every figure as SVG and PNG into `dir` (created if
+    /// missing, but not its parent), all of them or none; returns the paths written,
+    /// the page last.
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, IdentError> {
+        let mut outputs = crate::output::Outputs::new();
+        let written = self.stage(&mut outputs, dir)?;
+        outputs.commit()?;
         Ok(written)
     }
 }

@@ -44,8 +44,18 @@ pub(crate) fn check_rate(rate_hz: f64) -> Result<(), SignalError> {
     }
 }
 
+/// The range of normalized cut-offs (fraction of the Nyquist frequency) that processing
+/// accepts. At 1e-3 (0.1 Hz at 200 Hz, the lowest base frequency of the 2019 excitations)
+/// the 6th-order filter's slowest pole already has a time constant of about 2 500 samples
+/// and the streamed filter's settling margin (`signal::stream::zero_phase::settle_margin`)
+/// is about 120 000 samples; it grows as 1/Wn, and with it the memory and time of every
+/// block, so lower cut-offs are refused. Above 0.95 the poles approach the unit circle
+/// (at `Wn = 1` the filter is unstable: the margin never ends) and the filter no longer
+/// filters anything.
+pub const CUTOFF_RANGE_WN: [f64; 2] = [1e-3, 0.95];
+
 pub(crate) fn check_wn_for(wn: f64, cutoff_hz: f64, rate_hz: f64) -> Result<(), SignalError> {
-    if wn > 0.0 && wn < 1.0 {
+    if (CUTOFF_RANGE_WN[0]..=CUTOFF_RANGE_WN[1]).contains(&wn) {
         Ok(())
     } else {
         Err(SignalError::InvalidCutoff {
@@ -434,6 +444,27 @@ mod tests {
             butter_lowpass(2, f64::NAN, 200.0),
             Err(SignalError::InvalidCutoff { .. })
         ));
+        // At and just below the Nyquist frequency (rate read as 200.00000000000426 Hz
+        // from a 2019 log: the check used to pass and the filter never settled), and far
+        // below any motion.
+        for (fc, rate) in [
+            (100.0, 200.00000000000426),
+            (99.999999, 200.0),
+            (96.0, 200.0),
+            (0.000001, 200.0),
+            (0.0001, 200.0),
+            (0.09, 200.0),
+        ] {
+            assert!(
+                matches!(
+                    butter_lowpass_sos(6, fc, rate),
+                    Err(SignalError::InvalidCutoff { .. })
+                ),
+                "{fc} Hz at {rate} Hz"
+            );
+        }
+        assert!(butter_lowpass_sos(6, 95.0, 200.0).is_ok());
+        assert!(butter_lowpass_sos(6, 0.1, 200.0).is_ok());
         assert!(matches!(
             butter_lowpass_sos(2, 5.0, -1.0),
             Err(SignalError::InvalidRate { .. })

@@ -11,6 +11,7 @@ use crate::signal::SignalError;
 /// the rounding allowance of the count) take the last sample.
 #[derive(Clone, Debug)]
 pub(crate) struct Resampler {
+    rate_hz: f64,
     step: f64,
     origin: f64,
     /// The two latest samples: `[previous, latest]` times and rows.
@@ -24,6 +25,15 @@ pub(crate) struct Resampler {
     bad_first: bool,
 }
 
+/// Most resampled samples per logged sample, beyond a first [`RESAMPLE_ALLOWANCE`]:
+/// linear interpolation adds no information, so a rate far above the log's own only
+/// multiplies memory and time (`--resample 1e9` on a 200 Hz log asked for 5 million
+/// samples per logged one and aborted at 13.8 GB).
+pub const MAX_UPSAMPLING: usize = 4;
+
+/// Resampled samples always allowed (gaps at the start of a log), whatever the ratio.
+pub const RESAMPLE_ALLOWANCE: usize = 1 << 20;
+
 fn bad_time() -> SignalError {
     SignalError::InvalidSetting {
         name: "time",
@@ -35,6 +45,7 @@ impl Resampler {
     pub(crate) fn new(columns: usize, rate_hz: f64) -> Result<Resampler, SignalError> {
         check_rate(rate_hz)?;
         Ok(Resampler {
+            rate_hz,
             step: 1.0 / rate_hz,
             origin: 0.0,
             times: [0.0; 2],
@@ -52,8 +63,20 @@ impl Resampler {
     }
 
     /// Appends grid point `emitted` (time, then the row) interpolated between the two
-    /// latest samples.
-    fn emit(&mut self, times: &mut Vec<f64>, out: &mut Vec<f64>) {
+    /// latest samples, unless that would make more than [`MAX_UPSAMPLING`] grid points
+    /// per logged sample (beyond [`RESAMPLE_ALLOWANCE`]).
+    fn emit(&mut self, times: &mut Vec<f64>, out: &mut Vec<f64>) -> Result<(), SignalError> {
+        if self.emitted >= MAX_UPSAMPLING * self.count + RESAMPLE_ALLOWANCE {
+            return Err(SignalError::InvalidSetting {
+                name: "resample",
+                reason: format!(
+                    "{} Hz makes more than {MAX_UPSAMPLING} samples per logged sample \
+                     ({} grid points after {} logged samples): interpolation adds no \
+                     information, resample near the log's own rate",
+                    self.rate_hz, self.emitted, self.count
+                ),
+            });
+        }
         let t = self.origin + self.emitted as f64 * self.step;
         let [ta, tb] = self.times;
         let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
@@ -61,6 +84,7 @@ impl Resampler {
         out.extend(a.iter().zip(b).map(|(a, b)| (1.0 - w) * a + w * b));
         times.push(t);
         self.emitted += 1;
+        Ok(())
     }
 
     /// Adds the sample at `time` (s); appends the grid points that became known.
@@ -83,7 +107,7 @@ impl Resampler {
         self.count += 1;
         if self.count >= 2 {
             while self.origin + self.emitted as f64 * self.step <= time {
-                self.emit(times, out);
+                self.emit(times, out)?;
             }
         }
         Ok(())
@@ -103,7 +127,7 @@ impl Resampler {
         }
         let total = self.grid_len(self.origin, self.times[1]);
         while self.emitted < total {
-            self.emit(times, out);
+            self.emit(times, out)?;
         }
         Ok(())
     }

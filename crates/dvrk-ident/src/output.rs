@@ -1,0 +1,640 @@
+//! Where output files go, and how they are written.
+//!
+//! Every output of the library, the CLI and the Python module goes through here, so the
+//! rules are the same everywhere:
+//!
+//! - a **regular file** (existing or new) is replaced atomically: the content goes to a
+//!   hidden temporary file beside it, is synced, and renamed over it; its permissions are
+//!   kept. An error or a crash never leaves a half-written file under the final name;
+//! - a **symbolic link** is followed (up to [`MAX_SYMLINKS`] hops): the file it points to is
+//!   replaced as above and the link stays a link;
+//! - a **device, FIFO or socket** (`/dev/null`, `/dev/stdout`, a named pipe) is written in
+//!   place, never replaced by a regular file (atomic replacement would delete the device);
+//! - `-` is standard output;
+//! - a missing parent folder is an error: no folder is ever created that the user did not
+//!   name (a report folder itself is created, see [`Outputs::add_dir`]).
+//!
+//! A command with several outputs collects them in [`Outputs`]: every destination is
+//! checked and every file written to its temporary name first, and only when all of them
+//! succeeded are they put in place ([`Outputs::commit`]). An error before the commit
+//! leaves nothing behind.
+
+use std::fs::{File, OpenOptions};
+use std::io::{Seek, Write};
+use std::path::{Component, Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Symbolic links followed to find an output's file, as the kernel's own limit (40).
+pub const MAX_SYMLINKS: usize = 40;
+
+/// Where an output goes.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Destination {
+    /// `-`: standard output.
+    Stdout,
+    /// A regular file, existing or not (symbolic links followed): replaced atomically.
+    File(PathBuf),
+    /// A device, FIFO or socket (symbolic links followed): written in place.
+    Special(PathBuf),
+}
+
+impl Destination {
+    /// Where `path` goes: `-` is standard output; symbolic links are followed; a folder,
+    /// a missing parent folder or a path without a file name is an error whose message
+    /// says so (the caller names the path).
+    pub fn of(path: &Path) -> std::io::Result<Destination> {
+        if path.as_os_str() == "-" {
+            return Ok(Destination::Stdout);
+        }
+        if path.as_os_str().is_empty() {
+            return Err(invalid("empty output path"));
+        }
+        let resolved = resolve_links(path)?;
+        match std::fs::metadata(&resolved) {
+            Ok(m) if m.is_dir() => Err(std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a folder, not a file",
+            )),
+            Ok(m) if m.is_file() => Ok(Destination::File(resolved)),
+            Ok(_) => Ok(Destination::Special(resolved)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                if resolved.file_name().is_none()
+                    || matches!(
+                        resolved.components().next_back(),
+                        Some(Component::ParentDir)
+                    )
+                {
+                    return Err(invalid("not a file path"));
+                }
+                let dir = parent_dir(&resolved);
+                match std::fs::metadata(&dir) {
+                    Ok(m) if m.is_dir() => Ok(Destination::File(resolved)),
+                    Ok(_) => Err(invalid(&format!("{} is not a folder", dir.display()))),
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound => Err(std::io::Error::new(
+                        std::io::ErrorKind::NotFound,
+                        format!(
+                            "folder {} does not exist (outputs never create folders)",
+                            dir.display()
+                        ),
+                    )),
+                    Err(e) => Err(e),
+                }
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    /// The file this destination writes, for comparing two outputs.
+    fn key(&self) -> Option<&Path> {
+        match self {
+            Destination::Stdout => None,
+            Destination::File(p) | Destination::Special(p) => Some(p),
+        }
+    }
+}
+
+fn invalid(message: &str) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message.to_string())
+}
+
+/// The folder a file path is in (`.` for a bare name).
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// `path` with its symbolic links (of the last component, repeatedly) replaced by
+/// their targets; a dangling link resolves to the missing file it names.
+fn resolve_links(path: &Path) -> std::io::Result<PathBuf> {
+    let mut current = path.to_path_buf();
+    for _ in 0..MAX_SYMLINKS {
+        match std::fs::symlink_metadata(&current) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&current)?;
+                current = if target.is_absolute() {
+                    target
+                } else {
+                    parent_dir(&current).join(target)
+                };
+            }
+            Ok(_) => return Ok(current),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(current),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(invalid(&format!(
+        "more than {MAX_SYMLINKS} symbolic links to follow"
+    )))
+}
+
+/// Checks a folder output (e.g. a report folder): `dir` (symbolic links followed) is an
+/// existing folder, or does not exist and its parent folder does. Returns the resolved
+/// path and whether it exists.
+pub fn check_dir(dir: &Path) -> std::io::Result<(PathBuf, bool)> {
+    if dir.as_os_str() == "-" {
+        return Err(invalid("a folder output cannot be standard output"));
+    }
+    let resolved = resolve_links(dir)?;
+    match std::fs::metadata(&resolved) {
+        Ok(m) if m.is_dir() => Ok((resolved, true)),
+        Ok(_) => Err(invalid("exists and is not a folder")),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            // The parent folder is checked as for a new file.
+            Destination::of(&resolved)?;
+            Ok((resolved, false))
+        }
+        Err(e) => Err(e),
+    }
+}
+
+static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+/// A new hidden temporary file beside `target` (same folder, so the rename is atomic)
+/// with `target`'s permissions when it exists.
+fn temp_beside(target: &Path) -> std::io::Result<(PathBuf, File)> {
+    let name = target
+        .file_name()
+        .ok_or_else(|| invalid("not a file path"))?;
+    let tmp = parent_dir(target).join(format!(
+        ".{}.{}.{}.tmp",
+        name.to_string_lossy(),
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let file = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
+    if let Ok(m) = std::fs::metadata(target) {
+        if let Err(e) = file.set_permissions(m.permissions()) {
+            let _ = std::fs::remove_file(&tmp);
+            return Err(e);
+        }
+    }
+    Ok((tmp, file))
+}
+
+/// An unnamed scratch file (created in the system's temporary folder and unlinked at
+/// once), for writers that must seek but go to a pipe or device.
+fn scratch() -> std::io::Result<File> {
+    let path = std::env::temp_dir().join(format!(
+        ".dvrk-ident.{}.{}.scratch",
+        std::process::id(),
+        TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create_new(true)
+        .open(&path)?;
+    std::fs::remove_file(&path)?;
+    Ok(file)
+}
+
+/// Opens a device, FIFO or socket for writing, without truncating or creating anything.
+fn open_special(path: &Path) -> std::io::Result<File> {
+    OpenOptions::new().write(true).open(path)
+}
+
+/// Writes one output with `fill`: a regular file atomically, a device or pipe in place,
+/// `-` to standard output. Errors carry the OS error only: the caller names the path.
+pub fn write_with(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    match Destination::of(path)? {
+        Destination::Stdout => {
+            let mut out = std::io::stdout().lock();
+            fill(&mut out)?;
+            out.flush()
+        }
+        Destination::Special(p) => {
+            let mut w = std::io::BufWriter::new(open_special(&p)?);
+            fill(&mut w)?;
+            w.flush()
+        }
+        Destination::File(p) => {
+            let (tmp, file) = temp_beside(&p)?;
+            let result = (|| {
+                let mut w = std::io::BufWriter::new(file);
+                fill(&mut w)?;
+                let file = w.into_inner().map_err(|e| e.into_error())?;
+                file.sync_all()?;
+                std::fs::rename(&tmp, &p)
+            })();
+            if result.is_err() {
+                let _ = std::fs::remove_file(&tmp);
+            }
+            result
+        }
+    }
+}
+
+/// [`write_with`] for writers that seek back (the MCAP writer fills in lengths): `fill`
+/// gets a buffered file and returns it when done. A pipe, device or standard output
+/// gets the content through an unnamed scratch file, copied when complete.
+pub fn write_seekable<E>(
+    path: &Path,
+    fill: impl FnOnce(std::io::BufWriter<File>) -> Result<std::io::BufWriter<File>, E>,
+    io_error: impl Fn(std::io::Error) -> E,
+) -> Result<(), E> {
+    let destination = Destination::of(path).map_err(&io_error)?;
+    let finish = |w: std::io::BufWriter<File>| -> std::io::Result<File> {
+        let file = w.into_inner().map_err(|e| e.into_error())?;
+        file.sync_all()?;
+        Ok(file)
+    };
+    match destination {
+        Destination::File(p) => {
+            let (tmp, file) = temp_beside(&p).map_err(&io_error)?;
+            let result = fill(std::io::BufWriter::new(file)).and_then(|w| {
+                finish(w)
+                    .and_then(|_| std::fs::rename(&tmp, &p))
+                    .map_err(&io_error)
+            });
+            if result.is_err() {
+                let _ = std::fs::remove_file(&tmp);
+            }
+            result
+        }
+        other => {
+            let file = scratch().map_err(&io_error)?;
+            let mut file = finish(fill(std::io::BufWriter::new(file))?).map_err(&io_error)?;
+            let copy = |file: &mut File| -> std::io::Result<()> {
+                file.rewind()?;
+                match &other {
+                    Destination::Special(p) => {
+                        let mut out = open_special(p)?;
+                        std::io::copy(file, &mut out)?;
+                        out.flush()
+                    }
+                    _ => {
+                        let mut out = std::io::stdout().lock();
+                        std::io::copy(file, &mut out)?;
+                        out.flush()
+                    }
+                }
+            };
+            copy(&mut file).map_err(&io_error)
+        }
+    }
+}
+
+/// Why an output could not be prepared or written: the path as the user gave it and the
+/// reason.
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {source}", path.display())]
+pub struct OutputError {
+    /// The output as given.
+    pub path: PathBuf,
+    /// What went wrong.
+    #[source]
+    pub source: std::io::Error,
+}
+
+impl OutputError {
+    fn new(path: &Path, source: std::io::Error) -> OutputError {
+        OutputError {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
+
+/// One staged output.
+enum Staged {
+    /// A complete temporary file, renamed over `target` at the commit.
+    File { tmp: PathBuf, target: PathBuf },
+    /// A complete temporary folder, renamed to `target` (which did not exist) at the
+    /// commit.
+    Dir { tmp: PathBuf, target: PathBuf },
+    /// Content for standard output or a device, written at the commit.
+    Direct {
+        destination: Destination,
+        given: PathBuf,
+        bytes: Vec<u8>,
+    },
+}
+
+/// The outputs of one command, checked and written to temporary names before any is put
+/// in place (see the module documentation). Dropping it without [`Outputs::commit`]
+/// removes every temporary file.
+#[derive(Default)]
+pub struct Outputs {
+    staged: Vec<Staged>,
+    /// Destinations taken so far (resolved paths; `None` for standard output), with the
+    /// path as given.
+    taken: Vec<(Option<PathBuf>, PathBuf)>,
+}
+
+impl Outputs {
+    pub fn new() -> Outputs {
+        Outputs::default()
+    }
+
+    /// Checks that `path` can be an output of this command (see [`Destination::of`]) and
+    /// that no earlier output of it goes to the same place.
+    fn claim(&mut self, path: &Path) -> Result<Destination, OutputError> {
+        let destination = Destination::of(path).map_err(|e| OutputError::new(path, e))?;
+        let key = destination.key().map(Path::to_path_buf);
+        if let Some((_, other)) = self.taken.iter().find(|(k, _)| *k == key) {
+            return Err(OutputError::new(
+                path,
+                invalid(&format!(
+                    "the same destination as the output {} of this command",
+                    other.display()
+                )),
+            ));
+        }
+        self.taken.push((key, path.to_path_buf()));
+        Ok(destination)
+    }
+
+    /// Stages `bytes` for `path`.
+    pub fn add(&mut self, path: &Path, bytes: impl AsRef<[u8]>) -> Result<(), OutputError> {
+        self.add_with(path, |w| w.write_all(bytes.as_ref()))
+    }
+
+    /// Stages the output of `fill` for `path`: a regular file is written to its
+    /// temporary name now, standard output and devices are kept in memory until the
+    /// commit.
+    pub fn add_with(
+        &mut self,
+        path: &Path,
+        fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    ) -> Result<(), OutputError> {
+        let err = |e| OutputError::new(path, e);
+        match self.claim(path)? {
+            Destination::File(target) => {
+                let (tmp, file) = temp_beside(&target).map_err(err)?;
+                // Registered before writing, so that a failure removes it.
+                self.staged.push(Staged::File {
+                    tmp: tmp.clone(),
+                    target,
+                });
+                let mut w = std::io::BufWriter::new(file);
+                fill(&mut w).map_err(err)?;
+                let file = w.into_inner().map_err(|e| err(e.into_error()))?;
+                file.sync_all().map_err(err)
+            }
+            destination => {
+                let mut bytes = Vec::new();
+                fill(&mut bytes).map_err(err)?;
+                self.staged.push(Staged::Direct {
+                    destination,
+                    given: path.to_path_buf(),
+                    bytes,
+                });
+                Ok(())
+            }
+        }
+    }
+
+    /// Stages a folder of files (`name`, content), e.g. a report: into `dir` if it is an
+    /// existing folder (each file replaced atomically), else into a new folder `dir`
+    /// whose parent must exist, built under a temporary name and renamed at the commit.
+    /// Returns the final paths of the files.
+    pub fn add_dir(
+        &mut self,
+        dir: &Path,
+        files: &[(String, &[u8])],
+    ) -> Result<Vec<PathBuf>, OutputError> {
+        let err = |e| OutputError::new(dir, e);
+        match check_dir(dir).map_err(err)? {
+            (_, true) => {
+                for (name, bytes) in files {
+                    self.add(&dir.join(name), bytes)?;
+                }
+            }
+            (resolved, false) => {
+                if self
+                    .taken
+                    .iter()
+                    .any(|(k, _)| k.as_deref() == Some(&resolved))
+                {
+                    return Err(err(invalid(
+                        "the same destination as another output of this command",
+                    )));
+                }
+                self.taken.push((Some(resolved.clone()), dir.to_path_buf()));
+                let (tmp, file) = temp_beside(&resolved).map_err(err)?;
+                drop(file);
+                std::fs::remove_file(&tmp).map_err(err)?;
+                std::fs::create_dir(&tmp).map_err(err)?;
+                self.staged.push(Staged::Dir {
+                    tmp: tmp.clone(),
+                    target: resolved,
+                });
+                for (name, bytes) in files {
+                    let path = tmp.join(name);
+                    let mut file = OpenOptions::new()
+                        .write(true)
+                        .create_new(true)
+                        .open(&path)
+                        .map_err(err)?;
+                    file.write_all(bytes).map_err(err)?;
+                    file.sync_all().map_err(err)?;
+                }
+            }
+        }
+        Ok(files.iter().map(|(name, _)| dir.join(name)).collect())
+    }
+
+    /// Puts every staged output in place: standard output and devices first (the
+    /// writes that can still fail), then the renames.
+    pub fn commit(mut self) -> Result<(), OutputError> {
+        let staged = std::mem::take(&mut self.staged);
+        let (direct, renames): (Vec<_>, Vec<_>) = staged
+            .into_iter()
+            .partition(|s| matches!(s, Staged::Direct { .. }));
+        // From here on the temporary files are ours to clean up on failure.
+        let cleanup = |rest: &[Staged]| rest.iter().for_each(remove_staged);
+        for s in &direct {
+            if let Staged::Direct {
+                destination,
+                given,
+                bytes,
+            } = s
+            {
+                let write = || -> std::io::Result<()> {
+                    match destination {
+                        Destination::Special(p) => {
+                            let mut f = open_special(p)?;
+                            f.write_all(bytes)?;
+                            f.flush()
+                        }
+                        _ => {
+                            let mut out = std::io::stdout().lock();
+                            out.write_all(bytes)?;
+                            out.flush()
+                        }
+                    }
+                };
+                if let Err(e) = write() {
+                    cleanup(&renames);
+                    return Err(OutputError::new(given, e));
+                }
+            }
+        }
+        for (k, s) in renames.iter().enumerate() {
+            let (Staged::File { tmp, target } | Staged::Dir { tmp, target }) = s else {
+                continue;
+            };
+            if let Err(e) = std::fs::rename(tmp, target) {
+                cleanup(&renames[k..]);
+                return Err(OutputError::new(target, e));
+            }
+        }
+        Ok(())
+    }
+}
+
+fn remove_staged(s: &Staged) {
+    match s {
+        Staged::File { tmp, .. } => {
+            let _ = std::fs::remove_file(tmp);
+        }
+        Staged::Dir { tmp, .. } => {
+            let _ = std::fs::remove_dir_all(tmp);
+        }
+        Staged::Direct { .. } => {}
+    }
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        self.staged.iter().for_each(remove_staged);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d =
+            std::env::temp_dir().join(format!("dvrk-ident-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    fn entries(d: &Path) -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn symlink_is_written_through() {
+        let d = dir("link");
+        let target = d.join("target.json");
+        std::fs::write(&target, "old").unwrap();
+        let link = d.join("link.json");
+        std::os::unix::fs::symlink("target.json", &link).unwrap();
+        write_with(&link, |w| w.write_all(b"new")).unwrap();
+        assert!(std::fs::symlink_metadata(&link)
+            .unwrap()
+            .file_type()
+            .is_symlink());
+        assert_eq!(std::fs::read_to_string(&target).unwrap(), "new");
+        assert_eq!(entries(&d), ["link.json", "target.json"]);
+        // A dangling link creates the file it names.
+        let dangling = d.join("dangling.json");
+        std::os::unix::fs::symlink("made.json", &dangling).unwrap();
+        write_with(&dangling, |w| w.write_all(b"made")).unwrap();
+        assert_eq!(
+            std::fs::read_to_string(d.join("made.json")).unwrap(),
+            "made"
+        );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn device_is_written_in_place() {
+        // /dev/null stays a character device.
+        write_with(Path::new("/dev/null"), |w| w.write_all(b"x")).unwrap();
+        use std::os::unix::fs::FileTypeExt;
+        assert!(std::fs::metadata("/dev/null")
+            .unwrap()
+            .file_type()
+            .is_char_device());
+        assert_eq!(
+            Destination::of(Path::new("/dev/null")).unwrap(),
+            Destination::Special("/dev/null".into())
+        );
+    }
+
+    #[test]
+    fn missing_folder_is_refused_not_created() {
+        let d = dir("missing");
+        let out = d.join("no").join("such").join("file.json");
+        let e = write_with(&out, |w| w.write_all(b"x")).unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert!(!d.join("no").exists());
+        let e = Outputs::new()
+            .add_dir(&d.join("no").join("report"), &[("a".into(), b"x")])
+            .unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        assert!(entries(&d).is_empty());
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn permissions_are_kept() {
+        use std::os::unix::fs::PermissionsExt;
+        let d = dir("mode");
+        let f = d.join("f.txt");
+        std::fs::write(&f, "old").unwrap();
+        std::fs::set_permissions(&f, std::fs::Permissions::from_mode(0o600)).unwrap();
+        write_with(&f, |w| w.write_all(b"new")).unwrap();
+        assert_eq!(
+            std::fs::metadata(&f).unwrap().permissions().mode() & 0o777,
+            0o600
+        );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn failed_staging_leaves_nothing() {
+        let d = dir("staging");
+        let mut outputs = Outputs::new();
+        outputs.add(&d.join("a.json"), b"a").unwrap();
+        outputs
+            .add_dir(&d.join("report"), &[("r.html".into(), b"r")])
+            .unwrap();
+        let e = outputs.add(&d.join("a.json"), b"b").unwrap_err();
+        assert!(e.to_string().contains("same destination"), "{e}");
+        let e = outputs
+            .add(&d.join("missing").join("b.json"), b"b")
+            .unwrap_err();
+        assert!(e.to_string().contains("does not exist"), "{e}");
+        drop(outputs);
+        assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn commit_puts_everything_in_place() {
+        let d = dir("commit");
+        std::fs::create_dir(d.join("existing")).unwrap();
+        std::fs::write(d.join("existing").join("old.txt"), "kept").unwrap();
+        let mut outputs = Outputs::new();
+        outputs.add(&d.join("a.json"), b"a").unwrap();
+        let files = outputs
+            .add_dir(&d.join("report"), &[("r.html".into(), b"r")])
+            .unwrap();
+        outputs
+            .add_dir(&d.join("existing"), &[("new.txt".into(), b"n")])
+            .unwrap();
+        outputs.add(Path::new("/dev/null"), b"x").unwrap();
+        outputs.commit().unwrap();
+        assert_eq!(files, [d.join("report").join("r.html")]);
+        assert_eq!(entries(&d), ["a.json", "existing", "report"]);
+        assert_eq!(entries(&d.join("existing")), ["new.txt", "old.txt"]);
+        assert_eq!(std::fs::read_to_string(&files[0]).unwrap(), "r");
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+}
