@@ -311,6 +311,7 @@ impl Model {
             motion: Vec::new(),
             fixed: Vec::new(),
             post_identity: Vec::new(),
+            bodies: Vec::new(),
         }
         .finish())
     }
