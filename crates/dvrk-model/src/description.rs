@@ -817,6 +817,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         motion: Vec::new(),
         fixed: Vec::new(),
         post_identity: Vec::new(),
+        bodies: Vec::new(),
     }
     .finish();
     // Stribeck parameters come after all the others, as `Model::with_stribeck` adds them.

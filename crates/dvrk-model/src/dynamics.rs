@@ -1,14 +1,17 @@
 //! Inverse dynamics (recursive Newton–Euler on the open tree, mapped through Aᵀ),
-//! gravity, mass matrix and forward dynamics.
+//! gravity, nonlinear effects, mass matrix (composite rigid bodies) and forward
+//! dynamics (Cholesky of the mass matrix in the workspace).
 //!
 //! By virtual work the coupled system's generalized forces are `τ = Aᵀ f_tree(s, ṡ, s̈)`
 //! plus the elements (friction, springs, motor inertias): exact for closed chains, with
-//! no symbolic algebra.
+//! no symbolic algebra. The same holds for the mass matrix, `M = Aᵀ·M_tree·A` plus the
+//! motor inertias. All of them run over the tree's bodies (moving frames, fixed links
+//! merged, see `model::Body`) and allocate nothing.
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::inertia::sym3;
-use crate::model::Model;
+use crate::inertia::{sym3, transform_barycentric};
+use crate::model::{Model, Transform};
 use crate::workspace::Workspace;
 
 /// `sign` with `sign(0) = 0` (numpy's convention, used by the 2019 package), so that a
@@ -23,6 +26,12 @@ pub fn sign0(x: f64) -> f64 {
         0.0
     }
 }
+
+/// The mass matrix is not positive definite at this configuration (the parameters are
+/// not those of physical bodies), so forward dynamics has no solution.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("the mass matrix is not positive definite (the parameters are not physical)")]
+pub struct NotPositiveDefinite;
 
 /// Which terms an internal dynamics pass includes.
 #[derive(Clone, Copy)]
@@ -39,9 +48,16 @@ pub(crate) const ALL: Terms = Terms {
     motor: true,
 };
 
+/// Which motion a body pass includes; `false` stands for zero rates or accelerations.
+#[derive(Clone, Copy)]
+struct Motion {
+    velocity: bool,
+    acceleration: bool,
+}
+
 impl Model {
     /// Velocity and acceleration of every frame (body coordinates), from `ws.local`,
-    /// `ws.sd`, `ws.sdd`.
+    /// `ws.sd`, `ws.sdd`: the regressor's kinematics, per frame.
     #[inline]
     pub(crate) fn forward_pass(&self, ws: &mut Workspace, gravity: bool) {
         ws.w[0] = Vector3::zeros();
@@ -74,6 +90,151 @@ impl Model {
         }
     }
 
+    /// The bodies' inertias for `params` (fixed links merged), recomputed only when the
+    /// parameters differ from the last call's.
+    #[inline]
+    fn body_inertias(&self, ws: &mut Workspace, params: &[f64]) {
+        let b = &mut ws.body;
+        let same = b.inertia_of.len() == params.len()
+            && b.inertia_of
+                .iter()
+                .zip(params)
+                .fold(0u64, |acc, (x, y)| acc | (x.to_bits() ^ y.to_bits()))
+                == 0;
+        if same {
+            return;
+        }
+        b.inertia_of.clear();
+        b.inertia_of.extend_from_slice(params);
+        for (k, body) in self.bodies.iter().enumerate() {
+            let mut sum = [0.0; 10];
+            for (offset, pose) in &body.links {
+                let p: &[f64; 10] = params[*offset..offset + 10].try_into().expect("10");
+                let moved = match pose {
+                    None => *p,
+                    Some(x) => transform_barycentric(&x.rotation, &x.translation, p),
+                };
+                for (s, m) in sum.iter_mut().zip(moved) {
+                    *s += m;
+                }
+            }
+            b.inertia[k + 1] = sum;
+        }
+    }
+
+    /// Parent body → body transforms at `q`, into `ws.body.x`.
+    #[inline]
+    fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
+        for (k, body) in self.bodies.iter().enumerate() {
+            let s = self.frames[body.frame - 1].value.eval(q);
+            ws.body.x[k + 1] = self.joint_transform(body.frame, &body.pre, s);
+        }
+    }
+
+    /// Newton–Euler over the bodies from `ws.body.x`: the links' generalized forces
+    /// (N·m or N) into `tau` (overwritten). Zero rates or accelerations (`motion`) are
+    /// skipped rather than multiplied.
+    #[inline(always)]
+    fn body_rnea(
+        &self,
+        ws: &mut Workspace,
+        dq: &[f64],
+        ddq: &[f64],
+        motion: Motion,
+        gravity: bool,
+        tau: &mut [f64],
+    ) {
+        let b = &mut ws.body;
+        let zero = Vector3::zeros();
+        b.w[0] = zero;
+        b.v[0] = zero;
+        b.dw[0] = zero;
+        b.a[0] = if gravity { -self.gravity } else { zero };
+        for (k, body) in self.bodies.iter().enumerate() {
+            let i = k + 1;
+            let p = body.parent;
+            let value = &self.frames[body.frame - 1].value;
+            let x = &b.x[i];
+            let rt = x.rotation.transpose();
+            let (sw, sv) = &self.motion[body.frame];
+            let sdd = if motion.acceleration {
+                value.dot(ddq)
+            } else {
+                0.0
+            };
+            let (w, v, dw, a);
+            if motion.velocity {
+                let sd = value.dot(dq);
+                let (wsd, vsd) = (sw * sd, sv * sd);
+                w = rt * b.w[p] + wsd;
+                v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
+                dw = rt * b.dw[p] + sw * sdd + w.cross(&wsd);
+                a = rt * (b.a[p] + b.dw[p].cross(&x.translation))
+                    + sv * sdd
+                    + w.cross(&vsd)
+                    + v.cross(&wsd);
+            } else if motion.acceleration {
+                w = zero;
+                v = zero;
+                dw = rt * b.dw[p] + sw * sdd;
+                a = rt * (b.a[p] + b.dw[p].cross(&x.translation)) + sv * sdd;
+            } else {
+                w = zero;
+                v = zero;
+                dw = zero;
+                a = rt * b.a[p];
+            }
+            let pp = &b.inertia[i];
+            let l = Vector3::new(pp[6], pp[7], pp[8]);
+            let m = pp[9];
+            let (n, f) = if motion.velocity {
+                let l_in = sym3(&pp[0..6]);
+                let ac = a + w.cross(&v);
+                (
+                    l_in * dw + w.cross(&(l_in * w)) + l.cross(&ac),
+                    ac * m + dw.cross(&l) + w.cross(&w.cross(&l)),
+                )
+            } else if motion.acceleration {
+                (sym3(&pp[0..6]) * dw + l.cross(&a), a * m + dw.cross(&l))
+            } else {
+                (l.cross(&a), a * m)
+            };
+            b.w[i] = w;
+            b.v[i] = v;
+            b.dw[i] = dw;
+            b.a[i] = a;
+            b.n[i] = n;
+            b.f[i] = f;
+        }
+        tau.fill(0.0);
+        for (k, body) in self.bodies.iter().enumerate().rev() {
+            let i = k + 1;
+            let (sw, sv) = &self.motion[body.frame];
+            let t = sw.dot(&b.n[i]) + sv.dot(&b.f[i]);
+            for &(c, a) in &self.frames[body.frame - 1].value.terms {
+                tau[c] += a * t;
+            }
+            let p = body.parent;
+            if p != 0 {
+                let x = &b.x[i];
+                let rf = x.rotation * b.f[i];
+                let rn = x.rotation * b.n[i] + x.translation.cross(&rf);
+                b.f[p] += rf;
+                b.n[p] += rn;
+            }
+        }
+    }
+
+    fn check_state(&self, ws: &Workspace, params: &[f64], vectors: &[&[f64]]) {
+        ws.check(self);
+        let n = self.dof();
+        assert!(
+            vectors.iter().all(|v| v.len() == n),
+            "q, dq, ddq and tau must have length {n}"
+        );
+        assert_eq!(params.len(), self.n_params(), "parameter vector length");
+    }
+
     /// Core of the inverse dynamics; writes `tau` (length n).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn rnea(
@@ -86,47 +247,14 @@ impl Model {
         terms: Terms,
         tau: &mut [f64],
     ) {
-        ws.check(self);
-        let n = self.dof();
-        assert!(
-            q.len() == n && dq.len() == n && ddq.len() == n && tau.len() == n,
-            "q, dq, ddq and tau must have length {n}"
-        );
-        assert_eq!(params.len(), self.n_params(), "parameter vector length");
-        self.joint_values(ws, q, dq, ddq);
-        self.active_local_transforms(ws);
-        self.forward_pass(ws, terms.gravity);
-        ws.n[0] = Vector3::zeros();
-        ws.f[0] = Vector3::zeros();
-        for &fi in &self.active {
-            ws.n[fi] = Vector3::zeros();
-            ws.f[fi] = Vector3::zeros();
-        }
-        for &j in &self.links {
-            let p0 = self.frames[j - 1].inertia.expect("link frame");
-            let pp = &params[p0..p0 + 10];
-            let (w, v, dw) = (ws.w[j], ws.v[j], ws.dw[j]);
-            let ac = ws.a[j] + w.cross(&v);
-            let l_in = sym3(&pp[0..6]);
-            let l = Vector3::new(pp[6], pp[7], pp[8]);
-            let m = pp[9];
-            ws.f[j] = ac * m + dw.cross(&l) + w.cross(&w.cross(&l));
-            ws.n[j] = l_in * dw + w.cross(&(l_in * w)) + l.cross(&ac);
-        }
-        tau.fill(0.0);
-        for &fi in self.active.iter().rev() {
-            let f = &self.frames[fi - 1];
-            let (sw, sv) = &self.motion[fi];
-            let t = sw.dot(&ws.n[fi]) + sv.dot(&ws.f[fi]);
-            for &(k, c) in &f.value.terms {
-                tau[k] += c * t;
-            }
-            let x = &ws.local[fi];
-            let rf = x.rotation * ws.f[fi];
-            let rn = x.rotation * ws.n[fi] + x.translation.cross(&rf);
-            ws.f[f.parent] += rf;
-            ws.n[f.parent] += rn;
-        }
+        self.check_state(ws, params, &[q, dq, ddq, tau]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        let motion = Motion {
+            velocity: true,
+            acceleration: true,
+        };
+        self.body_rnea(ws, dq, ddq, motion, terms.gravity, tau);
         self.add_elements(params, q, dq, ddq, terms, tau);
     }
 
@@ -198,44 +326,97 @@ impl Model {
     /// Gravity torque `g(q)` of the links alone (N·m or N), as Pinocchio's
     /// `computeGeneralizedGravity`: no friction, spring or known force. Allocates nothing.
     pub fn gravity_torque(&self, ws: &mut Workspace, params: &[f64], q: &[f64], tau: &mut [f64]) {
-        let zeros = std::mem::take(&mut ws.zeros);
-        let terms = Terms {
-            gravity: true,
-            dissipative: false,
-            motor: false,
+        self.check_state(ws, params, &[q, tau]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        let still = Motion {
+            velocity: false,
+            acceleration: false,
         };
-        self.rnea(ws, params, q, &zeros, &zeros, terms, tau);
-        ws.zeros = zeros;
+        self.body_rnea(ws, q, q, still, true, tau);
+    }
+
+    /// Nonlinear effects `C(q, q̇)·q̇ + g(q)` of the links alone (N·m or N): the torque
+    /// that holds the links at zero acceleration, as Pinocchio's `nonLinearEffects`; no
+    /// friction, spring, motor inertia or known force. Allocates nothing.
+    pub fn nonlinear_effects(
+        &self,
+        ws: &mut Workspace,
+        params: &[f64],
+        q: &[f64],
+        dq: &[f64],
+        tau: &mut [f64],
+    ) {
+        self.check_state(ws, params, &[q, dq, tau]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        let coasting = Motion {
+            velocity: true,
+            acceleration: false,
+        };
+        self.body_rnea(ws, dq, dq, coasting, true, tau);
     }
 
     /// Mass matrix `M(q)` (n×n, kg·m², kg), motor inertias included, into `out`
-    /// (column-major n·n). Column k is the inverse dynamics with q̈ = e_k, q̇ = 0 and no
-    /// gravity, friction or spring. Allocates nothing.
+    /// (column-major n·n; it is symmetric). Composite rigid bodies in the base frame:
+    /// each subtree's inertia `I_i`, then `M_tree[i, j] = S_jᵀ·I_i·S_i` for every body
+    /// `j` on the path from `i` to the base, mapped to the coordinates through `A`.
+    /// Allocates nothing.
     pub fn mass_matrix_into(&self, ws: &mut Workspace, params: &[f64], q: &[f64], out: &mut [f64]) {
         let n = self.dof();
+        self.check_state(ws, params, &[q]);
         assert_eq!(out.len(), n * n, "mass matrix buffer must have n*n entries");
-        let zeros = std::mem::take(&mut ws.zeros);
-        let mut e = std::mem::take(&mut ws.tmp_q);
-        let terms = Terms {
-            gravity: false,
-            dissipative: false,
-            motor: true,
-        };
-        for k in 0..n {
-            e.fill(0.0);
-            e[k] = 1.0;
-            self.rnea(
-                ws,
-                params,
-                q,
-                &zeros,
-                &e,
-                terms,
-                &mut out[k * n..(k + 1) * n],
-            );
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        self.mass_from_positions(ws, params, out);
+    }
+
+    /// [`Model::mass_matrix_into`] from `ws.body.x` and `ws.body.inertia`: composite
+    /// rigid bodies in body coordinates (Featherstone's CRBA). From the tip down, each
+    /// body's composite inertia `I_i` gives the force of a unit rate of its joint,
+    /// `F = I_i·S_i`, carried down to the base one body at a time (`M_tree[i, j] =
+    /// S_jᵀ·F` at every body `j` on the way), then `I_i` is added to its parent's.
+    fn mass_from_positions(&self, ws: &mut Workspace, params: &[f64], out: &mut [f64]) {
+        let n = self.dof();
+        let b = &mut ws.body;
+        b.composite.copy_from_slice(&b.inertia);
+        out.fill(0.0);
+        for (k, body) in self.bodies.iter().enumerate().rev() {
+            let i = k + 1;
+            let mut force = body.axis.inertia_times(&b.composite[i]);
+            let terms_i = &self.frames[body.frame - 1].value.terms;
+            let (mut j, mut bj) = (i, body);
+            loop {
+                let mij = bj.axis.dot(&force);
+                for &(ci, ai) in terms_i {
+                    for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
+                        let x = ai * aj * mij;
+                        out[ci + cj * n] += x;
+                        if j != i {
+                            out[cj + ci * n] += x;
+                        }
+                    }
+                }
+                if bj.parent == 0 {
+                    break;
+                }
+                force = force_to_parent(&b.x[j], &force);
+                j = bj.parent;
+                bj = &self.bodies[j - 1];
+            }
+            if body.parent != 0 {
+                let x = &b.x[i];
+                let moved = transform_barycentric(&x.rotation, &x.translation, &b.composite[i]);
+                for (s, m) in b.composite[body.parent].iter_mut().zip(moved) {
+                    *s += m;
+                }
+            }
         }
-        ws.zeros = zeros;
-        ws.tmp_q = e;
+        for f in &self.frames {
+            if let Some(mi) = &f.motor_inertia {
+                out[mi.coordinate * (n + 1)] += mi.ratio * params[mi.param];
+            }
+        }
     }
 
     /// Mass matrix `M(q)` as a matrix (allocates).
@@ -246,10 +427,70 @@ impl Model {
         DMatrix::from_vec(n, n, out)
     }
 
-    /// Forward dynamics: the accelerations (rad/s², m/s²) under torques `tau` (N·m or N,
-    /// as measured: known forces are subtracted first) with friction, springs and
-    /// gravity. Returns `None` if the mass matrix is not positive definite (the
-    /// parameters are not physical). Allocates (Cholesky); for simulation, not control.
+    /// Forward dynamics into `ddq` (rad/s², m/s²): the accelerations under torques
+    /// `tau` (N·m or N, as measured: known forces are subtracted first) with friction,
+    /// springs, motor inertias and gravity, `M(q)·q̈ = τ − h(q, q̇) − τ_known(q)`,
+    /// solved by a Cholesky factorization in the workspace. Allocates nothing; errors
+    /// (leaving `ddq` unspecified) when the mass matrix is not positive definite.
+    ///
+    /// ```
+    /// # use dvrk_model::{Model, Workspace};
+    /// use dvrk_model::inertia::barycentric_from_standard;
+    /// let model = Model::builtin("mtm").unwrap();
+    /// let mut ws = Workspace::new(&model);
+    /// // Every link 0.5 kg with some inertia, no friction, spring or motor inertia.
+    /// let mut params = vec![0.0; model.n_params()];
+    /// for &j in model.link_frames() {
+    ///     let p0 = model.frame(j).inertia.unwrap();
+    ///     let link = barycentric_from_standard(0.5, [0.01, 0.02, 0.03], [0.01, 0.0, 0.0, 0.02, 0.0, 0.015]);
+    ///     params[p0..p0 + 10].copy_from_slice(&link);
+    /// }
+    /// let (q, dq, ddq) = ([0.1; 7], [0.2; 7], [0.3; 7]);
+    /// // The torque of the inverse dynamics (plus the cable) gives back q̈.
+    /// let mut tau = [0.0; 7];
+    /// model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
+    /// model.add_known_forces(&q, &mut tau);
+    /// let mut acc = [0.0; 7];
+    /// model.forward_dynamics_into(&mut ws, &params, &q, &dq, &tau, &mut acc).unwrap();
+    /// assert!(acc.iter().zip(ddq).all(|(a, b)| (a - b).abs() < 1e-9));
+    /// ```
+    pub fn forward_dynamics_into(
+        &self,
+        ws: &mut Workspace,
+        params: &[f64],
+        q: &[f64],
+        dq: &[f64],
+        tau: &[f64],
+        ddq: &mut [f64],
+    ) -> Result<(), NotPositiveDefinite> {
+        let n = self.dof();
+        self.check_state(ws, params, &[q, dq, tau, ddq]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        // h(q, q̇): everything at zero acceleration, into ddq.
+        let coasting = Motion {
+            velocity: true,
+            acceleration: false,
+        };
+        self.body_rnea(ws, dq, dq, coasting, true, ddq);
+        let terms = Terms {
+            motor: false,
+            ..ALL
+        };
+        self.add_elements(params, q, dq, dq, terms, ddq);
+        self.add_known_forces(q, ddq);
+        for (a, t) in ddq.iter_mut().zip(tau) {
+            *a = t - *a;
+        }
+        let mut m = std::mem::take(&mut ws.mass);
+        self.mass_from_positions(ws, params, &mut m);
+        let solved = cholesky_solve(&mut m, n, ddq);
+        ws.mass = m;
+        solved
+    }
+
+    /// [`Model::forward_dynamics_into`] returning a vector (allocates); `None` if the
+    /// mass matrix is not positive definite.
     pub fn forward_dynamics(
         &self,
         ws: &mut Workspace,
@@ -258,18 +499,69 @@ impl Model {
         dq: &[f64],
         tau: &[f64],
     ) -> Option<DVector<f64>> {
-        let n = self.dof();
-        let m = self.mass_matrix(ws, params, q);
-        let zeros = vec![0.0; n];
-        let mut h = vec![0.0; n];
-        self.rnea(ws, params, q, dq, &zeros, ALL, &mut h);
-        let mut rhs = DVector::from_column_slice(tau);
-        let mut known = vec![0.0; n];
-        self.add_known_forces(q, &mut known);
-        for k in 0..n {
-            rhs[k] -= h[k] + known[k];
-        }
-        let chol = m.cholesky()?;
-        Some(chol.solve(&rhs))
+        let mut ddq = DVector::zeros(self.dof());
+        self.forward_dynamics_into(ws, params, q, dq, tau, ddq.as_mut_slice())
+            .ok()?;
+        Some(ddq)
     }
+}
+
+/// Solves `m·x = b` in place (`b` becomes `x`) for a symmetric positive definite `m`
+/// (n×n column-major, lower triangle read, overwritten by its Cholesky factor).
+fn cholesky_solve(m: &mut [f64], n: usize, b: &mut [f64]) -> Result<(), NotPositiveDefinite> {
+    for j in 0..n {
+        let mut d = m[j + j * n];
+        for k in 0..j {
+            d -= m[j + k * n] * m[j + k * n];
+        }
+        if !(d > 0.0 && d.is_finite()) {
+            return Err(NotPositiveDefinite);
+        }
+        let d = d.sqrt();
+        m[j + j * n] = d;
+        for i in j + 1..n {
+            let mut s = m[i + j * n];
+            for k in 0..j {
+                s -= m[i + k * n] * m[j + k * n];
+            }
+            m[i + j * n] = s / d;
+        }
+    }
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= m[i + k * n] * b[k];
+        }
+        b[i] = s / m[i + i * n];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= m[k + i * n] * b[k];
+        }
+        b[i] = s / m[i + i * n];
+    }
+    Ok(())
+}
+
+/// A spatial force `[n; f]` (moment about the origin, force) in the parent's
+/// coordinates, `x` being the parent → child transform: `f' = R·f`, `n' = R·n + t × f'`.
+#[inline(always)]
+fn force_to_parent(x: &Transform, force: &[f64; 6]) -> [f64; 6] {
+    let r = &x.rotation.data.0; // r[column][row]
+    let t = &x.translation;
+    let rot = |v: [f64; 3], row: usize| r[0][row] * v[0] + r[1][row] * v[1] + r[2][row] * v[2];
+    let (n, f) = (
+        [force[0], force[1], force[2]],
+        [force[3], force[4], force[5]],
+    );
+    let f2 = [rot(f, 0), rot(f, 1), rot(f, 2)];
+    [
+        rot(n, 0) + t[1] * f2[2] - t[2] * f2[1],
+        rot(n, 1) + t[2] * f2[0] - t[0] * f2[2],
+        rot(n, 2) + t[0] * f2[1] - t[1] * f2[0],
+        f2[0],
+        f2[1],
+        f2[2],
+    ]
 }

@@ -46,6 +46,52 @@ pub fn barycentric_from_standard(mass: f64, com: [f64; 3], inertia_com: [f64; 6]
     ]
 }
 
+/// Barycentric parameters of a body (`[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`,
+/// inertia about the frame origin) expressed in another frame, where
+/// `x_new = rotation·x + translation`: `m' = m`, `l' = m·t + R·l`,
+/// `L' = R·L·Rᵀ + (t·(m·t + 2R·l))·I − (t·l'ᵀ + R·l·tᵀ)` (the parallel-axis terms
+/// `m·S(t)ᵀS(t) + S(t)ᵀS(Rl) + S(Rl)ᵀS(t)` written out). The mass matrix composes the
+/// links' inertias in the base frame with it, and fixed links are merged into their
+/// moving parent with it.
+#[inline]
+pub fn transform_barycentric(
+    rotation: &Matrix3<f64>,
+    translation: &Vector3<f64>,
+    p: &[f64; 10],
+) -> [f64; 10] {
+    // Written out on the arrays: nalgebra's generic products cost about twice the
+    // instructions here, and this runs once per body in every mass matrix.
+    let r = &rotation.data.0; // r[column][row]
+    let row = |i: usize| [r[0][i], r[1][i], r[2][i]];
+    let (r0, r1, r2) = (row(0), row(1), row(2));
+    let dot = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let t = [translation[0], translation[1], translation[2]];
+    let m = p[9];
+    let l = [p[6], p[7], p[8]];
+    let rl = [dot(&r0, &l), dot(&r1, &l), dot(&r2, &l)];
+    let h = [m * t[0] + rl[0], m * t[1] + rl[1], m * t[2] + rl[2]];
+    let d = t[0] * (h[0] + rl[0]) + t[1] * (h[1] + rl[1]) + t[2] * (h[2] + rl[2]);
+    // Rows of R·L (L symmetric: its rows are its columns), then against rows of R.
+    let (lx, ly, lz) = ([p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]);
+    let a = |ri: &[f64; 3]| [dot(ri, &lx), dot(ri, &ly), dot(ri, &lz)];
+    let (a0, a1, a2) = (a(&r0), a(&r1), a(&r2));
+    let big = |ai: &[f64; 3], rj: &[f64; 3], i: usize, j: usize| {
+        dot(ai, rj) - (t[i] * h[j] + rl[i] * t[j])
+    };
+    [
+        big(&a0, &r0, 0, 0) + d,
+        big(&a0, &r1, 0, 1),
+        big(&a0, &r2, 0, 2),
+        big(&a1, &r1, 1, 1) + d,
+        big(&a1, &r2, 1, 2),
+        big(&a2, &r2, 2, 2) + d,
+        h[0],
+        h[1],
+        h[2],
+        m,
+    ]
+}
+
 /// Standard parameters of one link.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct StandardInertia {
@@ -113,6 +159,22 @@ mod tests {
         }
         for (x, y) in s.inertia_com.iter().zip([1.0, 0.4, 0.5, 2.0, 0.6, 3.0]) {
             assert!((x - y).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn transform_equals_the_standard_parallel_axis_theorem() {
+        // A body of mass 2, centre of mass c, inertia I_C about it; moved by (R, t) its
+        // centre of mass is R·c + t and its inertia about it R·I_C·Rᵀ.
+        let (m, c, ic) = (2.0, [0.1, -0.2, 0.3], [1.0, 0.4, 0.5, 2.0, 0.6, 3.0]);
+        let r = nalgebra::Rotation3::from_euler_angles(0.3, -1.1, 2.0).into_inner();
+        let t = Vector3::new(0.5, 0.7, -0.4);
+        let moved = transform_barycentric(&r, &t, &barycentric_from_standard(m, c, ic));
+        let c2 = r * Vector3::from(c) + t;
+        let ic2 = sym6(&(r * sym3(&ic) * r.transpose()));
+        let expect = barycentric_from_standard(m, [c2[0], c2[1], c2[2]], ic2);
+        for (a, b) in moved.iter().zip(expect) {
+            assert!((a - b).abs() < 1e-14, "{moved:?} {expect:?}");
         }
     }
 

@@ -40,31 +40,41 @@ impl Model {
         let f = &self.frames[fi - 1];
         ws.local[fi] = match f.kind {
             JointKind::Fixed => self.fixed[fi],
-            JointKind::Revolute => {
-                let (sn, cs) = ws.s[fi].sin_cos();
-                let r = &f.pre.rotation;
-                // pre.rotation · Rz(s): mix the first two columns.
-                let c0 = r.column(0) * cs + r.column(1) * sn;
-                let c1 = r.column(1) * cs - r.column(0) * sn;
-                let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
-                Transform {
-                    rotation: if self.post_identity[fi] {
-                        rz
-                    } else {
-                        rz * f.post.rotation
-                    },
-                    translation: f.pre.translation + rz * f.post.translation,
-                }
-            }
-            JointKind::Prismatic => {
-                let r = &f.pre.rotation;
-                let shift = Vector3::new(0.0, 0.0, ws.s[fi]) + f.post.translation;
-                Transform {
-                    rotation: r * f.post.rotation,
-                    translation: f.pre.translation + r * shift,
-                }
-            }
+            _ => self.joint_transform(fi, &f.pre, ws.s[fi]),
         };
+    }
+
+    /// `pre · joint(s) · post` of the moving frame `fi` (rotation about or translation
+    /// along the joint frame's z axis by `s`, rad or m).
+    #[inline]
+    pub(crate) fn joint_transform(&self, fi: usize, pre: &Transform, s: f64) -> Transform {
+        let f = &self.frames[fi - 1];
+        let r = &pre.rotation;
+        if f.kind == JointKind::Prismatic {
+            let shift = Vector3::new(0.0, 0.0, s) + f.post.translation;
+            return Transform {
+                rotation: r * f.post.rotation,
+                translation: pre.translation + r * shift,
+            };
+        }
+        let (sn, cs) = libm::sincos(s);
+        // pre.rotation · Rz(s): mix the first two columns.
+        let c0 = r.column(0) * cs + r.column(1) * sn;
+        let c1 = r.column(1) * cs - r.column(0) * sn;
+        let rz = Matrix3::from_columns(&[c0, c1, r.column(2).into_owned()]);
+        let (rotation_identity, no_shift) = self.post_identity[fi];
+        Transform {
+            rotation: if rotation_identity {
+                rz
+            } else {
+                rz * f.post.rotation
+            },
+            translation: if no_shift {
+                pre.translation
+            } else {
+                pre.translation + rz * f.post.translation
+            },
+        }
     }
 
     /// Poses of every frame in the base frame, in `ws` (read them with

@@ -45,7 +45,7 @@ mod workspace;
 pub use base::BaseParameters;
 pub use builtin::is_urdf_document;
 pub use description::Convention;
-pub use dynamics::sign0;
+pub use dynamics::{sign0, NotPositiveDefinite};
 pub use error::ModelError;
 pub use model::*;
 pub use summary::{BaseSummary, FrameSummary, ModelSummary};

@@ -482,8 +482,91 @@ pub struct Model {
     pub(crate) motion: Vec<(Vector3<f64>, Vector3<f64>)>,
     /// Transform parent → frame for fixed frames (precomputed).
     pub(crate) fixed: Vec<Transform>,
-    /// Whether each frame's `post` rotation is the identity (then skipped per sample).
-    pub(crate) post_identity: Vec<bool>,
+    /// Whether each frame's `post` rotation is the identity, and its translation zero
+    /// (then skipped per sample).
+    pub(crate) post_identity: Vec<(bool, bool)>,
+    /// The moving frames that carry link dynamics, parents first (see [`Body`]).
+    pub(crate) bodies: Vec<Body>,
+}
+
+/// A moving frame with link dynamics in its subtree, and the links rigidly attached to
+/// it. Inverse dynamics, gravity, the mass matrix and forward dynamics run over bodies
+/// rather than frames: a fixed frame costs nothing per sample (its transform is folded
+/// into its child's `pre`, its link into its moving ancestor's inertia), as Pinocchio
+/// merges fixed joints, while the regressor keeps a column block per frame.
+#[derive(Clone, Debug)]
+pub(crate) struct Body {
+    /// Frame index (1-based).
+    pub frame: usize,
+    /// Parent body, 1-based like frames (0: the base, or a frame fixed to it).
+    pub parent: usize,
+    /// Parent body's frame → this frame's joint frame: the fixed frames between, then
+    /// the frame's own `pre`.
+    pub pre: Transform,
+    /// The links merged into this body: parameter offset of `L{i}xx`, and the link
+    /// frame's pose in the body's frame (`None`: the body's own link).
+    pub links: Vec<(usize, Option<Transform>)>,
+    /// The joint's motion subspace in the body's coordinates.
+    pub axis: Axis,
+}
+
+/// A joint's unit motion `(ω, v)` in its frame's coordinates. Most joints turn about or
+/// slide along their frame's own z axis (DH frames, URDF joints about z); the mass
+/// matrix then reads one component where a general axis takes a dot product.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) enum Axis {
+    /// `(z, 0)`
+    RevoluteZ,
+    /// `(0, z)`
+    PrismaticZ,
+    General(Vector3<f64>, Vector3<f64>),
+}
+
+impl Axis {
+    fn new((w, v): (Vector3<f64>, Vector3<f64>)) -> Axis {
+        if w == Vector3::z() && v == Vector3::zeros() {
+            Axis::RevoluteZ
+        } else if w == Vector3::zeros() && v == Vector3::z() {
+            Axis::PrismaticZ
+        } else {
+            Axis::General(w, v)
+        }
+    }
+
+    /// `Sᵀ·F` of a spatial force `F = [n; f]` (moment, force).
+    #[inline(always)]
+    pub fn dot(&self, force: &[f64; 6]) -> f64 {
+        match self {
+            Axis::RevoluteZ => force[2],
+            Axis::PrismaticZ => force[5],
+            Axis::General(w, v) => {
+                w[0] * force[0]
+                    + w[1] * force[1]
+                    + w[2] * force[2]
+                    + v[0] * force[3]
+                    + v[1] * force[4]
+                    + v[2] * force[5]
+            }
+        }
+    }
+
+    /// `I·S` for barycentric inertia `p` (about this frame's origin): the spatial force
+    /// `[L·ω + l × v; m·v + ω × l]` of a unit joint rate.
+    #[inline(always)]
+    pub fn inertia_times(&self, p: &[f64; 10]) -> [f64; 6] {
+        let (h, m) = ([p[6], p[7], p[8]], p[9]);
+        match self {
+            Axis::RevoluteZ => [p[2], p[4], p[5], -h[1], h[0], 0.0],
+            Axis::PrismaticZ => [h[1], -h[0], 0.0, 0.0, 0.0, m],
+            Axis::General(w, v) => {
+                let l = crate::inertia::sym3(&p[0..6]);
+                let hv = Vector3::from(h);
+                let n = l * w + hv.cross(v);
+                let f = v * m + w.cross(&hv);
+                [n[0], n[1], n[2], f[0], f[1], f[2]]
+            }
+        }
+    }
 }
 
 impl Model {
@@ -688,12 +771,13 @@ impl Model {
                 }
             }))
             .collect();
-        self.post_identity = std::iter::once(true)
-            .chain(
-                self.frames
-                    .iter()
-                    .map(|f| f.post.rotation == Matrix3::identity()),
-            )
+        self.post_identity = std::iter::once((true, true))
+            .chain(self.frames.iter().map(|f| {
+                (
+                    f.post.rotation == Matrix3::identity(),
+                    f.post.translation == Vector3::zeros(),
+                )
+            }))
             .collect();
         self.fixed = std::iter::once(Transform::identity())
             .chain(self.frames.iter().map(|f| {
@@ -706,7 +790,47 @@ impl Model {
                 f.pre.compose(&joint).compose(&f.post)
             }))
             .collect();
+        self.bodies = self.derive_bodies();
         self
+    }
+
+    /// The bodies of the tree (see [`Body`]), from `active` and `fixed`.
+    fn derive_bodies(&self) -> Vec<Body> {
+        let moving = |f: usize| f != 0 && self.frames[f - 1].kind != JointKind::Fixed;
+        // Nearest moving ancestor-or-self of frame `f` (0: none) and the pose of `f` in
+        // its frame.
+        let anchor = |mut f: usize| {
+            let mut x = Transform::identity();
+            while f != 0 && !moving(f) {
+                x = self.fixed[f].compose(&x);
+                f = self.frames[f - 1].parent;
+            }
+            (f, x)
+        };
+        let mut body_of = vec![0usize; self.frames.len() + 1];
+        let mut bodies = Vec::new();
+        for &fi in self.active.iter().filter(|&&f| moving(f)) {
+            let frame = &self.frames[fi - 1];
+            let (p, x) = anchor(frame.parent);
+            bodies.push(Body {
+                frame: fi,
+                parent: body_of[p],
+                pre: x.compose(&frame.pre),
+                links: Vec::new(),
+                axis: Axis::new(self.motion[fi]),
+            });
+            body_of[fi] = bodies.len();
+        }
+        for &j in &self.links {
+            let offset = self.frames[j - 1].inertia.expect("link frame");
+            let (f, x) = anchor(j);
+            // A link fixed to the base exerts nothing on the coordinates.
+            if f != 0 {
+                let pose = (f != j).then_some(x);
+                bodies[body_of[f] - 1].links.push((offset, pose));
+            }
+        }
+        bodies
     }
 }
 

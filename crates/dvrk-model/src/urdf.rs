@@ -363,6 +363,7 @@ impl Model {
             motion: Vec::new(),
             fixed: Vec::new(),
             post_identity: Vec::new(),
+            bodies: Vec::new(),
         }
         .finish())
     }

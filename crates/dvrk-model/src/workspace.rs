@@ -1,5 +1,6 @@
 //! Per-sample scratch buffers, reused across calls so that the real-time algorithms
-//! (inverse dynamics, gravity, regressor) allocate nothing.
+//! (inverse and forward dynamics, gravity, nonlinear effects, mass matrix, regressor)
+//! allocate nothing.
 
 use nalgebra::Vector3;
 
@@ -25,15 +26,36 @@ pub struct Workspace {
     pub(crate) v: Vec<Vector3<f64>>,
     pub(crate) dw: Vec<Vector3<f64>>,
     pub(crate) a: Vec<Vector3<f64>>,
-    /// Accumulated spatial force (moment about the origin n, force f) per frame.
-    pub(crate) n: Vec<Vector3<f64>>,
-    pub(crate) f: Vec<Vector3<f64>>,
     /// Link regressor blocks expressed in base coordinates about the base origin,
     /// 6 rows (n; f) × 10 columns, column-major per link frame.
     pub(crate) yb: Vec<[f64; 60]>,
-    /// Coordinate-sized scratch vectors.
-    pub(crate) tmp_q: Vec<f64>,
-    pub(crate) zeros: Vec<f64>,
+    /// Per body (index 0 = base, as frames): the dynamics of [`Model::inverse_dynamics`],
+    /// [`Model::mass_matrix_into`] and friends run over bodies (see `model::Body`).
+    pub(crate) body: BodyBuffers,
+    /// n×n mass matrix (column-major) and its Cholesky factor, for forward dynamics.
+    pub(crate) mass: Vec<f64>,
+}
+
+/// Body-indexed buffers (index 0 = base).
+#[derive(Clone, Debug)]
+pub(crate) struct BodyBuffers {
+    /// Parent body → body transform.
+    pub x: Vec<Transform>,
+    /// As the frame buffers: ω (rad/s), v (m/s), ω̇ (rad/s²), a (m/s², gravity
+    /// included), moment n (N·m) and force f (N), body coordinates.
+    pub w: Vec<Vector3<f64>>,
+    pub v: Vec<Vector3<f64>>,
+    pub dw: Vec<Vector3<f64>>,
+    pub a: Vec<Vector3<f64>>,
+    pub n: Vec<Vector3<f64>>,
+    pub f: Vec<Vector3<f64>>,
+    /// Barycentric inertia of each body with its fixed links merged, in its frame, and
+    /// the link parameters it was computed from: recomputed only when they change, as
+    /// Pinocchio keeps the inertias in its model.
+    pub inertia: Vec<[f64; 10]>,
+    pub inertia_of: Vec<f64>,
+    /// Mass matrix: the composite inertia of each body's subtree (body coordinates).
+    pub composite: Vec<[f64; 10]>,
 }
 
 impl Workspace {
@@ -53,11 +75,9 @@ impl Workspace {
             v: vec![Vector3::zeros(); nf],
             dw: vec![Vector3::zeros(); nf],
             a: vec![Vector3::zeros(); nf],
-            n: vec![Vector3::zeros(); nf],
-            f: vec![Vector3::zeros(); nf],
             yb: vec![[0.0; 60]; nf],
-            tmp_q: vec![0.0; n],
-            zeros: vec![0.0; n],
+            body: BodyBuffers::new(model.bodies.len() + 1, model.n_params()),
+            mass: vec![0.0; n * n],
         }
     }
 
@@ -68,8 +88,28 @@ impl Workspace {
 
     pub(crate) fn check(&self, model: &Model) {
         assert!(
-            self.n_frames == model.frames.len() + 1 && self.dof == model.dof(),
+            self.n_frames == model.frames.len() + 1
+                && self.dof == model.dof()
+                && self.body.x.len() == model.bodies.len() + 1,
             "workspace was created for another model"
         );
+    }
+}
+
+impl BodyBuffers {
+    fn new(nb: usize, n_params: usize) -> Self {
+        let zero = vec![Vector3::zeros(); nb];
+        BodyBuffers {
+            x: vec![Transform::identity(); nb],
+            w: zero.clone(),
+            v: zero.clone(),
+            dw: zero.clone(),
+            a: zero.clone(),
+            n: zero.clone(),
+            f: zero,
+            inertia: vec![[0.0; 10]; nb],
+            inertia_of: Vec::with_capacity(n_params),
+            composite: vec![[0.0; 10]; nb],
+        }
     }
 }

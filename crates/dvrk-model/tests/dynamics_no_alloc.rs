@@ -5,6 +5,9 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
+#[path = "dynamics_support.rs"]
+mod support;
+
 use dvrk_model::{Model, Workspace};
 
 struct Counting;
@@ -67,11 +70,15 @@ fn check(name: &str) {
     let model = Model::builtin(name).unwrap();
     let (n, p) = (model.dof(), model.n_params());
     let mut ws = Workspace::new(&model);
-    let params: Vec<f64> = (0..p).map(|k| 0.01 * (k % 17) as f64 + 0.005).collect();
+    // Physical parameters: forward dynamics needs a positive definite mass matrix.
+    let params = support::physical_params(&model, &mut support::Rng::new(5));
     let q: Vec<f64> = (0..n).map(|k| 0.1 + 0.13 * k as f64).collect();
     let dq: Vec<f64> = (0..n).map(|k| -0.3 + 0.11 * k as f64).collect();
     let ddq: Vec<f64> = (0..n).map(|k| 0.5 - 0.07 * k as f64).collect();
+    // Another parameter set: the bodies' merged inertias are recomputed in place.
+    let other: Vec<f64> = params.iter().map(|x| 1.5 * x).collect();
     let mut tau = vec![0.0; n];
+    let mut acc = vec![0.0; n];
     let mut mass = vec![0.0; n * n];
     let mut h = vec![0.0; n * p];
     // Warm-up (first calls may initialize lazily).
@@ -85,6 +92,18 @@ fn check(name: &str) {
     report.push(("gravity_torque", a));
     let a = allocations(|| model.mass_matrix_into(&mut ws, &params, &q, &mut mass));
     report.push(("mass_matrix_into", a));
+    let a = allocations(|| model.nonlinear_effects(&mut ws, &params, &q, &dq, &mut tau));
+    report.push(("nonlinear_effects", a));
+    let a = allocations(|| {
+        model
+            .forward_dynamics_into(&mut ws, &params, &q, &dq, &tau, &mut acc)
+            .unwrap()
+    });
+    report.push(("forward_dynamics_into", a));
+    let a = allocations(|| model.mass_matrix_into(&mut ws, &other, &q, &mut mass));
+    report.push(("mass_matrix_into, new parameters", a));
+    let a = allocations(|| model.inverse_dynamics(&mut ws, &other, &q, &dq, &ddq, &mut tau));
+    report.push(("inverse_dynamics, new parameters", a));
     let a = allocations(|| model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h));
     report.push(("regressor_into", a));
     let a = allocations(|| model.add_known_forces(&q, &mut tau));
@@ -95,6 +114,7 @@ fn check(name: &str) {
     assert!(bad.is_empty(), "{name}: allocations per call: {bad:?}");
     // The calls did something.
     assert!(h.iter().any(|x| *x != 0.0) && mass.iter().any(|x| *x != 0.0));
+    assert!(acc.iter().all(|x| x.is_finite()) && acc.iter().any(|x| *x != 0.0));
 }
 
 #[test]

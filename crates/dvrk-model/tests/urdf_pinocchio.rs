@@ -1,7 +1,8 @@
 //! The URDF import and the dynamics against Pinocchio 4.1 on a 7-DoF Franka Panda
 //! (`../shared/anchors/panda_arm_7dof.urdf`, `pinocchio_reference.json`): inverse
-//! dynamics, mass matrix, gravity, nonlinear effects and the joint-torque regressor on 20
-//! random samples, and the nominal dynamic parameters, all to 1e-9.
+//! dynamics, mass matrix, gravity, nonlinear effects, forward dynamics (the reference
+//! accelerations from its torques) and the joint-torque regressor on 20 random samples,
+//! and the nominal dynamic parameters, all to 1e-9.
 //!
 //! Conventions (from the JSON): Pinocchio's dynamic parameters of joint i are
 //! `[m, mc_x, mc_y, mc_z, Ixx, Ixy, Iyy, Ixz, Iyz, Izz]` in the joint frame (= child link
@@ -126,11 +127,13 @@ fn panda_dynamics_match_pinocchio() {
         .expect("URDF gives every nominal parameter");
     let mut ws = Workspace::new(model);
     let n = model.dof();
-    let (mut w_tau, mut w_m, mut w_g, mut w_nle) = (
+    let (mut w_tau, mut w_m, mut w_g, mut w_nle, mut w_id0, mut w_fd) = (
         Worst::default(),
         Worst::default(),
         Worst::default(),
         Worst::default(),
+        Worst::default(),
+        Worst::against("the reference ddq"),
     );
     let samples = r.json["samples"].as_array().unwrap();
     assert_eq!(samples.len(), 20);
@@ -158,15 +161,28 @@ fn panda_dynamics_match_pinocchio() {
             w_g.see(g[k], *t, || format!("sample {s} joint {k}"));
         }
         let mut nle = vec![0.0; n];
-        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &vec![0.0; n], &mut nle);
+        model.nonlinear_effects(&mut ws, &pi, &q, &dq, &mut nle);
+        let mut id0 = vec![0.0; n];
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &vec![0.0; n], &mut id0);
         for (k, t) in f64s(&sample["nle"]).iter().enumerate() {
             w_nle.see(nle[k], *t, || format!("sample {s} joint {k}"));
+            w_id0.see(id0[k], *t, || format!("sample {s} joint {k}"));
+        }
+        // Pinocchio's torques of (q, q̇, q̈) accelerate the arm by q̈.
+        let mut acc = vec![0.0; n];
+        model
+            .forward_dynamics_into(&mut ws, &pi, &q, &dq, &f64s(&sample["tau_rnea"]), &mut acc)
+            .unwrap();
+        for (k, a) in ddq.iter().enumerate() {
+            w_fd.see(acc[k], *a, || format!("sample {s} joint {k}"));
         }
     }
     w_tau.check("inverse dynamics vs tau_rnea");
     w_m.check("mass matrix vs crba");
     w_g.check("gravity torque vs computeGeneralizedGravity");
-    w_nle.check("inverse dynamics with ddq = 0 vs nonLinearEffects");
+    w_nle.check("nonlinear effects vs nonLinearEffects");
+    w_id0.check("inverse dynamics with ddq = 0 vs nonLinearEffects");
+    w_fd.check("forward dynamics of tau_rnea");
 }
 
 /// Barycentric parameters of a body moved from a child frame into its parent frame,
