@@ -289,7 +289,8 @@ fn cable_fit_prints_a_description_line() {
             (1.0 - (i - 500) as f64 / 250.0, -1.0)
         };
         let tau = poly[0] * x * x + poly[1] * x + poly[2] + 0.03 * dir;
-        text += &format!("{x},0,{tau}\n");
+        // Position, velocity (the sweep's direction: cable-fit checks it reverses), torque.
+        text += &format!("{x},{},{tau}\n", 0.1 * dir);
     }
     std::fs::write(&sweep, text).unwrap();
     let (ok, stdout, err) = run(&[
