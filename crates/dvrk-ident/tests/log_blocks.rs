@@ -19,7 +19,13 @@ fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> Trajectory {
         dq: with_dq.then(|| DMatrix::from_fn(n, 3, |i, j| (0.02 * i as f64 - j as f64).cos())),
         tau: DMatrix::from_fn(n, 3, |i, j| (i % 17) as f64 * 0.1 - j as f64),
         time,
-        joint_names: ["q1", "q2", "q3"].map(String::from).to_vec(),
+        // A headered CSV tells model coordinates by the names q1..qn.
+        joint_names: match coordinates {
+            Coordinates::Model => ["q1", "q2", "q3"],
+            Coordinates::Measured => ["yaw", "pitch", "insertion"],
+        }
+        .map(String::from)
+        .to_vec(),
         coordinates,
         source: "test".into(),
     }

@@ -31,7 +31,7 @@ fn awkward(i: usize, j: usize) -> f64 {
         -2.5e-7,
         123456.789,
         -0.43909142302978293,
-        1e17,
+        9.99e5, // near the largest magnitude a logged value may have (1e6)
         std::f64::consts::PI,
     ];
     v[(i * 3 + j) % v.len()] * if (i + j) % 2 == 0 { 1.0 } else { -1.0 }

@@ -21,7 +21,13 @@ use dvrk_ident::fit;
 use protocol_2019::{Protocol, MTM, PSM};
 use serde::{Deserialize, Serialize};
 
-const BASE_RELATIVE_TOLERANCE: f64 = 1e-6;
+/// The switch from OpenBLAS to the faer layer alone moved the base parameters by at most
+/// 1.2e-8 relative (measured when it landed). Changes since in the model's arithmetic
+/// (libm's sines and cosines, bodies with fixed links merged) perturb the data at the
+/// last bits, and the PSM's semidefinite solution moves 4.8e-5 relative along directions
+/// the data hardly determine (its test errors by 2.6e-7): the bound guards against a
+/// broken solve, not against rounding.
+const BASE_RELATIVE_TOLERANCE: f64 = 1e-4;
 const TEST_ERROR_TOLERANCE: f64 = 1e-4;
 
 /// One recorded fit.
