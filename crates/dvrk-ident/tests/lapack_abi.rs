@@ -823,15 +823,13 @@ fn assert_triangle<T: Scalar>(
     scale: f64,
     what: &str,
 ) {
-    let n = c.rows;
-    for i in 0..n {
-        for j in 0..n {
+    for (i, row) in expected.iter().enumerate() {
+        for (j, e) in row.iter().enumerate() {
             let v = c.get(i, j);
             if (upper && i <= j) || (!upper && i >= j) {
                 assert!(
-                    (v - expected[i][j]).abs() <= T::TOL * scale.max(1.0),
-                    "{what}: ({i}, {j}) {v} vs {}",
-                    expected[i][j]
+                    (v - e).abs() <= T::TOL * scale.max(1.0),
+                    "{what}: ({i}, {j}) {v} vs {e}"
                 );
             } else {
                 assert_eq!(v, SENTINEL, "{what}: other triangle ({i}, {j}) written");
@@ -1759,6 +1757,99 @@ fn illegal_argument_cases<T: Scalar>() {
     );
 }
 
+/// Empty problems: quick returns with `info = 0`, nothing written (the arrays hold the
+/// sentinel), LAPACK's workspace query answering 1.
+fn empty_cases<T: Scalar>() {
+    let s = T::of(SENTINEL);
+    let one = T::of(1.0);
+    let mut out = vec![s; 4];
+    let a = vec![one; 4];
+    let mut info = 9;
+    let untouched = |out: &[T], what: &str| assert!(out.iter().all(|x| *x == s), "{what}");
+    unsafe {
+        T::gemv(b'T', 0, 3, one, &a, 1, &a, 1, T::of(0.0), &mut out, 1);
+        untouched(&out, "gemv m = 0");
+        T::symv(b'L', 0, one, &a, 1, &a, 1, T::of(0.0), &mut out, 1);
+        untouched(&out, "symv n = 0");
+        T::syrk(b'U', b'N', 0, 2, one, &a, 1, T::of(0.0), &mut out, 1);
+        T::syr2k(b'L', b'T', 0, 2, one, &a, 2, &a, 2, T::of(0.0), &mut out, 1);
+        untouched(&out, "syrk/syr2k n = 0");
+        T::potrs(b'U', 0, 2, &a, 1, &mut out, 1, &mut info);
+        assert_eq!(info, 0);
+        T::potrs(b'U', 2, 0, &a, 2, &mut out, 2, &mut info);
+        assert_eq!(info, 0);
+        let mut ipiv = vec![-5; 2];
+        T::gesv(0, 1, &mut out, 1, &mut ipiv, &mut [], 1, &mut info);
+        assert_eq!(info, 0);
+        untouched(&out, "potrs/gesv empty");
+        assert_eq!(ipiv, vec![-5, -5]);
+        for (m, n) in [(0, 3), (3, 0)] {
+            let (mut u, mut vt) = (vec![s; 9], vec![s; 9]);
+            let mut work = vec![T::of(0.0); 1];
+            let mut iwork = vec![-5; 1];
+            let mut sv: Vec<T> = Vec::new();
+            T::gesdd(
+                b'S',
+                m,
+                n,
+                &mut out,
+                m.max(1),
+                &mut sv,
+                &mut u,
+                m.max(1),
+                &mut vt,
+                1,
+                &mut work,
+                -1,
+                &mut iwork,
+                &mut info,
+            );
+            assert_eq!(
+                (info, work[0].f(), iwork[0]),
+                (0, 1.0, -5),
+                "gesdd {m}x{n} query"
+            );
+            T::gesdd(
+                b'S',
+                m,
+                n,
+                &mut out,
+                m.max(1),
+                &mut sv,
+                &mut u,
+                m.max(1),
+                &mut vt,
+                1,
+                &mut work,
+                1,
+                &mut iwork,
+                &mut info,
+            );
+            assert_eq!(info, 0);
+            T::gesvd(
+                b'A',
+                b'A',
+                m,
+                n,
+                &mut out,
+                m.max(1),
+                &mut sv,
+                &mut u,
+                m.max(1),
+                &mut vt,
+                n.max(1),
+                &mut work,
+                1,
+                &mut info,
+            );
+            assert_eq!(info, 0);
+            untouched(&u, "gesdd/gesvd empty U");
+            untouched(&vt, "gesdd/gesvd empty Vt");
+            untouched(&out, "gesdd/gesvd empty A");
+        }
+    }
+}
+
 macro_rules! both_precisions {
     ($($name:ident),*) => {
         mod f32_routines {
@@ -1780,5 +1871,6 @@ both_precisions!(
     gesv_cases,
     syevr_cases,
     svd_cases,
-    illegal_argument_cases
+    illegal_argument_cases,
+    empty_cases
 );

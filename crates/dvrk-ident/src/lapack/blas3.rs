@@ -65,10 +65,14 @@ unsafe fn gemm<T: Real>(
     }
 }
 
-/// `C ← alpha·A·Aᵀ + beta·C` (`trans = 'N'`, `A` n×k) or `alpha·Aᵀ·A + beta·C` (`A`
-/// k×n), only the `uplo` triangle of `C` referenced and written.
+/// The symmetric rank updates on the `uplo` triangle of `C` (n×n), the other triangle
+/// neither read nor written: `?syrk` (`b = None`), `C ← alpha·op(A)·op(A)ᵀ + beta·C`, and
+/// `?syr2k`, `C ← alpha·(op(A)·op(B)ᵀ + op(B)·op(A)ᵀ) + beta·C`, where `op(X)` is `X`
+/// (n×k) for `trans = 'N'` and `Xᵀ` (X k×n) otherwise. Argument positions are
+/// `?syr2k`'s; `?syrk`'s after `lda` are two less (no `b`, `ldb`). Quick returns as
+/// `gemm`.
 #[allow(clippy::too_many_arguments)]
-unsafe fn syrk<T: Real>(
+unsafe fn rank_update<T: Real>(
     uplo: *const c_char,
     trans: *const c_char,
     n: *const c_int,
@@ -76,70 +80,12 @@ unsafe fn syrk<T: Real>(
     alpha: *const T,
     a: *const T,
     lda: *const c_int,
+    b: Option<(*const T, *const c_int)>,
     beta: *const T,
     c: *mut T,
     ldc: *const c_int,
 ) -> Result<(), Illegal> {
-    // SAFETY: as in `gemm`.
-    unsafe {
-        let up = upper(uplo, 1)?;
-        let t = transposed(trans, 2)?;
-        let n = dim(n, 3)?;
-        let k = dim(k, 4)?;
-        let (a_rows, a_cols) = if t { (k, n) } else { (n, k) };
-        let lda = leading(lda, 7, a_rows)?;
-        let ldc = leading(ldc, 10, n)?;
-        if n == 0 {
-            return Ok(());
-        }
-        let alpha = scalar(alpha, 5)?;
-        let beta = scalar(beta, 8)?;
-        let no_product = alpha == T::zero() || k == 0;
-        if no_product && beta == T::one() {
-            return Ok(());
-        }
-        let mut c = mat_mut(c, n, n, ldc, 9)?;
-        let (part, structure) = triangle(up);
-        if no_product {
-            scale(c, beta, part);
-            return Ok(());
-        }
-        // op(A) is n×k either way: C ← alpha·op(A)·op(A)ᵀ.
-        let a = op(mat_ref(a, a_rows, a_cols, lda, 6)?, t);
-        let accum = accumulate(c.rb_mut(), beta, part);
-        triangular::matmul(
-            c,
-            structure,
-            accum,
-            a,
-            BlockStructure::Rectangular,
-            a.transpose(),
-            BlockStructure::Rectangular,
-            alpha,
-            Par::Seq,
-        );
-        Ok(())
-    }
-}
-
-/// `C ← alpha·(A·Bᵀ + B·Aᵀ) + beta·C` (`trans = 'N'`, `A`, `B` n×k) or
-/// `alpha·(Aᵀ·B + Bᵀ·A) + beta·C` (k×n), only the `uplo` triangle of `C` referenced
-/// and written.
-#[allow(clippy::too_many_arguments)]
-unsafe fn syr2k<T: Real>(
-    uplo: *const c_char,
-    trans: *const c_char,
-    n: *const c_int,
-    k: *const c_int,
-    alpha: *const T,
-    a: *const T,
-    lda: *const c_int,
-    b: *const T,
-    ldb: *const c_int,
-    beta: *const T,
-    c: *mut T,
-    ldc: *const c_int,
-) -> Result<(), Illegal> {
+    let shift = if b.is_some() { 0 } else { -2 };
     // SAFETY: as in `gemm`.
     unsafe {
         let up = upper(uplo, 1)?;
@@ -148,27 +94,40 @@ unsafe fn syr2k<T: Real>(
         let k = dim(k, 4)?;
         let (rows, cols) = if t { (k, n) } else { (n, k) };
         let lda = leading(lda, 7, rows)?;
-        let ldb = leading(ldb, 9, rows)?;
-        let ldc = leading(ldc, 12, n)?;
+        let ldb = match b {
+            Some((_, ldb)) => leading(ldb, 9, rows)?,
+            None => lda,
+        };
+        let ldc = leading(ldc, 12 + shift, n)?;
         if n == 0 {
             return Ok(());
         }
         let alpha = scalar(alpha, 5)?;
-        let beta = scalar(beta, 10)?;
+        let beta = scalar(beta, 10 + shift)?;
         let no_product = alpha == T::zero() || k == 0;
         if no_product && beta == T::one() {
             return Ok(());
         }
-        let mut c = mat_mut(c, n, n, ldc, 11)?;
-        let (part, structure) = triangle(up);
+        let mut c = mat_mut(c, n, n, ldc, 11 + shift)?;
+        let (part, structure) = if up {
+            (Part::Upper, BlockStructure::TriangularUpper)
+        } else {
+            (Part::Lower, BlockStructure::TriangularLower)
+        };
         if no_product {
             scale(c, beta, part);
             return Ok(());
         }
         let a = op(mat_ref(a, rows, cols, lda, 6)?, t);
-        let b = op(mat_ref(b, rows, cols, ldb, 8)?, t);
-        let accum = accumulate(c.rb_mut(), beta, part);
-        for (x, y, accum) in [(a, b, accum), (b, a, Accum::Add)] {
+        let terms = match b {
+            Some((b, _)) => {
+                let b = op(mat_ref(b, rows, cols, ldb, 8)?, t);
+                vec![(a, b), (b, a)]
+            }
+            None => vec![(a, a)],
+        };
+        let mut accum = accumulate(c.rb_mut(), beta, part);
+        for (x, y) in terms {
             triangular::matmul(
                 c.rb_mut(),
                 structure,
@@ -180,6 +139,7 @@ unsafe fn syr2k<T: Real>(
                 alpha,
                 Par::Seq,
             );
+            accum = Accum::Add;
         }
         Ok(())
     }
@@ -191,15 +151,6 @@ fn op<T>(a: MatRef<'_, T>, transposed: bool) -> MatRef<'_, T> {
         a.transpose()
     } else {
         a
-    }
-}
-
-/// The updated part of `C` for `uplo`, as this module and faer name it.
-fn triangle(upper: bool) -> (Part, BlockStructure) {
-    if upper {
-        (Part::Upper, BlockStructure::TriangularUpper)
-    } else {
-        (Part::Lower, BlockStructure::TriangularLower)
     }
 }
 
@@ -240,7 +191,7 @@ export_gemm!(dgemm_, f64, "DGEMM");
 
 macro_rules! export_syrk {
     ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric rank-k update (see `syrk`).")]
+        #[doc = concat!("`", $routine, "`: symmetric rank-k update (see `rank_update`).")]
         ///
         /// # Safety
         /// As [`dgemm_`].
@@ -259,7 +210,8 @@ macro_rules! export_syrk {
             ldc: *const c_int,
         ) {
             // SAFETY: forwarded contract.
-            let result = unsafe { syrk::<$T>(uplo, trans, n, k, alpha, a, lda, beta, c, ldc) };
+            let result =
+                unsafe { rank_update::<$T>(uplo, trans, n, k, alpha, a, lda, None, beta, c, ldc) };
             blas_done($routine, result);
         }
     };
@@ -270,7 +222,7 @@ export_syrk!(dsyrk_, f64, "DSYRK");
 
 macro_rules! export_syr2k {
     ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric rank-2k update (see `syr2k`).")]
+        #[doc = concat!("`", $routine, "`: symmetric rank-2k update (see `rank_update`).")]
         ///
         /// # Safety
         /// As [`dgemm_`].
@@ -291,8 +243,21 @@ macro_rules! export_syr2k {
             ldc: *const c_int,
         ) {
             // SAFETY: forwarded contract.
-            let result =
-                unsafe { syr2k::<$T>(uplo, trans, n, k, alpha, a, lda, b, ldb, beta, c, ldc) };
+            let result = unsafe {
+                rank_update::<$T>(
+                    uplo,
+                    trans,
+                    n,
+                    k,
+                    alpha,
+                    a,
+                    lda,
+                    Some((b, ldb)),
+                    beta,
+                    c,
+                    ldc,
+                )
+            };
             blas_done($routine, result);
         }
     };
