@@ -487,6 +487,34 @@ pub struct Model {
     pub(crate) post_identity: Vec<(bool, bool)>,
     /// The moving frames that carry link dynamics, parents first (see [`Body`]).
     pub(crate) bodies: Vec<Body>,
+    /// The regressor's link blocks (see [`RegressorPlan`]).
+    pub(crate) regressor_plan: RegressorPlan,
+}
+
+/// Where the link columns of the regressor come from: for each moving frame `k`, each
+/// link `j` of its subtree adds `a·S_kᵀ·Y_j` to row `c` for each term `a·q_c` of `k`'s
+/// joint value. The first addition to a (row, link) block writes it instead, and only
+/// the entries no link block writes are zeroed: most of a regressor row is link blocks.
+#[derive(Clone, Debug, Default)]
+pub(crate) struct RegressorPlan {
+    pub frames: Vec<PlanFrame>,
+    /// Per row (coordinate), the first columns of the link blocks written, increasing.
+    pub blocks: Vec<Vec<usize>>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct PlanFrame {
+    pub frame: usize,
+    pub links: Vec<PlanLink>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct PlanLink {
+    /// Link frame and the column of its `L{j}xx`.
+    pub link: usize,
+    pub col0: usize,
+    /// `(row, a, write rather than add)` per term `a·q_row` of the joint value.
+    pub targets: Vec<(usize, f64, bool)>,
 }
 
 /// A moving frame with link dynamics in its subtree, and the links rigidly attached to
@@ -791,7 +819,43 @@ impl Model {
             }))
             .collect();
         self.bodies = self.derive_bodies();
+        self.regressor_plan = self.derive_regressor_plan();
         self
+    }
+
+    /// The regressor's plan (see [`RegressorPlan`]), in the order the regressor adds.
+    fn derive_regressor_plan(&self) -> RegressorPlan {
+        let mut written = std::collections::BTreeSet::new();
+        let frames = self
+            .active
+            .iter()
+            .filter(|&&k| self.frames[k - 1].kind != JointKind::Fixed)
+            .map(|&k| PlanFrame {
+                frame: k,
+                links: self.subtree_links[k]
+                    .iter()
+                    .map(|&j| {
+                        let col0 = self.frames[j - 1].inertia.expect("link frame");
+                        let targets = self.frames[k - 1]
+                            .value
+                            .terms
+                            .iter()
+                            .map(|&(c, a)| (c, a, written.insert((c, col0))))
+                            .collect();
+                        PlanLink {
+                            link: j,
+                            col0,
+                            targets,
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        let mut blocks = vec![Vec::new(); self.dof()];
+        for (c, col0) in written {
+            blocks[c].push(col0);
+        }
+        RegressorPlan { frames, blocks }
     }
 
     /// The bodies of the tree (see [`Body`]), from `active` and `fixed`.

@@ -1,14 +1,17 @@
 //! The regressor `H(q, q̇, q̈)` with `τ = H·π`, linear in all parameters.
 //!
-//! Link columns: each link's 6×10 body regressor (spatial force as a linear function of
-//! its barycentric parameters) is expressed in base coordinates; the tree joint `k`
-//! collects `S_kᵀ·Y_j` over the links `j` of its subtree, and `Aᵀ` maps tree joints to
-//! coordinates. Element columns follow `identification.md` §3.
+//! Link columns: the tree joint `k` collects `S_kᵀ·Y_j` over the links `j` of its
+//! subtree, `Y_j` the link's 6×10 body regressor (its spatial force as a linear function
+//! of its barycentric parameters), and `Aᵀ` maps tree joints to coordinates. Each
+//! `S_kᵀ·Y_j` is written out in the link's coordinates from its velocity and
+//! acceleration (`link_row`), so `Y_j` itself is never formed; the link blocks are
+//! written in place (the first one of a row) and only the rest of a row is zeroed.
+//! Element columns follow `identification.md` §3.
 
 use nalgebra::Vector3;
 
 use crate::dynamics::sign0;
-use crate::model::{JointKind, Model};
+use crate::model::Model;
 use crate::workspace::Workspace;
 
 impl Model {
@@ -49,37 +52,43 @@ impl Model {
             "q, dq and ddq must have length {n}"
         );
         assert_eq!(out.len(), n * p, "regressor buffer must have n*p entries");
-        out.fill(0.0);
+        // Zero what no link block writes.
+        for (r, row) in out.chunks_exact_mut(p).enumerate() {
+            let mut from = 0;
+            for &c in &self.regressor_plan.blocks[r] {
+                row[from..c].fill(0.0);
+                from = c + 10;
+            }
+            row[from..].fill(0.0);
+        }
         self.joint_values(ws, q, dq, ddq);
         self.active_local_transforms(ws);
         self.active_world_transforms(ws);
         self.forward_pass(ws, true);
 
         for &j in &self.links {
-            link_block(ws, j);
+            let (w, v) = (ws.w[j], ws.v[j]);
+            ws.ac[j] = ws.a[j] + w.cross(&v);
         }
-        for &k in &self.active {
-            let f = &self.frames[k - 1];
-            if f.kind == JointKind::Fixed {
-                continue;
-            }
-            let (sw, sv) = &self.motion[k];
-            let pose = &ws.world[k];
+        for plan in &self.regressor_plan.frames {
+            let (sw, sv) = &self.motion[plan.frame];
+            let pose = &ws.world[plan.frame];
             let w0 = pose.rotation * sw;
             let v0 = pose.rotation * sv + pose.translation.cross(&w0);
-            let s6 = [w0[0], w0[1], w0[2], v0[0], v0[1], v0[2]];
-            for &j in &self.subtree_links[k] {
-                let col0 = self.frames[j - 1].inertia.expect("link frame");
-                let y = &ws.yb[j];
-                let mut row = [0.0; 10];
-                for (c, r) in row.iter_mut().enumerate() {
-                    let yc = &y[6 * c..6 * c + 6];
-                    *r = s6.iter().zip(yc).map(|(a, b)| a * b).sum();
-                }
-                for &(coord, a) in &f.value.terms {
-                    let dst = &mut out[coord * p + col0..coord * p + col0 + 10];
-                    for (d, r) in dst.iter_mut().zip(&row) {
-                        *d += a * r;
+            for link in &plan.links {
+                let (row, col0) = (link_row(ws, link.link, &w0, &v0), link.col0);
+                for &(coord, a, write) in &link.targets {
+                    let dst: &mut [f64; 10] = (&mut out[coord * p + col0..coord * p + col0 + 10])
+                        .try_into()
+                        .expect("10 columns");
+                    if write {
+                        for (d, r) in dst.iter_mut().zip(&row) {
+                            *d = a * r;
+                        }
+                    } else {
+                        for (d, r) in dst.iter_mut().zip(&row) {
+                            *d += a * r;
+                        }
                     }
                 }
             }
@@ -128,41 +137,32 @@ impl Model {
     }
 }
 
-/// Link `j`'s 6×10 regressor block in base coordinates about the base origin, into
-/// `ws.yb[j]` (column c = the spatial force (n; f) per unit of parameter c).
-#[inline]
-fn link_block(ws: &mut Workspace, j: usize) {
-    let (w, v, dw) = (ws.w[j], ws.v[j], ws.dw[j]);
-    let ac = ws.a[j] + w.cross(&v);
-    let pose = ws.world[j];
-    let mut cols = [(Vector3::zeros(), Vector3::zeros()); 10];
-    // Inertia about the origin: n = K(ω̇)·L + ω × K(ω)·L, where K(x)·L = L x.
-    let kcol = |x: &Vector3<f64>, c: usize| -> Vector3<f64> {
-        match c {
-            0 => Vector3::new(x[0], 0.0, 0.0),
-            1 => Vector3::new(x[1], x[0], 0.0),
-            2 => Vector3::new(x[2], 0.0, x[0]),
-            3 => Vector3::new(0.0, x[1], 0.0),
-            4 => Vector3::new(0.0, x[2], x[1]),
-            _ => Vector3::new(0.0, 0.0, x[2]),
-        }
-    };
-    for (c, col) in cols.iter_mut().enumerate().take(6) {
-        col.0 = kcol(&dw, c) + w.cross(&kcol(&w, c));
-    }
-    // First moment: n = l × a_c, f = ω̇ × l + ω × (ω × l).
-    for (axis, col) in cols.iter_mut().skip(6).take(3).enumerate() {
-        let e = Vector3::ith(axis, 1.0);
-        col.0 = e.cross(&ac);
-        col.1 = dw.cross(&e) + w.cross(&w.cross(&e));
-    }
-    // Mass: f = m·a_c.
-    cols[9].1 = ac;
-    let y = &mut ws.yb[j];
-    for (c, (nb, fb)) in cols.iter().enumerate() {
-        let f0 = pose.rotation * fb;
-        let n0 = pose.rotation * nb + pose.translation.cross(&f0);
-        y[6 * c..6 * c + 3].copy_from_slice(n0.as_slice());
-        y[6 * c + 3..6 * c + 6].copy_from_slice(f0.as_slice());
-    }
+/// The regressor row of link `j`'s ten parameters for a joint whose unit motion is
+/// `(w0, v0)` in the base frame (rad/s, m/s, about the base origin): the power
+/// `Sᵀ·Y_j` of the link's spatial force per unit parameter, written out in the link's
+/// coordinates with `s = (sω, sv)` the joint's motion there. Inertia about the origin:
+/// `n = L·ω̇ + ω × L·ω` gives `sωᵀ·L·ω̇ + (sω × ω)ᵀ·L·ω`; first moment: `n = l × a_c`,
+/// `f = ω̇ × l + ω × (ω × l)` give `l·(a_c × sω + sv × ω̇ + ω (ω·sv) − sv |ω|²)`; mass:
+/// `f = m·a_c` gives `sv·a_c`.
+#[inline(always)]
+fn link_row(ws: &Workspace, j: usize, w0: &Vector3<f64>, v0: &Vector3<f64>) -> [f64; 10] {
+    let pose = &ws.world[j];
+    let rt = pose.rotation.transpose();
+    let s_w = rt * w0;
+    let s_v = rt * (v0 + w0.cross(&pose.translation));
+    let (w, dw, ac) = (&ws.w[j], &ws.dw[j], &ws.ac[j]);
+    let u = s_w.cross(w);
+    let lin = ac.cross(&s_w) + s_v.cross(dw) + w * w.dot(&s_v) - s_v * w.dot(w);
+    [
+        s_w[0] * dw[0] + u[0] * w[0],
+        s_w[0] * dw[1] + s_w[1] * dw[0] + u[0] * w[1] + u[1] * w[0],
+        s_w[0] * dw[2] + s_w[2] * dw[0] + u[0] * w[2] + u[2] * w[0],
+        s_w[1] * dw[1] + u[1] * w[1],
+        s_w[1] * dw[2] + s_w[2] * dw[1] + u[1] * w[2] + u[2] * w[1],
+        s_w[2] * dw[2] + u[2] * w[2],
+        lin[0],
+        lin[1],
+        lin[2],
+        s_v.dot(ac),
+    ]
 }

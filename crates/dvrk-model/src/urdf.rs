@@ -364,6 +364,7 @@ impl Model {
             fixed: Vec::new(),
             post_identity: Vec::new(),
             bodies: Vec::new(),
+            regressor_plan: Default::default(),
         }
         .finish())
     }

@@ -26,9 +26,8 @@ pub struct Workspace {
     pub(crate) v: Vec<Vector3<f64>>,
     pub(crate) dw: Vec<Vector3<f64>>,
     pub(crate) a: Vec<Vector3<f64>>,
-    /// Link regressor blocks expressed in base coordinates about the base origin,
-    /// 6 rows (n; f) × 10 columns, column-major per link frame.
-    pub(crate) yb: Vec<[f64; 60]>,
+    /// Acceleration of the origin `a + ω × v` (m/s², gravity included) per link frame.
+    pub(crate) ac: Vec<Vector3<f64>>,
     /// Per body (index 0 = base, as frames): the dynamics of [`Model::inverse_dynamics`],
     /// [`Model::mass_matrix_into`] and friends run over bodies (see `model::Body`).
     pub(crate) body: BodyBuffers,
@@ -75,7 +74,7 @@ impl Workspace {
             v: vec![Vector3::zeros(); nf],
             dw: vec![Vector3::zeros(); nf],
             a: vec![Vector3::zeros(); nf],
-            yb: vec![[0.0; 60]; nf],
+            ac: vec![Vector3::zeros(); nf],
             body: BodyBuffers::new(model.bodies.len() + 1, model.n_params()),
             mass: vec![0.0; n * n],
         }
