@@ -17,9 +17,16 @@ use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::Path;
 
-/// Largest record (or chunk) accepted, bytes: bounds the allocations a corrupted length
-/// field can cause.
-const RECORD_LENGTH_LIMIT: usize = 1 << 30;
+/// Largest record (or chunk, compressed or not) accepted, bytes: bounds the
+/// allocations a corrupted length field can cause (the reader reserves a chunk's
+/// uncompressed size before decompressing). rosbag2 writes chunks of under 1 MiB and the
+/// `mcap` tool 4 MiB; a camera image is tens of MiB.
+const RECORD_LENGTH_LIMIT: usize = 256 << 20;
+
+/// Most bytes handed to the reader per read: it grows its buffer by what it is given,
+/// so a record's claimed length is only allocated as its bytes really arrive (a 7 kB
+/// file claiming a 539 MB record made it allocate 539 MB at once).
+const READ_PIECE: usize = 1 << 16;
 
 /// A channel with its schema's name and encoding.
 #[derive(Debug)]
@@ -104,7 +111,7 @@ impl Scanner {
         while let Some(event) = self.reader.next_event() {
             match event.map_err(|e| container(e, self.bytes_read))? {
                 LinearReadEvent::ReadRequest(need) => {
-                    let buf = self.reader.insert(need);
+                    let buf = self.reader.insert(need.min(READ_PIECE));
                     let n = loop {
                         match self.src.read(buf) {
                             Ok(n) => break n,
