@@ -130,6 +130,24 @@ impl Scanner {
                 LinearReadEvent::Record { opcode, data } => match opcode {
                     op::DATA_END => self.past_data_end = true,
                     op::SCHEMA | op::CHANNEL | op::MESSAGE => {
+                        if !lengths_fit(opcode, data) {
+                            return Err(mcap_error(
+                                path,
+                                None,
+                                McapProblem::Container {
+                                    reason: format!(
+                                        "corrupted file: a length inside a {} record runs \
+                                         past its end (about byte {})",
+                                        if opcode == op::SCHEMA {
+                                            "schema"
+                                        } else {
+                                            "channel"
+                                        },
+                                        self.bytes_read
+                                    ),
+                                },
+                            ));
+                        }
                         let record = ::mcap::parse_record(opcode, data)
                             .map_err(|e| container(e, self.bytes_read))?;
                         match record {
@@ -222,6 +240,53 @@ pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem)
         topic: topic.map(str::to_owned),
         problem: Box::new(problem),
     }
+}
+
+/// Whether every length-prefixed string, map and byte array of a schema or channel
+/// record fits in the record. The `mcap` crate (0.26) reserves a string's claimed length
+/// before reading it, so a corrupted length inside a small record allocated gigabytes
+/// (found by fuzzing, `fuzz/seeds/mcap/oom-string-length-3GB.mcap`). Other records have
+/// no such field.
+fn lengths_fit(opcode: u8, data: &[u8]) -> bool {
+    struct Cursor<'a>(&'a [u8]);
+    impl Cursor<'_> {
+        fn skip(&mut self, n: usize) -> Option<()> {
+            self.0 = self.0.get(n..)?;
+            Some(())
+        }
+        /// A u32 length and that many bytes.
+        fn prefixed(&mut self) -> Option<&[u8]> {
+            let len = u32::from_le_bytes(self.0.get(..4)?.try_into().ok()?) as usize;
+            let rest = self.0.get(4..)?;
+            let (inner, after) = (rest.get(..len)?, rest.get(len..)?);
+            self.0 = after;
+            Some(inner)
+        }
+    }
+    let mut c = Cursor(data);
+    let fits = match opcode {
+        // id; name; encoding; data
+        op::SCHEMA => (|| {
+            c.skip(2)?;
+            c.prefixed()?;
+            c.prefixed()?;
+            c.prefixed().map(|_| ())
+        })(),
+        // id, schema id; topic; message encoding; metadata map of strings
+        op::CHANNEL => (|| {
+            c.skip(4)?;
+            c.prefixed()?;
+            c.prefixed()?;
+            let mut map = Cursor(c.prefixed()?);
+            while !map.0.is_empty() {
+                map.prefixed()?;
+                map.prefixed()?;
+            }
+            Some(())
+        })(),
+        _ => Some(()),
+    };
+    fits.is_some()
 }
 
 /// Says what a container error means for a user.
