@@ -226,8 +226,11 @@ pub fn limits(data: &[u8]) {
     }
 }
 
+/// A target's body: runs one input.
+pub type Target = fn(&[u8]);
+
 /// The targets by name (the folders of `fuzz/seeds`).
-pub const TARGETS: [(&str, fn(&[u8])); 8] = [
+pub const TARGETS: [(&str, Target); 8] = [
     ("description", description),
     ("urdf", urdf),
     ("csv_headered", csv_headered),

@@ -209,7 +209,7 @@ pub fn fit_cable(
             (polyval(&polynomial, q[i]) - exact).abs()
         })
         .fold(0.0, f64::max);
-    if !(expansion_error <= 1e-6 * scale) {
+    if expansion_error.is_nan() || expansion_error > 1e-6 * scale {
         return Err(err(format!(
             "degree {}: in powers of the position the polynomial differs from the fit by up \
              to {expansion_error:.3e} N·m over the sweep (torques up to {scale:.3e} N·m): \

@@ -21,7 +21,7 @@ use proptest::test_runner::{Config, RngSeed};
 fn config(cases: u32) -> Config {
     Config {
         cases,
-        rng_seed: RngSeed::Fixed(0x5eed_19),
+        rng_seed: RngSeed::Fixed(0x005e_ed19),
         failure_persistence: None,
         ..Config::default()
     }

@@ -68,7 +68,7 @@ fn margin_for(poles: usize, radius: f64, tolerance: f64) -> usize {
         return 0;
     }
     let log_r = radius.ln();
-    if !(log_r < 0.0) {
+    if log_r.is_nan() || log_r >= 0.0 {
         return MAX_MARGIN;
     }
     let target = tolerance.ln() - poles as f64 * std::f64::consts::LN_2;
