@@ -119,6 +119,9 @@ impl LogReader {
             block: block_samples.max(1),
             last: None,
             done: false,
+            rows: 0,
+            last_time: None,
+            path: self.path.clone(),
         })
     }
 
@@ -181,6 +184,10 @@ pub struct LogBlocks<'a> {
     /// The last block read, for the resampler's last samples.
     last: Option<Trajectory>,
     done: bool,
+    path: PathBuf,
+    /// Samples read and the last time, to validate the blocks as parts of one log.
+    rows: usize,
+    last_time: Option<f64>,
 }
 
 impl LogBlocks<'_> {
@@ -192,6 +199,16 @@ impl LogBlocks<'_> {
                 Source::Mcap(b) => b.next().transpose()?,
             };
             let Some(r) = &mut self.resampler else {
+                // Every sample a reader gives is valid (in range, time increasing): the
+                // resampler checks its input itself.
+                if let Some(block) = &raw {
+                    let path = self.path.clone();
+                    block
+                        .validate_rows(self.rows, self.last_time)
+                        .map_err(|source| LogError::Samples { path, source })?;
+                    self.rows += block.len();
+                    self.last_time = block.time.last().copied().or(self.last_time);
+                }
                 return Ok(raw);
             };
             let out = match raw {
@@ -272,7 +289,7 @@ impl BlockResampler {
     pub(crate) fn push(&mut self, block: &Trajectory) -> Result<Trajectory, LogError> {
         block
             .validate_rows(self.rows, self.last_time)
-            .map_err(|source| LogError::Invalid {
+            .map_err(|source| LogError::Samples {
                 path: self.path.clone(),
                 source,
             })?;

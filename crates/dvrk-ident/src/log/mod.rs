@@ -322,6 +322,17 @@ pub enum LogError {
         #[source]
         source: crate::signal::SignalError,
     },
+    /// Samples the reader parsed but refuses: a value beyond its signal's range
+    /// ([`crate::trajectory::Signal::max_magnitude`]) or time not increasing (the
+    /// message names the file, the signal, the joint and the sample).
+    #[error("{source}")]
+    Samples {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        #[source]
+        source: TrajectoryError,
+    },
     /// The trajectory to write is invalid.
     #[error("{}: cannot write an invalid trajectory: {source}", path.display())]
     Invalid {
@@ -384,7 +395,7 @@ pub fn read_with(
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
 /// interpolation: what `--resample` does for logs read without MCAP's own resampling.
 pub fn resample(path: &Path, traj: Trajectory, hz: f64) -> Result<Trajectory, LogError> {
-    traj.validate().map_err(|source| LogError::Invalid {
+    traj.validate().map_err(|source| LogError::Samples {
         path: path.to_path_buf(),
         source,
     })?;

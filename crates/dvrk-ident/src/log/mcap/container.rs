@@ -27,9 +27,16 @@ use super::bag::{Bag, BagFile, Packing, Storage, Unpacker};
 use super::ros1::Ros1File;
 use super::sqlite::SqliteFile;
 
-/// Largest record (or chunk) accepted, bytes: bounds the allocations a corrupted length
-/// field can cause.
-const RECORD_LENGTH_LIMIT: usize = 1 << 30;
+/// Largest record (or chunk, compressed or not) accepted, bytes: bounds the
+/// allocations a corrupted length field can cause (the reader reserves a chunk's
+/// uncompressed size before decompressing). rosbag2 writes chunks of under 1 MiB and the
+/// `mcap` tool 4 MiB; a camera image is tens of MiB.
+const RECORD_LENGTH_LIMIT: usize = 256 << 20;
+
+/// Most bytes handed to the reader per read: it grows its buffer by what it is given,
+/// so a record's claimed length is only allocated as its bytes really arrive (a 7 kB
+/// file claiming a 539 MB record made it allocate 539 MB at once).
+const READ_PIECE: usize = 1 << 16;
 
 /// A channel with its schema's name and encoding.
 #[derive(Debug)]
@@ -282,7 +289,7 @@ impl McapFile {
             };
             match event.map_err(|e| container(e, self.bytes_read))? {
                 LinearReadEvent::ReadRequest(need) => {
-                    let buf = self.reader.insert(need);
+                    let buf = self.reader.insert(need.min(READ_PIECE));
                     let n = loop {
                         match self.src.read(buf) {
                             Ok(n) => break n,
@@ -313,6 +320,24 @@ impl McapFile {
                 LinearReadEvent::Record { opcode, data } => match opcode {
                     op::DATA_END => self.past_data_end = true,
                     op::SCHEMA | op::CHANNEL | op::MESSAGE => {
+                        if !lengths_fit(opcode, data) {
+                            return Err(mcap_error(
+                                path,
+                                None,
+                                McapProblem::Container {
+                                    reason: format!(
+                                        "corrupted file: a length inside a {} record runs \
+                                         past its end (about byte {})",
+                                        if opcode == op::SCHEMA {
+                                            "schema"
+                                        } else {
+                                            "channel"
+                                        },
+                                        self.bytes_read
+                                    ),
+                                },
+                            ));
+                        }
                         let record = ::mcap::parse_record(opcode, data)
                             .map_err(|e| container(e, self.bytes_read))?;
                         match record {
@@ -383,6 +408,53 @@ pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem)
         topic: topic.map(str::to_owned),
         problem: Box::new(problem),
     }
+}
+
+/// Whether every length-prefixed string, map and byte array of a schema or channel
+/// record fits in the record. The `mcap` crate (0.26) reserves a string's claimed length
+/// before reading it, so a corrupted length inside a small record allocated gigabytes
+/// (found by fuzzing, `fuzz/seeds/mcap/oom-string-length-3GB.mcap`). Other records have
+/// no such field.
+fn lengths_fit(opcode: u8, data: &[u8]) -> bool {
+    struct Cursor<'a>(&'a [u8]);
+    impl Cursor<'_> {
+        fn skip(&mut self, n: usize) -> Option<()> {
+            self.0 = self.0.get(n..)?;
+            Some(())
+        }
+        /// A u32 length and that many bytes.
+        fn prefixed(&mut self) -> Option<&[u8]> {
+            let len = u32::from_le_bytes(self.0.get(..4)?.try_into().ok()?) as usize;
+            let rest = self.0.get(4..)?;
+            let (inner, after) = (rest.get(..len)?, rest.get(len..)?);
+            self.0 = after;
+            Some(inner)
+        }
+    }
+    let mut c = Cursor(data);
+    let fits = match opcode {
+        // id; name; encoding; data
+        op::SCHEMA => (|| {
+            c.skip(2)?;
+            c.prefixed()?;
+            c.prefixed()?;
+            c.prefixed().map(|_| ())
+        })(),
+        // id, schema id; topic; message encoding; metadata map of strings
+        op::CHANNEL => (|| {
+            c.skip(4)?;
+            c.prefixed()?;
+            c.prefixed()?;
+            let mut map = Cursor(c.prefixed()?);
+            while !map.0.is_empty() {
+                map.prefixed()?;
+                map.prefixed()?;
+            }
+            Some(())
+        })(),
+        _ => Some(()),
+    };
+    fits.is_some()
 }
 
 /// Says what a container error means for a user.

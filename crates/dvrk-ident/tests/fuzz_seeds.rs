@@ -1,0 +1,77 @@
+//! The fuzz corpus as a regression test on stable Rust: every committed seed and crash
+//! reproducer (`fuzz/seeds/<target>/`) goes through its fuzz target's body (the same
+//! function `cargo fuzz` runs, from `fuzz/src/lib.rs`), which panics on any broken
+//! promise: a reader that panics, a log accepted with a value out of range, a result
+//! with a non-finite number; and none may make the heap grow past [`HEAP_LIMIT`]
+//! (counted by this test's allocator: a corrupted length field must not be allocated).
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Heap allowed to one seed (all are under 20 kB; the fuzz runs' limit is 2 GB).
+const HEAP_LIMIT: usize = 16 << 20;
+
+/// The system allocator, counting the bytes in use and their peak.
+struct Counting;
+
+static IN_USE: AtomicUsize = AtomicUsize::new(0);
+static PEAK: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            let now = IN_USE.fetch_add(layout.size(), Ordering::Relaxed) + layout.size();
+            PEAK.fetch_max(now, Ordering::Relaxed);
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) };
+        IN_USE.fetch_sub(layout.size(), Ordering::Relaxed);
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Counting = Counting;
+
+#[path = "../../../fuzz/src/lib.rs"]
+#[allow(dead_code)]
+mod fuzz;
+
+#[test]
+fn every_seed_and_reproducer_passes_its_target() {
+    let seeds = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
+    let mut total = 0;
+    for (target, run) in fuzz::TARGETS {
+        let dir = seeds.join(target);
+        let mut files: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        assert!(!files.is_empty(), "no seed for {target}");
+        for f in files {
+            let name = f.file_name().unwrap().to_string_lossy().into_owned();
+            if name.starts_with("upstream-") && cfg!(debug_assertions) {
+                // A dependency's own overflow check (see fuzz/Cargo.toml): release only.
+                eprintln!("SKIPPED: {name}: an upstream overflow, checked in release builds");
+                continue;
+            }
+            let data = std::fs::read(&f).unwrap();
+            let before = IN_USE.load(Ordering::Relaxed);
+            PEAK.store(before, Ordering::Relaxed);
+            run(&data);
+            let grown = PEAK.load(Ordering::Relaxed) - before;
+            eprintln!("{target}: {}: heap peak +{grown} bytes", f.display());
+            assert!(
+                grown < HEAP_LIMIT,
+                "{target}: {}: the heap grew by {grown} bytes",
+                f.display()
+            );
+            total += 1;
+        }
+    }
+    eprintln!("{total} seeds");
+}

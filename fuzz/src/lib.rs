@@ -1,0 +1,242 @@
+//! The fuzz targets' bodies, one function per target (`fuzz_targets/*.rs` call them),
+//! and the checks every accepted input must pass. The stable test
+//! `crates/dvrk-ident/tests/fuzz_seeds.rs` includes this file and runs every committed
+//! seed and crash reproducer (`fuzz/seeds/<target>/`) through the same functions.
+//!
+//! Uses only `dvrk_model`, `dvrk_ident` and `mcap`, so that it builds in both places.
+
+use std::path::PathBuf;
+
+/// Writes `data` to this process's scratch file (in /dev/shm when there is one, so
+/// every run stays in memory) named with `extension`, and returns its path.
+pub fn scratch(data: &[u8], extension: &str) -> PathBuf {
+    let dir = if std::path::Path::new("/dev/shm").is_dir() {
+        PathBuf::from("/dev/shm")
+    } else {
+        std::env::temp_dir()
+    };
+    let path = dir.join(format!("dvrk-fuzz-{}.{extension}", std::process::id()));
+    std::fs::write(&path, data).expect("scratch file");
+    path
+}
+
+/// An accepted log holds only finite samples in the documented range, with increasing
+/// time: what every reader promises.
+pub fn check_log(t: &dvrk_ident::Trajectory) {
+    t.validate().expect("an accepted log is valid");
+}
+
+/// An accepted model evaluates to finite torques and regressors at a few states.
+pub fn check_model(model: &dvrk_model::Model) {
+    let n = model.dof();
+    let mut ws = dvrk_model::Workspace::new(model);
+    let params = vec![0.5; model.n_params()];
+    let mut tau = vec![0.0; n];
+    for scale in [0.0, 0.7, -2.0] {
+        let q: Vec<f64> = (0..n).map(|k| scale * (k as f64 + 1.0).sin()).collect();
+        let dq: Vec<f64> = (0..n).map(|k| scale * (k as f64).cos()).collect();
+        model.inverse_dynamics(&mut ws, &params, &q, &dq, &dq, &mut tau);
+        assert!(
+            tau.iter().all(|t| t.is_finite()),
+            "non-finite torque {tau:?}"
+        );
+        let h = model.regressor(&mut ws, &q, &dq, &dq);
+        assert!(h.iter().all(|x| x.is_finite()), "non-finite regressor");
+    }
+}
+
+/// Robot descriptions (TOML): never a panic; an accepted model evaluates to finite
+/// numbers.
+pub fn description(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(model) = dvrk_model::Model::from_toml_str(text, "fuzz.toml") {
+        check_model(&model);
+    }
+}
+
+/// URDF documents: never a panic; an accepted model evaluates to finite numbers and its
+/// nominal masses are finite and non-negative.
+pub fn urdf(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    if let Ok(model) = dvrk_model::Model::from_urdf_str(text, "fuzz.urdf") {
+        check_model(&model);
+        if let Some(pi) = model.nominal_parameters() {
+            for f in &model.frames {
+                if let Some(p0) = f.inertia {
+                    let s = dvrk_model::inertia::standard_from_barycentric(&pi[p0..p0 + 10]);
+                    assert!(s.mass >= 0.0 && s.mass.is_finite(), "{s:?}");
+                }
+            }
+        }
+    }
+}
+
+/// Headered CSV logs (`time, position.<joint>, velocity.<joint>, effort.<joint>`):
+/// never a panic; an accepted log is valid.
+pub fn csv_headered(data: &[u8]) {
+    let path = scratch(data, "csv");
+    if let Ok(t) = dvrk_ident::log::read(&path, Some(dvrk_ident::log::LogFormat::Csv), None) {
+        check_log(&t);
+    }
+}
+
+/// The 2019 headerless CSV layout (`q, dq, tau` columns at 200 Hz), and the format
+/// detection that chooses between the CSV layouts: never a panic; an accepted log is
+/// valid.
+pub fn csv_2019(data: &[u8]) {
+    let path = scratch(data, "csv");
+    let wpi = Some(dvrk_ident::log::LogFormat::Wpi);
+    if let Ok(t) = dvrk_ident::log::read(&path, wpi, Some(200.0)) {
+        check_log(&t);
+    }
+    if let Ok(t) = dvrk_ident::log::read(&path, None, Some(200.0)) {
+        check_log(&t);
+    }
+}
+
+/// MCAP files (container, chunks, CRCs, schemas, JointState messages) and their topic
+/// listing: never a panic; an accepted log is valid.
+pub fn mcap(data: &[u8]) {
+    let path = scratch(data, "mcap");
+    let _ = dvrk_ident::log::mcap::list_topics(&path);
+    let options = dvrk_ident::log::mcap::McapOptions::default();
+    if let Ok(t) = dvrk_ident::log::mcap::read_mcap(&path, &options) {
+        check_log(&t);
+    }
+}
+
+/// CDR payloads of sensor_msgs/msg/JointState, wrapped in a valid MCAP container so that
+/// every input reaches the message decoder: the input is split at 0xFF 0x00 0xFF into up
+/// to 16 messages, 5 ms apart. Never a panic; an accepted log is valid.
+pub fn cdr(data: &[u8]) {
+    let mut messages: Vec<&[u8]> = Vec::new();
+    let mut rest = data;
+    while messages.len() < 15 {
+        match rest.windows(3).position(|w| w == [0xFF, 0x00, 0xFF]) {
+            Some(k) => {
+                messages.push(&rest[..k]);
+                rest = &rest[k + 3..];
+            }
+            None => break,
+        }
+    }
+    messages.push(rest);
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    {
+        let mut w = mcap::WriteOptions::new()
+            .profile("ros2")
+            .compression(None)
+            .create(&mut bytes)
+            .expect("writer");
+        let schema = w
+            .add_schema(
+                dvrk_ident::log::mcap::JOINT_STATE_TYPE,
+                "ros2msg",
+                dvrk_ident::log::mcap::JOINT_STATE_SCHEMA.as_bytes(),
+            )
+            .expect("schema");
+        let channel = w
+            .add_channel(
+                schema,
+                "/arm/measured_js",
+                "cdr",
+                &std::collections::BTreeMap::new(),
+            )
+            .expect("channel");
+        for (k, m) in messages.iter().enumerate() {
+            let t = 1_000_000_000 + 5_000_000 * k as u64;
+            let header = mcap::records::MessageHeader {
+                channel_id: channel,
+                sequence: k as u32,
+                log_time: t,
+                publish_time: t,
+            };
+            w.write_to_known_channel(&header, m).expect("message");
+        }
+        w.finish().expect("finish");
+    }
+    let path = scratch(bytes.get_ref(), "mcap");
+    for time_source in [
+        dvrk_ident::log::mcap::TimeSource::HeaderStamp,
+        dvrk_ident::log::mcap::TimeSource::LogTime,
+    ] {
+        let options = dvrk_ident::log::mcap::McapOptions {
+            time_source,
+            ..Default::default()
+        };
+        if let Ok(t) = dvrk_ident::log::mcap::read_mcap(&path, &options) {
+            check_log(&t);
+        }
+    }
+}
+
+/// Result documents (`fit --out`): never a panic; an accepted result has finite numbers,
+/// and if it fits the PSM its parameters and 2019 params.json layout are finite.
+pub fn result_json(data: &[u8]) {
+    static PSM: std::sync::OnceLock<dvrk_model::Model> = std::sync::OnceLock::new();
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let Ok(result) = dvrk_ident::FitResult::from_json(text, "fuzz.json") else {
+        return;
+    };
+    result.check_finite().expect("a read result is finite");
+    let psm = PSM.get_or_init(|| dvrk_model::Model::builtin("psm").unwrap());
+    if let Ok(params) = result.params_for(psm) {
+        assert!(params.iter().all(|p| p.is_finite()));
+        let doc = dvrk_ident::result::wpi_params_json(psm, &params);
+        assert!(!doc.to_string().contains("null"), "{doc}");
+    }
+}
+
+/// Limits files (`excite --limits`: [[limits]] and [[cartesian_limits]]) on the 2-link
+/// test robot: never a panic, in reading nor in checking a trajectory against them.
+pub fn limits(data: &[u8]) {
+    use dvrk_ident::excite::{optimize, FourierTrajectory};
+    static ROBOT: std::sync::OnceLock<dvrk_model::Model> = std::sync::OnceLock::new();
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    let model = ROBOT.get_or_init(|| {
+        dvrk_model::Model::from_toml_str(
+            include_str!("../../tests/fixtures/two_link_tip.toml"),
+            "two_link_tip.toml",
+        )
+        .unwrap()
+    });
+    let Ok(limits) = optimize::Limits::from_toml_str(model, text, "fuzz.toml") else {
+        return;
+    };
+    let traj = FourierTrajectory {
+        order: 1,
+        base_frequency_hz: 1.0,
+        q0: vec![0.1, 0.5],
+        a: vec![vec![0.2], vec![0.1]],
+        b: vec![vec![0.0], vec![0.3]],
+        coordinates: Vec::new(),
+    };
+    if let Ok(f) = optimize::check_feasibility(model, &traj, &limits, 1000.0) {
+        if let Some(w) = f.worst {
+            assert!(!w.excess.is_nan(), "{w:?}");
+        }
+    }
+}
+
+/// A target's body: runs one input.
+pub type Target = fn(&[u8]);
+
+/// The targets by name (the folders of `fuzz/seeds`).
+pub const TARGETS: [(&str, Target); 8] = [
+    ("description", description),
+    ("urdf", urdf),
+    ("csv_headered", csv_headered),
+    ("csv_2019", csv_2019),
+    ("mcap", mcap),
+    ("cdr", cdr),
+    ("result_json", result_json),
+    ("limits", limits),
+];
