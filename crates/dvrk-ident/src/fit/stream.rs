@@ -35,8 +35,8 @@ use super::{
 };
 use crate::error::IdentError;
 use crate::log::LogReader;
-use crate::observation::{Observation, Samples, CHUNK_SAMPLES};
-use crate::progress::Progress;
+use crate::observation::{PerCoordinate, Samples, CHUNK_SAMPLES};
+use crate::progress::{Progress, Silent};
 use crate::result::{FitResult, Metrics};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
@@ -282,20 +282,19 @@ pub fn fit_stream(
     }
     let base = model.base_parameters()?;
     let n = model.dof();
-    let p = model.n_params();
     let started = std::time::Instant::now();
 
-    let mut parts = vec![Observation::new(p); n];
+    let mut reduction = PerCoordinate::new(model);
     let mut range = TorqueRange::new(n);
     let mut batches = Batches::new(n);
-    let add = |parts: &mut [Observation], [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
+    let add = |reduction: &mut PerCoordinate, [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
         let s = Samples {
             q: &q,
             dq: &dq,
             ddq: &ddq,
             tau: &tau,
         };
-        Observation::add_per_coordinate(parts, model, s);
+        reduction.add(model, s, &Silent);
     };
     train_log.processed(
         settings,
@@ -306,14 +305,15 @@ pub fn fit_stream(
             range.add(&block.tau);
             batches.push(block);
             if let Some(batch) = batches.take(false) {
-                add(&mut parts, batch);
+                add(&mut reduction, batch);
             }
             ControlFlow::Continue(())
         },
     )?;
     if let Some(batch) = batches.take(true) {
-        add(&mut parts, batch);
+        add(&mut reduction, batch);
     }
+    let parts = reduction.finish();
     let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
         Method::Wls | Method::Sdp => range.weights(),
