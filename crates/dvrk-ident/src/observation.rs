@@ -134,39 +134,51 @@ impl Qr {
 struct Factor {
     /// Columns seen nonzero, increasing.
     cols: Vec<usize>,
+    /// Columns that can still become nonzero (the regressor's pattern, not yet seen).
+    unseen: Vec<usize>,
     /// k×k upper triangular (k = `cols.len()`), column-major.
     r: Vec<f64>,
     rows: usize,
     /// Scratch: the factor stacked on the new rows (column-major), columns seen.
     stacked: Vec<f64>,
-    seen: Vec<bool>,
+    seen: Vec<usize>,
     qr: Qr,
 }
 
 impl Factor {
-    /// Takes the rows `rows` (each `width` = p+1 wide, full layout).
-    fn add<'a>(&mut self, rows: impl Iterator<Item = &'a [f64]> + Clone, width: usize) {
+    /// A factor for rows whose nonzero entries can only be in columns `pattern`.
+    fn new(pattern: Vec<usize>) -> Factor {
+        Factor {
+            unseen: pattern,
+            ..Factor::default()
+        }
+    }
+
+    /// Takes the rows `rows` (full layout, p+1 wide).
+    fn add<'a>(&mut self, rows: impl Iterator<Item = &'a [f64]> + Clone) {
         let count = rows.clone().count();
         if count == 0 {
             return;
         }
         // Columns newly nonzero: a zero row and column of the factor each, in order.
         self.seen.clear();
-        self.seen.resize(width, false);
-        for row in rows.clone() {
-            for (s, &x) in self.seen.iter_mut().zip(row) {
-                *s |= x != 0.0;
+        if !self.unseen.is_empty() {
+            for row in rows.clone() {
+                self.unseen.retain(|&c| {
+                    let new = row[c] != 0.0;
+                    if new {
+                        self.seen.push(c);
+                    }
+                    !new
+                });
             }
         }
-        for &c in &self.cols {
-            self.seen[c] = true;
-        }
-        let grown = self.seen.iter().filter(|&&s| s).count();
-        if grown > self.cols.len() {
-            let cols: Vec<usize> = (0..width).filter(|&c| self.seen[c]).collect();
-            let k = grown;
+        if !self.seen.is_empty() {
+            let mut cols = self.cols.clone();
+            cols.extend(&self.seen);
+            cols.sort_unstable();
+            let (old, k) = (self.cols.len(), cols.len());
             let mut r = vec![0.0; k * k];
-            let old = self.cols.len();
             let at: Vec<usize> = self
                 .cols
                 .iter()
@@ -185,11 +197,12 @@ impl Factor {
         self.stacked.clear();
         self.stacked.resize(m * k, 0.0);
         for j in 0..k {
-            let col = &mut self.stacked[j * m..(j + 1) * m];
-            col[..=j].copy_from_slice(&self.r[j * k..j * k + j + 1]);
-            let c = self.cols[j];
-            for (dst, row) in col[k..].iter_mut().zip(rows.clone()) {
-                *dst = row[c];
+            self.stacked[j * m..j * m + j + 1].copy_from_slice(&self.r[j * k..j * k + j + 1]);
+        }
+        // Row by row (each row read once), into the columns.
+        for (i, row) in rows.enumerate() {
+            for (j, &c) in self.cols.iter().enumerate() {
+                self.stacked[j * m + k + i] = row[c];
             }
         }
         let a = MatMut::from_column_major_slice_mut(&mut self.stacked, m, k);
@@ -200,7 +213,7 @@ impl Factor {
         self.rows += count;
     }
 
-    /// Takes the rows of another factor of the same columns' space.
+    /// Takes the rows of another factor of the same coordinate.
     fn merge(&mut self, other: &Factor, width: usize) {
         let k = other.cols.len();
         let rows: Vec<Vec<f64>> = (0..k)
@@ -213,7 +226,11 @@ impl Factor {
             })
             .collect();
         let rows_before = self.rows;
-        self.add(rows.iter().map(Vec::as_slice), width);
+        self.unseen
+            .extend(other.cols.iter().filter(|c| !self.cols.contains(c)));
+        self.unseen.sort_unstable();
+        self.unseen.dedup();
+        self.add(rows.iter().map(Vec::as_slice));
         self.rows = rows_before + other.rows;
     }
 
@@ -242,17 +259,28 @@ pub struct PerCoordinate {
     /// Chunks added so far, and whether the last one was partial (the end).
     chunks: usize,
     ended: bool,
+    /// The rows of the chunks in flight, reused.
+    blocks: Vec<Vec<f64>>,
 }
 
 impl PerCoordinate {
     pub fn new(model: &Model) -> Self {
         let n = model.dof();
+        let p = model.n_params();
+        let pattern = model.regressor_pattern();
         PerCoordinate {
             n,
-            width: model.n_params() + 1,
-            factors: (0..n * LANES).map(|_| Factor::default()).collect(),
+            width: p + 1,
+            factors: (0..n * LANES)
+                .map(|f| {
+                    let mut columns = pattern[f / LANES].clone();
+                    columns.push(p);
+                    Factor::new(columns)
+                })
+                .collect(),
             chunks: 0,
             ended: false,
+            blocks: Vec::new(),
         }
     }
 
@@ -275,34 +303,36 @@ impl PerCoordinate {
         let in_flight = (2 * rayon::current_num_threads()).clamp(2 * LANES, 16);
         for group in chunks.chunks(in_flight) {
             // The rows [H | τ] of each chunk, row k·n + j for coordinate j of sample k.
-            let blocks: Vec<Vec<f64>> = group
-                .par_iter()
-                .map_init(
-                    || {
-                        (
-                            Workspace::new(model),
-                            vec![0.0; n * p],
-                            vec![0.0; n],
-                            vec![0.0; n],
-                            vec![0.0; n],
-                        )
-                    },
-                    |(ws, h, q, dq, ddq), &(start, end)| {
-                        let mut block = vec![0.0; (end - start) * n * width];
-                        for k in start..end {
-                            samples.read(k, q, dq, ddq);
-                            model.regressor_into(ws, q, dq, ddq, h);
-                            for j in 0..n {
-                                let row = &mut block[((k - start) * n + j) * width..][..width];
-                                row[..p].copy_from_slice(&h[j * p..(j + 1) * p]);
-                                row[p] = samples.tau[(k, j)];
-                            }
+            if self.blocks.len() < group.len() {
+                self.blocks.resize_with(group.len(), Vec::new);
+            }
+            let blocks = &mut self.blocks[..group.len()];
+            group.par_iter().zip(blocks.par_iter_mut()).for_each_init(
+                || {
+                    (
+                        Workspace::new(model),
+                        vec![0.0; n * p],
+                        vec![0.0; n],
+                        vec![0.0; n],
+                        vec![0.0; n],
+                    )
+                },
+                |(ws, h, q, dq, ddq), (&(start, end), block)| {
+                    // Every entry is written below.
+                    block.resize((end - start) * n * width, 0.0);
+                    for k in start..end {
+                        samples.read(k, q, dq, ddq);
+                        model.regressor_into(ws, q, dq, ddq, h);
+                        for j in 0..n {
+                            let row = &mut block[((k - start) * n + j) * width..][..width];
+                            row[..p].copy_from_slice(&h[j * p..(j + 1) * p]);
+                            row[p] = samples.tau[(k, j)];
                         }
-                        progress.advance((end - start) as u64);
-                        block
-                    },
-                )
-                .collect();
+                    }
+                    progress.advance((end - start) as u64);
+                },
+            );
+            let blocks = &self.blocks[..group.len()];
             let first = self.chunks;
             self.factors
                 .par_iter_mut()
@@ -311,8 +341,7 @@ impl PerCoordinate {
                     let (j, lane) = (f / LANES, f % LANES);
                     for (c, block) in blocks.iter().enumerate() {
                         if (first + c) % LANES == lane {
-                            let rows = block.chunks_exact(width).skip(j).step_by(n);
-                            factor.add(rows, width);
+                            factor.add(block.chunks_exact(width).skip(j).step_by(n));
                         }
                     }
                 });

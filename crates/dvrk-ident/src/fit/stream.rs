@@ -327,26 +327,9 @@ pub fn fit_stream(
         &train_timing.1,
         started,
         progress,
-        |pi, it| {
-            let stage = format!(
-                "re-weighting (pass {} of {})",
-                it + 1,
-                settings.irls_iterations
-            );
-            train_log.metrics(settings, &train_timing, pi, None, &stage, progress)
-        },
     )?;
+    let train_metrics = MetricSums::from_factors(&parts, &estimated.params).metrics(model);
     let params = &estimated.params;
-    let train_metrics = train_log
-        .metrics(
-            settings,
-            &train_timing,
-            params,
-            None,
-            "metrics (train)",
-            progress,
-        )?
-        .metrics(model);
     let test_metrics = match (&test_log, &test_timing) {
         (Some(log), Some(timing)) => Some(
             log.metrics(
