@@ -316,6 +316,29 @@ impl MetricSums {
         self.samples += other.samples;
     }
 
+    /// The sums of the samples whose per-coordinate factors (unweighted, from
+    /// [`Observation::assemble_per_coordinate`]) are `parts`: `‖R_j·[π; −1]‖²` is the
+    /// squared error of coordinate `j`'s rows and `‖R_j·e_τ‖²` their squared torque,
+    /// exactly up to rounding, so the training metrics of a long log need no pass over
+    /// it. (The prediction is `H·π`, which the inverse dynamics equals to rounding.)
+    pub fn from_factors(parts: &[Observation], params: &[f64]) -> MetricSums {
+        let mut x = params.to_vec();
+        x.push(-1.0);
+        let p = params.len();
+        let sum2 = |v: nalgebra::DVector<f64>| v.norm_squared();
+        MetricSums {
+            e2: parts
+                .iter()
+                .map(|o| sum2(o.r() * nalgebra::DVector::from_column_slice(&x)))
+                .collect(),
+            t2: parts
+                .iter()
+                .map(|o| o.r().column(p).norm_squared())
+                .collect(),
+            samples: parts.first().map_or(0, Observation::rows),
+        }
+    }
+
     /// Adds the errors of `params` on the next samples, up to `window` samples in all
     /// (`None`: no limit).
     pub fn add(
@@ -541,10 +564,13 @@ pub fn fit_logs(
     // streamed fit.
     let total: usize = data.iter().map(Prepared::len).sum();
     progress.stage("assembling the observation", Some(total as u64));
+    let per_log: Vec<Vec<Observation>> = data
+        .iter()
+        .map(|d| Observation::assemble_per_coordinate(model, d.samples(), progress))
+        .collect();
     let mut parts: Option<Vec<Observation>> = None;
-    for d in &data {
-        let log = Observation::assemble_per_coordinate(model, d.samples(), progress);
-        merge_parts(&mut parts, log);
+    for log in &per_log {
+        merge_parts(&mut parts, log.clone());
     }
     let parts = parts.expect("at least one training log");
     progress.finish();
@@ -567,9 +593,12 @@ pub fn fit_logs(
         &source,
         started,
         progress,
-        |pi, _| Ok(summed(model, &metrics_of(pi, &data, None))),
     )?;
-    let train_sums = metrics_of(&estimated.params, &data, None);
+    // Training metrics from each log's factors: no second pass over the samples.
+    let train_sums: Vec<MetricSums> = per_log
+        .iter()
+        .map(|log| MetricSums::from_factors(log, &estimated.params))
+        .collect();
     let test_sums = metrics_of(&estimated.params, &test_data, settings.test_window);
     let mut inputs = Vec::with_capacity(train.len() + test.len());
     for (role, logs, sums, prepared) in [
@@ -651,8 +680,8 @@ pub(crate) struct Estimated {
 /// The estimator on the per-coordinate observation parts, shared by the in-memory and
 /// the streamed fit so that both give the same document: weighted least squares from
 /// `weights`; for IRLS, passes re-weighted by the inverse residual RMS of each
-/// coordinate, whose sums `residuals(pi, pass)` computes (from memory or by reading
-/// the log again); then the semidefinite program or the least-squares representative.
+/// coordinate (from the parts, [`MetricSums::from_factors`]: no pass over the data);
+/// then the semidefinite program or the least-squares representative.
 /// `source` names the data when they do not determine the base parameters.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn estimate(
@@ -664,7 +693,6 @@ pub(crate) fn estimate(
     source: &str,
     started: std::time::Instant,
     progress: &dyn Progress,
-    mut residuals: impl FnMut(&[f64], usize) -> Result<MetricSums, IdentError>,
 ) -> Result<Estimated, IdentError> {
     let p = model.n_params();
     let mut obs = Observation::weighted(parts, &weights);
@@ -680,7 +708,7 @@ pub(crate) fn estimate(
     if settings.method == Method::Irls {
         for it in 0..settings.irls_iterations {
             let pi = representative(base, &estimate.beta, p);
-            weights = residuals(&pi, it)?.inverse_rms();
+            weights = MetricSums::from_factors(parts, &pi).inverse_rms();
             obs = Observation::weighted(parts, &weights);
             estimate = base_least_squares(&obs, base).map_err(|e| not_excited(source, e))?;
             solver.iterations = it as u32 + 2;

@@ -1,20 +1,41 @@
 //! The weighted observation matrix `[W·H | W·τ]`, reduced on the fly to its R factor.
 //!
 //! The estimators only need `R` ((p+1)×(p+1)): `‖W H π − W τ‖² = ‖R₁₁ π − r₁‖² + ρ²`.
-//! Samples are assembled in chunks in parallel (rayon), each chunk is reduced by a QR
-//! (faer), and the chunk factors are merged in order by a QR of the stacked factors —
-//! exact, so memory does not grow with the log length, long logs stream, and
-//! observations of several logs combine with [`Observation::merge`].
+//! The rows are reduced per coordinate ([`PerCoordinate`]), unweighted, so that the
+//! weights can be chosen once the data are read ([`Observation::weighted`]). Each
+//! coordinate keeps a running triangular factor over the columns that have been
+//! nonzero in its rows: a row of the wrist's coordinate has a few dozen nonzero
+//! entries out of a hundred, and a QR update costs the square of the width, so this
+//! cuts the work by about ten on the dVRK arms. Samples come in chunks of
+//! [`CHUNK_SAMPLES`]; the regressor of a batch of chunks is evaluated in parallel
+//! (rayon), then each factor takes its chunks' rows by a QR of the factor stacked on
+//! them (faer, one thread per factor). Each coordinate has [`LANES`] factors that take
+//! alternate chunks and are merged at the end, so that the work spreads over threads
+//! while the result depends only on the data: not on the number of threads, and not
+//! on how the log was cut into batches of whole chunks (a log streamed from disk and
+//! the same log in memory give the same factors to the last bit). Memory does not grow
+//! with the log length, and observations of several logs combine with
+//! [`Observation::merge`].
 
 use dvrk_model::{Model, Workspace};
-use faer::Mat;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::linalg::qr::no_pivoting::factor::{
+    qr_in_place, qr_in_place_scratch, recommended_block_size,
+};
+use faer::{Mat, MatMut, Par};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use crate::progress::{Progress, Silent};
 
-/// Samples per parallel chunk: 256 samples of a 7-DoF arm with 116 columns are 1.7 MB.
-pub const CHUNK_SAMPLES: usize = 256;
+/// Samples per chunk: the unit of parallel regressor evaluation and of a factor's QR
+/// update (1024 rows on top of the factor's at most p+1: the update costs little more
+/// than the rows' own reduction).
+pub const CHUNK_SAMPLES: usize = 1024;
+
+/// Factors per coordinate, taking alternate chunks (a fixed number, so that the result
+/// does not depend on the machine).
+pub const LANES: usize = 2;
 
 /// The R factor of a stacked weighted observation, plus the row count.
 #[derive(Clone, Debug)]
@@ -61,17 +82,287 @@ impl Samples<'_> {
 /// non-negative diagonal, so factors of the same data compare entry by entry.
 fn r_factor(a: &Mat<f64>) -> DMatrix<f64> {
     let c = a.ncols();
-    let qr = a.qr();
-    let r = qr.thin_R();
-    let k = r.nrows();
+    let mut work = a.clone();
+    let mut qr = Qr::default();
+    qr.factor(work.as_mut());
+    let k = c.min(a.nrows());
     let mut out = DMatrix::zeros(c, c);
     for i in 0..k {
-        let sign = if r[(i, i)] < 0.0 { -1.0 } else { 1.0 };
+        let sign = if work[(i, i)] < 0.0 { -1.0 } else { 1.0 };
         for j in i..c {
-            out[(i, j)] = sign * r[(i, j)];
+            out[(i, j)] = sign * work[(i, j)];
         }
     }
     out
+}
+
+/// A sequential in-place QR (faer's blocked Householder) with its scratch kept between
+/// calls: the observation's factors are updated in parallel, one per thread, so faer's
+/// own parallelism would only add synchronization.
+#[derive(Default)]
+struct Qr {
+    coeff: Vec<f64>,
+    mem: Option<MemBuffer>,
+    mem_for: (usize, usize),
+}
+
+impl Qr {
+    /// Overwrites the upper triangle of `a` with R.
+    fn factor(&mut self, a: MatMut<'_, f64>) {
+        let (m, n) = (a.nrows(), a.ncols());
+        let size = m.min(n);
+        if size == 0 {
+            return;
+        }
+        let bs = recommended_block_size::<f64>(m, n);
+        if self.mem.is_none() || self.mem_for != (bs, n) {
+            let req = qr_in_place_scratch::<f64>(m, n, bs, Par::Seq, Default::default());
+            self.mem = Some(MemBuffer::new(req));
+            self.mem_for = (bs, n);
+        }
+        self.coeff.clear();
+        self.coeff.resize(bs * size, 0.0);
+        let coeff = MatMut::from_column_major_slice_mut(&mut self.coeff, bs, size);
+        let mem = self.mem.as_mut().expect("scratch");
+        qr_in_place(a, coeff, Par::Seq, MemStack::new(mem), Default::default());
+    }
+}
+
+/// One coordinate's running factor over the columns (of `[H | τ]`) that have been
+/// nonzero in its rows so far.
+#[derive(Default)]
+struct Factor {
+    /// Columns seen nonzero, increasing.
+    cols: Vec<usize>,
+    /// Columns that can still become nonzero (the regressor's pattern, not yet seen).
+    unseen: Vec<usize>,
+    /// k×k upper triangular (k = `cols.len()`), column-major.
+    r: Vec<f64>,
+    rows: usize,
+    /// Scratch: the factor stacked on the new rows (column-major), columns seen.
+    stacked: Vec<f64>,
+    seen: Vec<usize>,
+    qr: Qr,
+}
+
+impl Factor {
+    /// A factor for rows whose nonzero entries can only be in columns `pattern`.
+    fn new(pattern: Vec<usize>) -> Factor {
+        Factor {
+            unseen: pattern,
+            ..Factor::default()
+        }
+    }
+
+    /// Takes the rows `rows` (full layout, p+1 wide).
+    fn add<'a>(&mut self, rows: impl Iterator<Item = &'a [f64]> + Clone) {
+        let count = rows.clone().count();
+        if count == 0 {
+            return;
+        }
+        // Columns newly nonzero: a zero row and column of the factor each, in order.
+        self.seen.clear();
+        if !self.unseen.is_empty() {
+            for row in rows.clone() {
+                self.unseen.retain(|&c| {
+                    let new = row[c] != 0.0;
+                    if new {
+                        self.seen.push(c);
+                    }
+                    !new
+                });
+            }
+        }
+        if !self.seen.is_empty() {
+            let mut cols = self.cols.clone();
+            cols.extend(&self.seen);
+            cols.sort_unstable();
+            let (old, k) = (self.cols.len(), cols.len());
+            let mut r = vec![0.0; k * k];
+            let at: Vec<usize> = self
+                .cols
+                .iter()
+                .map(|c| cols.binary_search(c).expect("kept"))
+                .collect();
+            for j in 0..old {
+                for i in 0..=j {
+                    r[at[i] + at[j] * k] = self.r[i + j * old];
+                }
+            }
+            self.cols = cols;
+            self.r = r;
+        }
+        let k = self.cols.len();
+        let m = k + count;
+        self.stacked.clear();
+        self.stacked.resize(m * k, 0.0);
+        for j in 0..k {
+            self.stacked[j * m..j * m + j + 1].copy_from_slice(&self.r[j * k..j * k + j + 1]);
+        }
+        // Row by row (each row read once), into the columns.
+        for (i, row) in rows.enumerate() {
+            for (j, &c) in self.cols.iter().enumerate() {
+                self.stacked[j * m + k + i] = row[c];
+            }
+        }
+        let a = MatMut::from_column_major_slice_mut(&mut self.stacked, m, k);
+        self.qr.factor(a);
+        for j in 0..k {
+            self.r[j * k..j * k + j + 1].copy_from_slice(&self.stacked[j * m..j * m + j + 1]);
+        }
+        self.rows += count;
+    }
+
+    /// Takes the rows of another factor of the same coordinate.
+    fn merge(&mut self, other: &Factor, width: usize) {
+        let k = other.cols.len();
+        let rows: Vec<Vec<f64>> = (0..k)
+            .map(|i| {
+                let mut row = vec![0.0; width];
+                for j in i..k {
+                    row[other.cols[j]] = other.r[i + j * k];
+                }
+                row
+            })
+            .collect();
+        let rows_before = self.rows;
+        self.unseen
+            .extend(other.cols.iter().filter(|c| !self.cols.contains(c)));
+        self.unseen.sort_unstable();
+        self.unseen.dedup();
+        self.add(rows.iter().map(Vec::as_slice));
+        self.rows = rows_before + other.rows;
+    }
+
+    /// The factor in the full layout, (p+1)×(p+1) with a non-negative diagonal.
+    fn observation(&self, width: usize) -> Observation {
+        let k = self.cols.len();
+        let mut r = DMatrix::zeros(width, width);
+        for i in 0..k {
+            let sign = if self.r[i + i * k] < 0.0 { -1.0 } else { 1.0 };
+            for j in i..k {
+                r[(self.cols[i], self.cols[j])] = sign * self.r[i + j * k];
+            }
+        }
+        Observation { r, rows: self.rows }
+    }
+}
+
+/// The per-coordinate reduction of samples given in order (see the module docs):
+/// [`PerCoordinate::add`] batches of whole chunks (any number of samples in the last
+/// one), then [`PerCoordinate::finish`].
+pub struct PerCoordinate {
+    n: usize,
+    width: usize,
+    /// `LANES` factors per coordinate: coordinate j, lane l at `j * LANES + l`.
+    factors: Vec<Factor>,
+    /// Chunks added so far, and whether the last one was partial (the end).
+    chunks: usize,
+    ended: bool,
+    /// The rows of the chunks in flight, reused.
+    blocks: Vec<Vec<f64>>,
+}
+
+impl PerCoordinate {
+    pub fn new(model: &Model) -> Self {
+        let n = model.dof();
+        let p = model.n_params();
+        let pattern = model.regressor_pattern();
+        PerCoordinate {
+            n,
+            width: p + 1,
+            factors: (0..n * LANES)
+                .map(|f| {
+                    let mut columns = pattern[f / LANES].clone();
+                    columns.push(p);
+                    Factor::new(columns)
+                })
+                .collect(),
+            chunks: 0,
+            ended: false,
+            blocks: Vec::new(),
+        }
+    }
+
+    /// Adds `samples`, which continue the samples added so far; every call but the last
+    /// must give whole chunks of [`CHUNK_SAMPLES`]. `progress` counts the samples done
+    /// (from the worker threads, one call per chunk).
+    pub fn add(&mut self, model: &Model, samples: Samples<'_>, progress: &dyn Progress) {
+        assert!(
+            !self.ended,
+            "samples after a partial chunk: all but the last batch must be whole chunks"
+        );
+        let (n, p, width) = (self.n, model.n_params(), self.width);
+        assert_eq!(model.dof(), n, "the model of the reduction");
+        let count = samples.len();
+        let chunks: Vec<(usize, usize)> = (0..count)
+            .step_by(CHUNK_SAMPLES)
+            .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
+            .collect();
+        self.ended = count % CHUNK_SAMPLES != 0;
+        let in_flight = (2 * rayon::current_num_threads()).clamp(2 * LANES, 16);
+        for group in chunks.chunks(in_flight) {
+            // The rows [H | τ] of each chunk, row k·n + j for coordinate j of sample k.
+            if self.blocks.len() < group.len() {
+                self.blocks.resize_with(group.len(), Vec::new);
+            }
+            let blocks = &mut self.blocks[..group.len()];
+            group.par_iter().zip(blocks.par_iter_mut()).for_each_init(
+                || {
+                    (
+                        Workspace::new(model),
+                        vec![0.0; n * p],
+                        vec![0.0; n],
+                        vec![0.0; n],
+                        vec![0.0; n],
+                    )
+                },
+                |(ws, h, q, dq, ddq), (&(start, end), block)| {
+                    // Every entry is written below.
+                    block.resize((end - start) * n * width, 0.0);
+                    for k in start..end {
+                        samples.read(k, q, dq, ddq);
+                        model.regressor_into(ws, q, dq, ddq, h);
+                        for j in 0..n {
+                            let row = &mut block[((k - start) * n + j) * width..][..width];
+                            row[..p].copy_from_slice(&h[j * p..(j + 1) * p]);
+                            row[p] = samples.tau[(k, j)];
+                        }
+                    }
+                    progress.advance((end - start) as u64);
+                },
+            );
+            let blocks = &self.blocks[..group.len()];
+            let first = self.chunks;
+            self.factors
+                .par_iter_mut()
+                .enumerate()
+                .for_each(|(f, factor)| {
+                    let (j, lane) = (f / LANES, f % LANES);
+                    for (c, block) in blocks.iter().enumerate() {
+                        if (first + c) % LANES == lane {
+                            factor.add(block.chunks_exact(width).skip(j).step_by(n));
+                        }
+                    }
+                });
+            self.chunks += group.len();
+        }
+    }
+
+    /// One observation per coordinate (the lanes merged in order).
+    pub fn finish(mut self) -> Vec<Observation> {
+        let width = self.width;
+        self.factors
+            .chunks_mut(LANES)
+            .map(|lanes| {
+                let (first, rest) = lanes.split_at_mut(1);
+                for other in rest.iter() {
+                    first[0].merge(other, width);
+                }
+                first[0].observation(width)
+            })
+            .collect()
+    }
 }
 
 impl Observation {
@@ -151,39 +442,16 @@ impl Observation {
     }
 
     /// Observation of `samples` with per-coordinate row weights `weights` (1/N·m or
-    /// 1/N), assembled in parallel chunks and merged in order (the result does not
-    /// depend on the number of threads).
+    /// 1/N): the per-coordinate reduction, weighted.
     pub fn assemble(model: &Model, samples: Samples<'_>, weights: &[f64]) -> Observation {
-        let n = model.dof();
-        assert_eq!(weights.len(), n, "one weight per coordinate");
-        let mut obs = Observation::new(model.n_params());
-        chunk_factors(
-            model,
-            samples,
-            &Silent,
-            |block| {
-                let rows = block.nrows();
-                let mut block = block;
-                for i in 0..rows {
-                    let w = weights[i % n];
-                    for c in 0..block.ncols() {
-                        block[(i, c)] *= w;
-                    }
-                }
-                vec![Observation {
-                    r: r_factor(&block),
-                    rows,
-                }]
-            },
-            |f| obs.merge(&f[0]),
-        );
-        obs
+        let parts = Observation::assemble_per_coordinate(model, samples, &Silent);
+        Observation::weighted(&parts, weights)
     }
 
-    /// One observation per coordinate, unweighted: the rows of [`Observation::assemble`]
-    /// split by the coordinate they belong to. Weights can then be chosen after the
-    /// data are read, with [`Observation::weighted`]: what a fit streamed over a long
-    /// log needs, where the weights come from the whole log.
+    /// One observation per coordinate, unweighted: the rows of the observation split by
+    /// the coordinate they belong to ([`PerCoordinate`]). Weights can then be chosen
+    /// after the data are read, with [`Observation::weighted`]: what a fit streamed
+    /// over a long log needs, where the weights come from the whole log.
     ///
     /// `progress` counts the samples done (from the worker threads, one call per chunk).
     pub fn assemble_per_coordinate(
@@ -191,18 +459,9 @@ impl Observation {
         samples: Samples<'_>,
         progress: &dyn Progress,
     ) -> Vec<Observation> {
-        let mut parts = vec![Observation::new(model.n_params()); model.dof()];
-        add_per_coordinate(&mut parts, model, samples, progress);
-        parts
-    }
-
-    /// Adds `samples` to the per-coordinate observations `parts`: each chunk of
-    /// [`CHUNK_SAMPLES`] samples is factored (in parallel) and merged into `parts` in
-    /// order. Samples added in batches of whole chunks therefore give the same factors,
-    /// to the last bit, as all at once: a log streamed in blocks and the same log in
-    /// memory are fitted alike.
-    pub fn add_per_coordinate(parts: &mut [Observation], model: &Model, samples: Samples<'_>) {
-        add_per_coordinate(parts, model, samples, &Silent);
+        let mut reduction = PerCoordinate::new(model);
+        reduction.add(model, samples, progress);
+        reduction.finish()
     }
 
     /// The observation of the coordinates' rows (`parts`, one per coordinate, from
@@ -219,97 +478,6 @@ impl Observation {
             r: r_factor(&stacked),
             rows: parts.iter().map(|o| o.rows).sum(),
         }
-    }
-}
-
-/// [`Observation::add_per_coordinate`] reporting the samples done to `progress`.
-fn add_per_coordinate(
-    parts: &mut [Observation],
-    model: &Model,
-    samples: Samples<'_>,
-    progress: &dyn Progress,
-) {
-    let n = model.dof();
-    assert_eq!(parts.len(), n, "one observation per coordinate");
-    chunk_factors(
-        model,
-        samples,
-        progress,
-        |block| {
-            let count = block.nrows() / n;
-            (0..n)
-                .map(|j| {
-                    let rows = Mat::from_fn(count, block.ncols(), |k, c| block[(k * n + j, c)]);
-                    Observation {
-                        r: r_factor(&rows),
-                        rows: count,
-                    }
-                })
-                .collect()
-        },
-        |f| {
-            for (o, part) in parts.iter_mut().zip(&f) {
-                o.merge(part);
-            }
-        },
-    );
-}
-
-/// Chunks factored in parallel before their factors are merged: bounds the factors
-/// held at once (a long log in memory has thousands of chunks).
-const CHUNKS_IN_FLIGHT: usize = 32;
-
-/// The rows `[H | τ]` of `samples` in parallel chunks of [`CHUNK_SAMPLES`] (row
-/// `k·n + j`: coordinate `j` of the chunk's sample `k`), each reduced by `reduce`;
-/// `merge` gets the chunks' results in order.
-fn chunk_factors(
-    model: &Model,
-    samples: Samples<'_>,
-    progress: &dyn Progress,
-    reduce: impl Fn(Mat<f64>) -> Vec<Observation> + Sync,
-    mut merge: impl FnMut(Vec<Observation>),
-) {
-    let n = model.dof();
-    let p = model.n_params();
-    let count = samples.len();
-    let chunks: Vec<(usize, usize)> = (0..count)
-        .step_by(CHUNK_SAMPLES)
-        .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
-        .collect();
-    for group in chunks.chunks(CHUNKS_IN_FLIGHT) {
-        let factors: Vec<Vec<Observation>> = group
-            .par_iter()
-            .map_init(
-                || {
-                    (
-                        Workspace::new(model),
-                        vec![0.0; n * p],
-                        vec![0.0; n],
-                        vec![0.0; n],
-                        vec![0.0; n],
-                    )
-                },
-                |(ws, h, q, dq, ddq), &(start, end)| {
-                    let rows = (end - start) * n;
-                    let mut block = Mat::<f64>::zeros(rows, p + 1);
-                    for k in start..end {
-                        samples.read(k, q, dq, ddq);
-                        model.regressor_into(ws, q, dq, ddq, h);
-                        for j in 0..n {
-                            let row = (k - start) * n + j;
-                            for c in 0..p {
-                                block[(row, c)] = h[j * p + c];
-                            }
-                            block[(row, p)] = samples.tau[(k, j)];
-                        }
-                    }
-                    let factor = reduce(block);
-                    progress.advance((end - start) as u64);
-                    factor
-                },
-            )
-            .collect();
-        factors.into_iter().for_each(&mut merge);
     }
 }
 
@@ -375,37 +543,117 @@ mod tests {
         assert!(((obs.r() * &x).norm() - (&full * &x).norm()).abs() < 1e-9 * r2);
     }
 
+    /// The rows `[H | τ]` of coordinate `j`, one per sample, directly.
+    fn coordinate_rows(model: &Model, s: Samples<'_>, j: usize) -> DMatrix<f64> {
+        let (n, p) = (model.dof(), model.n_params());
+        let mut ws = Workspace::new(model);
+        let (mut a, mut b, mut c) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut h = vec![0.0; n * p];
+        let mut rows = DMatrix::zeros(s.len(), p + 1);
+        for k in 0..s.len() {
+            s.read(k, &mut a, &mut b, &mut c);
+            model.regressor_into(&mut ws, &a, &b, &c, &mut h);
+            for col in 0..p {
+                rows[(k, col)] = h[j * p + col];
+            }
+            rows[(k, p)] = s.tau[(k, j)];
+        }
+        rows
+    }
+
+    fn assert_same_gram(what: &str, r: &DMatrix<f64>, rows: &DMatrix<f64>) {
+        let g1 = r.transpose() * r;
+        let g2 = rows.transpose() * rows;
+        let err = (&g1 - &g2).amax();
+        assert!(
+            err < 1e-12 * g2.amax(),
+            "{what}: Gram matrices differ by {err:e}"
+        );
+    }
+
     #[test]
-    fn per_coordinate_parts_weighted_equal_the_weighted_assembly() {
-        let model = Model::builtin("psm").unwrap();
+    fn per_coordinate_parts_hold_their_coordinates_rows() {
+        let model = Model::builtin("mtm").unwrap();
         let n = model.dof();
-        let [q, dq, ddq, tau] = random_samples(&model, 2 * CHUNK_SAMPLES + 5, 11);
+        let [q, mut dq, mut ddq, tau] = random_samples(&model, 2 * CHUNK_SAMPLES + 700, 11);
+        // At rest for a chunk and a half: the Coulomb, viscous and motor-inertia columns
+        // are zero until the arm moves, then join the factors.
+        for k in 0..CHUNK_SAMPLES * 3 / 2 {
+            for j in 0..n {
+                dq[(k, j)] = 0.0;
+                ddq[(k, j)] = 0.0;
+            }
+        }
         let s = Samples {
             q: &q,
             dq: &dq,
             ddq: &ddq,
             tau: &tau,
         };
-        let weights: Vec<f64> = (0..n).map(|j| 0.5 + 0.3 * j as f64).collect();
-        let direct = Observation::assemble(&model, s, &weights);
         let parts = Observation::assemble_per_coordinate(&model, s, &Silent);
-        assert!(parts.iter().all(|o| o.rows() == q.nrows()));
+        assert_eq!(parts.len(), n);
+        for (j, part) in parts.iter().enumerate() {
+            assert_eq!(part.rows(), q.nrows());
+            let r = part.r();
+            for i in 0..r.nrows() {
+                assert!(r[(i, i)] >= 0.0, "non-negative diagonal");
+                for c in 0..i {
+                    assert_eq!(r[(i, c)], 0.0, "upper triangular");
+                }
+            }
+            assert_same_gram(
+                &format!("coordinate {j}"),
+                r,
+                &coordinate_rows(&model, s, j),
+            );
+        }
+        // Weighted: the factor of the weighted rows of all coordinates.
+        let weights: Vec<f64> = (0..n).map(|j| 0.5 + 0.3 * j as f64).collect();
         let combined = Observation::weighted(&parts, &weights);
-        assert_eq!(combined.rows(), direct.rows());
-        let g1 = combined.r().transpose() * combined.r();
-        let g2 = direct.r().transpose() * direct.r();
-        assert!(
-            (&g1 - &g2).amax() < 1e-12 * g2.amax(),
-            "{}",
-            (&g1 - &g2).amax()
+        let p1 = model.n_params() + 1;
+        let mut all = DMatrix::zeros(n * q.nrows(), p1);
+        for (j, w) in weights.iter().enumerate() {
+            let rows = coordinate_rows(&model, s, j) * *w;
+            all.rows_mut(j * q.nrows(), q.nrows()).copy_from(&rows);
+        }
+        assert_same_gram("weighted", combined.r(), &all);
+    }
+
+    #[test]
+    fn batches_of_whole_chunks_give_the_same_factors_to_the_bit() {
+        let model = Model::builtin("psm").unwrap();
+        let [q, dq, ddq, tau] = random_samples(&model, 4 * CHUNK_SAMPLES + 123, 5);
+        let all = |lo: usize, hi: usize| {
+            let cut = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
+            [cut(&q), cut(&dq), cut(&ddq), cut(&tau)]
+        };
+        let once = Observation::assemble_per_coordinate(
+            &model,
+            Samples {
+                q: &q,
+                dq: &dq,
+                ddq: &ddq,
+                tau: &tau,
+            },
+            &Silent,
         );
-        // One coordinate's factor holds that coordinate's residual: zero weight elsewhere.
-        let mut only = vec![0.0; n];
-        only[2] = 1.0;
-        let third = Observation::weighted(&parts, &only);
-        let g3 = third.r().transpose() * third.r();
-        let g = parts[2].r().transpose() * parts[2].r();
-        assert!((&g3 - &g).amax() < 1e-12 * g.amax());
+        let mut reduction = PerCoordinate::new(&model);
+        let cuts = [0, CHUNK_SAMPLES, 3 * CHUNK_SAMPLES, q.nrows()];
+        for w in cuts.windows(2) {
+            let [a, b, c, d] = all(w[0], w[1]);
+            let s = Samples {
+                q: &a,
+                dq: &b,
+                ddq: &c,
+                tau: &d,
+            };
+            reduction.add(&model, s, &Silent);
+        }
+        let batched = reduction.finish();
+        for (x, y) in once.iter().zip(&batched) {
+            assert_eq!(x.r(), y.r());
+            assert_eq!(x.rows(), y.rows());
+        }
     }
 
     #[test]

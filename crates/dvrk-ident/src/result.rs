@@ -383,4 +383,28 @@ mod tests {
         assert_eq!(doc["11"]["Im"].as_f64().unwrap(), 0.003);
         assert_eq!(doc["3"]["m"].as_f64().unwrap(), 0.0);
     }
+
+    #[test]
+    fn input_hash_is_the_sha256_of_the_whole_file() {
+        let dir = std::env::temp_dir().join(format!("dvrk-hash-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // The FIPS 180-2 example "abc".
+        let abc = dir.join("abc");
+        std::fs::write(&abc, b"abc").unwrap();
+        let info = InputInfo::from_file("train", &abc).unwrap();
+        assert_eq!(
+            info.sha256,
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        assert_eq!(info.bytes, 3);
+        // Several read blocks: the digest of the bytes at once.
+        let big = dir.join("big");
+        let bytes: Vec<u8> = (0..2_500_000u32).map(|i| (i * 7 + i / 13) as u8).collect();
+        std::fs::write(&big, &bytes).unwrap();
+        let info = InputInfo::from_file("test", &big).unwrap();
+        assert_eq!(info.sha256, format!("{:x}", Sha256::digest(&bytes)));
+        assert_eq!(info.bytes, bytes.len() as u64);
+        assert!(InputInfo::from_file("test", &dir.join("missing")).is_err());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

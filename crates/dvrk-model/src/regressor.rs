@@ -122,6 +122,34 @@ impl Model {
         }
     }
 
+    /// For each row (coordinate), the columns that [`Model::regressor_into`] can make
+    /// nonzero, increasing: every other entry of the row is exactly zero at every
+    /// sample (links outside the subtrees the coordinate moves, elements of other
+    /// coordinates). Reductions of many rows use it to skip those columns.
+    pub fn regressor_pattern(&self) -> Vec<Vec<usize>> {
+        let mut rows: Vec<std::collections::BTreeSet<usize>> = vec![Default::default(); self.dof()];
+        for (r, blocks) in self.regressor_plan.blocks.iter().enumerate() {
+            rows[r].extend(blocks.iter().flat_map(|&c| c..c + 10));
+        }
+        for f in &self.frames {
+            let mut columns = Vec::new();
+            if let Some(fr) = &f.friction {
+                columns.extend([fr.param, fr.param + 1, fr.param + 2]);
+                columns.extend(fr.stribeck.iter().map(|st| st.param));
+            }
+            if let Some(sp) = &f.spring {
+                columns.push(sp.param);
+            }
+            for &(c, _) in &f.value.terms {
+                rows[c].extend(&columns);
+            }
+            if let Some(mi) = &f.motor_inertia {
+                rows[mi.coordinate].insert(mi.param);
+            }
+        }
+        rows.into_iter().map(|r| r.into_iter().collect()).collect()
+    }
+
     /// Full regressor at one sample as an `n × p` matrix (allocates).
     pub fn regressor(
         &self,

@@ -27,11 +27,18 @@ fn regressor_times_params_is_inverse_dynamics() {
         let mut ws = Workspace::new(&model);
         let mut rng = Rng::new(100 + r as u64);
         let mut h = vec![0.0; n * p];
+        let pattern = model.regressor_pattern();
+        let mut nonzero = vec![vec![false; p]; n];
         for _ in 0..SAMPLES {
             let (q, dq, ddq) = random_state(&model, &mut rng);
             let pi = random_params(&model, &mut rng);
             let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
             model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+            for (row, seen) in nonzero.iter_mut().enumerate() {
+                for (c, s) in seen.iter_mut().enumerate() {
+                    *s |= h[row * p + c] != 0.0;
+                }
+            }
             // The allocating form agrees with the buffer form.
             let hm = model.regressor(&mut ws, &q, &dq, &ddq);
             for row in 0..n {
@@ -55,6 +62,23 @@ fn regressor_times_params_is_inverse_dynamics() {
             let hc: Vec<f64> = (0..n).map(|row| h[row * p + c]).collect();
             assert_close(&format!("{name}: column {c}"), &col, &hc, 1e-12);
         }
+        // The pattern holds every entry seen nonzero, and little else.
+        let mut extra = 0;
+        for (row, seen) in nonzero.iter().enumerate() {
+            for (c, &s) in seen.iter().enumerate() {
+                let listed = pattern[row].binary_search(&c).is_ok();
+                assert!(
+                    !s || listed,
+                    "{name}: H[{row}, {c}] nonzero outside the pattern"
+                );
+                extra += usize::from(listed && !s);
+            }
+        }
+        let listed: usize = pattern.iter().map(Vec::len).sum();
+        assert!(
+            extra * 4 < listed,
+            "{name}: {extra} of {listed} pattern entries never nonzero"
+        );
     }
 }
 

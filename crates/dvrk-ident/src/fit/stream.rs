@@ -35,8 +35,8 @@ use super::{
 };
 use crate::error::IdentError;
 use crate::log::LogReader;
-use crate::observation::{Observation, Samples, CHUNK_SAMPLES};
-use crate::progress::Progress;
+use crate::observation::{Observation, PerCoordinate, Samples, CHUNK_SAMPLES};
+use crate::progress::{Progress, Silent};
 use crate::result::{FitResult, InputInfo, Metrics};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
@@ -308,22 +308,22 @@ pub fn fit_stream_logs(
     }
     let base = model.base_parameters()?;
     let n = model.dof();
-    let p = model.n_params();
     let started = std::time::Instant::now();
 
     let mut total: Option<Vec<Observation>> = None;
+    let mut per_log = Vec::with_capacity(train_logs.len());
     let mut range = TorqueRange::new(n);
-    let add = |parts: &mut [Observation], [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
+    let add = |reduction: &mut PerCoordinate, [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
         let s = Samples {
             q: &q,
             dq: &dq,
             ddq: &ddq,
             tau: &tau,
         };
-        Observation::add_per_coordinate(parts, model, s);
+        reduction.add(model, s, &Silent);
     };
     for (log, timing) in train_logs.iter().zip(&train_timing) {
-        let mut parts = vec![Observation::new(p); n];
+        let mut reduction = PerCoordinate::new(model);
         let mut batches = Batches::new(n);
         log.processed(
             settings,
@@ -334,15 +334,17 @@ pub fn fit_stream_logs(
                 range.add(&block.tau);
                 batches.push(block);
                 if let Some(batch) = batches.take(false) {
-                    add(&mut parts, batch);
+                    add(&mut reduction, batch);
                 }
                 ControlFlow::Continue(())
             },
         )?;
         if let Some(batch) = batches.take(true) {
-            add(&mut parts, batch);
+            add(&mut reduction, batch);
         }
-        merge_parts(&mut total, parts);
+        let parts = reduction.finish();
+        merge_parts(&mut total, parts.clone());
+        per_log.push(parts);
     }
     let parts = total.expect("at least one training log");
     let weights = match settings.method {
@@ -370,20 +372,13 @@ pub fn fit_stream_logs(
         &source,
         started,
         progress,
-        |pi, it| {
-            let stage = format!(
-                "re-weighting (pass {} of {})",
-                it + 1,
-                settings.irls_iterations
-            );
-            Ok(summed(
-                model,
-                &metrics_of(&train_logs, &train_timing, pi, None, &stage)?,
-            ))
-        },
     )?;
     let params = &estimated.params;
-    let train_sums = metrics_of(&train_logs, &train_timing, params, None, "metrics (train)")?;
+    // Training metrics from each log's factors: no further pass over the training logs.
+    let train_sums: Vec<MetricSums> = per_log
+        .iter()
+        .map(|log| MetricSums::from_factors(log, params))
+        .collect();
     let test_sums = metrics_of(
         &test_logs,
         &test_timing,
