@@ -494,8 +494,18 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
 /// The files that hold the log at `path`: the file itself, or a rosbag2 folder's
 /// `metadata.yaml` and recording files in order (what the result's provenance hashes).
 pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
+    use self::mcap::bag::{sniff, Content};
     let path = path.as_ref();
-    if detect_format(path)? != LogFormat::Rosbag2 {
+    // Only a folder or its metadata.yaml stand for other files: any other file is
+    // itself, whatever its content (it is hashed, not read, here).
+    let is_bag = std::fs::metadata(path)
+        .map_err(|source| LogError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?
+        .is_dir()
+        || matches!(sniff(path)?, Content::Rosbag2Metadata);
+    if !is_bag {
         return Ok(vec![path.to_path_buf()]);
     }
     let located = mcap::bag::locate(path)?;
