@@ -40,6 +40,9 @@ pub enum IdentError {
     Setting { name: String, message: String },
     #[error("{file}: {message}")]
     Io { file: String, message: String },
+    /// An observation state file that is not one, or not of this format version.
+    #[error("{file}: {message}")]
+    State { file: String, message: String },
 }
 
 /// `source: error`, unless the error already starts with the source (errors of one

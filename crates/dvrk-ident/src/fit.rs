@@ -438,6 +438,26 @@ impl TorqueRange {
         }
     }
 
+    /// The range of both sample sets.
+    pub fn merge(&mut self, other: &TorqueRange) {
+        for (a, b) in self.min.iter_mut().zip(&other.min) {
+            *a = a.min(*b);
+        }
+        for (a, b) in self.max.iter_mut().zip(&other.max) {
+            *a = a.max(*b);
+        }
+    }
+
+    /// The smallest and largest torque per joint, N·m or N (±∞ before any sample).
+    pub fn bounds(&self) -> (&[f64], &[f64]) {
+        (&self.min, &self.max)
+    }
+
+    /// A range from its bounds (e.g. read back from a file).
+    pub fn from_bounds(min: Vec<f64>, max: Vec<f64>) -> Self {
+        TorqueRange { min, max }
+    }
+
     /// Joint weights `1 / (max − min)` (1/N·m or 1/N; 1 for a constant torque).
     pub fn weights(&self) -> Vec<f64> {
         self.min
@@ -538,56 +558,159 @@ pub fn fit_logs(
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
     progress.stage("processing", None);
-    let prepare_all = |logs: &[LogData<'_>]| -> Result<Vec<Prepared>, IdentError> {
-        logs.iter()
-            .map(|l| prepare(model, l.samples, &settings.processing))
-            .collect()
-    };
-    let data = prepare_all(train)?;
-    let test_data = prepare_all(test)?;
+    let data = prepare_logs(model, train, &settings.processing)?;
+    let test_data = prepare_logs(model, test, &settings.processing)?;
     progress.finish();
+    let observed = Observed::of_prepared(model, train, &data, progress)?;
+    fit_observed(
+        model,
+        &observed,
+        settings,
+        |params| test_inputs(model, test, &test_data, params, settings.test_window),
+        progress,
+    )
+}
+
+/// Each log prepared ([`prepare`]) on its own.
+pub(crate) fn prepare_logs(
+    model: &Model,
+    logs: &[LogData<'_>],
+    processing: &Processing,
+) -> Result<Vec<Prepared>, IdentError> {
+    logs.iter()
+        .map(|l| prepare(model, l.samples, processing))
+        .collect()
+}
+
+/// The test logs' provenance and the metrics of `params` on them (the first `window`
+/// samples of each).
+pub(crate) fn test_inputs(
+    model: &Model,
+    logs: &[LogData<'_>],
+    prepared: &[Prepared],
+    params: &[f64],
+    window: Option<usize>,
+) -> Result<Vec<(InputInfo, MetricSums)>, IdentError> {
+    logs.iter()
+        .zip(prepared)
+        .map(|(log, p)| {
+            let mut sums = MetricSums::new(model);
+            sums.add(model, params, p.samples(), window);
+            Ok((log_info("test", log, &p.source)?, sums))
+        })
+        .collect()
+}
+
+/// The provenance of a log: its file hashed, or its samples when it has none.
+fn log_info(role: &str, log: &LogData<'_>, source: &str) -> Result<InputInfo, IdentError> {
+    let mut info = match log.file {
+        Some(file) => InputInfo::from_file(role, file)?,
+        None => InputInfo::from_samples(role, log.samples),
+    };
+    info.source = source.to_string();
+    Ok(info)
+}
+
+/// One training log reduced: its provenance (role `train`, no metrics yet) and its
+/// unweighted per-coordinate factors ([`Observation::assemble_per_coordinate`]), from
+/// which its own training metrics come.
+#[derive(Clone, Debug)]
+pub struct ObservedLog {
+    pub info: InputInfo,
+    pub parts: Vec<Observation>,
+}
+
+/// The training logs reduced to everything a fit needs of them: each log's factors,
+/// all of them merged, and the running torque range of the WLS weights. What
+/// [`fit_logs`] and [`stream::fit_stream_logs`] build before the estimator, and what an
+/// observation state file ([`crate::state`]) holds, so that a fit of states equals the
+/// fit of their logs.
+#[derive(Clone, Debug)]
+pub struct Observed {
+    pub logs: Vec<ObservedLog>,
+    /// The logs' factors merged, one per coordinate.
+    pub parts: Vec<Observation>,
+    pub range: TorqueRange,
+}
+
+impl Observed {
+    /// Logs prepared in memory ([`prepare`]), reduced one after the other.
+    pub(crate) fn of_prepared(
+        model: &Model,
+        logs: &[LogData<'_>],
+        prepared: &[Prepared],
+        progress: &dyn Progress,
+    ) -> Result<Observed, IdentError> {
+        let total: usize = prepared.iter().map(Prepared::len).sum();
+        progress.stage("assembling the observation", Some(total as u64));
+        let mut observed: Option<Observed> = None;
+        for (log, d) in logs.iter().zip(prepared) {
+            let mut range = TorqueRange::new(model.dof());
+            range.add(&d.tau);
+            let parts = Observation::assemble_per_coordinate(model, d.samples(), progress);
+            let info = log_info("train", log, &d.source)?;
+            Observed::push(&mut observed, ObservedLog { info, parts }, range);
+        }
+        progress.finish();
+        observed.ok_or_else(no_training_log)
+    }
+
+    /// One more log after those of `observed` (the first makes it).
+    pub(crate) fn push(observed: &mut Option<Observed>, log: ObservedLog, range: TorqueRange) {
+        match observed {
+            None => {
+                *observed = Some(Observed {
+                    parts: log.parts.clone(),
+                    logs: vec![log],
+                    range,
+                })
+            }
+            Some(o) => {
+                merge_parts(&mut o.parts, &log.parts);
+                o.range.merge(&range);
+                o.logs.push(log);
+            }
+        }
+    }
+
+    /// The logs of `other` after these: factors merged (exact up to rounding, in any
+    /// order), ranges joined, logs listed in order.
+    pub fn merge(&mut self, other: &Observed) {
+        merge_parts(&mut self.parts, &other.parts);
+        self.range.merge(&other.range);
+        self.logs.extend(other.logs.iter().cloned());
+    }
+
+    /// Processed samples of all the logs.
+    pub fn samples(&self) -> usize {
+        self.parts.first().map_or(0, Observation::rows)
+    }
+}
+
+/// The fit of reduced training logs (the shared end of [`fit_logs`],
+/// [`stream::fit_stream_logs`] and the fit of observation states): the weights, the
+/// estimator, the training metrics from each log's factors (no pass over the samples),
+/// the test logs' metrics from `test` (given the parameters), the document. `model` is
+/// the model of the settings ([`FitSettings::model`]).
+pub(crate) fn fit_observed(
+    model: &Model,
+    observed: &Observed,
+    settings: &FitSettings,
+    test: impl FnOnce(&[f64]) -> Result<Vec<(InputInfo, MetricSums)>, IdentError>,
+    progress: &dyn Progress,
+) -> Result<FitResult, IdentError> {
     let base = model.base_parameters()?;
     let n = model.dof();
     let started = std::time::Instant::now();
-
     let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
-        Method::Wls | Method::Sdp => {
-            let mut range = TorqueRange::new(n);
-            for d in &data {
-                range.add(&d.tau);
-            }
-            range.weights()
-        }
+        Method::Wls | Method::Sdp => observed.range.weights(),
     };
-    // Per coordinate and per log, then merged and weighted: the same arithmetic as the
-    // streamed fit.
-    let total: usize = data.iter().map(Prepared::len).sum();
-    progress.stage("assembling the observation", Some(total as u64));
-    let per_log: Vec<Vec<Observation>> = data
-        .iter()
-        .map(|d| Observation::assemble_per_coordinate(model, d.samples(), progress))
-        .collect();
-    let mut parts: Option<Vec<Observation>> = None;
-    for log in &per_log {
-        merge_parts(&mut parts, log.clone());
-    }
-    let parts = parts.expect("at least one training log");
-    progress.finish();
-    let source = joined_sources(data.iter().map(|d| d.source.as_str()));
-    let metrics_of = |pi: &[f64], logs: &[Prepared], window: Option<usize>| {
-        logs.iter()
-            .map(|d| {
-                let mut sums = MetricSums::new(model);
-                sums.add(model, pi, d.samples(), window);
-                sums
-            })
-            .collect::<Vec<_>>()
-    };
+    let source = joined_sources(observed.logs.iter().map(|l| l.info.source.as_str()));
     let estimated = estimate(
         model,
         &base,
-        &parts,
+        &observed.parts,
         weights,
         settings,
         &source,
@@ -595,25 +718,22 @@ pub fn fit_logs(
         progress,
     )?;
     // Training metrics from each log's factors: no second pass over the samples.
-    let train_sums: Vec<MetricSums> = per_log
+    let train_sums: Vec<MetricSums> = observed
+        .logs
         .iter()
-        .map(|log| MetricSums::from_factors(log, &estimated.params))
+        .map(|log| MetricSums::from_factors(&log.parts, &estimated.params))
         .collect();
-    let test_sums = metrics_of(&estimated.params, &test_data, settings.test_window);
-    let mut inputs = Vec::with_capacity(train.len() + test.len());
-    for (role, logs, sums, prepared) in [
-        ("train", train, &train_sums, &data),
-        ("test", test, &test_sums, &test_data),
-    ] {
-        for ((log, sums), p) in logs.iter().zip(sums).zip(prepared) {
-            let mut info = match log.file {
-                Some(file) => InputInfo::from_file(role, file)?,
-                None => InputInfo::from_samples(role, log.samples),
-            };
-            info.source.clone_from(&p.source);
-            info.metrics = Some(sums.metrics(model));
-            inputs.push(info);
-        }
+    let tested = test(&estimated.params)?;
+    let test_sums: Vec<MetricSums> = tested.iter().map(|(_, s)| s.clone()).collect();
+    let mut inputs = Vec::with_capacity(observed.logs.len() + tested.len());
+    for (log, sums) in observed.logs.iter().zip(&train_sums) {
+        let mut info = log.info.clone();
+        info.metrics = Some(sums.metrics(model));
+        inputs.push(info);
+    }
+    for (mut info, sums) in tested {
+        info.metrics = Some(sums.metrics(model));
+        inputs.push(info);
     }
     let mut result = build_result(
         model,
@@ -638,15 +758,10 @@ pub(crate) fn no_training_log() -> IdentError {
 }
 
 /// The per-coordinate observations of one more log merged into those of the logs
-/// before it (the first log's are taken as they are).
-pub(crate) fn merge_parts(total: &mut Option<Vec<Observation>>, log: Vec<Observation>) {
-    match total {
-        None => *total = Some(log),
-        Some(parts) => {
-            for (o, l) in parts.iter_mut().zip(&log) {
-                o.merge(l);
-            }
-        }
+/// before it.
+pub(crate) fn merge_parts(total: &mut [Observation], log: &[Observation]) {
+    for (o, l) in total.iter_mut().zip(log) {
+        o.merge(l);
     }
 }
 

@@ -24,6 +24,7 @@ pub mod progress;
 pub mod report;
 pub mod signal;
 pub mod simulate;
+pub mod state;
 pub mod trajectory;
 
 pub use error::IdentError;

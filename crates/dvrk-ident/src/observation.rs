@@ -374,6 +374,13 @@ impl Observation {
         }
     }
 
+    /// An observation from its factor (read back from an observation state): `r` is
+    /// (p+1)×(p+1) upper triangular, `rows` the rows it reduces.
+    pub(crate) fn from_factor(r: DMatrix<f64>, rows: usize) -> Observation {
+        debug_assert!(r.is_square());
+        Observation { r, rows }
+    }
+
     /// Number of parameters (columns without the torque).
     pub fn n_params(&self) -> usize {
         self.r.ncols() - 1

@@ -30,14 +30,14 @@ use dvrk_model::Model;
 use nalgebra::DMatrix;
 
 use super::{
-    build_result, estimate, joined_sources, merge_parts, no_training_log, subtract_known_forces,
-    summed, to_model_coordinates, FitSettings, Method, MetricSums, TorqueRange,
+    fit_observed, no_training_log, subtract_known_forces, to_model_coordinates, FitSettings,
+    MetricSums, Observed, ObservedLog, TorqueRange,
 };
 use crate::error::IdentError;
 use crate::log::LogReader;
-use crate::observation::{Observation, PerCoordinate, Samples, CHUNK_SAMPLES};
+use crate::observation::{PerCoordinate, Samples, CHUNK_SAMPLES};
 use crate::progress::{Progress, Silent};
-use crate::result::{FitResult, InputInfo, Metrics};
+use crate::result::{FitResult, InputInfo};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
 use crate::trajectory::{Coordinates, Trajectory};
@@ -281,22 +281,10 @@ pub fn fit_stream_logs(
     // The model options of the settings (Stribeck terms), as the in-memory fit.
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
-    fn sources<'a>(logs: &[&'a LogReader], model: &'a Model, block: usize) -> Vec<Source<'a>> {
-        logs.iter()
-            .map(|&reader| Source {
-                reader,
-                model,
-                block,
-            })
-            .collect()
-    }
     let train_logs = sources(train, model, block_samples);
     let test_logs = sources(test, model, block_samples);
-    let timings = |logs: &[Source]| -> Result<Vec<(LogTiming, String)>, IdentError> {
-        logs.iter().map(|l| l.timing(progress)).collect()
-    };
-    let train_timing = timings(&train_logs)?;
-    let test_timing = timings(&test_logs)?;
+    let train_timing = timings(&train_logs, progress)?;
+    let test_timing = timings(&test_logs, progress)?;
     // Setting and length errors before the long passes, as the whole-log fit reports
     // them before fitting.
     for (log, timing) in train_logs
@@ -306,23 +294,95 @@ pub fn fit_stream_logs(
     {
         log.processor(settings, timing)?;
     }
-    let base = model.base_parameters()?;
-    let n = model.dof();
-    let started = std::time::Instant::now();
+    let observed = observe(&train_logs, &train_timing, settings, progress)?;
+    fit_observed(
+        model,
+        &observed,
+        settings,
+        |params| {
+            test_logs
+                .iter()
+                .zip(&test_timing)
+                .map(|(log, timing)| {
+                    let sums = log.metrics(
+                        settings,
+                        timing,
+                        params,
+                        settings.test_window,
+                        "metrics (test)",
+                        progress,
+                    )?;
+                    let mut info = InputInfo::from_file("test", log.reader.path())?;
+                    info.source.clone_from(&timing.1);
+                    Ok((info, sums))
+                })
+                .collect()
+        },
+        progress,
+    )
+}
 
-    let mut total: Option<Vec<Observation>> = None;
-    let mut per_log = Vec::with_capacity(train_logs.len());
-    let mut range = TorqueRange::new(n);
-    let add = |reduction: &mut PerCoordinate, [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
-        let s = Samples {
-            q: &q,
-            dq: &dq,
-            ddq: &ddq,
-            tau: &tau,
+/// The training logs of a streamed fit reduced, without the estimator: what
+/// [`fit_stream_logs`] builds before it, for an observation state
+/// ([`crate::state::ObservationState`]). `model` is the model of the settings
+/// ([`FitSettings::model`]).
+pub fn observe_stream_logs(
+    model: &Model,
+    train: &[&LogReader],
+    settings: &FitSettings,
+    block_samples: usize,
+    progress: &dyn Progress,
+) -> Result<Observed, IdentError> {
+    if train.is_empty() {
+        return Err(no_training_log());
+    }
+    let logs = sources(train, model, block_samples);
+    let timing = timings(&logs, progress)?;
+    for (log, timing) in logs.iter().zip(&timing) {
+        log.processor(settings, timing)?;
+    }
+    observe(&logs, &timing, settings, progress)
+}
+
+fn sources<'a>(logs: &[&'a LogReader], model: &'a Model, block: usize) -> Vec<Source<'a>> {
+    logs.iter()
+        .map(|&reader| Source {
+            reader,
+            model,
+            block,
+        })
+        .collect()
+}
+
+fn timings(
+    logs: &[Source],
+    progress: &dyn Progress,
+) -> Result<Vec<(LogTiming, String)>, IdentError> {
+    logs.iter().map(|l| l.timing(progress)).collect()
+}
+
+/// The observation pass over every training log: each log's factors (in batches of
+/// whole chunks, as in memory) and torque range.
+fn observe(
+    logs: &[Source],
+    timings: &[(LogTiming, String)],
+    settings: &FitSettings,
+    progress: &dyn Progress,
+) -> Result<Observed, IdentError> {
+    let mut observed: Option<Observed> = None;
+    for (log, timing) in logs.iter().zip(timings) {
+        let model = log.model;
+        let n = model.dof();
+        let add = |reduction: &mut PerCoordinate, [q, dq, ddq, tau]: [DMatrix<f64>; 4]| {
+            let s = Samples {
+                q: &q,
+                dq: &dq,
+                ddq: &ddq,
+                tau: &tau,
+            };
+            reduction.add(model, s, &Silent);
         };
-        reduction.add(model, s, &Silent);
-    };
-    for (log, timing) in train_logs.iter().zip(&train_timing) {
+        let mut range = TorqueRange::new(n);
         let mut reduction = PerCoordinate::new(model);
         let mut batches = Batches::new(n);
         log.processed(
@@ -342,73 +402,10 @@ pub fn fit_stream_logs(
         if let Some(batch) = batches.take(true) {
             add(&mut reduction, batch);
         }
+        let mut info = InputInfo::from_file("train", log.reader.path())?;
+        info.source.clone_from(&timing.1);
         let parts = reduction.finish();
-        merge_parts(&mut total, parts.clone());
-        per_log.push(parts);
+        Observed::push(&mut observed, ObservedLog { info, parts }, range);
     }
-    let parts = total.expect("at least one training log");
-    let weights = match settings.method {
-        Method::Ols | Method::Irls => vec![1.0; n],
-        Method::Wls | Method::Sdp => range.weights(),
-    };
-    let metrics_of = |logs: &[Source],
-                      timings: &[(LogTiming, String)],
-                      pi: &[f64],
-                      window: Option<usize>,
-                      stage: &str|
-     -> Result<Vec<MetricSums>, IdentError> {
-        logs.iter()
-            .zip(timings)
-            .map(|(log, timing)| log.metrics(settings, timing, pi, window, stage, progress))
-            .collect()
-    };
-    let source = joined_sources(train_timing.iter().map(|(_, s)| s.as_str()));
-    let estimated = estimate(
-        model,
-        &base,
-        &parts,
-        weights,
-        settings,
-        &source,
-        started,
-        progress,
-    )?;
-    let params = &estimated.params;
-    // Training metrics from each log's factors: no further pass over the training logs.
-    let train_sums: Vec<MetricSums> = per_log
-        .iter()
-        .map(|log| MetricSums::from_factors(log, params))
-        .collect();
-    let test_sums = metrics_of(
-        &test_logs,
-        &test_timing,
-        params,
-        settings.test_window,
-        "metrics (test)",
-    )?;
-    let mut inputs = Vec::with_capacity(train.len() + test.len());
-    for (role, logs, sums, timings) in [
-        ("train", train, &train_sums, &train_timing),
-        ("test", test, &test_sums, &test_timing),
-    ] {
-        for ((log, sums), (_, source)) in logs.iter().zip(sums).zip(timings) {
-            let mut info = InputInfo::from_file(role, log.path())?;
-            info.source.clone_from(source);
-            info.metrics = Some(sums.metrics(model));
-            inputs.push(info);
-        }
-    }
-    let mut result = build_result(
-        model,
-        &base,
-        settings,
-        estimated,
-        Metrics {
-            train: summed(model, &train_sums).metrics(model),
-            test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
-        },
-    )?;
-    result.inputs = inputs;
-    result.check_finite()?;
-    Ok(result)
+    observed.ok_or_else(no_training_log)
 }

@@ -1,0 +1,696 @@
+//! Observation states: training logs reduced to their per-coordinate R factors, in a
+//! file, so that engines outside this process (a shell loop, `xargs -P`, a Slurm array,
+//! Dask, Ray, Spark) can run the map (`dvrk-ident observe`, one state per log) and the
+//! reduce (merging states) of a fit, and a fit of the merged state gives the document
+//! of the fit of the logs themselves (`dvrk-ident fit --from`).
+//!
+//! A state holds what the merge and the later fit need: the robot (name, source and a
+//! hash of the model as built, [`model_hash`]), the processing settings and the
+//! Stribeck velocity of the fit's model, the running range of the processed torques
+//! (the WLS weights), every log's provenance (path, SHA-256, bytes, source, samples)
+//! and per-coordinate factors (its own training metrics), and the factors of all the
+//! logs merged. Merging refuses states of other robots or settings; it merges the
+//! factors (a QR of the two stacked, exact up to rounding, so associative and
+//! commutative to rounding), joins the ranges and lists the logs in order.
+//!
+//! # File layout (version 1)
+//!
+//! Integers little-endian unsigned, numbers little-endian IEEE-754 binary64:
+//!
+//! | offset | bytes | content |
+//! |---|---|---|
+//! | 0 | 8 | magic `DVRKOBS\n` |
+//! | 8 | 4 | format version (u32), 1 |
+//! | 12 | 4 | zero |
+//! | 16 | 8 | `H`, bytes of the header (u64, at most 16 MiB) |
+//! | 24 | `H` | header: a UTF-8 JSON object (below) |
+//! | 24 + `H` | 8·`n` | smallest processed torque per coordinate (N·m or N) |
+//! | … | 8·`n` | largest processed torque per coordinate |
+//! | … | 8·`n`·`T` | the merged factors: for each coordinate, the upper triangle of its `w`×`w` R factor row by row (`T = w(w+1)/2`) |
+//! | … | 8·`n`·`T`·`L` | each log's factors, in the header's order, the same way |
+//!
+//! and nothing after. The header: `{"format": "dvrk-ident observation", "robot",
+//! "robot_source", "robot_hash", "processing" (the `settings.processing` of a result),
+//! "stribeck_velocity" (rad/s or m/s, or null), "coordinates": n, "width": w (the
+//! model's parameters + 1, the torque column last), "logs": [{"path", "sha256", "bytes",
+//! "source", "samples"}]}` (`L` logs). A log's factor reduces `samples` rows per
+//! coordinate; the merged factor the sum. A PSM state (n = 7, w = 116) is 380 KB per
+//! log plus 380 KB for the merged factors.
+//!
+//! Reading checks the magic, the version, the header and the exact size before
+//! allocating the numbers, and then that every number is finite and every factor upper
+//! triangular with a non-negative diagonal; anything else is an error naming the file.
+
+use std::io::Read;
+use std::path::Path;
+
+use dvrk_model::Model;
+use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use crate::error::IdentError;
+use crate::fit::{
+    fit_observed, prepare_logs, test_inputs, FitSettings, LogData, Observed, ObservedLog,
+    TorqueRange,
+};
+use crate::log::LogReader;
+use crate::observation::Observation;
+use crate::progress::Progress;
+use crate::result::{FitResult, InputInfo};
+use crate::signal::Processing;
+
+/// The first bytes of a state file.
+pub const MAGIC: [u8; 8] = *b"DVRKOBS\n";
+/// The format version this build writes and reads.
+pub const VERSION: u32 = 1;
+/// Largest accepted header (a header lists the logs: about 300 bytes each).
+pub const MAX_HEADER_BYTES: u64 = 16 << 20;
+/// Bytes before the header.
+const PREFIX: usize = 24;
+/// The header's `format` value.
+const FORMAT: &str = "dvrk-ident observation";
+
+/// The training logs of a fit reduced, with what identifies the model and the
+/// processing they were reduced for (see the module docs).
+#[derive(Clone, Debug)]
+pub struct ObservationState {
+    pub robot: String,
+    /// `builtin:psm` or the description's path, as [`Model::load`] takes it (without
+    /// `builtin:`).
+    pub robot_source: String,
+    /// [`model_hash`] of the model of the fit (Stribeck terms included).
+    pub robot_hash: String,
+    pub processing: Processing,
+    pub stribeck_velocity: Option<f64>,
+    pub observed: Observed,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Header {
+    format: String,
+    robot: String,
+    robot_source: String,
+    robot_hash: String,
+    processing: Processing,
+    stribeck_velocity: Option<f64>,
+    coordinates: usize,
+    width: usize,
+    logs: Vec<HeaderLog>,
+}
+
+#[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct HeaderLog {
+    path: String,
+    sha256: String,
+    bytes: u64,
+    source: String,
+    samples: usize,
+}
+
+/// SHA-256 (hex) of what makes a model's regressor: coordinates, measured joints and
+/// coupling, gravity, every frame's name, parent, joint, joint value, fixed transforms
+/// and elements (friction with its Stribeck velocity, motor inertia, spring deflection,
+/// known force), and the parameter names. Bounds, limits and nominal values are left
+/// out: they do not change an observation. Two loads of the same description hash the
+/// same on any machine that parses numbers and evaluates `sin`/`cos` alike.
+pub fn model_hash(model: &Model) -> String {
+    let mut h = Sha256::new();
+    let mut text = |t: &str| {
+        h.update((t.len() as u64).to_le_bytes());
+        h.update(t.as_bytes());
+    };
+    text(&model.name);
+    for c in &model.coordinates {
+        text(c);
+    }
+    for j in &model.measured.joints {
+        text(j);
+    }
+    let mut numbers: Vec<f64> = model.measured.coupling.iter().copied().collect();
+    numbers.extend(model.gravity.iter());
+    let mut words: Vec<String> = Vec::new();
+    let affine = |a: &dvrk_model::expr::Affine, numbers: &mut Vec<f64>| {
+        numbers.push(a.terms.len() as f64);
+        for (i, c) in &a.terms {
+            numbers.push(*i as f64);
+            numbers.push(*c);
+        }
+        numbers.push(a.offset);
+    };
+    for f in &model.frames {
+        words.push(f.name.clone());
+        words.push(format!("{}:{:?}", f.parent, f.kind));
+        affine(&f.value, &mut numbers);
+        for t in [&f.pre, &f.post] {
+            numbers.extend(t.rotation.iter());
+            numbers.extend(t.translation.iter());
+        }
+        let index = |i: Option<usize>| i.map_or(-1.0, |i| i as f64);
+        numbers.push(index(f.inertia));
+        numbers.push(index(f.friction.as_ref().map(|x| x.param)));
+        if let Some(s) = f.friction.as_ref().and_then(|x| x.stribeck) {
+            numbers.extend([s.param as f64, s.velocity]);
+        }
+        if let Some(m) = &f.motor_inertia {
+            numbers.extend([m.param as f64, m.coordinate as f64, m.ratio]);
+        }
+        if let Some(s) = &f.spring {
+            numbers.push(s.param as f64);
+            match &s.deflection {
+                dvrk_model::Deflection::Affine(a) => affine(a, &mut numbers),
+                dvrk_model::Deflection::Expr(e) => words.push(e.text().to_string()),
+            }
+        }
+        if let Some(k) = &f.known_force {
+            affine(&k.along, &mut numbers);
+            numbers.extend(k.polynomial.iter());
+        }
+    }
+    for p in &model.params {
+        words.push(p.name.clone());
+    }
+    for w in &words {
+        text(w);
+    }
+    for x in numbers {
+        h.update(x.to_le_bytes());
+    }
+    format!("{:x}", h.finalize())
+}
+
+fn bad(file: &str, message: impl Into<String>) -> IdentError {
+    IdentError::State {
+        file: file.to_string(),
+        message: message.into(),
+    }
+}
+
+impl ObservationState {
+    /// The state of reduced logs: `model` is the robot as loaded, `settings` those of
+    /// the reduction (the processing and the Stribeck velocity are kept).
+    pub fn new(
+        model: &Model,
+        settings: &FitSettings,
+        observed: Observed,
+    ) -> Result<ObservationState, IdentError> {
+        let fitted = settings.model(model)?;
+        Ok(ObservationState {
+            robot: model.name.clone(),
+            robot_source: model.source.clone(),
+            robot_hash: model_hash(&fitted),
+            processing: settings.processing.clone(),
+            stribeck_velocity: settings.stribeck_velocity,
+            observed,
+        })
+    }
+
+    /// The map: training logs in memory, each processed on its own and reduced, as
+    /// [`crate::fit::fit_logs`] does before the estimator.
+    pub fn observe(
+        model: &Model,
+        logs: &[LogData<'_>],
+        settings: &FitSettings,
+        progress: &dyn Progress,
+    ) -> Result<ObservationState, IdentError> {
+        let fitted = settings.model(model)?;
+        progress.stage("processing", None);
+        let data = prepare_logs(&fitted, logs, &settings.processing)?;
+        progress.finish();
+        let observed = Observed::of_prepared(&fitted, logs, &data, progress)?;
+        ObservationState::new(model, settings, observed)
+    }
+
+    /// The map of logs read from their files block by block
+    /// ([`crate::fit::stream::observe_stream_logs`]): the same state as [`Self::observe`].
+    pub fn observe_stream(
+        model: &Model,
+        logs: &[&LogReader],
+        settings: &FitSettings,
+        block_samples: usize,
+        progress: &dyn Progress,
+    ) -> Result<ObservationState, IdentError> {
+        let fitted = settings.model(model)?;
+        let observed = crate::fit::stream::observe_stream_logs(
+            &fitted,
+            logs,
+            settings,
+            block_samples,
+            progress,
+        )?;
+        ObservationState::new(model, settings, observed)
+    }
+
+    /// The state's logs, for messages: `observation of a.mcap + b.csv`.
+    pub fn name(&self) -> String {
+        let names: Vec<&str> = self
+            .observed
+            .logs
+            .iter()
+            .map(|l| {
+                if l.info.path.is_empty() {
+                    l.info.source.as_str()
+                } else {
+                    l.info.path.as_str()
+                }
+            })
+            .collect();
+        format!("observation of {}", names.join(" + "))
+    }
+
+    /// Processed samples of all the logs.
+    pub fn samples(&self) -> usize {
+        self.observed.samples()
+    }
+
+    /// Why `other` cannot be merged with this state, if it cannot.
+    fn mismatch(&self, other: &ObservationState) -> Option<String> {
+        if self.robot_hash != other.robot_hash {
+            return Some(format!(
+                "robot {} (model hash {}) differs from robot {} (model hash {}) of the \
+                 states before it: states of different robots do not merge",
+                other.robot,
+                &other.robot_hash[..12.min(other.robot_hash.len())],
+                self.robot,
+                &self.robot_hash[..12.min(self.robot_hash.len())]
+            ));
+        }
+        if self.processing != other.processing {
+            let show = |p: &Processing| serde_json::to_string(p).unwrap_or_default();
+            return Some(format!(
+                "processing settings {} differ from {} of the states before it: states \
+                 processed differently do not merge (observe every log with the same options)",
+                show(&other.processing),
+                show(&self.processing)
+            ));
+        }
+        if self.stribeck_velocity != other.stribeck_velocity {
+            return Some(format!(
+                "Stribeck velocity {:?} differs from {:?} of the states before it",
+                other.stribeck_velocity, self.stribeck_velocity
+            ));
+        }
+        None
+    }
+
+    /// The reduce: the logs of `other` after these. Refuses (naming `other`'s logs) a
+    /// state of another robot, processing or Stribeck velocity.
+    pub fn merge(&mut self, other: &ObservationState) -> Result<(), IdentError> {
+        if let Some(message) = self.mismatch(other) {
+            return Err(IdentError::Mismatch {
+                source_name: other.name(),
+                message,
+            });
+        }
+        self.observed.merge(&other.observed);
+        Ok(())
+    }
+
+    /// The settings of a fit of this state: the estimator's (`method`, `test_window`,
+    /// `irls_iterations`, `sdp_regularization`) from `estimator`, the processing and
+    /// the Stribeck velocity from the state.
+    pub fn settings(&self, estimator: &FitSettings) -> FitSettings {
+        FitSettings {
+            processing: self.processing.clone(),
+            stribeck_velocity: self.stribeck_velocity,
+            ..estimator.clone()
+        }
+    }
+
+    /// `model` (the robot as loaded) with the state's model options, refused unless it
+    /// is the model the state was reduced for.
+    pub fn model(&self, model: &Model) -> Result<Model, IdentError> {
+        let fitted = self.settings(&FitSettings::default()).model(model)?;
+        let hash = model_hash(&fitted);
+        if hash != self.robot_hash {
+            return Err(IdentError::Mismatch {
+                source_name: self.name(),
+                message: format!(
+                    "reduced for robot {} (model hash {}), but the robot given is {} from {} \
+                     (model hash {}): give the robot the logs were observed with",
+                    self.robot,
+                    &self.robot_hash[..12.min(self.robot_hash.len())],
+                    model.name,
+                    model.source,
+                    &hash[..12]
+                ),
+            });
+        }
+        Ok(fitted.into_owned())
+    }
+
+    /// The fit of the state's logs with the estimator settings of `estimator` (see
+    /// [`Self::settings`]), validated on `test` logs (processed with the state's
+    /// settings): the document of [`crate::fit::fit_logs`] of the same logs.
+    pub fn fit(
+        &self,
+        model: &Model,
+        estimator: &FitSettings,
+        test: &[LogData<'_>],
+        progress: &dyn Progress,
+    ) -> Result<FitResult, IdentError> {
+        let settings = self.settings(estimator);
+        let model = self.model(model)?;
+        progress.stage("processing", None);
+        let test_data = prepare_logs(&model, test, &settings.processing)?;
+        progress.finish();
+        fit_observed(
+            &model,
+            &self.observed,
+            &settings,
+            |params| test_inputs(&model, test, &test_data, params, settings.test_window),
+            progress,
+        )
+    }
+
+    /// The state in the file layout of the module docs.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let o = &self.observed;
+        let n = o.parts.len();
+        let w = o.parts.first().map_or(0, |p| p.r().ncols());
+        let header = Header {
+            format: FORMAT.into(),
+            robot: self.robot.clone(),
+            robot_source: self.robot_source.clone(),
+            robot_hash: self.robot_hash.clone(),
+            processing: self.processing.clone(),
+            stribeck_velocity: self.stribeck_velocity,
+            coordinates: n,
+            width: w,
+            logs: o
+                .logs
+                .iter()
+                .map(|l| HeaderLog {
+                    path: l.info.path.clone(),
+                    sha256: l.info.sha256.clone(),
+                    bytes: l.info.bytes,
+                    source: l.info.source.clone(),
+                    samples: l.parts.first().map_or(0, Observation::rows),
+                })
+                .collect(),
+        };
+        let header = serde_json::to_vec(&header).expect("the header serializes");
+        let t = w * (w + 1) / 2;
+        let mut out =
+            Vec::with_capacity(PREFIX + header.len() + 8 * (2 * n + (o.logs.len() + 1) * n * t));
+        out.extend_from_slice(&MAGIC);
+        out.extend_from_slice(&VERSION.to_le_bytes());
+        out.extend_from_slice(&0u32.to_le_bytes());
+        out.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        out.extend_from_slice(&header);
+        let (min, max) = o.range.bounds();
+        for x in min.iter().chain(max) {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+        for parts in std::iter::once(&o.parts).chain(o.logs.iter().map(|l| &l.parts)) {
+            for p in parts {
+                let r = p.r();
+                for i in 0..w {
+                    for j in i..w {
+                        out.extend_from_slice(&r[(i, j)].to_le_bytes());
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Reads a state from its bytes; `file` names it in errors.
+    pub fn from_bytes(bytes: &[u8], file: &str) -> Result<ObservationState, IdentError> {
+        if bytes.len() < PREFIX {
+            return Err(bad(
+                file,
+                format!(
+                    "not a dvrk-ident observation state: {} bytes, shorter than its {PREFIX}-byte prefix",
+                    bytes.len()
+                ),
+            ));
+        }
+        let h = header_length(bytes[..PREFIX].try_into().expect("prefix"), file)?;
+        let rest = &bytes[PREFIX..];
+        if (rest.len() as u64) < h {
+            return Err(bad(
+                file,
+                format!(
+                    "truncated: the header is {h} bytes, the file has {} after the prefix",
+                    rest.len()
+                ),
+            ));
+        }
+        let (header, payload) = rest.split_at(h as usize);
+        let (header, size) = parse_header(header, file)?;
+        check_payload_size(payload.len() as u64, size, file)?;
+        decode(header, payload, file)
+    }
+
+    /// Reads a state file, its size checked against the header before the numbers are
+    /// read (a pipe or device is read only as far as the header says).
+    pub fn read(path: &Path) -> Result<ObservationState, IdentError> {
+        let file = path.display().to_string();
+        let io = |e: std::io::Error| IdentError::Io {
+            file: file.clone(),
+            message: e.to_string(),
+        };
+        let mut f = std::fs::File::open(path).map_err(io)?;
+        let mut prefix = Vec::with_capacity(PREFIX);
+        (&mut f)
+            .take(PREFIX as u64)
+            .read_to_end(&mut prefix)
+            .map_err(io)?;
+        if prefix.len() < PREFIX {
+            return Err(bad(
+                &file,
+                format!(
+                    "not a dvrk-ident observation state: {} bytes, shorter than its {PREFIX}-byte prefix",
+                    prefix.len()
+                ),
+            ));
+        }
+        let h = header_length(prefix[..].try_into().expect("prefix"), &file)?;
+        let mut header = Vec::new();
+        (&mut f).take(h).read_to_end(&mut header).map_err(io)?;
+        if (header.len() as u64) < h {
+            return Err(bad(
+                &file,
+                format!(
+                    "truncated: the header is {h} bytes, the file has {} after the prefix",
+                    header.len()
+                ),
+            ));
+        }
+        let (header, size) = parse_header(&header, &file)?;
+        // Grows with the bytes actually read, never beyond the size the header implies
+        // (plus one byte to tell a longer file).
+        let mut payload = Vec::new();
+        (&mut f)
+            .take(size + 1)
+            .read_to_end(&mut payload)
+            .map_err(io)?;
+        check_payload_size(payload.len() as u64, size, &file)?;
+        decode(header, &payload, &file)
+    }
+
+    /// Writes the state atomically ([`crate::output`]).
+    pub fn write(&self, path: &Path) -> Result<(), IdentError> {
+        let bytes = self.to_bytes();
+        crate::output::write_with(path, |w| w.write_all(&bytes)).map_err(|e| IdentError::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        })
+    }
+}
+
+/// The header length from the prefix, after the magic and the version.
+fn header_length(prefix: &[u8; PREFIX], file: &str) -> Result<u64, IdentError> {
+    if prefix[..8] != MAGIC {
+        return Err(bad(
+            file,
+            format!(
+                "not a dvrk-ident observation state (it starts with bytes {:02x?}, a state with \
+                 `DVRKOBS`): write one with `dvrk-ident observe`",
+                &prefix[..8]
+            ),
+        ));
+    }
+    let version = u32::from_le_bytes(prefix[8..12].try_into().expect("4 bytes"));
+    if version != VERSION {
+        return Err(bad(
+            file,
+            format!(
+                "observation state format version {version}; this dvrk-ident reads version \
+                 {VERSION} only: observe the logs again with this version"
+            ),
+        ));
+    }
+    if prefix[12..16] != [0; 4] {
+        return Err(bad(file, "bytes 12..16 of the prefix must be zero"));
+    }
+    let h = u64::from_le_bytes(prefix[16..24].try_into().expect("8 bytes"));
+    if h > MAX_HEADER_BYTES {
+        return Err(bad(
+            file,
+            format!(
+                "a header of {h} bytes, more than the {} MiB accepted",
+                MAX_HEADER_BYTES >> 20
+            ),
+        ));
+    }
+    Ok(h)
+}
+
+/// The header, checked, and the payload's size in bytes.
+fn parse_header(bytes: &[u8], file: &str) -> Result<(Header, u64), IdentError> {
+    let header: Header = serde_json::from_slice(bytes)
+        .map_err(|e| bad(file, format!("the header is not a state header: {e}")))?;
+    if header.format != FORMAT {
+        return Err(bad(
+            file,
+            format!("the header's format is {:?}, not {FORMAT:?}", header.format),
+        ));
+    }
+    let (n, w) = (header.coordinates, header.width);
+    if n == 0 || n > dvrk_model::input::MAX_COORDINATES {
+        return Err(bad(
+            file,
+            format!(
+                "{n} coordinates: 1 to {} accepted",
+                dvrk_model::input::MAX_COORDINATES
+            ),
+        ));
+    }
+    if w < 2 || w > dvrk_model::input::MAX_PARAMETERS + 1 {
+        return Err(bad(
+            file,
+            format!(
+                "width {w}: 2 to {} accepted (parameters + 1)",
+                dvrk_model::input::MAX_PARAMETERS + 1
+            ),
+        ));
+    }
+    if header.logs.is_empty() {
+        return Err(bad(file, "no log in the state"));
+    }
+    if let Some(l) = header.logs.iter().find(|l| l.samples == 0) {
+        return Err(bad(file, format!("log {}: no sample", l.path)));
+    }
+    if header.robot_hash.len() != 64 || !header.robot_hash.bytes().all(|b| b.is_ascii_hexdigit()) {
+        return Err(bad(file, "robot_hash is not a SHA-256 in hexadecimal"));
+    }
+    let t = (w * (w + 1) / 2) as u64;
+    let size = (header.logs.len() as u64 + 1)
+        .checked_mul(n as u64 * t)
+        .and_then(|v| v.checked_add(2 * n as u64))
+        .and_then(|v| v.checked_mul(8))
+        .ok_or_else(|| bad(file, "the header lists more logs than a file can hold"))?;
+    Ok((header, size))
+}
+
+fn check_payload_size(got: u64, size: u64, file: &str) -> Result<(), IdentError> {
+    if got != size {
+        return Err(bad(
+            file,
+            format!(
+                "{} the header's {size} bytes of numbers (got {})",
+                if got < size {
+                    "truncated: fewer bytes than"
+                } else {
+                    "more bytes than"
+                },
+                if got > size {
+                    "more".to_string()
+                } else {
+                    got.to_string()
+                }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// The state from a checked header and a payload of its exact size.
+fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState, IdentError> {
+    let (n, w) = (header.coordinates, header.width);
+    let mut numbers = payload
+        .chunks_exact(8)
+        .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
+    let mut next = |what: &dyn Fn() -> String| -> Result<f64, IdentError> {
+        let x = numbers.next().expect("the size was checked");
+        if x.is_finite() {
+            Ok(x)
+        } else {
+            Err(bad(file, format!("{}: {x} is not finite", what())))
+        }
+    };
+    let mut bound = |name: &str| -> Result<Vec<f64>, IdentError> {
+        (0..n)
+            .map(|j| next(&|| format!("torque {name}imum of coordinate {}", j + 1)))
+            .collect()
+    };
+    let min = bound("min")?;
+    let max = bound("max")?;
+    if let Some(j) = (0..n).find(|&j| min[j] > max[j]) {
+        return Err(bad(
+            file,
+            format!(
+                "coordinate {}: torque minimum {} above its maximum {}",
+                j + 1,
+                min[j],
+                max[j]
+            ),
+        ));
+    }
+    let total: usize = header.logs.iter().map(|l| l.samples).sum();
+    let mut factors = |what: &str, rows: usize| -> Result<Vec<Observation>, IdentError> {
+        (0..n)
+            .map(|j| {
+                let mut r = DMatrix::zeros(w, w);
+                for i in 0..w {
+                    for c in i..w {
+                        r[(i, c)] = next(&|| format!("{what}, coordinate {}", j + 1))?;
+                    }
+                    if r[(i, i)] < 0.0 {
+                        return Err(bad(
+                            file,
+                            format!(
+                                "{what}, coordinate {}: negative diagonal entry {} of the R factor",
+                                j + 1,
+                                r[(i, i)]
+                            ),
+                        ));
+                    }
+                }
+                Ok(Observation::from_factor(r, rows))
+            })
+            .collect()
+    };
+    let parts = factors("merged factors", total)?;
+    let mut logs = Vec::with_capacity(header.logs.len());
+    for l in &header.logs {
+        let parts = factors(&format!("log {}", l.path), l.samples)?;
+        logs.push(ObservedLog {
+            info: InputInfo {
+                role: "train".into(),
+                path: l.path.clone(),
+                sha256: l.sha256.clone(),
+                bytes: l.bytes,
+                source: l.source.clone(),
+                metrics: None,
+            },
+            parts,
+        });
+    }
+    Ok(ObservationState {
+        robot: header.robot,
+        robot_source: header.robot_source,
+        robot_hash: header.robot_hash,
+        processing: header.processing,
+        stribeck_velocity: header.stribeck_velocity,
+        observed: Observed {
+            logs,
+            parts,
+            range: TorqueRange::from_bounds(min, max),
+        },
+    })
+}
