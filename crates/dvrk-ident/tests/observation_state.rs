@@ -1,0 +1,279 @@
+//! Observation states (`dvrk_ident::state`): the fit of merged states equals the fit of
+//! their logs; the file round trip is exact; merges are associative and commutative to
+//! rounding (Gram matrices to 1e-12, fits to 1e-10); states of other robots or
+//! settings, other format versions and damaged files are refused with the file named.
+
+use std::path::PathBuf;
+
+use dvrk_ident::fit::{fit_logs, LogData};
+use dvrk_ident::log;
+use dvrk_ident::progress::Silent;
+use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::state::{ObservationState, MAGIC};
+use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
+use dvrk_model::Model;
+use nalgebra::DMatrix;
+
+fn example() -> Trajectory {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
+    log::read(path, None, None).unwrap()
+}
+
+/// Rows `lo..hi` of a log.
+fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+    let rows = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
+    Trajectory {
+        time: t.time[lo..hi].to_vec(),
+        q: rows(&t.q),
+        dq: t.dq.as_ref().map(rows),
+        tau: rows(&t.tau),
+        joint_names: t.joint_names.clone(),
+        coordinates: t.coordinates,
+        source: format!("{} [{lo}..{hi}]", t.source),
+    }
+}
+
+/// Three consecutive pieces of the bundled log, each long enough for the trimming.
+fn pieces() -> [Trajectory; 3] {
+    let whole = example();
+    let n = whole.len();
+    [
+        part(&whole, 0, n / 3),
+        part(&whole, n / 3, 2 * n / 3),
+        part(&whole, 2 * n / 3, n),
+    ]
+}
+
+fn settings(method: Method) -> FitSettings {
+    FitSettings {
+        method,
+        ..FitSettings::default()
+    }
+}
+
+fn observe(model: &Model, log: &Trajectory, s: &FitSettings) -> ObservationState {
+    ObservationState::observe(model, &[LogData::new(log)], s, &Silent).unwrap()
+}
+
+/// The document without the solver's wall-clock time.
+fn document(r: &FitResult) -> serde_json::Value {
+    let mut v: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
+    v["solver"]["seconds"] = serde_json::Value::Null;
+    v
+}
+
+fn merged(states: &[&ObservationState]) -> ObservationState {
+    let mut total = states[0].clone();
+    for s in &states[1..] {
+        total.merge(s).unwrap();
+    }
+    total
+}
+
+#[test]
+fn fit_of_merged_states_is_the_fit_of_the_logs() {
+    let model = Model::builtin("psm").unwrap();
+    let [a, b, c] = pieces();
+    for method in [Method::Wls, Method::Irls, Method::Sdp] {
+        let s = FitSettings {
+            test_window: Some(150),
+            ..settings(method)
+        };
+        let direct = fit_logs(
+            &model,
+            &[LogData::new(&a), LogData::new(&b)],
+            &[LogData::new(&c)],
+            &s,
+            &Silent,
+        )
+        .unwrap();
+        let state = merged(&[&observe(&model, &a, &s), &observe(&model, &b, &s)]);
+        let from_state = state.fit(&model, &s, &[LogData::new(&c)], &Silent).unwrap();
+        // The same merges in the same order: the same document to the last bit.
+        assert_eq!(
+            document(&from_state),
+            document(&direct),
+            "{}",
+            method.name()
+        );
+        assert_eq!(direct.inputs.len(), 3);
+        // Both logs observed at once give the same state as two merged.
+        let both =
+            ObservationState::observe(&model, &[LogData::new(&a), LogData::new(&b)], &s, &Silent)
+                .unwrap();
+        assert_eq!(both.to_bytes(), state.to_bytes());
+    }
+}
+
+#[test]
+fn file_round_trip_is_exact() {
+    let model = Model::builtin("psm").unwrap();
+    let [a, b, _] = pieces();
+    let s = settings(Method::Wls);
+    let state = merged(&[&observe(&model, &a, &s), &observe(&model, &b, &s)]);
+    let bytes = state.to_bytes();
+    assert_eq!(&bytes[..8], &MAGIC);
+    // n = 7, w = 116: two logs and the merged factors, each 7 triangles of 6786 numbers.
+    let header = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    assert_eq!(bytes.len(), 24 + header + 8 * (2 * 7 + 3 * 7 * 6786));
+    let back = ObservationState::from_bytes(&bytes, "mem.obs").unwrap();
+    assert_eq!(back.to_bytes(), bytes);
+    assert_eq!(back.samples(), state.samples());
+    let dir = std::env::temp_dir().join(format!("dvrk-state-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("s.obs");
+    state.write(&path).unwrap();
+    let read = ObservationState::read(&path).unwrap();
+    assert_eq!(read.to_bytes(), bytes);
+    assert_eq!(
+        document(&read.fit(&model, &s, &[], &Silent).unwrap()),
+        document(&state.fit(&model, &s, &[], &Silent).unwrap())
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Largest difference of the merged Gram matrices `RᵀR`, relative to their largest entry.
+fn gram_difference(x: &ObservationState, y: &ObservationState) -> f64 {
+    let mut worst: f64 = 0.0;
+    for (p, q) in x.observed.parts.iter().zip(&y.observed.parts) {
+        let (g1, g2) = (p.r().transpose() * p.r(), q.r().transpose() * q.r());
+        worst = worst.max((&g1 - &g2).amax() / g2.amax());
+        assert_eq!(p.rows(), q.rows());
+    }
+    worst
+}
+
+#[test]
+fn merge_is_associative_and_commutative() {
+    let model = Model::builtin("psm").unwrap();
+    let [a, b, c] = pieces();
+    // Least squares follows the factors to rounding (1e-10 required; observed about
+    // 4e-14). The semidefinite program's solution moves within the interior-point
+    // solver's tolerances when its input moves by rounding (observed 3.4e-7).
+    for (method, tolerance) in [(Method::Wls, 1e-10), (Method::Sdp, 1e-5)] {
+        let s = settings(method);
+        let (a, b, c) = (
+            observe(&model, &a, &s),
+            observe(&model, &b, &s),
+            observe(&model, &c, &s),
+        );
+        let left = merged(&[&merged(&[&a, &b]), &c]);
+        let orders = [
+            merged(&[&a, &merged(&[&b, &c])]),
+            merged(&[&merged(&[&c, &a]), &b]),
+            merged(&[&b, &merged(&[&c, &a])]),
+            merged(&[&c, &b, &a]),
+        ];
+        let fit = |st: &ObservationState| st.fit(&model, &s, &[], &Silent).unwrap();
+        let reference = fit(&left);
+        let beta =
+            |r: &FitResult| -> Vec<f64> { r.base_parameters.iter().map(|b| b.value).collect() };
+        for other in &orders {
+            let d = gram_difference(other, &left);
+            assert!(d < 1e-12, "Gram matrices differ by {d:e}");
+            assert_eq!(other.observed.range.bounds(), left.observed.range.bounds());
+            let r = fit(other);
+            let (x, y) = (beta(&r), beta(&reference));
+            let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+            let diff = x
+                .iter()
+                .zip(&y)
+                .map(|(p, q)| (p - q).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            eprintln!(
+                "{}: Gram {d:e}, base parameters {:e}",
+                method.name(),
+                diff / norm
+            );
+            assert!(
+                diff < tolerance * norm,
+                "{}: base parameters differ by {:e} relative",
+                method.name(),
+                diff / norm
+            );
+            assert_eq!(r.metrics.train.samples, reference.metrics.train.samples);
+        }
+    }
+}
+
+#[test]
+fn merge_refuses_other_robots_and_settings() {
+    let psm = Model::builtin("psm").unwrap();
+    let simplified = Model::builtin("psm_simplified").unwrap();
+    let [a, b, _] = pieces();
+    let s = settings(Method::Wls);
+    let mut x = observe(&psm, &a, &s);
+    let other_robot = observe(&simplified, &b, &s);
+    let e = x.merge(&other_robot).unwrap_err().to_string();
+    assert!(
+        e.contains("robot psm_simplified") && e.contains("do not merge"),
+        "{e}"
+    );
+    let cut = FitSettings {
+        processing: dvrk_ident::signal::Processing {
+            filter: Some(LowPass {
+                cutoff_hz: Cutoff::All(8.0),
+                ..LowPass::default()
+            }),
+            ..Default::default()
+        },
+        ..s.clone()
+    };
+    let e = x.merge(&observe(&psm, &b, &cut)).unwrap_err().to_string();
+    assert!(e.contains("processing settings"), "{e}");
+    let stribeck = FitSettings {
+        stribeck_velocity: Some(0.3),
+        ..s.clone()
+    };
+    let e = x
+        .merge(&observe(&psm, &b, &stribeck))
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("do not merge"), "{e}");
+    // Nothing was merged by the refusals.
+    assert_eq!(x.observed.logs.len(), 1);
+    // A state fitted with another robot.
+    let e = x
+        .fit(&simplified, &s, &[], &Silent)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("reduced for robot psm"), "{e}");
+}
+
+#[test]
+fn damaged_files_are_refused_with_the_file_named() {
+    let model = Model::builtin("psm").unwrap();
+    let [a, ..] = pieces();
+    let bytes = observe(&model, &a, &settings(Method::Ols)).to_bytes();
+    let err = |b: &[u8]| {
+        ObservationState::from_bytes(b, "x.obs")
+            .unwrap_err()
+            .to_string()
+    };
+    let mut v = bytes.clone();
+    v[8] = 2;
+    let e = err(&v);
+    assert!(
+        e.starts_with("x.obs: ") && e.contains("format version 2"),
+        "{e}"
+    );
+    let e = err(b"time,position.outer_yaw\n0,1\n");
+    assert!(e.contains("not a dvrk-ident observation state"), "{e}");
+    let e = err(&bytes[..bytes.len() - 8]);
+    assert!(e.contains("truncated"), "{e}");
+    let e = err(&[bytes.as_slice(), &[0u8; 8]].concat());
+    assert!(e.contains("more bytes than"), "{e}");
+    // A header length beyond the limit, and one beyond the file: no allocation.
+    let mut v = bytes.clone();
+    v[16..24].copy_from_slice(&u64::MAX.to_le_bytes());
+    assert!(err(&v).contains("more than the 16 MiB"), "{}", err(&v));
+    let mut v = bytes.clone();
+    v[16..24].copy_from_slice(&(1u64 << 20).to_le_bytes());
+    assert!(err(&v).contains("truncated"), "{}", err(&v));
+    // A NaN among the numbers (the last one: the last log's last factor entry).
+    let mut v = bytes.clone();
+    let end = v.len();
+    v[end - 8..].copy_from_slice(&f64::NAN.to_le_bytes());
+    assert!(err(&v).contains("is not finite"), "{}", err(&v));
+}
