@@ -27,8 +27,12 @@ struct Cli {
 enum Command {
     /// Summarize a robot model, or evaluate its regressor or inverse dynamics.
     Model(cmd::model::Args),
-    /// Identify the parameters from a log (OLS, WLS, IRLS or the physically consistent SDP).
+    /// Identify the parameters from logs or observation states (OLS, WLS, IRLS or the
+    /// physically consistent SDP).
     Fit(cmd::fit::Args),
+    /// Reduce logs to an observation state file, the map of a fit over many machines
+    /// (`fit --from` merges and fits the states).
+    Observe(cmd::observe::Args),
     /// Errors of an identified model on other logs.
     Validate(cmd::validate::Args),
     /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
@@ -51,6 +55,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Model(args) => cmd::model::run(args),
         Command::Fit(args) => cmd::fit::run(args),
+        Command::Observe(args) => cmd::observe::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::CableFit(args) => cmd::cable_fit::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),

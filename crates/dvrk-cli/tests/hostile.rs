@@ -246,6 +246,17 @@ fn hostile_corpus() {
         &work.join("psm_ols.json").display().to_string(),
     ]);
     assert!(ok, "{err}");
+    // An observation state the state cases damage: the bundled example observed.
+    let (ok, _, err) = support::run(&[
+        "observe",
+        &support::example("psm_excitation.mcap"),
+        "--robot",
+        "psm",
+        "--quiet",
+        "--out",
+        &work.join("psm.obs").display().to_string(),
+    ]);
+    assert!(ok, "{err}");
     let mut names = std::collections::HashSet::new();
     let mut failures = Vec::new();
     let (mut ran, mut skipped) = (0, 0);

@@ -4,13 +4,15 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
+use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat, LogReader};
 use dvrk_ident::output::Outputs;
 use dvrk_ident::signal::{Cutoff, LowPass};
-use dvrk_ident::{FitResult, FitSettings, Method};
+use dvrk_ident::state::ObservationState;
+use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
 use dvrk_model::Model;
 
 use super::emit;
@@ -210,11 +212,17 @@ pub struct Args {
     /// Training logs: files (2019 CSV, headered CSV, MCAP, sqlite3 .db3, ROS 1 .bag) or
     /// rosbag2 folders, recognized by content. Each is processed on its own (filters
     /// and trimming never cross from one to the next), their observations merged
-    #[arg(required = true, num_args = 1.., value_name = "LOG")]
+    #[arg(required_unless_present = "from", num_args = 1.., value_name = "LOG")]
     pub logs: Vec<String>,
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
-    #[arg(long)]
-    pub robot: String,
+    /// Observation states of `dvrk-ident observe` (the reduce): merged in order and
+    /// fitted, with their processing settings and robot; the same document as the fit
+    /// of their logs
+    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck"])]
+    pub from: Vec<String>,
+    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
+    /// --from: default the states' robot, and it must be the robot they were observed with)
+    #[arg(long, required_unless_present = "from")]
+    pub robot: Option<String>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Estimator
@@ -260,7 +268,7 @@ pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
 
 /// Whether a log (its files, for a rosbag2 folder) is large enough to be streamed (a
 /// log that cannot be examined is read the usual way, which reports the problem).
-fn is_large(path: &str) -> bool {
+pub fn is_large(path: &str) -> bool {
     log::files_of(path).is_ok_and(|files| {
         files
             .iter()
@@ -272,7 +280,7 @@ fn is_large(path: &str) -> bool {
 }
 
 /// The logs read from `paths`, for the fit and its provenance.
-fn log_data<'a>(data: &'a [dvrk_ident::Trajectory], paths: &'a [String]) -> Vec<LogData<'a>> {
+pub fn log_data<'a>(data: &'a [dvrk_ident::Trajectory], paths: &'a [String]) -> Vec<LogData<'a>> {
     data.iter()
         .zip(paths)
         .map(|(samples, path)| LogData {
@@ -293,16 +301,6 @@ pub fn run(args: Args) -> Result<()> {
     if stdout_taken && args.json {
         bail!("--json prints the result to stdout, and so does an output `-`: give one of them");
     }
-    let model = Model::load(&args.robot)?;
-    let mut settings = args.log_args.settings(FitSettings::default())?;
-    settings.method = match args.method {
-        MethodArg::Ols => Method::Ols,
-        MethodArg::Wls => Method::Wls,
-        MethodArg::Irls => Method::Irls,
-        MethodArg::Sdp => Method::Sdp,
-    };
-    settings.stribeck_velocity = args.stribeck;
-    let model = settings.model(&model)?.into_owned();
     let excitation = match &args.excitation {
         Some(p) => Some(
             dvrk_ident::excite::FourierTrajectory::from_json_file(p)
@@ -310,63 +308,11 @@ pub fn run(args: Args) -> Result<()> {
         ),
         None => None,
     };
-    settings.test_window = args.test_window;
-    let stream = args.stream || args.logs.iter().chain(&args.test).any(|p| is_large(p));
-    if stream && args.report.is_some() {
-        bail!(
-            "--report draws the logs, which a streamed fit does not hold in memory: \
-             fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
-        );
-    }
-    if stream && excitation.is_some() && !args.test.is_empty() && args.test_window.is_none() {
-        bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
-    }
-    let log_args = args.log_args.for_robot(&model);
-    let open = |paths: &[String]| -> Result<Vec<LogReader>> {
-        paths.iter().map(|p| log_args.open(p)).collect()
-    };
-    let train = open(&args.logs)?;
-    let test = open(&args.test)?;
     let bars = crate::progress::Bars::new();
-    let mut in_memory = None;
-    let result = if stream {
-        fit_stream_logs(
-            &model,
-            &train.iter().collect::<Vec<_>>(),
-            &test.iter().collect::<Vec<_>>(),
-            &settings,
-            BLOCK_SAMPLES,
-            &bars,
-        )?
+    let (model, settings, result, in_memory) = if args.from.is_empty() {
+        fit_logs_arg(&args, excitation.as_ref(), &bars)?
     } else {
-        let read = |readers: &[LogReader]| -> Result<Vec<dvrk_ident::Trajectory>> {
-            readers
-                .iter()
-                .map(|r| {
-                    let name = format!("reading {}", r.path().display());
-                    Ok(bars.spin(&name, || r.read_all())?)
-                })
-                .collect()
-        };
-        let train_data = read(&train)?;
-        let test_data = read(&test)?;
-        if let (None, Some(traj), Some(t)) = (args.test_window, &excitation, test_data.first()) {
-            let rate = t
-                .rate_hz()
-                .context("the test log has no usable time stamps")?;
-            // int(rate / f0) as in 2019 (1111 samples for the PSM at 200 Hz, 0.18 Hz).
-            let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
-            settings.test_window = Some(samples / settings.processing.decimate.max(1));
-        }
-        let result = fit_logs(
-            &model,
-            &log_data(&train_data, &args.logs),
-            &log_data(&test_data, &args.test),
-            &settings,
-            &bars,
-        )?;
-        in_memory = Some((train_data, test_data));
-        result
+        fit_states(&args, excitation.as_ref(), &bars)?
     };
     if result.solver.converged {
         // Every output built and staged before the first is put in place.
@@ -426,6 +372,153 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The estimator settings of the command line (method, test window).
+fn estimator(args: &Args) -> FitSettings {
+    FitSettings {
+        method: match args.method {
+            MethodArg::Ols => Method::Ols,
+            MethodArg::Wls => Method::Wls,
+            MethodArg::Irls => Method::Irls,
+            MethodArg::Sdp => Method::Sdp,
+        },
+        test_window: args.test_window,
+        ..FitSettings::default()
+    }
+}
+
+/// Logs read into memory, in order.
+fn read_all(readers: &[LogReader], bars: &crate::progress::Bars) -> Result<Vec<Trajectory>> {
+    readers
+        .iter()
+        .map(|r| {
+            let name = format!("reading {}", r.path().display());
+            Ok(bars.spin(&name, || r.read_all())?)
+        })
+        .collect()
+}
+
+/// With --excitation and test logs but no --test-window: the samples of one period of
+/// the trajectory at the first test log's rate, as in 2019.
+fn excitation_window(
+    args: &Args,
+    excitation: Option<&FourierTrajectory>,
+    test: &[Trajectory],
+    settings: &FitSettings,
+) -> Result<Option<usize>> {
+    if let (None, Some(traj), Some(t)) = (args.test_window, excitation, test.first()) {
+        let rate = t
+            .rate_hz()
+            .context("the test log has no usable time stamps")?;
+        // int(rate / f0) as in 2019 (1111 samples for the PSM at 200 Hz, 0.18 Hz).
+        let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
+        return Ok(Some(samples / settings.processing.decimate.max(1)));
+    }
+    Ok(settings.test_window)
+}
+
+/// The logs in memory (for --report) when the fit read them so.
+type InMemory = Option<(Vec<Trajectory>, Vec<Trajectory>)>;
+
+/// `fit LOG...`: the model, the settings, the result and the logs if held in memory.
+fn fit_logs_arg(
+    args: &Args,
+    excitation: Option<&FourierTrajectory>,
+    bars: &crate::progress::Bars,
+) -> Result<(Model, FitSettings, FitResult, InMemory)> {
+    let robot = args
+        .robot
+        .as_deref()
+        .expect("clap requires --robot without --from");
+    let model = Model::load(robot)?;
+    let mut settings = args.log_args.settings(estimator(args))?;
+    settings.stribeck_velocity = args.stribeck;
+    let model = settings.model(&model)?.into_owned();
+    let stream = args.stream || args.logs.iter().chain(&args.test).any(|p| is_large(p));
+    if stream && args.report.is_some() {
+        bail!(
+            "--report draws the logs, which a streamed fit does not hold in memory: \
+             fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
+        );
+    }
+    if stream && excitation.is_some() && !args.test.is_empty() && args.test_window.is_none() {
+        bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
+    }
+    let log_args = args.log_args.for_robot(&model);
+    let open = |paths: &[String]| -> Result<Vec<LogReader>> {
+        paths.iter().map(|p| log_args.open(p)).collect()
+    };
+    let train = open(&args.logs)?;
+    let test = open(&args.test)?;
+    if stream {
+        let result = fit_stream_logs(
+            &model,
+            &train.iter().collect::<Vec<_>>(),
+            &test.iter().collect::<Vec<_>>(),
+            &settings,
+            BLOCK_SAMPLES,
+            bars,
+        )?;
+        return Ok((model, settings, result, None));
+    }
+    let train_data = read_all(&train, bars)?;
+    let test_data = read_all(&test, bars)?;
+    settings.test_window = excitation_window(args, excitation, &test_data, &settings)?;
+    let result = fit_logs(
+        &model,
+        &log_data(&train_data, &args.logs),
+        &log_data(&test_data, &args.test),
+        &settings,
+        bars,
+    )?;
+    Ok((model, settings, result, Some((train_data, test_data))))
+}
+
+/// `fit --from STATE...`: the states merged in order, fitted, validated on the test
+/// logs (read in memory, processed with the states' settings).
+fn fit_states(
+    args: &Args,
+    excitation: Option<&FourierTrajectory>,
+    bars: &crate::progress::Bars,
+) -> Result<(Model, FitSettings, FitResult, InMemory)> {
+    let l = &args.log_args;
+    if l.cutoff.is_some() || l.trim.is_some() || l.filter_torque {
+        bail!(
+            "--from: the processing (--cutoff, --trim, --filter-torque) is the states' own, \
+             set when they were observed: give those options to `dvrk-ident observe`"
+        );
+    }
+    let mut state: Option<ObservationState> = None;
+    for path in &args.from {
+        let s = ObservationState::read(Path::new(path))?;
+        match &mut state {
+            None => state = Some(s),
+            Some(total) => total.merge(&s).with_context(|| format!("{path}"))?,
+        }
+    }
+    let state = state.expect("clap requires a state");
+    let robot = match &args.robot {
+        Some(r) => r.clone(),
+        None => state
+            .robot_source
+            .strip_prefix("builtin:")
+            .unwrap_or(&state.robot_source)
+            .to_string(),
+    };
+    let base = Model::load(&robot).with_context(|| format!("robot of {}", args.from[0]))?;
+    let model = state.model(&base).with_context(|| args.from.join(", "))?;
+    let mut settings = state.settings(&estimator(args));
+    let log_args = args.log_args.for_robot(&model);
+    let test = args
+        .test
+        .iter()
+        .map(|p| log_args.open(p))
+        .collect::<Result<Vec<_>>>()?;
+    let test_data = read_all(&test, bars)?;
+    settings.test_window = excitation_window(args, excitation, &test_data, &settings)?;
+    let result = state.fit(&base, &settings, &log_data(&test_data, &args.test), bars)?;
+    Ok((model, settings, result, None))
 }
 
 /// The human summary: solver, consistency and per-joint errors.

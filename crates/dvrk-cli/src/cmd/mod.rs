@@ -6,6 +6,7 @@ pub mod excite;
 pub mod export;
 pub mod fit;
 pub mod model;
+pub mod observe;
 pub mod report;
 pub mod simulate;
 pub mod validate;
