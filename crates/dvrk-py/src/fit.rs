@@ -18,6 +18,7 @@ use crate::convert::{array, background, matrix, py_bool, py_str};
 use crate::data::{fail_ident, DataPy, PreparedPy};
 use crate::errors::{error, from_ident, from_io, from_model, input, Kind};
 use crate::json::{from_python, to_python};
+use crate::observe::observations_arg;
 use crate::robot::Robot;
 
 fn parse_method(text: &str) -> PyResult<Method> {
@@ -71,23 +72,23 @@ fn log_data(logs: &[(Arc<Trajectory>, Option<PathBuf>)]) -> Vec<LogData<'_>> {
 
 /// The keyword arguments that change the settings, shared by `fit` and `prepare`.
 #[derive(Default)]
-struct Overrides<'a, 'py> {
-    settings: Option<&'a Bound<'py, PyAny>>,
-    method: Option<&'a str>,
-    cutoff: Option<&'a Bound<'py, PyAny>>,
-    trim: Option<usize>,
-    test_window: Option<usize>,
-    decimate: Option<usize>,
-    min_speed: Option<f64>,
-    resample: Option<f64>,
-    irls_iterations: Option<usize>,
-    sdp_regularization: Option<f64>,
+pub(crate) struct Overrides<'a, 'py> {
+    pub settings: Option<&'a Bound<'py, PyAny>>,
+    pub method: Option<&'a str>,
+    pub cutoff: Option<&'a Bound<'py, PyAny>>,
+    pub trim: Option<usize>,
+    pub test_window: Option<usize>,
+    pub decimate: Option<usize>,
+    pub min_speed: Option<f64>,
+    pub resample: Option<f64>,
+    pub irls_iterations: Option<usize>,
+    pub sdp_regularization: Option<f64>,
 }
 
 impl Overrides<'_, '_> {
     /// `settings` (the result document's `settings` layout; missing fields take the
     /// defaults) or the defaults, then each keyword that is not `None`.
-    fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
+    pub fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
         let mut s = match self.settings.filter(|s| !s.is_none()) {
             Some(obj) => from_python::<FitSettings>(py, obj, "settings")?,
             None => FitSettings::default(),
@@ -161,7 +162,10 @@ impl Overrides<'_, '_> {
 /// - ``data``: a :class:`Data` or a list of them (``dvrk-ident fit a b c``): each log is
 ///   processed on its own (filters and trimming never cross from one to the next) and
 ///   their observations merged; ``result.inputs`` lists every log with its hash (of
-///   the file it was read from, else of its samples) and its own metrics;
+///   the file it was read from, else of its samples) and its own metrics. Or an
+///   :class:`Observation` or a list of them (:func:`observe`, ``dvrk-ident fit
+///   --from``): merged in order and fitted with their own processing settings, the
+///   result of the fit of their logs;
 /// - ``test``: a :class:`Data` or a list to validate on, ``test_window``: metrics on
 ///   the first N processed samples of each only;
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
@@ -216,19 +220,45 @@ pub fn fit(
     }
     .apply(py)?;
     let model = robot.get().model.clone();
-    let train = logs_arg(data, "data")?;
+    let states = observations_arg(data)?;
+    if states.is_some()
+        && (cutoff.is_some()
+            || trim.is_some()
+            || decimate.is_some()
+            || min_speed.is_some()
+            || resample.is_some())
+    {
+        return Err(input(
+            "data: the processing (cutoff, trim, decimate, min_speed, resample) of \
+             observations is their own, set by observe()",
+        ));
+    }
+    let train = match states {
+        Some(_) => Vec::new(),
+        None => logs_arg(data, "data")?,
+    };
     let test = match test.filter(|t| !t.is_none()) {
         Some(t) => logs_arg(t, "test")?,
         None => Vec::new(),
     };
     let inner = background(py, move || {
-        fit_logs(
-            &model,
-            &log_data(&train),
-            &log_data(&test),
-            &settings,
-            &Silent,
-        )
+        match states {
+            // The reduce: the observations merged in order, then fitted.
+            Some(states) => {
+                let mut total = (*states[0]).clone();
+                for s in &states[1..] {
+                    total.merge(s).map_err(fail_ident)?;
+                }
+                total.fit(&model, &settings, &log_data(&test), &Silent)
+            }
+            None => fit_logs(
+                &model,
+                &log_data(&train),
+                &log_data(&test),
+                &settings,
+                &Silent,
+            ),
+        }
         .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;

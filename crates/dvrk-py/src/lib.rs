@@ -13,6 +13,7 @@ mod excite;
 mod fit;
 mod frame;
 mod json;
+mod observe;
 mod robot;
 
 use pyo3::prelude::*;
@@ -40,6 +41,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::fit::{fit, prepare, FitResultPy};
+
+    #[pymodule_export]
+    use crate::observe::{observe, ObservationPy};
 
     #[pymodule_export]
     use crate::excite::{evaluate_trajectory, excite, ExcitationPy, TrajectoryPy};
