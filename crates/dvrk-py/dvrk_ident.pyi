@@ -318,9 +318,45 @@ def read_log(
 def list_topics(path: PathLike) -> List[Dict[str, Any]]:
     """The topics of a recording (MCAP, sqlite3, ROS 1 bag or rosbag2 folder)."""
 
+class Observation:
+    """Training logs reduced to their R factors (:func:`observe`): merge with ``+``,
+    fit with :func:`fit`; ``bytes()`` is the file of ``dvrk-ident observe``."""
+
+    @staticmethod
+    def from_bytes(data: bytes) -> "Observation": ...
+    @staticmethod
+    def read(path: PathLike) -> "Observation": ...
+    def write(self, path: PathLike) -> None: ...
+    def merge(self, other: "Observation") -> "Observation": ...
+    def __add__(self, other: "Observation") -> "Observation": ...
+    def __bytes__(self) -> bytes: ...
+    @property
+    def robot(self) -> str: ...
+    @property
+    def samples(self) -> int: ...
+    @property
+    def logs(self) -> List[Dict[str, Any]]:
+        """``[{path, sha256, bytes, source, samples}]``."""
+    @property
+    def processing(self) -> Dict[str, Any]: ...
+
+def observe(
+    robot: Robot,
+    data: Union[Data, PathLike, Sequence[Union[Data, PathLike]]],
+    *,
+    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    trim: Optional[int] = None,
+    decimate: Optional[int] = None,
+    min_speed: Optional[float] = None,
+    resample: Optional[float] = None,
+    settings: Optional[Mapping[str, Any]] = None,
+) -> Observation:
+    """The logs processed as :func:`fit` processes them and reduced: the map of a fit
+    over many processes or machines."""
+
 def fit(
     robot: Robot,
-    data: Union[Data, Sequence[Data]],
+    data: Union[Data, Sequence[Data], Observation, Sequence[Observation]],
     method: Optional[str] = None,
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
@@ -336,7 +372,7 @@ def fit(
     allow_unconverged: bool = False,
 ) -> Result:
     """Identifies the parameters from one log or a list of logs, each processed on its
-    own (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
+    own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter)."""
 
 def prepare(
