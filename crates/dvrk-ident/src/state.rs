@@ -560,7 +560,7 @@ fn parse_header(bytes: &[u8], file: &str) -> Result<(Header, u64), IdentError> {
             ),
         ));
     }
-    if w < 2 || w > dvrk_model::input::MAX_PARAMETERS + 1 {
+    if !(2..=dvrk_model::input::MAX_PARAMETERS + 1).contains(&w) {
         return Err(bad(
             file,
             format!(

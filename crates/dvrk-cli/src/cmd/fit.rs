@@ -494,7 +494,7 @@ fn fit_states(
         let s = ObservationState::read(Path::new(path))?;
         match &mut state {
             None => state = Some(s),
-            Some(total) => total.merge(&s).with_context(|| format!("{path}"))?,
+            Some(total) => total.merge(&s).with_context(|| path.clone())?,
         }
     }
     let state = state.expect("clap requires a state");
