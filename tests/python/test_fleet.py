@@ -135,14 +135,15 @@ def test_dask_local_cluster_of_two_processes(psm, fleet, direct):
         processes=True,
         dashboard_address=None,
     ) as cluster, distributed.Client(cluster) as client:
+        client.wait_for_workers(2)
         merged = (
             db.from_sequence(fleet, npartitions=4)
             .map(observe)
             .fold(operator.add)
             .compute(scheduler=client)
         )
-        # Both workers took part (the work is given to them by the scheduler; which
-        # took which log does not change the result).
+        # Two worker processes (which took which log is the scheduler's choice and does
+        # not change the result).
         assert len(client.scheduler_info()["workers"]) == 2
     assert isinstance(merged, di.Observation)
     assert merged.samples == direct.metrics["train"]["samples"]

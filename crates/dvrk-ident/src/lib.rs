@@ -10,6 +10,10 @@
 //! [`log::LogReader`] reads any format in blocks, [`signal::stream`] processes them,
 //! and [`fit::stream::fit_stream`] reduces them into the observation in several passes
 //! over the files, with the same result as [`fit()`].
+//!
+//! Fits spread over processes or machines: [`state::ObservationState`] holds the
+//! training logs reduced (each log's factors, all of them merged, the torque range) in a
+//! versioned file; states merge, and the fit of a merged state is the fit of its logs.
 
 pub mod error;
 pub mod estimate;
