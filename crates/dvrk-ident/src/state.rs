@@ -575,6 +575,14 @@ fn parse_header(bytes: &[u8], file: &str) -> Result<(Header, u64), IdentError> {
     if let Some(l) = header.logs.iter().find(|l| l.samples == 0) {
         return Err(bad(file, format!("log {}: no sample", l.path)));
     }
+    if header
+        .logs
+        .iter()
+        .try_fold(0usize, |total, l| total.checked_add(l.samples))
+        .is_none()
+    {
+        return Err(bad(file, "the logs' sample counts overflow"));
+    }
     if header.robot_hash.len() != 64 || !header.robot_hash.bytes().all(|b| b.is_ascii_hexdigit()) {
         return Err(bad(file, "robot_hash is not a SHA-256 in hexadecimal"));
     }

@@ -271,6 +271,21 @@ fn damaged_files_are_refused_with_the_file_named() {
     let mut v = bytes.clone();
     v[16..24].copy_from_slice(&(1u64 << 20).to_le_bytes());
     assert!(err(&v).contains("truncated"), "{}", err(&v));
+    // Two logs whose sample counts sum beyond usize: refused, no overflow.
+    let mut pair = ObservationState::from_bytes(&bytes, "x.obs").unwrap();
+    pair.merge(&observe(&model, &a, &settings(Method::Ols)))
+        .unwrap();
+    let pair = pair.to_bytes();
+    let header = u64::from_le_bytes(pair[16..24].try_into().unwrap()) as usize;
+    let text = std::str::from_utf8(&pair[24..24 + header]).unwrap();
+    let samples = format!("\"samples\":{}", a.len() - 400);
+    assert!(text.contains(&samples), "{text}");
+    let text = text.replacen(&samples, &format!("\"samples\":{}", usize::MAX), 1);
+    let mut v = pair[..16].to_vec();
+    v.extend_from_slice(&(text.len() as u64).to_le_bytes());
+    v.extend_from_slice(text.as_bytes());
+    v.extend_from_slice(&pair[24 + header..]);
+    assert!(err(&v).contains("sample counts overflow"), "{}", err(&v));
     // A NaN among the numbers (the last one: the last log's last factor entry).
     let mut v = bytes.clone();
     let end = v.len();
