@@ -640,7 +640,11 @@ fn limits_round_trip_through_the_file_layout() {
         assert_eq!(back.cartesian, limits.cartesian);
     }
     let model = Model::builtin("psm").unwrap();
-    let text = toml::to_string(&dvrk_model::LimitsSpec::of(&model, &Limits::of_model(&model))).unwrap();
+    let text = toml::to_string(&dvrk_model::LimitsSpec::of(
+        &model,
+        &Limits::of_model(&model),
+    ))
+    .unwrap();
     assert!(text.contains("expr = \"1.2177*(q7 - q6)\""), "{text}");
 }
 

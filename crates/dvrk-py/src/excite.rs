@@ -33,13 +33,7 @@ fn from_fourier(e: FourierError) -> PyErr {
 }
 
 fn parse_criterion(text: &str) -> PyResult<Criterion> {
-    match text.to_ascii_lowercase().replace('-', "_").as_str() {
-        "condition" => Ok(Criterion::Condition),
-        "log_det" | "logdet" => Ok(Criterion::LogDet),
-        other => Err(input(format!(
-            "criterion: unknown criterion {other:?}: expected \"condition\" or \"log_det\""
-        ))),
-    }
+    crate::convert::named("criterion", text)
 }
 
 /// `robot`'s limits (description `[[limits]]` and `[[cartesian_limits]]`) as a dict in

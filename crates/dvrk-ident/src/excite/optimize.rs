@@ -82,11 +82,9 @@ pub enum Criterion {
 }
 
 impl Criterion {
+    /// The name the command line, Python and results use (see [`crate::names`]).
     pub fn name(&self) -> &'static str {
-        match self {
-            Criterion::Condition => "condition",
-            Criterion::LogDet => "log_det",
-        }
+        crate::names::Named::name(*self)
     }
 
     /// True when `a` is a better criterion value than `b`.
@@ -102,6 +100,24 @@ impl Criterion {
             Criterion::Condition => objective.exp(),
             Criterion::LogDet => -objective,
         }
+    }
+}
+
+impl crate::names::Named for Criterion {
+    const WHAT: &'static str = "criterion";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("condition", Criterion::Condition),
+        ("log_det", Criterion::LogDet),
+        ("logdet", Criterion::LogDet),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for Criterion {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
     }
 }
 
