@@ -48,13 +48,25 @@ pub struct JointLimitSpec {
     /// e.g. `q3`, `jaw`, `q7 - q6`.
     pub expr: String,
     /// `[low, high]`, rad or m.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "as_list::option"
+    )]
     pub position: Option<[NumOrExpr; 2]>,
     /// `[low, high]`, rad/s or m/s.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "as_list::option"
+    )]
     pub velocity: Option<[NumOrExpr; 2]>,
     /// `[low, high]`, rad/s² or m/s².
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "as_list::option"
+    )]
     pub acceleration: Option<[NumOrExpr; 2]>,
 }
 
@@ -64,8 +76,41 @@ pub struct JointLimitSpec {
 #[serde(deny_unknown_fields)]
 pub struct CartesianLimitSpec {
     pub frame: String,
+    #[serde(serialize_with = "as_list::array")]
     pub min: [NumOrExpr; 3],
+    #[serde(serialize_with = "as_list::array")]
     pub max: [NumOrExpr; 3],
+}
+
+/// Ranges and corners written as lists (serde writes fixed arrays as tuples, which
+/// Python would get as `tuple`s where a limits file and JSON have lists).
+mod as_list {
+    use serde::{Serialize, Serializer};
+
+    struct List<'a, T>(&'a [T]);
+
+    impl<T: Serialize> Serialize for List<'_, T> {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            s.collect_seq(self.0)
+        }
+    }
+
+    pub fn array<S: Serializer, T: Serialize, const N: usize>(
+        v: &[T; N],
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        s.collect_seq(v)
+    }
+
+    pub fn option<S: Serializer, T: Serialize, const N: usize>(
+        v: &Option<[T; N]>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        match v {
+            Some(a) => s.serialize_some(&List(a)),
+            None => s.serialize_none(),
+        }
+    }
 }
 
 /// Compiled limits of an excitation: joint limits and Cartesian boxes.
