@@ -148,7 +148,7 @@ def test_data_errors(psm):
 def test_fit_setting_errors(psm):
     t = np.arange(2000) / 200.0
     data = di.Data(t, np.zeros((2000, 7)), np.zeros((2000, 7)))
-    with pytest.raises(di.InputError, match="unknown estimator"):
+    with pytest.raises(di.InputError, match="method: unknown method \"lasso\": expected ols, wls, irls or sdp"):
         di.fit(psm, data, method="lasso")
     with pytest.raises(di.InputError, match="cutoff"):
         di.fit(psm, data, method="ols", cutoff="fast")

@@ -190,8 +190,14 @@ def test_robot_limits_round_trip(arm):
 def test_excite_errors(arm, tmp_path):
     with pytest.raises(di.InputError, match="criterion"):
         di.excite(arm, criterion="trace", **QUICK)
-    with pytest.raises(di.InputError, match="impossible limits"):
+    # The same checks as a limits file or a description (one schema, one compiler).
+    with pytest.raises(di.InputError, match="position`: lower bound 1 is above upper bound 0"):
         di.excite(arm, limits={"limits": [{"expr": "q1", "position": [1.0, 0.0]}]}, **QUICK)
+    with pytest.raises(di.InputError, match="unknown field `speed`"):
+        di.excite(arm, limits={"limits": [{"expr": "q1", "speed": [-1.0, 1.0]}]}, **QUICK)
+    with pytest.raises(di.InputError, match="must be a finite number"):
+        di.excite(arm, limits={"limits": [{"expr": "q1", "position": [float("nan"), 1.0]}]},
+                  **QUICK)
     with pytest.raises(di.InputError, match="no frame named `hand`"):
         di.excite(arm, limits={"cartesian_limits": [
             {"frame": "hand", "min": [0, 0, 0], "max": [1, 1, 1]}]}, **QUICK)

@@ -18,6 +18,8 @@ pub enum IdentError {
     Report(#[from] crate::report::ReportError),
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    #[error(transparent)]
+    Excite(#[from] crate::excite::ExciteError),
     #[error("{}", prefixed(source_name, error))]
     Signal {
         source_name: String,

@@ -35,13 +35,28 @@ pub enum Method {
 }
 
 impl Method {
+    /// The name the command line, Python and results use (see [`crate::names`]).
     pub fn name(self) -> &'static str {
-        match self {
-            Method::Ols => "ols",
-            Method::Wls => "wls",
-            Method::Irls => "irls",
-            Method::Sdp => "sdp",
-        }
+        crate::names::Named::name(self)
+    }
+}
+
+impl crate::names::Named for Method {
+    const WHAT: &'static str = "method";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("ols", Method::Ols),
+        ("wls", Method::Wls),
+        ("irls", Method::Irls),
+        ("sdp", Method::Sdp),
+    ];
+    const CANONICAL: usize = 4;
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
     }
 }
 

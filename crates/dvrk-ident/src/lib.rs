@@ -22,6 +22,7 @@ pub mod excite;
 mod lapack;
 pub mod log;
 mod median;
+pub mod names;
 pub mod observation;
 pub mod output;
 pub mod progress;

@@ -27,10 +27,24 @@ pub enum Coordinates {
 
 impl std::fmt::Display for Coordinates {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            Coordinates::Measured => "measured",
-            Coordinates::Model => "model",
-        })
+        f.write_str(crate::names::Named::name(*self))
+    }
+}
+
+impl crate::names::Named for Coordinates {
+    const WHAT: &'static str = "coordinates";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("measured", Coordinates::Measured),
+        ("model", Coordinates::Model),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for Coordinates {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
     }
 }
 

@@ -8,23 +8,11 @@ use nalgebra::{DMatrix, Vector3};
 use serde::Deserialize;
 
 use crate::error::ModelError;
-use crate::expr::{Affine, Expr, ExprError, Scope};
+use crate::expr::{Affine, Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
+use crate::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, Limits, LimitsSpec};
 use crate::model::*;
-
-/// A number, or an expression string evaluated at load time.
-#[derive(Clone, Debug, Deserialize)]
-#[serde(untagged)]
-pub enum NumOrExpr {
-    Num(f64),
-    Expr(String),
-}
-
-impl Default for NumOrExpr {
-    fn default() -> Self {
-        NumOrExpr::Num(0.0)
-    }
-}
+use crate::resolve::Ctx;
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
@@ -47,9 +35,9 @@ struct FileDesc {
     measured: Option<MeasuredDesc>,
     frames: Vec<FrameDesc>,
     #[serde(default)]
-    limits: Vec<LimitDesc>,
+    limits: Vec<JointLimitSpec>,
     #[serde(default)]
-    cartesian_limits: Vec<CartesianLimitDesc>,
+    cartesian_limits: Vec<CartesianLimitSpec>,
     #[serde(default)]
     bounds: GlobalBounds,
 }
@@ -93,23 +81,6 @@ struct FrameDesc {
 struct KnownForceDesc {
     polynomial: Vec<f64>,
     along: Option<String>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LimitDesc {
-    expr: String,
-    position: Option<[NumOrExpr; 2]>,
-    velocity: Option<[NumOrExpr; 2]>,
-    acceleration: Option<[NumOrExpr; 2]>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CartesianLimitDesc {
-    frame: String,
-    min: [NumOrExpr; 3],
-    max: [NumOrExpr; 3],
 }
 
 /// Resolves constants that may refer to each other, in dependency order.
@@ -197,91 +168,6 @@ fn resolve_constants(
 fn mentions(text: &str, name: &str) -> bool {
     text.split(|c: char| !(c.is_alphanumeric() || c == '_'))
         .any(|token| token == name)
-}
-
-struct Ctx<'a> {
-    file: &'a str,
-    constants: Vec<(String, f64)>,
-    coordinates: &'a [String],
-}
-
-impl Ctx<'_> {
-    fn scope(&self) -> Scope<'_> {
-        Scope {
-            constants: &self.constants,
-            coordinates: self.coordinates,
-        }
-    }
-
-    fn expr(&self, place: &str, field: &str, text: &str) -> Result<Expr, ModelError> {
-        Expr::parse(text, &self.scope())
-            .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))
-    }
-
-    /// A number or constant expression, finite and at most `max` (`unit`) in magnitude.
-    fn number(
-        &self,
-        place: &str,
-        field: &str,
-        v: &NumOrExpr,
-        (max, unit): (f64, &str),
-    ) -> Result<f64, ModelError> {
-        let x = match v {
-            NumOrExpr::Num(x) => *x,
-            NumOrExpr::Expr(s) => self
-                .expr(place, field, s)?
-                .constant_value(self.coordinates)
-                .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))?,
-        };
-        input::check_magnitude(x, max, unit)
-            .map_err(|m| ModelError::field(self.file, place, field, m))
-    }
-
-    /// An affine joint value whose offset is at most `max` (`unit`) and whose
-    /// coefficients are at most [`input::MAX_ANGLE_RAD`] in magnitude, all finite.
-    fn affine(
-        &self,
-        place: &str,
-        field: &str,
-        v: &NumOrExpr,
-        (max, unit): (f64, &str),
-    ) -> Result<Affine, ModelError> {
-        let a = match v {
-            NumOrExpr::Num(x) => Affine::constant(*x),
-            NumOrExpr::Expr(s) => self
-                .expr(place, field, s)?
-                .affine(self.coordinates.len())
-                .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))?,
-        };
-        let bad = |m: String| ModelError::field(self.file, place, field, m);
-        input::check_magnitude(a.offset, max, unit).map_err(bad)?;
-        for &(k, c) in &a.terms {
-            input::check_magnitude(c, input::MAX_ANGLE_RAD, "")
-                .map_err(|m| bad(format!("coefficient of {}: {m}", self.coordinates[k])))?;
-        }
-        Ok(a)
-    }
-
-    fn range(
-        &self,
-        place: &str,
-        field: &str,
-        v: &Option<[NumOrExpr; 2]>,
-        range: (f64, &str),
-    ) -> Result<Option<[f64; 2]>, ModelError> {
-        let Some([lo, hi]) = v else { return Ok(None) };
-        let lo = self.number(place, field, lo, range)?;
-        let hi = self.number(place, field, hi, range)?;
-        if lo > hi {
-            return Err(ModelError::field(
-                self.file,
-                place,
-                field,
-                format!("lower bound {lo} is above upper bound {hi}"),
-            ));
-        }
-        Ok(Some([lo, hi]))
-    }
 }
 
 /// A frame's nominal values: a rigid body where they give one (mass, centre of mass and
@@ -742,55 +628,18 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         },
     };
 
-    let mut limits = Vec::new();
-    for (i, ld) in desc.limits.iter().enumerate() {
-        let place = format!("limits[{i}] ({})", ld.expr);
-        let expr = measured
-            .affine(&ld.expr, &ctx.constants, ctx.coordinates)
-            .map_err(|e| ModelError::field(file, &place, "expr", e.to_string()))?;
-        limits.push(Limit {
-            label: ld.expr.clone(),
-            expr,
-            position: ctx.range(
-                &place,
-                "position",
-                &ld.position,
-                (input::MAX_ANGLE_RAD, "rad or m"),
-            )?,
-            velocity: ctx.range(
-                &place,
-                "velocity",
-                &ld.velocity,
-                (input::MAX_VALUE, "rad/s or m/s"),
-            )?,
-            acceleration: ctx.range(
-                &place,
-                "acceleration",
-                &ld.acceleration,
-                (input::MAX_VALUE, "rad/s² or m/s²"),
-            )?,
-        });
-    }
-
-    let mut cartesian_limits = Vec::new();
-    for (i, cd) in desc.cartesian_limits.iter().enumerate() {
-        let place = format!("cartesian_limits[{i}] ({})", cd.frame);
-        let mut corners = [[0.0; 3]; 2];
-        for (corner, (field, values)) in
-            corners.iter_mut().zip([("min", &cd.min), ("max", &cd.max)])
-        {
-            for (v, raw) in corner.iter_mut().zip(values) {
-                // An infinite side leaves the box open (documented); NaN is refused.
-                *v = match raw {
-                    NumOrExpr::Num(x) if x.is_infinite() => *x,
-                    raw => ctx.number(&place, field, raw, (input::MAX_LENGTH_M, "m"))?,
-                };
-            }
-        }
-        let limit = CartesianLimit::new(&names, &cd.frame, corners[0], corners[1])
-            .map_err(|(field, message)| ModelError::field(file, &place, field, message))?;
-        cartesian_limits.push(limit);
-    }
+    let spec = LimitsSpec {
+        limits: desc.limits,
+        cartesian_limits: desc.cartesian_limits,
+    };
+    let Limits {
+        joint: limits,
+        cartesian: cartesian_limits,
+    } = spec.compile_in(&LimitScope {
+        ctx: &ctx,
+        measured: &measured,
+        frame_names: &names,
+    })?;
 
     let coordinate_is_length = (0..n)
         .map(|k| {

@@ -8,6 +8,7 @@
 
 use exmex::prelude::*;
 use exmex::FlatEx;
+use serde::{Deserialize, Serialize};
 
 /// Largest number of distinct names (coordinates and constants) in one expression: the
 /// size of the evaluation buffer.
@@ -132,6 +133,20 @@ pub(crate) fn format_coefficient(x: f64) -> String {
     }
 }
 
+/// A number, or an expression string evaluated at load time.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum NumOrExpr {
+    Num(f64),
+    Expr(String),
+}
+
+impl Default for NumOrExpr {
+    fn default() -> Self {
+        NumOrExpr::Num(0.0)
+    }
+}
+
 /// Why an expression could not be used.
 #[derive(Debug, Clone, PartialEq)]
 pub enum ExprError {
@@ -181,6 +196,9 @@ impl std::fmt::Display for ExprError {
         }
     }
 }
+
+/// So that callers can keep an expression error as the `source` of theirs.
+impl std::error::Error for ExprError {}
 
 /// Names an expression may refer to: constants (with values) and coordinates (by index).
 pub struct Scope<'a> {

@@ -70,26 +70,15 @@ fn matrix_arg(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<DM
 }
 
 fn parse_coordinates(text: &str) -> PyResult<Coordinates> {
-    match text.to_ascii_lowercase().as_str() {
-        "model" => Ok(Coordinates::Model),
-        "measured" => Ok(Coordinates::Measured),
-        other => Err(input(format!(
-            "coordinates: expected \"model\" or \"measured\", got {other:?}"
-        ))),
-    }
+    crate::convert::named("coordinates", text)
 }
 
-/// `None` / `"auto"`: detect; `wpi`, `wpi-csv`, `2019`, `csv`, `mcap`.
+/// `None` / `"auto"`: detect; otherwise a log format's name (`wpi`, `csv`, `mcap`, ...).
 pub fn parse_format(text: Option<&str>) -> PyResult<Option<LogFormat>> {
-    match text.map(|t| t.to_ascii_lowercase()) {
+    match text {
         None => Ok(None),
-        Some(t) if t == "auto" => Ok(None),
-        Some(t) if t == "wpi-csv" || t == "wpi_csv" => Ok(Some(LogFormat::Wpi)),
-        Some(t) => t.parse::<LogFormat>().map(Some).map_err(|e| {
-            input(format!(
-                "format: {e} (also accepted: wpi-csv, 2019, auto or None)"
-            ))
-        }),
+        Some(t) if t.eq_ignore_ascii_case("auto") => Ok(None),
+        Some(t) => crate::convert::named("format", t).map(Some),
     }
 }
 
@@ -663,9 +652,7 @@ pub fn read_log(
     };
     let time_source = match time_source {
         None => mcap::TimeSource::default(),
-        Some(s) => s
-            .parse::<mcap::TimeSource>()
-            .map_err(|e| input(format!("time_source: {e}")))?,
+        Some(s) => crate::convert::named("time_source", s)?,
     };
     let given_time_source = time_source != mcap::TimeSource::default();
     let model = robot.map(|r| r.get().model.clone());

@@ -12,6 +12,7 @@
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
 //! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `Result` |
 
+use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;
 use dvrk_ident::IdentError;
 use dvrk_model::ModelError;
@@ -210,6 +211,22 @@ pub fn log_kind(e: &LogError) -> Kind {
     }
 }
 
+pub fn excite_kind(e: &ExciteError) -> Kind {
+    match e {
+        ExciteError::Infeasible(_) => Kind::Solver,
+        ExciteError::Fourier(f) => fourier_kind(f),
+        ExciteError::ImpossibleLimits(_) | ExciteError::Invalid(_) => Kind::Input,
+    }
+}
+
+pub fn fourier_kind(e: &FourierError) -> Kind {
+    match e {
+        FourierError::Io { path, .. } if !std::path::Path::new(path).exists() => Kind::NotFound,
+        FourierError::Io { .. } => Kind::Io,
+        _ => Kind::Input,
+    }
+}
+
 pub fn ident_kind(e: &IdentError) -> Kind {
     match e {
         IdentError::Model(m) => model_kind(m),
@@ -217,6 +234,7 @@ pub fn ident_kind(e: &IdentError) -> Kind {
         IdentError::Sdp(_) => Kind::Solver,
         IdentError::Io { .. } => Kind::Io,
         IdentError::Output(o) => io_kind(&o.source),
+        IdentError::Excite(x) => excite_kind(x),
         _ => Kind::Input,
     }
 }

@@ -3,40 +3,22 @@
 
 use std::path::PathBuf;
 
-use dvrk_ident::excite::optimize::{
-    self, Criterion, Excitation, ExciteError, ExciteOptions, Limits,
-};
+use dvrk_ident::excite::optimize::{self, Criterion, Excitation, ExciteError, ExciteOptions};
 use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::write_atomic;
-use dvrk_model::Model;
+use dvrk_model::{Limits, LimitsSpec, Model};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::PyDict;
 
 use crate::convert::{array, background, matrix, rows, vector, Failure};
-use crate::errors::{error, from_ident, from_io, input, Kind};
+use crate::errors::{error, excite_kind, fourier_kind, from_ident, from_io, from_model, input};
 use crate::json::to_python;
 use crate::robot::Robot;
 
 /// A float64 numpy array.
 type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
-
-fn excite_kind(e: &ExciteError) -> Kind {
-    match e {
-        ExciteError::Infeasible(_) => Kind::Solver,
-        ExciteError::Fourier(f) => fourier_kind(f),
-        ExciteError::ImpossibleLimits(_) | ExciteError::Invalid(_) => Kind::Input,
-    }
-}
-
-fn fourier_kind(e: &FourierError) -> Kind {
-    match e {
-        FourierError::Io { path, .. } if !std::path::Path::new(path).exists() => Kind::NotFound,
-        FourierError::Io { .. } => Kind::Io,
-        _ => Kind::Input,
-    }
-}
 
 fn fail_excite(e: ExciteError) -> Failure {
     (excite_kind(&e), e.to_string())
@@ -51,117 +33,33 @@ fn from_fourier(e: FourierError) -> PyErr {
 }
 
 fn parse_criterion(text: &str) -> PyResult<Criterion> {
-    match text.to_ascii_lowercase().replace('-', "_").as_str() {
-        "condition" => Ok(Criterion::Condition),
-        "log_det" | "logdet" => Ok(Criterion::LogDet),
-        other => Err(input(format!(
-            "criterion: unknown criterion {other:?}: expected \"condition\" or \"log_det\""
-        ))),
-    }
-}
-
-/// A Python value of a limits dict as TOML (floats stay floats, `inf` included, which
-/// JSON could not carry).
-fn toml_value(obj: &Bound<'_, PyAny>, place: &str) -> PyResult<toml::Value> {
-    if obj.is_instance_of::<PyBool>() {
-        return Ok(toml::Value::Boolean(obj.extract()?));
-    }
-    if obj.is_instance_of::<PyInt>() {
-        return Ok(toml::Value::Integer(obj.extract()?));
-    }
-    if obj.is_instance_of::<PyFloat>() {
-        return Ok(toml::Value::Float(obj.extract()?));
-    }
-    if obj.is_instance_of::<PyString>() {
-        return Ok(toml::Value::String(obj.extract()?));
-    }
-    if let Ok(d) = obj.cast::<PyDict>() {
-        let mut t = toml::Table::new();
-        for (k, v) in d.iter() {
-            let key: String = k
-                .extract()
-                .map_err(|_| input(format!("{place}: keys must be strings")))?;
-            let value = toml_value(&v, &format!("{place}.{key}"))?;
-            t.insert(key, value);
-        }
-        return Ok(toml::Value::Table(t));
-    }
-    if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
-        let items = obj
-            .try_iter()?
-            .enumerate()
-            .map(|(i, v)| toml_value(&v?, &format!("{place}[{i}]")))
-            .collect::<PyResult<Vec<_>>>()?;
-        return Ok(toml::Value::Array(items));
-    }
-    // numpy scalars and anything else float-like.
-    obj.extract::<f64>().map(toml::Value::Float).map_err(|_| {
-        input(format!(
-            "{place}: expected a number, a string, a list or a dict, got {}",
-            obj.get_type()
-                .name()
-                .map(|n| n.to_string())
-                .unwrap_or_default()
-        ))
-    })
-}
-
-/// A TOML value as the Python object [`toml_value`] reads back (floats stay floats,
-/// infinities included).
-fn python_value<'py>(py: Python<'py>, v: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
-    Ok(match v {
-        toml::Value::String(s) => PyString::new(py, s).into_any(),
-        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
-        toml::Value::Float(f) => PyFloat::new(py, *f).into_any(),
-        toml::Value::Boolean(b) => PyBool::new(py, *b).to_owned().into_any(),
-        toml::Value::Datetime(d) => PyString::new(py, &d.to_string()).into_any(),
-        toml::Value::Array(items) => PyList::new(
-            py,
-            items
-                .iter()
-                .map(|x| python_value(py, x))
-                .collect::<PyResult<Vec<_>>>()?,
-        )?
-        .into_any(),
-        toml::Value::Table(t) => {
-            let d = PyDict::new(py);
-            for (k, x) in t {
-                d.set_item(k, python_value(py, x)?)?;
-            }
-            d.into_any()
-        }
-    })
+    crate::convert::named("criterion", text)
 }
 
 /// `robot`'s limits (description `[[limits]]` and `[[cartesian_limits]]`) as a dict in
 /// the layout of a limits file, which `excite(..., limits=...)` reads back to the same
 /// limits.
 pub fn limits_dict<'py>(py: Python<'py>, model: &Model) -> PyResult<Bound<'py, PyAny>> {
-    python_value(
-        py,
-        &toml::Value::Table(Limits::of_model(model).to_toml_table(model)),
-    )
+    let spec = LimitsSpec::of(model, &Limits::of_model(model));
+    serde_pyobject::to_pyobject(py, &spec).map_err(PyErr::from)
 }
 
 /// The limits of `excite`/`evaluate_trajectory`: the description's (None), a limits
-/// file (a path), or a dict in the file's layout.
+/// file (a path), or a dict in the file's layout (the same serde schema as the file).
 fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Limits> {
     let Some(obj) = obj.filter(|o| !o.is_none()) else {
         return Ok(Limits::of_model(model));
     };
     if obj.is_instance_of::<PyDict>() {
-        let toml::Value::Table(table) = toml_value(obj, "limits")? else {
-            unreachable!("a dict converts to a table")
-        };
-        let text = toml::to_string(&table)
-            .map_err(|e| input(format!("limits: cannot be written as TOML: {e}")))?;
-        return Limits::from_toml_str(model, &text, "limits").map_err(from_excite);
+        let spec: LimitsSpec = serde_pyobject::from_pyobject(obj.clone())
+            .map_err(|e| input(format!("limits: not a limits dict: {}", PyErr::from(e))))?;
+        return spec.compile(model, "limits").map_err(from_model);
     }
     let path: PathBuf = obj.extract().map_err(|_| {
         input("limits: expected None (the robot's limits), a limits file path or a dict")
     })?;
     let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
-    Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_excite)
+    Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_model)
 }
 
 /// Coefficients `a` or `b`: a 2-D array of `order` columns, one row per coordinate.

@@ -22,15 +22,7 @@ use crate::observe::observations_arg;
 use crate::robot::Robot;
 
 fn parse_method(text: &str) -> PyResult<Method> {
-    match text.to_ascii_lowercase().as_str() {
-        "ols" => Ok(Method::Ols),
-        "wls" => Ok(Method::Wls),
-        "irls" => Ok(Method::Irls),
-        "sdp" => Ok(Method::Sdp),
-        other => Err(input(format!(
-            "method: unknown estimator {other:?}: expected ols, wls, irls or sdp"
-        ))),
-    }
+    crate::convert::named("method", text)
 }
 
 /// A :class:`Data` or a list of them: the samples and the files they were read from.

@@ -8,16 +8,8 @@ use dvrk_ident::Coordinates;
 use dvrk_model::Model;
 
 use super::emit_summary;
-use super::fit::{read_log, FormatArg, McapArgs};
+use super::fit::{read_log, McapArgs};
 use super::simulate::{output_format, write_log};
-
-#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum CoordinatesArg {
-    /// The model's generalized coordinates (e.g. q1..q7, motor angles of the PSM wrist)
-    Model,
-    /// The robot's measured joints (e.g. the dVRK ROS joint names)
-    Measured,
-}
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -32,11 +24,11 @@ pub struct Args {
     #[arg(long)]
     pub robot: Option<String>,
     /// Input format (default: from the extension and content)
-    #[arg(long, value_enum)]
-    pub from: Option<FormatArg>,
+    #[arg(long, value_parser = super::named::<LogFormat>())]
+    pub from: Option<LogFormat>,
     /// Output format (default: mcap for a .mcap file, otherwise headered csv)
-    #[arg(long, value_enum)]
-    pub format: Option<FormatArg>,
+    #[arg(long, value_parser = super::named::<LogFormat>())]
+    pub format: Option<LogFormat>,
     /// Sampling rate of an input without time stamps (2019 layout), Hz
     #[arg(long, value_name = "HZ")]
     pub rate: Option<f64>,
@@ -44,8 +36,8 @@ pub struct Args {
     pub mcap: McapArgs,
     /// Output coordinates (default: model for wpi-csv, measured for mcap, the input's for
     /// csv). Changing them needs --robot
-    #[arg(long, value_enum)]
-    pub coordinates: Option<CoordinatesArg>,
+    #[arg(long, value_parser = super::named::<Coordinates>())]
+    pub coordinates: Option<Coordinates>,
     /// Topic of the written MCAP
     #[arg(long, default_value = mcap::DEFAULT_TOPIC, value_name = "TOPIC")]
     pub out_topic: String,
@@ -54,23 +46,18 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[])?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
-    let traj = read_log(
-        &args.input,
-        args.from.map(FormatArg::format),
-        args.rate,
-        &args.mcap,
-    )?;
+    let traj = read_log(&args.input, args.from, args.rate, &args.mcap)?;
     traj.validate()?;
-    let format = output_format(&args.output, args.format);
+    let format = output_format(&args.output, args.format)?;
     let target = match (args.coordinates, format) {
-        (Some(CoordinatesArg::Measured), LogFormat::Wpi) => {
+        (Some(Coordinates::Measured), LogFormat::Wpi) => {
             bail!("the 2019 (wpi-csv) layout holds model coordinates, not measured joints")
         }
-        (Some(CoordinatesArg::Model), LogFormat::Mcap) => {
+        (Some(Coordinates::Model), LogFormat::Mcap) => {
             bail!("MCAP JointState logs hold measured joints, not model coordinates")
         }
-        (Some(CoordinatesArg::Model), _) => Coordinates::Model,
-        (Some(CoordinatesArg::Measured), _) => Coordinates::Measured,
+        (Some(Coordinates::Model), _) => Coordinates::Model,
+        (Some(Coordinates::Measured), _) => Coordinates::Measured,
         (None, LogFormat::Wpi) => Coordinates::Model,
         (None, LogFormat::Mcap) => Coordinates::Measured,
         (None, _) => traj.coordinates,

@@ -16,23 +16,6 @@ use std::path::Path;
 
 use super::{emit, emit_summary};
 
-#[derive(Clone, Copy, Debug, clap::ValueEnum)]
-pub enum CriterionArg {
-    /// Condition number of the column-normalized base regressor (minimized)
-    Condition,
-    /// log det of the normalized information matrix (D-optimality, maximized)
-    LogDet,
-}
-
-impl CriterionArg {
-    fn criterion(self) -> Criterion {
-        match self {
-            CriterionArg::Condition => Criterion::Condition,
-            CriterionArg::LogDet => Criterion::LogDet,
-        }
-    }
-}
-
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
@@ -54,8 +37,8 @@ pub struct Args {
     #[arg(long, value_name = "FILE")]
     pub limits: Option<String>,
     /// Optimality criterion
-    #[arg(long, value_enum, default_value = "condition")]
-    pub criterion: CriterionArg,
+    #[arg(long, value_parser = super::named::<Criterion>(), default_value = "condition")]
+    pub criterion: Criterion,
     /// Seed of the random starts
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -185,7 +168,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => Limits::of_model(&model),
     };
-    let criterion = args.criterion.criterion();
+    let criterion = args.criterion;
     // Limit errors found while optimizing name where the limits come from.
     let limits_source = match &args.limits {
         Some(path) => path.clone(),

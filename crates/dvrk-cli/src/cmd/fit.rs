@@ -17,46 +17,6 @@ use dvrk_model::Model;
 
 use super::emit;
 
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum FormatArg {
-    /// The 2019 layout: no header, q, dq, tau columns in model coordinates
-    WpiCsv,
-    /// Headered CSV: time, position.<joint>, velocity.<joint>, effort.<joint>
-    Csv,
-    /// ROS 2 MCAP of sensor_msgs/msg/JointState (measured joints, header stamps)
-    Mcap,
-}
-
-impl FormatArg {
-    pub fn format(self) -> LogFormat {
-        match self {
-            FormatArg::WpiCsv => LogFormat::Wpi,
-            FormatArg::Csv => LogFormat::Csv,
-            FormatArg::Mcap => LogFormat::Mcap,
-        }
-    }
-}
-
-#[derive(Clone, Copy, clap::ValueEnum)]
-pub enum MethodArg {
-    Ols,
-    Wls,
-    Irls,
-    Sdp,
-}
-
-/// Which time of an MCAP message is its sample time.
-#[derive(Clone, Copy, Default, clap::ValueEnum)]
-pub enum TimeArg {
-    /// header.stamp: when the controller measured the joints
-    #[default]
-    Header,
-    /// MCAP log time: when the recorder received the message
-    Log,
-    /// MCAP publish time
-    Publish,
-}
-
 /// MCAP reading options, and resampling for every format.
 #[derive(clap::Args, Clone, Default)]
 pub struct McapArgs {
@@ -65,9 +25,10 @@ pub struct McapArgs {
     /// Default: the topic with positions and efforts (ending in measured_js if several)
     #[arg(long = "topic", value_name = "TOPIC")]
     pub topics: Vec<String>,
-    /// MCAP: sample times from the message header stamps or the MCAP log/publish times
-    #[arg(long, value_enum, default_value = "header")]
-    pub time: TimeArg,
+    /// Recordings: sample times from the JointState header stamps (when the controller
+    /// measured the joints), or the recorder's log times or the publish times
+    #[arg(long, value_parser = super::named::<TimeSource>(), default_value = "header")]
+    pub time: TimeSource,
     /// Resample to this uniform rate (Hz) by linear interpolation before anything else
     /// (bridges gaps and jitter; without it such logs are refused)
     #[arg(long, value_name = "HZ")]
@@ -82,11 +43,7 @@ impl McapArgs {
     pub fn options(&self) -> McapOptions {
         McapOptions {
             topics: self.topics.clone(),
-            time_source: match self.time {
-                TimeArg::Header => TimeSource::HeaderStamp,
-                TimeArg::Log => TimeSource::LogTime,
-                TimeArg::Publish => TimeSource::PublishTime,
-            },
+            time_source: self.time,
             resample_hz: self.resample,
             joints: self.joints.clone(),
         }
@@ -123,9 +80,9 @@ pub fn read_log(
 /// Options shared by every command that reads logs.
 #[derive(clap::Args, Clone)]
 pub struct LogArgs {
-    /// Log format (default: from the file extension and content)
-    #[arg(long, value_enum)]
-    pub format: Option<FormatArg>,
+    /// Log format (default: from the file's content); wpi is the 2019 headerless CSV
+    #[arg(long, value_parser = super::named::<LogFormat>())]
+    pub format: Option<LogFormat>,
     /// Sampling rate of logs without time stamps (Hz)
     #[arg(long)]
     pub rate: Option<f64>,
@@ -147,17 +104,12 @@ pub struct LogArgs {
 
 impl LogArgs {
     pub fn read(&self, path: &str) -> Result<dvrk_ident::Trajectory> {
-        read_log(
-            path,
-            self.format.map(FormatArg::format),
-            self.rate,
-            &self.mcap,
-        )
+        read_log(path, self.format, self.rate, &self.mcap)
     }
 
     /// Opens a log for reading block by block (the checks of [`LogArgs::read`]).
     pub fn open(&self, path: &str) -> Result<LogReader> {
-        let format = log_format(path, self.format.map(FormatArg::format), &self.mcap)?;
+        let format = log_format(path, self.format, &self.mcap)?;
         Ok(LogReader::open(
             path,
             Some(format),
@@ -226,8 +178,8 @@ pub struct Args {
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Estimator
-    #[arg(long, value_enum, default_value = "sdp")]
-    pub method: MethodArg,
+    #[arg(long, value_parser = super::named::<Method>(), default_value = "sdp")]
+    pub method: Method,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG")]
     pub test: Vec<String>,
@@ -377,12 +329,7 @@ pub fn run(args: Args) -> Result<()> {
 /// The estimator settings of the command line (method, test window).
 fn estimator(args: &Args) -> FitSettings {
     FitSettings {
-        method: match args.method {
-            MethodArg::Ols => Method::Ols,
-            MethodArg::Wls => Method::Wls,
-            MethodArg::Irls => Method::Irls,
-            MethodArg::Sdp => Method::Sdp,
-        },
+        method: args.method,
         test_window: args.test_window,
         ..FitSettings::default()
     }

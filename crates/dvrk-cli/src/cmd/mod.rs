@@ -12,8 +12,50 @@ pub mod simulate;
 pub mod validate;
 
 use anyhow::{bail, Context, Result};
+use dvrk_ident::names::Named;
 use dvrk_ident::FitResult;
 use dvrk_model::Model;
+
+/// The clap parser of a flag whose values are a library option enum's names
+/// ([`Named`]): the command line lists and parses exactly what Python accepts.
+#[derive(Clone)]
+pub struct NamedParser<T>(std::marker::PhantomData<T>);
+
+/// [`NamedParser`] for `T`, in `#[arg(value_parser = named::<T>())]`.
+pub fn named<T>() -> NamedParser<T> {
+    NamedParser(std::marker::PhantomData)
+}
+
+impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for NamedParser<T> {
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        let flag = arg.map(|a| format!("{a}: ")).unwrap_or_default();
+        let message = match value.to_str() {
+            Some(text) => match T::parse_name(text) {
+                Ok(v) => return Ok(v),
+                Err(m) => m,
+            },
+            None => format!("{} is not valid UTF-8", T::WHAT),
+        };
+        Err(clap::Error::raw(
+            clap::error::ErrorKind::InvalidValue,
+            format!("{flag}{message}\n"),
+        )
+        .with_cmd(cmd))
+    }
+
+    fn possible_values(
+        &self,
+    ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
+        Some(Box::new(T::names().map(clap::builder::PossibleValue::new)))
+    }
+}
 
 /// Writes `text` and a newline to stdout. A closed pipe (`dvrk-ident ... | head`) is
 /// reported as an I/O error that `main` treats as a normal end, not a panic.

@@ -9,7 +9,6 @@ use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_model::Model;
 
-use super::fit::FormatArg;
 use super::{emit_summary, read_params};
 
 #[derive(clap::Args)]
@@ -34,8 +33,8 @@ pub struct Args {
     pub out: String,
     /// Output format (default: mcap for a .mcap file, otherwise headered csv; wpi-csv is
     /// in model coordinates)
-    #[arg(long, value_enum)]
-    pub format: Option<FormatArg>,
+    #[arg(long, value_parser = super::named::<LogFormat>())]
+    pub format: Option<LogFormat>,
     /// Torque noise standard deviation (N·m or N), added in model coordinates: one value
     /// or one per coordinate, comma-separated
     #[arg(long, default_value = "0", value_name = "STD")]
@@ -58,9 +57,12 @@ pub struct Args {
 }
 
 /// The output format: `--format`, else `.mcap` is MCAP and anything else headered CSV.
-pub fn output_format(path: &str, format: Option<FormatArg>) -> LogFormat {
-    match format {
-        Some(f) => f.format(),
+pub fn output_format(path: &str, format: Option<LogFormat>) -> Result<LogFormat> {
+    Ok(match format {
+        Some(f) if !f.is_writable() => {
+            bail!("--format {f}: logs are written as wpi, csv or mcap ({f} is read only)")
+        }
+        Some(f) => f,
         None if Path::new(path)
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("mcap")) =>
@@ -68,7 +70,7 @@ pub fn output_format(path: &str, format: Option<FormatArg>) -> LogFormat {
             LogFormat::Mcap
         }
         None => LogFormat::Csv,
-    }
+    })
 }
 
 /// Writes `traj` in `format`: MCAP on `topic`, the 2019 layout in model coordinates.
@@ -123,7 +125,7 @@ pub fn run(args: Args) -> Result<()> {
         noise_std: noise,
         seed: args.seed,
     };
-    let format = output_format(&args.out, args.format);
+    let format = output_format(&args.out, args.format)?;
     let log = simulate(&model, &params, &traj, &sim)?;
     write_log(Some(&model), &log, &args.out, format, &args.topic)?;
     let bytes = match dvrk_ident::output::Destination::of(Path::new(&args.out)) {

@@ -18,228 +18,12 @@
 // `!(x > 0.0)`-style tests are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
-use std::f64::consts::PI;
-
-use dvrk_model::expr::{Expr, Scope};
-use dvrk_model::{CartesianLimit, Limit, Model, Workspace};
+pub use dvrk_model::Limits;
+use dvrk_model::{Model, Workspace};
 use serde::{Deserialize, Serialize};
 
 use super::grid::Grid;
-use super::optimize::ExciteError;
-
-/// The limits of an excitation trajectory: joint limits and Cartesian boxes.
-#[derive(Clone, Debug, Default)]
-pub struct Limits {
-    pub joint: Vec<Limit>,
-    pub cartesian: Vec<CartesianLimit>,
-}
-
-impl Limits {
-    /// The description's `[[limits]]` and `[[cartesian_limits]]`.
-    pub fn of_model(model: &Model) -> Limits {
-        Limits {
-            joint: model.limits.clone(),
-            cartesian: model.cartesian_limits.clone(),
-        }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.joint.is_empty() && self.cartesian.is_empty()
-    }
-
-    /// The limits in the layout of a limits file, which [`Limits::from_toml_str`] reads
-    /// back to the same limits: a starting point for one's own file (e.g. a robot's
-    /// limits plus a box). Each `expr` is the limit's label when that parses to the same
-    /// affine function with the file's constants (`deg`, `pi`), else the affine function
-    /// written out.
-    pub fn to_toml_table(&self, model: &Model) -> toml::Table {
-        let constants = file_constants();
-        let pair = |r: [f64; 2]| toml::Value::Array(vec![r[0].into(), r[1].into()]);
-        let joint: Vec<toml::Value> = self
-            .joint
-            .iter()
-            .map(|lim| {
-                let same = model
-                    .measured
-                    .affine(&lim.label, &constants, &model.coordinates)
-                    .is_ok_and(|a| a == lim.expr);
-                let expr = if same {
-                    lim.label.clone()
-                } else {
-                    let mut text: Vec<String> = lim
-                        .expr
-                        .terms
-                        .iter()
-                        .map(|&(k, c)| format!("({c:?})*{}", model.coordinates[k]))
-                        .collect();
-                    if lim.expr.offset != 0.0 || text.is_empty() {
-                        text.push(format!("({:?})", lim.expr.offset));
-                    }
-                    text.join(" + ")
-                };
-                let mut t = toml::Table::new();
-                t.insert("expr".into(), expr.into());
-                for (key, range) in [
-                    ("position", lim.position),
-                    ("velocity", lim.velocity),
-                    ("acceleration", lim.acceleration),
-                ] {
-                    if let Some(r) = range {
-                        t.insert(key.into(), pair(r));
-                    }
-                }
-                toml::Value::Table(t)
-            })
-            .collect();
-        let boxes: Vec<toml::Value> = self
-            .cartesian
-            .iter()
-            .map(|c| {
-                let corner =
-                    |v: [f64; 3]| toml::Value::Array(v.iter().map(|&x| x.into()).collect());
-                let mut t = toml::Table::new();
-                t.insert("frame".into(), c.frame_name.clone().into());
-                t.insert("min".into(), corner(c.min));
-                t.insert("max".into(), corner(c.max));
-                toml::Value::Table(t)
-            })
-            .collect();
-        let mut doc = toml::Table::new();
-        doc.insert("limits".into(), toml::Value::Array(joint));
-        doc.insert("cartesian_limits".into(), toml::Value::Array(boxes));
-        doc
-    }
-
-    /// Reads limits from a TOML file of `[[limits]]` tables (`expr`, and optional
-    /// `position`, `velocity`, `acceleration` ranges of numbers or constant expressions
-    /// such as `"-57*deg"`) and `[[cartesian_limits]]` tables (`frame`, `min = [x, y, z]`,
-    /// `max = [x, y, z]`, m, base frame), as in a description. Expressions use the
-    /// model's coordinate names and its measured joint names (see
-    /// [`dvrk_model::Measured::affine`]); `deg` and `pi` are known constants. `source`
-    /// names the file in messages.
-    pub fn from_toml_str(model: &Model, text: &str, source: &str) -> Result<Limits, ExciteError> {
-        let bad = |m: String| ExciteError::ImpossibleLimits(format!("{source}: {m}"));
-        let doc: toml::Table = text
-            .parse()
-            .map_err(|e| bad(format!("not valid TOML: {e}")))?;
-        if let Some(k) = doc
-            .keys()
-            .find(|k| !["limits", "cartesian_limits"].contains(&k.as_str()))
-        {
-            return Err(bad(format!(
-                "unknown key {k} (expected [[limits]] and [[cartesian_limits]] tables)"
-            )));
-        }
-        let constants = file_constants();
-        let scope = Scope {
-            constants: &constants,
-            coordinates: &model.coordinates,
-        };
-        let tables = |key: &str| -> Result<Vec<&toml::Table>, ExciteError> {
-            match doc.get(key) {
-                None => Ok(Vec::new()),
-                Some(toml::Value::Array(list)) => list
-                    .iter()
-                    .enumerate()
-                    .map(|(i, item)| {
-                        item.as_table()
-                            .ok_or_else(|| bad(format!("{key}[{i}] is not a table")))
-                    })
-                    .collect(),
-                Some(_) => Err(bad(format!("{key}: expected [[{key}]] tables"))),
-            }
-        };
-        let (joint_tables, box_tables) = (tables("limits")?, tables("cartesian_limits")?);
-        if joint_tables.is_empty() && box_tables.is_empty() {
-            return Err(bad(
-                "expected [[limits]] or [[cartesian_limits]] tables".into()
-            ));
-        }
-        let num = |v: &toml::Value, place: &str| -> Result<f64, ExciteError> {
-            match v {
-                toml::Value::Float(x) => Ok(*x),
-                toml::Value::Integer(i) => Ok(*i as f64),
-                toml::Value::String(s) => {
-                    let e = Expr::parse(s, &scope).map_err(|e| bad(format!("{place}: {e}")))?;
-                    if !e.is_constant() {
-                        return Err(bad(format!("{place}: `{s}` is not a constant")));
-                    }
-                    Ok(e.eval(&vec![0.0; model.dof()]))
-                }
-                _ => Err(bad(format!(
-                    "{place}: expected a number or a constant expression"
-                ))),
-            }
-        };
-        let mut out = Limits::default();
-        for (i, t) in joint_tables.into_iter().enumerate() {
-            for k in t.keys() {
-                if !["expr", "position", "velocity", "acceleration"].contains(&k.as_str()) {
-                    return Err(bad(format!("limits[{i}]: unknown key {k}")));
-                }
-            }
-            let text = t
-                .get("expr")
-                .and_then(|v| v.as_str())
-                .ok_or_else(|| bad(format!("limits[{i}]: missing expr")))?;
-            let expr = model
-                .measured
-                .affine(text, &constants, &model.coordinates)
-                .map_err(|e| bad(format!("limits[{i}] ({text}): {e}")))?;
-            let mut ranges = [None; 3];
-            for (r, key) in ["position", "velocity", "acceleration"].iter().enumerate() {
-                if let Some(v) = t.get(*key) {
-                    let place = format!("limits[{i}].{key}");
-                    let arr = v
-                        .as_array()
-                        .filter(|a| a.len() == 2)
-                        .ok_or_else(|| bad(format!("{place}: expected [low, high]")))?;
-                    ranges[r] = Some([num(&arr[0], &place)?, num(&arr[1], &place)?]);
-                }
-            }
-            out.joint.push(Limit {
-                label: text.to_string(),
-                expr,
-                position: ranges[0],
-                velocity: ranges[1],
-                acceleration: ranges[2],
-            });
-        }
-        let frame_names = model.frame_names();
-        for (i, t) in box_tables.into_iter().enumerate() {
-            for k in t.keys() {
-                if !["frame", "min", "max"].contains(&k.as_str()) {
-                    return Err(bad(format!("cartesian_limits[{i}]: unknown key {k}")));
-                }
-            }
-            let frame = t
-                .get("frame")
-                .and_then(|v| v.as_str())
-                .ok_or_else(|| bad(format!("cartesian_limits[{i}]: missing frame")))?;
-            let place = format!("cartesian_limits[{i}] ({frame})");
-            let mut corners = [[0.0; 3]; 2];
-            for (corner, key) in corners.iter_mut().zip(["min", "max"]) {
-                let arr = t
-                    .get(key)
-                    .and_then(|v| v.as_array())
-                    .filter(|a| a.len() == 3)
-                    .ok_or_else(|| bad(format!("{place}.{key}: expected [x, y, z] (m)")))?;
-                for (c, v) in corner.iter_mut().zip(arr) {
-                    *c = num(v, &format!("{place}.{key}"))?;
-                }
-            }
-            let limit = CartesianLimit::new(&frame_names, frame, corners[0], corners[1])
-                .map_err(|(field, m)| bad(format!("{place}.{field}: {m}")))?;
-            out.cartesian.push(limit);
-        }
-        Ok(out)
-    }
-}
-
-/// The constants a limits file's expressions know.
-fn file_constants() -> Vec<(String, f64)> {
-    vec![("deg".to_string(), PI / 180.0), ("pi".to_string(), PI)]
-}
+use super::ExciteError;
 
 /// The worst (largest) limit excess on a grid; positive = violated.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -878,7 +662,7 @@ impl Constraints {
         }
         // Aim a little inside the margin so that a converged pose is strictly inside.
         let aim = margin + 0.01;
-        let mut rng = super::optimize::Rng(0x5eed);
+        let mut rng = super::rng::Rng(0x5eed);
         let mut best = (f64::INFINITY, q.clone(), 0usize);
         for attempt in 0..24 {
             let mut p = q.clone();
@@ -888,7 +672,7 @@ impl Constraints {
             let mut f = |p: &[f64], g: &mut [f64]| -> f64 {
                 self.static_penalty(model, &mut ws, p, aim, g)
             };
-            super::optimize::lbfgs(&mut f, &mut p, 300);
+            super::lbfgs::lbfgs(&mut f, &mut p, 300);
             let (e, i) = self.static_excess(model, &mut ws, &p, margin);
             if e <= 0.0 {
                 return Ok(p);

@@ -3,9 +3,13 @@
 //! parametrization), with their analytic derivatives and the loader of the 2019
 //! coefficient files.
 
+mod error;
 pub mod fourier;
 mod grid;
+mod lbfgs;
 pub mod limits;
 pub mod optimize;
+mod rng;
 
+pub use error::ExciteError;
 pub use fourier::{FourierError, FourierTrajectory};

@@ -44,10 +44,8 @@
 //! 218.0 with seeds 1 to 5), 221.7 without the smooth surrogate and 224.3 with 4 starts
 //! of which 1 is refined (README, "Excitation trajectories").
 //!
-//! `lbfgs` and `Rng` are our own although the project prefers crates: argmin's
-//! L-BFGS (backtracking Armijo or More–Thuente line search) ended at MTM 223.6 / 222.7,
-//! above the 2019 trajectory, and ChaCha8 with rand_distr's normal samples gave worse
-//! MTM results on 5 of 6 seeds (measured 2026-11-22; numbers in the README).
+//! The L-BFGS ([`super::lbfgs`]) and the random numbers ([`super::rng`]) are our own
+//! although the project prefers crates; their modules say what the crates measured.
 
 // `!(x > 0.0)`-style tests are deliberate: they also catch NaN, which a reversed
 // comparison would let through. Index loops mirror the math over several arrays.
@@ -63,12 +61,14 @@ use dvrk_model::{BaseParameters, Model, Workspace};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use thiserror::Error;
 
+pub use super::error::ExciteError;
 use super::grid::{from_x, project_rest, to_x, Grid};
+use super::lbfgs::{dot, lbfgs};
 use super::limits::Constraints;
 pub use super::limits::{Feasibility, Limits, Violation};
-use super::{FourierError, FourierTrajectory};
+use super::rng::Rng;
+use super::FourierTrajectory;
 
 /// The optimality criterion of an excitation trajectory.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -82,11 +82,9 @@ pub enum Criterion {
 }
 
 impl Criterion {
+    /// The name the command line, Python and results use (see [`crate::names`]).
     pub fn name(&self) -> &'static str {
-        match self {
-            Criterion::Condition => "condition",
-            Criterion::LogDet => "log_det",
-        }
+        crate::names::Named::name(*self)
     }
 
     /// True when `a` is a better criterion value than `b`.
@@ -105,27 +103,29 @@ impl Criterion {
     }
 }
 
+impl crate::names::Named for Criterion {
+    const WHAT: &'static str = "criterion";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("condition", Criterion::Condition),
+        ("log_det", Criterion::LogDet),
+        ("logdet", Criterion::LogDet),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for Criterion {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
 /// A criterion value with its name.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CriterionValue {
     pub name: String,
     pub value: f64,
-}
-
-/// Errors of the optimizer and evaluator.
-#[derive(Debug, Error)]
-pub enum ExciteError {
-    /// The limits admit no trajectory (not even a static pose), or are malformed.
-    #[error("impossible limits: {0}")]
-    ImpossibleLimits(String),
-    /// No start produced a trajectory that passes the dense feasibility check.
-    #[error("no feasible trajectory found: {0}")]
-    Infeasible(String),
-    /// Bad options or a trajectory that does not fit the model.
-    #[error("{0}")]
-    Invalid(String),
-    #[error(transparent)]
-    Fourier(#[from] FourierError),
 }
 
 /// Options of [`optimize`].
@@ -485,146 +485,6 @@ impl<'a> CriterionEval<'a> {
 // ---------------------------------------------------------------------------------
 // L-BFGS with Armijo backtracking
 // ---------------------------------------------------------------------------------
-
-/// `a·b` with eight independent partial sums: the compiler keeps them in SIMD
-/// registers, where a single running sum would wait on every addition. The criterion's
-/// gradient spends a good part of its time in these (one per regressor call).
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0; 8];
-    let (ca, cb) = (a.chunks_exact(8), b.chunks_exact(8));
-    let tail: f64 = ca
-        .remainder()
-        .iter()
-        .zip(cb.remainder())
-        .map(|(x, y)| x * y)
-        .sum();
-    for (x, y) in ca.zip(cb) {
-        for k in 0..8 {
-            acc[k] += x[k] * y[k];
-        }
-    }
-    acc.iter().sum::<f64>() + tail
-}
-
-/// Minimizes `f` (value, gradient; `inf` = invalid point) from `x` for at most `iters`
-/// iterations. Returns the final value.
-pub(crate) fn lbfgs(
-    f: &mut dyn FnMut(&[f64], &mut [f64]) -> f64,
-    x: &mut Vec<f64>,
-    iters: usize,
-) -> f64 {
-    let dim = x.len();
-    let mem = 10;
-    let mut g = vec![0.0; dim];
-    let mut fx = f(x, &mut g);
-    if !fx.is_finite() {
-        return fx;
-    }
-    let mut ss: Vec<Vec<f64>> = Vec::new();
-    let mut ys: Vec<Vec<f64>> = Vec::new();
-    let mut xn = vec![0.0; dim];
-    let mut gn = vec![0.0; dim];
-    let mut small = 0;
-    for _ in 0..iters {
-        // Two-loop recursion.
-        let mut d: Vec<f64> = g.iter().map(|v| -v).collect();
-        let mut alpha = vec![0.0; ss.len()];
-        for i in (0..ss.len()).rev() {
-            let rho = 1.0 / dot(&ys[i], &ss[i]);
-            alpha[i] = rho * dot(&ss[i], &d);
-            for (dv, yv) in d.iter_mut().zip(&ys[i]) {
-                *dv -= alpha[i] * yv;
-            }
-        }
-        if let (Some(s), Some(y)) = (ss.last(), ys.last()) {
-            let gamma = dot(s, y) / dot(y, y);
-            d.iter_mut().for_each(|v| *v *= gamma);
-        } else {
-            let gnorm = dot(&g, &g).sqrt().max(1e-300);
-            d.iter_mut().for_each(|v| *v *= 0.01 / gnorm);
-        }
-        for i in 0..ss.len() {
-            let rho = 1.0 / dot(&ys[i], &ss[i]);
-            let beta = rho * dot(&ys[i], &d);
-            for (dv, sv) in d.iter_mut().zip(&ss[i]) {
-                *dv += (alpha[i] - beta) * sv;
-            }
-        }
-        let mut slope = dot(&g, &d);
-        if !(slope < 0.0) {
-            ss.clear();
-            ys.clear();
-            let gnorm = dot(&g, &g).sqrt().max(1e-300);
-            d = g.iter().map(|v| -v * 0.01 / gnorm).collect();
-            slope = dot(&g, &d);
-            if !(slope < 0.0) {
-                break;
-            }
-        }
-        let mut step = 1.0;
-        let mut fnew;
-        loop {
-            for i in 0..dim {
-                xn[i] = x[i] + step * d[i];
-            }
-            fnew = f(&xn, &mut gn);
-            if fnew.is_finite() && fnew <= fx + 1e-4 * step * slope {
-                break;
-            }
-            step *= 0.5;
-            if step < 1e-10 {
-                return fx;
-            }
-        }
-        let s: Vec<f64> = (0..dim).map(|i| xn[i] - x[i]).collect();
-        let y: Vec<f64> = (0..dim).map(|i| gn[i] - g[i]).collect();
-        if dot(&s, &y) > 1e-12 * dot(&y, &y).sqrt() * dot(&s, &s).sqrt() {
-            ss.push(s);
-            ys.push(y);
-            if ss.len() > mem {
-                ss.remove(0);
-                ys.remove(0);
-            }
-        }
-        let improvement = fx - fnew;
-        x.copy_from_slice(&xn);
-        g.copy_from_slice(&gn);
-        fx = fnew;
-        if improvement < 1e-9 * (1.0 + fx.abs()) {
-            small += 1;
-            if small >= 5 {
-                break;
-            }
-        } else {
-            small = 0;
-        }
-    }
-    fx
-}
-
-// ---------------------------------------------------------------------------------
-// Seeded normal samples (SplitMix64 + Box–Muller; deterministic everywhere)
-// ---------------------------------------------------------------------------------
-
-pub(crate) struct Rng(pub u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-    pub fn normal(&mut self) -> f64 {
-        (-2.0 * self.uniform().ln()).sqrt() * (2.0 * PI * self.uniform()).cos()
-    }
-}
 
 // ---------------------------------------------------------------------------------
 // Public API

@@ -124,6 +124,28 @@ pub enum TimeSource {
     PublishTime,
 }
 
+impl crate::names::Named for TimeSource {
+    const WHAT: &'static str = "time source";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("header", TimeSource::HeaderStamp),
+        ("log", TimeSource::LogTime),
+        ("publish", TimeSource::PublishTime),
+        ("stamp", TimeSource::HeaderStamp),
+        ("header_stamp", TimeSource::HeaderStamp),
+        ("log_time", TimeSource::LogTime),
+        ("publish_time", TimeSource::PublishTime),
+    ];
+    const CANONICAL: usize = 3;
+}
+
+impl std::str::FromStr for TimeSource {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
 impl std::fmt::Display for TimeSource {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
@@ -131,23 +153,6 @@ impl std::fmt::Display for TimeSource {
             TimeSource::LogTime => "log times",
             TimeSource::PublishTime => "publish times",
         })
-    }
-}
-
-impl std::str::FromStr for TimeSource {
-    type Err = String;
-
-    /// Parses `header` (also `stamp`, `header_stamp`), `log` (`log_time`) or `publish`
-    /// (`publish_time`), case-insensitively, `-` or `_` alike.
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.to_ascii_lowercase().replace('-', "_").as_str() {
-            "header" | "stamp" | "header_stamp" => Ok(TimeSource::HeaderStamp),
-            "log" | "log_time" => Ok(TimeSource::LogTime),
-            "publish" | "publish_time" => Ok(TimeSource::PublishTime),
-            other => Err(format!(
-                "unknown time source {other:?}: expected header, log or publish"
-            )),
-        }
     }
 }
 

@@ -71,38 +71,44 @@ impl LogFormat {
     pub fn has_topics(self) -> bool {
         !matches!(self, LogFormat::Wpi | LogFormat::Csv)
     }
+
+    /// Whether [`write`] writes the format (the CSV layouts and MCAP; the other
+    /// recordings are read only).
+    pub fn is_writable(self) -> bool {
+        matches!(self, LogFormat::Wpi | LogFormat::Csv | LogFormat::Mcap)
+    }
 }
 
 impl std::fmt::Display for LogFormat {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(match self {
-            LogFormat::Wpi => "wpi",
-            LogFormat::Csv => "csv",
-            LogFormat::Mcap => "mcap",
-            LogFormat::Rosbag2 => "rosbag2",
-            LogFormat::Sqlite3 => "sqlite3",
-            LogFormat::Ros1 => "ros1",
-        })
+        f.write_str(crate::names::Named::name(*self))
     }
+}
+
+/// `wpi` is the 2019 package's headerless CSV (also `wpi-csv`, `2019`); `sqlite3` also
+/// `db3`, `ros1` also `bag`; case-insensitive.
+impl crate::names::Named for LogFormat {
+    const WHAT: &'static str = "log format";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("wpi", LogFormat::Wpi),
+        ("csv", LogFormat::Csv),
+        ("mcap", LogFormat::Mcap),
+        ("rosbag2", LogFormat::Rosbag2),
+        ("sqlite3", LogFormat::Sqlite3),
+        ("ros1", LogFormat::Ros1),
+        ("wpi_csv", LogFormat::Wpi),
+        ("2019", LogFormat::Wpi),
+        ("db3", LogFormat::Sqlite3),
+        ("bag", LogFormat::Ros1),
+    ];
+    const CANONICAL: usize = 6;
 }
 
 impl std::str::FromStr for LogFormat {
     type Err = String;
 
-    /// Parses `wpi` (also `2019`), `csv`, `mcap`, `rosbag2`, `sqlite3` (also `db3`) or
-    /// `ros1` (also `bag`), case-insensitively.
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        match s.to_ascii_lowercase().as_str() {
-            "wpi" | "2019" => Ok(LogFormat::Wpi),
-            "csv" => Ok(LogFormat::Csv),
-            "mcap" => Ok(LogFormat::Mcap),
-            "rosbag2" => Ok(LogFormat::Rosbag2),
-            "sqlite3" | "db3" => Ok(LogFormat::Sqlite3),
-            "ros1" | "bag" => Ok(LogFormat::Ros1),
-            other => Err(format!(
-                "unknown log format {other:?}: expected wpi, csv, mcap, rosbag2, sqlite3 or ros1"
-            )),
-        }
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
     }
 }
 

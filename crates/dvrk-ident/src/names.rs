@@ -1,0 +1,120 @@
+//! The names of the option enums (estimator, criterion, log format, time source, ...),
+//! in one place: the command line, Python and result documents parse and print them
+//! through [`Named`], so an option spelled one way in one front end is spelled the
+//! same in the other.
+//!
+//! ```
+//! use dvrk_ident::fit::Method;
+//! use dvrk_ident::names::Named;
+//! assert_eq!("SDP".parse::<Method>().unwrap(), Method::Sdp);
+//! assert_eq!(Method::Irls.name(), "irls");
+//! let e = "lasso".parse::<Method>().unwrap_err();
+//! assert_eq!(e, "unknown method \"lasso\": expected ols, wls, irls or sdp");
+//! ```
+
+/// An option enum with one canonical name per value, and accepted aliases.
+pub trait Named: Sized + Copy + 'static {
+    /// What the option is called in messages (`method`, `criterion`, ...).
+    const WHAT: &'static str;
+    /// `(name, value)`, canonical names first in the order they are listed, then aliases.
+    const NAMES: &'static [(&'static str, Self)];
+    /// How many leading entries of [`Named::NAMES`] are canonical.
+    const CANONICAL: usize;
+
+    /// The canonical name.
+    fn name(self) -> &'static str
+    where
+        Self: PartialEq,
+    {
+        Self::NAMES
+            .iter()
+            .find(|(_, v)| *v == self)
+            .map(|(n, _)| *n)
+            .expect("every value has a name")
+    }
+
+    /// The canonical names, for help texts.
+    fn names() -> impl Iterator<Item = &'static str> {
+        Self::NAMES[..Self::CANONICAL].iter().map(|(n, _)| *n)
+    }
+
+    /// Case-insensitive, `-` and `_` alike; the error lists the canonical names.
+    fn parse_name(text: &str) -> Result<Self, String> {
+        let key = |s: &str| s.to_ascii_lowercase().replace('-', "_");
+        let wanted = key(text);
+        Self::NAMES
+            .iter()
+            .find(|(n, _)| key(n) == wanted)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| {
+                let names: Vec<&str> = Self::names().collect();
+                let list = match names.split_last() {
+                    Some((last, rest)) if !rest.is_empty() => {
+                        format!("{} or {last}", rest.join(", "))
+                    }
+                    _ => names.join(""),
+                };
+                format!("unknown {} {text:?}: expected {list}", Self::WHAT)
+            })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Named;
+    use crate::excite::optimize::Criterion;
+    use crate::fit::Method;
+    use crate::log::mcap::TimeSource;
+    use crate::log::LogFormat;
+    use crate::Coordinates;
+
+    /// Every name parses back to its value in any case and with `-` for `_`; the
+    /// canonical names cover every value; an unknown name lists them.
+    fn check<T: Named + PartialEq + std::fmt::Debug>(values: &[T]) {
+        for &(name, value) in T::NAMES {
+            assert_eq!(T::parse_name(name), Ok(value), "{name}");
+            assert_eq!(T::parse_name(&name.to_ascii_uppercase()), Ok(value));
+            assert_eq!(T::parse_name(&name.replace('_', "-")), Ok(value));
+            assert_eq!(T::parse_name(value.name()), Ok(value));
+        }
+        for v in values {
+            assert!(
+                T::names().any(|n| n == v.name()),
+                "{v:?} has no canonical name"
+            );
+        }
+        assert_eq!(T::names().count(), values.len());
+        let e = T::parse_name("no-such-name").unwrap_err();
+        assert!(
+            e.starts_with(&format!("unknown {} \"no-such-name\"", T::WHAT)),
+            "{e}"
+        );
+        for n in T::names() {
+            assert!(e.contains(n), "{e} does not list {n}");
+        }
+    }
+
+    #[test]
+    fn every_option_name_parses_back() {
+        check(&[Method::Ols, Method::Wls, Method::Irls, Method::Sdp]);
+        check(&[Criterion::Condition, Criterion::LogDet]);
+        check(&[Coordinates::Measured, Coordinates::Model]);
+        check(&[
+            TimeSource::HeaderStamp,
+            TimeSource::LogTime,
+            TimeSource::PublishTime,
+        ]);
+        check(&[
+            LogFormat::Wpi,
+            LogFormat::Csv,
+            LogFormat::Mcap,
+            LogFormat::Rosbag2,
+            LogFormat::Sqlite3,
+            LogFormat::Ros1,
+        ]);
+        // The 2019 layout's other spellings.
+        for alias in ["wpi-csv", "WPI_CSV", "2019"] {
+            assert_eq!(LogFormat::parse_name(alias), Ok(LogFormat::Wpi));
+        }
+    }
+}
