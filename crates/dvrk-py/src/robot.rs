@@ -101,10 +101,7 @@ impl Robot {
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
     pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<Robot> {
-        let name = robot_source
-            .strip_prefix("builtin:")
-            .unwrap_or(robot_source)
-            .to_string();
+        let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
         let (model, origin) = py
             .detach(move || {
                 let (model, origin) = Origin::load(&name)?;
