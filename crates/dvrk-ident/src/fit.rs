@@ -585,14 +585,7 @@ pub fn fit_logs(
             .collect::<Vec<_>>()
     };
     let estimated = estimate(
-        model,
-        &base,
-        &parts,
-        weights,
-        settings,
-        &source,
-        started,
-        progress,
+        model, &base, &parts, weights, settings, &source, started, progress,
     )?;
     // Training metrics from each log's factors: no second pass over the samples.
     let train_sums: Vec<MetricSums> = per_log

@@ -364,14 +364,7 @@ pub fn fit_stream_logs(
     };
     let source = joined_sources(train_timing.iter().map(|(_, s)| s.as_str()));
     let estimated = estimate(
-        model,
-        &base,
-        &parts,
-        weights,
-        settings,
-        &source,
-        started,
-        progress,
+        model, &base, &parts, weights, settings, &source, started, progress,
     )?;
     let params = &estimated.params;
     // Training metrics from each log's factors: no further pass over the training logs.

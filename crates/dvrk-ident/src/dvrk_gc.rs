@@ -1,0 +1,595 @@
+//! The dVRK controller's MTM gravity-compensation file (version "2.0") from an identified
+//! MTM model, so that a lab can hand our fit to sawIntuitiveResearchKit instead of
+//! collecting an hour of data for the CUHK MATLAB/Python tool.
+//!
+//! What the controller does with the file (read in `robGravityCompensationMTM.cpp` of
+//! jhu-dvrk/sawIntuitiveResearchKit, commit af18bd7):
+//!
+//! - `Create()` reads `std::stod(json["version"].asString())` (so the version is the
+//!   string `"2.0"`) and, for version 2, the arrays `gc_dynamic_params_pos`,
+//!   `gc_dynamic_params_neg`, `safe_upper_torque_limit`, `safe_lower_torque_limit`,
+//!   `db_vel_vec`, `sat_vec_vec`, `fric_comp_ratio_vec` of `GC_controller`; an empty one
+//!   is an error, other keys are ignored;
+//! - `AssignRegressor(q)` fills a 7×40 matrix `Y` of the measured joint positions (rad):
+//!   columns 0–9 are ten lumped gravity terms in sines and cosines of q2…q6 with
+//!   `g = 9.81` (joint 1 has none), columns `10 + 5k … 14 + 5k` are `1, q, q², q³, q⁴` of
+//!   joint `k + 1` in row `k` (k = 0…5), row 6 (joint 7) stays zero; [`regressor`]
+//!   reproduces it, with the products of sines and cosines of q2 and q3 grouped into
+//!   `cos(q2 + q3)` and `sin(q2 + q3)` as the source's sums of products are;
+//! - `compute()` (version 2) blends `τ = α·(Y·pos) + (1 − α)·(Y·neg)` per joint with
+//!   `α(q̇) = 0.5` for `|q̇| ≤ db_vel`, `0.5 ± 0.5·fric_comp_ratio` for `q̇ ≥ sat_vel` /
+//!   `q̇ ≤ −sat_vel`, linear in between, then clamps `τ` to the safe limits.
+//!
+//! So `Y·pos` is the torque to feed forward while a joint moves positively and `Y·neg`
+//! while it moves negatively. [`dvrk_gc`] fits both to our model's static torque
+//! ([`dvrk_model::Model::static_torque`]: gravity, springs, known forces, Coulomb,
+//! Stribeck and offset friction) in measured joint coordinates, over a regular grid of
+//! the description's joint ranges, in two least-squares stages:
+//!
+//! 1. the ten gravity parameters, shared by `pos` and `neg` as in the CUHK generator, on
+//!    the links' gravity torque alone (joints 2–6). When the basis spans the model's
+//!    gravity (the MTM's does: every link rotates with the dVRK joints in the way the
+//!    CUHK derivation assumes) this is exact to rounding;
+//! 2. per joint and direction, the quartic in the joint's own position on what is left:
+//!    springs (the wrist-pitch spring), known forces (the wrist-platform cable, a 7th
+//!    degree polynomial), friction, and any gravity the basis misses. Those depend on
+//!    one joint each on the MTM, so a quartic approximates them; the residual is
+//!    reported per joint (max and RMS, N·m).
+
+use dvrk_model::{Model, Workspace};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+use rayon::prelude::*;
+
+use crate::observation::Observation;
+use crate::IdentError;
+
+/// Gravity acceleration the controller's regressor assumes (m/s²).
+pub const G: f64 = 9.81;
+/// Rows of the controller's regressor: the MTM's seven measured joints.
+pub const JOINTS: usize = 7;
+/// Columns of the controller's regressor: 10 gravity terms and 6 quartics.
+pub const COLUMNS: usize = 40;
+/// Gravity columns, shared by `pos` and `neg`.
+const GRAVITY_COLUMNS: usize = 10;
+/// The dVRK's MTM joint names in the controller's order (the measured joints of
+/// `robots/mtm.toml`).
+pub const MTM_JOINTS: [&str; JOINTS] = [
+    "outer_yaw",
+    "shoulder_pitch",
+    "elbow_pitch",
+    "wrist_platform",
+    "wrist_pitch",
+    "wrist_yaw",
+    "wrist_roll",
+];
+
+/// Velocity blend of the CUHK generator's defaults (jhu-dvrk/dvrk-gravity-compensation,
+/// `config/gc_controller.json`): dead band (rad/s) within which both directions count
+/// half. Tuned on real MTMs for stability near rest; our identification has nothing to
+/// say about it.
+pub const DB_VEL: [f64; JOINTS] = [0.02, 0.02, 0.02, 0.01, 0.008, 0.008, 0.01];
+/// Speed (rad/s) from which the blend is saturated (CUHK default).
+pub const SAT_VEL: [f64; JOINTS] = [0.2; JOINTS];
+/// Share of the friction difference `pos − neg` compensated beyond `SAT_VEL` (CUHK
+/// default: less than all of it on most joints, so the handle does not drift).
+pub const FRIC_COMP_RATIO: [f64; JOINTS] = [0.7, 0.01, 0.5, 0.4, 0.2, 0.2, 1.0];
+
+/// Widening of the safe torque limits beyond the range the file's compensation spans
+/// over the joint ranges, as a share of that range: the clamp stops a runaway outside
+/// the workspace without cutting the model inside it.
+const LIMIT_MARGIN: f64 = 0.25;
+/// Least widening of the safe torque limits (N·m).
+const LIMIT_MARGIN_MIN: f64 = 0.05;
+
+/// Grid points per joint by default: 7⁶ = 117 649 configurations of joints 1–6.
+pub const DEFAULT_POINTS: usize = 7;
+
+/// The controller's regressor `Y(q)` (7×40, row-major) at measured joint positions `q`
+/// (rad, the dVRK's MTM joint order; joint 7 is not used).
+pub fn regressor(q: &[f64; JOINTS]) -> [[f64; COLUMNS]; JOINTS] {
+    let mut y = [[0.0; COLUMNS]; JOINTS];
+    let (s2, c2) = q[1].sin_cos();
+    let (s3, c3) = q[2].sin_cos();
+    let (s4, c4) = q[3].sin_cos();
+    let (s5, c5) = q[4].sin_cos();
+    let (s6, c6) = q[5].sin_cos();
+    // cos(q2 + q3) and sin(q2 + q3) as the products the source sums.
+    let c = c2 * c3 - s2 * s3;
+    let s = s2 * c3 + c2 * s3;
+    // Joints 2 and 3: columns 2–9 are the same in both rows.
+    let upper = [
+        c,
+        -s,
+        c * c4,
+        -c * s4,
+        -(c * c4 * s5 + s * c5),
+        c * c4 * c5 - s * s5,
+        c * s4 * s6 + s * c6 * s5 - c * c4 * c5 * c6,
+        c * c6 * s4 - s * s5 * s6 + c * c4 * c5 * s6,
+    ];
+    y[1][0] = G * s2;
+    y[1][1] = G * c2;
+    for (k, v) in upper.iter().enumerate() {
+        y[1][2 + k] = G * v;
+        y[2][2 + k] = G * v;
+    }
+    let wrist_platform = [
+        -s * s4,
+        -s * c4,
+        s * s4 * s5,
+        -s * c5 * s4,
+        s * (c4 * s6 + c5 * c6 * s4),
+        s * (c4 * c6 - c5 * s4 * s6),
+    ];
+    for (k, v) in wrist_platform.iter().enumerate() {
+        y[3][4 + k] = G * v;
+    }
+    let wrist_pitch = [
+        -(c * s5 + s * c4 * c5),
+        c * c5 - s * c4 * s5,
+        s * c4 * c6 * s5 - c * c5 * c6,
+        c * c5 * s6 - s * c4 * s5 * s6,
+    ];
+    for (k, v) in wrist_pitch.iter().enumerate() {
+        y[4][6 + k] = G * v;
+    }
+    y[5][8] = G * (s * c6 * s4 + c * s5 * s6 + s * c4 * c5 * s6);
+    y[5][9] = G * (c * c6 * s5 - s * s4 * s6 + s * c4 * c5 * c6);
+    for (j, row) in y.iter_mut().enumerate().take(6) {
+        let mut p = 1.0;
+        for col in row[GRAVITY_COLUMNS + 5 * j..GRAVITY_COLUMNS + 5 * j + 5].iter_mut() {
+            *col = p;
+            p *= q[j];
+        }
+    }
+    y
+}
+
+/// The controller's velocity blend `α(q̇)` of one joint (version 2): the weight of
+/// `Y·pos`, `1 − α` that of `Y·neg`.
+pub fn alpha(qd: f64, db_vel: f64, sat_vel: f64, ratio: f64) -> f64 {
+    if qd >= sat_vel {
+        0.5 + 0.5 * ratio
+    } else if qd <= -sat_vel {
+        0.5 - 0.5 * ratio
+    } else if qd.abs() <= db_vel {
+        0.5
+    } else if qd > 0.0 {
+        0.5 + 0.5 * ratio * (qd - db_vel) / (sat_vel - db_vel)
+    } else {
+        0.5 - 0.5 * ratio * (-qd - db_vel) / (sat_vel - db_vel)
+    }
+}
+
+/// How far the file's compensation is from the model over the grid, per joint (N·m).
+#[derive(Clone, Debug, Serialize)]
+pub struct Residuals {
+    /// Gravity columns against the links' gravity torque.
+    pub gravity_max: Vec<f64>,
+    pub gravity_rms: Vec<f64>,
+    /// `Y·pos` against the static torque for positive motion of the joint.
+    pub pos_max: Vec<f64>,
+    pub pos_rms: Vec<f64>,
+    /// `Y·neg` against the static torque for negative motion of the joint.
+    pub neg_max: Vec<f64>,
+    pub neg_rms: Vec<f64>,
+}
+
+/// A gravity-compensation file for the dVRK's MTM controller, and how well it
+/// represents the model.
+#[derive(Clone, Debug)]
+pub struct DvrkGc {
+    /// `gc_dynamic_params_pos`, 40 values (columns 0–9 shared with `neg`).
+    pub pos: Vec<f64>,
+    /// `gc_dynamic_params_neg`, 40 values.
+    pub neg: Vec<f64>,
+    /// `safe_upper_torque_limit`, `safe_lower_torque_limit` (N·m): the range of the
+    /// compensation over the grid, widened (joint 7: 0, it is not compensated).
+    pub upper: Vec<f64>,
+    pub lower: Vec<f64>,
+    /// `db_vel_vec`, `sat_vec_vec` (rad/s), `fric_comp_ratio_vec`: CUHK defaults.
+    pub db_vel: Vec<f64>,
+    pub sat_vel: Vec<f64>,
+    pub fric_comp_ratio: Vec<f64>,
+    pub residuals: Residuals,
+    /// Joint ranges of the grid (rad, joints 1–6) and points per joint.
+    pub ranges: Vec<[f64; 2]>,
+    pub points: usize,
+    pub configurations: usize,
+    /// The robot the model was loaded as.
+    pub robot: String,
+}
+
+impl DvrkGc {
+    /// The file as the controller reads it, with our provenance and residuals under
+    /// `dvrk_ident` (the loader reads only `version` and `GC_controller`).
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "version": "2.0",
+            "GC_controller": {
+                "gc_dynamic_params_pos": self.pos,
+                "gc_dynamic_params_neg": self.neg,
+                "safe_upper_torque_limit": self.upper,
+                "safe_lower_torque_limit": self.lower,
+                "db_vel_vec": self.db_vel,
+                "sat_vec_vec": self.sat_vel,
+                "fric_comp_ratio_vec": self.fric_comp_ratio,
+            },
+            "dvrk_ident": {
+                "robot": self.robot,
+                "joints": MTM_JOINTS,
+                "fit": "least squares over a regular grid of the joint ranges: the gravity \
+                        columns on the links' gravity torque, then per joint and direction \
+                        the quartic on the rest of the static torque (springs, cable, \
+                        friction)",
+                "grid": {
+                    "ranges_rad": self.ranges,
+                    "points_per_joint": self.points,
+                    "configurations": self.configurations,
+                },
+                "residual_N_m": self.residuals,
+                "velocity_blend": "db_vel_vec, sat_vec_vec, fric_comp_ratio_vec: defaults of \
+                                   the CUHK generator (jhu-dvrk/dvrk-gravity-compensation)",
+                "safe_limits": "range of the compensation over the grid, widened by 25 % \
+                                (at least 0.05 N·m) on each side; joint 7 not compensated",
+            }
+        })
+    }
+
+    /// A per-joint table of the residuals, for the command line.
+    pub fn summary(&self) -> String {
+        let r = &self.residuals;
+        let mut out = format!(
+            "dVRK MTM gravity compensation (version 2.0): {} configurations, {} per joint\n\
+             residual vs model (N·m)   gravity max/rms        pos max/rms            neg max/rms\n",
+            self.configurations, self.points
+        );
+        for (j, name) in MTM_JOINTS.iter().enumerate() {
+            out += &format!(
+                "  {:<15} {:>10.2e} {:>10.2e}  {:>10.2e} {:>10.2e}  {:>10.2e} {:>10.2e}\n",
+                name,
+                r.gravity_max[j],
+                r.gravity_rms[j],
+                r.pos_max[j],
+                r.pos_rms[j],
+                r.neg_max[j],
+                r.neg_rms[j]
+            );
+        }
+        out += "joint 7 (wrist_roll) is not compensated by the controller (its row is zero)\n";
+        out
+    }
+}
+
+/// The static torques of the model at one measured configuration, measured coordinates
+/// (N·m): the links' gravity, and per joint the static torque for positive and negative
+/// motion of that joint alone.
+struct Static {
+    gravity: [f64; JOINTS],
+    pos: [f64; JOINTS],
+    neg: [f64; JOINTS],
+}
+
+/// Evaluates the model in measured coordinates.
+struct Evaluator<'a> {
+    model: &'a Model,
+    params: &'a [f64],
+    ws: Workspace,
+    /// `q_model = M⁻¹·q_measured`.
+    to_model: DMatrix<f64>,
+    /// `τ_measured = M⁻ᵀ·τ_model`.
+    to_measured_torque: DMatrix<f64>,
+}
+
+impl<'a> Evaluator<'a> {
+    fn eval(&mut self, qm: &[f64; JOINTS]) -> Static {
+        let n = JOINTS;
+        let q = &self.to_model * DVector::from_column_slice(qm);
+        let mut tau = DVector::zeros(n);
+        self.model
+            .gravity_torque(&mut self.ws, self.params, q.as_slice(), tau.as_mut_slice());
+        let gravity = &self.to_measured_torque * &tau;
+        let mut out = Static {
+            gravity: [0.0; JOINTS],
+            pos: [0.0; JOINTS],
+            neg: [0.0; JOINTS],
+        };
+        out.gravity.copy_from_slice(gravity.as_slice());
+        for j in 0..n {
+            for sign in [1.0, -1.0] {
+                // Motion of measured joint j alone, in model coordinates.
+                let motion = self.to_model.column(j) * sign;
+                self.model.static_torque(
+                    &mut self.ws,
+                    self.params,
+                    q.as_slice(),
+                    motion.as_slice(),
+                    tau.as_mut_slice(),
+                );
+                let t = self.to_measured_torque.row(j).dot(&tau.transpose());
+                if sign > 0.0 {
+                    out.pos[j] = t;
+                } else {
+                    out.neg[j] = t;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The position range (rad) of each measured joint 1–6 from the description's limits: a
+/// `[[limits]]` entry whose expression is the joint (its row of the coupling).
+fn joint_ranges(model: &Model) -> Result<Vec<[f64; 2]>, IdentError> {
+    let m = &model.measured.coupling;
+    (0..6)
+        .map(|j| {
+            model
+                .limits
+                .iter()
+                .filter(|lim| {
+                    let mut row = vec![0.0; model.dof()];
+                    for &(k, c) in &lim.expr.terms {
+                        row[k] = c;
+                    }
+                    lim.expr.offset == 0.0
+                        && row
+                            .iter()
+                            .enumerate()
+                            .all(|(k, c)| (c - m[(j, k)]).abs() <= 1e-12)
+                })
+                .find_map(|lim| lim.position)
+                .filter(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo < hi)
+                .ok_or_else(|| IdentError::Mismatch {
+                    source_name: format!("robot `{}`", model.name),
+                    message: format!(
+                        "no finite position range of measured joint `{}` (a [[limits]] entry \
+                         with expr = \"{}\" and position = [lower, upper]): the \
+                         gravity-compensation fit needs the joint ranges",
+                        model.measured.joints[j], model.measured.joints[j]
+                    ),
+                })
+        })
+        .collect()
+}
+
+/// The grid configuration of index `index` (measured joints; joint 7 at 0).
+fn grid_point(ranges: &[[f64; 2]], points: usize, mut index: usize) -> [f64; JOINTS] {
+    let mut q = [0.0; JOINTS];
+    for (j, [lo, hi]) in ranges.iter().enumerate() {
+        let i = index % points;
+        index /= points;
+        q[j] = lo + (hi - lo) * i as f64 / (points - 1) as f64;
+    }
+    q
+}
+
+/// Rows of configurations handed to the QR factor at a time.
+const BLOCK: usize = 2048;
+
+/// Solves the least-squares problem of an observation (R factor of `[A | b]`).
+fn solve(obs: &Observation, what: &str) -> Result<Vec<f64>, IdentError> {
+    let p = obs.n_params();
+    let r = obs.r();
+    let r11 = r.view((0, 0), (p, p)).into_owned();
+    let diag_max = (0..p).map(|i| r11[(i, i)].abs()).fold(0.0, f64::max);
+    if (0..p).any(|i| !(r11[(i, i)].abs() > 1e-12 * diag_max)) {
+        return Err(IdentError::RankDeficient {
+            source_name: "dVRK gravity compensation".into(),
+            message: format!("the grid does not determine the {what}"),
+        });
+    }
+    let rhs = DVector::from_iterator(p, (0..p).map(|i| r[(i, p)]));
+    let x = r11
+        .solve_upper_triangular(&rhs)
+        .expect("non-singular triangular factor");
+    Ok(x.iter().copied().collect())
+}
+
+/// The MTM gravity-compensation file of `params` for `model` (the MTM, or a
+/// description with its measured joints), fitted over `points` grid points per joint
+/// (at least 6: the quartics need five distinct positions, one more to see a residual).
+pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, IdentError> {
+    let mismatch = |message: String| IdentError::Mismatch {
+        source_name: format!("robot `{}`", model.name),
+        message,
+    };
+    if model
+        .measured
+        .joints
+        .iter()
+        .map(String::as_str)
+        .ne(MTM_JOINTS)
+    {
+        return Err(mismatch(format!(
+            "the dVRK gravity-compensation file is for the MTM, whose measured joints are \
+             {}; this robot's are {}",
+            MTM_JOINTS.join(", "),
+            model.measured.joints.join(", ")
+        )));
+    }
+    if params.len() != model.n_params() || params.iter().any(|p| !p.is_finite()) {
+        return Err(mismatch(format!(
+            "expected {} finite parameters, got {}",
+            model.n_params(),
+            params.len()
+        )));
+    }
+    if !(6..=40).contains(&points) {
+        return Err(IdentError::Setting {
+            name: "points".into(),
+            message: format!("grid points per joint must be 6 to 40, got {points}"),
+        });
+    }
+    let to_model = model
+        .measured_to_model_matrix()
+        .ok_or_else(|| mismatch("the coupling matrix is singular".into()))?;
+    let to_measured_torque = to_model.transpose();
+    let ranges = joint_ranges(model)?;
+    let configurations = points.pow(6);
+    // The model at every grid configuration, once (21 numbers each), in parallel.
+    let statics: Vec<Static> = (0..configurations)
+        .into_par_iter()
+        .chunks(BLOCK)
+        .flat_map_iter(|chunk| {
+            let mut ev = Evaluator {
+                model,
+                params,
+                ws: Workspace::new(model),
+                to_model: to_model.clone(),
+                to_measured_torque: to_measured_torque.clone(),
+            };
+            chunk
+                .into_iter()
+                .map(|c| ev.eval(&grid_point(&ranges, points, c)))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+
+    // Stage 1: gravity columns on the gravity torque of joints 2–6.
+    let mut gravity_obs = Observation::new(GRAVITY_COLUMNS);
+    // Stage 2 (after stage 1): per joint and direction, [1, q, q², q³, q⁴].
+    let mut block = DMatrix::zeros(0, GRAVITY_COLUMNS + 1);
+    let mut start = 0;
+    while start < configurations {
+        let end = (start + BLOCK).min(configurations);
+        block = block.resize((end - start) * 5, GRAVITY_COLUMNS + 1, 0.0);
+        for c in start..end {
+            let q = grid_point(&ranges, points, c);
+            let y = regressor(&q);
+            let st = &statics[c];
+            for j in 1..6 {
+                let r = (c - start) * 5 + j - 1;
+                for k in 0..GRAVITY_COLUMNS {
+                    block[(r, k)] = y[j][k];
+                }
+                block[(r, GRAVITY_COLUMNS)] = st.gravity[j];
+            }
+        }
+        gravity_obs.add_rows(&block);
+        start = end;
+    }
+    let gravity = solve(&gravity_obs, "gravity parameters")?;
+    let gravity_part = |y: &[[f64; COLUMNS]; JOINTS], j: usize| -> f64 {
+        (0..GRAVITY_COLUMNS).map(|k| y[j][k] * gravity[k]).sum()
+    };
+
+    let mut quartic_obs: Vec<[Observation; 2]> = (0..6)
+        .map(|_| [Observation::new(5), Observation::new(5)])
+        .collect();
+    let mut blocks: Vec<[DMatrix<f64>; 2]> = (0..6)
+        .map(|_| [DMatrix::zeros(0, 6), DMatrix::zeros(0, 6)])
+        .collect();
+    let mut start = 0;
+    while start < configurations {
+        let end = (start + BLOCK).min(configurations);
+        for pair in blocks.iter_mut() {
+            for b in pair.iter_mut() {
+                *b = std::mem::replace(b, DMatrix::zeros(0, 0)).resize(end - start, 6, 0.0);
+            }
+        }
+        for c in start..end {
+            let q = grid_point(&ranges, points, c);
+            let y = regressor(&q);
+            let st = &statics[c];
+            for (j, pair) in blocks.iter_mut().enumerate() {
+                let g = gravity_part(&y, j);
+                for (b, target) in pair.iter_mut().zip([st.pos[j], st.neg[j]]) {
+                    for k in 0..5 {
+                        b[(c - start, k)] = y[j][GRAVITY_COLUMNS + 5 * j + k];
+                    }
+                    b[(c - start, 5)] = target - g;
+                }
+            }
+        }
+        for (obs, b) in quartic_obs.iter_mut().zip(&blocks) {
+            obs[0].add_rows(&b[0]);
+            obs[1].add_rows(&b[1]);
+        }
+        start = end;
+    }
+    let mut pos = vec![0.0; COLUMNS];
+    pos[..GRAVITY_COLUMNS].copy_from_slice(&gravity);
+    let mut neg = pos.clone();
+    for (j, obs) in quartic_obs.iter().enumerate() {
+        let cols = GRAVITY_COLUMNS + 5 * j..GRAVITY_COLUMNS + 5 * j + 5;
+        pos[cols.clone()].copy_from_slice(&solve(&obs[0], &format!("quartic of joint {}", j + 1))?);
+        neg[cols].copy_from_slice(&solve(&obs[1], &format!("quartic of joint {}", j + 1))?);
+    }
+
+    // Residuals and the range of the compensation, on the same grid.
+    let mut max = [[0.0f64; JOINTS]; 3];
+    let mut sum2 = [[0.0f64; JOINTS]; 3];
+    let mut low = [f64::INFINITY; JOINTS];
+    let mut high = [f64::NEG_INFINITY; JOINTS];
+    for c in 0..configurations {
+        let q = grid_point(&ranges, points, c);
+        let y = regressor(&q);
+        let st = &statics[c];
+        for j in 0..JOINTS {
+            let tp: f64 = (0..COLUMNS).map(|k| y[j][k] * pos[k]).sum();
+            let tn: f64 = (0..COLUMNS).map(|k| y[j][k] * neg[k]).sum();
+            let errors = [
+                gravity_part(&y, j) - st.gravity[j],
+                tp - st.pos[j],
+                tn - st.neg[j],
+            ];
+            for (i, e) in errors.iter().enumerate() {
+                max[i][j] = max[i][j].max(e.abs());
+                sum2[i][j] += e * e;
+            }
+            low[j] = low[j].min(tp.min(tn));
+            high[j] = high[j].max(tp.max(tn));
+        }
+    }
+    let rms = |i: usize| -> Vec<f64> {
+        sum2[i]
+            .iter()
+            .map(|s| (s / configurations as f64).sqrt())
+            .collect()
+    };
+    let mut upper = vec![0.0; JOINTS];
+    let mut lower = vec![0.0; JOINTS];
+    for j in 0..6 {
+        let margin = (LIMIT_MARGIN * (high[j] - low[j])).max(LIMIT_MARGIN_MIN);
+        upper[j] = high[j] + margin;
+        lower[j] = low[j] - margin;
+    }
+    let out = DvrkGc {
+        pos,
+        neg,
+        upper,
+        lower,
+        db_vel: DB_VEL.to_vec(),
+        sat_vel: SAT_VEL.to_vec(),
+        fric_comp_ratio: FRIC_COMP_RATIO.to_vec(),
+        residuals: Residuals {
+            gravity_max: max[0].to_vec(),
+            gravity_rms: rms(0),
+            pos_max: max[1].to_vec(),
+            pos_rms: rms(1),
+            neg_max: max[2].to_vec(),
+            neg_rms: rms(2),
+        },
+        ranges,
+        points,
+        configurations,
+        robot: model.name.clone(),
+    };
+    let finite = out
+        .pos
+        .iter()
+        .chain(&out.neg)
+        .chain(&out.upper)
+        .chain(&out.lower)
+        .all(|v| v.is_finite());
+    if !finite {
+        return Err(IdentError::RankDeficient {
+            source_name: "dVRK gravity compensation".into(),
+            message: "the fit gave non-finite values".into(),
+        });
+    }
+    Ok(out)
+}
