@@ -342,7 +342,8 @@ impl Model {
     /// frame's joint rate `s·motion` counts): Coulomb and Stribeck terms at that sign,
     /// offset friction always, no viscous friction (zero speed). A gravity-compensation
     /// controller feeds this forward, the friction part for the direction it expects to
-    /// move; `motion = 0` gives the torque at rest (offset friction, no Coulomb).
+    /// move; `motion = 0` gives the torque at rest (offset friction, no Coulomb). A
+    /// frame rate below 1e-12 of the motion's scale counts as zero (rounding).
     /// Allocates nothing.
     ///
     /// ```
@@ -369,9 +370,18 @@ impl Model {
     ) {
         self.check_state(ws, params, &[q, motion, tau]);
         self.gravity_torque(ws, params, q, tau);
+        // A frame whose rate is rounding (a direction from the inverse of a coupling,
+        // e.g. the MTM's wrist platform under elbow-pitch motion) stands still.
+        let scale = motion.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         for f in &self.frames {
             if let Some(fr) = &f.friction {
-                let s = sign0(f.value.dot(motion));
+                let rate = f.value.dot(motion);
+                let size: f64 = f.value.terms.iter().map(|(_, c)| c.abs()).sum();
+                let s = if rate.abs() <= 1e-12 * scale * size {
+                    0.0
+                } else {
+                    sign0(rate)
+                };
                 let mut force = params[fr.param] * s + params[fr.param + 2];
                 if let Some(st) = &fr.stribeck {
                     // exp(−(ṡ/vs)²) → 1 at the onset of motion.
