@@ -24,12 +24,18 @@
 //! while it moves negatively. [`dvrk_gc`] fits both to our model's static torque
 //! ([`dvrk_model::Model::static_torque`]: gravity, springs, known forces, Coulomb,
 //! Stribeck and offset friction) in measured joint coordinates, over a regular grid of
-//! the description's joint ranges, in two least-squares stages:
+//! the description's ranges of joints 1–6, in two least-squares stages:
 //!
 //! 1. the ten gravity parameters, shared by `pos` and `neg` as in the CUHK generator, on
-//!    the links' gravity torque alone (joints 2–6). When the basis spans the model's
-//!    gravity (the MTM's does: every link rotates with the dVRK joints in the way the
-//!    CUHK derivation assumes) this is exact to rounding;
+//!    the links' gravity torque alone (joints 2–6). The controller does not read the
+//!    wrist roll (joint 7), so the torque is averaged over a turn of it: a rigid body
+//!    turning with the roll moves the gravity torque by a first harmonic `a·cos q7 +
+//!    b·sin q7`, whose average is the mean of rolls 0 and π and whose amplitude (from
+//!    roll π/2) is added to the residuals; a model that is not a first harmonic of the
+//!    roll (checked at −π/2) is refused. The basis spans the rest of the MTM's gravity
+//!    (every link rotates with the dVRK joints in the way the CUHK derivation assumes),
+//!    so the average is fitted exactly to rounding, and the residual is the wrist
+//!    roll's centre of mass off its axis;
 //! 2. per joint and direction, the quartic in the joint's own position on what is left:
 //!    springs (the wrist-pitch spring), known forces (the wrist-platform cable, a 7th
 //!    degree polynomial), friction, and any gravity the basis misses. Those depend on
@@ -163,7 +169,9 @@ pub fn alpha(qd: f64, db_vel: f64, sat_vel: f64, ratio: f64) -> f64 {
     }
 }
 
-/// How far the file's compensation is from the model over the grid, per joint (N·m).
+/// How far the file's compensation is from the model over the grid, per joint (N·m),
+/// over a whole turn of the wrist roll (the error at its average plus the amplitude of
+/// its first harmonic; the RMS over the turn).
 #[derive(Clone, Debug, Serialize)]
 pub struct Residuals {
     /// Gravity columns against the links' gravity torque.
@@ -263,13 +271,18 @@ impl DvrkGc {
     }
 }
 
-/// The static torques of the model at one measured configuration, measured coordinates
-/// (N·m): the links' gravity, and per joint the static torque for positive and negative
-/// motion of that joint alone.
+/// The static torques of the model at one measured configuration of joints 1–6,
+/// measured coordinates (N·m), averaged over the wrist roll (joint 7), which the
+/// controller does not read: the links' gravity, and per joint the static torque for
+/// positive and negative motion of that joint alone; and how far the wrist roll moves
+/// them about that average.
 struct Static {
     gravity: [f64; JOINTS],
     pos: [f64; JOINTS],
     neg: [f64; JOINTS],
+    /// Amplitude of the torque's dependence on the wrist roll (a rigid body turning
+    /// about an axis: `a·cos q7 + b·sin q7` about the average).
+    roll: [f64; JOINTS],
 }
 
 /// Evaluates the model in measured coordinates.
@@ -283,20 +296,49 @@ struct Evaluator<'a> {
     to_measured_torque: DMatrix<f64>,
 }
 
-impl<'a> Evaluator<'a> {
-    fn eval(&mut self, qm: &[f64; JOINTS]) -> Static {
-        let n = JOINTS;
+impl Evaluator<'_> {
+    /// The links' gravity torque, measured joints.
+    fn gravity(&mut self, qm: &[f64; JOINTS]) -> DVector<f64> {
         let q = &self.to_model * DVector::from_column_slice(qm);
-        let mut tau = DVector::zeros(n);
+        let mut tau = DVector::zeros(JOINTS);
         self.model
             .gravity_torque(&mut self.ws, self.params, q.as_slice(), tau.as_mut_slice());
-        let gravity = &self.to_measured_torque * &tau;
+        &self.to_measured_torque * tau
+    }
+
+    /// `None` when the gravity torque is not a first harmonic of the wrist roll.
+    fn eval(&mut self, qm: &[f64; JOINTS]) -> Option<Static> {
+        let n = JOINTS;
+        // Wrist roll at 0, π, ±π/2: the average and the amplitude of a first harmonic.
+        let at = |roll: f64| {
+            let mut q = *qm;
+            q[6] = roll;
+            q
+        };
+        let half = std::f64::consts::FRAC_PI_2;
+        let g0 = self.gravity(&at(0.0));
+        let g_pi = self.gravity(&at(std::f64::consts::PI));
+        let g_up = self.gravity(&at(half));
+        let g_down = self.gravity(&at(-half));
+        let mean = (&g0 + &g_pi) * 0.5;
+        let harmonic = (&g_up + &g_down) * 0.5 - &mean;
+        let size = 1.0 + mean.amax() + g_up.amax();
+        if harmonic.amax() > 1e-9 * size {
+            return None;
+        }
         let mut out = Static {
             gravity: [0.0; JOINTS],
             pos: [0.0; JOINTS],
             neg: [0.0; JOINTS],
+            roll: [0.0; JOINTS],
         };
-        out.gravity.copy_from_slice(gravity.as_slice());
+        for j in 0..n {
+            out.gravity[j] = mean[j];
+            out.roll[j] = (0.5 * (g0[j] - g_pi[j])).hypot(g_up[j] - mean[j]);
+        }
+        // Springs, known forces and friction at roll 0, gravity averaged.
+        let q = &self.to_model * DVector::from_column_slice(&at(0.0));
+        let mut tau = DVector::zeros(n);
         for j in 0..n {
             for sign in [1.0, -1.0] {
                 // Motion of measured joint j alone, in model coordinates.
@@ -308,7 +350,7 @@ impl<'a> Evaluator<'a> {
                     motion.as_slice(),
                     tau.as_mut_slice(),
                 );
-                let t = self.to_measured_torque.row(j).dot(&tau.transpose());
+                let t = self.to_measured_torque.row(j).dot(&tau.transpose()) + mean[j] - g0[j];
                 if sign > 0.0 {
                     out.pos[j] = t;
                 } else {
@@ -316,7 +358,7 @@ impl<'a> Evaluator<'a> {
                 }
             }
         }
-        out
+        Some(out)
     }
 }
 
@@ -430,7 +472,7 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
     let ranges = joint_ranges(model)?;
     let configurations = points.pow(6);
     // The model at every grid configuration, once (21 numbers each), in parallel.
-    let statics: Vec<Static> = (0..configurations)
+    let statics: Option<Vec<Static>> = (0..configurations)
         .into_par_iter()
         .chunks(BLOCK)
         .flat_map_iter(|chunk| {
@@ -447,6 +489,13 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
                 .collect::<Vec<_>>()
         })
         .collect();
+    let statics = statics.ok_or_else(|| {
+        mismatch(
+            "its gravity torque depends on the wrist roll (joint 7) otherwise than a rigid \
+             body turning about the roll axis; the controller cannot represent it"
+                .into(),
+        )
+    })?;
 
     // Stage 1: gravity columns on the gravity torque of joints 2–6.
     let mut gravity_obs = Observation::new(GRAVITY_COLUMNS);
@@ -536,9 +585,12 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
                 tp - st.pos[j],
                 tn - st.neg[j],
             ];
+            // Over a turn of the wrist roll: the error at its average plus (or, squared
+            // and averaged, half) the amplitude of the roll's first harmonic.
+            let a = st.roll[j];
             for (i, e) in errors.iter().enumerate() {
-                max[i][j] = max[i][j].max(e.abs());
-                sum2[i][j] += e * e;
+                max[i][j] = max[i][j].max(e.abs() + a);
+                sum2[i][j] += e * e + 0.5 * a * a;
             }
             low[j] = low[j].min(tp.min(tn));
             high[j] = high[j].max(tp.max(tn));
@@ -606,9 +658,16 @@ mod tests {
         for (i, f) in model.frames.iter().enumerate() {
             let k = (i + 1) as f64;
             if let Some(p0) = f.inertia {
+                // The wrist roll's centre of mass on its axis (z), which the
+                // controller's basis assumes.
+                let com = if f.name == "wrist_roll" {
+                    [0.0, 0.0, 0.03]
+                } else {
+                    [0.01 * k, -0.02, 0.015 * (k - 5.0)]
+                };
                 let b = dvrk_model::inertia::barycentric_from_standard(
                     0.2 * k,
-                    [0.01 * k, -0.02, 0.015 * (k - 5.0)],
+                    com,
                     [0.002, 0.0, 0.0, 0.003, 0.0, 0.001 * k],
                 );
                 p[p0..p0 + 10].copy_from_slice(&b);
@@ -627,7 +686,8 @@ mod tests {
     #[test]
     fn mtm_gravity_is_in_the_span_and_friction_is_per_direction() {
         let model = Model::builtin("mtm").unwrap();
-        let gc = dvrk_gc(&model, &mtm_params(&model), 6).unwrap();
+        let params = mtm_params(&model);
+        let gc = dvrk_gc(&model, &params, 6).unwrap();
         let r = &gc.residuals;
         // Every MTM link's gravity lies in the ten columns' span.
         for j in 0..6 {
@@ -637,6 +697,21 @@ mod tests {
                 j + 1,
                 r.gravity_max[j]
             );
+        }
+        // A wrist roll whose centre of mass is off its axis (first moment 1 kg·mm: at
+        // most 9.81e-3 N·m) moves the gravity of joints 4-6 by what the controller
+        // cannot see.
+        let roll = model
+            .frames
+            .iter()
+            .find(|f| f.name == "wrist_roll")
+            .unwrap();
+        let mut off_axis = params.clone();
+        off_axis[roll.inertia.unwrap() + 6] = 0.001;
+        let off = dvrk_gc(&model, &off_axis, 6).unwrap().residuals;
+        for j in 3..6 {
+            let g = off.gravity_max[j];
+            assert!(g > 1e-4 && g <= 9.81e-3 + 1e-12, "joint {}: {g:e}", j + 1);
         }
         // Joints 1, 2, 3 and 6 carry gravity and constant friction only: exact. Joint 4
         // has the cable (degree 7), joint 5 the spring: approximated, not exact.
