@@ -640,7 +640,7 @@ impl FitResultPy {
     /// The dVRK controller's MTM gravity-compensation file (``dvrk-ident export
     /// --dvrk-gc``) as a dict: ``version`` ``"2.0"``, ``GC_controller`` with the arrays
     /// sawIntuitiveResearchKit reads, and ``dvrk_ident`` with the grid and the residuals
-    /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 40).
+    /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 10).
     /// Raises ``InputError`` for a robot that is not the MTM.
     #[pyo3(signature = (robot = None, points = dvrk_ident::dvrk_gc::DEFAULT_POINTS))]
     fn dvrk_gc<'py>(

@@ -39,7 +39,7 @@ pub struct Args {
     /// sawIntuitiveResearchKit's robGravityCompensationMTM reads it) here (atomically)
     #[arg(long, value_name = "gc-MTML.json")]
     pub dvrk_gc: Option<String>,
-    /// Grid points per joint of the gravity-compensation fit (joints 1-6)
+    /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
     #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc")]
     pub gc_points: usize,
     /// Robot (default: the one the result was fitted for)
