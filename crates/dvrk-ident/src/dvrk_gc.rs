@@ -417,7 +417,9 @@ fn solve(obs: &Observation, what: &str) -> Result<Vec<f64>, IdentError> {
     let r = obs.r();
     let r11 = r.view((0, 0), (p, p)).into_owned();
     let diag_max = (0..p).map(|i| r11[(i, i)].abs()).fold(0.0, f64::max);
-    if (0..p).any(|i| !(r11[(i, i)].abs() > 1e-12 * diag_max)) {
+    // NaN on the diagonal fails the comparison too.
+    let determined = |i: usize| r11[(i, i)].abs() > 1e-12 * diag_max;
+    if !(0..p).all(determined) {
         return Err(IdentError::RankDeficient {
             source_name: "dVRK gravity compensation".into(),
             message: format!("the grid does not determine the {what}"),
@@ -508,14 +510,12 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
     while start < configurations {
         let end = (start + BLOCK).min(configurations);
         block = block.resize((end - start) * 5, GRAVITY_COLUMNS + 1, 0.0);
-        for c in start..end {
-            let q = grid_point(&ranges, points, c);
-            let y = regressor(&q);
-            let st = &statics[c];
-            for j in 1..6 {
+        for (c, st) in statics.iter().enumerate().take(end).skip(start) {
+            let y = regressor(&grid_point(&ranges, points, c));
+            for (j, row) in y.iter().enumerate().take(6).skip(1) {
                 let r = (c - start) * 5 + j - 1;
-                for k in 0..GRAVITY_COLUMNS {
-                    block[(r, k)] = y[j][k];
+                for (k, v) in row[..GRAVITY_COLUMNS].iter().enumerate() {
+                    block[(r, k)] = *v;
                 }
                 block[(r, GRAVITY_COLUMNS)] = st.gravity[j];
             }
@@ -542,10 +542,8 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
                 *b = std::mem::replace(b, DMatrix::zeros(0, 0)).resize(end - start, 6, 0.0);
             }
         }
-        for c in start..end {
-            let q = grid_point(&ranges, points, c);
-            let y = regressor(&q);
-            let st = &statics[c];
+        for (c, st) in statics.iter().enumerate().take(end).skip(start) {
+            let y = regressor(&grid_point(&ranges, points, c));
             for (j, pair) in blocks.iter_mut().enumerate() {
                 let g = gravity_part(&y, j);
                 for (b, target) in pair.iter_mut().zip([st.pos[j], st.neg[j]]) {
@@ -576,10 +574,8 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
     let mut sum2 = [[0.0f64; JOINTS]; 3];
     let mut low = [f64::INFINITY; JOINTS];
     let mut high = [f64::NEG_INFINITY; JOINTS];
-    for c in 0..configurations {
-        let q = grid_point(&ranges, points, c);
-        let y = regressor(&q);
-        let st = &statics[c];
+    for (c, st) in statics.iter().enumerate() {
+        let y = regressor(&grid_point(&ranges, points, c));
         for j in 0..JOINTS {
             let tp: f64 = (0..COLUMNS).map(|k| y[j][k] * pos[k]).sum();
             let tn: f64 = (0..COLUMNS).map(|k| y[j][k] * neg[k]).sum();
