@@ -23,8 +23,17 @@
 //!   after a massless `{frame}_motion` link. Then:
 //!   - each coordinate `q_k` is carried by exactly one non-mimic joint named after it: the
 //!     first frame whose value is exactly `q_k`, else `q_k + c` (the constant folded into
-//!     the origin), else `−q_k + c` (axis −z), else a massless link `{q_k}_coordinate`
-//!     hung from the root, so that the URDF's coordinates are the model's;
+//!     the origin), else `−q_k + c` (axis −z), so that the URDF's coordinates are the
+//!     model's. That needs every coordinate to have such a frame, above every other
+//!     frame driven by it: Pinocchio (`mimic=True`) adds a mimic joint only after the
+//!     joint it mimics, visiting the tree depth first with each link's child joints in
+//!     the order of their names (urdfdom's). Otherwise (the PSM's `1.0186*q5`, the
+//!     parallelograms, which mimic `q2` in one branch and `q3` in another) every
+//!     coordinate is a massless link `{q_k}_coordinate` hung from the root and every
+//!     moving frame a mimic; the root's frames then hang from a massless
+//!     `{root}_frames` link whose fixed joint is named after the greatest coordinate
+//!     name plus `_frames`, so it sorts after all coordinates. Either way our importer
+//!     reads the coordinates back in order (checked on the generated text);
 //!   - every other frame driven by one coordinate, `s = a·q_k + c`, is a
 //!     `<mimic joint="q_k" multiplier="a" offset="c">`;
 //!   - a frame driven by several coordinates (the MTM parallelogram, `q3 − q2`) is a chain

@@ -7,9 +7,11 @@
 //!   transmission, gazebo, materials), which must survive untouched; and on the Panda of
 //!   `../shared/anchors` when present;
 //! - generate mode on the dVRK PSM, simplified PSM and MTM (parallelograms, tendon
-//!   couplings, counterweights, virtual motor frames) and on a standard-DH robot that
-//!   needs every fallback (a −q carrier, a coordinate no frame carries alone, a post
-//!   transform that does not commute with its joint, gravity not along −z).
+//!   couplings, counterweights, virtual motor frames: coordinates as root links, every
+//!   frame a mimic) and on standard-DH robots (a coordinate no frame carries alone, a
+//!   post transform that does not commute with its joint, gravity not along −z; and with
+//!   carriers, a −q one): the coordinates read back in order, every mimic after the
+//!   joint it mimics in the depth-first, by-name order of urdfdom and Pinocchio.
 
 mod common;
 #[path = "dynamics_support.rs"]
