@@ -612,8 +612,8 @@ impl Model {
                 .generate(params, &inertials, &carriers)
                 .map_err(error)?;
             // Our importer numbers the coordinates in breadth-first order.
-            let back = Model::from_urdf_str(&text, &self.source)?;
-            if back.coordinates == self.coordinates {
+            let back = Model::from_urdf_str(&text, &self.source);
+            if back.is_ok_and(|b| b.coordinates == self.coordinates) {
                 return Ok(text);
             }
         }
