@@ -621,6 +621,26 @@ impl FitResultPy {
         to_python(py, &wpi_params_json(&model, &params))
     }
 
+    /// The dVRK controller's MTM gravity-compensation file (``dvrk-ident export
+    /// --dvrk-gc``) as a dict: ``version`` ``"2.0"``, ``GC_controller`` with the arrays
+    /// sawIntuitiveResearchKit reads, and ``dvrk_ident`` with the grid and the residuals
+    /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 10).
+    /// Raises ``InputError`` for a robot that is not the MTM.
+    #[pyo3(signature = (robot = None, points = dvrk_ident::dvrk_gc::DEFAULT_POINTS))]
+    fn dvrk_gc<'py>(
+        &self,
+        py: Python<'py>,
+        robot: Option<&Bound<'py, Robot>>,
+        points: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        let gc = py
+            .detach(move || dvrk_ident::dvrk_gc::dvrk_gc(&model, &params, points))
+            .map_err(from_ident)?;
+        to_python(py, &gc.to_json())
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "Result(robot={}, method={}, converged={}, physically_consistent={})",

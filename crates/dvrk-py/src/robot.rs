@@ -496,6 +496,18 @@ impl Robot {
         Ok(array(py, out, &q.shape(&[n])))
     }
 
+    /// A URDF of the whole robot with the inertials of ``params`` (an array, a
+    /// ``{name: value}`` mapping or a fit ``Result``), as ``dvrk-ident export --urdf``
+    /// generates it: one link per frame, mimic joints for the couplings, what URDF
+    /// cannot hold listed in its header. Raises ``ModelError`` for parameters that are
+    /// not rigid bodies.
+    fn to_urdf(&self, py: Python<'_>, params: &Bound<'_, PyAny>) -> PyResult<String> {
+        let params = self.params(py, params)?;
+        let model = self.model.clone();
+        py.detach(move || model.to_urdf(&params))
+            .map_err(from_model)
+    }
+
     /// Mass matrix ``M(q)`` (motor inertias included), shape ``(N, dof, dof)``, or
     /// ``(dof, dof)`` for one 1-D sample.
     fn mass_matrix<'py>(
