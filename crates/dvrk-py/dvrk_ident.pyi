@@ -122,6 +122,8 @@ class Robot:
         """Accelerations under measured torques: ``(N, dof)`` or ``(dof,)``."""
     def known_forces(self, q: ArrayLike) -> FloatArray:
         """Known generalized forces (e.g. the MTM cable): ``(N, dof)`` or ``(dof,)``."""
+    def to_urdf(self, params: Params) -> str:
+        """The generated URDF (``dvrk-ident export --urdf``) with these inertials."""
     def forward_kinematics(self, q: ArrayLike) -> FloatArray:
         """Frame poses in the base frame, base first: ``(N, frames, 4, 4)`` or
         ``(frames, 4, 4)``."""
@@ -301,6 +303,8 @@ class Result:
         self, data: Data, test_window: Optional[int] = None, robot: Optional[Robot] = None
     ) -> Dict[str, Any]: ...
     def wpi_params(self, robot: Optional[Robot] = None) -> Dict[str, Any]: ...
+    def dvrk_gc(self, robot: Optional[Robot] = None, points: int = 7) -> Dict[str, Any]:
+        """The dVRK controller's MTM gravity-compensation file (version "2.0")."""
 
 def read_log(
     path: PathLike,

@@ -321,6 +321,27 @@ fn export_errors_name_the_file_and_write_nothing() {
         &dir,
         &[],
     );
+    // The dVRK gravity-compensation file is for the MTM: refused for the PSM, and the
+    // URDF that could have been written is not.
+    let gc = s(&dir.join("gc-MTML.json"));
+    assert_fails(
+        &["export", &s(&sdp), "--urdf", &urdf, "--dvrk-gc", &gc],
+        &[
+            &s(&sdp),
+            "dVRK gravity compensation",
+            "for the MTM",
+            "outer_pitch",
+        ],
+        &dir,
+        &[],
+    );
+    // --gc-points out of range.
+    assert_fails(
+        &["export", &s(&sdp), "--dvrk-gc", &gc, "--gc-points", "3"],
+        &["grid points per joint must be 6 to 10"],
+        &dir,
+        &[],
+    );
     // --from a URDF that is not the robot.
     let other = inputs.join("other.urdf");
     std::fs::write(&other, ARM).unwrap();

@@ -40,3 +40,4 @@ pub mod result;
 pub use fit::{fit, FitSettings, Method};
 pub use result::FitResult;
 pub mod cable;
+pub mod dvrk_gc;

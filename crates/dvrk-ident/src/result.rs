@@ -94,6 +94,14 @@ pub struct InputInfo {
     pub metrics: Option<JointMetrics>,
 }
 
+/// A result's `robot_source` (`builtin:psm`, or a path) as [`dvrk_model::Model::load`]
+/// takes it.
+pub fn loadable_robot(robot_source: &str) -> &str {
+    robot_source
+        .strip_prefix("builtin:")
+        .unwrap_or(robot_source)
+}
+
 impl InputInfo {
     /// Hashes a log file, or the files of a rosbag2 folder, reading them in pieces.
     pub fn from_file(role: &str, path: &Path) -> Result<InputInfo, IdentError> {
@@ -190,14 +198,16 @@ impl FitResult {
         )?)
     }
 
+    /// The robot the result records, as [`dvrk_model::Model::load`] takes it: a
+    /// built-in name or a description path.
+    pub fn robot(&self) -> &str {
+        loadable_robot(&self.robot_source)
+    }
+
     /// The model this result's parameters belong to: its recorded robot (or `robot`
     /// instead), with the fit's model options (Stribeck terms) applied.
     pub fn model(&self, robot: Option<&str>) -> Result<dvrk_model::Model, IdentError> {
-        let robot = robot.unwrap_or_else(|| {
-            self.robot_source
-                .strip_prefix("builtin:")
-                .unwrap_or(&self.robot_source)
-        });
+        let robot = robot.unwrap_or_else(|| self.robot());
         let model = dvrk_model::Model::load(robot)?;
         Ok(self.settings.model(&model)?.into_owned())
     }

@@ -211,6 +211,31 @@ pub enum Cutoff {
 }
 
 impl Cutoff {
+    /// The text of a cut-off flag: `none` (no filter), one cut-off in Hz, or one per
+    /// coordinate separated by commas (`--cutoff 16.965`, `--cutoff 5,5,5,3,3,3,3`).
+    ///
+    /// ```
+    /// use dvrk_ident::signal::Cutoff;
+    /// assert_eq!(Cutoff::parse_flag("none"), Ok(None));
+    /// assert_eq!(Cutoff::parse_flag("5.4"), Ok(Some(Cutoff::All(5.4))));
+    /// assert_eq!(Cutoff::parse_flag("5, 3"), Ok(Some(Cutoff::PerJoint(vec![5.0, 3.0]))));
+    /// assert!(Cutoff::parse_flag("fast").is_err());
+    /// ```
+    pub fn parse_flag(text: &str) -> Result<Option<Cutoff>, String> {
+        if text.trim().eq_ignore_ascii_case("none") {
+            return Ok(None);
+        }
+        let values: Vec<f64> = text
+            .split(',')
+            .map(|v| v.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("`{text}` is not a cut-off (Hz), a list of them or `none`"))?;
+        Ok(Some(match values[..] {
+            [one] => Cutoff::All(one),
+            _ => Cutoff::PerJoint(values),
+        }))
+    }
+
     /// Cut-off of joint `j`, Hz (`None` when a per-joint list is too short).
     pub fn for_joint(&self, j: usize) -> Option<f64> {
         match self {
@@ -450,6 +475,28 @@ impl Default for Processing {
 }
 
 impl Processing {
+    /// Sets the motion's low-pass cut-off as `--cutoff` and Python's `cutoff=` do:
+    /// `None` removes the filter; a cut-off keeps the filter's order, form and
+    /// convention (the defaults where there was no filter), so that a new cut-off on a
+    /// result's 2019 settings still converts it the 2019 way.
+    ///
+    /// ```
+    /// use dvrk_ident::signal::{Cutoff, CutoffConvention, LowPass, Processing};
+    /// let mut p = Processing::default();
+    /// p.filter = Some(LowPass::wpi2019(5.4));
+    /// p.set_cutoff(Some(Cutoff::All(3.0)));
+    /// let f = p.filter.clone().unwrap();
+    /// assert_eq!((f.cutoff_hz, f.convention), (Cutoff::All(3.0), CutoffConvention::Wpi2019));
+    /// p.set_cutoff(None);
+    /// assert!(p.filter.is_none());
+    /// ```
+    pub fn set_cutoff(&mut self, cutoff: Option<Cutoff>) {
+        self.filter = cutoff.map(|cutoff_hz| LowPass {
+            cutoff_hz,
+            ..self.filter.take().unwrap_or_default()
+        });
+    }
+
     /// Checks the settings that do not depend on the data (cut-offs for `dof`
     /// coordinates, decimation, minimum speed), for the whole-log and the block
     /// processing alike.

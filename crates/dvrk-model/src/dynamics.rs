@@ -336,6 +336,71 @@ impl Model {
         self.body_rnea(ws, q, q, still, true, tau);
     }
 
+    /// Static torque (N·m or N): what holds the robot still at `q` against gravity,
+    /// springs and known forces (e.g. the MTM cable), plus the friction that opposes the
+    /// onset of a motion in direction `motion` (model coordinates; only the sign of each
+    /// frame's joint rate `s·motion` counts): Coulomb and Stribeck terms at that sign,
+    /// offset friction always, no viscous friction (zero speed). A gravity-compensation
+    /// controller feeds this forward, the friction part for the direction it expects to
+    /// move; `motion = 0` gives the torque at rest (offset friction, no Coulomb). A
+    /// frame rate below 1e-12 of the motion's scale counts as zero (rounding).
+    /// Allocates nothing.
+    ///
+    /// ```
+    /// # use dvrk_model::{Model, Workspace};
+    /// let mtm = Model::builtin("mtm").unwrap();
+    /// let mut ws = Workspace::new(&mtm);
+    /// let params = vec![0.01; mtm.n_params()];
+    /// let (mut up, mut down) = ([0.0; 7], [0.0; 7]);
+    /// let mut e1 = [0.0; 7];
+    /// e1[0] = 1.0;
+    /// mtm.static_torque(&mut ws, &params, &[0.1; 7], &e1, &mut up);
+    /// e1[0] = -1.0;
+    /// mtm.static_torque(&mut ws, &params, &[0.1; 7], &e1, &mut down);
+    /// // Joint 1 only: Coulomb friction Fc1 = 0.01 one way, then the other.
+    /// assert!((up[0] - down[0] - 0.02).abs() < 1e-15);
+    /// ```
+    pub fn static_torque(
+        &self,
+        ws: &mut Workspace,
+        params: &[f64],
+        q: &[f64],
+        motion: &[f64],
+        tau: &mut [f64],
+    ) {
+        self.check_state(ws, params, &[q, motion, tau]);
+        self.gravity_torque(ws, params, q, tau);
+        // A frame whose rate is rounding (a direction from the inverse of a coupling,
+        // e.g. the MTM's wrist platform under elbow-pitch motion) stands still.
+        let scale = motion.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        for f in &self.frames {
+            if let Some(fr) = &f.friction {
+                let rate = f.value.dot(motion);
+                let size: f64 = f.value.terms.iter().map(|(_, c)| c.abs()).sum();
+                let s = if rate.abs() <= 1e-12 * scale * size {
+                    0.0
+                } else {
+                    sign0(rate)
+                };
+                let mut force = params[fr.param] * s + params[fr.param + 2];
+                if let Some(st) = &fr.stribeck {
+                    // exp(−(ṡ/vs)²) → 1 at the onset of motion.
+                    force += params[st.param] * s;
+                }
+                for &(k, c) in &f.value.terms {
+                    tau[k] += c * force;
+                }
+            }
+            if let Some(sp) = &f.spring {
+                let force = params[sp.param] * sp.deflection.eval(q);
+                for &(k, c) in &f.value.terms {
+                    tau[k] -= c * force;
+                }
+            }
+        }
+        self.add_known_forces(q, tau);
+    }
+
     /// Nonlinear effects `C(q, q̇)·q̇ + g(q)` of the links alone (N·m or N): the torque
     /// that holds the links at zero acceleration, as Pinocchio's `nonLinearEffects`; no
     /// friction, spring, motor inertia or known force. Allocates nothing.

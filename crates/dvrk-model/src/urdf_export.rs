@@ -23,8 +23,17 @@
 //!   after a massless `{frame}_motion` link. Then:
 //!   - each coordinate `q_k` is carried by exactly one non-mimic joint named after it: the
 //!     first frame whose value is exactly `q_k`, else `q_k + c` (the constant folded into
-//!     the origin), else `−q_k + c` (axis −z), else a massless link `{q_k}_coordinate`
-//!     hung from the root, so that the URDF's coordinates are the model's;
+//!     the origin), else `−q_k + c` (axis −z), so that the URDF's coordinates are the
+//!     model's. That needs every coordinate to have such a frame, above every other
+//!     frame driven by it: Pinocchio (`mimic=True`) adds a mimic joint only after the
+//!     joint it mimics, visiting the tree depth first with each link's child joints in
+//!     the order of their names (urdfdom's). Otherwise (the PSM's `1.0186*q5`, the
+//!     parallelograms, which mimic `q2` in one branch and `q3` in another) every
+//!     coordinate is a massless link `{q_k}_coordinate` hung from the root and every
+//!     moving frame a mimic; the root's frames then hang from a massless
+//!     `{root}_frames` link whose fixed joint is named after the greatest coordinate
+//!     name plus `_frames`, so it sorts after all coordinates. Either way our importer
+//!     reads the coordinates back in order (checked on the generated text);
 //!   - every other frame driven by one coordinate, `s = a·q_k + c`, is a
 //!     `<mimic joint="q_k" multiplier="a" offset="c">`;
 //!   - a frame driven by several coordinates (the MTM parallelogram, `q3 − q2`) is a chain
@@ -593,21 +602,59 @@ impl Model {
     pub fn to_urdf(&self, params: &[f64]) -> Result<String, ModelError> {
         self.check_export_params(params)?;
         let inertials = self.export_inertials(params)?;
-        self.generate(params, &inertials)
-            .map_err(|message| ModelError::Urdf {
-                file: self.source.clone(),
-                message,
+        let error = |message| ModelError::Urdf {
+            file: self.source.clone(),
+            message,
+        };
+        let carriers = self.coordinate_carriers();
+        if self.carriers_lead(&carriers) {
+            let text = self
+                .generate(params, &inertials, &carriers)
+                .map_err(error)?;
+            // Our importer numbers the coordinates in breadth-first order.
+            let back = Model::from_urdf_str(&text, &self.source);
+            if back.is_ok_and(|b| b.coordinates == self.coordinates) {
+                return Ok(text);
+            }
+        }
+        self.generate(params, &inertials, &vec![None; self.dof()])
+            .map_err(error)
+    }
+
+    /// True if every coordinate has a carrier frame and every other frame driven by
+    /// that coordinate hangs below it: then any traversal of the tree meets a
+    /// coordinate's joint before its mimics, as Pinocchio's URDF parser (`mimic=True`)
+    /// requires, since it adds a mimic joint only after the joint it mimics.
+    fn carriers_lead(&self, carriers: &[Option<(usize, f64)>]) -> bool {
+        let below = |mut i: usize, ancestor: usize| loop {
+            if i == ancestor {
+                return true;
+            }
+            if i == 0 {
+                return false;
+            }
+            i = self.frames[i - 1].parent;
+        };
+        carriers.iter().all(Option::is_some)
+            && self.frames.iter().enumerate().all(|(fi, f)| {
+                f.kind == JointKind::Fixed
+                    || f.value.terms.iter().all(|&(k, _)| {
+                        carriers[k].is_some_and(|(carrier, _)| below(fi + 1, carrier))
+                    })
             })
     }
 
+    /// The URDF text with the coordinates carried by `carriers` (frame, sign); a
+    /// coordinate without one gets a massless `{q_k}_coordinate` link hung from the
+    /// root, written before every other joint (so in order, and ahead of its mimics).
     fn generate(
         &self,
         params: &[f64],
         inertials: &[Option<StandardInertia>],
+        carriers: &[Option<(usize, f64)>],
     ) -> Result<String, String> {
         let names = self.frame_names();
         let ranges = self.coordinate_ranges();
-        let carriers = self.coordinate_carriers();
         let mut out = Builder::default();
         let mut notes: Vec<String> = Vec::new();
         let expr = |a: &crate::expr::Affine| a.display(&self.coordinates);
@@ -667,10 +714,31 @@ impl Model {
                 })?;
             }
         }
+        // URDF parsers (urdfdom, so Pinocchio) visit a link's child joints sorted by
+        // name, depth first. When every coordinate is a root-level `<qk>_coordinate`
+        // joint, the frames hanging from the root go under one massless link whose fixed
+        // joint's name extends the greatest coordinate name, so it sorts after all of
+        // them: every coordinate is met before any mimic.
+        let mut top = names[0].clone();
+        if carriers.iter().all(Option::is_none) {
+            let greatest = self.coordinates.iter().max().cloned().unwrap_or_default();
+            top = format!("{}_frames", names[0]);
+            out.link(&top, None)?;
+            out.joint(JointSpec::fixed(
+                format!("{greatest}_frames"),
+                Transform::identity(),
+                names[0].clone(),
+                top.clone(),
+            ))?;
+        }
 
         for (fi, f) in self.frames.iter().enumerate() {
             let i = fi + 1;
-            let parent = names[f.parent].clone();
+            let parent = if f.parent == 0 {
+                top.clone()
+            } else {
+                names[f.parent].clone()
+            };
             if f.kind == JointKind::Fixed {
                 out.joint(JointSpec::fixed(
                     format!("{}_joint", f.name),
@@ -870,8 +938,13 @@ impl Model {
              coordinate qk; other moving joints mimic one coordinate (value = multiplier*qk +\n\
              offset). A frame driven by several coordinates is a chain of joints about one\n\
              axis, one mimic per coordinate, separated by massless links `<frame>_<qk>`: the\n\
-             motions add up exactly. `<qk>_coordinate` links carry a coordinate no frame\n\
-             carries alone; `<frame>_motion` links separate a joint from its fixed post-transform.",
+             motions add up exactly. Massless `<qk>_coordinate` links hung from the root carry\n\
+             the coordinates when some coordinate has no frame of its own or a frame that\n\
+             precedes all its mimics in the tree (parallelograms): then all coordinates, in\n\
+             order, ahead of every mimic, every moving frame is a mimic, and the root's frames\n\
+             hang from a massless `<root>_frames` link (its joint named to sort after the\n\
+             coordinates, as URDF parsers visit joints by name). `<frame>_motion`\n\
+             links separate a joint from its fixed post-transform.",
             names[0]
         );
         let _ = writeln!(

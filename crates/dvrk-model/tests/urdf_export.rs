@@ -7,9 +7,11 @@
 //!   transmission, gazebo, materials), which must survive untouched; and on the Panda of
 //!   `../shared/anchors` when present;
 //! - generate mode on the dVRK PSM, simplified PSM and MTM (parallelograms, tendon
-//!   couplings, counterweights, virtual motor frames) and on a standard-DH robot that
-//!   needs every fallback (a −q carrier, a coordinate no frame carries alone, a post
-//!   transform that does not commute with its joint, gravity not along −z).
+//!   couplings, counterweights, virtual motor frames: coordinates as root links, every
+//!   frame a mimic) and on standard-DH robots (a coordinate no frame carries alone, a
+//!   post transform that does not commute with its joint, gravity not along −z; and with
+//!   carriers, a −q one): the coordinates read back in order, every mimic after the
+//!   joint it mimics in the depth-first, by-name order of urdfdom and Pinocchio.
 
 mod common;
 #[path = "dynamics_support.rs"]
@@ -292,11 +294,11 @@ fn generate_round_trip(model: &Model, seed: u64) -> (String, urdf_rs::Robot) {
     let urdf = model.to_urdf(&params).unwrap();
     let robot = urdf_rs::read_from_string(&urdf).unwrap();
     let back = Model::from_urdf_str(&urdf, "generated.urdf").unwrap();
-    let mut ours = model.coordinates.clone();
-    let mut theirs = back.coordinates.clone();
-    ours.sort();
-    theirs.sort();
-    assert_eq!(theirs, ours, "the URDF's coordinates are the model's");
+    assert_eq!(
+        back.coordinates, model.coordinates,
+        "the URDF's coordinates are the model's, in order"
+    );
+    assert_mimics_follow_their_joints(&robot);
     // Rigid body only: URDF has no motor inertia or spring, and the importer reads no
     // friction.
     let rigid = rigid_only(model, &params);
@@ -310,21 +312,71 @@ fn generate_round_trip(model: &Model, seed: u64) -> (String, urdf_rs::Robot) {
         let mass = f.inertia.map_or(0.0, |p0| params[p0 + 9]);
         assert_eq!(link.inertial.mass.value, mass, "{}", f.name);
     }
-    // Friction of a frame carried by a coordinate joint is its <dynamics>.
-    for (k, c) in model.coordinates.iter().enumerate() {
-        let joint = robot.joints.iter().find(|j| &j.name == c).unwrap();
-        let carrier = model.frames.iter().find(|f| {
-            f.name == joint.child.link && f.value.terms.first().is_some_and(|t| t.0 == k)
-        });
-        if let Some(fr) = carrier.and_then(|f| f.friction.as_ref()) {
-            let d = joint.dynamics.as_ref().expect("dynamics");
-            assert_eq!(
-                (d.friction, d.damping),
-                (params[fr.param], params[fr.param + 1])
-            );
-        }
+    // Friction of a frame driven by one coordinate is its joint's <dynamics>.
+    for f in &model.frames {
+        let Some(fr) = f.friction.as_ref().filter(|_| f.value.terms.len() == 1) else {
+            continue;
+        };
+        let motion = format!("{}_motion", f.name);
+        let joint = robot
+            .joints
+            .iter()
+            .find(|j| {
+                j.joint_type != urdf_rs::JointType::Fixed
+                    && (j.child.link == f.name || j.child.link == motion)
+            })
+            .unwrap();
+        let d = joint.dynamics.as_ref().expect("dynamics");
+        assert_eq!(
+            (d.friction, d.damping),
+            (params[fr.param], params[fr.param + 1]),
+            "{}",
+            f.name
+        );
     }
     (urdf, robot)
+}
+
+/// What Pinocchio's URDF parser (`mimic=True`) needs: visiting the tree depth first with
+/// each link's child joints sorted by name (urdfdom keeps joints in a map by name), the
+/// joint a mimic refers to has been met before the mimic.
+fn assert_mimics_follow_their_joints(robot: &urdf_rs::Robot) {
+    let children = |link: &str| {
+        let mut js: Vec<&urdf_rs::Joint> = robot
+            .joints
+            .iter()
+            .filter(|j| j.parent.link == link)
+            .collect();
+        js.sort_by(|a, b| a.name.as_bytes().cmp(b.name.as_bytes()));
+        js
+    };
+    let root = robot
+        .links
+        .iter()
+        .find(|l| robot.joints.iter().all(|j| j.child.link != l.name))
+        .unwrap();
+    let mut seen = std::collections::HashSet::new();
+    let mut stack = vec![root.name.as_str()];
+    let mut order = Vec::new();
+    while let Some(link) = stack.pop() {
+        for j in children(link).into_iter().rev() {
+            stack.push(j.child.link.as_str());
+        }
+        if let Some(j) = robot.joints.iter().find(|j| j.child.link == link) {
+            order.push(j);
+        }
+    }
+    for j in order {
+        if let Some(m) = &j.mimic {
+            assert!(
+                seen.contains(m.joint.as_str()),
+                "mimic joint {} is met before the joint {} it mimics",
+                j.name,
+                m.joint
+            );
+        }
+        seen.insert(j.name.as_str());
+    }
 }
 
 struct Counts {
@@ -373,20 +425,36 @@ fn joint<'a>(robot: &'a urdf_rs::Robot, name: &str) -> &'a urdf_rs::Joint {
 fn generate_mode_psm() {
     let model = Model::builtin("psm").unwrap();
     let (urdf, robot) = generate_round_trip(&model, 31);
-    // 16 frames + base; wrist_yaw_1, wrist_yaw_2 and jaw_coupling_friction depend on two
-    // coordinates (+1 massless link each); no frame is driven by q5 alone (1.0186*q5):
-    // q5_coordinate. 19 moving joints, 7 of them the coordinates; pitch_back is fixed.
-    assert_counts(&robot, 21, 20, 12, 1);
-    assert!(has_link(&robot, "q5_coordinate"));
+    // No frame is driven by q5 alone (1.0186*q5) and the parallelogram mimics q2 outside
+    // the subtree of the frame that turns by q2: every coordinate is a massless
+    // `qk_coordinate` link at the root, every moving frame a mimic. 16 frames + base,
+    // wrist_yaw_1, wrist_yaw_2 and jaw_coupling_friction depend on two coordinates (+1
+    // massless link each), 7 coordinate links, base_frames; pitch_back and q7_frames
+    // are fixed.
+    assert_counts(&robot, 28, 27, 18, 2);
+    for k in 1..=7 {
+        let j = joint(&robot, &format!("q{k}"));
+        assert_eq!(j.child.link, format!("q{k}_coordinate"));
+        assert_eq!(j.parent.link, "base");
+        assert!(j.mimic.is_none());
+    }
     assert!(has_link(&robot, "wrist_yaw_1_q5"));
-    // q2 is carried by pitch_bottom (theta = q2 exactly), the parallelogram mimics it.
-    assert_eq!(joint(&robot, "q2").child.link, "pitch_bottom");
+    assert_eq!(joint(&robot, "q7_frames").child.link, "base_frames");
+    assert_eq!(joint(&robot, "yaw_joint").parent.link, "base_frames");
+    let bottom = joint(&robot, "pitch_bottom_joint").mimic.as_ref().unwrap();
+    assert_eq!(
+        (bottom.joint.as_str(), bottom.multiplier),
+        ("q2", Some(1.0))
+    );
     let front = joint(&robot, "pitch_front_joint").mimic.as_ref().unwrap();
     assert_eq!((front.joint.as_str(), front.multiplier), ("q2", Some(-1.0)));
-    // q3: the counterweight (d = q3); the insertion stage mimics it with an offset.
-    assert_eq!(joint(&robot, "q3").child.link, "main_insertion");
+    // q3 is a length: its coordinate joint and the insertion stage are prismatic.
     assert_eq!(
         joint(&robot, "q3").joint_type,
+        urdf_rs::JointType::Prismatic
+    );
+    assert_eq!(
+        joint(&robot, "main_insertion_joint").joint_type,
         urdf_rs::JointType::Prismatic
     );
     let m = joint(&robot, "wrist_pitch_joint").mimic.as_ref().unwrap();
@@ -400,8 +468,9 @@ fn generate_mode_psm() {
 fn generate_mode_psm_simplified() {
     let model = Model::builtin("psm_simplified").unwrap();
     let (_, robot) = generate_round_trip(&model, 41);
-    // 14 frames + base, the same three two-coordinate frames and q5 link as the PSM.
-    assert_counts(&robot, 19, 18, 10, 1);
+    // 14 frames + base, the same three two-coordinate frames, 7 coordinate links and
+    // base_frames.
+    assert_counts(&robot, 26, 25, 16, 2);
 }
 
 #[test]
@@ -409,14 +478,18 @@ fn generate_mode_mtm() {
     let model = Model::builtin("mtm").unwrap();
     let (urdf, robot) = generate_round_trip(&model, 51);
     // 10 frames + base; forearm (q3 − q2) and front_parallel (q2 − q3) +1 link each,
-    // wrist_platform (0.6697 q2 − 0.6697 q3 + q4) +2; every coordinate has a carrier.
-    assert_counts(&robot, 15, 14, 7, 0);
+    // wrist_platform (0.6697 q2 − 0.6697 q3 + q4) +2; the parallelogram turns by q3 in
+    // one branch and mimics q2 in the other (and the reverse): 7 coordinate links and
+    // base_frames, every frame a mimic.
+    assert_counts(&robot, 23, 22, 14, 1);
     for (j, coord, multiplier) in [
         ("forearm_joint_q2", "q2", -1.0),
         ("forearm_joint_q3", "q3", 1.0),
         ("wrist_platform_joint_q2", "q2", 0.6697),
         ("wrist_platform_joint_q3", "q3", -0.6697),
         ("wrist_platform_joint_q4", "q4", 1.0),
+        ("upper_arm_joint", "q2", 1.0),
+        ("back_parallel_joint", "q3", 1.0),
     ] {
         let m = joint(&robot, j).mimic.as_ref().unwrap();
         assert_eq!(
@@ -436,10 +509,16 @@ fn generate_mode_mtm() {
     ] {
         assert!(urdf.contains(note), "header lacks {note}");
     }
-    // Limits from the description (q1 in [-57, 29] degrees).
-    let l = &joint(&robot, "q1").limit;
+    // Limits from the description (q1 in [-57, 29] degrees), on the coordinate's joint
+    // and on the frame that turns by it.
     let deg = std::f64::consts::PI / 180.0;
-    assert!((l.lower + 57.0 * deg).abs() < 1e-15 && (l.upper - 29.0 * deg).abs() < 1e-15);
+    for j in ["q1", "top_panel_joint"] {
+        let l = &joint(&robot, j).limit;
+        assert!(
+            (l.lower + 57.0 * deg).abs() < 1e-15 && (l.upper - 29.0 * deg).abs() < 1e-15,
+            "{j}"
+        );
+    }
 }
 
 const ODD: &str = r#"
@@ -498,25 +577,32 @@ position = [-1.0, 1.5]
 fn generate_mode_fallbacks_are_exact() {
     let model = Model::from_toml_str(ODD, "odd.toml").unwrap();
     let (urdf, robot) = generate_round_trip(&model, 61);
-    // base_world (gravity along −y in the model), base, 4 frames; one_motion and
-    // four_motion (standard DH revolute with a ≠ 0: the post transform moves off the
-    // joint axis, so it is a fixed joint after the motion); four_u (chain u, w);
-    // w_coordinate (only 2*w and u + w drive frames).
-    assert_counts(&robot, 10, 9, 3, 3);
+    // No frame turns by w alone (2*w, u + w): the coordinates are root links. base_world
+    // (gravity along −y in the model), base, 4 frames; one_motion and four_motion
+    // (standard DH revolute with a ≠ 0: the post transform moves off the joint axis, so
+    // it is a fixed joint after the motion); four_u (chain u, w); u, v, w_coordinate;
+    // base_frames under the fixed joint w_frames (sorts after u, v, w).
+    assert_counts(&robot, 13, 12, 5, 4);
     for l in [
         "base_world",
         "one_motion",
         "four_motion",
         "four_u",
+        "u_coordinate",
         "w_coordinate",
+        "base_frames",
     ] {
         assert!(has_link(&robot, l), "no link {l}");
     }
+    assert_eq!(joint(&robot, "w_frames").child.link, "base_frames");
+    assert_eq!(joint(&robot, "one_joint").parent.link, "base_frames");
     assert_eq!(joint(&robot, "three_joint").parent.link, "two");
     assert_eq!(joint(&robot, "four_joint_w").child.link, "four_motion");
-    assert_eq!(joint(&robot, "u").axis.xyz.0, [0.0, 0.0, -1.0]);
-    assert_eq!(joint(&robot, "u").child.link, "one_motion");
-    assert_eq!(joint(&robot, "v").child.link, "two");
+    let one = joint(&robot, "one_joint").mimic.as_ref().unwrap();
+    assert_eq!(
+        (one.joint.as_str(), one.multiplier, one.offset),
+        ("u", Some(-1.0), Some(0.3))
+    );
     assert_eq!(joint(&robot, "w").child.link, "w_coordinate");
     assert_eq!(joint(&robot, "w").joint_type, urdf_rs::JointType::Revolute);
     let l = &joint(&robot, "w").limit;
@@ -528,6 +614,24 @@ fn generate_mode_fallbacks_are_exact() {
         urdf.contains("friction Fc4"),
         "two-coordinate friction noted"
     );
+}
+
+#[test]
+fn generate_mode_carriers_when_they_lead_their_mimics() {
+    // The same robot with frame three turning by w: every coordinate has a frame of its
+    // own above every frame that depends on it, so the coordinates are those frames'
+    // joints (−u + 0.3 with the axis reversed, v + 0.05 with the offset in the origin).
+    let text = ODD.replace("theta = \"2*w\"", "theta = \"w\"");
+    let model = Model::from_toml_str(&text, "odd.toml").unwrap();
+    let (_, robot) = generate_round_trip(&model, 71);
+    assert_counts(&robot, 9, 8, 2, 3);
+    assert_eq!(joint(&robot, "u").axis.xyz.0, [0.0, 0.0, -1.0]);
+    assert_eq!(joint(&robot, "u").child.link, "one_motion");
+    assert_eq!(joint(&robot, "v").child.link, "two");
+    assert_eq!(joint(&robot, "w").child.link, "three");
+    let l = &joint(&robot, "w").limit;
+    assert_eq!((l.lower, l.upper), (-0.5, 0.75));
+    assert!(!has_link(&robot, "base_frames"));
 }
 
 #[test]

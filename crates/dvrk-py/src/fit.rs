@@ -6,7 +6,7 @@ use std::sync::Arc;
 use dvrk_ident::fit::{fit_logs, joint_metrics, predict, prepare as prepare_data, LogData};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::{wpi_params_json, write_atomic};
-use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::signal::Cutoff;
 use dvrk_ident::Trajectory;
 use dvrk_ident::{FitResult, FitSettings, Method};
 use dvrk_model::Model;
@@ -89,30 +89,26 @@ impl Overrides<'_, '_> {
             s.method = parse_method(m)?;
         }
         if let Some(c) = self.cutoff.filter(|c| !c.is_none()) {
-            let off = c.extract::<bool>().ok() == Some(false)
-                || c.extract::<String>()
-                    .is_ok_and(|t| t.trim().eq_ignore_ascii_case("none"));
-            if off {
-                // The CLI's `--cutoff none`: no low-pass filter.
-                s.processing.filter = None;
+            let bad = || {
+                input(
+                    "cutoff: expected a number (Hz), one number per coordinate, \
+                     or \"none\" (no filter)",
+                )
+            };
+            let cutoff = if c.extract::<bool>().ok() == Some(false) {
+                None
+            } else if let Ok(text) = c.extract::<String>() {
+                Cutoff::parse_flag(&text).map_err(|e| input(format!("cutoff: {e}")))?
+            } else if c.is_instance_of::<pyo3::types::PyBool>() {
+                return Err(bad());
+            } else if let Ok(v) = c.extract::<f64>() {
+                Some(Cutoff::All(v))
             } else {
-                let cutoff = match c.extract::<f64>() {
-                    Ok(v) if !c.is_instance_of::<pyo3::types::PyBool>() => Cutoff::All(v),
-                    _ => Cutoff::PerJoint(c.extract::<Vec<f64>>().map_err(|_| {
-                        input(
-                            "cutoff: expected a number (Hz), one number per coordinate, \
-                             or \"none\" (no filter)",
-                        )
-                    })?),
-                };
-                // Same as the CLI's --cutoff on default settings; keeps the other
-                // filter settings (order, form, convention) of `settings`.
-                let base = s.processing.filter.take().unwrap_or_default();
-                s.processing.filter = Some(LowPass {
-                    cutoff_hz: cutoff,
-                    ..base
-                });
-            }
+                Some(Cutoff::PerJoint(
+                    c.extract::<Vec<f64>>().map_err(|_| bad())?,
+                ))
+            };
+            s.processing.set_cutoff(cutoff);
         }
         if let Some(t) = self.trim {
             s.processing.trim = t;
@@ -348,11 +344,7 @@ impl FitResultPy {
         } else if let Some(r) = &self.robot {
             r.get().model.clone()
         } else {
-            let source = self.inner.robot_source.clone();
-            let name = source
-                .strip_prefix("builtin:")
-                .unwrap_or(&source)
-                .to_string();
+            let name = self.inner.robot().to_string();
             Arc::new(py.detach(move || Model::load(&name)).map_err(from_model)?)
         };
         let extended = match self.inner.settings.model(&base).map_err(from_ident)? {
@@ -657,6 +649,26 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         to_python(py, &wpi_params_json(&model, &params))
+    }
+
+    /// The dVRK controller's MTM gravity-compensation file (``dvrk-ident export
+    /// --dvrk-gc``) as a dict: ``version`` ``"2.0"``, ``GC_controller`` with the arrays
+    /// sawIntuitiveResearchKit reads, and ``dvrk_ident`` with the grid and the residuals
+    /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 10).
+    /// Raises ``InputError`` for a robot that is not the MTM.
+    #[pyo3(signature = (robot = None, points = dvrk_ident::dvrk_gc::DEFAULT_POINTS))]
+    fn dvrk_gc<'py>(
+        &self,
+        py: Python<'py>,
+        robot: Option<&Bound<'py, Robot>>,
+        points: usize,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        let gc = py
+            .detach(move || dvrk_ident::dvrk_gc::dvrk_gc(&model, &params, points))
+            .map_err(from_ident)?;
+        to_python(py, &gc.to_json())
     }
 
     fn __repr__(&self) -> String {

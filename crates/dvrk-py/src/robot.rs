@@ -101,10 +101,7 @@ impl Robot {
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
     pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<Robot> {
-        let name = robot_source
-            .strip_prefix("builtin:")
-            .unwrap_or(robot_source)
-            .to_string();
+        let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
         let (model, origin) = py
             .detach(move || {
                 let (model, origin) = Origin::load(&name)?;
@@ -497,6 +494,18 @@ impl Robot {
             model.gravity_torque(&mut ws, &params, q.row(k), out)
         })?;
         Ok(array(py, out, &q.shape(&[n])))
+    }
+
+    /// A URDF of the whole robot with the inertials of ``params`` (an array, a
+    /// ``{name: value}`` mapping or a fit ``Result``), as ``dvrk-ident export --urdf``
+    /// generates it: one link per frame, mimic joints for the couplings, what URDF
+    /// cannot hold listed in its header. Raises ``ModelError`` for parameters that are
+    /// not rigid bodies.
+    fn to_urdf(&self, py: Python<'_>, params: &Bound<'_, PyAny>) -> PyResult<String> {
+        let params = self.params(py, params)?;
+        let model = self.model.clone();
+        py.detach(move || model.to_urdf(&params))
+            .map_err(from_model)
     }
 
     /// Mass matrix ``M(q)`` (motor inertias included), shape ``(N, dof, dof)``, or

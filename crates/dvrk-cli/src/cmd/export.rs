@@ -1,9 +1,11 @@
-//! `dvrk-ident export RESULT --urdf OUT.urdf [--from ROBOT.urdf] [--wpi-json OUT.json]`:
-//! an identified model for the tools that read URDF or the 2019 params.json.
+//! `dvrk-ident export RESULT --urdf OUT.urdf [--from ROBOT.urdf] [--wpi-json OUT.json]
+//! [--dvrk-gc gc-MTML.json]`: an identified model for the tools that read URDF, the 2019
+//! params.json, or the dVRK controller's MTM gravity compensation.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
+use dvrk_ident::dvrk_gc::dvrk_gc;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
@@ -16,7 +18,7 @@ use super::{emit_summary, load_result, LoadedResult};
 #[command(allow_negative_numbers = true)]
 #[command(group(
     clap::ArgGroup::new("outputs")
-        .args(["urdf", "wpi_json"])
+        .args(["urdf", "wpi_json", "dvrk_gc"])
         .required(true)
         .multiple(true)
 ))]
@@ -33,6 +35,13 @@ pub struct Args {
     /// Write the parameters in the 2019 package's params.json layout here (atomically)
     #[arg(long, value_name = "OUT.json")]
     pub wpi_json: Option<String>,
+    /// Write the dVRK controller's MTM gravity-compensation file (version 2.0, as
+    /// sawIntuitiveResearchKit's robGravityCompensationMTM reads it) here (atomically)
+    #[arg(long, value_name = "gc-MTML.json")]
+    pub dvrk_gc: Option<String>,
+    /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
+    #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc")]
+    pub gc_points: usize,
     /// Robot (default: the one the result was fitted for)
     #[arg(long)]
     pub robot: Option<String>,
@@ -43,6 +52,7 @@ pub fn run(args: Args) -> Result<()> {
         &[
             ("--urdf", args.urdf.as_deref()),
             ("--wpi-json", args.wpi_json.as_deref()),
+            ("--dvrk-gc", args.dvrk_gc.as_deref()),
         ],
         &[],
     )?;
@@ -59,6 +69,22 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
+    let gc = match &args.dvrk_gc {
+        Some(out) => {
+            let gc = dvrk_gc(&loaded.model, &loaded.params, args.gc_points).with_context(|| {
+                format!(
+                    "{}: cannot export the dVRK gravity compensation",
+                    args.result
+                )
+            })?;
+            Some((
+                out,
+                serde_json::to_string_pretty(&gc.to_json())?,
+                gc.summary(),
+            ))
+        }
+        None => None,
+    };
     let mut report = String::new();
     let mut outputs = Outputs::new();
     if let Some((out, (text, how))) = &urdf {
@@ -68,6 +94,10 @@ pub fn run(args: Args) -> Result<()> {
     if let Some((out, text)) = &wpi {
         outputs.add(Path::new(out), text)?;
         report += &format!("wrote {out}: 2019 params.json layout\n");
+    }
+    if let Some((out, text, summary)) = &gc {
+        outputs.add(Path::new(out), text)?;
+        report += &format!("wrote {out}: dVRK MTM gravity compensation\n{summary}");
     }
     outputs.commit()?;
     emit_summary(&report, stdout_taken)

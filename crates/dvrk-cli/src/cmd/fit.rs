@@ -10,7 +10,7 @@ use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
 use dvrk_ident::log::{self, LogFormat, LogReader};
 use dvrk_ident::output::Outputs;
-use dvrk_ident::signal::{Cutoff, LowPass};
+use dvrk_ident::signal::Cutoff;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
 use dvrk_model::Model;
@@ -128,23 +128,9 @@ impl LogArgs {
 
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
         let mut s = base;
-        if self.cutoff.as_deref().map(str::trim) == Some("none") {
-            s.processing.filter = None;
-        } else if let Some(c) = &self.cutoff {
-            let values: Vec<f64> = c
-                .split(',')
-                .map(|v| v.trim().parse::<f64>())
-                .collect::<std::result::Result<_, _>>()
-                .map_err(|_| anyhow::anyhow!("--cutoff: `{c}` is not a number list"))?;
-            let cutoff = if values.len() == 1 {
-                Cutoff::All(values[0])
-            } else {
-                Cutoff::PerJoint(values)
-            };
-            s.processing.filter = Some(LowPass {
-                cutoff_hz: cutoff,
-                ..LowPass::default()
-            });
+        if let Some(c) = &self.cutoff {
+            let cutoff = Cutoff::parse_flag(c).map_err(|e| anyhow::anyhow!("--cutoff: {e}"))?;
+            s.processing.set_cutoff(cutoff);
         }
         if let Some(t) = self.trim {
             s.processing.trim = t;

@@ -211,13 +211,7 @@ pub struct LoadedResult {
 /// result records (built-in name or description path), with the fit's model options.
 pub fn load_result(path: &str, robot: Option<&str>) -> Result<LoadedResult> {
     let result = FitResult::read(std::path::Path::new(path))?;
-    let robot = robot.map(str::to_string).unwrap_or_else(|| {
-        result
-            .robot_source
-            .strip_prefix("builtin:")
-            .unwrap_or(&result.robot_source)
-            .to_string()
-    });
+    let robot = robot.unwrap_or_else(|| result.robot()).to_string();
     // Through the result, so the fit's model options (Stribeck terms) are applied.
     let model = result
         .model(Some(&robot))

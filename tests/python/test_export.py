@@ -1,0 +1,349 @@
+"""Exports other tools load as they are.
+
+- The dVRK controller's MTM gravity-compensation file (`export --dvrk-gc`,
+  `Result.dvrk_gc()`), from the real 2019 MTM fit (../shared, skipped when absent):
+  evaluated here with an implementation of the controller's formula written from its
+  loader (sawIntuitiveResearchKit `robGravityCompensationMTM.cpp`: `AssignRegressor`
+  with its sums of products as written there, the version-2 velocity blend and the
+  clamp) and compared with the model's own torques at random configurations.
+- The generated URDF of the PSM, the MTM and DH robots in Pinocchio with
+  `mimic=True` (skipped when `pin` is not installed): its RNEA, the mimic joints driven
+  by the coordinates, against our rigid-body inverse dynamics; `check_urdf`
+  (liburdfdom-tools) when installed; our importer reads the coordinates back in order.
+"""
+
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+import dvrk_ident as di
+from conftest import shared_file
+
+G = 9.81
+# The keys robGravityCompensationMTM::Create reads for version 2, and their lengths.
+GC_KEYS = {
+    "gc_dynamic_params_pos": 40,
+    "gc_dynamic_params_neg": 40,
+    "safe_upper_torque_limit": 7,
+    "safe_lower_torque_limit": 7,
+    "db_vel_vec": 7,
+    "sat_vec_vec": 7,
+    "fric_comp_ratio_vec": 7,
+}
+
+
+def controller_regressor(q):
+    """AssignRegressor(q): 7x40, written out term by term as in the controller."""
+    q1, q2, q3, q4, q5, q6 = q[:6]
+    sq2, cq2, sq3, cq3 = np.sin(q2), np.cos(q2), np.sin(q3), np.cos(q3)
+    sq4, cq4, sq5, cq5 = np.sin(q4), np.cos(q4), np.sin(q5), np.cos(q5)
+    sq6, cq6 = np.sin(q6), np.cos(q6)
+    sq2pq3 = np.sin(q2 + q3)
+    Y = np.zeros((7, 40))
+    Y[0, 10:15] = [1.0, q1, q1**2, q1**3, q1**4]
+    Y[1, 0] = G * sq2
+    Y[1, 1] = G * cq2
+    for r in (1, 2):
+        Y[r, 2] = G * cq2 * cq3 - G * sq2 * sq3
+        Y[r, 3] = -G * cq2 * sq3 - G * cq3 * sq2
+        Y[r, 4] = G * cq2 * cq3 * cq4 - G * cq4 * sq2 * sq3
+        Y[r, 5] = G * sq2 * sq3 * sq4 - G * cq2 * cq3 * sq4
+        Y[r, 6] = (G * cq4 * sq2 * sq3 * sq5 - G * cq3 * cq5 * sq2
+                   - G * cq2 * cq3 * cq4 * sq5 - G * cq2 * cq5 * sq3)
+        Y[r, 7] = (G * cq2 * cq3 * cq4 * cq5 - G * cq3 * sq2 * sq5
+                   - G * cq2 * sq3 * sq5 - G * cq4 * cq5 * sq2 * sq3)
+        Y[r, 8] = (G * cq2 * cq3 * sq4 * sq6 + G * cq2 * cq6 * sq3 * sq5
+                   + G * cq3 * cq6 * sq2 * sq5 - G * sq2 * sq3 * sq4 * sq6
+                   + G * cq4 * cq5 * cq6 * sq2 * sq3 - G * cq2 * cq3 * cq4 * cq5 * cq6)
+        Y[r, 9] = (G * cq2 * cq3 * cq6 * sq4 - G * cq6 * sq2 * sq3 * sq4
+                   - G * cq2 * sq3 * sq5 * sq6 - G * cq3 * sq2 * sq5 * sq6
+                   - G * cq4 * cq5 * sq2 * sq3 * sq6 + G * cq2 * cq3 * cq4 * cq5 * sq6)
+    Y[1, 15:20] = [1.0, q2, q2**2, q2**3, q2**4]
+    Y[2, 20:25] = [1.0, q3, q3**2, q3**3, q3**4]
+    Y[3, 4] = -G * sq2pq3 * sq4
+    Y[3, 5] = -G * sq2pq3 * cq4
+    Y[3, 6] = G * sq2pq3 * sq4 * sq5
+    Y[3, 7] = -G * sq2pq3 * cq5 * sq4
+    Y[3, 8] = G * sq2pq3 * (cq4 * sq6 + cq5 * cq6 * sq4)
+    Y[3, 9] = G * sq2pq3 * (cq4 * cq6 - cq5 * sq4 * sq6)
+    Y[3, 25:30] = [1.0, q4, q4**2, q4**3, q4**4]
+    Y[4, 6] = -G * (cq2 * cq3 * sq5 - sq2 * sq3 * sq5 + cq2 * cq4 * cq5 * sq3
+                    + cq3 * cq4 * cq5 * sq2)
+    Y[4, 7] = -G * (cq5 * sq2 * sq3 - cq2 * cq3 * cq5 + cq2 * cq4 * sq3 * sq5
+                    + cq3 * cq4 * sq2 * sq5)
+    Y[4, 8] = G * (cq5 * cq6 * sq2 * sq3 - cq2 * cq3 * cq5 * cq6
+                   + cq2 * cq4 * cq6 * sq3 * sq5 + cq3 * cq4 * cq6 * sq2 * sq5)
+    Y[4, 9] = -G * (cq5 * sq2 * sq3 * sq6 - cq2 * cq3 * cq5 * sq6
+                    + cq2 * cq4 * sq3 * sq5 * sq6 + cq3 * cq4 * sq2 * sq5 * sq6)
+    Y[4, 30:35] = [1.0, q5, q5**2, q5**3, q5**4]
+    Y[5, 8] = G * (cq2 * cq6 * sq3 * sq4 + cq3 * cq6 * sq2 * sq4 + cq2 * cq3 * sq5 * sq6
+                   - sq2 * sq3 * sq5 * sq6 + cq2 * cq4 * cq5 * sq3 * sq6
+                   + cq3 * cq4 * cq5 * sq2 * sq6)
+    Y[5, 9] = G * (cq2 * cq3 * cq6 * sq5 - cq2 * sq3 * sq4 * sq6 - cq3 * sq2 * sq4 * sq6
+                   - cq6 * sq2 * sq3 * sq5 + cq2 * cq4 * cq5 * cq6 * sq3
+                   + cq3 * cq4 * cq5 * cq6 * sq2)
+    Y[5, 35:40] = [1.0, q6, q6**2, q6**3, q6**4]
+    return Y
+
+
+def controller_effort(gc, q, qd):
+    """robGravityCompensationMTM::compute, version 2: blend by velocity, then clamp."""
+    c = gc["GC_controller"]
+    Y = controller_regressor(q)
+    pos = Y @ np.array(c["gc_dynamic_params_pos"])
+    neg = Y @ np.array(c["gc_dynamic_params_neg"])
+    tau = np.zeros(7)
+    for j in range(7):
+        db, sat, r = c["db_vel_vec"][j], c["sat_vec_vec"][j], c["fric_comp_ratio_vec"][j]
+        if qd[j] >= sat:
+            a = 0.5 + 0.5 * r
+        elif qd[j] <= -sat:
+            a = 0.5 - 0.5 * r
+        elif -db <= qd[j] <= db:
+            a = 0.5
+        elif db < qd[j] < sat:
+            a = 0.5 * r * (qd[j] - db) / (sat - db) + 0.5
+        else:
+            a = -0.5 * r * (-qd[j] - db) / (sat - db) + 0.5
+        tau[j] = a * pos[j] + (1 - a) * neg[j]
+    return np.clip(tau, c["safe_lower_torque_limit"], c["safe_upper_torque_limit"])
+
+
+@pytest.fixture(scope="module")
+def mtm_fit(mtm):
+    one = shared_file("data", "dvrk", "mtm", "one_results.csv")
+    train = di.read_log(one, mtm, format="wpi-csv", rate=200)
+    result = di.fit(mtm, train, method="sdp", cutoff=5.655,
+                    settings={"processing": {"filter_torque": True}})
+    assert result.solver["converged"] and result.physically_consistent
+    return result
+
+
+def model_torques(robot, result, qm, direction):
+    """The model's static torque in measured joints at measured positions `qm`, the
+    friction of a motion `direction` (measured joint rates, only signs count): inverse
+    dynamics at a vanishing speed plus the known forces (the cable)."""
+    C = robot.coupling
+    q = np.linalg.solve(C, qm)
+    # Rounded so that a frame the motion leaves still gets a rate of exactly zero
+    # (the MTM's wrist platform, 0.6697 q2 - 0.6697 q3 + q4, under elbow pitch).
+    dq = 1e-12 * np.round(np.linalg.solve(C, direction), 12)
+    tau = robot.inverse_dynamics(result, q, dq, np.zeros(7)) + robot.known_forces(q)
+    return np.linalg.solve(C.T, tau)
+
+
+def test_dvrk_gc_file_matches_the_real_mtm_fit(mtm, mtm_fit, cli, tmp_path):
+    result = mtm_fit
+    path = tmp_path / "result.json"
+    result.write(path)
+    out = tmp_path / "gc-MTML.json"
+    r = subprocess.run([cli, "export", path, "--dvrk-gc", out], capture_output=True,
+                       text=True)
+    assert r.returncode == 0, r.stderr
+    # The residual table is on the command line.
+    assert "wrist_platform" in r.stdout and "not compensated" in r.stdout
+    gc = json.loads(out.read_text())
+    assert gc == json.loads(json.dumps(result.dvrk_gc()))
+    # What the loader needs: version "2.0" as a string, every key, the right lengths.
+    assert gc["version"] == "2.0" and int(float(gc["version"])) == 2
+    for key, n in GC_KEYS.items():
+        assert len(gc["GC_controller"][key]) == n, key
+    c = gc["GC_controller"]
+    pos, neg = np.array(c["gc_dynamic_params_pos"]), np.array(c["gc_dynamic_params_neg"])
+    # Gravity parameters shared by both directions (as the CUHK generator has them).
+    np.testing.assert_array_equal(pos[:10], neg[:10])
+    res = gc["dvrk_ident"]["residual_N_m"]
+    ranges = np.array(gc["dvrk_ident"]["grid"]["ranges_rad"])
+    assert ranges.shape == (6, 2)
+
+    rng = np.random.default_rng(7)
+    C = mtm.coupling
+    worst = {"gravity": 0.0, "pos": np.zeros(7), "neg": np.zeros(7), "rest": np.zeros(7)}
+    for _ in range(200):
+        qm = np.append(rng.uniform(ranges[:, 0], ranges[:, 1]), rng.uniform(-3, 3))
+        Y = controller_regressor(qm)
+        # Gravity: the links' gravity torque, in measured joints, from the ten columns.
+        # The controller does not read the wrist roll: the file holds the average over
+        # a turn of it (a rigid body turning with it: the mean of q7 and q7 + pi).
+        def gravity(roll):
+            q = np.linalg.solve(C, np.append(qm[:6], roll))
+            return np.linalg.solve(C.T, mtm.gravity(result, q))
+        average = 0.5 * (gravity(qm[6]) + gravity(qm[6] + np.pi))
+        worst["gravity"] = max(worst["gravity"],
+                               np.abs(Y[:6, :10] @ pos[:10] - average[:6]).max())
+        worst["roll"] = np.maximum(worst.get("roll", 0), np.abs(gravity(qm[6]) - average))
+        for j in range(6):
+            e = np.eye(7)[j]
+            worst["pos"][j] = max(worst["pos"][j],
+                                  abs(Y[j] @ pos - model_torques(mtm, result, qm, e)[j]))
+            worst["neg"][j] = max(worst["neg"][j],
+                                  abs(Y[j] @ neg - model_torques(mtm, result, qm, -e)[j]))
+        # At rest (inside the dead band) the controller feeds the mean of both
+        # directions: the model's torque at rest (offset friction, no Coulomb).
+        rest = model_torques(mtm, result, qm, np.zeros(7))
+        effort = controller_effort(gc, qm, np.zeros(7))
+        worst["rest"] = np.maximum(worst["rest"], np.abs(effort - rest))
+        # One joint moving beyond the saturation speed: the controller adds the share
+        # fric_comp_ratio of that joint's Coulomb friction to its torque at rest. (It
+        # blends each joint by its own speed: friction that the parallelogram and the
+        # cable couple into other joints is not in the file.)
+        j = rng.integers(6)
+        qd = np.zeros(7)
+        qd[j] = rng.choice([-1.0, 1.0])
+        effort = controller_effort(gc, qm, qd)[j]
+        moving = model_torques(mtm, result, qm, qd)[j]
+        ratio = c["fric_comp_ratio_vec"][j]
+        expected = rest[j] + ratio * (moving - rest[j])
+        bound = max(res["pos_max"][j], res["neg_max"][j])
+        assert abs(effort - expected) < 1.5 * bound + 1e-9, (j, effort, expected)
+    # The MTM's gravity, averaged over the wrist roll, is in the span of the
+    # controller's ten gravity columns; the roll's own part is in the reported residual.
+    assert worst["gravity"] < 1e-9, worst["gravity"]
+    np.testing.assert_array_less(worst["roll"], np.array(res["gravity_max"]) + 1e-12)
+    # Springs, cable and friction: within the reported residual (it is the worst case
+    # on the fitted grid; random points between grid points may exceed it a little).
+    for side in ("pos", "neg"):
+        np.testing.assert_array_less(worst[side][:6],
+                                     1.5 * np.array(res[f"{side}_max"][:6]) + 1e-9)
+    np.testing.assert_array_less(worst["rest"][:6],
+                                 1.5 * np.maximum(res["pos_max"], res["neg_max"])[:6] + 1e-9)
+    # Joint 7 is not compensated: its row is zero and its limits are 0.
+    assert not controller_regressor(np.ones(7))[6].any()
+    assert c["safe_upper_torque_limit"][6] == c["safe_lower_torque_limit"][6] == 0
+    # The reported residuals: the wrist roll's centre of mass off its axis (joints 2-6,
+    # a few mN·m on this fit), the cable (joint 4) and the spring (joint 5) approximated
+    # by quartics; joint 1 (vertical axis) exact.
+    print("residual max (N·m): gravity", res["gravity_max"], "pos", res["pos_max"],
+          "random worst: pos", worst["pos"], "neg", worst["neg"])
+    assert res["pos_max"][0] < 1e-9 and res["neg_max"][0] < 1e-9
+    assert max(res["pos_max"][:6]) < 0.02 and max(res["neg_max"][:6]) < 0.02
+
+
+def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
+    result = di.fit(psm, di.read_log(psm_logs["csv"], psm), method="ols")
+    with pytest.raises(di.InputError, match="for the MTM"):
+        result.dvrk_gc()
+
+
+# A standard-DH robot with gravity along -y (the URDF gets a rotated root), a reversed
+# coordinate, a prismatic joint, a joint turning by 2w and one by u + w.
+DH = """
+name = "dh_test"
+convention = "standard"
+coordinates = ["u", "v", "w"]
+gravity = [0.0, -9.81, 0.0]
+
+[[frames]]
+name = "one"
+parent = "base"
+a = 0.2
+alpha = 0.5
+d = 0.1
+theta = "-u + 0.3"
+inertia = true
+friction = true
+
+[[frames]]
+name = "two"
+parent = "one"
+a = 0.15
+alpha = -0.7
+theta = 0.4
+d = "v + 0.05"
+inertia = true
+
+[[frames]]
+name = "three"
+parent = "two"
+d = 0.1
+alpha = 1.2
+theta = "THREE"
+inertia = true
+
+[[frames]]
+name = "four"
+parent = "three"
+a = 0.05
+theta = "u + w - 0.2"
+inertia = true
+"""
+
+
+def physical_params(robot, rng):
+    """Random rigid bodies on every link (mass, centre of mass, the inertia of a box
+    about it), as barycentric parameters; friction and the rest zero."""
+    names = robot.parameter_names
+    p = dict.fromkeys(names, 0.0)
+    for i in range(1, len(robot.frame_names)):
+        if f"m{i}" not in p:
+            continue
+        m = rng.uniform(0.1, 2.0)
+        c = rng.uniform(-0.1, 0.1, 3)
+        # A box of random sides, turned by a random rotation.
+        a, b, h = rng.uniform(0.02, 0.3, 3)
+        R, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        Ic = R @ np.diag([b * b + h * h, a * a + h * h, a * a + b * b]) @ R.T * m / 12
+        L = Ic + m * (c @ c * np.eye(3) - np.outer(c, c))
+        for k, (r, s) in zip(("xx", "xy", "xz", "yy", "yz", "zz"),
+                             ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))):
+            p[f"L{i}{k}"] = L[r, s]
+        for k, x in zip("xyz", m * c):
+            p[f"l{i}{k}"] = x
+        p[f"m{i}"] = m
+    return p
+
+
+ROBOTS = {
+    "psm": lambda: di.Robot.load("psm"),
+    "mtm": lambda: di.Robot.load("mtm"),
+    "dh_2w": lambda: di.Robot.from_toml(DH.replace("THREE", "2*w"), "dh.toml"),
+    "dh_chain": lambda: di.Robot.from_toml(DH.replace("THREE", "w"), "dh.toml"),
+}
+
+
+@pytest.mark.parametrize("name", ROBOTS)
+def test_exported_urdf_loads_everywhere_with_its_mimics(name, tmp_path, capsys):
+    robot = ROBOTS[name]()
+    rng = np.random.default_rng(len(name))
+    params = physical_params(robot, rng)
+    text = robot.to_urdf(params)
+    path = tmp_path / f"{name}.urdf"
+    path.write_text(text)
+    # Our importer: the same coordinates, in the same order.
+    back = di.Robot.from_urdf(text, str(path))
+    assert back.coordinates == robot.coordinates
+    if shutil.which("check_urdf"):
+        r = subprocess.run(["check_urdf", path], capture_output=True, text=True)
+        assert r.returncode == 0 and "Successfully Parsed" in r.stdout, r.stdout + r.stderr
+    else:
+        with capsys.disabled():
+            print("SKIPPED: check_urdf not installed (apt-get install liburdfdom-tools)")
+    try:
+        import pinocchio as pin
+    except ImportError:
+        pytest.skip("SKIPPED: Pinocchio not installed (pip install pin)")
+    model = pin.buildModelFromUrdf(str(path), mimic=True)
+    data = model.createData()
+    # One degree of freedom per coordinate; every other moving joint mimics one.
+    assert model.nv == robot.dof
+    joints = [model.joints[model.getJointId(c)] for c in robot.coordinates]
+    assert sorted(j.idx_v for j in joints) == list(range(robot.dof))
+    worst = 0.0
+    for _ in range(20):
+        q, dq, ddq = (rng.uniform(-1, 1, robot.dof) for _ in range(3))
+        ours = robot.inverse_dynamics(params, q, dq, ddq)
+        qp, vp, ap = np.zeros(model.nq), np.zeros(model.nv), np.zeros(model.nv)
+        for k, j in enumerate(joints):
+            if j.nq == 2:  # a continuous joint: cos, sin
+                qp[j.idx_q:j.idx_q + 2] = np.cos(q[k]), np.sin(q[k])
+            else:
+                qp[j.idx_q] = q[k]
+            vp[j.idx_v], ap[j.idx_v] = dq[k], ddq[k]
+        tau = pin.rnea(model, data, qp, vp, ap)
+        theirs = np.array([tau[j.idx_v] for j in joints])
+        worst = max(worst, np.abs(ours - theirs).max())
+    print(f"{name}: max |ours - Pinocchio RNEA| = {worst:.2e} N·m")
+    assert worst < 1e-9
