@@ -34,6 +34,35 @@ fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
     }
 }
 
+/// Refuses attributes with a namespace prefix (other than `xmlns` declarations) before
+/// urdf-rs sees the document: URDF attributes have none, and urdf-rs 0.10 writes the
+/// parsed document back through RustyXML 0.3, which panics on a prefixed attribute whose
+/// prefix it has not bound (found by fuzzing: `<parent :ink="a"/>` under a default
+/// `xmlns`; reproducer `fuzz/seeds/urdf/crash-unbound-attribute-prefix.urdf`). Anything
+/// else malformed is left to urdf-rs's own error.
+fn check_attribute_names(text: &str) -> Result<(), String> {
+    use quick_xml::events::Event;
+    let mut reader = quick_xml::Reader::from_str(text);
+    loop {
+        match reader.read_event() {
+            Ok(Event::Start(e)) | Ok(Event::Empty(e)) => {
+                for a in e.attributes().flatten() {
+                    let key = a.key.as_ref();
+                    if key.contains(&b':') && !key.starts_with(b"xmlns") {
+                        return Err(format!(
+                            "attribute `{}` of <{}>: URDF attributes have no namespace prefix",
+                            String::from_utf8_lossy(key),
+                            String::from_utf8_lossy(e.name().as_ref())
+                        ));
+                    }
+                }
+            }
+            Ok(Event::Eof) | Err(_) => return Ok(()),
+            Ok(_) => {}
+        }
+    }
+}
+
 impl Model {
     /// Imports a URDF document; `file` names it in error messages.
     pub fn from_urdf_str(text: &str, file: &str) -> Result<Model, ModelError> {
@@ -41,6 +70,7 @@ impl Model {
             file: file.to_string(),
             message,
         };
+        check_attribute_names(text).map_err(err)?;
         let robot = urdf_rs::read_from_string(text).map_err(|e| {
             err(format!(
                 "cannot parse the document (malformed XML or a missing element): {e}"
