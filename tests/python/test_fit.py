@@ -71,6 +71,70 @@ def test_fit_matches_cli(psm, psm_logs, run_cli, method):
         assert result.physically_consistent
 
 
+# Every option of `dvrk-ident fit` against its keyword of `di.fit`: both map onto one
+# library request (dvrk_ident::request::FitRequest), so the documents must agree to
+# rounding. Each case: (keywords, flags); the test log and its window are added to all.
+OPTIONS = [
+    ({"method": "ols", "cutoff": 4.0}, ["--method", "ols", "--cutoff", "4"]),
+    ({"method": "ols", "cutoff": [4.0, 5.0, 6.0, 4.0, 5.0, 6.0, 4.0]},
+     ["--method", "ols", "--cutoff", "4,5,6,4,5,6,4"]),
+    ({"method": "ols", "cutoff": "none"}, ["--method", "ols", "--cutoff", "none"]),
+    ({"method": "ols", "filter_torque": True}, ["--method", "ols", "--filter-torque"]),
+    ({"method": "ols", "trim": 50}, ["--method", "ols", "--trim", "50"]),
+    ({"method": "ols", "decimate": 3}, ["--method", "ols", "--decimate", "3"]),
+    ({"method": "ols", "min_speed": 0.01}, ["--method", "ols", "--min-speed", "0.01"]),
+    ({"method": "wls", "stribeck": 0.3}, ["--method", "wls", "--stribeck", "0.3"]),
+    ({"method": "irls", "irls_iterations": 2},
+     ["--method", "irls", "--irls-iterations", "2"]),
+    ({"method": "sdp", "sdp_regularization": 1e-6},
+     ["--method", "sdp", "--sdp-regularization", "1e-6"]),
+]
+
+
+@pytest.mark.parametrize("kwargs,flags", OPTIONS, ids=[" ".join(f) for _, f in OPTIONS])
+def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
+    train = di.read_log(psm_logs["csv"], psm)
+    test = di.read_log(psm_logs["test"], psm)
+    result = di.fit(psm, train, test=test, test_window=1000, **kwargs)
+    cli = run_cli("fit", psm_logs["csv"], "--robot", "psm", *flags, "--test",
+                  psm_logs["test"], "--test-window", "1000", "--json")
+    same_document(result.to_dict(), cli)
+    # The option took effect (it is in the recorded settings).
+    settings = result.settings
+    for key, value in kwargs.items():
+        recorded = {
+            "method": settings["method"],
+            "filter_torque": settings["processing"]["filter_torque"],
+            "trim": settings["processing"]["trim"],
+            "decimate": settings["processing"]["decimate"],
+            "min_speed": settings["processing"]["min_speed"],
+            "stribeck": settings["stribeck_velocity"],
+            "irls_iterations": settings["irls_iterations"],
+            "sdp_regularization": settings["sdp_regularization"],
+        }.get(key)
+        if recorded is not None:
+            assert recorded == value, key
+
+
+def test_excitation_window_matches_cli(psm, psm_logs, run_cli, tmp_path):
+    """--excitation with a test log and no --test-window: the metrics cover one period
+    of the excitation (the 2019 rule), in both front ends."""
+    traj = di.Trajectory(order=1, base_frequency_hz=0.125, q0=[0.0] * 7,
+                         a=[[0.1]] * 7, b=[[0.0]] * 7)
+    path = tmp_path / "excitation.json"
+    traj.write(path)
+    train = di.read_log(psm_logs["csv"], psm)
+    test = di.read_log(psm_logs["test"], psm)
+    for excitation in (traj, path):
+        result = di.fit(psm, train, method="ols", test=test, excitation=excitation)
+        # 8 s at 200 Hz.
+        assert result.settings["test_window"] == 1600
+        assert result.metrics["test"]["samples"] == 1600
+    cli = run_cli("fit", psm_logs["csv"], "--robot", "psm", "--method", "ols", "--test",
+                  psm_logs["test"], "--excitation", path, "--json")
+    same_document(result.to_dict(), cli)
+
+
 def test_fit_mcap_matches_cli(psm, psm_logs, run_cli):
     data = di.read_log(psm_logs["mcap"], psm)
     assert data.coordinates == "measured"

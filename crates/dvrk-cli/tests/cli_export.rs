@@ -4,11 +4,9 @@
 //! `fit --wpi-json`'s; errors naming the file, exiting non-zero and writing nothing.
 
 mod support;
+use dvrk_test_support::{rigid_only, torque_difference};
 use std::path::{Path, PathBuf};
 use support::{example, run, s, temp_dir};
-#[path = "../../dvrk-model/tests/dynamics_support.rs"]
-mod dynamics_support;
-use dynamics_support::{rigid_only, torque_difference};
 
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_ident::FitResult;

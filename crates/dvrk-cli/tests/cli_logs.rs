@@ -4,7 +4,7 @@
 //! naming the problem, a non-zero exit and no output file.
 
 mod support;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use support::{example, run, s, temp_dir};
 
 use dvrk_ident::log;
@@ -165,9 +165,8 @@ fn the_example_log_is_what_its_readme_command_writes() {
     assert_eq!(a.dq, b.dq);
     assert_eq!(a.tau, b.tau);
     // The same trajectory taken from the 2019 coefficient file.
-    let anchor = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/anchors/wpi2019_excitation_trajectories.json");
-    if anchor.exists() {
+    if let Some(anchor) = dvrk_test_support::shared("anchors/wpi2019_excitation_trajectories.json")
+    {
         let picked = dir.join("picked.mcap");
         let (ok, _, err) = run(&[
             "simulate",
@@ -190,8 +189,6 @@ fn the_example_log_is_what_its_readme_command_writes() {
         assert!(ok, "{err}");
         let c = log::read(&picked, None, None).unwrap();
         assert_eq!((&c.q, &c.tau), (&a.q, &a.tau));
-    } else {
-        println!("SKIPPED: --pick check, {} not found", anchor.display());
     }
     let readme = std::fs::read_to_string(example("README.md")).unwrap();
     assert!(readme.contains("--periods 2 --rate 200 --noise 0.002 --seed 1"));

@@ -60,7 +60,7 @@ fn regressor_and_torque_match_the_library() {
     assert_eq!(doc["rows"][0].as_array().unwrap().len(), 49);
 
     // Torque with a parameter file equals H·π.
-    let dir = std::env::temp_dir().join(format!("dvrk-cli-test-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-cli-test");
     std::fs::create_dir_all(&dir).unwrap();
     let params: serde_json::Map<String, serde_json::Value> = model
         .param_names()

@@ -273,7 +273,7 @@ fn hostile_corpus() {
             continue;
         }
         if case.shared && !shared_data().exists() {
-            eprintln!("SKIPPED: {}: ../shared absent", case.name);
+            dvrk_test_support::skip(format!("{}: ../shared absent", case.name));
             skipped += 1;
             continue;
         }
@@ -290,10 +290,10 @@ fn hostile_corpus() {
         }
         if let Some(dev) = &case.null_device {
             if !make_null_device(&tmp.join(dev)) {
-                eprintln!(
-                    "SKIPPED: {}: cannot make a device node (not root)",
+                dvrk_test_support::skip(format!(
+                    "{}: cannot make a device node (not root)",
                     case.name
-                );
+                ));
                 skipped += 1;
                 continue;
             }

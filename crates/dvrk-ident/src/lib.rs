@@ -14,6 +14,14 @@
 //! Fits spread over processes or machines: [`state::ObservationState`] holds the
 //! training logs reduced (each log's factors, all of them merged, the torque range) in a
 //! versioned file; states merge, and the fit of a merged state is the fit of its logs.
+//!
+//! The command line and the Python module only map their flags and keyword arguments
+//! onto [`log::ReadOptions`] and [`request::FitRequest`]: a difference between them is a
+//! bug of one of the mappings.
+//!
+//! Cargo features (all default): `rust-lapack` (Clarabel's BLAS/LAPACK in Rust over
+//! faer, so no system library is linked) and `report` (figures and the HTML report,
+//! [`report`]; a program that only fits can leave it out).
 
 pub mod error;
 pub mod estimate;
@@ -26,7 +34,9 @@ pub mod names;
 pub mod observation;
 pub mod output;
 pub mod progress;
+#[cfg(feature = "report")]
 pub mod report;
+pub mod request;
 pub mod signal;
 pub mod simulate;
 pub mod state;

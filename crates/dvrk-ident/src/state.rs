@@ -341,6 +341,16 @@ impl ObservationState {
         Ok(fitted.into_owned())
     }
 
+    /// The robot the state was observed with, loaded from its recorded source (a
+    /// built-in name or a description path).
+    pub fn robot_model(&self) -> Result<Model, IdentError> {
+        let robot = crate::result::loadable_robot(&self.robot_source);
+        Model::load(robot).map_err(|e| IdentError::State {
+            file: self.name(),
+            message: format!("its robot {robot}: {e}"),
+        })
+    }
+
     /// The fit of the state's logs with the estimator settings of `estimator` (see
     /// [`Self::settings`]), validated on `test` logs (processed with the state's
     /// settings): the document of [`crate::fit::fit_logs`] of the same logs.

@@ -524,11 +524,11 @@ const WPI2019: &str = concat!(
 #[test]
 fn acceptance_psm_and_mtm_vs_2019() {
     if cfg!(debug_assertions) {
-        eprintln!("SKIPPED: the PSM/MTM optimizations run in release builds only");
+        dvrk_test_support::skip("the PSM/MTM optimizations run in release builds only");
         return;
     }
     let Ok(names) = FourierTrajectory::wpi2019_names(WPI2019) else {
-        eprintln!("SKIPPED: {WPI2019} not found (../shared absent)");
+        dvrk_test_support::skip(format!("{WPI2019} not found (../shared absent)"));
         return;
     };
     assert!(names.contains(&"mtm_one".to_string()));

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use dvrk_ident::fit::stream::fit_stream_logs;
 use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, LogData};
-use dvrk_ident::log::{self, mcap::McapOptions, LogFormat, LogReader};
+use dvrk_ident::log::{self, LogFormat, LogReader, ReadOptions};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::{FitSettings, Method, Trajectory};
 use dvrk_model::{Model, Workspace};
@@ -166,7 +166,7 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
 fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
     let model = Model::builtin("psm").unwrap();
     let whole = example();
-    let dir = std::env::temp_dir().join(format!("dvrk-fit-logs-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-fit-logs");
     std::fs::create_dir_all(&dir).unwrap();
     let logs = [
         (part(&whole, 0, 900), "a.mcap", LogFormat::Mcap),
@@ -193,7 +193,7 @@ fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
         .collect();
     let readers: Vec<LogReader> = paths
         .iter()
-        .map(|p| LogReader::open(p, None, None, &McapOptions::default()).unwrap())
+        .map(|p| ReadOptions::default().open(p).unwrap())
         .collect();
     for method in [Method::Wls, Method::Irls, Method::Sdp] {
         let settings = FitSettings {

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use dvrk_ident::log::mcap::{list_topics, read_mcap_log, McapOptions, McapProblem, McapReader};
-use dvrk_ident::log::{detect_format, read_with, LogError, LogFormat, LogReader};
+use dvrk_ident::log::{detect_format, LogError, LogFormat, ReadOptions};
 
 const N: usize = 16;
 const T0_NS: i64 = 1_700_000_000 * 1_000_000_000;
@@ -72,6 +72,10 @@ fn every_format_reads_the_same_samples_exactly() {
         joints: psm_joints(),
         ..Default::default()
     };
+    let read_options = ReadOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
     for (name, format) in FIXTURES.iter().chain(&MORE) {
         let path = fixture(name);
         assert_eq!(detect_format(&path).unwrap(), *format, "{name}");
@@ -96,10 +100,10 @@ fn every_format_reads_the_same_samples_exactly() {
             }
         }
         // The same through the generic reader, format detected.
-        let reader = LogReader::open(&path, None, None, &options).unwrap();
+        let reader = read_options.open(&path).unwrap();
         assert_eq!(reader.format(), *format, "{name}");
         assert_eq!(reader.topics(), log.topics.as_slice());
-        let again = read_with(&path, None, None, &options).unwrap();
+        let again = read_options.read(&path).unwrap();
         assert_eq!(again.q, t.q, "{name}");
     }
 }
@@ -274,7 +278,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
     for (name, bytes, expect) in cases {
         let p = dir.0.join(name);
         std::fs::write(&p, bytes).unwrap();
-        let e = read_with(&p, None, None, &McapOptions::default()).unwrap_err();
+        let e = ReadOptions::default().read(&p).unwrap_err();
         let msg = e.to_string();
         assert!(msg.contains(name), "{msg}");
         assert!(msg.contains(expect), "{name}: {msg}");
@@ -305,7 +309,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
     // An empty folder.
     let empty = dir.0.join("empty");
     std::fs::create_dir(&empty).unwrap();
-    let e = read_with(&empty, None, None, &McapOptions::default()).unwrap_err();
+    let e = ReadOptions::default().read(&empty).unwrap_err();
     assert!(
         e.to_string()
             .contains("neither a metadata.yaml nor a recording file"),

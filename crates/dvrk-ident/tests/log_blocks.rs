@@ -2,8 +2,7 @@
 //! for the CSV layouts (with and without `--resample`), and name bad rows by their line
 //! in the file wherever the block boundaries fall.
 
-use dvrk_ident::log::mcap::McapOptions;
-use dvrk_ident::log::{read_with, write, LogError, LogFormat, LogReader};
+use dvrk_ident::log::{write, LogError, LogFormat, LogReader, ReadOptions};
 use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use std::path::PathBuf;
@@ -78,17 +77,27 @@ fn blocks_of_any_size_are_the_whole_log() {
         let path = temp(name);
         write(&path, &traj, format).unwrap();
         for resample_hz in [None, Some(130.0)] {
-            let opts = McapOptions {
+            let opts = ReadOptions {
                 resample_hz,
-                ..McapOptions::default()
+                ..ReadOptions::default()
             };
-            let whole = read_with(&path, None, Some(200.0), &opts).unwrap();
+            let whole = ReadOptions {
+                rate_hz: Some(200.0),
+                ..opts.clone()
+            }
+            .read(&path)
+            .unwrap();
             if resample_hz.is_none() {
                 assert_eq!((&whole.q, &whole.tau), (&traj.q, &traj.tau));
             } else {
                 whole.check_uniform(1e-9).unwrap();
             }
-            let reader = LogReader::open(&path, None, Some(200.0), &opts).unwrap();
+            let reader = ReadOptions {
+                rate_hz: Some(200.0),
+                ..opts.clone()
+            }
+            .open(&path)
+            .unwrap();
             assert_eq!(reader.format(), format);
             assert_eq!(reader.joint_names(), &whole.joint_names[..]);
             assert_eq!(reader.coordinates(), traj.coordinates);
@@ -117,13 +126,13 @@ fn bad_rows_are_named_by_line_in_any_block() {
         text += &format!("{t},{p},1.0,2.0\n");
     }
     std::fs::write(&path, text).unwrap();
-    let opts = McapOptions::default();
-    let whole = read_with(&path, None, None, &opts).unwrap_err();
+    let opts = ReadOptions::default();
+    let whole = opts.read(&path).unwrap_err();
     assert!(
         matches!(whole, LogError::NonMonotonicTime { line: 58, .. }),
         "{whole}"
     );
-    let reader = LogReader::open(&path, None, None, &opts).unwrap();
+    let reader = opts.open(&path).unwrap();
     for size in [1, 10, 56, 57, 1000] {
         let e = reader.blocks(size).unwrap().find_map(Result::err).unwrap();
         assert_eq!(e.to_string(), whole.to_string(), "blocks of {size}");
@@ -133,11 +142,11 @@ fn bad_rows_are_named_by_line_in_any_block() {
     let empty = temp("empty.csv");
     std::fs::write(&empty, "# nothing\n").unwrap();
     assert!(matches!(
-        LogReader::open(&empty, None, None, &opts).unwrap_err(),
+        opts.open(&empty).unwrap_err(),
         LogError::Empty { .. }
     ));
     std::fs::write(&empty, "time,position.a,effort.a\n").unwrap();
-    let reader = LogReader::open(&empty, None, None, &opts).unwrap();
+    let reader = opts.open(&empty).unwrap();
     let e = reader.blocks(10).unwrap().next().unwrap().unwrap_err();
     assert!(e.to_string().contains("a header but no data rows"), "{e}");
     std::fs::remove_file(&empty).unwrap();

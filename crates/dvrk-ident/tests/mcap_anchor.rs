@@ -10,18 +10,7 @@ use std::f64::consts::PI;
 use std::path::PathBuf;
 
 fn anchor(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/anchors")
-        .join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!(
-            "SKIPPED: {} not found (shared/anchors is not beside the repository)",
-            p.display()
-        );
-        None
-    }
+    dvrk_test_support::shared(&format!("anchors/{name}"))
 }
 
 struct Formulas {

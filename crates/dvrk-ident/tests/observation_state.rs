@@ -119,7 +119,7 @@ fn file_round_trip_is_exact() {
     let back = ObservationState::from_bytes(&bytes, "mem.obs").unwrap();
     assert_eq!(back.to_bytes(), bytes);
     assert_eq!(back.samples(), state.samples());
-    let dir = std::env::temp_dir().join(format!("dvrk-state-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-state");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("s.obs");
     state.write(&path).unwrap();

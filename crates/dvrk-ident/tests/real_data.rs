@@ -7,18 +7,7 @@ use dvrk_ident::trajectory::Coordinates;
 use std::path::PathBuf;
 
 fn shared(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/dvrk")
-        .join(rel);
-    if p.is_file() {
-        Some(p)
-    } else {
-        eprintln!(
-            "skipping: real dVRK data not found at {} (shared/data is outside the repository)",
-            p.display()
-        );
-        None
-    }
+    dvrk_test_support::shared(&format!("data/dvrk/{rel}"))
 }
 
 #[test]

@@ -220,7 +220,7 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
     assert!(!html.contains("<script") && !html.contains("<link") && !html.contains("src="));
     assert!(!html.contains("href=\"http"));
 
-    let dir = std::env::temp_dir().join(format!("dvrk-report-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-report");
     let written = report.write(&dir).unwrap();
     assert_eq!(written.len(), 2 * report.figures.len() + 1);
     let mut names: Vec<String> = std::fs::read_dir(&dir)

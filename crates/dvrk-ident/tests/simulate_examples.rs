@@ -12,22 +12,11 @@ use dvrk_ident::excite::FourierTrajectory;
 use dvrk_model::{inertia, Model};
 
 fn examples() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
+    dvrk_test_support::repo().join("examples")
 }
 
 fn anchor(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/anchors")
-        .join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!(
-            "SKIPPED: {} not found (shared/anchors is not beside the repository)",
-            p.display()
-        );
-        None
-    }
+    dvrk_test_support::shared(&format!("anchors/{name}"))
 }
 
 fn write_examples() -> bool {

@@ -8,18 +8,7 @@ use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_model::Model;
 
 fn anchor(name: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/anchors")
-        .join(name);
-    if p.exists() {
-        Some(p)
-    } else {
-        println!(
-            "SKIPPED: {} not found (shared/anchors is not beside the repository)",
-            p.display()
-        );
-        None
-    }
+    dvrk_test_support::shared(&format!("anchors/{name}"))
 }
 
 #[test]
@@ -140,7 +129,7 @@ fn derivatives_and_period_of_a_2019_trajectory() {
 
 #[test]
 fn json_file_errors_name_the_file() {
-    let dir = std::env::temp_dir().join(format!("dvrk-fourier-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-fourier");
     std::fs::create_dir_all(&dir).unwrap();
     let p = dir.join("bad.json");
     std::fs::write(

@@ -10,8 +10,7 @@ use std::sync::Mutex;
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::stream::fit_stream;
 use dvrk_ident::fit::to_model_coordinates;
-use dvrk_ident::log::mcap::McapOptions;
-use dvrk_ident::log::{self, LogFormat, LogReader};
+use dvrk_ident::log::{self, LogFormat, ReadOptions};
 use dvrk_ident::progress::{Progress, Silent};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::{fit, FitResult, FitSettings, Method, Trajectory};
@@ -86,7 +85,7 @@ impl Progress for Counter {
 fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
     let model = Model::builtin("psm").unwrap();
     let whole_log = log::read(example(), None, None).unwrap();
-    let reader = LogReader::open(example(), None, None, &McapOptions::default()).unwrap();
+    let reader = ReadOptions::default().open(example()).unwrap();
     for method in [Method::Ols, Method::Wls, Method::Irls, Method::Sdp] {
         let settings = FitSettings {
             method,
@@ -185,7 +184,7 @@ fn simulated(model: &Model, phase: f64, seconds: f64, seed: u64) -> Trajectory {
 #[test]
 fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
     let model = Model::builtin("mtm").unwrap();
-    let dir = std::env::temp_dir().join(format!("dvrk-ident-stream-fit-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-ident-stream-fit");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     // Training: headered CSV in measured joints, without velocities (differentiated).
@@ -197,11 +196,16 @@ fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
     let test = to_model_coordinates(&model, &simulated(&model, 0.1, 9.0, 4)).unwrap();
     let test_path = dir.join("test.csv");
     log::write(&test_path, &test, LogFormat::Wpi).unwrap();
-    let opts = McapOptions::default();
+    let opts = ReadOptions::default();
     let train_whole = log::read(&train_path, None, None).unwrap();
     let test_whole = log::read(&test_path, None, Some(200.0)).unwrap();
-    let train_reader = LogReader::open(&train_path, None, None, &opts).unwrap();
-    let test_reader = LogReader::open(&test_path, None, Some(200.0), &opts).unwrap();
+    let train_reader = opts.open(&train_path).unwrap();
+    let test_reader = ReadOptions {
+        rate_hz: Some(200.0),
+        ..opts.clone()
+    }
+    .open(&test_path)
+    .unwrap();
     for (method, filter_torque) in [
         (Method::Ols, false),
         (Method::Wls, true),
@@ -235,10 +239,10 @@ fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
 #[test]
 fn streamed_fit_errors_name_the_file() {
     let model = Model::builtin("psm").unwrap();
-    let dir = std::env::temp_dir().join(format!("dvrk-ident-stream-err-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-ident-stream-err");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let opts = McapOptions::default();
+    let opts = ReadOptions::default();
     // Too short for the trimming: the same error as in memory, before any long pass.
     let short = dir.join("short.mcap");
     let whole = log::read(example(), None, None).unwrap();
@@ -250,7 +254,7 @@ fn streamed_fit_errors_name_the_file() {
         ..whole.clone()
     };
     log::write(&short, &first, LogFormat::Mcap).unwrap();
-    let reader = LogReader::open(&short, None, None, &opts).unwrap();
+    let reader = opts.open(&short).unwrap();
     let settings = FitSettings::default();
     let e = fit_stream(&model, &reader, None, &settings, 100, &Silent).unwrap_err();
     let in_memory = fit(
@@ -266,7 +270,7 @@ fn streamed_fit_errors_name_the_file() {
     let bytes = std::fs::read(example()).unwrap();
     let cut = dir.join("cut.mcap");
     std::fs::write(&cut, &bytes[..bytes.len() / 2]).unwrap();
-    let e = LogReader::open(&cut, None, None, &opts).unwrap_err();
+    let e = opts.open(&cut).unwrap_err();
     assert!(
         e.to_string().contains("cut.mcap") && e.to_string().contains("truncated"),
         "{e}"
@@ -282,7 +286,7 @@ fn streamed_fit_errors_name_the_file() {
     let mut out: Vec<&str> = lines.clone();
     out[100] = &bad;
     std::fs::write(&nan, out.join("\n")).unwrap();
-    let reader = LogReader::open(&nan, None, None, &opts).unwrap();
+    let reader = opts.open(&nan).unwrap();
     let e = fit_stream(&model, &reader, None, &settings, 64, &Silent).unwrap_err();
     assert!(e.to_string().contains("nan.csv:101"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
@@ -314,8 +318,7 @@ mod properties {
             with_dq: bool,
         ) {
             let model = Model::builtin("mtm").unwrap();
-            let dir = std::env::temp_dir()
-                .join(format!("dvrk-ident-stream-prop-{}", std::process::id()));
+            let dir = dvrk_test_support::temp_dir("dvrk-ident-stream-prop");
             std::fs::create_dir_all(&dir).unwrap();
             let mut train = simulated(&model, phase, 8.0, seed);
             if !with_dq {
@@ -327,7 +330,7 @@ mod properties {
             settings.processing.decimate = decimate;
             let whole = fit(&model, &log::read(&path, None, None).unwrap(), None, &settings)
                 .unwrap();
-            let reader = LogReader::open(&path, None, None, &McapOptions::default()).unwrap();
+            let reader = ReadOptions::default().open(&path).unwrap();
             let streamed = fit_stream(&model, &reader, None, &settings, block, &Silent).unwrap();
             compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
             std::fs::remove_dir_all(&dir).unwrap();

@@ -8,8 +8,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
-use dvrk_ident::log::mcap::McapOptions;
-use dvrk_ident::log::{self, LogFormat, LogReader};
+use dvrk_ident::log::{self, LogFormat, ReadOptions};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::{fit, FitSettings, Method};
@@ -96,7 +95,7 @@ fn write_log(model: &Model, samples: usize, path: &Path) {
 #[test]
 fn streamed_fit_memory_does_not_grow_with_the_log() {
     let model = Model::builtin("psm").unwrap();
-    let dir = std::env::temp_dir().join(format!("dvrk-ident-memory-{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk-ident-memory");
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let settings = FitSettings {
@@ -113,11 +112,11 @@ fn streamed_fit_memory_does_not_grow_with_the_log() {
             // What a process allocates once, not per log: the thread pool, the base
             // parameters, and faer's global buffers on its first QR (about 660 MB of
             // address space on this machine, kept for the process's lifetime).
-            let reader = LogReader::open(&path, None, None, &McapOptions::default()).unwrap();
+            let reader = ReadOptions::default().open(&path).unwrap();
             fit_stream(&model, &reader, None, &settings, BLOCK_SAMPLES, &Silent).unwrap();
         }
         let (peak, result) = peak_during(|| {
-            let reader = LogReader::open(&path, None, None, &McapOptions::default()).unwrap();
+            let reader = ReadOptions::default().open(&path).unwrap();
             fit_stream(&model, &reader, None, &settings, BLOCK_SAMPLES, &Silent).unwrap()
         });
         assert_eq!(result.metrics.train.samples, samples - 400);

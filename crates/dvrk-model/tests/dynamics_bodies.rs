@@ -7,8 +7,7 @@
 //! built-in robots and on a chain with fixed links between and after moving frames
 //! (merged into their moving parent).
 
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};
 use support::{assert_close, physical_params, random_params, random_state, rigid_only, Rng};

@@ -2,8 +2,7 @@
 //! the textbook planar two-link arm, a prismatic joint along gravity, springs, friction,
 //! motor inertias on coupled frames, standard vs modified DH, known forces.
 
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::{inertia, sign0, Model, Workspace};
 use support::{assert_close, id, Rng};

@@ -2,8 +2,7 @@
 //! dynamics, mass matrix, forward dynamics, energy balance, gravity, Jacobians — on the
 //! built-in PSM, simplified PSM and MTM at seeded random samples.
 
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::{Model, ParamKind, Workspace};
 use nalgebra::{DMatrix, DVector, Vector3};

@@ -5,8 +5,7 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};
 

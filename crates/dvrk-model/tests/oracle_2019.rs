@@ -1,16 +1,15 @@
 //! The regressor against the 2019 package's symbolic (sympy, Lagrangian) models, column by
 //! column by parameter name, and base-parameter spans.
 
-mod common;
-use common::*;
 use dvrk_model::{Model, Workspace};
+use dvrk_test_support::*;
 use nalgebra::DMatrix;
 
 /// Compares every regressor column by name. Conventions shared with 2019: the motor
 /// inertia of a frame with joint value `c·q_k + const` has column `c·q̈_k` (so the PSM
 /// frame-11 column is 1.0186·q̈5), and Coulomb columns use sign(0) = 0.
 fn check_regressor(robot: &str) {
-    let Some(path) = shared_file(&format!("oracle/{robot}.json")) else {
+    let Some(path) = shared(&format!("oracle/{robot}.json")) else {
         return;
     };
     let oracle = read_json(&path);
@@ -102,7 +101,7 @@ fn rank(m: &DMatrix<f64>) -> usize {
 }
 
 fn check_base_span(robot: &str) {
-    let Some(path) = shared_file(&format!("oracle/{robot}.json")) else {
+    let Some(path) = shared(&format!("oracle/{robot}.json")) else {
         return;
     };
     let oracle = read_json(&path);

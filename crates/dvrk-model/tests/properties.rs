@@ -3,8 +3,7 @@
 //! robot and the MTM with Stribeck friction terms. The seed is fixed, so a run is
 //! reproducible.
 
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};
 use proptest::prelude::*;

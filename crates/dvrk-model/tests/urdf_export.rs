@@ -13,9 +13,7 @@
 //!   carriers, a −q one): the coordinates read back in order, every mimic after the
 //!   joint it mimics in the depth-first, by-name order of urdfdom and Pinocchio.
 
-mod common;
-#[path = "dynamics_support.rs"]
-mod support;
+use dvrk_test_support as support;
 
 use dvrk_model::Model;
 use support::*;
@@ -204,7 +202,7 @@ fn replace_mode_round_trips_and_keeps_everything_else() {
 
 #[test]
 fn replace_mode_round_trips_the_panda() {
-    let Some(path) = common::shared_file("anchors/panda_arm_7dof.urdf") else {
+    let Some(path) = dvrk_test_support::shared("anchors/panda_arm_7dof.urdf") else {
         return;
     };
     let text = std::fs::read_to_string(&path).unwrap();

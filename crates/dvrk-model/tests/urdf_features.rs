@@ -817,7 +817,7 @@ fn error_malformed_xml() {
     );
     assert_names(&msg, &["missing.urdf", "cannot parse", "inertia"]);
     // Through Model::load, the path names the file.
-    let dir = std::env::temp_dir().join(format!("dvrk_model_urdf_{}", std::process::id()));
+    let dir = dvrk_test_support::temp_dir("dvrk_model_urdf");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("broken.urdf");
     std::fs::write(&path, r#"<robot name="x"><link name="a"></robot>"#).unwrap();

@@ -10,9 +10,8 @@
 //! the moving parent body. Our model keeps one frame per URDF joint (fixed ones included)
 //! with barycentric `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
 
-mod common;
-use common::*;
 use dvrk_model::{Model, Transform, Workspace};
+use dvrk_test_support::*;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 const TOL: f64 = 1e-9;
@@ -26,8 +25,8 @@ struct Reference {
 }
 
 fn load() -> Option<Reference> {
-    let urdf = shared_file("anchors/panda_arm_7dof.urdf")?;
-    let json = shared_file("anchors/pinocchio_reference.json")?;
+    let urdf = shared("anchors/panda_arm_7dof.urdf")?;
+    let json = shared("anchors/pinocchio_reference.json")?;
     let model = Model::load(urdf.to_str().unwrap()).unwrap();
     Some(Reference {
         model,

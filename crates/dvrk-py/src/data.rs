@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use dvrk_ident::fit::{to_model_coordinates, Prepared};
-use dvrk_ident::log::{self, mcap, LogFormat};
+use dvrk_ident::log::{self, mcap, LogFormat, ReadOptions};
 use dvrk_ident::trajectory::{Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use numpy::{PyArrayDyn, PyArrayMethods};
@@ -13,7 +13,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PySlice, PyTuple};
 
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
-use crate::errors::{from_ident, from_log, ident_kind, input, log_kind, Kind};
+use crate::errors::{from_ident, from_log, ident_kind, input, log_kind};
 use crate::frame;
 use crate::json::to_python;
 use crate::robot::Robot;
@@ -640,7 +640,6 @@ pub fn read_log(
     time_source: Option<&str>,
     resample: Option<f64>,
 ) -> PyResult<DataPy> {
-    let format = parse_format(format)?;
     let topics: Vec<String> = match topic.filter(|t| !t.is_none()) {
         None => Vec::new(),
         Some(t) => match t.extract::<String>() {
@@ -650,50 +649,24 @@ pub fn read_log(
                 .map_err(|_| input("topic: expected a topic name or a list of topic names"))?,
         },
     };
-    let time_source = match time_source {
-        None => mcap::TimeSource::default(),
-        Some(s) => crate::convert::named("time_source", s)?,
+    let options = ReadOptions {
+        format: parse_format(format)?,
+        rate_hz: rate,
+        topics,
+        time_source: time_source
+            .map(|s| crate::convert::named("time_source", s))
+            .transpose()?,
+        resample_hz: resample,
+        ..ReadOptions::default()
     };
-    let given_time_source = time_source != mcap::TimeSource::default();
     let model = robot.map(|r| r.get().model.clone());
     let file = path.clone();
     let traj = background(py, move || {
-        let format = match format {
-            Some(f) => f,
-            None => log::detect_format(&file).map_err(fail_log)?,
+        let options = match &model {
+            Some(m) => options.for_model(m),
+            None => options,
         };
-        if !format.has_topics() && (!topics.is_empty() || given_time_source) {
-            return Err((
-                Kind::Input,
-                format!(
-                    "{}: topic and time_source apply to recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) only, this is a {format} log",
-                    file.display()
-                ),
-            ));
-        }
-        let traj = match (format, rate) {
-            (LogFormat::Wpi, Some(rate)) => {
-                log::read_wpi(&file, rate, model.as_ref().map(|m| m.dof()))
-            }
-            (format, _) if format.has_topics() => mcap::read_mcap(
-                &file,
-                &mcap::McapOptions {
-                    topics,
-                    time_source,
-                    resample_hz: resample,
-                    joints: model
-                        .as_ref()
-                        .map(|m| m.measured.joints.clone())
-                        .unwrap_or_default(),
-                },
-            ),
-            (format, rate) => log::read(&file, Some(format), rate),
-        }
-        .map_err(fail_log)?;
-        let traj = match resample {
-            Some(hz) if !format.has_topics() => log::resample(&file, traj, hz).map_err(fail_log)?,
-            _ => traj,
-        };
+        let traj = options.read(&file).map_err(fail_log)?;
         if let Some(model) = &model {
             to_model_coordinates(model, &traj).map_err(fail_ident)?;
         }

@@ -3,8 +3,10 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::fit::{fit_logs, joint_metrics, predict, prepare as prepare_data, LogData};
+use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
+use dvrk_ident::request::{self, FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::result::{wpi_params_json, write_atomic};
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::Trajectory;
@@ -16,7 +18,8 @@ use pyo3::types::PyDict;
 
 use crate::convert::{array, background, matrix, py_bool, py_str};
 use crate::data::{fail_ident, DataPy, PreparedPy};
-use crate::errors::{error, from_ident, from_io, from_model, input, Kind};
+use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input, Kind};
+use crate::excite::TrajectoryPy;
 use crate::json::{from_python, to_python};
 use crate::observe::observations_arg;
 use crate::robot::Robot;
@@ -53,21 +56,20 @@ fn logs_arg(
     Ok(logs)
 }
 
-fn log_data(logs: &[(Arc<Trajectory>, Option<PathBuf>)]) -> Vec<LogData<'_>> {
-    logs.iter()
-        .map(|(samples, path)| LogData {
-            samples,
-            file: path.as_deref(),
-        })
+fn samples(logs: Vec<(Arc<Trajectory>, Option<PathBuf>)>) -> Vec<LogSource> {
+    logs.into_iter()
+        .map(|(samples, file)| LogSource::Samples { samples, file })
         .collect()
 }
 
-/// The keyword arguments that change the settings, shared by `fit` and `prepare`.
+/// The keyword arguments that change the settings, shared by `fit`, `observe` and
+/// `prepare`: a base (`settings`) and the library's [`request::Overrides`].
 #[derive(Default)]
 pub(crate) struct Overrides<'a, 'py> {
     pub settings: Option<&'a Bound<'py, PyAny>>,
     pub method: Option<&'a str>,
     pub cutoff: Option<&'a Bound<'py, PyAny>>,
+    pub filter_torque: Option<bool>,
     pub trim: Option<usize>,
     pub test_window: Option<usize>,
     pub decimate: Option<usize>,
@@ -75,63 +77,63 @@ pub(crate) struct Overrides<'a, 'py> {
     pub resample: Option<f64>,
     pub irls_iterations: Option<usize>,
     pub sdp_regularization: Option<f64>,
+    pub stribeck: Option<f64>,
 }
 
 impl Overrides<'_, '_> {
-    /// `settings` (the result document's `settings` layout; missing fields take the
-    /// defaults) or the defaults, then each keyword that is not `None`.
-    pub fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
-        let mut s = match self.settings.filter(|s| !s.is_none()) {
-            Some(obj) => from_python::<FitSettings>(py, obj, "settings")?,
-            None => FitSettings::default(),
+    /// The base settings: `settings` (the result document's `settings` layout; missing
+    /// fields take the defaults) or the defaults.
+    fn base(&self, py: Python<'_>) -> PyResult<FitSettings> {
+        match self.settings.filter(|s| !s.is_none()) {
+            Some(obj) => from_python::<FitSettings>(py, obj, "settings"),
+            None => Ok(FitSettings::default()),
+        }
+    }
+
+    /// The keywords that are not `None`, as the library's overrides.
+    fn overrides(&self) -> PyResult<request::Overrides> {
+        let cutoff = match self.cutoff.filter(|c| !c.is_none()) {
+            None => None,
+            Some(c) => {
+                let bad = || {
+                    input(
+                        "cutoff: expected a number (Hz), one number per coordinate, \
+                         or \"none\" (no filter)",
+                    )
+                };
+                Some(if c.extract::<bool>().ok() == Some(false) {
+                    None
+                } else if let Ok(text) = c.extract::<String>() {
+                    Cutoff::parse_flag(&text).map_err(|e| input(format!("cutoff: {e}")))?
+                } else if c.is_instance_of::<pyo3::types::PyBool>() {
+                    return Err(bad());
+                } else if let Ok(v) = c.extract::<f64>() {
+                    Some(Cutoff::All(v))
+                } else {
+                    Some(Cutoff::PerJoint(
+                        c.extract::<Vec<f64>>().map_err(|_| bad())?,
+                    ))
+                })
+            }
         };
-        if let Some(m) = self.method {
-            s.method = parse_method(m)?;
-        }
-        if let Some(c) = self.cutoff.filter(|c| !c.is_none()) {
-            let bad = || {
-                input(
-                    "cutoff: expected a number (Hz), one number per coordinate, \
-                     or \"none\" (no filter)",
-                )
-            };
-            let cutoff = if c.extract::<bool>().ok() == Some(false) {
-                None
-            } else if let Ok(text) = c.extract::<String>() {
-                Cutoff::parse_flag(&text).map_err(|e| input(format!("cutoff: {e}")))?
-            } else if c.is_instance_of::<pyo3::types::PyBool>() {
-                return Err(bad());
-            } else if let Ok(v) = c.extract::<f64>() {
-                Some(Cutoff::All(v))
-            } else {
-                Some(Cutoff::PerJoint(
-                    c.extract::<Vec<f64>>().map_err(|_| bad())?,
-                ))
-            };
-            s.processing.set_cutoff(cutoff);
-        }
-        if let Some(t) = self.trim {
-            s.processing.trim = t;
-        }
-        if let Some(w) = self.test_window {
-            s.test_window = Some(w);
-        }
-        if let Some(d) = self.decimate {
-            s.processing.decimate = d;
-        }
-        if let Some(v) = self.min_speed {
-            s.processing.min_speed = Some(v);
-        }
-        if let Some(r) = self.resample {
-            s.processing.resample_hz = Some(r);
-        }
-        if let Some(i) = self.irls_iterations {
-            s.irls_iterations = i;
-        }
-        if let Some(r) = self.sdp_regularization {
-            s.sdp_regularization = r;
-        }
-        Ok(s)
+        Ok(request::Overrides {
+            method: self.method.map(parse_method).transpose()?,
+            cutoff,
+            filter_torque: self.filter_torque,
+            trim: self.trim,
+            decimate: self.decimate,
+            min_speed: self.min_speed,
+            resample_hz: self.resample,
+            test_window: self.test_window,
+            irls_iterations: self.irls_iterations,
+            sdp_regularization: self.sdp_regularization,
+            stribeck_velocity: self.stribeck,
+        })
+    }
+
+    /// `settings` (or the defaults), then each keyword that is not `None`.
+    pub fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
+        Ok(self.overrides()?.apply(self.base(py)?))
     }
 }
 
@@ -145,8 +147,7 @@ impl Overrides<'_, '_> {
 /// - ``cutoff``: low-pass cut-off of the motion (positions, velocities,
 ///   accelerations), Hz, one number or one per coordinate (default 5.4 Hz; the 2019
 ///   PSM/MTM fits effectively used 16.965/5.655), or ``"none"`` (or ``False``) for no
-///   filter; the torques are filtered too with
-///   ``settings={"processing": {"filter_torque": True}}`` (the 2019 protocol);
+///   filter; ``filter_torque=True`` filters the torques too (the 2019 protocol);
 /// - ``data``: a :class:`Data` or a list of them (``dvrk-ident fit a b c``): each log is
 ///   processed on its own (filters and trimming never cross from one to the next) and
 ///   their observations merged; ``result.inputs`` lists every log with its hash (of
@@ -155,12 +156,21 @@ impl Overrides<'_, '_> {
 ///   --from``): merged in order and fitted with their own processing settings, the
 ///   result of the fit of their logs;
 /// - ``test``: a :class:`Data` or a list to validate on, ``test_window``: metrics on
-///   the first N processed samples of each only;
+///   the first N processed samples of each only; ``excitation``: the
+///   :class:`Trajectory` the logs follow (or the path of its JSON document): with
+///   ``test`` but no ``test_window`` the test metrics cover its first period (the 2019
+///   protocol, ``--excitation``);
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
-///   ``resample`` (Hz), ``irls_iterations``, ``sdp_regularization``;
+///   ``resample`` (Hz, of the samples given), ``irls_iterations``,
+///   ``sdp_regularization``, ``stribeck`` (adds a Stribeck term with this velocity,
+///   rad/s or m/s, to every friction element);
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
+///
+/// The keywords are the flags of ``dvrk-ident fit`` (``filter_torque`` is
+/// ``--filter-torque``...), applied by the same library request
+/// (``dvrk_ident::request::FitRequest``), so both give the same result document.
 ///
 /// A fit whose solver did not converge raises ``NotConvergedError`` (its ``result``
 /// attribute holds the unconverged :class:`Result`) unless ``allow_unconverged``.
@@ -175,7 +185,7 @@ impl Overrides<'_, '_> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -183,21 +193,25 @@ pub fn fit(
     data: &Bound<'_, PyAny>,
     method: Option<&str>,
     cutoff: Option<&Bound<'_, PyAny>>,
+    filter_torque: Option<bool>,
     test: Option<&Bound<'_, PyAny>>,
     test_window: Option<usize>,
+    excitation: Option<&Bound<'_, PyAny>>,
     trim: Option<usize>,
     decimate: Option<usize>,
     min_speed: Option<f64>,
     resample: Option<f64>,
     irls_iterations: Option<usize>,
     sdp_regularization: Option<f64>,
+    stribeck: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
-    let settings = Overrides {
+    let kw = Overrides {
         settings,
         method,
         cutoff,
+        filter_torque,
         trim,
         test_window,
         decimate,
@@ -205,49 +219,43 @@ pub fn fit(
         resample,
         irls_iterations,
         sdp_regularization,
-    }
-    .apply(py)?;
-    let model = robot.get().model.clone();
-    let states = observations_arg(data)?;
-    if states.is_some()
-        && (cutoff.is_some()
-            || trim.is_some()
-            || decimate.is_some()
-            || min_speed.is_some()
-            || resample.is_some())
-    {
-        return Err(input(
-            "data: the processing (cutoff, trim, decimate, min_speed, resample) of \
-             observations is their own, set by observe()",
-        ));
-    }
-    let train = match states {
-        Some(_) => Vec::new(),
-        None => logs_arg(data, "data")?,
+        stribeck,
+    };
+    let train = match observations_arg(data)? {
+        Some(states) => Training::Observations(states.into_iter().map(|s| (s, None)).collect()),
+        None => Training::Logs(samples(logs_arg(data, "data")?)),
     };
     let test = match test.filter(|t| !t.is_none()) {
-        Some(t) => logs_arg(t, "test")?,
+        Some(t) => samples(logs_arg(t, "test")?),
         None => Vec::new(),
     };
-    let inner = background(py, move || {
-        match states {
-            // The reduce: the observations merged in order, then fitted.
-            Some(states) => {
-                let mut total = (*states[0]).clone();
-                for s in &states[1..] {
-                    total.merge(s).map_err(fail_ident)?;
-                }
-                total.fit(&model, &settings, &log_data(&test), &Silent)
+    let excitation = match excitation.filter(|e| !e.is_none()) {
+        None => None,
+        Some(e) => Some(match e.cast::<TrajectoryPy>() {
+            Ok(t) => t.get().inner.clone(),
+            Err(_) => {
+                let path: PathBuf = e.extract().map_err(|_| {
+                    input("excitation: expected a Trajectory or the path of its JSON document")
+                })?;
+                FourierTrajectory::from_json_file(&path)
+                    .map_err(|err| error(fourier_kind(&err), err.to_string()))?
             }
-            None => fit_logs(
-                &model,
-                &log_data(&train),
-                &log_data(&test),
-                &settings,
-                &Silent,
-            ),
-        }
-        .map_err(fail_ident)
+        }),
+    };
+    let request = FitRequest {
+        test,
+        settings: kw.base(py)?,
+        overrides: kw.overrides()?,
+        excitation,
+        streaming: Streaming::Never,
+        ..FitRequest::new(train)
+    };
+    let model = robot.get().model.clone();
+    let inner = background(py, move || {
+        request
+            .run(Some(&model), &Silent)
+            .map(|outcome| outcome.result)
+            .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;
     let status = inner.solver.status.clone();

@@ -176,9 +176,9 @@ fn logs_or_paths(
 
 /// The map of a fit over many processes: the logs of ``data`` (a :class:`Data`, a path
 /// read with :func:`read_log`, or a list of them) processed as :func:`fit` processes
-/// them (same keywords and defaults: ``cutoff``, ``trim``, ``decimate``, ``min_speed``,
-/// ``resample``, ``settings``, whose ``stribeck_velocity`` adds the Stribeck terms) and
-/// reduced to an :class:`Observation`. ``fit(robot, [observe(robot, p) for p in
+/// them (same keywords and defaults: ``cutoff``, ``filter_torque``, ``trim``,
+/// ``decimate``, ``min_speed``, ``resample``, ``stribeck``, ``settings``) and reduced to
+/// an :class:`Observation` (``dvrk-ident observe``). ``fit(robot, [observe(robot, p) for p in
 /// paths])`` is ``fit(robot, [read_log(p, robot) for p in paths])``.
 ///
 /// Example (Dask)::
@@ -188,26 +188,30 @@ fn logs_or_paths(
 ///     ...     lambda a, b: a + b).compute()
 ///     >>> result = di.fit(psm, obs, method="wls")
 #[pyfunction]
-#[pyo3(signature = (robot, data, *, cutoff = None, trim = None, decimate = None, min_speed = None, resample = None, settings = None))]
+#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, stribeck = None, settings = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn observe(
     py: Python<'_>,
     robot: &Bound<'_, Robot>,
     data: &Bound<'_, PyAny>,
     cutoff: Option<&Bound<'_, PyAny>>,
+    filter_torque: Option<bool>,
     trim: Option<usize>,
     decimate: Option<usize>,
     min_speed: Option<f64>,
     resample: Option<f64>,
+    stribeck: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<ObservationPy> {
     let settings = Overrides {
         settings,
         cutoff,
+        filter_torque,
         trim,
         decimate,
         min_speed,
         resample,
+        stribeck,
         ..Overrides::default()
     }
     .apply(py)?;

@@ -8,7 +8,7 @@ use dvrk_ident::Coordinates;
 use dvrk_model::Model;
 
 use super::emit_summary;
-use super::fit::{read_log, McapArgs};
+use super::fit::{read, read_options, McapArgs};
 use super::simulate::{output_format, write_log};
 
 #[derive(clap::Args)]
@@ -46,7 +46,7 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[])?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
-    let traj = read_log(&args.input, args.from, args.rate, &args.mcap)?;
+    let traj = read(&read_options(args.from, args.rate, &args.mcap), &args.input)?;
     traj.validate()?;
     let format = output_format(&args.output, args.format)?;
     let target = match (args.coordinates, format) {

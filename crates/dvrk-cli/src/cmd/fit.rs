@@ -2,14 +2,14 @@
 
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
-use dvrk_ident::fit::{fit_logs, LogData};
-use dvrk_ident::log::mcap::{McapOptions, TimeSource};
-use dvrk_ident::log::{self, LogFormat, LogReader};
+use dvrk_ident::log::mcap::TimeSource;
+use dvrk_ident::log::{LogFormat, ReadOptions};
 use dvrk_ident::output::Outputs;
+use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, Overrides, Streaming, Training};
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
@@ -17,7 +17,8 @@ use dvrk_model::Model;
 
 use super::emit;
 
-/// MCAP reading options, and resampling for every format.
+/// Recording options, and resampling for every format (mapped onto
+/// [`ReadOptions`]).
 #[derive(clap::Args, Clone, Default)]
 pub struct McapArgs {
     /// MCAP: sensor_msgs/msg/JointState topic to read; repeat to merge topics (the first
@@ -26,54 +27,32 @@ pub struct McapArgs {
     #[arg(long = "topic", value_name = "TOPIC")]
     pub topics: Vec<String>,
     /// Recordings: sample times from the JointState header stamps (when the controller
-    /// measured the joints), or the recorder's log times or the publish times
-    #[arg(long, value_parser = super::named::<TimeSource>(), default_value = "header")]
-    pub time: TimeSource,
+    /// measured the joints), or the recorder's log times or the publish times. Default:
+    /// header
+    #[arg(long, value_parser = super::named::<TimeSource>())]
+    pub time: Option<TimeSource>,
     /// Resample to this uniform rate (Hz) by linear interpolation before anything else
     /// (bridges gaps and jitter; without it such logs are refused)
     #[arg(long, value_name = "HZ")]
     pub resample: Option<f64>,
-    /// The robot's measured joints, for the automatic topic choice (set by the commands
-    /// that know the robot, see [`LogArgs::for_robot`]).
-    #[arg(skip)]
-    pub joints: Vec<String>,
 }
 
-impl McapArgs {
-    pub fn options(&self) -> McapOptions {
-        McapOptions {
-            topics: self.topics.clone(),
-            time_source: self.time,
-            resample_hz: self.resample,
-            joints: self.joints.clone(),
-        }
+/// The reading options of `--format`, `--rate` and the recording flags.
+pub fn read_options(format: Option<LogFormat>, rate: Option<f64>, mcap: &McapArgs) -> ReadOptions {
+    ReadOptions {
+        format,
+        rate_hz: rate,
+        topics: mcap.topics.clone(),
+        time_source: mcap.time,
+        resample_hz: mcap.resample,
+        ..ReadOptions::default()
     }
 }
 
-/// The format of `path` (given, or from its content); `--topic` only for recordings.
-fn log_format(path: &str, format: Option<LogFormat>, mcap: &McapArgs) -> Result<LogFormat> {
-    let format = match format {
-        Some(f) => f,
-        None => log::detect_format(path)?,
-    };
-    if !mcap.topics.is_empty() && !format.has_topics() {
-        bail!("{path}: --topic applies to recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) only, this is a {format} log");
-    }
-    Ok(format)
-}
-
-/// Reads a log in `format` (default: from its content) with the recording options of
-/// `mcap`; `--resample` applies to every format (recordings while reading).
-pub fn read_log(
-    path: &str,
-    format: Option<LogFormat>,
-    rate: Option<f64>,
-    mcap: &McapArgs,
-) -> Result<dvrk_ident::Trajectory> {
-    let format = log_format(path, format, mcap)?;
-    let traj = crate::progress::Bars::new().spin(&format!("reading {path}"), || {
-        log::read_with(path, Some(format), rate, &mcap.options())
-    })?;
+/// Reads a log into memory, with a spinner.
+pub fn read(options: &ReadOptions, path: &str) -> Result<Trajectory> {
+    let traj =
+        crate::progress::Bars::new().spin(&format!("reading {path}"), || options.read(path))?;
     Ok(traj)
 }
 
@@ -98,47 +77,43 @@ pub struct LogArgs {
     /// Samples trimmed at each end after filtering
     #[arg(long)]
     pub trim: Option<usize>,
+    /// Keep every N-th processed sample (after filtering; N ≥ 1)
+    #[arg(long, value_parser = super::at_least_one, value_name = "N")]
+    pub decimate: Option<usize>,
+    /// Drop processed samples where some joint moves slower than this (rad/s or m/s):
+    /// the sign of its Coulomb friction is noise there
+    #[arg(long, value_name = "SPEED")]
+    pub min_speed: Option<f64>,
     #[command(flatten)]
     pub mcap: McapArgs,
 }
 
 impl LogArgs {
-    pub fn read(&self, path: &str) -> Result<dvrk_ident::Trajectory> {
-        read_log(path, self.format, self.rate, &self.mcap)
+    /// How these flags read logs (the robot's joints added by
+    /// [`ReadOptions::for_model`]).
+    pub fn read_options(&self) -> ReadOptions {
+        read_options(self.format, self.rate, &self.mcap)
     }
 
-    /// Opens a log for reading block by block (the checks of [`LogArgs::read`]).
-    pub fn open(&self, path: &str) -> Result<LogReader> {
-        let format = log_format(path, self.format, &self.mcap)?;
-        Ok(LogReader::open(
-            path,
-            Some(format),
-            self.rate,
-            &self.mcap.options(),
-        )?)
+    /// The processing flags as settings overrides.
+    pub fn overrides(&self) -> Result<Overrides> {
+        let cutoff = match &self.cutoff {
+            Some(c) => Some(Cutoff::parse_flag(c).map_err(|e| anyhow::anyhow!("--cutoff: {e}"))?),
+            None => None,
+        };
+        Ok(Overrides {
+            cutoff,
+            trim: self.trim,
+            filter_torque: self.filter_torque.then_some(true),
+            decimate: self.decimate,
+            min_speed: self.min_speed,
+            ..Overrides::default()
+        })
     }
 
-    /// These options for reading `model`'s logs: its measured joints guide the
-    /// automatic topic choice (a dVRK 2.x PSM's arm and jaw topics are paired).
-    pub fn for_robot(&self, model: &Model) -> LogArgs {
-        let mut args = self.clone();
-        args.mcap.joints.clone_from(&model.measured.joints);
-        args
-    }
-
+    /// `base` with the processing flags applied.
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
-        let mut s = base;
-        if let Some(c) = &self.cutoff {
-            let cutoff = Cutoff::parse_flag(c).map_err(|e| anyhow::anyhow!("--cutoff: {e}"))?;
-            s.processing.set_cutoff(cutoff);
-        }
-        if let Some(t) = self.trim {
-            s.processing.trim = t;
-        }
-        if self.filter_torque {
-            s.processing.filter_torque = true;
-        }
-        Ok(s)
+        Ok(self.overrides()?.apply(base))
     }
 }
 
@@ -187,6 +162,12 @@ pub struct Args {
     /// or m/s) to every friction element (parameters Fs<frame>)
     #[arg(long, value_name = "VS")]
     pub stribeck: Option<f64>,
+    /// Re-weighting passes of --method irls
+    #[arg(long, value_name = "N")]
+    pub irls_iterations: Option<usize>,
+    /// Tikhonov weight of the semidefinite fit toward zero, relative
+    #[arg(long, value_name = "W")]
+    pub sdp_regularization: Option<f64>,
     /// Also write figures and report.html into this folder (see `dvrk-ident report`)
     #[arg(long, value_name = "DIR")]
     pub report: Option<String>,
@@ -200,32 +181,53 @@ pub struct Args {
     pub stream: bool,
 }
 
-/// Logs larger than this are fitted streamed (`--stream`): about a tenth of this
-/// machine's memory in samples and their processed copies.
-pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
-
-/// Whether a log (its files, for a rosbag2 folder) is large enough to be streamed (a
-/// log that cannot be examined is read the usual way, which reports the problem).
-pub fn is_large(path: &str) -> bool {
-    log::files_of(path).is_ok_and(|files| {
-        files
+/// The request of these flags: everything but the outputs.
+fn request(args: &Args) -> Result<FitRequest> {
+    let train = if args.from.is_empty() {
+        Training::Logs(
+            args.logs
+                .iter()
+                .map(|p| LogSource::File(p.into()))
+                .collect(),
+        )
+    } else {
+        let mut states = Vec::new();
+        for path in &args.from {
+            states.push((
+                Arc::new(ObservationState::read(Path::new(path))?),
+                Some(path.into()),
+            ));
+        }
+        Training::Observations(states)
+    };
+    let excitation = match &args.excitation {
+        Some(p) => {
+            Some(FourierTrajectory::from_json_file(p).with_context(|| format!("{p}: excitation"))?)
+        }
+        None => None,
+    };
+    let mut overrides = args.log_args.overrides()?;
+    overrides.method = Some(args.method);
+    overrides.test_window = args.test_window;
+    overrides.stribeck_velocity = args.stribeck;
+    overrides.irls_iterations = args.irls_iterations;
+    overrides.sdp_regularization = args.sdp_regularization;
+    Ok(FitRequest {
+        test: args
+            .test
             .iter()
-            .filter_map(|f| std::fs::metadata(f).ok())
-            .map(|m| m.len())
-            .sum::<u64>()
-            > STREAM_ABOVE_BYTES
+            .map(|p| LogSource::File(p.into()))
+            .collect(),
+        read: args.log_args.read_options(),
+        overrides,
+        excitation,
+        streaming: if args.stream {
+            Streaming::Always
+        } else {
+            Streaming::Auto
+        },
+        ..FitRequest::new(train)
     })
-}
-
-/// The logs read from `paths`, for the fit and its provenance.
-pub fn log_data<'a>(data: &'a [dvrk_ident::Trajectory], paths: &'a [String]) -> Vec<LogData<'a>> {
-    data.iter()
-        .zip(paths)
-        .map(|(samples, path)| LogData {
-            samples,
-            file: Some(Path::new(path)),
-        })
-        .collect()
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -239,19 +241,21 @@ pub fn run(args: Args) -> Result<()> {
     if stdout_taken && args.json {
         bail!("--json prints the result to stdout, and so does an output `-`: give one of them");
     }
-    let excitation = match &args.excitation {
-        Some(p) => Some(
-            dvrk_ident::excite::FourierTrajectory::from_json_file(p)
-                .with_context(|| format!("{p}: excitation"))?,
-        ),
-        None => None,
-    };
+    let request = request(&args)?;
+    if request.streams() && args.report.is_some() {
+        bail!(
+            "--report draws the logs, which a streamed fit does not hold in memory: \
+             fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
+        );
+    }
+    let robot = args.robot.as_deref().map(Model::load).transpose()?;
     let bars = crate::progress::Bars::new();
-    let (model, settings, result, in_memory) = if args.from.is_empty() {
-        fit_logs_arg(&args, excitation.as_ref(), &bars)?
-    } else {
-        fit_states(&args, excitation.as_ref(), &bars)?
-    };
+    let FitOutcome {
+        model,
+        settings,
+        result,
+        logs,
+    } = request.run(robot.as_ref(), &bars)?;
     if result.solver.converged {
         // Every output built and staged before the first is put in place.
         let mut outputs = Outputs::new();
@@ -264,7 +268,7 @@ pub fn run(args: Args) -> Result<()> {
             let doc = dvrk_ident::result::wpi_params_json(&model, &params);
             outputs.add(Path::new(out), serde_json::to_string_pretty(&doc)?)?;
         }
-        if let (Some(dir), Some((train, test))) = (&args.report, &in_memory) {
+        if let (Some(dir), Some((train, test))) = (&args.report, &logs) {
             let roles = |role: &str, count: usize| -> Vec<String> {
                 (1..=count)
                     .map(|k| {
@@ -278,14 +282,14 @@ pub fn run(args: Args) -> Result<()> {
             };
             let train_roles = roles("training", train.len());
             let test_roles = roles("test", test.len());
-            let mut logs: Vec<(&str, &dvrk_ident::Trajectory, Option<usize>)> = Vec::new();
+            let mut drawn: Vec<(&str, &Trajectory, Option<usize>)> = Vec::new();
             for (role, t) in train_roles.iter().zip(train) {
-                logs.push((role, t, None));
+                drawn.push((role, &**t, None));
             }
             for (role, t) in test_roles.iter().zip(test) {
-                logs.push((role, t, settings.test_window));
+                drawn.push((role, &**t, settings.test_window));
             }
-            let built = super::report::build(&model, &result, &logs, excitation.as_ref())?;
+            let built = super::report::build(&model, &result, &drawn, request.excitation.as_ref())?;
             let written = built.stage(&mut outputs, Path::new(dir))?;
             report_note = Some(format!(
                 "report: {} ({} files)",
@@ -310,148 +314,6 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// The estimator settings of the command line (method, test window).
-fn estimator(args: &Args) -> FitSettings {
-    FitSettings {
-        method: args.method,
-        test_window: args.test_window,
-        ..FitSettings::default()
-    }
-}
-
-/// Logs read into memory, in order.
-fn read_all(readers: &[LogReader], bars: &crate::progress::Bars) -> Result<Vec<Trajectory>> {
-    readers
-        .iter()
-        .map(|r| {
-            let name = format!("reading {}", r.path().display());
-            Ok(bars.spin(&name, || r.read_all())?)
-        })
-        .collect()
-}
-
-/// With --excitation and test logs but no --test-window: the samples of one period of
-/// the trajectory at the first test log's rate, as in 2019.
-fn excitation_window(
-    args: &Args,
-    excitation: Option<&FourierTrajectory>,
-    test: &[Trajectory],
-    settings: &FitSettings,
-) -> Result<Option<usize>> {
-    if let (None, Some(traj), Some(t)) = (args.test_window, excitation, test.first()) {
-        let rate = t
-            .rate_hz()
-            .context("the test log has no usable time stamps")?;
-        // int(rate / f0) as in 2019 (1111 samples for the PSM at 200 Hz, 0.18 Hz).
-        let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
-        return Ok(Some(samples / settings.processing.decimate.max(1)));
-    }
-    Ok(settings.test_window)
-}
-
-/// The logs in memory (for --report) when the fit read them so.
-type InMemory = Option<(Vec<Trajectory>, Vec<Trajectory>)>;
-
-/// `fit LOG...`: the model, the settings, the result and the logs if held in memory.
-fn fit_logs_arg(
-    args: &Args,
-    excitation: Option<&FourierTrajectory>,
-    bars: &crate::progress::Bars,
-) -> Result<(Model, FitSettings, FitResult, InMemory)> {
-    let robot = args
-        .robot
-        .as_deref()
-        .expect("clap requires --robot without --from");
-    let model = Model::load(robot)?;
-    let mut settings = args.log_args.settings(estimator(args))?;
-    settings.stribeck_velocity = args.stribeck;
-    let model = settings.model(&model)?.into_owned();
-    let stream = args.stream || args.logs.iter().chain(&args.test).any(|p| is_large(p));
-    if stream && args.report.is_some() {
-        bail!(
-            "--report draws the logs, which a streamed fit does not hold in memory: \
-             fit with --out, then run `dvrk-ident report RESULT LOG` on a shorter log"
-        );
-    }
-    if stream && excitation.is_some() && !args.test.is_empty() && args.test_window.is_none() {
-        bail!("a streamed fit with --excitation needs --test-window (samples of one period)");
-    }
-    let log_args = args.log_args.for_robot(&model);
-    let open = |paths: &[String]| -> Result<Vec<LogReader>> {
-        paths.iter().map(|p| log_args.open(p)).collect()
-    };
-    let train = open(&args.logs)?;
-    let test = open(&args.test)?;
-    if stream {
-        let result = fit_stream_logs(
-            &model,
-            &train.iter().collect::<Vec<_>>(),
-            &test.iter().collect::<Vec<_>>(),
-            &settings,
-            BLOCK_SAMPLES,
-            bars,
-        )?;
-        return Ok((model, settings, result, None));
-    }
-    let train_data = read_all(&train, bars)?;
-    let test_data = read_all(&test, bars)?;
-    settings.test_window = excitation_window(args, excitation, &test_data, &settings)?;
-    let result = fit_logs(
-        &model,
-        &log_data(&train_data, &args.logs),
-        &log_data(&test_data, &args.test),
-        &settings,
-        bars,
-    )?;
-    Ok((model, settings, result, Some((train_data, test_data))))
-}
-
-/// `fit --from STATE...`: the states merged in order, fitted, validated on the test
-/// logs (read in memory, processed with the states' settings).
-fn fit_states(
-    args: &Args,
-    excitation: Option<&FourierTrajectory>,
-    bars: &crate::progress::Bars,
-) -> Result<(Model, FitSettings, FitResult, InMemory)> {
-    let l = &args.log_args;
-    if l.cutoff.is_some() || l.trim.is_some() || l.filter_torque {
-        bail!(
-            "--from: the processing (--cutoff, --trim, --filter-torque) is the states' own, \
-             set when they were observed: give those options to `dvrk-ident observe`"
-        );
-    }
-    let mut state: Option<ObservationState> = None;
-    for path in &args.from {
-        let s = ObservationState::read(Path::new(path))?;
-        match &mut state {
-            None => state = Some(s),
-            Some(total) => total.merge(&s).with_context(|| path.clone())?,
-        }
-    }
-    let state = state.expect("clap requires a state");
-    let robot = match &args.robot {
-        Some(r) => r.clone(),
-        None => state
-            .robot_source
-            .strip_prefix("builtin:")
-            .unwrap_or(&state.robot_source)
-            .to_string(),
-    };
-    let base = Model::load(&robot).with_context(|| format!("robot of {}", args.from[0]))?;
-    let model = state.model(&base).with_context(|| args.from.join(", "))?;
-    let mut settings = state.settings(&estimator(args));
-    let log_args = args.log_args.for_robot(&model);
-    let test = args
-        .test
-        .iter()
-        .map(|p| log_args.open(p))
-        .collect::<Result<Vec<_>>>()?;
-    let test_data = read_all(&test, bars)?;
-    settings.test_window = excitation_window(args, excitation, &test_data, &settings)?;
-    let result = state.fit(&base, &settings, &log_data(&test_data, &args.test), bars)?;
-    Ok((model, settings, result, None))
 }
 
 /// The human summary: solver, consistency and per-joint errors.

@@ -6,12 +6,14 @@ use std::path::Path;
 
 use anyhow::Result;
 use dvrk_ident::fit::stream::BLOCK_SAMPLES;
+use dvrk_ident::fit::LogData;
 use dvrk_ident::output::Outputs;
+use dvrk_ident::request::is_large;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::FitSettings;
 use dvrk_model::Model;
 
-use super::fit::{is_large, log_data, LogArgs};
+use super::fit::LogArgs;
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]
@@ -42,14 +44,14 @@ pub fn run(args: Args) -> Result<()> {
     let mut settings = args.log_args.settings(FitSettings::default())?;
     settings.stribeck_velocity = args.stribeck;
     let fitted = settings.model(&model)?;
-    let log_args = args.log_args.for_robot(&fitted);
+    let read = args.log_args.read_options().for_model(&fitted);
     let readers = args
         .logs
         .iter()
-        .map(|p| log_args.open(p))
-        .collect::<Result<Vec<_>>>()?;
+        .map(|p| read.open(p))
+        .collect::<Result<Vec<_>, _>>()?;
     let bars = crate::progress::Bars::new();
-    let state = if args.stream || args.logs.iter().any(|p| is_large(p)) {
+    let state = if args.stream || args.logs.iter().any(|p| is_large(Path::new(p))) {
         ObservationState::observe_stream(
             &model,
             &readers.iter().collect::<Vec<_>>(),
@@ -65,7 +67,15 @@ pub fn run(args: Args) -> Result<()> {
                 Ok(bars.spin(&name, || r.read_all())?)
             })
             .collect::<Result<Vec<_>>>()?;
-        ObservationState::observe(&model, &log_data(&data, &args.logs), &settings, &bars)?
+        let logs: Vec<LogData> = data
+            .iter()
+            .zip(&args.logs)
+            .map(|(samples, path)| LogData {
+                samples,
+                file: Some(Path::new(path)),
+            })
+            .collect();
+        ObservationState::observe(&model, &logs, &settings, &bars)?
     };
     let bytes = state.to_bytes();
     let mut outputs = Outputs::new();

@@ -104,10 +104,10 @@ pub fn run(args: Args) -> Result<()> {
             .map(|(k, p)| (format!("log {}", k + 1), p.clone()))
             .collect()
     };
-    let log_args = args.log_args.for_robot(&model);
+    let read = args.log_args.read_options().for_model(&model);
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
-        trajectories.push((role.clone(), log_args.read(path)?));
+        trajectories.push((role.clone(), super::fit::read(&read, path)?));
     }
     let logs: Vec<(&str, &Trajectory, Option<usize>)> = trajectories
         .iter()

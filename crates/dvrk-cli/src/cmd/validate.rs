@@ -43,9 +43,9 @@ pub fn run(args: Args) -> Result<()> {
     let settings = args.log_args.settings(result.settings.clone())?;
     let mut reports = Vec::new();
     let mut text = String::new();
-    let log_args = args.log_args.for_robot(&model);
+    let read = args.log_args.read_options().for_model(&model);
     for path in &args.logs {
-        let traj = log_args.read(path)?;
+        let traj = super::fit::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
         super::check_metrics(&m, path)?;

@@ -2,7 +2,7 @@
 // Each test binary compiles this module and uses only part of it.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 /// Runs `dvrk-ident ARGS` with stdout and stderr piped: (success, stdout, stderr).
@@ -18,21 +18,13 @@ pub fn run(args: &[&str]) -> (bool, String, String) {
     )
 }
 
-/// A fresh, empty folder for one test (named by `tag` and the process id).
-pub fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("dvrk-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+// Not every test binary makes scratch folders.
+#[allow(unused_imports)]
+pub use dvrk_test_support::temp_dir;
 
-/// Path of a file in the repository's `examples/`.
+/// Path of a file in the repository's `examples/`, as a command-line argument.
 pub fn example(name: &str) -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../examples")
-        .join(name)
-        .display()
-        .to_string()
+    dvrk_test_support::example(name).display().to_string()
 }
 
 /// A path as a command-line argument.

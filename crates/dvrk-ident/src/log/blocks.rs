@@ -1,13 +1,13 @@
 //! Logs of any format read block by block: what a fit of a log larger than memory reads,
-//! and what [`super::read_with`] collects.
+//! and what [`super::ReadOptions::read`] collects.
 
 use std::path::{Path, PathBuf};
 
 use nalgebra::DMatrix;
 
 use super::csv::{HeaderedBlocks, WpiBlocks};
-use super::mcap::{McapBlocks, McapOptions, McapReader};
-use super::{detect_format, LogError, LogFormat};
+use super::mcap::{McapBlocks, McapReader};
+use super::{detect_format, LogError, LogFormat, ReadOptions};
 use crate::signal::stream::Resampler;
 use crate::trajectory::{Coordinates, Trajectory};
 
@@ -21,6 +21,8 @@ pub struct LogReader {
     format: LogFormat,
     /// The 2019 layout's sampling rate, Hz.
     rate_hz: Option<f64>,
+    /// The 2019 layout's expected number of joints.
+    dof: Option<usize>,
     /// Resampling of the CSV formats (MCAP logs resample while merging).
     resample_hz: Option<f64>,
     mcap: Option<McapReader>,
@@ -30,25 +32,20 @@ pub struct LogReader {
 }
 
 impl LogReader {
-    /// Opens `path` in `format` (`None`: [`detect_format`]). `rate_hz` is the 2019
-    /// layout's sampling rate; `mcap_options` are used for recordings, and their
-    /// `resample_hz` for every format (as in [`super::read_with`]).
-    pub fn open(
-        path: impl AsRef<Path>,
-        format: Option<LogFormat>,
-        rate_hz: Option<f64>,
-        mcap_options: &McapOptions,
-    ) -> Result<LogReader, LogError> {
-        let path = path.as_ref();
-        let format = match format {
+    /// Opens `path` with `options` (the public entry point is [`ReadOptions::open`]).
+    pub(super) fn open(path: &Path, options: &ReadOptions) -> Result<LogReader, LogError> {
+        let format = match options.format {
             Some(f) => f,
             None => detect_format(path)?,
         };
+        options.check_format(path, format)?;
+        let rate_hz = options.rate_hz;
         let mut reader = LogReader {
             path: path.to_path_buf(),
             format,
             rate_hz,
-            resample_hz: mcap_options.resample_hz,
+            dof: options.dof,
+            resample_hz: options.resample_hz,
             mcap: None,
             joint_names: Vec::new(),
             coordinates: Coordinates::Measured,
@@ -59,7 +56,7 @@ impl LogReader {
                 let rate = rate_hz.ok_or_else(|| LogError::MissingRate {
                     path: path.to_path_buf(),
                 })?;
-                let first = WpiBlocks::open(path, rate, None)?
+                let first = WpiBlocks::open(path, rate, options.dof)?
                     .next_block(1)?
                     .ok_or_else(|| LogError::Empty {
                         path: path.to_path_buf(),
@@ -74,7 +71,7 @@ impl LogReader {
                 reader.has_velocity = b.has_velocity();
             }
             _ => {
-                let m = McapReader::open(path, mcap_options)?;
+                let m = McapReader::open(path, &options.recording())?;
                 reader.format = m.format();
                 reader.joint_names = m.joint_names();
                 reader.has_velocity = m.has_velocity();
@@ -100,7 +97,7 @@ impl LogReader {
             (None, LogFormat::Wpi) => Source::Wpi(WpiBlocks::open(
                 path,
                 self.rate_hz.unwrap_or(f64::NAN),
-                None,
+                self.dof,
             )?),
             (None, _) => Source::Csv(HeaderedBlocks::open(path)?),
         };

@@ -19,9 +19,11 @@
 //! Formats are recognized by content ([`detect_format`]), never by extension; a file of
 //! no supported format is an error saying what it looks like.
 //!
-//! Every reader streams its file: [`LogReader`] gives a log of any format in blocks of
-//! samples (for logs larger than memory), and [`read`] / [`read_with`] collect every
-//! block, so both go through the same parsing and checks.
+//! Every reader streams its file: [`ReadOptions::open`] gives a log of any format as a
+//! [`LogReader`] of blocks of samples (for logs larger than memory), and
+//! [`ReadOptions::read`] (or [`read`]) collects every block, so both go through the same
+//! parsing and checks. [`ReadOptions`] holds every reading option of the command line and
+//! the Python module: both map their flags and keywords onto it.
 //!
 //! Readers never panic on bad input: every problem is a [`LogError`] naming the file,
 //! the line (1-based, as an editor shows it) and what is wrong. Writers write to a
@@ -32,6 +34,7 @@ mod blocks;
 mod csv;
 mod line_limit;
 pub mod mcap;
+mod options;
 
 pub use self::line_limit::MAX_LINE_BYTES;
 
@@ -39,6 +42,7 @@ pub use self::blocks::{LogBlocks, LogReader};
 pub use self::csv::{
     read_headered, read_wpi, write_headered, write_wpi, HeaderedBlocks, WpiBlocks,
 };
+pub use self::options::ReadOptions;
 
 use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
 use serde::{Deserialize, Serialize};
@@ -257,6 +261,16 @@ pub enum LogError {
         /// This row's time, s.
         current: f64,
     },
+    /// A recording's option (topics, time source) given for a log of another format.
+    #[error("{}: {option} applies to recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) only, this is a {format} log", path.display())]
+    NotARecording {
+        /// The file.
+        path: PathBuf,
+        /// Its format.
+        format: LogFormat,
+        /// The option, as the reader calls it (`topics`, `time source`).
+        option: &'static str,
+    },
     /// The 2019 layout has no time stamps and no rate was given.
     #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate in Hz (the 2019 dVRK logs are 200 Hz)", path.display())]
     MissingRate {
@@ -355,9 +369,9 @@ pub enum LogError {
 ///
 /// `rate_hz` (Hz) is required for the 2019 layout, which has no time stamps (the dVRK
 /// logs are 200 Hz), and ignored for formats with time stamps. Recordings are read with
-/// [`mcap::McapOptions::default`] (automatic topic, header stamps, no resampling; use
-/// [`read_with`] or [`mcap::read_mcap`] for more). The 2019 layout's number
-/// of joints is inferred as columns / 3 (use [`read_wpi`] to force it).
+/// the default options (automatic topic, header stamps, no resampling; use
+/// [`ReadOptions::read`] for more). The 2019 layout's number of joints is inferred as
+/// columns / 3 ([`ReadOptions::dof`] checks it).
 ///
 /// ```rust
 /// use dvrk_ident::log::{read, write_wpi};
@@ -384,18 +398,12 @@ pub fn read(
     format: Option<LogFormat>,
     rate_hz: Option<f64>,
 ) -> Result<Trajectory, LogError> {
-    read_with(path, format, rate_hz, &mcap::McapOptions::default())
-}
-
-/// [`read`] with the MCAP options (topics, time source, resampling) used when the file
-/// is an MCAP log; other formats ignore them.
-pub fn read_with(
-    path: impl AsRef<Path>,
-    format: Option<LogFormat>,
-    rate_hz: Option<f64>,
-    mcap_options: &mcap::McapOptions,
-) -> Result<Trajectory, LogError> {
-    LogReader::open(path, format, rate_hz, mcap_options)?.read_all()
+    ReadOptions {
+        format,
+        rate_hz,
+        ..ReadOptions::default()
+    }
+    .read(path)
 }
 
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear

@@ -34,18 +34,10 @@ pub const MTM: Protocol = Protocol {
     window: 2000,
 };
 
-/// A file of `../shared/data/dvrk`, or `None` after printing `SKIPPED` when the
-/// shared folder is not beside the repository.
+/// A file of `../shared/data/dvrk`, or `None` after a counted skip when the shared
+/// folder is not beside the repository.
 pub fn data(rel: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/data/dvrk")
-        .join(rel);
-    if p.exists() {
-        Some(p)
-    } else {
-        eprintln!("SKIPPED: {} not found (../shared absent)", p.display());
-        None
-    }
+    dvrk_test_support::shared(&format!("data/dvrk/{rel}"))
 }
 
 /// The robot and its training ("one") and test ("two") logs, `None` (skipped) without

@@ -1,9 +1,96 @@
-//! Helpers shared by the `dynamics_*` integration tests (included with `#[path]`): a
-//! seeded generator, random states, random (and physically consistent) parameters.
-#![allow(dead_code)]
+//! What the workspace's integration tests share, in one place (a `publish = false`
+//! crate, a dev-dependency of each library crate):
+//!
+//! - [`shared`]: a file of the `shared/` folder beside the repository (reference data of
+//!   independent tools, real dVRK logs), or `None` after a **counted skip**: [`skip`]
+//!   prints `SKIPPED: ...` and appends the test and the reason to
+//!   `target/skipped-tests.txt`, which `.ci/run` lists after the test run, so skips
+//!   are visible in the summary instead of passing silently;
+//! - [`temp_dir`]: a fresh scratch folder per test;
+//! - [`repo`], [`example`]: the repository and its bundled examples;
+//! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
+//!   parameters, physically consistent ones included.
+#![allow(clippy::missing_panics_doc)]
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
 
 use dvrk_model::{inertia, Model, ParamKind, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector4};
+
+/// The repository's root folder.
+pub fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A file of the repository's `examples/`.
+pub fn example(name: &str) -> PathBuf {
+    repo().join("examples").join(name)
+}
+
+/// `rel` under the `shared/` folder beside the repository, or `None` after a counted
+/// [`skip`] when it is absent, so that the project's own tests pass without it.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let path = repo().join("../shared").join(rel);
+    if path.exists() {
+        Some(path)
+    } else {
+        skip(format!("{} not found (../shared absent)", path.display()));
+        None
+    }
+}
+
+/// Records that the running test skips its checks: prints `SKIPPED: reason` and appends
+/// `test: reason` to `target/skipped-tests.txt` (read by `.ci/run`).
+pub fn skip(reason: impl std::fmt::Display) {
+    let test = std::thread::current()
+        .name()
+        .unwrap_or("(unnamed)")
+        .to_string();
+    eprintln!("SKIPPED: {test}: {reason}");
+    // The test binary is target/<profile>/deps/<name>: the target folder is three up.
+    let Some(target) = std::env::current_exe()
+        .ok()
+        .and_then(|exe| exe.ancestors().nth(3).map(Path::to_path_buf))
+    else {
+        return;
+    };
+    let binary = std::env::current_exe()
+        .ok()
+        .and_then(|e| e.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .unwrap_or_default();
+    let binary = binary.rsplit_once('-').map_or(binary.as_str(), |(b, _)| b);
+    if let Ok(mut f) = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(target.join("skipped-tests.txt"))
+    {
+        // One write per line: lines of tests running in parallel do not interleave.
+        let _ = f.write_all(format!("{binary}::{test}: {reason}\n").as_bytes());
+    }
+}
+
+/// A fresh, empty folder for one test, named by `tag` and the process id.
+pub fn temp_dir(tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("dvrk-test-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create a scratch folder");
+    d
+}
+
+/// A JSON file's document.
+pub fn read_json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("read")).expect("JSON")
+}
+
+/// A JSON array of numbers.
+pub fn f64s(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .expect("an array")
+        .iter()
+        .map(|x| x.as_f64().expect("a number"))
+        .collect()
+}
 
 /// SplitMix64: tiny, seeded, the same on every machine.
 pub struct Rng(u64);

@@ -1,0 +1,118 @@
+//! The reading options of every log format, in one place: the command line's `--format
+//! --rate --topic --time --resample` and Python's `read_log(format=, rate=, topic=,
+//! time_source=, resample=)` are both mapped onto [`ReadOptions`], so a log read by one
+//! front end is the log read by the other.
+
+use std::path::Path;
+
+use dvrk_model::Model;
+
+use super::mcap::{McapOptions, TimeSource};
+use super::{LogError, LogFormat, LogReader};
+use crate::trajectory::Trajectory;
+
+/// How to read a log, whatever its format.
+///
+/// ```rust
+/// use dvrk_ident::log::{write_wpi, LogFormat, ReadOptions};
+/// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+/// use nalgebra::DMatrix;
+///
+/// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-options-{}.csv", std::process::id()));
+/// let traj = Trajectory {
+///     time: uniform_time(4, 200.0),
+///     q: DMatrix::from_element(4, 2, 0.5),
+///     dq: Some(DMatrix::zeros(4, 2)),
+///     tau: DMatrix::from_element(4, 2, -1.25),
+///     joint_names: vec!["q1".into(), "q2".into()],
+///     coordinates: Coordinates::Model,
+///     source: "doc".into(),
+/// };
+/// write_wpi(&path, &traj).unwrap();
+/// let options = ReadOptions { rate_hz: Some(200.0), ..ReadOptions::default() };
+/// assert_eq!(options.read(&path).unwrap().len(), 4);
+/// // A recording's option on a CSV log is refused, naming the file.
+/// let topics = ReadOptions { topics: vec!["/PSM1/measured_js".into()], ..options.clone() };
+/// let err = topics.read(&path).unwrap_err().to_string();
+/// assert!(err.contains("applies to recordings") && err.contains("dvrk-ident-doc-options"), "{err}");
+/// // The 2019 layout checked against the expected number of joints.
+/// let three = ReadOptions { dof: Some(3), ..options };
+/// assert!(three.read(&path).is_err());
+/// std::fs::remove_file(&path).unwrap();
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReadOptions {
+    /// The layout; `None`: recognized from the file's content ([`super::detect_format`]).
+    pub format: Option<LogFormat>,
+    /// Sampling rate of the 2019 layout, which has no time stamps, Hz (the dVRK logs
+    /// are 200 Hz); ignored by formats with time stamps.
+    pub rate_hz: Option<f64>,
+    /// Recordings: the `sensor_msgs/msg/JointState` topics to merge, the first being the
+    /// clock; empty: chosen automatically (see [`McapOptions::topics`]). Refused for other
+    /// formats.
+    pub topics: Vec<String>,
+    /// Recordings: where the sample times come from; `None`: the header stamps. Refused
+    /// for other formats.
+    pub time_source: Option<TimeSource>,
+    /// Resample every format to this uniform rate, Hz, by linear interpolation while
+    /// reading (bridges gaps and jitter, which are refused otherwise).
+    pub resample_hz: Option<f64>,
+    /// The robot's measured joints: they guide the automatic topic choice (a dVRK 2.x
+    /// PSM's arm and jaw topics are paired). Set by [`ReadOptions::for_model`].
+    pub joints: Vec<String>,
+    /// The 2019 layout: the number of joints its rows must hold (3 columns each);
+    /// `None`: columns / 3. Set by [`ReadOptions::for_model`].
+    pub dof: Option<usize>,
+}
+
+impl ReadOptions {
+    /// These options for `model`'s logs: its measured joints guide the topic choice and
+    /// a 2019-layout log must have its number of model coordinates.
+    pub fn for_model(&self, model: &Model) -> ReadOptions {
+        ReadOptions {
+            joints: model.measured.joints.clone(),
+            dof: Some(model.dof()),
+            ..self.clone()
+        }
+    }
+
+    /// Opens `path` for reading block by block (every check of the header, the first
+    /// row or the recording's index is made here).
+    pub fn open(&self, path: impl AsRef<Path>) -> Result<LogReader, LogError> {
+        LogReader::open(path.as_ref(), self)
+    }
+
+    /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
+    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+        self.open(path)?.read_all()
+    }
+
+    /// The recording reader's options.
+    pub(super) fn recording(&self) -> McapOptions {
+        McapOptions {
+            topics: self.topics.clone(),
+            time_source: self.time_source.unwrap_or_default(),
+            resample_hz: self.resample_hz,
+            joints: self.joints.clone(),
+        }
+    }
+
+    /// Refuses a recording's option for a log of another format.
+    pub(super) fn check_format(&self, path: &Path, format: LogFormat) -> Result<(), LogError> {
+        let option = if !self.topics.is_empty() {
+            "a topic"
+        } else if self.time_source.is_some() {
+            "a time source"
+        } else {
+            return Ok(());
+        };
+        if format.has_topics() {
+            return Ok(());
+        }
+        Err(LogError::NotARecording {
+            path: path.to_path_buf(),
+            format,
+            option,
+        })
+    }
+}

@@ -1,0 +1,448 @@
+//! A fit as the front ends ask for it: the logs (files or samples already in memory, or
+//! observation states), how to read them ([`ReadOptions`]), the settings changed from
+//! their defaults ([`Overrides`]), the excitation the logs follow. The command line and
+//! the Python module only map their flags and keyword arguments onto a [`FitRequest`]:
+//! everything that decides the result (reading, overriding, streaming, the 2019
+//! test-window rule, provenance) happens here, once.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use dvrk_model::Model;
+
+use crate::excite::FourierTrajectory;
+use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
+use crate::fit::{fit_logs, LogData};
+use crate::log::{self, LogReader, ReadOptions};
+use crate::progress::Progress;
+use crate::signal::Cutoff;
+use crate::state::ObservationState;
+use crate::{FitResult, FitSettings, IdentError, Method, Trajectory};
+
+/// Settings changed from a base (the defaults, or a result's `settings`): each field
+/// that is `Some` replaces the base's value, the same way for every front end.
+///
+/// ```rust
+/// use dvrk_ident::request::Overrides;
+/// use dvrk_ident::signal::Cutoff;
+/// use dvrk_ident::{FitSettings, Method};
+///
+/// let base = FitSettings::default();
+/// let order = base.processing.filter.as_ref().unwrap().order;
+/// let s = Overrides {
+///     method: Some(Method::Wls),
+///     cutoff: Some(Some(Cutoff::All(16.965))),
+///     trim: Some(50),
+///     ..Overrides::default()
+/// }
+/// .apply(base);
+/// assert_eq!(s.method, Method::Wls);
+/// assert_eq!(s.processing.trim, 50);
+/// // A new cut-off keeps the filter's order and form.
+/// assert_eq!(s.processing.filter.as_ref().unwrap().order, order);
+/// // `Some(None)`: no filter.
+/// let none = Overrides { cutoff: Some(None), ..Overrides::default() }.apply(s);
+/// assert!(none.processing.filter.is_none());
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Overrides {
+    /// The estimator.
+    pub method: Option<Method>,
+    /// The motion's low-pass cut-off; `Some(None)`: no filter (see
+    /// [`crate::signal::Processing::set_cutoff`]).
+    pub cutoff: Option<Option<Cutoff>>,
+    /// Low-pass the torques too (the 2019 protocol).
+    pub filter_torque: Option<bool>,
+    /// Samples trimmed at each end after filtering.
+    pub trim: Option<usize>,
+    /// Keep every n-th processed sample.
+    pub decimate: Option<usize>,
+    /// Drop samples where some joint moves slower than this, rad/s or m/s.
+    pub min_speed: Option<f64>,
+    /// Resample to this uniform rate, Hz, before the processing (samples already read;
+    /// [`ReadOptions::resample_hz`] resamples while reading, which recordings with gaps
+    /// need).
+    pub resample_hz: Option<f64>,
+    /// Metrics on the first N processed samples of each test log.
+    pub test_window: Option<usize>,
+    /// Re-weighting passes of IRLS.
+    pub irls_iterations: Option<usize>,
+    /// Tikhonov weight of the SDP, relative.
+    pub sdp_regularization: Option<f64>,
+    /// A Stribeck term with this velocity (rad/s or m/s) on every friction element.
+    pub stribeck_velocity: Option<f64>,
+}
+
+impl Overrides {
+    /// `base` with every given field replaced.
+    pub fn apply(&self, base: FitSettings) -> FitSettings {
+        let mut s = base;
+        if let Some(m) = self.method {
+            s.method = m;
+        }
+        if let Some(c) = &self.cutoff {
+            s.processing.set_cutoff(c.clone());
+        }
+        if let Some(f) = self.filter_torque {
+            s.processing.filter_torque = f;
+        }
+        if let Some(t) = self.trim {
+            s.processing.trim = t;
+        }
+        if let Some(d) = self.decimate {
+            s.processing.decimate = d;
+        }
+        if let Some(v) = self.min_speed {
+            s.processing.min_speed = Some(v);
+        }
+        if let Some(r) = self.resample_hz {
+            s.processing.resample_hz = Some(r);
+        }
+        if let Some(w) = self.test_window {
+            s.test_window = Some(w);
+        }
+        if let Some(i) = self.irls_iterations {
+            s.irls_iterations = i;
+        }
+        if let Some(r) = self.sdp_regularization {
+            s.sdp_regularization = r;
+        }
+        if let Some(v) = self.stribeck_velocity {
+            s.stribeck_velocity = Some(v);
+        }
+        s
+    }
+
+    /// The overrides that change how logs are processed or which model is fitted:
+    /// observation states carry their own, so these are refused with them.
+    fn observation_fields(&self) -> Vec<&'static str> {
+        let given = [
+            ("cutoff", self.cutoff.is_some()),
+            ("filter_torque", self.filter_torque.is_some()),
+            ("trim", self.trim.is_some()),
+            ("decimate", self.decimate.is_some()),
+            ("min_speed", self.min_speed.is_some()),
+            ("resample", self.resample_hz.is_some()),
+            ("stribeck", self.stribeck_velocity.is_some()),
+        ];
+        given
+            .into_iter()
+            .filter_map(|(name, set)| set.then_some(name))
+            .collect()
+    }
+}
+
+/// A log to fit or to test on.
+#[derive(Clone, Debug)]
+pub enum LogSource {
+    /// A file (or rosbag2 folder), read with the request's [`ReadOptions`].
+    File(PathBuf),
+    /// Samples already read, and the file they came from (for the provenance).
+    Samples {
+        samples: Arc<Trajectory>,
+        file: Option<PathBuf>,
+    },
+}
+
+impl LogSource {
+    fn path(&self) -> Option<&Path> {
+        match self {
+            LogSource::File(p) => Some(p),
+            LogSource::Samples { file, .. } => file.as_deref(),
+        }
+    }
+}
+
+/// What the training data are.
+#[derive(Clone, Debug)]
+pub enum Training {
+    /// Logs, each processed on its own, their observations merged.
+    Logs(Vec<LogSource>),
+    /// Observation states of `observe` (the reduce), merged in order and fitted with
+    /// their own processing settings and robot; each with the file it was read from
+    /// (named when it does not merge).
+    Observations(Vec<(Arc<ObservationState>, Option<PathBuf>)>),
+}
+
+/// Whether to read the logs block by block from disk.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Streaming {
+    /// Streamed when a log's files exceed [`STREAM_ABOVE_BYTES`].
+    #[default]
+    Auto,
+    /// Always streamed (files only).
+    Always,
+    /// Always read into memory.
+    Never,
+}
+
+/// Logs larger than this are fitted streamed under [`Streaming::Auto`]: about a tenth
+/// of a 24 GiB machine's memory in samples and their processed copies.
+pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
+
+/// Whether a log (its files, for a rosbag2 folder) is large enough to be streamed (a
+/// log that cannot be examined is read the usual way, which reports the problem).
+pub fn is_large(path: &Path) -> bool {
+    log::files_of(path).is_ok_and(|files| {
+        files
+            .iter()
+            .filter_map(|f| std::fs::metadata(f).ok())
+            .map(|m| m.len())
+            .sum::<u64>()
+            > STREAM_ABOVE_BYTES
+    })
+}
+
+/// A whole fit: see the module docs.
+#[derive(Clone, Debug)]
+pub struct FitRequest {
+    pub train: Training,
+    pub test: Vec<LogSource>,
+    /// How the files are read (the robot's joints are added, see
+    /// [`ReadOptions::for_model`]).
+    pub read: ReadOptions,
+    /// The base settings (defaults, or a result's), before [`FitRequest::overrides`].
+    pub settings: FitSettings,
+    pub overrides: Overrides,
+    /// The excitation the logs follow: with test logs but no test window, the metrics
+    /// cover its first period (the 2019 protocol).
+    pub excitation: Option<FourierTrajectory>,
+    pub streaming: Streaming,
+}
+
+/// The training and the test logs of a fit, in order.
+pub type HeldLogs = (Vec<Arc<Trajectory>>, Vec<Arc<Trajectory>>);
+
+/// What a [`FitRequest`] gives back.
+#[derive(Debug)]
+pub struct FitOutcome {
+    /// The model fitted (with the Stribeck terms of the settings).
+    pub model: Model,
+    /// The settings used (overrides applied, test window derived).
+    pub settings: FitSettings,
+    pub result: FitResult,
+    /// The logs when they were held in memory (not streamed, not observation
+    /// states), for figures.
+    pub logs: Option<HeldLogs>,
+}
+
+impl FitRequest {
+    /// A request for these training logs with every option at its default.
+    pub fn new(train: Training) -> FitRequest {
+        FitRequest {
+            train,
+            test: Vec::new(),
+            read: ReadOptions::default(),
+            settings: FitSettings::default(),
+            overrides: Overrides::default(),
+            excitation: None,
+            streaming: Streaming::Auto,
+        }
+    }
+
+    /// Whether the logs will be read block by block.
+    pub fn streams(&self) -> bool {
+        let files = || {
+            let train: Vec<&LogSource> = match &self.train {
+                Training::Logs(l) => l.iter().collect(),
+                Training::Observations(_) => Vec::new(),
+            };
+            train.into_iter().chain(&self.test).collect::<Vec<_>>()
+        };
+        let all_files = files().iter().all(|l| matches!(l, LogSource::File(_)));
+        match (&self.train, self.streaming) {
+            (Training::Observations(_), _) | (_, Streaming::Never) => false,
+            (_, Streaming::Always) => all_files,
+            (_, Streaming::Auto) => {
+                all_files && files().iter().filter_map(|l| l.path()).any(is_large)
+            }
+        }
+    }
+
+    /// The fit of `robot` (a built-in, description or URDF model; for observation
+    /// states `None` loads the robot they were observed with).
+    pub fn run(
+        &self,
+        robot: Option<&Model>,
+        progress: &dyn Progress,
+    ) -> Result<FitOutcome, IdentError> {
+        match &self.train {
+            Training::Logs(train) => {
+                let robot = robot.ok_or_else(|| IdentError::Setting {
+                    name: "robot".into(),
+                    message: "a fit of logs needs the robot".into(),
+                })?;
+                self.run_logs(robot, train, progress)
+            }
+            Training::Observations(states) => self.run_observations(robot, states, progress),
+        }
+    }
+
+    fn run_logs(
+        &self,
+        robot: &Model,
+        train: &[LogSource],
+        progress: &dyn Progress,
+    ) -> Result<FitOutcome, IdentError> {
+        if train.is_empty() {
+            return Err(crate::fit::no_training_log());
+        }
+        let mut settings = self.overrides.apply(self.settings.clone());
+        let model = settings.model(robot)?.into_owned();
+        let read = self.read.for_model(&model);
+        if self.streams() {
+            if self.excitation.is_some() && !self.test.is_empty() && settings.test_window.is_none()
+            {
+                return Err(IdentError::Setting {
+                    name: "test_window".into(),
+                    message: "a streamed fit with an excitation needs a test window \
+                              (samples of one period)"
+                        .into(),
+                });
+            }
+            let open = |logs: &[LogSource]| -> Result<Vec<LogReader>, IdentError> {
+                logs.iter()
+                    .filter_map(|l| l.path())
+                    .map(|p| Ok(read.open(p)?))
+                    .collect()
+            };
+            let (train, test) = (open(train)?, open(&self.test)?);
+            let result = fit_stream_logs(
+                &model,
+                &train.iter().collect::<Vec<_>>(),
+                &test.iter().collect::<Vec<_>>(),
+                &settings,
+                BLOCK_SAMPLES,
+                progress,
+            )?;
+            return Ok(FitOutcome {
+                model,
+                settings,
+                result,
+                logs: None,
+            });
+        }
+        let train_data = read_all(&read, train, progress)?;
+        let test_data = read_all(&read, &self.test, progress)?;
+        settings.test_window = self.test_window(&settings, &test_data)?;
+        let result = fit_logs(
+            &model,
+            &log_data(&train_data, train),
+            &log_data(&test_data, &self.test),
+            &settings,
+            progress,
+        )?;
+        Ok(FitOutcome {
+            model,
+            settings,
+            result,
+            logs: Some((train_data, test_data)),
+        })
+    }
+
+    fn run_observations(
+        &self,
+        robot: Option<&Model>,
+        states: &[(Arc<ObservationState>, Option<PathBuf>)],
+        progress: &dyn Progress,
+    ) -> Result<FitOutcome, IdentError> {
+        let fields = self.overrides.observation_fields();
+        if !fields.is_empty() {
+            return Err(IdentError::Setting {
+                name: fields.join(", "),
+                message: "the processing (and the Stribeck terms) of observation states are \
+                          their own, set when they were observed: give these options to observe"
+                    .into(),
+            });
+        }
+        let ((first, _), rest) = states
+            .split_first()
+            .ok_or_else(crate::fit::no_training_log)?;
+        let mut state = ObservationState::clone(first);
+        for (s, file) in rest {
+            state.merge(s).map_err(|e| match file {
+                Some(f) => IdentError::State {
+                    file: f.display().to_string(),
+                    message: e.to_string(),
+                },
+                None => e,
+            })?;
+        }
+        let base = match robot {
+            Some(r) => r.clone(),
+            None => state.robot_model()?,
+        };
+        let model = state.model(&base)?;
+        let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
+        let read = self.read.for_model(&model);
+        let test_data = read_all(&read, &self.test, progress)?;
+        settings.test_window = self.test_window(&settings, &test_data)?;
+        let result = state.fit(
+            &base,
+            &settings,
+            &log_data(&test_data, &self.test),
+            progress,
+        )?;
+        Ok(FitOutcome {
+            model,
+            settings,
+            result,
+            logs: None,
+        })
+    }
+
+    /// The test window: given, or with an excitation and test logs one period of it at
+    /// the first test log's rate (`int(rate / f0)` samples as in 2019: 1111 for the PSM at
+    /// 200 Hz and 0.18 Hz), in processed (decimated) samples.
+    fn test_window(
+        &self,
+        settings: &FitSettings,
+        test: &[Arc<Trajectory>],
+    ) -> Result<Option<usize>, IdentError> {
+        if let (None, Some(traj), Some(t)) = (settings.test_window, &self.excitation, test.first())
+        {
+            let rate = t.rate_hz().ok_or_else(|| IdentError::Setting {
+                name: "excitation".into(),
+                message: format!(
+                    "{}: the test log has no usable time stamps for one period of the excitation",
+                    self.test
+                        .first()
+                        .and_then(|l| l.path())
+                        .map_or_else(|| t.source.clone(), |p| p.display().to_string())
+                ),
+            })?;
+            let samples = (traj.period_s() * rate + 1e-9).floor() as usize;
+            return Ok(Some(samples / settings.processing.decimate.max(1)));
+        }
+        Ok(settings.test_window)
+    }
+}
+
+/// Every log in memory, in order (files read with `read`).
+fn read_all(
+    read: &ReadOptions,
+    logs: &[LogSource],
+    progress: &dyn Progress,
+) -> Result<Vec<Arc<Trajectory>>, IdentError> {
+    logs.iter()
+        .map(|l| match l {
+            LogSource::File(p) => {
+                progress.stage(&format!("reading {}", p.display()), None);
+                let t = read.read(p);
+                progress.finish();
+                Ok(Arc::new(t?))
+            }
+            LogSource::Samples { samples, .. } => Ok(samples.clone()),
+        })
+        .collect()
+}
+
+fn log_data<'a>(data: &'a [Arc<Trajectory>], logs: &'a [LogSource]) -> Vec<LogData<'a>> {
+    data.iter()
+        .zip(logs)
+        .map(|(samples, l)| LogData {
+            samples,
+            file: l.path(),
+        })
+        .collect()
+}
