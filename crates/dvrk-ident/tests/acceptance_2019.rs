@@ -1,5 +1,5 @@
 //! Acceptance on the real dVRK measurements, following the 2019 protocol
-//! (dvrk-models.md, `support/protocol_2019.rs`): fit on trajectory "one", test on "two"
+//! (docs/dvrk.md §5, `support/protocol_2019.rs`): fit on trajectory "one", test on "two"
 //! over the first period, 6th-order zero-phase Butterworth at the cut-offs the 2019 code
 //! effectively applied (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion and the
 //! torques, 200 samples trimmed. Prints the table; skips with a reason when ../shared

@@ -6,7 +6,7 @@
 //! `S_kᵀ·Y_j` is written out in the link's coordinates from its velocity and
 //! acceleration (`link_row`), so `Y_j` itself is never formed; the link blocks are
 //! written in place (the first one of a row) and only the rest of a row is zeroed.
-//! Element columns follow `identification.md` §3.
+//! Element columns follow `docs/identification.md` §3.2.
 
 use nalgebra::Vector3;
 

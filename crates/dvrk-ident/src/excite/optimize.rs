@@ -1,4 +1,4 @@
-//! Optimal excitation trajectories (identification reference §7): choose the Fourier
+//! Optimal excitation trajectories (`docs/identification.md` §7): choose the Fourier
 //! coefficients (per coordinate `q0`, `a_l`, `b_l`, `l = 1..L`) that minimize the
 //! condition number of the column-normalized base regressor stacked over one period
 //! (or maximize its log-determinant, D-optimality), subject to position, velocity and
