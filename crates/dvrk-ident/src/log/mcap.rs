@@ -79,6 +79,7 @@
 
 pub(crate) mod bag;
 mod blocks;
+mod channels;
 mod container;
 mod joint_state;
 mod ros1;
@@ -89,7 +90,7 @@ mod topic;
 pub use self::blocks::McapBlocks;
 pub use self::joint_state::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
 
-use self::container::mcap_error;
+use self::channels::mcap_error;
 use self::joint_state::{Header, JointStateMsg, Time};
 use crate::log::LogError;
 use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};

@@ -8,7 +8,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::container::mcap_error;
+use super::channels::mcap_error;
 use super::McapProblem;
 use crate::log::{LogError, LogFormat};
 

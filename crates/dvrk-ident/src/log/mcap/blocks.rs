@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::bag::Bag;
-use super::container::{mcap_error, Scanner};
+use super::channels::mcap_error;
+use super::container::Scanner;
 use super::survey::{seconds_between, Plan};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::McapProblem;

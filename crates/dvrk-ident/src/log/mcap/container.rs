@@ -13,6 +13,7 @@
 //! slices (each payload copied once out of its chunk), so a log can be read block by
 //! block and read again.
 
+use super::channels::{mcap_error, ChannelInfo, Channels, RawMessage};
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
 use ::mcap::records::{op, Record};
@@ -20,7 +21,6 @@ use ::mcap::sans_io::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use ::mcap::McapError;
 use std::collections::BTreeMap;
 use std::io::Read;
-use std::path::Path;
 use std::sync::Arc;
 
 use super::bag::{Bag, BagFile, Packing, Storage, Unpacker};
@@ -37,14 +37,6 @@ const RECORD_LENGTH_LIMIT: usize = 256 << 20;
 /// so a record's claimed length is only allocated as its bytes really arrive (a 7 kB
 /// file claiming a 539 MB record made it allocate 539 MB at once).
 const READ_PIECE: usize = 1 << 16;
-
-/// A channel with its schema's name and encoding.
-#[derive(Debug)]
-pub(crate) struct ChannelInfo {
-    pub topic: String,
-    pub schema_name: String,
-    pub message_encoding: String,
-}
 
 /// A message, its channel and its times.
 pub(crate) struct MessageRef<'a> {
@@ -72,47 +64,6 @@ pub(crate) fn scan(
     Ok(Scan {
         topics: scanner.topics(),
     })
-}
-
-/// The channels of every file of a recording, merged by topic, type and encoding (a
-/// split recording repeats them in each file, under ids of that file).
-#[derive(Default)]
-pub(crate) struct Channels {
-    list: Vec<ChannelInfo>,
-    counts: Vec<u64>,
-}
-
-impl Channels {
-    /// The index of a channel, added if new.
-    pub(crate) fn index(
-        &mut self,
-        topic: &str,
-        schema_name: &str,
-        message_encoding: &str,
-    ) -> usize {
-        if let Some(k) = self.list.iter().position(|c| {
-            c.topic == topic
-                && c.schema_name == schema_name
-                && c.message_encoding == message_encoding
-        }) {
-            return k;
-        }
-        self.list.push(ChannelInfo {
-            topic: topic.to_owned(),
-            schema_name: schema_name.to_owned(),
-            message_encoding: message_encoding.to_owned(),
-        });
-        self.counts.push(0);
-        self.list.len() - 1
-    }
-}
-
-/// A message as a storage backend gives it: its channel's index in [`Channels`].
-pub(crate) struct RawMessage<'a> {
-    pub channel: usize,
-    pub log_time: u64,
-    pub publish_time: u64,
-    pub data: &'a [u8],
 }
 
 /// One file of a recording being read.
@@ -399,14 +350,6 @@ impl McapFile {
             publish_time,
             data: &self.current,
         }))
-    }
-}
-
-pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem) -> LogError {
-    LogError::Mcap {
-        path: path.to_path_buf(),
-        topic: topic.map(str::to_owned),
-        problem: Box::new(problem),
     }
 }
 

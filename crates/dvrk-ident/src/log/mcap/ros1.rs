@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
 
 use super::bag::BagFile;
-use super::container::{mcap_error, Channels, RawMessage};
+use super::channels::{mcap_error, Channels, RawMessage};
 use super::McapProblem;
 use crate::log::LogError;
 

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use rusqlite::{Connection, OpenFlags};
 
 use super::bag::BagFile;
-use super::container::{mcap_error, Channels, RawMessage};
+use super::channels::{mcap_error, Channels, RawMessage};
 use super::McapProblem;
 use crate::log::LogError;
 

@@ -4,7 +4,8 @@
 
 use std::collections::HashMap;
 
-use super::container::{ChannelInfo, MessageRef};
+use super::channels::ChannelInfo;
+use super::container::MessageRef;
 use super::joint_state::{self, JointStateMsg};
 use super::{McapProblem, TimeSource, JOINT_STATE_TYPE};
 use crate::trajectory::Signal;
