@@ -7,8 +7,8 @@ use dvrk_ident::simulate::to_measured_coordinates;
 use dvrk_ident::Coordinates;
 use dvrk_model::Model;
 
+use super::args::{read, read_options, McapArgs};
 use super::emit_summary;
-use super::fit::{read, read_options, McapArgs};
 use super::simulate::{output_format, write_log};
 
 #[derive(clap::Args)]

@@ -1,5 +1,6 @@
 //! One module per subcommand, plus the few conversions they share.
 
+pub mod args;
 pub mod cable_fit;
 pub mod convert;
 pub mod excite;

@@ -13,7 +13,7 @@ use dvrk_ident::state::ObservationState;
 use dvrk_ident::FitSettings;
 use dvrk_model::Model;
 
-use super::fit::LogArgs;
+use super::args::LogArgs;
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true)]

@@ -11,8 +11,8 @@ use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, Trajectory};
 use dvrk_model::Model;
 
+use super::args::LogArgs;
 use super::emit;
-use super::fit::LogArgs;
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     let read = args.log_args.read_options().for_model(&model);
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
-        trajectories.push((role.clone(), super::fit::read(&read, path)?));
+        trajectories.push((role.clone(), super::args::read(&read, path)?));
     }
     let logs: Vec<(&str, &Trajectory, Option<usize>)> = trajectories
         .iter()

@@ -6,7 +6,7 @@ use anyhow::Result;
 use dvrk_ident::fit::{joint_metrics, prepare};
 use serde_json::json;
 
-use super::fit::LogArgs;
+use super::args::LogArgs;
 use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -45,7 +45,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut text = String::new();
     let read = args.log_args.read_options().for_model(&model);
     for path in &args.logs {
-        let traj = super::fit::read(&read, path)?;
+        let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
         super::check_metrics(&m, path)?;
