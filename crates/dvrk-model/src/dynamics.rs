@@ -11,8 +11,8 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::inertia::{sym3, transform_barycentric};
-use crate::model::{Model, Transform};
-use crate::workspace::Workspace;
+use crate::model::{Body, Model, Transform};
+use crate::workspace::{BodyBuffers, Workspace};
 
 /// `sign` with `sign(0) = 0` (numpy's convention, used by the 2019 package), so that a
 /// joint at rest gets no Coulomb force.
@@ -50,46 +50,12 @@ pub(crate) const ALL: Terms = Terms {
 
 /// Which motion a body pass includes; `false` stands for zero rates or accelerations.
 #[derive(Clone, Copy)]
-struct Motion {
-    velocity: bool,
-    acceleration: bool,
+pub(crate) struct Motion {
+    pub velocity: bool,
+    pub acceleration: bool,
 }
 
 impl Model {
-    /// Velocity and acceleration of every frame (body coordinates), from `ws.local`,
-    /// `ws.sd`, `ws.sdd`: the regressor's kinematics, per frame.
-    #[inline]
-    pub(crate) fn forward_pass(&self, ws: &mut Workspace, gravity: bool) {
-        ws.w[0] = Vector3::zeros();
-        ws.v[0] = Vector3::zeros();
-        ws.dw[0] = Vector3::zeros();
-        ws.a[0] = if gravity {
-            -self.gravity
-        } else {
-            Vector3::zeros()
-        };
-        for &fi in &self.active {
-            let p = self.frames[fi - 1].parent;
-            let x = &ws.local[fi];
-            let rt = x.rotation.transpose();
-            let (sw, sv) = &self.motion[fi];
-            let (sd, sdd) = (ws.sd[fi], ws.sdd[fi]);
-            let wsd = sw * sd;
-            let vsd = sv * sd;
-            let w = rt * ws.w[p] + wsd;
-            let v = rt * (ws.v[p] + ws.w[p].cross(&x.translation)) + vsd;
-            let dw = rt * ws.dw[p] + sw * sdd + w.cross(&wsd);
-            let a = rt * (ws.a[p] + ws.dw[p].cross(&x.translation))
-                + sv * sdd
-                + w.cross(&vsd)
-                + v.cross(&wsd);
-            ws.w[fi] = w;
-            ws.v[fi] = v;
-            ws.dw[fi] = dw;
-            ws.a[fi] = a;
-        }
-    }
-
     /// The bodies' inertias for `params` (fixed links merged), recomputed only when the
     /// parameters differ from the last call's.
     #[inline]
@@ -124,10 +90,56 @@ impl Model {
 
     /// Parent body → body transforms at `q`, into `ws.body.x`.
     #[inline]
-    fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
+    pub(crate) fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
         for (k, body) in self.bodies.iter().enumerate() {
             let s = self.frames[body.frame - 1].value.eval(q);
             ws.body.x[k + 1] = self.joint_transform(body.frame, &body.pre, s);
+        }
+    }
+
+    /// Angular velocity ω (rad/s), origin velocity v (m/s), ω̇ (rad/s²) and linear
+    /// acceleration a (m/s², gravity included) of body `i` in its coordinates, from its
+    /// parent's in `b` and `b.x[i]`: the forward pass of Newton–Euler, shared by the
+    /// dynamics and the regressor. Zero rates or accelerations (`motion`) are skipped
+    /// rather than multiplied.
+    #[inline(always)]
+    pub(crate) fn body_velocity(
+        &self,
+        b: &BodyBuffers,
+        body: &Body,
+        i: usize,
+        dq: &[f64],
+        ddq: &[f64],
+        motion: Motion,
+    ) -> [Vector3<f64>; 4] {
+        let zero = Vector3::zeros();
+        let p = body.parent;
+        let value = &self.frames[body.frame - 1].value;
+        let x = &b.x[i];
+        let rt = x.rotation.transpose();
+        let (sw, sv) = &self.motion[body.frame];
+        let sdd = if motion.acceleration {
+            value.dot(ddq)
+        } else {
+            0.0
+        };
+        if motion.velocity {
+            let sd = value.dot(dq);
+            let (wsd, vsd) = (sw * sd, sv * sd);
+            let w = rt * b.w[p] + wsd;
+            let v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
+            let dw = rt * b.dw[p] + sw * sdd + w.cross(&wsd);
+            let a = rt * (b.a[p] + b.dw[p].cross(&x.translation))
+                + sv * sdd
+                + w.cross(&vsd)
+                + v.cross(&wsd);
+            [w, v, dw, a]
+        } else if motion.acceleration {
+            let dw = rt * b.dw[p] + sw * sdd;
+            let a = rt * (b.a[p] + b.dw[p].cross(&x.translation)) + sv * sdd;
+            [zero, zero, dw, a]
+        } else {
+            [zero, zero, zero, rt * b.a[p]]
         }
     }
 
@@ -152,38 +164,7 @@ impl Model {
         b.a[0] = if gravity { -self.gravity } else { zero };
         for (k, body) in self.bodies.iter().enumerate() {
             let i = k + 1;
-            let p = body.parent;
-            let value = &self.frames[body.frame - 1].value;
-            let x = &b.x[i];
-            let rt = x.rotation.transpose();
-            let (sw, sv) = &self.motion[body.frame];
-            let sdd = if motion.acceleration {
-                value.dot(ddq)
-            } else {
-                0.0
-            };
-            let (w, v, dw, a);
-            if motion.velocity {
-                let sd = value.dot(dq);
-                let (wsd, vsd) = (sw * sd, sv * sd);
-                w = rt * b.w[p] + wsd;
-                v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
-                dw = rt * b.dw[p] + sw * sdd + w.cross(&wsd);
-                a = rt * (b.a[p] + b.dw[p].cross(&x.translation))
-                    + sv * sdd
-                    + w.cross(&vsd)
-                    + v.cross(&wsd);
-            } else if motion.acceleration {
-                w = zero;
-                v = zero;
-                dw = rt * b.dw[p] + sw * sdd;
-                a = rt * (b.a[p] + b.dw[p].cross(&x.translation)) + sv * sdd;
-            } else {
-                w = zero;
-                v = zero;
-                dw = zero;
-                a = rt * b.a[p];
-            }
+            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, motion);
             let pp = &b.inertia[i];
             let l = Vector3::new(pp[6], pp[7], pp[8]);
             let m = pp[9];

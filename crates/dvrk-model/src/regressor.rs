@@ -9,9 +9,10 @@
 //! Element columns follow `identification.md` §3.
 
 use nalgebra::Vector3;
+use wide::f64x2;
 
-use crate::dynamics::sign0;
-use crate::model::Model;
+use crate::dynamics::{sign0, Motion};
+use crate::model::{Model, Transform};
 use crate::workspace::Workspace;
 
 impl Model {
@@ -61,33 +62,68 @@ impl Model {
             }
             row[from..].fill(0.0);
         }
-        self.joint_values(ws, q, dq, ddq);
-        self.active_local_transforms(ws);
-        self.active_world_transforms(ws);
-        self.forward_pass(ws, true);
-
-        for &j in &self.links {
-            let (w, v) = (ws.w[j], ws.v[j]);
-            ws.ac[j] = ws.a[j] + w.cross(&v);
+        self.body_positions(ws, q);
+        let b = &mut ws.body;
+        let zero = Vector3::zeros();
+        b.w[0] = zero;
+        b.v[0] = zero;
+        b.dw[0] = zero;
+        b.a[0] = -self.gravity;
+        let full = Motion {
+            velocity: true,
+            acceleration: true,
+        };
+        for (k, body) in self.bodies.iter().enumerate() {
+            let i = k + 1;
+            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, full);
+            b.w[i] = w;
+            b.v[i] = v;
+            b.dw[i] = dw;
+            b.a[i] = a;
+            let world = b.world[body.parent].compose(&b.x[i]);
+            let (sw, sv) = &self.motion[body.frame];
+            let w0 = world.rotation * sw;
+            let v0 = world.rotation * sv + world.translation.cross(&w0);
+            b.axis[i] = [w0[0], w0[1], w0[2], v0[0], v0[1], v0[2]];
+            b.world[i] = world;
         }
-        for plan in &self.regressor_plan.frames {
-            let (sw, sv) = &self.motion[plan.frame];
-            let pose = &ws.world[plan.frame];
-            let w0 = pose.rotation * sw;
-            let v0 = pose.rotation * sv + pose.translation.cross(&w0);
-            for link in &plan.links {
-                let (row, col0) = (link_row(ws, link.link, &w0, &v0), link.col0);
-                for &(coord, a, write) in &link.targets {
-                    let dst: &mut [f64; 10] = (&mut out[coord * p + col0..coord * p + col0 + 10])
-                        .try_into()
-                        .expect("10 columns");
-                    if write {
-                        for (d, r) in dst.iter_mut().zip(&row) {
-                            *d = a * r;
-                        }
-                    } else {
-                        for (d, r) in dst.iter_mut().zip(&row) {
-                            *d += a * r;
+
+        let plan = &self.regressor_plan;
+        for pb in &plan.bodies {
+            let i = pb.body;
+            let (w, dw, world) = (&b.w[i], &b.dw[i], &b.world[i]);
+            let ac = b.a[i] + w.cross(&b.v[i]);
+            let joints = &plan.joints[pb.joints.clone()];
+            for link in &plan.links[pb.links.clone()] {
+                let rows = match &link.pose {
+                    None => LinkRows::new(w, dw, &ac, world),
+                    Some(x) => {
+                        // A link fixed to the body: its frame's motion.
+                        let (rt, t) = (x.rotation.transpose(), &x.translation);
+                        let ac_link = rt * (ac + dw.cross(t) + w.cross(&w.cross(t)));
+                        LinkRows::new(&(rt * w), &(rt * dw), &ac_link, &world.compose(x))
+                    }
+                };
+                let targets = &plan.targets[link.targets..link.targets + joints.len()];
+                for (pair, pair_targets) in joints.chunks_exact(2).zip(targets.chunks_exact(2)) {
+                    let (s0, s1) = (&b.axis[pair[0]], &b.axis[pair[1]]);
+                    let e = rows.rows(&std::array::from_fn(|c| f64x2::new([s0[c], s1[c]])));
+                    // Entries (2i, 2i+1) of the first joint's row, then of the second's.
+                    let halves: [[f64x2; 2]; 5] =
+                        std::array::from_fn(|i| f64x2::transpose([e[2 * i], e[2 * i + 1]]));
+                    for (l, t) in pair_targets.iter().enumerate() {
+                        for &(coord, a, write) in &plan.terms[t.clone()] {
+                            let at = coord * p + link.col0;
+                            let dst = &mut out[at..at + 10];
+                            let a = f64x2::splat(a);
+                            for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
+                                let x = if write {
+                                    a * h[l]
+                                } else {
+                                    a * h[l] + f64x2::new([d[0], d[1]])
+                                };
+                                d.copy_from_slice(&x.to_array());
+                            }
                         }
                     }
                 }
@@ -165,32 +201,89 @@ impl Model {
     }
 }
 
-/// The regressor row of link `j`'s ten parameters for a joint whose unit motion is
-/// `(w0, v0)` in the base frame (rad/s, m/s, about the base origin): the power
-/// `Sᵀ·Y_j` of the link's spatial force per unit parameter, written out in the link's
-/// coordinates with `s = (sω, sv)` the joint's motion there. Inertia about the origin:
+/// Link `j`'s regressor rows as a linear map of a joint's unit motion: the power
+/// `Sᵀ·Y_j` of the link's spatial force per unit parameter, in the link's coordinates
+/// with `s = (sω, sv)` the joint's motion there. Inertia about the origin:
 /// `n = L·ω̇ + ω × L·ω` gives `sωᵀ·L·ω̇ + (sω × ω)ᵀ·L·ω`; first moment: `n = l × a_c`,
 /// `f = ω̇ × l + ω × (ω × l)` give `l·(a_c × sω + sv × ω̇ + ω (ω·sv) − sv |ω|²)`; mass:
-/// `f = m·a_c` gives `sv·a_c`.
-#[inline(always)]
-fn link_row(ws: &Workspace, j: usize, w0: &Vector3<f64>, v0: &Vector3<f64>) -> [f64; 10] {
-    let pose = &ws.world[j];
-    let rt = pose.rotation.transpose();
-    let s_w = rt * w0;
-    let s_v = rt * (v0 + w0.cross(&pose.translation));
-    let (w, dw, ac) = (&ws.w[j], &ws.dw[j], &ws.ac[j]);
-    let u = s_w.cross(w);
-    let lin = ac.cross(&s_w) + s_v.cross(dw) + w * w.dot(&s_v) - s_v * w.dot(w);
-    [
-        s_w[0] * dw[0] + u[0] * w[0],
-        s_w[0] * dw[1] + s_w[1] * dw[0] + u[0] * w[1] + u[1] * w[0],
-        s_w[0] * dw[2] + s_w[2] * dw[0] + u[0] * w[2] + u[2] * w[0],
-        s_w[1] * dw[1] + u[1] * w[1],
-        s_w[1] * dw[2] + s_w[2] * dw[1] + u[1] * w[2] + u[2] * w[1],
-        s_w[2] * dw[2] + u[2] * w[2],
-        lin[0],
-        lin[1],
-        lin[2],
-        s_v.dot(ac),
-    ]
+/// `f = m·a_c` gives `sv·a_c`. Their coefficients on `sω` and `sv` depend on the link's
+/// state only, so they are formed once per link; each of its joints then costs moving
+/// `s` into the link's coordinates and a sparse 10×6 product, two joints at a time in
+/// the two lanes of SIMD registers (every coefficient held in both lanes).
+struct LinkRows {
+    /// Coefficients of `sω` in the six inertia entries.
+    inertia: [[f64x2; 3]; 6],
+    /// Coefficients of `sv` in the first moment (its `sω` part is `a_c × sω`).
+    moment: [[f64x2; 3]; 3],
+    /// `a_c` (m/s²).
+    ac: [f64x2; 3],
+    /// The link's pose in the base frame: its columns (`rotation[c][r]`) and origin (m).
+    rotation: [[f64x2; 3]; 3],
+    translation: [f64x2; 3],
+}
+
+impl LinkRows {
+    /// From the link's angular velocity ω (rad/s), acceleration ω̇ (rad/s²), origin
+    /// acceleration `a_c` (m/s², gravity included) in its coordinates, and its pose.
+    #[inline(always)]
+    fn new(w: &Vector3<f64>, dw: &Vector3<f64>, ac: &Vector3<f64>, pose: &Transform) -> Self {
+        let (w0, w1, w2) = (w[0], w[1], w[2]);
+        let (d0, d1, d2) = (dw[0], dw[1], dw[2]);
+        let (w00, w11, w22) = (w0 * w0, w1 * w1, w2 * w2);
+        let (w01, w02, w12) = (w0 * w1, w0 * w2, w1 * w2);
+        let splat = |x: [f64; 3]| x.map(f64x2::splat);
+        let r = &pose.rotation.data.0;
+        LinkRows {
+            inertia: [
+                splat([d0, w02, -w01]),
+                splat([d1 - w02, d0 + w12, w00 - w11]),
+                splat([d2 + w01, w22 - w00, d0 - w12]),
+                splat([-w12, d1, w01]),
+                splat([w11 - w22, d2 - w01, d1 + w02]),
+                splat([w12, -w02, d2]),
+            ],
+            moment: [
+                splat([-(w11 + w22), w01 + d2, w02 - d1]),
+                splat([w01 - d2, -(w00 + w22), w12 + d0]),
+                splat([w02 + d1, w12 - d0, -(w00 + w11)]),
+            ],
+            ac: splat([ac[0], ac[1], ac[2]]),
+            rotation: [splat(r[0]), splat(r[1]), splat(r[2])],
+            translation: splat([
+                pose.translation[0],
+                pose.translation[1],
+                pose.translation[2],
+            ]),
+        }
+    }
+
+    /// The ten entries, each for two joints (one per lane), whose unit motions are
+    /// `s = (ω0, v0)` in the base frame (rad/s, m/s, about the base origin):
+    /// `sω = Rᵀ·ω0`, `sv = Rᵀ·(v0 + ω0 × t)`.
+    #[inline(always)]
+    fn rows(&self, s: &[f64x2; 6]) -> [f64x2; 10] {
+        let (r, t) = (&self.rotation, &self.translation);
+        let w0 = [s[0], s[1], s[2]];
+        let v0 = [
+            s[3] + w0[1] * t[2] - w0[2] * t[1],
+            s[4] + w0[2] * t[0] - w0[0] * t[2],
+            s[5] + w0[0] * t[1] - w0[1] * t[0],
+        ];
+        let dot = |k: &[f64x2; 3], x: &[f64x2; 3]| k[0] * x[0] + k[1] * x[1] + k[2] * x[2];
+        let sw = [dot(&r[0], &w0), dot(&r[1], &w0), dot(&r[2], &w0)];
+        let sv = [dot(&r[0], &v0), dot(&r[1], &v0), dot(&r[2], &v0)];
+        let (k, m, c) = (&self.inertia, &self.moment, &self.ac);
+        [
+            dot(&k[0], &sw),
+            dot(&k[1], &sw),
+            dot(&k[2], &sw),
+            dot(&k[3], &sw),
+            dot(&k[4], &sw),
+            dot(&k[5], &sw),
+            dot(&m[0], &sv) + c[1] * sw[2] - c[2] * sw[1],
+            dot(&m[1], &sv) + c[2] * sw[0] - c[0] * sw[2],
+            dot(&m[2], &sv) + c[0] * sw[1] - c[1] * sw[0],
+            dot(c, &sv),
+        ]
+    }
 }
