@@ -11,7 +11,7 @@
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::inertia::{sym3, transform_barycentric};
-use crate::model::{Body, Model, Transform};
+use crate::model::{Axis, Body, Model, Transform};
 use crate::workspace::{BodyBuffers, Workspace};
 
 /// `sign` with `sign(0) = 0` (numpy's convention, used by the 2019 package), so that a
@@ -123,7 +123,22 @@ impl Model {
         } else {
             0.0
         };
-        if motion.velocity {
+        let revolute_z = matches!(body.axis, Axis::RevoluteZ);
+        if motion.velocity && revolute_z {
+            // S = (z, 0): the general branch's products with S written out.
+            let sd = value.dot(dq);
+            let mut w = rt * b.w[p];
+            w.z += sd;
+            let v = rt * (b.v[p] + b.w[p].cross(&x.translation));
+            let mut dw = rt * b.dw[p];
+            dw.x += w.y * sd;
+            dw.y -= w.x * sd;
+            dw.z += sdd;
+            let mut a = rt * (b.a[p] + b.dw[p].cross(&x.translation));
+            a.x += v.y * sd;
+            a.y -= v.x * sd;
+            [w, v, dw, a]
+        } else if motion.velocity {
             let sd = value.dot(dq);
             let (wsd, vsd) = (sw * sd, sv * sd);
             let w = rt * b.w[p] + wsd;
@@ -422,6 +437,8 @@ impl Model {
     /// body's composite inertia `I_i` gives the force of a unit rate of its joint,
     /// `F = I_i·S_i`, carried down to the base one body at a time (`M_tree[i, j] =
     /// S_jᵀ·F` at every body `j` on the way), then `I_i` is added to its parent's.
+    /// (Composites in the base frame, one dot product per entry, cost more: every
+    /// body's inertia moved to the base frame outweighs the transforms of `F` saved.)
     fn mass_from_positions(&self, ws: &mut Workspace, params: &[f64], out: &mut [f64]) {
         let n = self.dof();
         let b = &mut ws.body;
@@ -434,12 +451,23 @@ impl Model {
             let (mut j, mut bj) = (i, body);
             loop {
                 let mij = bj.axis.dot(&force);
-                for &(ci, ai) in terms_i {
-                    for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
-                        let x = ai * aj * mij;
-                        out[ci + cj * n] += x;
-                        if j != i {
-                            out[cj + ci * n] += x;
+                let terms_j = &self.frames[bj.frame - 1].value.terms;
+                if let ([(ci, ai)], [(cj, aj)]) = (terms_i.as_slice(), terms_j.as_slice()) {
+                    // One coordinate each (every joint of a serial chain): the loops
+                    // below without their overhead.
+                    let x = ai * aj * mij;
+                    out[ci + cj * n] += x;
+                    if j != i {
+                        out[cj + ci * n] += x;
+                    }
+                } else {
+                    for &(ci, ai) in terms_i {
+                        for &(cj, aj) in terms_j {
+                            let x = ai * aj * mij;
+                            out[ci + cj * n] += x;
+                            if j != i {
+                                out[cj + ci * n] += x;
+                            }
                         }
                     }
                 }
@@ -463,6 +491,27 @@ impl Model {
                 out[mi.coordinate * (n + 1)] += mi.ratio * params[mi.param];
             }
         }
+    }
+
+    /// The pose of body `i` in the base frame, from its parent's and `b.x[i]`, and its
+    /// joint's unit motion there (about the base origin), into `b.world[i]` and
+    /// `b.axis[i]`.
+    #[inline(always)]
+    pub(crate) fn body_world(&self, b: &mut BodyBuffers, body: &Body, i: usize) {
+        let world = b.world[body.parent].compose(&b.x[i]);
+        let (w0, v0) = match body.axis {
+            Axis::RevoluteZ => {
+                let z: Vector3<f64> = world.rotation.column(2).into();
+                (z, world.translation.cross(&z))
+            }
+            _ => {
+                let (sw, sv) = &self.motion[body.frame];
+                let w0 = world.rotation * sw;
+                (w0, world.rotation * sv + world.translation.cross(&w0))
+            }
+        };
+        b.axis[i] = [w0[0], w0[1], w0[2], v0[0], v0[1], v0[2]];
+        b.world[i] = world;
     }
 
     /// Mass matrix `M(q)` as a matrix (allocates).

@@ -505,6 +505,8 @@ pub(crate) struct RegressorPlan {
     /// regressor takes them two at a time.
     pub joints: Vec<usize>,
     pub links: Vec<PlanLink>,
+    /// See [`PlanLink::columns`].
+    pub columns: Vec<(usize, usize)>,
     /// Per link and joint of its body (in the order of [`RegressorPlan::joints`]), the
     /// range of [`RegressorPlan::terms`] it adds to.
     pub targets: Vec<std::ops::Range<usize>>,
@@ -512,6 +514,10 @@ pub(crate) struct RegressorPlan {
     pub terms: Vec<(usize, f64, bool)>,
     /// Per row (coordinate), the first columns of the link blocks written, increasing.
     pub blocks: Vec<Vec<usize>>,
+    /// The stretches of the rows that no link block writes, as `(row, first column,
+    /// end column)` with `None` for the end of the row (the element columns follow the
+    /// link columns, and their number may grow, see [`Model::add_stribeck`]).
+    pub gaps: Vec<(usize, usize, Option<usize>)>,
 }
 
 #[derive(Clone, Debug)]
@@ -524,14 +530,15 @@ pub(crate) struct PlanBody {
     pub links: std::ops::Range<usize>,
 }
 
+/// Links of one body at the same pose in it, whose rows are therefore the same (e.g. a
+/// gripper's two fingers): computed once, written to each link's columns.
 #[derive(Clone, Debug)]
 pub(crate) struct PlanLink {
-    /// The column of the link's `L{j}xx`.
-    pub col0: usize,
-    /// The link frame's pose in its body's frame (`None`: the body's own link).
+    /// The links' pose in their body's frame (`None`: the body's own frame).
     pub pose: Option<Transform>,
-    /// Its first entry in [`RegressorPlan::targets`] (one per joint of the body).
-    pub targets: usize,
+    /// `columns[start..end]` of the plan: per link, the column of its `L{j}xx` and its
+    /// first entry in [`RegressorPlan::targets`] (one per joint of the body).
+    pub columns: std::ops::Range<usize>,
 }
 
 /// A moving frame with link dynamics in its subtree, and the links rigidly attached to
@@ -855,22 +862,31 @@ impl Model {
                 plan.joints.push(0);
             }
             let l0 = plan.links.len();
-            for (col0, pose) in &body.links {
-                plan.links.push(PlanLink {
-                    col0: *col0,
-                    pose: *pose,
-                    targets: plan.targets.len(),
-                });
-                for &b in &plan.joints[j0..] {
-                    let t0 = plan.terms.len();
-                    if b != 0 {
-                        let value = &self.frames[self.bodies[b - 1].frame - 1].value;
-                        for &(c, a) in &value.terms {
-                            plan.terms.push((c, a, written.insert((c, *col0))));
-                        }
-                    }
-                    plan.targets.push(t0..plan.terms.len());
+            let mut poses: Vec<Option<Transform>> = Vec::new();
+            for (_, pose) in &body.links {
+                if !poses.contains(pose) {
+                    poses.push(*pose);
                 }
+            }
+            for pose in poses {
+                let c0 = plan.columns.len();
+                for (col0, _) in body.links.iter().filter(|(_, x)| *x == pose) {
+                    plan.columns.push((*col0, plan.targets.len()));
+                    for &b in &plan.joints[j0..] {
+                        let t0 = plan.terms.len();
+                        if b != 0 {
+                            let value = &self.frames[self.bodies[b - 1].frame - 1].value;
+                            for &(c, a) in &value.terms {
+                                plan.terms.push((c, a, written.insert((c, *col0))));
+                            }
+                        }
+                        plan.targets.push(t0..plan.terms.len());
+                    }
+                }
+                plan.links.push(PlanLink {
+                    pose,
+                    columns: c0..plan.columns.len(),
+                });
             }
             plan.bodies.push(PlanBody {
                 body: k + 1,
@@ -881,6 +897,16 @@ impl Model {
         plan.blocks = vec![Vec::new(); self.dof()];
         for (c, col0) in written {
             plan.blocks[c].push(col0);
+        }
+        for (r, blocks) in plan.blocks.iter().enumerate() {
+            let mut from = 0;
+            for &c in blocks {
+                if c > from {
+                    plan.gaps.push((r, from, Some(c)));
+                }
+                from = c + 10;
+            }
+            plan.gaps.push((r, from, None));
         }
         plan
     }

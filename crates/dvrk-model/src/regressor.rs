@@ -54,13 +54,8 @@ impl Model {
         );
         assert_eq!(out.len(), n * p, "regressor buffer must have n*p entries");
         // Zero what no link block writes.
-        for (r, row) in out.chunks_exact_mut(p).enumerate() {
-            let mut from = 0;
-            for &c in &self.regressor_plan.blocks[r] {
-                row[from..c].fill(0.0);
-                from = c + 10;
-            }
-            row[from..].fill(0.0);
+        for &(r, from, to) in &self.regressor_plan.gaps {
+            out[r * p + from..r * p + to.unwrap_or(p)].fill(0.0);
         }
         self.body_positions(ws, q);
         let b = &mut ws.body;
@@ -80,12 +75,7 @@ impl Model {
             b.v[i] = v;
             b.dw[i] = dw;
             b.a[i] = a;
-            let world = b.world[body.parent].compose(&b.x[i]);
-            let (sw, sv) = &self.motion[body.frame];
-            let w0 = world.rotation * sw;
-            let v0 = world.rotation * sv + world.translation.cross(&w0);
-            b.axis[i] = [w0[0], w0[1], w0[2], v0[0], v0[1], v0[2]];
-            b.world[i] = world;
+            self.body_world(b, body, i);
         }
 
         let plan = &self.regressor_plan;
@@ -104,25 +94,30 @@ impl Model {
                         LinkRows::new(&(rt * w), &(rt * dw), &ac_link, &world.compose(x))
                     }
                 };
-                let targets = &plan.targets[link.targets..link.targets + joints.len()];
-                for (pair, pair_targets) in joints.chunks_exact(2).zip(targets.chunks_exact(2)) {
+                let columns = &plan.columns[link.columns.clone()];
+                for (chunk, pair) in joints.chunks_exact(2).enumerate() {
                     let (s0, s1) = (&b.axis[pair[0]], &b.axis[pair[1]]);
                     let e = rows.rows(&std::array::from_fn(|c| f64x2::new([s0[c], s1[c]])));
                     // Entries (2i, 2i+1) of the first joint's row, then of the second's.
                     let halves: [[f64x2; 2]; 5] =
                         std::array::from_fn(|i| f64x2::transpose([e[2 * i], e[2 * i + 1]]));
-                    for (l, t) in pair_targets.iter().enumerate() {
-                        for &(coord, a, write) in &plan.terms[t.clone()] {
-                            let at = coord * p + link.col0;
-                            let dst = &mut out[at..at + 10];
-                            let a = f64x2::splat(a);
-                            for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
-                                let x = if write {
-                                    a * h[l]
-                                } else {
-                                    a * h[l] + f64x2::new([d[0], d[1]])
-                                };
-                                d.copy_from_slice(&x.to_array());
+                    for &(col0, targets) in columns {
+                        let pair_targets =
+                            &plan.targets[targets + 2 * chunk..targets + 2 * chunk + 2];
+                        for (l, t) in pair_targets.iter().enumerate() {
+                            for &(coord, a, write) in &plan.terms[t.clone()] {
+                                let at = coord * p + col0;
+                                let dst: &mut [f64; 10] =
+                                    (&mut out[at..at + 10]).try_into().expect("10 columns");
+                                let a = f64x2::splat(a);
+                                for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
+                                    let x = if write {
+                                        a * h[l]
+                                    } else {
+                                        a * h[l] + f64x2::new([d[0], d[1]])
+                                    };
+                                    d.copy_from_slice(&x.to_array());
+                                }
                             }
                         }
                     }
