@@ -105,7 +105,19 @@ impl Model {
                         let pair_targets =
                             &plan.targets[targets + 2 * chunk..targets + 2 * chunk + 2];
                         for (l, t) in pair_targets.iter().enumerate() {
-                            for &(coord, a, write) in &plan.terms[t.clone()] {
+                            let terms = &plan.terms[t.clone()];
+                            if let &[(coord, 1.0, true)] = terms {
+                                // The common case (one coordinate, coefficient 1):
+                                // a plain copy.
+                                let at = coord * p + col0;
+                                let dst: &mut [f64; 10] =
+                                    (&mut out[at..at + 10]).try_into().expect("10 columns");
+                                for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
+                                    d.copy_from_slice(&h[l].to_array());
+                                }
+                                continue;
+                            }
+                            for &(coord, a, write) in terms {
                                 let at = coord * p + col0;
                                 let dst: &mut [f64; 10] =
                                     (&mut out[at..at + 10]).try_into().expect("10 columns");
