@@ -92,7 +92,8 @@ impl Model {
     #[inline]
     pub(crate) fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
         for (k, body) in self.bodies.iter().enumerate() {
-            let s = self.frames[body.frame - 1].value.eval(q);
+            let value = &self.frames[body.frame - 1].value;
+            let s = value.offset + body.rate(value, q);
             ws.body.x[k + 1] = self.joint_transform(body.frame, &body.pre, s);
         }
     }
@@ -119,14 +120,14 @@ impl Model {
         let rt = x.rotation.transpose();
         let (sw, sv) = &self.motion[body.frame];
         let sdd = if motion.acceleration {
-            value.dot(ddq)
+            body.rate(value, ddq)
         } else {
             0.0
         };
         let revolute_z = matches!(body.axis, Axis::RevoluteZ);
         if motion.velocity && revolute_z {
             // S = (z, 0): the general branch's products with S written out.
-            let sd = value.dot(dq);
+            let sd = body.rate(value, dq);
             let mut w = rt * b.w[p];
             w.z += sd;
             let v = rt * (b.v[p] + b.w[p].cross(&x.translation));
@@ -139,7 +140,7 @@ impl Model {
             a.y -= v.x * sd;
             [w, v, dw, a]
         } else if motion.velocity {
-            let sd = value.dot(dq);
+            let sd = body.rate(value, dq);
             let (wsd, vsd) = (sw * sd, sv * sd);
             let w = rt * b.w[p] + wsd;
             let v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
@@ -451,10 +452,8 @@ impl Model {
             let (mut j, mut bj) = (i, body);
             loop {
                 let mij = bj.axis.dot(&force);
-                let terms_j = &self.frames[bj.frame - 1].value.terms;
-                if let ([(ci, ai)], [(cj, aj)]) = (terms_i.as_slice(), terms_j.as_slice()) {
-                    // One coordinate each (every joint of a serial chain): the loops
-                    // below without their overhead.
+                if let (Some((ci, ai)), Some((cj, aj))) = (body.coordinate, bj.coordinate) {
+                    // The loops below without their overhead.
                     let x = ai * aj * mij;
                     out[ci + cj * n] += x;
                     if j != i {
@@ -462,7 +461,7 @@ impl Model {
                     }
                 } else {
                     for &(ci, ai) in terms_i {
-                        for &(cj, aj) in terms_j {
+                        for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
                             let x = ai * aj * mij;
                             out[ci + cj * n] += x;
                             if j != i {

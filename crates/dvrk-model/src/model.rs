@@ -560,6 +560,21 @@ pub(crate) struct Body {
     pub links: Vec<(usize, Option<Transform>)>,
     /// The joint's motion subspace in the body's coordinates.
     pub axis: Axis,
+    /// `(c, a)` when the joint value moves with one coordinate only, `s = a·q_c + b`
+    /// (every joint of a serial chain): the mass matrix then skips the term loops.
+    pub coordinate: Option<(usize, f64)>,
+}
+
+impl Body {
+    /// `a·x` of the joint value `value` (this body's frame's): its rate for coordinate
+    /// rates `x`, the same number as [`Affine::dot`] without its loop for one term.
+    #[inline(always)]
+    pub fn rate(&self, value: &Affine, x: &[f64]) -> f64 {
+        match self.coordinate {
+            Some((c, a)) => a * x[c],
+            None => value.dot(x),
+        }
+    }
 }
 
 /// A joint's unit motion `(ω, v)` in its frame's coordinates. Most joints turn about or
@@ -935,6 +950,10 @@ impl Model {
                 pre: x.compose(&frame.pre),
                 links: Vec::new(),
                 axis: Axis::new(self.motion[fi]),
+                coordinate: match frame.value.terms.as_slice() {
+                    &[term] => Some(term),
+                    _ => None,
+                },
             });
             body_of[fi] = bodies.len();
         }
