@@ -71,7 +71,12 @@ pub fn transform_barycentric(
     let row2 = [r[0][2], r[1][2], r[2][2]];
     let sp = f64x2::splat;
     // R·x: rows 0 and 1 in the lanes, row 2 apart.
-    let rot = |x: &[f64; 3]| (c0 * sp(x[0]) + c1 * sp(x[1]) + c2 * sp(x[2]), dot_z(&row2, x));
+    let rot = |x: &[f64; 3]| {
+        (
+            c0 * sp(x[0]) + c1 * sp(x[1]) + c2 * sp(x[2]),
+            dot_z(&row2, x),
+        )
+    };
     let t = [translation[0], translation[1], translation[2]];
     let m = p[9];
     let (rl, rl2) = rot(&[p[6], p[7], p[8]]);

@@ -26,7 +26,7 @@ impl Model {
 
     /// `pre · joint(s) · post` of the moving frame `fi` (rotation about or translation
     /// along the joint frame's z axis by `s`, rad or m).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn joint_transform(&self, fi: usize, pre: &Transform, s: f64) -> Transform {
         let f = &self.frames[fi - 1];
         let r = &pre.rotation;
