@@ -2,11 +2,14 @@
 //!
 //! Link columns: the tree joint `k` collects `S_kᵀ·Y_j` over the links `j` of its
 //! subtree, `Y_j` the link's 6×10 body regressor (its spatial force as a linear function
-//! of its barycentric parameters), and `Aᵀ` maps tree joints to coordinates. Each
-//! `S_kᵀ·Y_j` is written out in the link's coordinates from its velocity and
-//! acceleration (`link_row`), so `Y_j` itself is never formed; the link blocks are
-//! written in place (the first one of a row) and only the rest of a row is zeroed.
-//! Element columns follow `identification.md` §3.
+//! of its barycentric parameters), and `Aᵀ` maps tree joints to coordinates. The
+//! kinematics run over the bodies (moving frames, fixed links merged, as the dynamics):
+//! a link fixed to a body takes its motion from the body's. Each `S_kᵀ·Y_j` is written
+//! out in the link's coordinates ([`LinkRows`]), so `Y_j` itself is never formed: its
+//! coefficients are formed once per link, then the joints of the link's path go two at
+//! a time through SIMD lanes; links of a body at the same pose share their rows. The
+//! link blocks are written in place (the first one of a row) and only the rest of a
+//! row is zeroed. Element columns follow `identification.md` §3.
 
 use nalgebra::Vector3;
 use wide::f64x2;
