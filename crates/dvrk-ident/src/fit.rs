@@ -60,6 +60,47 @@ impl std::str::FromStr for Method {
     }
 }
 
+/// A named set of the global lower bounds of the semidefinite fit
+/// ([`dvrk_model::GlobalBounds`]), replacing the description's `[bounds]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BoundsSet {
+    /// `Fc, Fv, Ia ≥ 0`: the physical signs ([`dvrk_model::GlobalBounds::PHYSICAL`]).
+    #[serde(rename = "physical")]
+    Physical,
+    /// `Fc, Fv, Ia ≥ 0.001`, to reproduce the 2019 fit
+    /// ([`dvrk_model::GlobalBounds::WANG_2019`]).
+    #[serde(rename = "2019")]
+    Wang2019,
+}
+
+impl BoundsSet {
+    /// The bounds of the set.
+    pub fn bounds(self) -> dvrk_model::GlobalBounds {
+        match self {
+            BoundsSet::Physical => dvrk_model::GlobalBounds::PHYSICAL,
+            BoundsSet::Wang2019 => dvrk_model::GlobalBounds::WANG_2019,
+        }
+    }
+}
+
+impl crate::names::Named for BoundsSet {
+    const WHAT: &'static str = "bounds";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("physical", BoundsSet::Physical),
+        ("2019", BoundsSet::Wang2019),
+        ("wang2019", BoundsSet::Wang2019),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for BoundsSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
 /// Settings of a fit. Defaults: SDP, the processing defaults, metrics over whole logs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -77,17 +118,33 @@ pub struct FitSettings {
     /// m/s) to every friction element of the model that has none (see
     /// [`FitSettings::model`]). `None`: the model as described.
     pub stribeck_velocity: Option<f64>,
+    /// Lower bounds on Fc, Fv, Ia of the semidefinite fit in place of the description's
+    /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<BoundsSet>,
 }
 
 impl FitSettings {
     /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
-    /// of [`FitSettings::stribeck_velocity`]. Everything that reads a result back
-    /// (validate, report, export) goes through here so the parameters line up.
+    /// of [`FitSettings::stribeck_velocity`] and the bounds of [`FitSettings::bounds`].
+    /// Everything that reads a result back (validate, report, export) goes through here
+    /// so the parameters line up.
     pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
-        Ok(match self.stribeck_velocity {
+        let mut m = match self.stribeck_velocity {
             Some(v) => std::borrow::Cow::Owned(model.with_stribeck(v)?),
             None => std::borrow::Cow::Borrowed(model),
-        })
+        };
+        if let Some(set) = self.bounds {
+            // The set's sign bounds; the description's `pseudo_inertia_eps` stays.
+            let wanted = dvrk_model::GlobalBounds {
+                pseudo_inertia_eps: m.bounds.pseudo_inertia_eps,
+                ..set.bounds()
+            };
+            if m.bounds != wanted {
+                m.to_mut().bounds = wanted;
+            }
+        }
+        Ok(m)
     }
 }
 
@@ -100,6 +157,7 @@ impl Default for FitSettings {
             irls_iterations: 5,
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
+            bounds: None,
         }
     }
 }
@@ -834,6 +892,7 @@ pub(crate) fn estimate(
         converged: true,
         seconds: 0.0,
         iterations: 1,
+        tolerance: None,
     };
     if settings.method == Method::Irls {
         for it in 0..settings.irls_iterations {
@@ -858,6 +917,7 @@ pub(crate) fn estimate(
             converged: sol.converged,
             seconds: sol.seconds,
             iterations: sol.iterations,
+            tolerance: Some(options.tolerance),
         };
         sol.params
     } else {

@@ -54,6 +54,11 @@ pub struct SolverInfo {
     pub converged: bool,
     pub seconds: f64,
     pub iterations: u32,
+    /// The semidefinite solver's feasibility and gap tolerance (relative, in its scaled
+    /// problem): the link pseudo-inertias satisfy `J ⪰ eps·I` to it, while friction and
+    /// motor inertia bounds hold exactly (projected after the solve).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
 }
 
 /// Per-joint errors on one trajectory (model coordinates).

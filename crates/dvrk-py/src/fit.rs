@@ -75,6 +75,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub resample: Option<f64>,
     pub irls_iterations: Option<usize>,
     pub sdp_regularization: Option<f64>,
+    pub bounds: Option<&'a str>,
 }
 
 impl Overrides<'_, '_> {
@@ -131,6 +132,9 @@ impl Overrides<'_, '_> {
         if let Some(r) = self.sdp_regularization {
             s.sdp_regularization = r;
         }
+        if let Some(b) = self.bounds {
+            s.bounds = Some(crate::convert::named("bounds", b)?);
+        }
         Ok(s)
     }
 }
@@ -158,6 +162,9 @@ impl Overrides<'_, '_> {
 ///   the first N processed samples of each only;
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
 ///   ``resample`` (Hz), ``irls_iterations``, ``sdp_regularization``;
+/// - ``bounds``: ``"physical"`` (friction and motor inertias ≥ 0) or ``"2019"`` (≥ 0.001,
+///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
+///   robot description's (``dvrk-ident fit --bounds``);
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
@@ -175,7 +182,7 @@ impl Overrides<'_, '_> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, bounds = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -191,6 +198,7 @@ pub fn fit(
     resample: Option<f64>,
     irls_iterations: Option<usize>,
     sdp_regularization: Option<f64>,
+    bounds: Option<&str>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
@@ -205,6 +213,7 @@ pub fn fit(
         resample,
         irls_iterations,
         sdp_regularization,
+        bounds,
     }
     .apply(py)?;
     let model = robot.get().model.clone();

@@ -12,7 +12,7 @@ use dvrk_ident::log::{self, LogFormat, LogReader};
 use dvrk_ident::output::Outputs;
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
+use dvrk_ident::{BoundsSet, FitResult, FitSettings, Method, Trajectory};
 use dvrk_model::Model;
 
 use super::emit;
@@ -166,6 +166,11 @@ pub struct Args {
     /// Estimator
     #[arg(long, value_parser = super::named::<Method>(), default_value = "sdp")]
     pub method: Method,
+    /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
+    /// the robot description's: `physical` (≥ 0) or `2019` (≥ 0.001, to reproduce the
+    /// 2019 fit). Default: the description's (the built-in robots: physical)
+    #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET")]
+    pub bounds: Option<BoundsSet>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG")]
     pub test: Vec<String>,
@@ -317,6 +322,7 @@ fn estimator(args: &Args) -> FitSettings {
     FitSettings {
         method: args.method,
         test_window: args.test_window,
+        bounds: args.bounds,
         ..FitSettings::default()
     }
 }
