@@ -3,6 +3,7 @@
 //! document. [`fit`] works on logs in memory; [`stream::fit_stream`] on logs read from
 //! disk block by block, for logs larger than memory, with the same result.
 
+pub mod delay;
 pub mod stream;
 
 use dvrk_model::{inertia, BaseParameters, Model, ParamKind, Workspace};
@@ -122,6 +123,11 @@ pub struct FitSettings {
     /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bounds: Option<BoundsSet>,
+    /// Estimate the torques' measurement delays over `[0, this]` s ([`delay`]) and fit
+    /// with them (they replace `processing.delay_s`, where the result records them).
+    /// `None`: the delays of `processing.delay_s`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_search_s: Option<f64>,
 }
 
 impl FitSettings {
@@ -158,6 +164,7 @@ impl Default for FitSettings {
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
             bounds: None,
+            delay_search_s: None,
         }
     }
 }
@@ -630,18 +637,47 @@ pub fn fit_logs(
     }
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
+    let mut settings = std::borrow::Cow::Borrowed(settings);
+    let delays = match settings.delay_search_s {
+        Some(max_s) => {
+            progress.stage("estimating the measurement delays", None);
+            let found = delay::estimate_delays(model, train, &settings, max_s)?;
+            progress.finish();
+            settings.to_mut().processing.delay_s = found.delay_s.clone();
+            Some(found)
+        }
+        None => None,
+    };
+    let settings: &FitSettings = &settings;
     progress.stage("processing", None);
     let data = prepare_logs(model, train, &settings.processing)?;
     let test_data = prepare_logs(model, test, &settings.processing)?;
     progress.finish();
     let observed = Observed::of_prepared(model, train, &data, progress)?;
-    fit_observed(
+    let mut result = fit_observed(
         model,
         &observed,
         settings,
         |params| test_inputs(model, test, &test_data, params, settings.test_window),
         progress,
-    )
+    )?;
+    result.delay = delays;
+    result.check_finite()?;
+    Ok(result)
+}
+
+/// Refuses the delay search where the samples are not in memory (a streamed fit, a fit
+/// of observation states): it needs every log processed at many shifts.
+pub(crate) fn no_delay_search(settings: &FitSettings, what: &str) -> Result<(), IdentError> {
+    match settings.delay_search_s {
+        Some(_) => Err(IdentError::Setting {
+            name: "delay".into(),
+            message: format!(
+                "the delay search (delay auto) needs the logs in memory, which {what} does                  not hold: estimate the delays on a shorter log and give them fixed"
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Each log prepared ([`prepare`]) on its own.
@@ -1016,6 +1052,7 @@ pub(crate) fn build_result(
         condition_number: estimate.condition_number,
         sigma2: estimate.sigma2,
         metrics,
+        delay: None,
     };
     result.check_finite()?;
     Ok(result)

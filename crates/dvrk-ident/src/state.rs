@@ -352,6 +352,7 @@ impl ObservationState {
         progress: &dyn Progress,
     ) -> Result<FitResult, IdentError> {
         let settings = self.settings(estimator);
+        crate::fit::no_delay_search(&settings, "a fit of observation states")?;
         let model = self.model(model)?;
         // The estimator's bounds (not part of the state: no column depends on them).
         let model = settings.model(&model)?;

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::mcap::{McapOptions, TimeSource};
@@ -155,7 +156,7 @@ pub struct Args {
     /// Observation states of `dvrk-ident observe` (the reduce): merged in order and
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
-    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck"])]
+    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck", "delay"])]
     pub from: Vec<String>,
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
     /// --from: default the states' robot, and it must be the robot they were observed with)
@@ -171,6 +172,11 @@ pub struct Args {
     /// 2019 fit). Default: the description's (the built-in robots: physical)
     #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET")]
     pub bounds: Option<BoundsSet>,
+    /// Measurement delay of the torques: `auto` (estimated per coordinate within
+    /// 0–0.150 s with the parameters, recorded in the result), `0` (none, the default)
+    /// or seconds, one for all coordinates or one per coordinate `d1,d2,...`
+    #[arg(long, value_name = "auto|D|D1,D2,...")]
+    pub delay: Option<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG")]
     pub test: Vec<String>,
@@ -373,6 +379,11 @@ fn fit_logs_arg(
     let model = Model::load(robot)?;
     let mut settings = args.log_args.settings(estimator(args))?;
     settings.stribeck_velocity = args.stribeck;
+    if let Some(d) = &args.delay {
+        d.parse::<DelayOption>()
+            .and_then(|d| d.apply(&mut settings, model.dof()))
+            .map_err(|e| anyhow::anyhow!("--delay: {e}"))?;
+    }
     let model = settings.model(&model)?.into_owned();
     let stream = args.stream || args.logs.iter().chain(&args.test).any(|p| is_large(p));
     if stream && args.report.is_some() {
@@ -501,6 +512,24 @@ pub fn table(r: &FitResult) -> String {
             format!(" (not: {})", bad.join(", "))
         }
     );
+    let delays = &r.settings.processing.delay_s;
+    if !delays.is_empty() {
+        let ms: Vec<String> = match &r.delay {
+            Some(d) => d
+                .delay_s
+                .iter()
+                .zip(&d.std_s)
+                .map(|(v, e)| format!("{:.1}±{:.1}", v * 1e3, e * 1e3))
+                .collect(),
+            None => delays.iter().map(|v| format!("{:.1}", v * 1e3)).collect(),
+        };
+        let how = if r.delay.is_some() {
+            "estimated"
+        } else {
+            "given"
+        };
+        let _ = writeln!(s, "torque delays ({how}, ms): {}", ms.join(" "));
+    }
     let _ = writeln!(
         s,
         "{:<8} {:>12} {:>12} {:>12} {:>12}",

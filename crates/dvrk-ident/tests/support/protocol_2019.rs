@@ -87,6 +87,17 @@ pub fn stribeck_settings(protocol: &Protocol, method: Method) -> FitSettings {
     s
 }
 
+/// The acceptance fit of issue 14: the semidefinite fit with the description's default
+/// (physical) bounds, a Stribeck term (vs = 0.3) and the torques' measurement delays
+/// estimated (`--delay auto`), with the protocol's processing.
+pub fn delay_settings(protocol: &Protocol) -> FitSettings {
+    let mut s = settings(protocol, Method::Sdp);
+    s.bounds = None;
+    s.stribeck_velocity = Some(0.3);
+    s.delay_search_s = Some(dvrk_ident::fit::delay::DEFAULT_MAX_DELAY_S);
+    s
+}
+
 /// The two semidefinite fits of the protocol: `(label, model, settings)` with the 2019
 /// bounds, and with a Stribeck term and zero lower bounds.
 pub fn sdp_variants(protocol: &Protocol, model: &Model) -> [(&'static str, Model, FitSettings); 2] {
