@@ -673,7 +673,8 @@ pub(crate) fn no_delay_search(settings: &FitSettings, what: &str) -> Result<(), 
         Some(_) => Err(IdentError::Setting {
             name: "delay".into(),
             message: format!(
-                "the delay search (delay auto) needs the logs in memory, which {what} does                  not hold: estimate the delays on a shorter log and give them fixed"
+                "the delay search (delay auto) needs the logs in memory, which {what} does \
+                 not hold: estimate the delays on a shorter log and give them fixed"
             ),
         }),
         None => Ok(()),

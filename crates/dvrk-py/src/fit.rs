@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::fit::{fit_logs, joint_metrics, predict, prepare as prepare_data, LogData};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::{wpi_params_json, write_atomic};
@@ -162,6 +163,10 @@ impl Overrides<'_, '_> {
 ///   the first N processed samples of each only;
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
 ///   ``resample`` (Hz), ``irls_iterations``, ``sdp_regularization``;
+/// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
+///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
+///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every
+///   coordinate, or a list of seconds, one per coordinate (``0``: none, the default);
 /// - ``bounds``: ``"physical"`` (friction and motor inertias ≥ 0) or ``"2019"`` (≥ 0.001,
 ///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
 ///   robot description's (``dvrk-ident fit --bounds``);
@@ -182,7 +187,7 @@ impl Overrides<'_, '_> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, bounds = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, test = None, test_window = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, bounds = None, delay = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -199,6 +204,7 @@ pub fn fit(
     irls_iterations: Option<usize>,
     sdp_regularization: Option<f64>,
     bounds: Option<&str>,
+    delay: Option<&Bound<'_, PyAny>>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
@@ -217,6 +223,21 @@ pub fn fit(
     }
     .apply(py)?;
     let model = robot.get().model.clone();
+    let mut settings = settings;
+    if let Some(d) = delay.filter(|d| !d.is_none()) {
+        let option = if let Ok(text) = d.extract::<String>() {
+            text.parse::<DelayOption>()
+        } else if let Ok(v) = d.extract::<f64>() {
+            Ok(DelayOption::Fixed(vec![v]))
+        } else if let Ok(v) = d.extract::<Vec<f64>>() {
+            Ok(DelayOption::Fixed(v))
+        } else {
+            Err("expected \"auto\", seconds, or a list of seconds".to_string())
+        };
+        option
+            .and_then(|o| o.apply(&mut settings, model.dof()))
+            .map_err(|e| input(format!("delay: {e}")))?;
+    }
     let states = observations_arg(data)?;
     if states.is_some()
         && (cutoff.is_some()
@@ -497,6 +518,13 @@ impl FitResultPy {
     #[getter]
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.metrics)
+    }
+
+    /// The measurement delays estimated by ``delay="auto"``: ``{delay_s, std_s, max_s,
+    /// sweeps}`` (seconds), or ``None``.
+    #[getter]
+    fn delay<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.delay)
     }
 
     #[getter]

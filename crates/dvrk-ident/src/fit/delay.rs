@@ -80,7 +80,8 @@ impl DelayOption {
                     m if m == dof => d.clone(),
                     m => {
                         return Err(format!(
-                            "{m} delays for {dof} coordinates: give one for all or one per                              coordinate"
+                            "{m} delays for {dof} coordinates: give one for all or one per \
+                             coordinate"
                         ))
                     }
                 };
