@@ -65,7 +65,7 @@ impl std::str::FromStr for Method {
 /// ([`dvrk_model::GlobalBounds`]), replacing the description's `[bounds]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum BoundsSet {
-    /// `Fc, Fv, Ia ≥ 0`: the physical signs ([`dvrk_model::GlobalBounds::PHYSICAL`]).
+    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`: physical ([`dvrk_model::GlobalBounds::PHYSICAL`]).
     #[serde(rename = "physical")]
     Physical,
     /// `Fc, Fv, Ia ≥ 0.001`, to reproduce the 2019 fit
@@ -170,7 +170,9 @@ impl Default for FitSettings {
 }
 
 /// Friction and motor inertia count as non-negative down to `-ELEMENT_TOLERANCE`
-/// (N·m, N·m·s/rad, kg·m²): Clarabel's feasibility tolerance is 1e-8 relative.
+/// (N·m, N·m·s/rad, kg·m²): zero up to rounding. A converged semidefinite fit meets its
+/// sign bounds exactly (projected after the solve, `estimate::sdp`), so its verdict
+/// never hangs on Clarabel's feasibility tolerance (1e-8 relative).
 pub const ELEMENT_TOLERANCE: f64 = 1e-9;
 
 /// Processed samples in model coordinates, known forces subtracted from the torques.
@@ -1016,8 +1018,7 @@ pub(crate) fn build_result(
             std: estimate.std[i],
         })
         .collect();
-    // Sign conditions hold to the solver's feasibility tolerance: an interior-point
-    // solution sits a hair outside a bound that is active at zero.
+    // Sign conditions hold up to rounding (see `ELEMENT_TOLERANCE`).
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
         && model.params.iter().zip(&params).all(|(p, v)| match p.kind {

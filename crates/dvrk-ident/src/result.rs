@@ -262,6 +262,7 @@ impl FitResult {
                 put(format!("delay.delay_s[{i}]"), *v);
                 put(format!("delay.std_s[{i}]"), *s);
             }
+            put("delay.residual".into(), d.residual);
         }
         let roles = [
             ("train", Some(&self.metrics.train)),

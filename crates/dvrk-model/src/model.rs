@@ -214,8 +214,8 @@ pub struct FrameBounds {
 
 /// Lower bounds applied to every element by the physically consistent fit.
 ///
-/// The default is [`GlobalBounds::PHYSICAL`]: friction and motor inertias cannot be
-/// negative, and nothing more is known of them a priori. [`GlobalBounds::WANG_2019`] are
+/// The default is [`GlobalBounds::PHYSICAL`]: friction cannot be negative and a motor
+/// has some inertia, and nothing more is known of them a priori. [`GlobalBounds::WANG_2019`] are
 /// the bounds of the 2019 fit, kept to reproduce it: they exclude the small wrist
 /// friction and motor inertias the real PSM and MTM data ask for.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
@@ -232,11 +232,14 @@ pub struct GlobalBounds {
 }
 
 impl GlobalBounds {
-    /// `Fc, Fv, Ia ≥ 0`, `J ⪰ 1e-6·I`: the physical sign constraints.
+    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`, `J ⪰ 1e-6·I`: the physical constraints. A motor
+    /// inertia is kept positive, by the margin of the pseudo-inertias: a coordinate that
+    /// moves no link with inertia (the PSM's jaw) has only its motor's, and with `Ia = 0`
+    /// the mass matrix would be singular (no forward dynamics).
     pub const PHYSICAL: GlobalBounds = GlobalBounds {
         fc_min: 0.0,
         fv_min: 0.0,
-        ia_min: 0.0,
+        ia_min: 1e-6,
         pseudo_inertia_eps: 1e-6,
     };
 

@@ -167,7 +167,7 @@ impl Overrides<'_, '_> {
 ///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
 ///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every
 ///   coordinate, or a list of seconds, one per coordinate (``0``: none, the default);
-/// - ``bounds``: ``"physical"`` (friction and motor inertias ≥ 0) or ``"2019"`` (≥ 0.001,
+/// - ``bounds``: ``"physical"`` (friction ≥ 0, motor inertias ≥ 1e-6) or ``"2019"`` (≥ 0.001,
 ///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
 ///   robot description's (``dvrk-ident fit --bounds``);
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take

@@ -168,7 +168,7 @@ pub struct Args {
     #[arg(long, value_parser = super::named::<Method>(), default_value = "sdp")]
     pub method: Method,
     /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
-    /// the robot description's: `physical` (≥ 0) or `2019` (≥ 0.001, to reproduce the
+    /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019` (≥ 0.001, to reproduce the
     /// 2019 fit). Default: the description's (the built-in robots: physical)
     #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET")]
     pub bounds: Option<BoundsSet>,

@@ -109,6 +109,9 @@ pub struct DelayEstimate {
     pub std_s: Vec<f64>,
     /// The search range `[0, max_s]`, s.
     pub max_s: f64,
+    /// The weighted residual sum of squares of the least-squares fit at `delay_s` (the
+    /// method's first weights: 1 for OLS and IRLS, 1/torque range for WLS and SDP).
+    pub residual: f64,
     /// Coordinate sweeps until no delay moved by more than 1e-7 s.
     pub sweeps: usize,
 }
@@ -247,6 +250,7 @@ pub fn estimate_delays(
         delay_s,
         std_s,
         max_s,
+        residual,
         sweeps,
     })
 }
