@@ -521,7 +521,7 @@ impl FitResultPy {
     }
 
     /// The measurement delays estimated by ``delay="auto"``: ``{delay_s, std_s, max_s,
-    /// sweeps}`` (seconds), or ``None``.
+    /// residual, sweeps}`` (seconds), or ``None``.
     #[getter]
     fn delay<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.delay)
