@@ -265,7 +265,10 @@ class Result:
     def physically_consistent(self) -> bool: ...
     @property
     def solver(self) -> Dict[str, Any]:
-        """``{name, status, converged, seconds, iterations}``."""
+        """``{name, status, converged, seconds, iterations}`` (and ``tolerance``)."""
+    @property
+    def delay(self) -> Optional[Dict[str, Any]]:
+        """``{delay_s, std_s, max_s, residual, sweeps}`` of ``delay="auto"``, or None."""
     @property
     def metrics(self) -> Dict[str, Any]:
         """``{train, test}``, each ``{joints, samples, relative_error, rms}`` or None."""
@@ -377,12 +380,15 @@ def fit(
     irls_iterations: Optional[int] = None,
     sdp_regularization: Optional[float] = None,
     stribeck: Optional[float] = None,
+    bounds: Optional[str] = None,
+    delay: Optional[Union[str, float, Sequence[float]]] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
 ) -> Result:
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
-    per coordinate, or ``"none"``/``False`` (no filter)."""
+    per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
+    ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate)."""
 
 def prepare(
     robot: Robot,

@@ -279,7 +279,12 @@ def test_sdp_result_is_consistent(psm, psm_logs):
     assert r.physically_consistent
     assert all(c["consistent"] and c["min_eigenvalue"] > 0 for c in r.consistency)
     p = r.parameters
-    assert all(p[n] >= 0.001 - 1e-6 for n in p if n[:2] in ("Fc", "Fv", "Ia"))
+    # The robot's default bounds are physical, met exactly (projected after the solve);
+    # bounds="2019" puts back Fc, Fv, Ia >= 0.001.
+    assert all(p[n] >= 0.0 for n in p if n[:2] in ("Fc", "Fv", "Ia"))
+    p2019 = di.fit(psm, di.read_log(psm_logs["csv"]), cutoff=5.0, bounds="2019").parameters
+    assert all(p2019[n] >= 0.001 for n in p2019 if n[:2] in ("Fc", "Fv", "Ia"))
+    assert any(p[n] < 0.001 for n in p if n[:2] in ("Fc", "Fv", "Ia"))
     # A consistent result has a positive definite mass matrix: forward dynamics works.
     q = np.zeros((3, 7))
     q[:, 2] = 0.12
@@ -344,3 +349,40 @@ def test_a_held_computation_finishes_once_released(psm):
     di._hold_computations(False)
     m = psm.mass_matrix(np.full(115, 0.01), np.zeros((3, 7)))
     assert m.shape == (3, 7, 7)
+
+
+def test_delay_auto_matches_cli(psm, cli, run_cli, tmp_path):
+    """`delay="auto"` is `fit --delay auto`: a log simulated with torque delays of 0, 10
+    and 50 ms (`simulate --delay`) gives the same document, delays included, and they
+    are within 1 ms of the simulated ones."""
+    import subprocess
+    from conftest import REPO
+
+    truth = [0.0, 0.01, 0.05, 0.01, 0.05, 0.0, 0.01]
+    log = tmp_path / "delayed.mcap"
+    subprocess.run(
+        [cli, "simulate", "psm", "--params", REPO / "examples" / "psm_params.json",
+         "--trajectory", REPO / "examples" / "psm_trajectory.json", "--periods", "3",
+         "--noise", "0.002", "--seed", "1", "--delay", ",".join(map(str, truth)),
+         "--out", log],
+        check=True,
+        capture_output=True,
+    )
+    result = di.fit(psm, di.read_log(log, psm), method="ols", delay="auto")
+    cli_doc = run_cli("fit", log, "--robot", "psm", "--method", "ols", "--delay", "auto",
+                      "--json")
+    py = result.to_dict()
+    same_document(py, cli_doc)
+    close(py["delay"]["delay_s"], cli_doc["delay"]["delay_s"])
+    close(py["delay"]["std_s"], cli_doc["delay"]["std_s"])
+    assert result.delay == py["delay"]
+    assert np.all(np.abs(np.array(result.delay["delay_s"]) - truth) < 1e-3)
+    # Fixed delays and the 2019 bounds by name, as on the command line.
+    fixed = di.fit(psm, di.read_log(log, psm), method="ols", delay=truth)
+    assert fixed.settings["processing"]["delay_s"] == truth and fixed.delay is None
+    with pytest.raises(di.InputError, match="delay"):
+        di.fit(psm, di.read_log(log, psm), delay=[0.01, 0.02])
+    with pytest.raises(di.InputError, match="bounds"):
+        di.fit(psm, di.read_log(log, psm), bounds="2018")
+    assert di.fit(psm, di.read_log(log, psm), method="ols", bounds="2019").settings[
+        "bounds"] == "2019"

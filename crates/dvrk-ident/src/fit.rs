@@ -3,6 +3,7 @@
 //! document. [`fit`] works on logs in memory; [`stream::fit_stream`] on logs read from
 //! disk block by block, for logs larger than memory, with the same result.
 
+pub mod delay;
 pub mod stream;
 
 use dvrk_model::{inertia, BaseParameters, Model, ParamKind, Workspace};
@@ -60,6 +61,47 @@ impl std::str::FromStr for Method {
     }
 }
 
+/// A named set of the global lower bounds of the semidefinite fit
+/// ([`dvrk_model::GlobalBounds`]), replacing the description's `[bounds]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BoundsSet {
+    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`: physical ([`dvrk_model::GlobalBounds::PHYSICAL`]).
+    #[serde(rename = "physical")]
+    Physical,
+    /// `Fc, Fv, Ia ≥ 0.001`, to reproduce the 2019 fit
+    /// ([`dvrk_model::GlobalBounds::WANG_2019`]).
+    #[serde(rename = "2019")]
+    Wang2019,
+}
+
+impl BoundsSet {
+    /// The bounds of the set.
+    pub fn bounds(self) -> dvrk_model::GlobalBounds {
+        match self {
+            BoundsSet::Physical => dvrk_model::GlobalBounds::PHYSICAL,
+            BoundsSet::Wang2019 => dvrk_model::GlobalBounds::WANG_2019,
+        }
+    }
+}
+
+impl crate::names::Named for BoundsSet {
+    const WHAT: &'static str = "bounds";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("physical", BoundsSet::Physical),
+        ("2019", BoundsSet::Wang2019),
+        ("wang2019", BoundsSet::Wang2019),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for BoundsSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
 /// Settings of a fit. Defaults: SDP, the processing defaults, metrics over whole logs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -77,17 +119,38 @@ pub struct FitSettings {
     /// m/s) to every friction element of the model that has none (see
     /// [`FitSettings::model`]). `None`: the model as described.
     pub stribeck_velocity: Option<f64>,
+    /// Lower bounds on Fc, Fv, Ia of the semidefinite fit in place of the description's
+    /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<BoundsSet>,
+    /// Estimate the torques' measurement delays over `[0, this]` s ([`delay`]) and fit
+    /// with them (they replace `processing.delay_s`, where the result records them).
+    /// `None`: the delays of `processing.delay_s`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_search_s: Option<f64>,
 }
 
 impl FitSettings {
     /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
-    /// of [`FitSettings::stribeck_velocity`]. Everything that reads a result back
-    /// (validate, report, export) goes through here so the parameters line up.
+    /// of [`FitSettings::stribeck_velocity`] and the bounds of [`FitSettings::bounds`].
+    /// Everything that reads a result back (validate, report, export) goes through here
+    /// so the parameters line up.
     pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
-        Ok(match self.stribeck_velocity {
+        let mut m = match self.stribeck_velocity {
             Some(v) => std::borrow::Cow::Owned(model.with_stribeck(v)?),
             None => std::borrow::Cow::Borrowed(model),
-        })
+        };
+        if let Some(set) = self.bounds {
+            // The set's sign bounds; the description's `pseudo_inertia_eps` stays.
+            let wanted = dvrk_model::GlobalBounds {
+                pseudo_inertia_eps: m.bounds.pseudo_inertia_eps,
+                ..set.bounds()
+            };
+            if m.bounds != wanted {
+                m.to_mut().bounds = wanted;
+            }
+        }
+        Ok(m)
     }
 }
 
@@ -100,12 +163,16 @@ impl Default for FitSettings {
             irls_iterations: 5,
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
+            bounds: None,
+            delay_search_s: None,
         }
     }
 }
 
 /// Friction and motor inertia count as non-negative down to `-ELEMENT_TOLERANCE`
-/// (N·m, N·m·s/rad, kg·m²): Clarabel's feasibility tolerance is 1e-8 relative.
+/// (N·m, N·m·s/rad, kg·m²): zero up to rounding. A converged semidefinite fit meets its
+/// sign bounds exactly (projected after the solve, `estimate::sdp`), so its verdict
+/// never hangs on Clarabel's feasibility tolerance (1e-8 relative).
 pub const ELEMENT_TOLERANCE: f64 = 1e-9;
 
 /// Processed samples in model coordinates, known forces subtracted from the torques.
@@ -572,18 +639,48 @@ pub fn fit_logs(
     }
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;
+    let mut settings = std::borrow::Cow::Borrowed(settings);
+    let delays = match settings.delay_search_s {
+        Some(max_s) => {
+            progress.stage("estimating the measurement delays", None);
+            let found = delay::estimate_delays(model, train, &settings, max_s)?;
+            progress.finish();
+            settings.to_mut().processing.delay_s = found.delay_s.clone();
+            Some(found)
+        }
+        None => None,
+    };
+    let settings: &FitSettings = &settings;
     progress.stage("processing", None);
     let data = prepare_logs(model, train, &settings.processing)?;
     let test_data = prepare_logs(model, test, &settings.processing)?;
     progress.finish();
     let observed = Observed::of_prepared(model, train, &data, progress)?;
-    fit_observed(
+    let mut result = fit_observed(
         model,
         &observed,
         settings,
         |params| test_inputs(model, test, &test_data, params, settings.test_window),
         progress,
-    )
+    )?;
+    result.delay = delays;
+    result.check_finite()?;
+    Ok(result)
+}
+
+/// Refuses the delay search where the samples are not in memory (a streamed fit, a fit
+/// of observation states): it needs every log processed at many shifts.
+pub(crate) fn no_delay_search(settings: &FitSettings, what: &str) -> Result<(), IdentError> {
+    match settings.delay_search_s {
+        Some(_) => Err(IdentError::Setting {
+            name: "delay".into(),
+            message: format!(
+                "the delay search (delay auto) needs the logs in memory, which {what} does \
+                 not hold: estimate the delays on a shorter log and give them fixed"
+            ),
+        }),
+        None => Ok(()),
+    }
 }
 
 /// Each log prepared ([`prepare`]) on its own.
@@ -834,6 +931,7 @@ pub(crate) fn estimate(
         converged: true,
         seconds: 0.0,
         iterations: 1,
+        tolerance: None,
     };
     if settings.method == Method::Irls {
         for it in 0..settings.irls_iterations {
@@ -858,6 +956,7 @@ pub(crate) fn estimate(
             converged: sol.converged,
             seconds: sol.seconds,
             iterations: sol.iterations,
+            tolerance: Some(options.tolerance),
         };
         sol.params
     } else {
@@ -919,8 +1018,7 @@ pub(crate) fn build_result(
             std: estimate.std[i],
         })
         .collect();
-    // Sign conditions hold to the solver's feasibility tolerance: an interior-point
-    // solution sits a hair outside a bound that is active at zero.
+    // Sign conditions hold up to rounding (see `ELEMENT_TOLERANCE`).
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
         && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
@@ -956,6 +1054,7 @@ pub(crate) fn build_result(
         condition_number: estimate.condition_number,
         sigma2: estimate.sigma2,
         metrics,
+        delay: None,
     };
     result.check_finite()?;
     Ok(result)

@@ -47,7 +47,7 @@ pub use trajectory::{Coordinates, Trajectory, TrajectoryError};
 pub mod fit;
 pub mod result;
 
-pub use fit::{fit, FitSettings, Method};
+pub use fit::{fit, BoundsSet, FitSettings, Method};
 pub use result::FitResult;
 pub mod cable;
 pub mod dvrk_gc;

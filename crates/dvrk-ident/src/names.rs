@@ -63,7 +63,7 @@ pub trait Named: Sized + Copy + 'static {
 mod tests {
     use super::Named;
     use crate::excite::optimize::Criterion;
-    use crate::fit::Method;
+    use crate::fit::{BoundsSet, Method};
     use crate::log::mcap::TimeSource;
     use crate::log::LogFormat;
     use crate::Coordinates;
@@ -97,6 +97,7 @@ mod tests {
     #[test]
     fn every_option_name_parses_back() {
         check(&[Method::Ols, Method::Wls, Method::Irls, Method::Sdp]);
+        check(&[BoundsSet::Physical, BoundsSet::Wang2019]);
         check(&[Criterion::Condition, Criterion::LogDet]);
         check(&[Coordinates::Measured, Coordinates::Model]);
         check(&[

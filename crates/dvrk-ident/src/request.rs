@@ -11,13 +11,14 @@ use std::sync::Arc;
 use dvrk_model::Model;
 
 use crate::excite::FourierTrajectory;
+use crate::fit::delay::DelayOption;
 use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use crate::fit::{fit_logs, LogData};
 use crate::log::{self, LogReader, ReadOptions};
 use crate::progress::Progress;
 use crate::signal::Cutoff;
 use crate::state::ObservationState;
-use crate::{FitResult, FitSettings, IdentError, Method, Trajectory};
+use crate::{BoundsSet, FitResult, FitSettings, IdentError, Method, Trajectory};
 
 /// Settings changed from a base (the defaults, or a result's `settings`): each field
 /// that is `Some` replaces the base's value, the same way for every front end.
@@ -71,6 +72,11 @@ pub struct Overrides {
     pub sdp_regularization: Option<f64>,
     /// A Stribeck term with this velocity (rad/s or m/s) on every friction element.
     pub stribeck_velocity: Option<f64>,
+    /// The semidefinite fit's lower bounds in place of the description's.
+    pub bounds: Option<BoundsSet>,
+    /// The torques' measurement delays: estimated, or fixed (one for every coordinate or
+    /// one each); applied by [`Overrides::settings_for`], which knows the coordinates.
+    pub delay: Option<DelayOption>,
 }
 
 impl Overrides {
@@ -110,11 +116,32 @@ impl Overrides {
         if let Some(v) = self.stribeck_velocity {
             s.stribeck_velocity = Some(v);
         }
+        if let Some(b) = self.bounds {
+            s.bounds = Some(b);
+        }
         s
     }
 
-    /// The overrides that change how logs are processed or which model is fitted:
-    /// observation states carry their own, so these are refused with them.
+    /// [`Overrides::apply`], and the delays for `model`'s coordinates.
+    pub fn settings_for(
+        &self,
+        base: FitSettings,
+        model: &Model,
+    ) -> Result<FitSettings, IdentError> {
+        let mut s = self.apply(base);
+        if let Some(d) = &self.delay {
+            d.apply(&mut s, model.dof())
+                .map_err(|message| IdentError::Setting {
+                    name: "delay".into(),
+                    message,
+                })?;
+        }
+        Ok(s)
+    }
+
+    /// The overrides that change how logs are processed or which model is fitted
+    /// (the delays shift the torques before the reduction): observation states carry
+    /// their own, so these are refused with them.
     fn observation_fields(&self) -> Vec<&'static str> {
         let given = [
             ("cutoff", self.cutoff.is_some()),
@@ -124,6 +151,7 @@ impl Overrides {
             ("min_speed", self.min_speed.is_some()),
             ("resample", self.resample_hz.is_some()),
             ("stribeck", self.stribeck_velocity.is_some()),
+            ("delay", self.delay.is_some()),
         ];
         given
             .into_iter()
@@ -287,7 +315,7 @@ impl FitRequest {
         if train.is_empty() {
             return Err(crate::fit::no_training_log());
         }
-        let mut settings = self.overrides.apply(self.settings.clone());
+        let mut settings = self.overrides.settings_for(self.settings.clone(), robot)?;
         let model = settings.model(robot)?.into_owned();
         let read = self.read.for_model(&model);
         if self.streams() {

@@ -54,6 +54,11 @@ pub struct SolverInfo {
     pub converged: bool,
     pub seconds: f64,
     pub iterations: u32,
+    /// The semidefinite solver's feasibility and gap tolerance (relative, in its scaled
+    /// problem): the link pseudo-inertias satisfy `J ⪰ eps·I` to it, while friction and
+    /// motor inertia bounds hold exactly (projected after the solve).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
 }
 
 /// Per-joint errors on one trajectory (model coordinates).
@@ -187,6 +192,10 @@ pub struct FitResult {
     /// Residual variance of the weighted least-squares fit.
     pub sigma2: f64,
     pub metrics: Metrics,
+    /// The measurement delays estimated by `delay auto` (applied through
+    /// `settings.processing.delay_s`, which holds them for validate, report, export).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub delay: Option<crate::fit::delay::DelayEstimate>,
 }
 
 impl FitResult {
@@ -248,6 +257,13 @@ impl FitResult {
         }
         put("condition_number".into(), self.condition_number);
         put("sigma2".into(), self.sigma2);
+        if let Some(d) = &self.delay {
+            for (i, (v, s)) in d.delay_s.iter().zip(&d.std_s).enumerate() {
+                put(format!("delay.delay_s[{i}]"), *v);
+                put(format!("delay.std_s[{i}]"), *s);
+            }
+            put("delay.residual".into(), d.residual);
+        }
         let roles = [
             ("train", Some(&self.metrics.train)),
             ("test", self.metrics.test.as_ref()),

@@ -16,6 +16,7 @@
 //! explicitly as [`CutoffConvention::Wpi2019`] (and [`LowPass::wpi2019`],
 //! [`Processing::wpi2019`]) for reproducing the published numbers, never as a default.
 
+pub mod advance;
 mod butter;
 mod filter;
 mod ops;
@@ -455,6 +456,11 @@ pub struct Processing {
     /// Largest accepted relative deviation of a time step from the median step when not
     /// resampling (gaps and jitter beyond it are rejected).
     pub uniform_tolerance: f64,
+    /// Measurement delay of each coordinate's torque, s (none: empty): the torque of
+    /// coordinate `j` at `t + delay_s[j]` is the one the motion at `t` explains
+    /// ([`advance`]), applied on the processing clock before the filters.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub delay_s: Vec<f64>,
 }
 
 impl Default for Processing {
@@ -470,6 +476,7 @@ impl Default for Processing {
             min_speed: None,
             resample_hz: None,
             uniform_tolerance: 0.1,
+            delay_s: Vec::new(),
         }
     }
 }
@@ -504,6 +511,7 @@ impl Processing {
         if let Some(f) = &self.filter {
             f.cutoff_hz.check(dof)?;
         }
+        advance::check_delays(&self.delay_s, dof)?;
         if self.decimate == 0 {
             return Err(SignalError::InvalidSetting {
                 name: "decimate",
@@ -639,6 +647,21 @@ pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, Si
                 rate,
             )
         }
+    };
+    let tau = match advance::Advance::new(&settings.delay_s, rate_hz) {
+        Some(mut a) => {
+            let mut out = Vec::with_capacity(tau.len());
+            let mut row = vec![0.0; tau.ncols()];
+            for k in 0..tau.nrows() {
+                for (j, r) in row.iter_mut().enumerate() {
+                    *r = tau[(k, j)];
+                }
+                a.push(&row, &mut out);
+            }
+            a.finish(&mut out);
+            DMatrix::from_row_slice(tau.nrows(), tau.ncols(), &out)
+        }
+        None => tau,
     };
     let n = time.len();
     if 2 * settings.trim >= n {

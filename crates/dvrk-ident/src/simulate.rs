@@ -35,6 +35,10 @@ pub struct Simulation {
     pub noise_std: Vec<f64>,
     /// Seed of the noise generator.
     pub seed: u64,
+    /// Measurement delay of each coordinate's torque, s: the torque logged at `t` is the
+    /// one of the motion at `t − d_j` (what `fit --delay` estimates). Empty for none,
+    /// one value for every coordinate or one per coordinate.
+    pub delay_s: Vec<f64>,
 }
 
 impl Default for Simulation {
@@ -45,6 +49,7 @@ impl Default for Simulation {
             rate_hz: 200.0,
             noise_std: Vec::new(),
             seed: 0,
+            delay_s: Vec::new(),
         }
     }
 }
@@ -178,6 +183,27 @@ pub fn simulate(
             format!("standard deviations must be finite and non-negative, got {v}"),
         ));
     }
+    let delay: Vec<f64> = match sim.delay_s.len() {
+        0 => vec![0.0; n],
+        1 => vec![sim.delay_s[0]; n],
+        m if m == n => sim.delay_s.clone(),
+        m => {
+            return Err(setting(
+                "delay",
+                format!("expected one value or {n} (one per coordinate), got {m}"),
+            ))
+        }
+    };
+    let max_delay = crate::signal::advance::MAX_DELAY_S;
+    if let Some(v) = delay
+        .iter()
+        .find(|v| !(v.is_finite() && **v >= 0.0 && **v <= max_delay))
+    {
+        return Err(setting(
+            "delay",
+            format!("delays must be within [0, {max_delay}] s, got {v}"),
+        ));
+    }
     let count = sim.samples(traj);
     if count < 2 {
         return Err(setting(
@@ -194,25 +220,40 @@ pub fn simulate(
     let time = uniform_time(count, sim.rate_hz);
     let (q, dq, ddq) = traj.sample(&time);
     let mut ws = Workspace::new(model);
-    let mut rng = Gaussian::new(sim.seed);
     let mut tau = DMatrix::zeros(count, n);
     let (mut qk, mut dqk, mut ddqk, mut tk) =
         (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    // The torques of each distinct delay from the motion that much earlier (the
+    // trajectory is periodic, so before its start too).
+    let mut distinct = delay.clone();
+    distinct.sort_by(f64::total_cmp);
+    distinct.dedup();
+    for &d in &distinct {
+        let shifted: Vec<f64> = time.iter().map(|t| t - d).collect();
+        let (sq, sdq, sddq) = if d == 0.0 {
+            (q.clone(), dq.clone(), ddq.clone())
+        } else {
+            traj.sample(&shifted)
+        };
+        for k in 0..count {
+            for j in 0..n {
+                qk[j] = sq[(k, j)];
+                dqk[j] = sdq[(k, j)];
+                ddqk[j] = sddq[(k, j)];
+            }
+            model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
+            model.add_known_forces(&qk, &mut tk);
+            for j in (0..n).filter(|&j| delay[j] == d) {
+                tau[(k, j)] = tk[j];
+            }
+        }
+    }
+    let mut rng = Gaussian::new(sim.seed);
     for k in 0..count {
         for j in 0..n {
-            qk[j] = q[(k, j)];
-            dqk[j] = dq[(k, j)];
-            ddqk[j] = ddq[(k, j)];
-        }
-        model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
-        model.add_known_forces(&qk, &mut tk);
-        for j in 0..n {
-            let e = if noise[j] > 0.0 {
-                noise[j] * rng.sample()
-            } else {
-                0.0
-            };
-            tau[(k, j)] = tk[j] + e;
+            if noise[j] > 0.0 {
+                tau[(k, j)] += noise[j] * rng.sample();
+            }
         }
     }
     let in_model = Trajectory {

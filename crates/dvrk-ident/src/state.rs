@@ -362,15 +362,19 @@ impl ObservationState {
         progress: &dyn Progress,
     ) -> Result<FitResult, IdentError> {
         let settings = self.settings(estimator);
+        crate::fit::no_delay_search(&settings, "a fit of observation states")?;
         let model = self.model(model)?;
+        // The estimator's bounds (not part of the state: no column depends on them).
+        let model = settings.model(&model)?;
+        let model: &Model = &model;
         progress.stage("processing", None);
-        let test_data = prepare_logs(&model, test, &settings.processing)?;
+        let test_data = prepare_logs(model, test, &settings.processing)?;
         progress.finish();
         fit_observed(
-            &model,
+            model,
             &self.observed,
             &settings,
-            |params| test_inputs(&model, test, &test_data, params, settings.test_window),
+            |params| test_inputs(model, test, &test_data, params, settings.test_window),
             progress,
         )
     }

@@ -213,24 +213,48 @@ pub struct FrameBounds {
 }
 
 /// Lower bounds applied to every element by the physically consistent fit.
+///
+/// The default is [`GlobalBounds::PHYSICAL`]: friction cannot be negative and a motor
+/// has some inertia, and nothing more is known of them a priori. [`GlobalBounds::WANG_2019`] are
+/// the bounds of the 2019 fit, kept to reproduce it: they exclude the small wrist
+/// friction and motor inertias the real PSM and MTM data ask for.
 #[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct GlobalBounds {
+    /// Coulomb friction, N·m or N
     pub fc_min: f64,
+    /// viscous friction, N·m·s/rad or N·s/m
     pub fv_min: f64,
+    /// motor inertia, kg·m²
     pub ia_min: f64,
     /// `J ⪰ eps·I` for every link pseudo-inertia (kg·m²)
     pub pseudo_inertia_eps: f64,
 }
 
+impl GlobalBounds {
+    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`, `J ⪰ 1e-6·I`: the physical constraints. A motor
+    /// inertia is kept positive, by the margin of the pseudo-inertias: a coordinate that
+    /// moves no link with inertia (the PSM's jaw) has only its motor's, and with `Ia = 0`
+    /// the mass matrix would be singular (no forward dynamics).
+    pub const PHYSICAL: GlobalBounds = GlobalBounds {
+        fc_min: 0.0,
+        fv_min: 0.0,
+        ia_min: 1e-6,
+        pseudo_inertia_eps: 1e-6,
+    };
+
+    /// `Fc, Fv, Ia ≥ 0.001`, `J ⪰ 1e-6·I`: the bounds of Wang et al. (RA-L 2019).
+    pub const WANG_2019: GlobalBounds = GlobalBounds {
+        fc_min: 0.001,
+        fv_min: 0.001,
+        ia_min: 0.001,
+        pseudo_inertia_eps: 1e-6,
+    };
+}
+
 impl Default for GlobalBounds {
     fn default() -> Self {
-        GlobalBounds {
-            fc_min: 0.001,
-            fv_min: 0.001,
-            ia_min: 0.001,
-            pseudo_inertia_eps: 1e-6,
-        }
+        GlobalBounds::PHYSICAL
     }
 }
 

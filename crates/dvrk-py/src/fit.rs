@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{self, FitRequest, LogSource, Streaming, Training};
@@ -62,6 +63,20 @@ fn samples(logs: Vec<(Arc<Trajectory>, Option<PathBuf>)>) -> Vec<LogSource> {
         .collect()
 }
 
+/// `delay=`: ``"auto"``, seconds, or a list of seconds (one per coordinate).
+fn delay_option(d: &Bound<'_, PyAny>) -> PyResult<DelayOption> {
+    if let Ok(text) = d.extract::<String>() {
+        text.parse::<DelayOption>()
+    } else if let Ok(v) = d.extract::<f64>() {
+        Ok(DelayOption::Fixed(vec![v]))
+    } else if let Ok(v) = d.extract::<Vec<f64>>() {
+        Ok(DelayOption::Fixed(v))
+    } else {
+        Err("expected \"auto\", seconds, or a list of seconds".to_string())
+    }
+    .map_err(|e| input(format!("delay: {e}")))
+}
+
 /// The keyword arguments that change the settings, shared by `fit`, `observe` and
 /// `prepare`: a base (`settings`) and the library's [`request::Overrides`].
 #[derive(Default)]
@@ -78,6 +93,8 @@ pub(crate) struct Overrides<'a, 'py> {
     pub irls_iterations: Option<usize>,
     pub sdp_regularization: Option<f64>,
     pub stribeck: Option<f64>,
+    pub bounds: Option<&'a str>,
+    pub delay: Option<&'a Bound<'py, PyAny>>,
 }
 
 impl Overrides<'_, '_> {
@@ -128,6 +145,15 @@ impl Overrides<'_, '_> {
             irls_iterations: self.irls_iterations,
             sdp_regularization: self.sdp_regularization,
             stribeck_velocity: self.stribeck,
+            bounds: self
+                .bounds
+                .map(|b| crate::convert::named("bounds", b))
+                .transpose()?,
+            delay: self
+                .delay
+                .filter(|d| !d.is_none())
+                .map(delay_option)
+                .transpose()?,
         })
     }
 
@@ -164,6 +190,13 @@ impl Overrides<'_, '_> {
 ///   ``resample`` (Hz, of the samples given), ``irls_iterations``,
 ///   ``sdp_regularization``, ``stribeck`` (adds a Stribeck term with this velocity,
 ///   rad/s or m/s, to every friction element);
+/// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
+///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
+///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every
+///   coordinate, or a list of seconds, one per coordinate (``0``: none, the default);
+/// - ``bounds``: ``"physical"`` (friction ≥ 0, motor inertias ≥ 1e-6) or ``"2019"`` (≥ 0.001,
+///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
+///   robot description's (``dvrk-ident fit --bounds``);
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
@@ -185,7 +218,7 @@ impl Overrides<'_, '_> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -204,6 +237,8 @@ pub fn fit(
     irls_iterations: Option<usize>,
     sdp_regularization: Option<f64>,
     stribeck: Option<f64>,
+    bounds: Option<&str>,
+    delay: Option<&Bound<'_, PyAny>>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
@@ -220,6 +255,8 @@ pub fn fit(
         irls_iterations,
         sdp_regularization,
         stribeck,
+        bounds,
+        delay,
     };
     let train = match observations_arg(data)? {
         Some(states) => Training::Observations(states.into_iter().map(|s| (s, None)).collect()),
@@ -496,6 +533,13 @@ impl FitResultPy {
     #[getter]
     fn metrics<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.metrics)
+    }
+
+    /// The measurement delays estimated by ``delay="auto"``: ``{delay_s, std_s, max_s,
+    /// residual, sweeps}`` (seconds), or ``None``.
+    #[getter]
+    fn delay<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.delay)
     }
 
     #[getter]

@@ -57,6 +57,18 @@ pub fn run(args: Args) -> Result<()> {
         &[],
     )?;
     let loaded = load_result(&args.result, args.robot.as_deref())?;
+    // None of the formats has a place for the torques' measurement delays: a controller
+    // that compares these torques with its measurements must apply them itself.
+    let delays = &loaded.result.settings.processing.delay_s;
+    if !delays.is_empty() {
+        let ms: Vec<String> = delays.iter().map(|d| format!("{:.1}", d * 1e3)).collect();
+        eprintln!(
+            "note: the fit's torque measurement delays ({} ms, per coordinate) are not part \
+             of the exported files: compare measured torques that much later with the \
+             model's",
+            ms.join(" ")
+        );
+    }
     // Everything is built before anything is written: an error leaves no output.
     let urdf = match &args.urdf {
         Some(out) => Some((out, urdf_text(&loaded, args.from.as_deref(), &args.result)?)),

@@ -6,10 +6,11 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::{FitResult, Method, Trajectory};
+use dvrk_ident::{BoundsSet, FitResult, Method, Trajectory};
 use dvrk_model::Model;
 
 use super::args::LogArgs;
@@ -28,7 +29,7 @@ pub struct Args {
     /// Observation states of `dvrk-ident observe` (the reduce): merged in order and
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
-    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck"])]
+    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck", "delay"])]
     pub from: Vec<String>,
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
     /// --from: default the states' robot, and it must be the robot they were observed with)
@@ -39,6 +40,16 @@ pub struct Args {
     /// Estimator
     #[arg(long, value_parser = super::named::<Method>(), default_value = "sdp")]
     pub method: Method,
+    /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
+    /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019` (≥ 0.001, to reproduce the
+    /// 2019 fit). Default: the description's (the built-in robots: physical)
+    #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET")]
+    pub bounds: Option<BoundsSet>,
+    /// Measurement delay of the torques: `auto` (estimated per coordinate within
+    /// 0–0.150 s with the parameters, recorded in the result), `0` (none, the default)
+    /// or seconds, one for all coordinates or one per coordinate `d1,d2,...`
+    #[arg(long, value_name = "auto|D|D1,D2,...")]
+    pub delay: Option<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG")]
     pub test: Vec<String>,
@@ -110,6 +121,14 @@ fn request(args: &Args) -> Result<FitRequest> {
     overrides.stribeck_velocity = args.stribeck;
     overrides.irls_iterations = args.irls_iterations;
     overrides.sdp_regularization = args.sdp_regularization;
+    overrides.bounds = args.bounds;
+    overrides.delay = match &args.delay {
+        Some(d) => Some(
+            d.parse::<DelayOption>()
+                .map_err(|e| anyhow::anyhow!("--delay: {e}"))?,
+        ),
+        None => None,
+    };
     Ok(FitRequest {
         test: args
             .test
@@ -255,6 +274,24 @@ pub fn table(r: &FitResult) -> String {
             format!(" (not: {})", bad.join(", "))
         }
     );
+    let delays = &r.settings.processing.delay_s;
+    if !delays.is_empty() {
+        let ms: Vec<String> = match &r.delay {
+            Some(d) => d
+                .delay_s
+                .iter()
+                .zip(&d.std_s)
+                .map(|(v, e)| format!("{:.1}±{:.1}", v * 1e3, e * 1e3))
+                .collect(),
+            None => delays.iter().map(|v| format!("{:.1}", v * 1e3)).collect(),
+        };
+        let how = if r.delay.is_some() {
+            "estimated"
+        } else {
+            "given"
+        };
+        let _ = writeln!(s, "torque delays ({how}, ms): {}", ms.join(" "));
+    }
     let _ = writeln!(
         s,
         "{:<8} {:>12} {:>12} {:>12} {:>12}",

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_model::Model;
@@ -39,6 +40,10 @@ pub struct Args {
     /// or one per coordinate, comma-separated
     #[arg(long, default_value = "0", value_name = "STD")]
     pub noise: String,
+    /// Measurement delay of the torques (s): the torque logged at t is the one of the
+    /// motion at t − d. One value or one per coordinate, comma-separated
+    #[arg(long, value_name = "D")]
+    pub delay: Option<String>,
     /// Sampling rate (Hz)
     #[arg(long, default_value_t = 200.0, value_name = "HZ")]
     pub rate: f64,
@@ -119,11 +124,18 @@ pub fn run(args: Args) -> Result<()> {
             noise.len()
         );
     }
+    let delay_s = match args.delay.as_deref().map(str::parse::<DelayOption>) {
+        None => Vec::new(),
+        Some(Ok(DelayOption::Fixed(d))) => d,
+        Some(Ok(DelayOption::Auto)) => bail!("--delay: simulate takes delays in seconds"),
+        Some(Err(e)) => bail!("--delay: {e}"),
+    };
     let sim = Simulation {
         duration_s: args.duration.or(args.periods.map(|p| p * traj.period_s())),
         rate_hz: args.rate,
         noise_std: noise,
         seed: args.seed,
+        delay_s,
     };
     let format = output_format(&args.out, args.format)?;
     let log = simulate(&model, &params, &traj, &sim)?;

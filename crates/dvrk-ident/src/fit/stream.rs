@@ -278,6 +278,7 @@ pub fn fit_stream_logs(
     if train.is_empty() {
         return Err(no_training_log());
     }
+    crate::fit::no_delay_search(settings, "a streamed fit")?;
     // The model options of the settings (Stribeck terms), as the in-memory fit.
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;

@@ -8,6 +8,7 @@ use super::difference::Difference;
 use super::resample::Resampler;
 use super::timing::LogTiming;
 use super::zero_phase::{settle_margin, ZeroPhase};
+use crate::signal::advance::Advance;
 use crate::signal::{AccelerationSource, Processed, Processing, SignalError};
 use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};
 
@@ -64,6 +65,8 @@ pub struct BlockProcessor {
     resampler: Option<Resampler>,
     q_stage: Stage,
     dq_stage: Stage,
+    /// The torques' measurement delays, before `tau_stage`.
+    advance: Option<Advance>,
     tau_stage: Stage,
     acc_stage: Stage,
     /// Differentiates the filtered positions when the log has no velocities.
@@ -135,6 +138,7 @@ impl BlockProcessor {
             resampler,
             q_stage: Stage::Pass,
             dq_stage: Stage::Pass,
+            advance: Advance::new(&settings.delay_s, rate_hz),
             tau_stage: Stage::Pass,
             acc_stage: Stage::Pass,
             velocity: None,
@@ -314,6 +318,16 @@ impl BlockProcessor {
         a.clear();
         self.acc_stage.finish(a)?;
         self.ddq_out.extend(a.iter());
+        if let Some(mut advance) = self.advance.take() {
+            a.clear();
+            advance.finish(a);
+            b.clear();
+            for r in a.chunks_exact(self.dof) {
+                self.tau_stage.push(r, b);
+            }
+            self.tau_out.extend(b.iter());
+            b.clear();
+        }
         a.clear();
         self.tau_stage.finish(a)?;
         self.tau_out.extend(a.iter());
@@ -386,7 +400,16 @@ impl BlockProcessor {
             }
         }
         a.clear();
-        self.tau_stage.push(tau, &mut a);
+        match &mut self.advance {
+            Some(advance) => {
+                b.clear();
+                advance.push(tau, &mut b);
+                for r in b.chunks_exact(n) {
+                    self.tau_stage.push(r, &mut a);
+                }
+            }
+            None => self.tau_stage.push(tau, &mut a),
+        }
         self.tau_out.extend(a.iter());
         self.scratch = [a, b, c, d];
         self.assemble(out);
