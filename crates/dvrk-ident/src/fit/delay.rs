@@ -85,7 +85,10 @@ impl DelayOption {
                         ))
                     }
                 };
-                crate::signal::advance::check_delays(&all, dof).map_err(|e| e.to_string())?;
+                crate::signal::advance::check_delays(&all, dof).map_err(|e| match e {
+                    crate::signal::SignalError::InvalidSetting { reason, .. } => reason,
+                    e => e.to_string(),
+                })?;
                 settings.delay_search_s = None;
                 settings.processing.delay_s = if all.iter().all(|&v| v == 0.0) {
                     Vec::new()
