@@ -7,8 +7,8 @@
 #   PYTHON   a python whose environment has the `pin` wheel (default: .venv-ci/bin/python
 #            of the repository if it imports pinocchio, else a venv made in
 #            target/pinbench/venv with `pip install pin`)
-#   MARCH    g++ -march (default x86-64: the baseline, SSE2, that our Rust build targets;
-#            MARCH=native shows what Pinocchio gains from AVX2/FMA, which we do not use)
+#   MARCH    g++ -march (default x86-64: the baseline, SSE2, that our Rust build targets and
+#            that the wheel's libraries were built for; others crash, see below)
 #   CXX      C++ compiler (default g++)
 set -euo pipefail
 
@@ -70,6 +70,12 @@ defs=(
   -DPINOCCHIO_WITH_URDFDOM -DPINOCCHIO_URDFDOM_HEADERS_MAJOR_VERSION=3
   -DPINOCCHIO_URDFDOM_HEADERS_MINOR_VERSION=0 -DPINOCCHIO_URDFDOM_HEADERS_PATCH_VERSION=0
 )
+# The wheel's libraries were built for baseline x86-64. Another -march (tried: native, with
+# AVX-512, with and without -DEIGEN_MAX_ALIGN_BYTES=16) gives a binary whose Model does not
+# match the one libpinocchio_parsers' buildModel fills: it crashes (in ~Model). Baseline only.
+if [[ "$march" != x86-64 ]]; then
+  echo "warning: -march=$march does not match the wheel's libraries; expect a crash" >&2
+fi
 bin="$work/panda-$march"
 if [[ ! -x "$bin" || "$here/panda.cpp" -nt "$bin" || "$0" -nt "$bin" ]]; then
   echo "compiling $bin (Pinocchio $version, -O3 -DNDEBUG -march=$march; a minute or two)" >&2
