@@ -37,6 +37,7 @@ pub mod progress;
 #[cfg(feature = "report")]
 pub mod report;
 pub mod request;
+pub mod settings;
 pub mod signal;
 pub mod simulate;
 pub mod state;

@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::error::IdentError;
-use crate::fit::FitSettings;
+use crate::settings::FitSettings;
 
 /// Standard parameters of one link (frame axes).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -195,7 +195,7 @@ pub struct FitResult {
     /// The measurement delays estimated by `delay auto` (applied through
     /// `settings.processing.delay_s`, which holds them for validate, report, export).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub delay: Option<crate::fit::delay::DelayEstimate>,
+    pub delay: Option<DelayEstimate>,
 }
 
 impl FitResult {
@@ -378,6 +378,24 @@ pub fn wpi_params_json(model: &dvrk_model::Model, params: &[f64]) -> serde_json:
         );
     }
     serde_json::Value::Object(out)
+}
+
+/// The delays found, recorded in the result (`delay`) and applied through
+/// `settings.processing.delay_s`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct DelayEstimate {
+    /// Per coordinate, s.
+    pub delay_s: Vec<f64>,
+    /// Standard error per coordinate from the residual's curvature, s (see the module
+    /// documentation); the search range where the residual is flat there.
+    pub std_s: Vec<f64>,
+    /// The search range `[0, max_s]`, s.
+    pub max_s: f64,
+    /// The weighted residual sum of squares of the least-squares fit at `delay_s` (the
+    /// method's first weights: 1 for OLS and IRLS, 1/torque range for WLS and SDP).
+    pub residual: f64,
+    /// Coordinate sweeps until no delay moved by more than 1e-7 s.
+    pub sweeps: usize,
 }
 
 #[cfg(test)]

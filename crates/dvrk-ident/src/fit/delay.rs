@@ -22,10 +22,10 @@
 
 use dvrk_model::{Model, Workspace};
 use nalgebra::{DMatrix, DVector};
-use serde::{Deserialize, Serialize};
 
 use crate::error::IdentError;
 use crate::fit::{subtract_known_forces, to_model_coordinates, LogData, Method, TorqueRange};
+use crate::result::DelayEstimate;
 use crate::signal::stream::process_in_blocks;
 use crate::signal::{Processed, Processing};
 
@@ -99,24 +99,6 @@ impl DelayOption {
         }
         Ok(())
     }
-}
-
-/// The delays found, recorded in the result (`delay`) and applied through
-/// `settings.processing.delay_s`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct DelayEstimate {
-    /// Per coordinate, s.
-    pub delay_s: Vec<f64>,
-    /// Standard error per coordinate from the residual's curvature, s (see the module
-    /// documentation); the search range where the residual is flat there.
-    pub std_s: Vec<f64>,
-    /// The search range `[0, max_s]`, s.
-    pub max_s: f64,
-    /// The weighted residual sum of squares of the least-squares fit at `delay_s` (the
-    /// method's first weights: 1 for OLS and IRLS, 1/torque range for WLS and SDP).
-    pub residual: f64,
-    /// Coordinate sweeps until no delay moved by more than 1e-7 s.
-    pub sweeps: usize,
 }
 
 /// The delays of `logs` (training logs) minimizing the least-squares residual of

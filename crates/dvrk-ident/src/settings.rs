@@ -1,0 +1,161 @@
+//! What a fit is asked to do: the estimator ([`Method`]), the bounds set, the processing
+//! and the model options ([`FitSettings`]). A leaf: the pipeline (`fit`), the result
+//! document (`result`), observation states and the front ends all read these, and it
+//! reads none of them.
+
+use dvrk_model::Model;
+use serde::{Deserialize, Serialize};
+
+use crate::error::IdentError;
+use crate::estimate::sdp::SdpOptions;
+use crate::signal::Processing;
+
+/// Which estimator to run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Method {
+    /// Ordinary least squares on the base parameters.
+    Ols,
+    /// Weighted least squares, joint weights 1 / (torque range on the training set).
+    Wls,
+    /// Iteratively re-weighted least squares: weights 1 / (residual std per joint).
+    Irls,
+    /// Physically consistent semidefinite fit over all parameters (WLS weights).
+    #[default]
+    Sdp,
+}
+
+impl Method {
+    /// The name the command line, Python and results use (see [`crate::names`]).
+    pub fn name(self) -> &'static str {
+        crate::names::Named::name(self)
+    }
+}
+
+impl crate::names::Named for Method {
+    const WHAT: &'static str = "method";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("ols", Method::Ols),
+        ("wls", Method::Wls),
+        ("irls", Method::Irls),
+        ("sdp", Method::Sdp),
+    ];
+    const CANONICAL: usize = 4;
+}
+
+impl std::str::FromStr for Method {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
+/// A named set of the global lower bounds of the semidefinite fit
+/// ([`dvrk_model::GlobalBounds`]), replacing the description's `[bounds]`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum BoundsSet {
+    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`: physical ([`dvrk_model::GlobalBounds::PHYSICAL`]).
+    #[serde(rename = "physical")]
+    Physical,
+    /// `Fc, Fv, Ia ≥ 0.001`, to reproduce the 2019 fit
+    /// ([`dvrk_model::GlobalBounds::WANG_2019`]).
+    #[serde(rename = "2019")]
+    Wang2019,
+}
+
+impl BoundsSet {
+    /// The bounds of the set.
+    pub fn bounds(self) -> dvrk_model::GlobalBounds {
+        match self {
+            BoundsSet::Physical => dvrk_model::GlobalBounds::PHYSICAL,
+            BoundsSet::Wang2019 => dvrk_model::GlobalBounds::WANG_2019,
+        }
+    }
+}
+
+impl crate::names::Named for BoundsSet {
+    const WHAT: &'static str = "bounds";
+    const NAMES: &'static [(&'static str, Self)] = &[
+        ("physical", BoundsSet::Physical),
+        ("2019", BoundsSet::Wang2019),
+        ("wang2019", BoundsSet::Wang2019),
+    ];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for BoundsSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
+/// Settings of a fit. Defaults: SDP, the processing defaults, metrics over whole logs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct FitSettings {
+    pub method: Method,
+    pub processing: Processing,
+    /// Metrics on the first N processed samples of the test log only (the 2019 protocol
+    /// uses the first period). `None`: all samples.
+    pub test_window: Option<usize>,
+    /// Re-weighting passes of IRLS.
+    pub irls_iterations: usize,
+    /// Tikhonov weight of the SDP toward zero, relative (see `estimate::sdp`).
+    pub sdp_regularization: f64,
+    /// Adds a Stribeck term `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` with this velocity (rad/s or
+    /// m/s) to every friction element of the model that has none (see
+    /// [`FitSettings::model`]). `None`: the model as described.
+    pub stribeck_velocity: Option<f64>,
+    /// Lower bounds on Fc, Fv, Ia of the semidefinite fit in place of the description's
+    /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub bounds: Option<BoundsSet>,
+    /// Estimate the torques' measurement delays over `[0, this]` s and fit
+    /// with them (they replace `processing.delay_s`, where the result records them; see
+    /// `fit::delay`).
+    /// `None`: the delays of `processing.delay_s`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub delay_search_s: Option<f64>,
+}
+
+impl FitSettings {
+    /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
+    /// of [`FitSettings::stribeck_velocity`] and the bounds of [`FitSettings::bounds`].
+    /// Everything that reads a result back (validate, report, export) goes through here
+    /// so the parameters line up.
+    pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
+        let mut m = match self.stribeck_velocity {
+            Some(v) => std::borrow::Cow::Owned(model.with_stribeck(v)?),
+            None => std::borrow::Cow::Borrowed(model),
+        };
+        if let Some(set) = self.bounds {
+            // The set's sign bounds; the description's `pseudo_inertia_eps` stays.
+            let wanted = dvrk_model::GlobalBounds {
+                pseudo_inertia_eps: m.bounds.pseudo_inertia_eps,
+                ..set.bounds()
+            };
+            if m.bounds != wanted {
+                m.to_mut().bounds = wanted;
+            }
+        }
+        Ok(m)
+    }
+}
+
+impl Default for FitSettings {
+    fn default() -> Self {
+        FitSettings {
+            method: Method::default(),
+            processing: Processing::default(),
+            test_window: None,
+            irls_iterations: 5,
+            sdp_regularization: SdpOptions::default().regularization,
+            stribeck_velocity: None,
+            bounds: None,
+            delay_search_s: None,
+        }
+    }
+}
