@@ -270,21 +270,15 @@ impl FitRequest {
 
     /// Whether the logs will be read block by block.
     pub fn streams(&self) -> bool {
-        let files = || {
-            let train: Vec<&LogSource> = match &self.train {
-                Training::Logs(l) => l.iter().collect(),
-                Training::Observations(_) => Vec::new(),
-            };
-            train.into_iter().chain(&self.test).collect::<Vec<_>>()
+        let train = match (&self.train, self.streaming) {
+            (Training::Observations(_), _) | (_, Streaming::Never) => return false,
+            (Training::Logs(train), _) => train,
         };
-        let all_files = files().iter().all(|l| matches!(l, LogSource::File(_)));
-        match (&self.train, self.streaming) {
-            (Training::Observations(_), _) | (_, Streaming::Never) => false,
-            (_, Streaming::Always) => all_files,
-            (_, Streaming::Auto) => {
-                all_files && files().iter().filter_map(|l| l.path()).any(is_large)
-            }
+        let mut logs = train.iter().chain(&self.test);
+        if !logs.clone().all(|l| matches!(l, LogSource::File(_))) {
+            return false;
         }
+        self.streaming == Streaming::Always || logs.any(|l| l.path().is_some_and(is_large))
     }
 
     /// The fit of `robot` (a built-in, description or URDF model; for observation
@@ -351,8 +345,7 @@ impl FitRequest {
             });
         }
         let train_data = read_all(&read, train, progress)?;
-        let test_data = read_all(&read, &self.test, progress)?;
-        settings.test_window = self.test_window(&settings, &test_data)?;
+        let test_data = self.read_test(&read, &mut settings, progress)?;
         let result = fit_logs(
             &model,
             &log_data(&train_data, train),
@@ -402,9 +395,7 @@ impl FitRequest {
         };
         let model = state.model(&base)?;
         let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
-        let read = self.read.for_model(&model);
-        let test_data = read_all(&read, &self.test, progress)?;
-        settings.test_window = self.test_window(&settings, &test_data)?;
+        let test_data = self.read_test(&self.read.for_model(&model), &mut settings, progress)?;
         let result = state.fit(
             &base,
             &settings,
@@ -417,6 +408,19 @@ impl FitRequest {
             result,
             logs: None,
         })
+    }
+
+    /// The test logs in memory, and `settings.test_window` derived from them (see
+    /// [`FitRequest::test_window`]).
+    fn read_test(
+        &self,
+        read: &ReadOptions,
+        settings: &mut FitSettings,
+        progress: &dyn Progress,
+    ) -> Result<Vec<Arc<Trajectory>>, IdentError> {
+        let test = read_all(read, &self.test, progress)?;
+        settings.test_window = self.test_window(settings, &test)?;
+        Ok(test)
     }
 
     /// The test window: given, or with an excitation and test logs one period of it at

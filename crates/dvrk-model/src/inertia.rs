@@ -8,7 +8,8 @@ fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0)
 }
 
-fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
+/// `[xx, xy, xz, yy, yz, zz]` of a symmetric matrix (the inverse of [`sym3`]).
+pub fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
     [
         m[(0, 0)],
         m[(0, 1)],

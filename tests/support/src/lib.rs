@@ -150,17 +150,7 @@ pub fn random_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
     rng.vec(model.n_params(), -1.0, 1.0)
 }
 
-/// `[xx, xy, xz, yy, yz, zz]` of a symmetric matrix.
-pub fn sym6(m: &Matrix3<f64>) -> [f64; 6] {
-    [
-        m[(0, 0)],
-        m[(0, 1)],
-        m[(0, 2)],
-        m[(1, 1)],
-        m[(1, 2)],
-        m[(2, 2)],
-    ]
-}
+pub use dvrk_model::inertia::sym6;
 
 /// A random positive-definite inertia about the centre of mass that a real mass
 /// distribution realizes (principal moments from positive second moments, so the
