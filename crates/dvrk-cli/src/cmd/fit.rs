@@ -330,6 +330,18 @@ pub fn table(r: &FitResult) -> String {
         };
         let _ = writeln!(s, "torque delays ({how}, ms): {}", ms.join(" "));
     }
+    if let Some(p) = &r.settings.prior {
+        let divergence = r
+            .prior_divergence
+            .map_or(String::new(), |d| format!(", divergence from it {d:.4e}"));
+        let _ = writeln!(
+            s,
+            "prior {} ({} metric, weight {}){divergence}",
+            p.source,
+            p.metric.name(),
+            p.weight
+        );
+    }
     let _ = writeln!(
         s,
         "{:<8} {:>12} {:>12} {:>12} {:>12}",
@@ -349,7 +361,8 @@ pub fn table(r: &FitResult) -> String {
     // Each log with what was read of it (a recording's topics) and, when there are
     // several, its own errors.
     let _ = writeln!(s, "logs (samples after processing, sha256):");
-    for i in &r.inputs {
+    let logs: Vec<_> = r.inputs.iter().filter(|i| i.role != "prior").collect();
+    for i in &logs {
         let name = if i.source.is_empty() {
             &i.path
         } else {
@@ -362,7 +375,7 @@ pub fn table(r: &FitResult) -> String {
             i.metrics.as_ref().map_or(0, |m| m.samples),
             &i.sha256[..12.min(i.sha256.len())]
         );
-        if let (true, Some(m)) = (r.inputs.len() > 1, &i.metrics) {
+        if let (true, Some(m)) = (logs.len() > 1, &i.metrics) {
             let errors: Vec<String> = m.relative_error.iter().map(|e| format!("{e:.4}")).collect();
             let _ = writeln!(s, "        relative error {}", errors.join(" "));
         }

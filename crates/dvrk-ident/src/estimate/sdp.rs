@@ -161,6 +161,13 @@ impl crate::names::Named for PriorMetric {
     const CANONICAL: usize = 2;
 }
 
+impl PriorMetric {
+    /// The name the command line, Python and results use.
+    pub fn name(self) -> &'static str {
+        crate::names::Named::name(self)
+    }
+}
+
 impl std::str::FromStr for PriorMetric {
     type Err = String;
 
