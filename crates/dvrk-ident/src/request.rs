@@ -88,13 +88,27 @@ pub struct Overrides {
 }
 
 /// Where a prior's values come from.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub enum PriorSource {
     /// The robot description's nominal parameters (a URDF's inertias, a description's
     /// `nominal` entries).
     Nominal,
     /// An earlier result document.
     File(PathBuf),
+    /// An earlier result in memory (e.g. Python's `prior=result`).
+    Result(Arc<FitResult>),
+}
+
+/// Results in memory are equal when they are the same one.
+impl PartialEq for PriorSource {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (PriorSource::Nominal, PriorSource::Nominal) => true,
+            (PriorSource::File(a), PriorSource::File(b)) => a == b,
+            (PriorSource::Result(a), PriorSource::Result(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
 }
 
 impl std::str::FromStr for PriorSource {
@@ -110,9 +124,20 @@ impl std::str::FromStr for PriorSource {
     }
 }
 
+/// `result`'s parameters for every parameter of `model` (a result without Stribeck
+/// terms gets `Fs = 0`, the same friction law); errors name `source`.
+fn result_values(result: &FitResult, model: &Model, source: &str) -> Result<Vec<f64>, IdentError> {
+    let mut named = result.parameters.clone();
+    for p in &model.params {
+        if p.kind == dvrk_model::ParamKind::Stribeck && !named.contains_key(&p.name) {
+            named.insert(p.name.clone(), 0.0);
+        }
+    }
+    Ok(model.params_from_named(named.iter().map(|(k, v)| (k.as_str(), *v)), source)?)
+}
+
 impl PriorSource {
-    /// The values for every parameter of `model` (the model fitted: a prior read from a
-    /// result without Stribeck terms gets `Fs = 0`, the same friction law).
+    /// The values for every parameter of `model` (the model fitted).
     fn parameters(&self, model: &Model) -> Result<Prior, IdentError> {
         let (source, values) = match self {
             PriorSource::Nominal => {
@@ -130,16 +155,16 @@ impl PriorSource {
                 ("nominal".to_string(), values)
             }
             PriorSource::File(path) => {
-                let result = FitResult::read(path)?;
-                let mut named = result.parameters.clone();
-                for p in &model.params {
-                    if p.kind == dvrk_model::ParamKind::Stribeck && !named.contains_key(&p.name) {
-                        named.insert(p.name.clone(), 0.0);
-                    }
-                }
                 let source = path.display().to_string();
-                let values = model
-                    .params_from_named(named.iter().map(|(k, v)| (k.as_str(), *v)), &source)?;
+                let values = result_values(&FitResult::read(path)?, model, &source)?;
+                (source, values)
+            }
+            PriorSource::Result(result) => {
+                let source = format!(
+                    "a result in memory ({}, robot {})",
+                    result.tool, result.robot
+                );
+                let values = result_values(result, model, &source)?;
                 (source, values)
             }
         };
