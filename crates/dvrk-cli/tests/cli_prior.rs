@@ -67,7 +67,7 @@ fn nominal_prior_returns_the_generating_parameters() {
         assert!(r.solver.converged && r.physically_consistent);
         let with = worst_link_distance(&model, &r.params_for(&model).unwrap(), &nominal);
         eprintln!("{metric} prior: worst link distance {with:e} (without a prior {without:e})");
-        assert!(with < 1e-4, "{metric}: {with:e}");
+        assert!(with < 1e-3, "{metric}: {with:e}");
         let prior = r.settings.prior.as_ref().unwrap();
         assert_eq!(prior.source, "nominal");
         assert_eq!(prior.metric.name(), metric);
@@ -93,7 +93,14 @@ fn result_file_prior_is_recorded() {
         &urdf,
         &log,
         &dir.join("again.json"),
-        &["--prior", &s(&first_path), "--prior-weight", "0.1"],
+        &[
+            "--prior",
+            &s(&first_path),
+            "--prior-weight",
+            "0.1",
+            "--prior-metric",
+            "euclidean",
+        ],
     );
     // The prior is a fit of the same data: the data and the prior agree on it.
     let d = worst_link_distance(
@@ -101,8 +108,23 @@ fn result_file_prior_is_recorded() {
         &again.params_for(&model).unwrap(),
         &first.params_for(&model).unwrap(),
     );
-    eprintln!("prior = an earlier fit of the same log: worst link distance {d:e}");
-    assert!(d < 1e-4, "{d:e}");
+    eprintln!("euclidean prior = an earlier fit of the same log: worst link distance {d:e}");
+    assert!(d < 1e-6, "{d:e}");
+    // The entropic metric conditions a prior whose links sit at the boundary of
+    // consistency (as semidefinite fits leave them): close, not equal.
+    let entropic = fit(
+        &urdf,
+        &log,
+        &dir.join("entropic.json"),
+        &["--prior", &s(&first_path), "--prior-weight", "0.1"],
+    );
+    let d = worst_link_distance(
+        &model,
+        &entropic.params_for(&model).unwrap(),
+        &first.params_for(&model).unwrap(),
+    );
+    eprintln!("entropic prior = an earlier fit of the same log: worst link distance {d:e}");
+    assert!(d < 1e-2, "{d:e}");
     let prior = again.settings.prior.as_ref().unwrap();
     assert_eq!(prior.source, s(&first_path));
     assert_eq!(prior.weight, 0.1);
