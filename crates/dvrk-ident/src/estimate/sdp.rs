@@ -809,7 +809,8 @@ fn whitenings(
             frame: fi + 1,
             min_eigenvalue: eig.eigenvalues.min(),
         };
-        if !(eig.eigenvalues.min() > 0.0) {
+        let min = eig.eigenvalues.min();
+        if min.is_nan() || min <= 0.0 {
             return Err(inconsistent());
         }
         let tau = link_length(model, fi, override_bounds);
