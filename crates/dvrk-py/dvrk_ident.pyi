@@ -270,6 +270,9 @@ class Result:
     def delay(self) -> Optional[Dict[str, Any]]:
         """``{delay_s, std_s, max_s, residual, sweeps}`` of ``delay="auto"``, or None."""
     @property
+    def prior_divergence(self) -> Optional[float]:
+        """With an entropic prior: the links' summed log-det divergence from it, or None."""
+    @property
     def metrics(self) -> Dict[str, Any]:
         """``{train, test}``, each ``{joints, samples, relative_error, rms}`` or None."""
     @property

@@ -130,6 +130,8 @@ def test_prior_matches_cli(psm, psm_logs, run_cli, tmp_path, metric):
     assert (prior["source"], prior["metric"], prior["weight"]) == (str(path), metric, 0.01)
     assert prior["parameters"] == first.parameters
     assert any(i["role"] == "prior" for i in result.inputs)
+    assert (result.prior_divergence is not None) == (metric == "entropic")
+    assert result.prior_divergence == result.to_dict().get("prior_divergence")
     cli = run_cli("fit", psm_logs["csv"], "--robot", "psm", "--cutoff", "4", "--prior",
                   path, "--prior-weight", "0.01", "--prior-metric", metric, "--json")
     same_document(result.to_dict(), cli)

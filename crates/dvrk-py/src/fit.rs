@@ -584,6 +584,13 @@ impl FitResultPy {
         to_python(py, &self.inner.delay)
     }
 
+    /// With an entropic prior: the summed log-det divergence of the links from the
+    /// prior's (no units), or ``None``.
+    #[getter]
+    fn prior_divergence(&self) -> Option<f64> {
+        self.inner.prior_divergence
+    }
+
     #[getter]
     fn settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.settings)
