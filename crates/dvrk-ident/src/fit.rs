@@ -781,7 +781,7 @@ pub(crate) fn estimate(
         base_least_squares(&obs, base).map_err(|e| not_excited(source, e))?;
     let mut solver = SolverInfo {
         name: "qr".into(),
-        status: "Solved".into(),
+        status: crate::estimate::SolverStatus::Solved,
         converged: true,
         seconds: 0.0,
         iterations: 1,
@@ -811,7 +811,7 @@ pub(crate) fn estimate(
         progress.finish();
         solver = SolverInfo {
             name: "clarabel".into(),
-            status: sol.status.clone(),
+            status: sol.status,
             converged: sol.converged,
             seconds: sol.seconds,
             iterations: sol.iterations,

@@ -50,7 +50,7 @@ pub struct BaseParameterResult {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SolverInfo {
     pub name: String,
-    pub status: String,
+    pub status: crate::estimate::SolverStatus,
     pub converged: bool,
     pub seconds: f64,
     pub iterations: u32,
@@ -114,9 +114,9 @@ impl InputInfo {
         let mut hash = Sha256::new();
         let mut bytes = 0;
         for f in &files {
-            let io = |e: std::io::Error| IdentError::Io {
+            let io = |source: std::io::Error| IdentError::Io {
                 file: f.display().to_string(),
-                message: e.to_string(),
+                source,
             };
             let mut file = std::fs::File::open(f).map_err(io)?;
             bytes += std::io::copy(&mut file, &mut hash).map_err(io)?;
@@ -330,7 +330,7 @@ impl FitResult {
     /// Reads a result document; `source` names it in errors. Every number must be finite
     /// and the parameters within ±[`dvrk_model::input::MAX_VALUE`].
     pub fn from_json(text: &str, source: &str) -> Result<FitResult, IdentError> {
-        let result: FitResult = serde_json::from_str(text).map_err(|e| IdentError::Io {
+        let result: FitResult = serde_json::from_str(text).map_err(|e| IdentError::Format {
             file: source.into(),
             message: format!("not a dvrk-ident result: {e}"),
         })?;
@@ -340,7 +340,7 @@ impl FitResult {
             } else {
                 f64::MAX
             };
-            dvrk_model::input::check_magnitude(v, max, "").map_err(|m| IdentError::Io {
+            dvrk_model::input::check_magnitude(v, max, "").map_err(|m| IdentError::Format {
                 file: source.into(),
                 message: format!("{place}: {m}"),
             })?;
@@ -350,9 +350,9 @@ impl FitResult {
 
     /// Reads a result file (at most [`dvrk_model::input::MAX_TEXT_BYTES`]).
     pub fn read(path: &Path) -> Result<FitResult, IdentError> {
-        let text = dvrk_model::input::read_text(path).map_err(|e| IdentError::Io {
+        let text = dvrk_model::input::read_text(path).map_err(|source| IdentError::Io {
             file: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })?;
         FitResult::from_json(&text, &path.display().to_string())
     }

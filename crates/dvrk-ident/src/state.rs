@@ -463,9 +463,9 @@ impl ObservationState {
     /// read (a pipe or device is read only as far as the header says).
     pub fn read(path: &Path) -> Result<ObservationState, IdentError> {
         let file = path.display().to_string();
-        let io = |e: std::io::Error| IdentError::Io {
+        let io = |source: std::io::Error| IdentError::Io {
             file: file.clone(),
-            message: e.to_string(),
+            source,
         };
         let mut f = std::fs::File::open(path).map_err(io)?;
         let mut prefix = Vec::with_capacity(PREFIX);
@@ -509,9 +509,9 @@ impl ObservationState {
     /// Writes the state atomically ([`crate::output`]).
     pub fn write(&self, path: &Path) -> Result<(), IdentError> {
         let bytes = self.to_bytes();
-        crate::output::write_with(path, |w| w.write_all(&bytes)).map_err(|e| IdentError::Io {
+        crate::output::write_with(path, |w| w.write_all(&bytes)).map_err(|source| IdentError::Io {
             file: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })
     }
 }

@@ -337,7 +337,7 @@ pub fn fit(
             .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;
-    let status = inner.solver.status.clone();
+    let status = inner.solver.status;
     let result = FitResultPy {
         inner,
         robot: Some(robot.clone().unbind()),

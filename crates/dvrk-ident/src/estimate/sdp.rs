@@ -92,9 +92,7 @@
 use std::time::Instant;
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{
-    DefaultSettingsBuilder, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
-};
+use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
 use dvrk_model::{Model, ParamKind};
 use nalgebra::{DMatrix, Matrix4};
 use thiserror::Error;
@@ -184,9 +182,9 @@ pub struct SdpSolution {
     /// All model parameters, in model order and units (the solver's last iterate, or a
     /// meaningless certificate when infeasible, if not converged).
     pub params: Vec<f64>,
-    /// Clarabel's status name (`Solved`, `AlmostSolved`, `PrimalInfeasible`,
+    /// Clarabel's status (`Solved`, `AlmostSolved`, `PrimalInfeasible`,
     /// `MaxIterations`, ...).
-    pub status: String,
+    pub status: super::SolverStatus,
     /// True only for status `Solved` (not `AlmostSolved`).
     pub converged: bool,
     /// Wall time of the whole call: building the problem and solving (s).
@@ -722,7 +720,8 @@ pub fn solve_sdp(
     solver.solve();
     let sol = &solver.solution;
     let mut params: Vec<f64> = (0..p).map(|i| s[i] * sol.x[i]).collect();
-    let converged = sol.status == SolverStatus::Solved;
+    let status = super::SolverStatus::from(sol.status);
+    let converged = status.converged();
     if converged {
         clamp_element_bounds(model, &mut params, options.override_bounds);
     }
@@ -735,7 +734,7 @@ pub fn solve_sdp(
     });
     Ok(SdpSolution {
         params,
-        status: format!("{:?}", sol.status),
+        status,
         converged,
         seconds: started.elapsed().as_secs_f64(),
         iterations: sol.iterations,
@@ -1013,7 +1012,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
         };
         let sol = solve_sdp(&model, &r, &options).unwrap();
         assert!(sol.converged, "status {}", sol.status);
-        assert_eq!(sol.status, "Solved");
+        assert_eq!(sol.status, crate::estimate::SolverStatus::Solved);
 
         // Closed form of the link part: eigenvalues of J_t clipped at eps.
         let eig = jt.symmetric_eigen();
@@ -1412,7 +1411,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
         let r = DMatrix::identity(14, 14);
         let sol = solve_sdp(&model, &r, &SdpOptions::default()).unwrap();
         assert!(!sol.converged);
-        assert!(sol.status.contains("Infeasible"), "status {}", sol.status);
+        assert!(sol.status.infeasible(), "status {}", sol.status);
         // Plain contradictory bounds (m ≥ 5, m ≤ 4) on the built-in PSM.
         let mut psm = Model::builtin("psm").unwrap();
         let p0 = psm.frames[0].inertia.unwrap();
@@ -1425,7 +1424,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
         assert!(!sol.converged);
         assert_eq!(
             sol.status,
-            "PrimalInfeasible",
+            crate::estimate::SolverStatus::PrimalInfeasible,
             "m1 = {}",
             sol.params[p0 + 9]
         );

@@ -142,7 +142,7 @@ pub fn page(
         escape(&result.robot_source),
         escape(&result.method),
         escape(&result.solver.name),
-        escape(&result.solver.status),
+        result.solver.status,
         converged,
         result.solver.iterations,
         result.solver.seconds,
