@@ -359,10 +359,7 @@ impl Model {
                 pre,
                 post,
                 inertia: Some(p0),
-                friction: None,
-                motor_inertia: None,
-                spring: None,
-                known_force: None,
+                elements: Vec::new(),
                 nominal,
                 bounds: FrameBounds::default(),
             });
