@@ -543,6 +543,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         post_identity: Vec::new(),
         bodies: Vec::new(),
         regressor_plan: Default::default(),
+        element_plan: Default::default(),
     }
     .finish();
     // Stribeck parameters come after all the others, as `Model::with_stribeck` adds them.

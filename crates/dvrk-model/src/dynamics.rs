@@ -252,23 +252,14 @@ impl Model {
         terms: Terms,
         tau: &mut [f64],
     ) {
-        for f in &self.frames {
-            let s = Sample {
-                value: &f.value,
-                q,
-                dq,
-                ddq,
-            };
-            // Forces first, then acceleration terms, per frame (the order of the sums
-            // the results were computed with).
-            for e in f.elements.iter().filter(|e| !e.inertial()) {
-                e.add_torque(&s, params, tau);
-            }
-            if terms.inertial {
-                for e in f.elements.iter().filter(|e| e.inertial()) {
-                    e.add_torque(&s, params, tau);
-                }
-            }
+        let plan = if terms.inertial {
+            &self.element_plan.all
+        } else {
+            &self.element_plan.forces
+        };
+        for (value, e) in plan {
+            let s = Sample { value, q, dq, ddq };
+            e.add_torque(&s, params, tau);
         }
     }
 
@@ -347,20 +338,15 @@ impl Model {
         // A frame whose rate is rounding (a direction from the inverse of a coupling,
         // e.g. the MTM's wrist platform under elbow-pitch motion) stands still.
         let scale = motion.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        for f in &self.frames {
-            if f.elements.is_empty() {
-                continue;
-            }
-            let rate = f.value.dot(motion);
-            let size: f64 = f.value.terms.iter().map(|(_, c)| c.abs()).sum();
+        for (value, e) in &self.element_plan.forces {
+            let rate = value.dot(motion);
+            let size: f64 = value.terms.iter().map(|(_, c)| c.abs()).sum();
             let onset = if rate.abs() <= 1e-12 * scale * size {
                 0.0
             } else {
                 sign0(rate)
             };
-            for e in &f.elements {
-                e.add_static(&f.value, q, onset, params, tau);
-            }
+            e.add_static(value, q, onset, params, tau);
         }
         self.add_known_forces(q, tau);
     }
@@ -441,10 +427,8 @@ impl Model {
                 }
             }
         }
-        for f in &self.frames {
-            for e in &f.elements {
-                e.add_mass(params, n, out);
-            }
+        for e in &self.element_plan.inertial {
+            e.add_mass(params, n, out);
         }
     }
 

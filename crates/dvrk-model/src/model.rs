@@ -337,6 +337,24 @@ pub struct Model {
     pub(crate) bodies: Vec<Body>,
     /// The regressor's link blocks (see [`RegressorPlan`]).
     pub(crate) regressor_plan: RegressorPlan,
+    /// The elements in the order the per-sample passes visit them (see [`ElementPlan`]).
+    pub(crate) element_plan: ElementPlan,
+}
+
+/// The elements in a flat list, each with its frame's joint value: frames in order and
+/// within a frame its forces before its acceleration terms (the order of the sums of the
+/// first results, which stay identical to the bit). The per-sample passes run one loop
+/// over contiguous memory, with no frame lookup and nothing for frames without elements.
+/// A copy of `Frame::elements`, derived in `finish` (and again by `Model::add_stribeck`).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ElementPlan {
+    /// Every element, with its frame's joint value.
+    pub all: Vec<(Affine, Element)>,
+    /// The forces alone (not `Element::inertial`), in the same order: forward dynamics
+    /// has the acceleration terms in the mass matrix.
+    pub forces: Vec<(Affine, Element)>,
+    /// The acceleration terms alone (`Element::inertial`), for the mass matrix.
+    pub inertial: Vec<Element>,
 }
 
 /// Where the link columns of the regressor come from: for each moving frame `k`, each
@@ -564,6 +582,7 @@ impl Model {
             kind: ParamKind::Stribeck,
             frame,
         });
+        self.element_plan = self.derive_element_plan();
         Ok(())
     }
 
@@ -654,9 +673,30 @@ impl Model {
                 f.pre.compose(&joint).compose(&f.post)
             }))
             .collect();
+        self.element_plan = self.derive_element_plan();
         self.bodies = self.derive_bodies();
         self.regressor_plan = self.derive_regressor_plan();
         self
+    }
+
+    /// The elements' plan (see [`ElementPlan`]).
+    pub(crate) fn derive_element_plan(&self) -> ElementPlan {
+        let mut plan = ElementPlan::default();
+        for f in &self.frames {
+            // Known forces are no part of `H·π` (`Model::add_known_forces` adds them).
+            let forces = f.elements.iter().filter(|e| !e.inertial() && !e.is_known());
+            let inertial = f.elements.iter().filter(|e| e.inertial());
+            plan.all.extend(
+                forces
+                    .clone()
+                    .chain(inertial.clone())
+                    .map(|e| (f.value.clone(), e.clone())),
+            );
+            plan.forces
+                .extend(forces.clone().map(|e| (f.value.clone(), e.clone())));
+            plan.inertial.extend(inertial.cloned());
+        }
+        plan
     }
 
     /// The regressor's plan (see [`RegressorPlan`]), in the order the regressor adds.

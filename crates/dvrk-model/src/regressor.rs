@@ -92,16 +92,9 @@ impl Model {
                 }
             }
         }
-        for f in &self.frames {
-            let s = crate::element::Sample {
-                value: &f.value,
-                q,
-                dq,
-                ddq,
-            };
-            for e in &f.elements {
-                e.add_regressor(&s, p, out);
-            }
+        for (value, e) in &self.element_plan.all {
+            let s = crate::element::Sample { value, q, dq, ddq };
+            e.add_regressor(&s, p, out);
         }
     }
 

@@ -392,6 +392,7 @@ impl Model {
             post_identity: Vec::new(),
             bodies: Vec::new(),
             regressor_plan: Default::default(),
+            element_plan: Default::default(),
         }
         .finish())
     }

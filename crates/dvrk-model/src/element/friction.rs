@@ -35,7 +35,7 @@ impl Law for Friction {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
         let sd = s.value.dot(s.dq);
         let sg = sign0(sd);
@@ -53,7 +53,7 @@ impl Law for Friction {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
         let sd = s.value.dot(s.dq);
         let k = self.param;
@@ -68,6 +68,7 @@ impl Law for Friction {
 
     /// Coulomb friction at the onset's sign, offset friction always, no viscous term;
     /// the Stribeck term at the onset's sign (`exp(−(ṡ/vs)²) → 1`).
+    #[inline(always)]
     fn add_static(&self, value: &Affine, _q: &[f64], onset: f64, params: &[f64], tau: &mut [f64]) {
         let mut force = params[self.param] * onset + params[self.param + 2];
         if let Some(st) = &self.stribeck {

@@ -29,7 +29,7 @@ pub(super) struct KnownForceDesc {
 
 impl KnownForce {
     /// The polynomial at the current coordinates (N·m or N along `s`).
-    #[inline]
+    #[inline(always)]
     pub fn value(&self, q: &[f64]) -> f64 {
         let s = self.along.eval(q);
         self.polynomial.iter().fold(0.0, |acc, &c| acc * s + c)
@@ -72,7 +72,7 @@ impl Law for KnownForce {
 
     fn add_torque(&self, _s: &Sample, _params: &[f64], _tau: &mut [f64]) {}
 
-    #[inline]
+    #[inline(always)]
     fn add_known(&self, q: &[f64], tau: &mut [f64]) {
         let v = self.value(q);
         for &(k, c) in &self.along.terms {

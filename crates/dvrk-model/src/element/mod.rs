@@ -157,13 +157,16 @@ pub(crate) trait Law {
     fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]);
     /// Whether the torque is an acceleration term, which forward dynamics moves into
     /// the mass matrix ([`Law::add_mass`]) instead.
+    #[inline(always)]
     fn inertial(&self) -> bool {
         false
     }
     /// Adds the element's share of the mass matrix (`n×n`, column-major).
+    #[inline(always)]
     fn add_mass(&self, _params: &[f64], _n: usize, _out: &mut [f64]) {}
     /// Adds what the element holds at rest at `q` when the motion starts in the
     /// direction of sign `onset` along its frame's joint value (`0`: at rest).
+    #[inline(always)]
     fn add_static(
         &self,
         _value: &Affine,
@@ -256,31 +259,32 @@ impl Element {
     }
 
     /// Adds the regressor columns of one sample into `out` (row-major, `p` columns).
-    #[inline]
+    #[inline(always)]
     pub fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
         each!(self, e => e.add_regressor(s, p, out))
     }
 
     /// Adds the element's part of `H·π` into `tau` (N·m or N).
-    #[inline]
+    #[inline(always)]
     pub fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
         each!(self, e => e.add_torque(s, params, tau))
     }
 
     /// Whether the torque is an acceleration term (in the mass matrix instead).
-    #[inline]
+    #[inline(always)]
     pub fn inertial(&self) -> bool {
         each!(self, e => e.inertial())
     }
 
     /// Adds the element's share of the mass matrix (`n×n`, column-major).
-    #[inline]
+    #[inline(always)]
     pub fn add_mass(&self, params: &[f64], n: usize, out: &mut [f64]) {
         each!(self, e => e.add_mass(params, n, out))
     }
 
     /// Adds the static torque at `q` for a motion starting with sign `onset` along the
     /// frame's joint value `value` (see `Model::static_torque`).
+    #[inline(always)]
     pub fn add_static(
         &self,
         value: &Affine,
@@ -293,7 +297,7 @@ impl Element {
     }
 
     /// Adds a known generalized force (not identified: the MTM's cable) into `tau`.
-    #[inline]
+    #[inline(always)]
     pub fn add_known(&self, q: &[f64], tau: &mut [f64]) {
         each!(self, e => e.add_known(q, tau))
     }

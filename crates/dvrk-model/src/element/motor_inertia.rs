@@ -44,21 +44,22 @@ impl Law for MotorInertia {
         out.push((self.param, "Ia", ParamKind::MotorInertia));
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
         out[self.coordinate * p + self.param] += self.ratio * s.ddq[self.coordinate];
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
         tau[self.coordinate] += self.ratio * params[self.param] * s.ddq[self.coordinate];
     }
 
+    #[inline(always)]
     fn inertial(&self) -> bool {
         true
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_mass(&self, params: &[f64], n: usize, out: &mut [f64]) {
         out[self.coordinate * (n + 1)] += self.ratio * params[self.param];
     }

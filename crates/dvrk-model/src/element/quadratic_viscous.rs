@@ -81,7 +81,7 @@ impl QuadraticViscous {
     }
 
     /// The regressor factor of `Fq` at joint rate `sd`: `ṡ·|ṡ|`.
-    #[inline]
+    #[inline(always)]
     pub fn factor(sd: f64) -> f64 {
         sd * sd.abs()
     }
@@ -96,7 +96,7 @@ impl Law for QuadraticViscous {
         out.push((self.param, "Fq", ParamKind::QuadraticViscous));
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
         let v = Self::factor(s.value.dot(s.dq));
         for &(coord, a) in &s.value.terms {
@@ -104,7 +104,7 @@ impl Law for QuadraticViscous {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
         let force = params[self.param] * Self::factor(s.value.dot(s.dq));
         for &(c, a) in &s.value.terms {

@@ -31,7 +31,7 @@ impl Deflection {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, q: &[f64]) -> f64 {
         match self {
             Deflection::Affine(a) => a.eval(q),
@@ -61,7 +61,7 @@ impl Spring {
         Ok(Spring { param, deflection })
     }
 
-    #[inline]
+    #[inline(always)]
     fn push(&self, value: &Affine, q: &[f64], params: &[f64], tau: &mut [f64]) {
         let force = params[self.param] * self.deflection.eval(q);
         for &(c, a) in &value.terms {
@@ -79,7 +79,7 @@ impl Law for Spring {
         out.push((self.param, "K", ParamKind::Spring));
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
         let dl = self.deflection.eval(s.q);
         for &(coord, a) in &s.value.terms {
@@ -87,11 +87,12 @@ impl Law for Spring {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
         self.push(s.value, s.q, params, tau);
     }
 
+    #[inline(always)]
     fn add_static(&self, value: &Affine, q: &[f64], _onset: f64, params: &[f64], tau: &mut [f64]) {
         self.push(value, q, params, tau);
     }

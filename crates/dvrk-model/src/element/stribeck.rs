@@ -21,7 +21,7 @@ pub struct Stribeck {
 
 impl Stribeck {
     /// The regressor factor of `Fs` at joint rate `sd`.
-    #[inline]
+    #[inline(always)]
     pub fn factor(&self, sd: f64) -> f64 {
         let x = sd / self.velocity;
         sign0(sd) * (-x * x).exp()
