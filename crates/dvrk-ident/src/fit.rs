@@ -11,7 +11,7 @@ use nalgebra::DMatrix;
 
 use crate::error::IdentError;
 use crate::estimate::ols::{base_least_squares, representative, BaseEstimate};
-use crate::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::estimate::sdp::{solve_sdp, PriorMetric, SdpOptions};
 use crate::observation::{Observation, Samples};
 use crate::progress::{Progress, Silent};
 use crate::result::*;
@@ -754,6 +754,8 @@ pub(crate) struct Estimated {
     pub solver: SolverInfo,
     /// Rows of the weighted observation.
     pub rows: usize,
+    /// With an entropic prior, `Σ_links d(J‖J₀)` at `params`.
+    pub prior_divergence: Option<f64>,
 }
 
 /// The estimator on the per-coordinate observation parts, shared by the in-memory and
@@ -794,10 +796,15 @@ pub(crate) fn estimate(
             solver.iterations = it as u32 + 2;
         }
     }
+    let mut prior_divergence = None;
     let params = if settings.method == Method::Sdp {
         progress.stage("solving the semidefinite program", None);
+        let prior = settings.prior.as_ref();
         let options = SdpOptions {
             regularization: settings.sdp_regularization,
+            prior: crate::settings::Prior::values_for(prior, model)?,
+            prior_weight: prior.map_or(0.0, |p| p.weight),
+            prior_metric: prior.map_or(PriorMetric::default(), |p| p.metric),
             ..SdpOptions::default()
         };
         let sol = solve_sdp(model, obs.r(), &options)?;
@@ -810,6 +817,7 @@ pub(crate) fn estimate(
             iterations: sol.iterations,
             tolerance: Some(options.tolerance),
         };
+        prior_divergence = sol.divergence;
         sol.params
     } else {
         solver.seconds = started.elapsed().as_secs_f64();
@@ -821,6 +829,7 @@ pub(crate) fn estimate(
         weights,
         solver,
         rows: obs.rows(),
+        prior_divergence,
     })
 }
 
@@ -837,6 +846,7 @@ pub(crate) fn build_result(
         weights,
         solver,
         rows,
+        prior_divergence,
     } = estimated;
     let beta = base.project(&params);
     let names = model.param_names();
@@ -902,6 +912,7 @@ pub(crate) fn build_result(
         sigma2: estimate.sigma2,
         metrics,
         delay: None,
+        prior_divergence,
     };
     result.check_finite()?;
     Ok(result)

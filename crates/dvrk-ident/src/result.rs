@@ -78,10 +78,10 @@ pub struct Metrics {
     pub test: Option<JointMetrics>,
 }
 
-/// Provenance of an input log.
+/// Provenance of an input: a log, or the result file a prior was read from.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct InputInfo {
-    /// `train` or `test`
+    /// `train`, `test` or `prior`
     pub role: String,
     /// The file or rosbag2 folder; empty for samples that were not read from one.
     pub path: String,
@@ -196,6 +196,11 @@ pub struct FitResult {
     /// `settings.processing.delay_s`, which holds them for validate, report, export).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delay: Option<DelayEstimate>,
+    /// With an entropic prior (`settings.prior`): the sum over links of the log-det
+    /// divergence of the fitted pseudo-inertia from the prior's (no units; 0 at the
+    /// prior).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_divergence: Option<f64>,
 }
 
 impl FitResult {
@@ -263,6 +268,15 @@ impl FitResult {
                 put(format!("delay.std_s[{i}]"), *s);
             }
             put("delay.residual".into(), d.residual);
+        }
+        if let Some(d) = self.prior_divergence {
+            put("prior_divergence".into(), d);
+        }
+        if let Some(p) = &self.settings.prior {
+            put("settings.prior.weight".into(), p.weight);
+            for (k, v) in &p.parameters {
+                put(format!("settings.prior.parameters.{k}"), *v);
+            }
         }
         let roles = [
             ("train", Some(&self.metrics.train)),
