@@ -6,7 +6,7 @@
 pub mod delay;
 pub mod stream;
 
-use dvrk_model::{inertia, BaseParameters, Model, ParamKind, Workspace};
+use dvrk_model::{inertia, BaseParameters, Model, Workspace};
 use nalgebra::DMatrix;
 
 use crate::error::IdentError;
@@ -883,16 +883,11 @@ pub(crate) fn build_result(
     // Sign conditions hold up to rounding (see `ELEMENT_TOLERANCE`).
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
-        && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
-            ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
-            _ => true,
-        })
-        && model.frames.iter().all(|f| match &f.friction {
-            Some(fr) => fr
-                .stribeck
-                .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
-            None => true,
-        });
+        && model
+            .frames
+            .iter()
+            .flat_map(|f| &f.elements)
+            .all(|e| e.consistent(&params, tol));
     let result = FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
         robot: model.name.clone(),

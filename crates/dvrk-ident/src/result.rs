@@ -379,17 +379,13 @@ pub fn wpi_params_json(model: &dvrk_model::Model, params: &[f64]) -> serde_json:
             com = s.com;
             mass = s.mass;
         }
-        let (fc, fv, fo) = f.friction.as_ref().map_or((0.0, 0.0, 0.0), |fr| {
-            (params[fr.param], params[fr.param + 1], params[fr.param + 2])
+        let mut entry = serde_json::json!({
+            "I": inertia, "r": com, "m": mass, "Fc": 0.0, "Fv": 0.0, "Fo": 0.0, "Im": 0.0, "K": 0.0
         });
-        let im = f.motor_inertia.as_ref().map_or(0.0, |m| params[m.param]);
-        let k = f.spring.as_ref().map_or(0.0, |s| params[s.param]);
-        out.insert(
-            (i + 1).to_string(),
-            serde_json::json!({
-                "I": inertia, "r": com, "m": mass, "Fc": fc, "Fv": fv, "Fo": fo, "Im": im, "K": k
-            }),
-        );
+        for (field, v) in f.elements.iter().flat_map(|e| e.wpi_fields(params)) {
+            entry[field] = v.into();
+        }
+        out.insert((i + 1).to_string(), entry);
     }
     serde_json::Value::Object(out)
 }

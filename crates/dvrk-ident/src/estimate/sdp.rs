@@ -93,7 +93,7 @@ use std::time::Instant;
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
-use dvrk_model::{Model, ParamKind};
+use dvrk_model::{BoundOrigin, BoundsContext, Model};
 use nalgebra::{DMatrix, Matrix4};
 use thiserror::Error;
 
@@ -280,19 +280,6 @@ fn lmi_rows(p0: usize, eps: f64, tau: f64) -> Vec<(Vec<(usize, f64)>, f64)> {
         .collect()
 }
 
-/// Unit class of a parameter, for the fallback scale of columns the data never see.
-fn unit_class(kind: ParamKind) -> usize {
-    match kind {
-        ParamKind::Inertia { index } if index < 6 => 0,
-        ParamKind::Inertia { index } if index < 9 => 1,
-        ParamKind::Inertia { .. } => 2,
-        ParamKind::Coulomb | ParamKind::Offset | ParamKind::Stribeck => 3,
-        ParamKind::Viscous => 4,
-        ParamKind::MotorInertia => 5,
-        ParamKind::Spring => 6,
-    }
-}
-
 fn median(mut v: Vec<f64>) -> Option<f64> {
     if v.is_empty() {
         return None;
@@ -348,44 +335,22 @@ fn bounds_rows(model: &Model, override_bounds: bool) -> Result<Linear, SdpError>
                 }
             }
         }
-        if let Some(fr) = &f.friction {
-            let (fc, fv, fo) = (fr.param, fr.param + 1, fr.param + 2);
-            lin.le(vec![(fc, -1.0)], -g.fc_min, "global bound fc_min")?;
-            lin.le(vec![(fv, -1.0)], -g.fv_min, "global bound fv_min")?;
-            // Friction opposes motion at low speed too: Fc + Fs ≥ 0. Fs itself may be
-            // negative (a friction that builds up with speed, or the smoothing the
-            // low-pass filter gives the measured Coulomb steps).
-            if let Some(st) = &fr.stribeck {
-                lin.le(vec![(fc, -1.0), (st.param, -1.0)], 0.0, "Fc + Fs ≥ 0")?;
-            }
-            if !override_bounds {
-                if let Some(v) = b.fc_max {
-                    lin.le(vec![(fc, 1.0)], v, &place("fc_max"))?;
-                }
-                if let Some(v) = b.fv_max {
-                    lin.le(vec![(fv, 1.0)], v, &place("fv_max"))?;
-                }
-                if let Some(v) = b.fo_max {
-                    lin.le(vec![(fo, 1.0)], v, &place("fo_max"))?;
-                    lin.le(vec![(fo, -1.0)], v, &place("fo_max"))?;
-                }
-            }
+        let bounds = BoundsContext {
+            global: g,
+            frame: b,
+            use_frame: !override_bounds,
+        };
+        let mut rows = Vec::new();
+        for e in &f.elements {
+            e.bound_rows(&bounds, &mut rows);
         }
-        if let Some(mi) = &f.motor_inertia {
-            lin.le(vec![(mi.param, -1.0)], -g.ia_min, "global bound ia_min")?;
-            if !override_bounds {
-                if let Some(v) = b.ia_max {
-                    lin.le(vec![(mi.param, 1.0)], v, &place("ia_max"))?;
-                }
-            }
-        }
-        if let Some(sp) = &f.spring {
-            if !override_bounds {
-                if let Some([lo, hi]) = b.spring {
-                    lin.le(vec![(sp.param, -1.0)], -lo, &place("spring"))?;
-                    lin.le(vec![(sp.param, 1.0)], hi, &place("spring"))?;
-                }
-            }
+        for row in rows {
+            let what = match row.origin {
+                BoundOrigin::Global(field) => format!("global bound {field}"),
+                BoundOrigin::Frame(field) => place(field),
+                BoundOrigin::Physical(constraint) => constraint.to_string(),
+            };
+            lin.le(row.coefficients, row.limit, &what)?;
         }
     }
     Ok(lin)
@@ -505,9 +470,9 @@ pub fn solve_sdp(
     let global = median(all_seen).unwrap_or(1.0);
     for (c, dc) in d.iter_mut().enumerate() {
         if !seen(c) {
-            let class = unit_class(model.params[c].kind);
+            let class = model.params[c].kind.unit_class();
             let same: Vec<f64> = (0..p)
-                .filter(|&k| seen(k) && unit_class(model.params[k].kind) == class)
+                .filter(|&k| seen(k) && model.params[k].kind.unit_class() == class)
                 .map(|k| norms[k])
                 .collect();
             *dc = median(same).unwrap_or(global);
@@ -846,50 +811,21 @@ fn log_det_divergence(whitening: &Matrix4<f64>, bary: &[f64]) -> f64 {
     }
 }
 
-/// Clamps friction, motor inertia and spring parameters into their bounds (and
-/// Stribeck terms onto `Fc + Fs ≥ 0`) when they miss them by at most
+/// Clamps the elements' parameters (friction, motor inertia, spring...) into their
+/// bounds (and Stribeck terms onto `Fc + Fs ≥ 0`) when they miss them by at most
 /// `1e-6·max(1, |bound|)`. Each appears in no other constraint,
 /// and a solved problem satisfies its bounds to the solver's tolerance (relative to the
 /// variable's scale, e.g. ~1e-5 N·m/rad on the MTM's 300 N·m/rad spring), so this only
 /// makes the bounds hold exactly; a larger miss is left visible.
 fn clamp_element_bounds(model: &Model, params: &mut [f64], override_bounds: bool) {
-    let g = &model.bounds;
-    let near = |v: f64, bound: f64| (v - bound).abs() <= 1e-6 * bound.abs().max(1.0);
-    let clamp = |v: &mut f64, lo: f64, hi: Option<f64>| {
-        if let Some(hi) = hi.filter(|&hi| hi >= lo) {
-            if *v > hi && near(*v, hi) {
-                *v = hi;
-            }
-        }
-        if *v < lo && near(*v, lo) {
-            *v = lo;
-        }
-    };
     for f in &model.frames {
-        let b = &f.bounds;
-        let upper = |v: Option<f64>| if override_bounds { None } else { v };
-        if let Some(fr) = &f.friction {
-            clamp(&mut params[fr.param], g.fc_min, upper(b.fc_max));
-            clamp(&mut params[fr.param + 1], g.fv_min, upper(b.fv_max));
-            if let Some(fo) = upper(b.fo_max) {
-                clamp(&mut params[fr.param + 2], -fo, Some(fo));
-            }
-            // `Fc + Fs ≥ 0` after Fc is in place: Fs is in no other constraint, and
-            // `Fc + (−Fc)` is exactly zero.
-            if let Some(st) = &fr.stribeck {
-                let fc = params[fr.param];
-                if fc + params[st.param] < 0.0 && near(fc + params[st.param], 0.0) {
-                    params[st.param] = -fc;
-                }
-            }
-        }
-        if let Some(mi) = &f.motor_inertia {
-            clamp(&mut params[mi.param], g.ia_min, upper(b.ia_max));
-        }
-        if let Some(sp) = &f.spring {
-            if let Some([lo, hi]) = b.spring.filter(|_| !override_bounds) {
-                clamp(&mut params[sp.param], lo, Some(hi));
-            }
+        let bounds = BoundsContext {
+            global: &model.bounds,
+            frame: &f.bounds,
+            use_frame: !override_bounds,
+        };
+        for e in &f.elements {
+            e.clamp(&bounds, params);
         }
     }
 }
@@ -1049,8 +985,10 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
             .with_stribeck(0.3)
             .unwrap();
         let p = model.n_params();
-        let fr = model.frames[0].friction.clone().unwrap();
-        let (fc, fs) = (fr.param, fr.stribeck.unwrap().param);
+        let (fc, fs) = (
+            model.frames[0].friction().unwrap().param,
+            model.frames[0].stribeck().unwrap().param,
+        );
         let mut rng = Rng(0x5eed_1234);
         for _ in 0..12 {
             // A consistent link (identity rows: its target is feasible), Fc and Fs with
@@ -1169,16 +1107,16 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
                 };
                 pi[p0..p0 + 10].copy_from_slice(&bary);
             }
-            if let Some(fr) = &f.friction {
+            if let Some(fr) = f.friction() {
                 pi[fr.param] = rng.uniform(g.fc_min, b.fc_max.unwrap_or(0.5));
                 pi[fr.param + 1] = rng.uniform(g.fv_min, b.fv_max.unwrap_or(0.5));
                 let fo = b.fo_max.unwrap_or(0.3);
                 pi[fr.param + 2] = rng.uniform(-fo, fo);
             }
-            if let Some(mi) = &f.motor_inertia {
+            if let Some(mi) = f.motor_inertia() {
                 pi[mi.param] = rng.uniform(g.ia_min, b.ia_max.unwrap_or(0.01));
             }
-            if let Some(sp) = &f.spring {
+            if let Some(sp) = f.spring() {
                 let [lo, hi] = b.spring.unwrap_or([0.0, 1.0]);
                 pi[sp.param] = rng.uniform(lo, hi);
             }
@@ -1214,7 +1152,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
                     }
                 }
             }
-            if let Some(fr) = &f.friction {
+            if let Some(fr) = f.friction() {
                 let (fc, fv, fo) = (pi[fr.param], pi[fr.param + 1], pi[fr.param + 2]);
                 assert!(fc >= g.fc_min - tol, "{name}: Fc {fc}");
                 assert!(fv >= g.fv_min - tol, "{name}: Fv {fv}");
@@ -1228,14 +1166,14 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
                     assert!(fo.abs() <= v + tol, "{name}: Fo {fo}");
                 }
             }
-            if let Some(mi) = &f.motor_inertia {
+            if let Some(mi) = f.motor_inertia() {
                 let ia = pi[mi.param];
                 assert!(ia >= g.ia_min - tol, "{name}: Ia {ia}");
                 if let Some(v) = b.ia_max {
                     assert!(ia <= v + tol, "{name}: Ia {ia}");
                 }
             }
-            if let Some(sp) = &f.spring {
+            if let Some(sp) = f.spring() {
                 if let Some([lo, hi]) = b.spring {
                     let k = pi[sp.param];
                     assert!(k >= lo - tol && k <= hi + tol, "{name}: K {k}");
