@@ -49,7 +49,7 @@
 //! one or none ends below the 2019 trajectory's 219.3. With one draw per start and no
 //! hops (the defaults until 2026-11-24) seeds 0 to 5 ended between 213.2 and 231.5
 //! depending on the build; with 4 draws per start and 4 hops they end between 209.9 and
-//! 215.8 with both builds (README, "Excitation trajectories").
+//! 216.9 with both builds (README, "Excitation trajectories").
 //!
 //! The L-BFGS ([`super::lbfgs`]) and the random numbers ([`super::rng`]) are our own
 //! although the project prefers crates; their modules say what the crates measured.
