@@ -270,6 +270,9 @@ class Result:
     def delay(self) -> Optional[Dict[str, Any]]:
         """``{delay_s, std_s, max_s, residual, sweeps}`` of ``delay="auto"``, or None."""
     @property
+    def prior_divergence(self) -> Optional[float]:
+        """With an entropic prior: the links' summed log-det divergence from it, or None."""
+    @property
     def metrics(self) -> Dict[str, Any]:
         """``{train, test}``, each ``{joints, samples, relative_error, rms}`` or None."""
     @property
@@ -382,13 +385,19 @@ def fit(
     stribeck: Optional[float] = None,
     bounds: Optional[str] = None,
     delay: Optional[Union[str, float, Sequence[float]]] = None,
+    prior: Optional[Union[str, PathLike, Result]] = None,
+    prior_weight: Optional[float] = None,
+    prior_metric: Optional[str] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
 ) -> Result:
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
-    ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate)."""
+    ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
+    ``prior``: ``"nominal"``, a result file or a :class:`Result` to regularize the
+    semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
+    ``"entropic"`` (default) or ``"euclidean"``."""
 
 def prepare(
     robot: Robot,

@@ -116,6 +116,35 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             assert recorded == value, key
 
 
+@pytest.mark.parametrize("metric", ["entropic", "euclidean"])
+def test_prior_matches_cli(psm, psm_logs, run_cli, tmp_path, metric):
+    """prior=, prior_weight=, prior_metric= against --prior, --prior-weight,
+    --prior-metric; a Result in memory is the same prior as its file."""
+    train = di.read_log(psm_logs["csv"], psm)
+    first = di.fit(psm, train, cutoff=4.0)
+    path = tmp_path / "first.json"
+    first.write(path)
+    result = di.fit(psm, train, cutoff=4.0, prior=path, prior_weight=0.01,
+                    prior_metric=metric)
+    prior = result.settings["prior"]
+    assert (prior["source"], prior["metric"], prior["weight"]) == (str(path), metric, 0.01)
+    assert prior["parameters"] == first.parameters
+    assert any(i["role"] == "prior" for i in result.inputs)
+    assert (result.prior_divergence is not None) == (metric == "entropic")
+    assert result.prior_divergence == result.to_dict().get("prior_divergence")
+    cli = run_cli("fit", psm_logs["csv"], "--robot", "psm", "--cutoff", "4", "--prior",
+                  path, "--prior-weight", "0.01", "--prior-metric", metric, "--json")
+    same_document(result.to_dict(), cli)
+    in_memory = di.fit(psm, train, cutoff=4.0, prior=first, prior_weight=0.01,
+                       prior_metric=metric)
+    assert in_memory.settings["prior"]["parameters"] == first.parameters
+    close(list(in_memory.parameters.values()), list(result.parameters.values()), 1e-12)
+    with pytest.raises(di.InputError, match="prior_weight: needs a prior"):
+        di.fit(psm, train, prior_weight=0.1)
+    with pytest.raises(di.InputError, match="prior_metric"):
+        di.fit(psm, train, prior=path, prior_metric="cosine")
+
+
 def test_excitation_window_matches_cli(psm, psm_logs, run_cli, tmp_path):
     """--excitation with a test log and no --test-window: the metrics cover one period
     of the excitation (the 2019 rule), in both front ends."""

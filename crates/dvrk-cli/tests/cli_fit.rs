@@ -32,17 +32,17 @@ fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
                 [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
             ));
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             // Coulomb too: the default processing filters the motion only, so the
             // measured torques keep their sign steps, as the regressor does.
             pi[fr.param] = 0.03;
             pi[fr.param + 1] = 0.02;
             pi[fr.param + 2] = 0.01;
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = 0.005;
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = 270.0;
         }
     }

@@ -206,15 +206,46 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
     for (a, b) in again.iter().zip(train) {
         assert!((a.as_f64().unwrap() - b.as_f64().unwrap()).abs() < 1e-12);
     }
+    // The fit's own metrics beside the log's: in the document and side by side in the
+    // table.
+    assert_eq!(v["fit"]["train"], result["metrics"]["train"]);
+    let (ok, table, err) = run(&["validate", out.to_str().unwrap(), &log, "--cutoff", "none"]);
+    assert!(ok, "{err}");
+    let header = table.lines().nth(1).unwrap();
+    assert!(
+        header.contains("fit train rel") && header.contains("this log rel"),
+        "{table}"
+    );
+    let q1: Vec<f64> = table
+        .lines()
+        .nth(2)
+        .unwrap()
+        .split_whitespace()
+        .skip(1)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    assert_eq!(q1.len(), 4, "{table}");
+    assert!(
+        (q1[0] - q1[2]).abs() < 1e-4,
+        "the same log: the same error, {table}"
+    );
     let (ok, _, err) = run(&[
         "report",
         out.to_str().unwrap(),
+        &log,
+        "--cutoff",
+        "none",
         "--out",
         dir.join("rep").to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
     let html = std::fs::read_to_string(dir.join("rep/report.html")).unwrap();
     assert!(html.contains("<td class=l>Fs16</td>"));
+    // One metrics table: the fit's training errors and this log's side by side.
+    assert!(
+        html.contains("<th colspan=2>fit: training (") && html.contains("<th colspan=2>log 1 ("),
+        "side by side"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -671,11 +671,11 @@ mod tests {
                 );
                 p[p0..p0 + 10].copy_from_slice(&b);
             }
-            if let Some(fr) = &f.friction {
+            if let Some(fr) = f.friction() {
                 p[fr.param] = 0.01 * k;
                 p[fr.param + 2] = -0.002 * k;
             }
-            if let Some(sp) = &f.spring {
+            if let Some(sp) = f.spring() {
                 p[sp.param] = 280.0;
             }
         }

@@ -41,8 +41,18 @@ pub enum IdentError {
     /// A setting is out of range.
     #[error("invalid setting {name}: {message}")]
     Setting { name: String, message: String },
+    /// A file that could not be read (its cause kept: Python maps a missing file to
+    /// `FileNotFoundError`).
+    #[error("{file}: {source}")]
+    Io {
+        file: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A file whose content is not what it should be (not JSON, not a result, a value
+    /// out of range).
     #[error("{file}: {message}")]
-    Io { file: String, message: String },
+    Format { file: String, message: String },
     /// An observation state file that is not one, or not of this format version.
     #[error("{file}: {message}")]
     State { file: String, message: String },

@@ -6,12 +6,12 @@
 pub mod delay;
 pub mod stream;
 
-use dvrk_model::{inertia, BaseParameters, Model, ParamKind, Workspace};
+use dvrk_model::{inertia, BaseParameters, Model, Workspace};
 use nalgebra::DMatrix;
 
 use crate::error::IdentError;
 use crate::estimate::ols::{base_least_squares, representative, BaseEstimate};
-use crate::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::estimate::sdp::{solve_sdp, PriorMetric, SdpOptions};
 use crate::observation::{Observation, Samples};
 use crate::progress::{Progress, Silent};
 use crate::result::*;
@@ -754,6 +754,8 @@ pub(crate) struct Estimated {
     pub solver: SolverInfo,
     /// Rows of the weighted observation.
     pub rows: usize,
+    /// With an entropic prior, `Σ_links d(J‖J₀)` at `params`.
+    pub prior_divergence: Option<f64>,
 }
 
 /// The estimator on the per-coordinate observation parts, shared by the in-memory and
@@ -779,7 +781,7 @@ pub(crate) fn estimate(
         base_least_squares(&obs, base).map_err(|e| not_excited(source, e))?;
     let mut solver = SolverInfo {
         name: "qr".into(),
-        status: "Solved".into(),
+        status: crate::estimate::SolverStatus::Solved,
         converged: true,
         seconds: 0.0,
         iterations: 1,
@@ -794,22 +796,28 @@ pub(crate) fn estimate(
             solver.iterations = it as u32 + 2;
         }
     }
+    let mut prior_divergence = None;
     let params = if settings.method == Method::Sdp {
         progress.stage("solving the semidefinite program", None);
+        let prior = settings.prior.as_ref();
         let options = SdpOptions {
             regularization: settings.sdp_regularization,
+            prior: crate::settings::Prior::values_for(prior, model)?,
+            prior_weight: prior.map_or(0.0, |p| p.weight),
+            prior_metric: prior.map_or(PriorMetric::default(), |p| p.metric),
             ..SdpOptions::default()
         };
         let sol = solve_sdp(model, obs.r(), &options)?;
         progress.finish();
         solver = SolverInfo {
             name: "clarabel".into(),
-            status: sol.status.clone(),
+            status: sol.status,
             converged: sol.converged,
             seconds: sol.seconds,
             iterations: sol.iterations,
             tolerance: Some(options.tolerance),
         };
+        prior_divergence = sol.divergence;
         sol.params
     } else {
         solver.seconds = started.elapsed().as_secs_f64();
@@ -821,6 +829,7 @@ pub(crate) fn estimate(
         weights,
         solver,
         rows: obs.rows(),
+        prior_divergence,
     })
 }
 
@@ -837,6 +846,7 @@ pub(crate) fn build_result(
         weights,
         solver,
         rows,
+        prior_divergence,
     } = estimated;
     let beta = base.project(&params);
     let names = model.param_names();
@@ -873,16 +883,11 @@ pub(crate) fn build_result(
     // Sign conditions hold up to rounding (see `ELEMENT_TOLERANCE`).
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
-        && model.params.iter().zip(&params).all(|(p, v)| match p.kind {
-            ParamKind::Coulomb | ParamKind::Viscous | ParamKind::MotorInertia => *v >= tol,
-            _ => true,
-        })
-        && model.frames.iter().all(|f| match &f.friction {
-            Some(fr) => fr
-                .stribeck
-                .is_none_or(|st| params[fr.param] + params[st.param] >= tol),
-            None => true,
-        });
+        && model
+            .frames
+            .iter()
+            .flat_map(|f| &f.elements)
+            .all(|e| e.consistent(&params, tol));
     let result = FitResult {
         tool: format!("dvrk-ident {}", env!("CARGO_PKG_VERSION")),
         robot: model.name.clone(),
@@ -907,6 +912,7 @@ pub(crate) fn build_result(
         sigma2: estimate.sigma2,
         metrics,
         delay: None,
+        prior_divergence,
     };
     result.check_finite()?;
     Ok(result)

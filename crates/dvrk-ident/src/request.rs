@@ -16,6 +16,7 @@ use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use crate::fit::{fit_logs, LogData};
 use crate::log::{self, LogReader, ReadOptions};
 use crate::progress::Progress;
+use crate::settings::{Prior, PriorMetric};
 use crate::signal::Cutoff;
 use crate::state::ObservationState;
 use crate::{BoundsSet, FitResult, FitSettings, IdentError, Method, Trajectory};
@@ -77,6 +78,108 @@ pub struct Overrides {
     /// The torques' measurement delays: estimated, or fixed (one for every coordinate or
     /// one each); applied by [`Overrides::settings_for`], which knows the coordinates.
     pub delay: Option<DelayOption>,
+    /// Regularize the semidefinite fit toward these values; read by
+    /// [`Overrides::settings_for`], which knows the model.
+    pub prior: Option<PriorSource>,
+    /// The prior's weight (default [`Prior::DEFAULT_WEIGHT`]).
+    pub prior_weight: Option<f64>,
+    /// The prior's metric (default entropic).
+    pub prior_metric: Option<PriorMetric>,
+}
+
+/// Where a prior's values come from.
+#[derive(Clone, Debug)]
+pub enum PriorSource {
+    /// The robot description's nominal parameters (a URDF's inertias, a description's
+    /// `nominal` entries).
+    Nominal,
+    /// An earlier result document.
+    File(PathBuf),
+    /// An earlier result in memory (e.g. Python's `prior=result`).
+    Result(Arc<FitResult>),
+}
+
+/// Results in memory are equal when they are the same one.
+impl PartialEq for PriorSource {
+    fn eq(&self, other: &Self) -> bool {
+        match (self, other) {
+            (PriorSource::Nominal, PriorSource::Nominal) => true,
+            (PriorSource::File(a), PriorSource::File(b)) => a == b,
+            (PriorSource::Result(a), PriorSource::Result(b)) => Arc::ptr_eq(a, b),
+            _ => false,
+        }
+    }
+}
+
+impl std::str::FromStr for PriorSource {
+    type Err = String;
+
+    /// `nominal`, or the path of a result file.
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "" => Err("give `nominal` or a result file".into()),
+            "nominal" => Ok(PriorSource::Nominal),
+            path => Ok(PriorSource::File(PathBuf::from(path))),
+        }
+    }
+}
+
+/// `result`'s parameters for every parameter of `model` (a result without Stribeck
+/// terms gets `Fs = 0`, the same friction law); errors name `source`.
+fn result_values(result: &FitResult, model: &Model, source: &str) -> Result<Vec<f64>, IdentError> {
+    let mut named = result.parameters.clone();
+    for p in &model.params {
+        if p.kind == dvrk_model::ParamKind::Stribeck && !named.contains_key(&p.name) {
+            named.insert(p.name.clone(), 0.0);
+        }
+    }
+    Ok(model.params_from_named(named.iter().map(|(k, v)| (k.as_str(), *v)), source)?)
+}
+
+impl PriorSource {
+    /// The values for every parameter of `model` (the model fitted).
+    fn parameters(&self, model: &Model) -> Result<Prior, IdentError> {
+        let (source, values) = match self {
+            PriorSource::Nominal => {
+                let values = model
+                    .nominal_parameters()
+                    .ok_or_else(|| IdentError::Setting {
+                        name: "prior".into(),
+                        message: format!(
+                            "robot {} has no nominal value for some of its parameters (every \
+                         link needs a nominal mass, every motor inertia and spring a \
+                         nominal value): give an earlier result file instead",
+                            model.name
+                        ),
+                    })?;
+                ("nominal".to_string(), values)
+            }
+            PriorSource::File(path) => {
+                let source = path.display().to_string();
+                let values = result_values(&FitResult::read(path)?, model, &source)?;
+                (source, values)
+            }
+            PriorSource::Result(result) => {
+                let source = format!(
+                    "a result in memory ({}, robot {})",
+                    result.tool, result.robot
+                );
+                let values = result_values(result, model, &source)?;
+                (source, values)
+            }
+        };
+        Ok(Prior {
+            source,
+            metric: PriorMetric::default(),
+            weight: Prior::DEFAULT_WEIGHT,
+            parameters: model
+                .params
+                .iter()
+                .zip(values)
+                .map(|(p, v)| (p.name.clone(), v))
+                .collect(),
+        })
+    }
 }
 
 impl Overrides {
@@ -122,7 +225,8 @@ impl Overrides {
         s
     }
 
-    /// [`Overrides::apply`], and the delays for `model`'s coordinates.
+    /// [`Overrides::apply`], the delays for `model`'s coordinates and the prior for its
+    /// parameters.
     pub fn settings_for(
         &self,
         base: FitSettings,
@@ -136,7 +240,42 @@ impl Overrides {
                     message,
                 })?;
         }
+        let fitted = s.model(model)?.into_owned();
+        self.set_prior(&mut s, &fitted)?;
         Ok(s)
+    }
+
+    /// The prior of `s` for `fitted` (the model with the settings' Stribeck terms):
+    /// read from [`Overrides::prior`], or the base's with the weight and metric
+    /// overridden, then checked.
+    fn set_prior(&self, s: &mut FitSettings, fitted: &Model) -> Result<(), IdentError> {
+        if let Some(source) = &self.prior {
+            s.prior = Some(source.parameters(fitted)?);
+        }
+        match &mut s.prior {
+            Some(p) => {
+                if let Some(w) = self.prior_weight {
+                    p.weight = w;
+                }
+                if let Some(m) = self.prior_metric {
+                    p.metric = m;
+                }
+                p.check(s.method)
+            }
+            None => {
+                let given = [
+                    ("prior_weight", self.prior_weight.is_some()),
+                    ("prior_metric", self.prior_metric.is_some()),
+                ];
+                match given.iter().find(|(_, set)| *set) {
+                    Some((name, _)) => Err(IdentError::Setting {
+                        name: name.to_string(),
+                        message: "needs a prior (nominal, or an earlier result file)".into(),
+                    }),
+                    None => Ok(()),
+                }
+            }
+        }
     }
 
     /// The overrides that change how logs are processed or which model is fitted
@@ -288,16 +427,22 @@ impl FitRequest {
         robot: Option<&Model>,
         progress: &dyn Progress,
     ) -> Result<FitOutcome, IdentError> {
-        match &self.train {
+        let mut outcome = match &self.train {
             Training::Logs(train) => {
                 let robot = robot.ok_or_else(|| IdentError::Setting {
                     name: "robot".into(),
                     message: "a fit of logs needs the robot".into(),
                 })?;
-                self.run_logs(robot, train, progress)
+                self.run_logs(robot, train, progress)?
             }
-            Training::Observations(states) => self.run_observations(robot, states, progress),
+            Training::Observations(states) => self.run_observations(robot, states, progress)?,
+        };
+        // The prior's file is an input of the result like the logs.
+        if let Some(PriorSource::File(path)) = &self.overrides.prior {
+            let info = crate::result::InputInfo::from_file("prior", path)?;
+            outcome.result.inputs.push(info);
         }
+        Ok(outcome)
     }
 
     fn run_logs(
@@ -395,6 +540,7 @@ impl FitRequest {
         };
         let model = state.model(&base)?;
         let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
+        self.overrides.set_prior(&mut settings, &model)?;
         let test_data = self.read_test(&self.read.for_model(&model), &mut settings, progress)?;
         let result = state.fit(
             &base,

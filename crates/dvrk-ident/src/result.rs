@@ -50,7 +50,7 @@ pub struct BaseParameterResult {
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SolverInfo {
     pub name: String,
-    pub status: String,
+    pub status: crate::estimate::SolverStatus,
     pub converged: bool,
     pub seconds: f64,
     pub iterations: u32,
@@ -78,10 +78,10 @@ pub struct Metrics {
     pub test: Option<JointMetrics>,
 }
 
-/// Provenance of an input log.
+/// Provenance of an input: a log, or the result file a prior was read from.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct InputInfo {
-    /// `train` or `test`
+    /// `train`, `test` or `prior`
     pub role: String,
     /// The file or rosbag2 folder; empty for samples that were not read from one.
     pub path: String,
@@ -114,9 +114,9 @@ impl InputInfo {
         let mut hash = Sha256::new();
         let mut bytes = 0;
         for f in &files {
-            let io = |e: std::io::Error| IdentError::Io {
+            let io = |source: std::io::Error| IdentError::Io {
                 file: f.display().to_string(),
-                message: e.to_string(),
+                source,
             };
             let mut file = std::fs::File::open(f).map_err(io)?;
             bytes += std::io::copy(&mut file, &mut hash).map_err(io)?;
@@ -196,6 +196,11 @@ pub struct FitResult {
     /// `settings.processing.delay_s`, which holds them for validate, report, export).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delay: Option<DelayEstimate>,
+    /// With an entropic prior (`settings.prior`): the sum over links of the log-det
+    /// divergence of the fitted pseudo-inertia from the prior's (no units; 0 at the
+    /// prior).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prior_divergence: Option<f64>,
 }
 
 impl FitResult {
@@ -264,6 +269,15 @@ impl FitResult {
             }
             put("delay.residual".into(), d.residual);
         }
+        if let Some(d) = self.prior_divergence {
+            put("prior_divergence".into(), d);
+        }
+        if let Some(p) = &self.settings.prior {
+            put("settings.prior.weight".into(), p.weight);
+            for (k, v) in &p.parameters {
+                put(format!("settings.prior.parameters.{k}"), *v);
+            }
+        }
         let roles = [
             ("train", Some(&self.metrics.train)),
             ("test", self.metrics.test.as_ref()),
@@ -316,7 +330,7 @@ impl FitResult {
     /// Reads a result document; `source` names it in errors. Every number must be finite
     /// and the parameters within ±[`dvrk_model::input::MAX_VALUE`].
     pub fn from_json(text: &str, source: &str) -> Result<FitResult, IdentError> {
-        let result: FitResult = serde_json::from_str(text).map_err(|e| IdentError::Io {
+        let result: FitResult = serde_json::from_str(text).map_err(|e| IdentError::Format {
             file: source.into(),
             message: format!("not a dvrk-ident result: {e}"),
         })?;
@@ -326,7 +340,7 @@ impl FitResult {
             } else {
                 f64::MAX
             };
-            dvrk_model::input::check_magnitude(v, max, "").map_err(|m| IdentError::Io {
+            dvrk_model::input::check_magnitude(v, max, "").map_err(|m| IdentError::Format {
                 file: source.into(),
                 message: format!("{place}: {m}"),
             })?;
@@ -336,9 +350,9 @@ impl FitResult {
 
     /// Reads a result file (at most [`dvrk_model::input::MAX_TEXT_BYTES`]).
     pub fn read(path: &Path) -> Result<FitResult, IdentError> {
-        let text = dvrk_model::input::read_text(path).map_err(|e| IdentError::Io {
+        let text = dvrk_model::input::read_text(path).map_err(|source| IdentError::Io {
             file: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })?;
         FitResult::from_json(&text, &path.display().to_string())
     }
@@ -365,17 +379,13 @@ pub fn wpi_params_json(model: &dvrk_model::Model, params: &[f64]) -> serde_json:
             com = s.com;
             mass = s.mass;
         }
-        let (fc, fv, fo) = f.friction.as_ref().map_or((0.0, 0.0, 0.0), |fr| {
-            (params[fr.param], params[fr.param + 1], params[fr.param + 2])
+        let mut entry = serde_json::json!({
+            "I": inertia, "r": com, "m": mass, "Fc": 0.0, "Fv": 0.0, "Fo": 0.0, "Im": 0.0, "K": 0.0
         });
-        let im = f.motor_inertia.as_ref().map_or(0.0, |m| params[m.param]);
-        let k = f.spring.as_ref().map_or(0.0, |s| params[s.param]);
-        out.insert(
-            (i + 1).to_string(),
-            serde_json::json!({
-                "I": inertia, "r": com, "m": mass, "Fc": fc, "Fv": fv, "Fo": fo, "Im": im, "K": k
-            }),
-        );
+        for (field, v) in f.elements.iter().flat_map(|e| e.wpi_fields(params)) {
+            entry[field] = v.into();
+        }
+        out.insert((i + 1).to_string(), entry);
     }
     serde_json::Value::Object(out)
 }

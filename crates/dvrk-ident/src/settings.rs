@@ -7,6 +7,7 @@ use dvrk_model::Model;
 use serde::{Deserialize, Serialize};
 
 use crate::error::IdentError;
+pub use crate::estimate::sdp::PriorMetric;
 use crate::estimate::sdp::SdpOptions;
 use crate::signal::Processing;
 
@@ -92,6 +93,70 @@ impl std::str::FromStr for BoundsSet {
     }
 }
 
+/// What the semidefinite fit is regularized toward, and how hard (see
+/// `estimate::sdp`, "Priors"). The values are kept here by name so a result records
+/// exactly what its fit used, and a fit from its settings repeats it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Prior {
+    /// Where the values came from: `nominal` (the description's nominal parameters)
+    /// or the result file they were read from.
+    pub source: String,
+    /// The divergence the weight multiplies.
+    pub metric: PriorMetric,
+    /// Weight relative to the data term, which is scaled to at most 1 (no units).
+    pub weight: f64,
+    /// The values, every parameter of the fitted model by name (model units).
+    pub parameters: indexmap::IndexMap<String, f64>,
+}
+
+impl Prior {
+    /// The weight when none is given: see the README's fit section for the
+    /// measurements behind it.
+    pub const DEFAULT_WEIGHT: f64 = 1e-3;
+
+    /// The values in `model`'s parameter order; `None` without a prior. Errors name
+    /// the prior's source and the parameters that do not match.
+    pub fn values_for(
+        prior: Option<&Prior>,
+        model: &Model,
+    ) -> Result<Option<Vec<f64>>, IdentError> {
+        prior
+            .map(|p| {
+                Ok(model.params_from_named(
+                    p.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
+                    &format!("prior {}", p.source),
+                )?)
+            })
+            .transpose()
+    }
+
+    /// Checks what a fit needs of a prior: a finite, non-negative weight and the
+    /// semidefinite estimator (the least-squares estimators have no prior term).
+    pub fn check(&self, method: Method) -> Result<(), IdentError> {
+        let setting = |name: &str, message: String| IdentError::Setting {
+            name: name.into(),
+            message,
+        };
+        if !(self.weight.is_finite() && self.weight >= 0.0) {
+            return Err(setting(
+                "prior_weight",
+                format!("must be finite and >= 0, got {}", self.weight),
+            ));
+        }
+        if method != Method::Sdp {
+            return Err(setting(
+                "prior",
+                format!(
+                    "only the semidefinite fit (method sdp) has a prior term, not method {}",
+                    method.name()
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// Settings of a fit. Defaults: SDP, the processing defaults, metrics over whole logs.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -119,6 +184,10 @@ pub struct FitSettings {
     /// `None`: the delays of `processing.delay_s`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub delay_search_s: Option<f64>,
+    /// Regularize the semidefinite fit toward a prior. `None`: only the small Tikhonov
+    /// term of `sdp_regularization`, toward zero.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub prior: Option<Prior>,
 }
 
 impl FitSettings {
@@ -156,6 +225,7 @@ impl Default for FitSettings {
             stribeck_velocity: None,
             bounds: None,
             delay_search_s: None,
+            prior: None,
         }
     }
 }

@@ -132,41 +132,24 @@ pub fn model_hash(model: &Model) -> String {
     let mut numbers: Vec<f64> = model.measured.coupling.iter().copied().collect();
     numbers.extend(model.gravity.iter());
     let mut words: Vec<String> = Vec::new();
-    let affine = |a: &dvrk_model::expr::Affine, numbers: &mut Vec<f64>| {
-        numbers.push(a.terms.len() as f64);
-        for (i, c) in &a.terms {
-            numbers.push(*i as f64);
-            numbers.push(*c);
-        }
-        numbers.push(a.offset);
-    };
     for f in &model.frames {
         words.push(f.name.clone());
         words.push(format!("{}:{:?}", f.parent, f.kind));
-        affine(&f.value, &mut numbers);
+        f.value.push_numbers(&mut numbers);
         for t in [&f.pre, &f.post] {
             numbers.extend(t.rotation.iter());
             numbers.extend(t.translation.iter());
         }
         let index = |i: Option<usize>| i.map_or(-1.0, |i| i as f64);
         numbers.push(index(f.inertia));
-        numbers.push(index(f.friction.as_ref().map(|x| x.param)));
-        if let Some(s) = f.friction.as_ref().and_then(|x| x.stribeck) {
-            numbers.extend([s.param as f64, s.velocity]);
+        // A frame without friction marks its place (the layout of the first hashes,
+        // kept so that earlier observation states still merge); friction, when there,
+        // is the frame's first element.
+        if f.friction().is_none() {
+            numbers.push(-1.0);
         }
-        if let Some(m) = &f.motor_inertia {
-            numbers.extend([m.param as f64, m.coordinate as f64, m.ratio]);
-        }
-        if let Some(s) = &f.spring {
-            numbers.push(s.param as f64);
-            match &s.deflection {
-                dvrk_model::Deflection::Affine(a) => affine(a, &mut numbers),
-                dvrk_model::Deflection::Expr(e) => words.push(e.text().to_string()),
-            }
-        }
-        if let Some(k) = &f.known_force {
-            affine(&k.along, &mut numbers);
-            numbers.extend(k.polynomial.iter());
+        for e in &f.elements {
+            e.fingerprint(&mut numbers, &mut words);
         }
     }
     for p in &model.params {
@@ -463,9 +446,9 @@ impl ObservationState {
     /// read (a pipe or device is read only as far as the header says).
     pub fn read(path: &Path) -> Result<ObservationState, IdentError> {
         let file = path.display().to_string();
-        let io = |e: std::io::Error| IdentError::Io {
+        let io = |source: std::io::Error| IdentError::Io {
             file: file.clone(),
-            message: e.to_string(),
+            source,
         };
         let mut f = std::fs::File::open(path).map_err(io)?;
         let mut prefix = Vec::with_capacity(PREFIX);
@@ -509,9 +492,9 @@ impl ObservationState {
     /// Writes the state atomically ([`crate::output`]).
     pub fn write(&self, path: &Path) -> Result<(), IdentError> {
         let bytes = self.to_bytes();
-        crate::output::write_with(path, |w| w.write_all(&bytes)).map_err(|e| IdentError::Io {
+        crate::output::write_with(path, |w| w.write_all(&bytes)).map_err(|source| IdentError::Io {
             file: path.display().to_string(),
-            message: e.to_string(),
+            source,
         })
     }
 }

@@ -55,7 +55,7 @@ fn fits(protocol: &Protocol) -> Option<Vec<Recorded>> {
                 let r = fit(&m, &train, Some(&test), &s).unwrap();
                 Recorded {
                     label: label.to_string(),
-                    status: r.solver.status.clone(),
+                    status: r.solver.status.to_string(),
                     iterations: r.solver.iterations,
                     base_parameters: r.base_parameters.iter().map(|b| b.value).collect(),
                     test_relative_error: r.metrics.test.unwrap().relative_error,

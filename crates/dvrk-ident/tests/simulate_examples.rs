@@ -51,15 +51,15 @@ fn example_params(model: &Model) -> Vec<f64> {
             ];
             pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
             pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
             pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = 0.002;
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
         }
     }
@@ -129,16 +129,16 @@ fn example_params_are_the_documented_rule_and_consistent() {
         }
     }
     for f in &model.frames {
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             let (fc, fv, fo) = (file[fr.param], file[fr.param + 1], file[fr.param + 2]);
             assert!(fc >= model.bounds.fc_min && fc <= f.bounds.fc_max.unwrap());
             assert!(fv >= model.bounds.fv_min && fv <= f.bounds.fv_max.unwrap());
             assert!(fo.abs() <= f.bounds.fo_max.unwrap());
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             assert!(file[mi.param] >= model.bounds.ia_min);
         }
-        if let (Some(sp), Some([lo, hi])) = (&f.spring, f.bounds.spring) {
+        if let (Some(sp), Some([lo, hi])) = (f.spring(), f.bounds.spring) {
             assert!(lo <= file[sp.param] && file[sp.param] <= hi);
         }
     }

@@ -135,15 +135,15 @@ fn mtm_params(model: &Model) -> Vec<f64> {
                 [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
             ));
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             pi[fr.param] = 0.05;
             pi[fr.param + 1] = 0.02;
             pi[fr.param + 2] = 0.01;
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = 0.005;
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = 270.0;
         }
     }

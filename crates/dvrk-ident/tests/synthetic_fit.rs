@@ -52,15 +52,15 @@ fn consistent_params(model: &Model) -> Vec<f64> {
             ];
             pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
             pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
             pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = 0.01;
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
         }
     }

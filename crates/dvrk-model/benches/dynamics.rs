@@ -31,13 +31,13 @@ fn physical(model: &Model) -> Vec<f64> {
             );
             pi[p0..p0 + 10].copy_from_slice(&link);
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             pi[fr.param..fr.param + 3].copy_from_slice(&[0.1, 0.05, 0.01]);
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = 0.01;
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = 0.2;
         }
     }

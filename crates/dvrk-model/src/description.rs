@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use nalgebra::{DMatrix, Vector3};
 use serde::Deserialize;
 
+use crate::element::{ElementsDesc, FrameContext, FrameElements};
 use crate::error::ModelError;
 use crate::expr::{Affine, Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
@@ -64,23 +65,11 @@ struct FrameDesc {
     theta: NumOrExpr,
     #[serde(default)]
     inertia: bool,
-    #[serde(default)]
-    friction: bool,
-    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
-    stribeck_velocity: Option<NumOrExpr>,
-    #[serde(default)]
-    motor_inertia: bool,
-    spring: Option<String>,
-    known_force: Option<KnownForceDesc>,
+    /// Friction, springs... (see [`ElementsDesc`]).
+    #[serde(flatten)]
+    elements: ElementsDesc,
     nominal: Option<Nominal>,
     bounds: Option<FrameBounds>,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct KnownForceDesc {
-    polynomial: Vec<f64>,
-    along: Option<String>,
 }
 
 /// Resolves constants that may refer to each other, in dependency order.
@@ -389,133 +378,22 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         } else {
             None
         };
-        let need_motion = |field: &str| -> Result<(), ModelError> {
-            if moving {
-                Ok(())
-            } else {
-                Err(ModelError::field(
-                    file,
-                    &place,
-                    field,
-                    "needs a moving frame (theta or d depending on the coordinates)",
-                ))
-            }
-        };
-        let friction = if fd.friction {
-            need_motion("friction")?;
-            let p0 = params.len();
-            for (kind, prefix) in [
-                (ParamKind::Coulomb, "Fc"),
-                (ParamKind::Viscous, "Fv"),
-                (ParamKind::Offset, "Fo"),
-            ] {
-                params.push(Param {
-                    name: format!("{prefix}{idx}"),
-                    kind,
-                    frame: idx,
-                });
-            }
-            Some(Friction {
-                param: p0,
-                stribeck: None,
-            })
-        } else {
-            None
-        };
-        if let Some(v) = &fd.stribeck_velocity {
-            if !fd.friction {
-                return Err(ModelError::field(
-                    file,
-                    &place,
-                    "stribeck_velocity",
-                    "needs `friction = true` on the frame",
-                ));
-            }
-            let v = ctx.number(
-                &place,
-                "stribeck_velocity",
-                v,
-                (input::MAX_VALUE, "rad/s or m/s"),
-            )?;
-            if !(v > 0.0 && v.is_finite()) {
-                return Err(ModelError::field(
-                    file,
-                    &place,
-                    "stribeck_velocity",
-                    format!("must be positive (rad/s or m/s), got {v}"),
-                ));
-            }
+        let FrameElements {
+            elements,
+            stribeck_velocity,
+        } = fd.elements.build(
+            &FrameContext {
+                ctx: &ctx,
+                place: &place,
+                index: idx,
+                value: &value,
+                moving,
+            },
+            &mut params,
+        )?;
+        if let Some(v) = stribeck_velocity {
             stribeck.push((idx, v));
         }
-        let motor_inertia = if fd.motor_inertia {
-            need_motion("motor_inertia")?;
-            if value.terms.len() != 1 {
-                return Err(ModelError::field(
-                    file,
-                    &place,
-                    "motor_inertia",
-                    "the joint value must depend on exactly one coordinate (c*q_k + const)",
-                ));
-            }
-            let (coordinate, ratio) = value.terms[0];
-            params.push(Param {
-                name: format!("Ia{idx}"),
-                kind: ParamKind::MotorInertia,
-                frame: idx,
-            });
-            Some(MotorInertia {
-                param: params.len() - 1,
-                coordinate,
-                ratio,
-            })
-        } else {
-            None
-        };
-        let spring = match &fd.spring {
-            Some(text) => {
-                need_motion("spring")?;
-                let deflection = Deflection::new(ctx.expr(&place, "spring", text)?, n);
-                params.push(Param {
-                    name: format!("K{idx}"),
-                    kind: ParamKind::Spring,
-                    frame: idx,
-                });
-                Some(Spring {
-                    param: params.len() - 1,
-                    deflection,
-                })
-            }
-            None => None,
-        };
-        let known_force = match &fd.known_force {
-            Some(kf) => {
-                let along = match &kf.along {
-                    Some(text) => ctx
-                        .expr(&place, "known_force.along", text)?
-                        .affine(n)
-                        .map_err(|e: ExprError| {
-                            ModelError::field(file, &place, "known_force.along", e.to_string())
-                        })?,
-                    None => {
-                        need_motion("known_force")?;
-                        value.clone()
-                    }
-                };
-                if kf.polynomial.is_empty() || kf.polynomial.iter().any(|c| !c.is_finite()) {
-                    return Err(ModelError::field(
-                        file,
-                        &place,
-                        "known_force.polynomial",
-                        "needs at least one finite coefficient",
-                    ));
-                }
-                Some(KnownForce {
-                    along,
-                    polynomial: kf.polynomial.clone(),
-                })
-            }
-            None => None,
-        };
         let nominal = fd.nominal.clone().unwrap_or_default();
         check_nominal(&nominal).map_err(|m| ModelError::field(file, &place, "nominal", m))?;
         let bounds = fd.bounds.clone().unwrap_or_default();
@@ -553,10 +431,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
             pre,
             post,
             inertia,
-            friction,
-            motor_inertia,
-            spring,
-            known_force,
+            elements,
             nominal,
             bounds,
         });
@@ -667,6 +542,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         post_identity: Vec::new(),
         bodies: Vec::new(),
         regressor_plan: Default::default(),
+        element_plan: Default::default(),
     }
     .finish();
     // Stribeck parameters come after all the others, as `Model::with_stribeck` adds them.

@@ -10,22 +10,10 @@
 
 use nalgebra::{DMatrix, DVector, Vector3};
 
+use crate::element::{sign0, Sample};
 use crate::inertia::{sym3, transform_barycentric};
 use crate::model::{Axis, Body, Model, Transform};
 use crate::workspace::{BodyBuffers, Workspace};
-
-/// `sign` with `sign(0) = 0` (numpy's convention, used by the 2019 package), so that a
-/// joint at rest gets no Coulomb force.
-#[inline]
-pub fn sign0(x: f64) -> f64 {
-    if x > 0.0 {
-        1.0
-    } else if x < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
 
 /// The mass matrix is not positive definite at this configuration (the parameters are
 /// not those of physical bodies), so forward dynamics has no solution.
@@ -33,20 +21,15 @@ pub fn sign0(x: f64) -> f64 {
 #[error("the mass matrix is not positive definite (the parameters are not physical)")]
 pub struct NotPositiveDefinite;
 
-/// Which terms an internal dynamics pass includes.
+/// Which element terms an internal dynamics pass includes.
 #[derive(Clone, Copy)]
 pub(crate) struct Terms {
-    pub gravity: bool,
-    /// friction and springs
-    pub dissipative: bool,
-    pub motor: bool,
+    /// Acceleration terms of the elements (motor inertias); forward dynamics has them
+    /// in the mass matrix instead.
+    pub inertial: bool,
 }
 
-pub(crate) const ALL: Terms = Terms {
-    gravity: true,
-    dissipative: true,
-    motor: true,
-};
+pub(crate) const ALL: Terms = Terms { inertial: true };
 
 /// Which motion a body pass includes; `false` stands for zero rates or accelerations.
 #[derive(Clone, Copy)]
@@ -251,11 +234,11 @@ impl Model {
             velocity: true,
             acceleration: true,
         };
-        self.body_rnea(ws, dq, ddq, motion, terms.gravity, tau);
+        self.body_rnea(ws, dq, ddq, motion, true, tau);
         self.add_elements(params, q, dq, ddq, terms, tau);
     }
 
-    /// Friction, spring and motor-inertia torques, added into `tau`.
+    /// The elements' torques (friction, springs, motor inertias...), added into `tau`.
     #[inline]
     fn add_elements(
         &self,
@@ -266,32 +249,14 @@ impl Model {
         terms: Terms,
         tau: &mut [f64],
     ) {
-        for f in &self.frames {
-            if terms.dissipative {
-                if let Some(fr) = &f.friction {
-                    let sd = f.value.dot(dq);
-                    let mut force = params[fr.param] * sign0(sd)
-                        + params[fr.param + 1] * sd
-                        + params[fr.param + 2];
-                    if let Some(st) = &fr.stribeck {
-                        force += params[st.param] * st.factor(sd);
-                    }
-                    for &(k, c) in &f.value.terms {
-                        tau[k] += c * force;
-                    }
-                }
-                if let Some(sp) = &f.spring {
-                    let force = params[sp.param] * sp.deflection.eval(q);
-                    for &(k, c) in &f.value.terms {
-                        tau[k] -= c * force;
-                    }
-                }
-            }
-            if terms.motor {
-                if let Some(mi) = &f.motor_inertia {
-                    tau[mi.coordinate] += mi.ratio * params[mi.param] * ddq[mi.coordinate];
-                }
-            }
+        let plan = if terms.inertial {
+            &self.element_plan.all
+        } else {
+            &self.element_plan.forces
+        };
+        for (value, e) in plan {
+            let s = Sample { value, q, dq, ddq };
+            e.add_torque(&s, params, tau);
         }
     }
 
@@ -370,30 +335,15 @@ impl Model {
         // A frame whose rate is rounding (a direction from the inverse of a coupling,
         // e.g. the MTM's wrist platform under elbow-pitch motion) stands still.
         let scale = motion.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        for f in &self.frames {
-            if let Some(fr) = &f.friction {
-                let rate = f.value.dot(motion);
-                let size: f64 = f.value.terms.iter().map(|(_, c)| c.abs()).sum();
-                let s = if rate.abs() <= 1e-12 * scale * size {
-                    0.0
-                } else {
-                    sign0(rate)
-                };
-                let mut force = params[fr.param] * s + params[fr.param + 2];
-                if let Some(st) = &fr.stribeck {
-                    // exp(−(ṡ/vs)²) → 1 at the onset of motion.
-                    force += params[st.param] * s;
-                }
-                for &(k, c) in &f.value.terms {
-                    tau[k] += c * force;
-                }
-            }
-            if let Some(sp) = &f.spring {
-                let force = params[sp.param] * sp.deflection.eval(q);
-                for &(k, c) in &f.value.terms {
-                    tau[k] -= c * force;
-                }
-            }
+        for (value, e) in &self.element_plan.forces {
+            let rate = value.dot(motion);
+            let size: f64 = value.terms.iter().map(|(_, c)| c.abs()).sum();
+            let onset = if rate.abs() <= 1e-12 * scale * size {
+                0.0
+            } else {
+                sign0(rate)
+            };
+            e.add_static(value, q, onset, params, tau);
         }
         self.add_known_forces(q, tau);
     }
@@ -485,10 +435,8 @@ impl Model {
                 }
             }
         }
-        for f in &self.frames {
-            if let Some(mi) = &f.motor_inertia {
-                out[mi.coordinate * (n + 1)] += mi.ratio * params[mi.param];
-            }
+        for e in &self.element_plan.inertial {
+            e.add_mass(params, n, out);
         }
     }
 
@@ -567,10 +515,7 @@ impl Model {
             acceleration: false,
         };
         self.body_rnea(ws, dq, dq, coasting, true, ddq);
-        let terms = Terms {
-            motor: false,
-            ..ALL
-        };
+        let terms = Terms { inertial: false };
         self.add_elements(params, q, dq, dq, terms, ddq);
         self.add_known_forces(q, ddq);
         for (a, t) in ddq.iter_mut().zip(tau) {

@@ -64,6 +64,17 @@ impl Affine {
     }
 
     /// True when the value does not depend on any coordinate.
+    /// Its numbers, for fingerprints (model hashes): the term count, each `(coordinate,
+    /// coefficient)` pair, the offset.
+    pub fn push_numbers(&self, numbers: &mut Vec<f64>) {
+        numbers.push(self.terms.len() as f64);
+        for (i, c) in &self.terms {
+            numbers.push(*i as f64);
+            numbers.push(*c);
+        }
+        numbers.push(self.offset);
+    }
+
     pub fn is_constant(&self) -> bool {
         self.terms.is_empty()
     }

@@ -30,6 +30,7 @@ mod base;
 mod builtin;
 mod description;
 mod dynamics;
+mod element;
 mod error;
 pub mod expr;
 pub mod inertia;
@@ -37,6 +38,7 @@ pub mod input;
 mod kinematics;
 mod limits;
 mod model;
+mod param;
 mod regressor;
 mod resolve;
 mod summary;
@@ -47,7 +49,11 @@ mod workspace;
 pub use base::BaseParameters;
 pub use builtin::is_urdf_document;
 pub use description::Convention;
-pub use dynamics::{sign0, NotPositiveDefinite};
+pub use dynamics::NotPositiveDefinite;
+pub use element::{
+    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, Friction, KnownForce,
+    MotorInertia, Note, QuadraticViscous, Sample, Spring, Stribeck,
+};
 pub use error::ModelError;
 pub use expr::NumOrExpr;
 pub use limits::{CartesianLimitSpec, JointLimitSpec, Limits, LimitsSpec};

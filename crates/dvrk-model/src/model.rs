@@ -7,7 +7,9 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
+use crate::element::{Element, Friction, KnownForce, MotorInertia, Spring, Stribeck};
 use crate::expr::{Affine, Expr, ExprError, Scope};
+pub use crate::param::*;
 use crate::ModelError;
 
 /// How a frame moves relative to its parent.
@@ -87,174 +89,6 @@ impl Transform {
             [r[(2, 0)], r[(2, 1)], r[(2, 2)], t[2]],
             [0.0, 0.0, 0.0, 1.0],
         ]
-    }
-}
-
-/// Coulomb, viscous and offset friction on a frame's joint value, optionally with a
-/// Stribeck term.
-#[derive(Clone, Debug)]
-pub struct Friction {
-    /// Index of `Fc` in the parameter vector; `Fv`, `Fo` follow.
-    pub param: usize,
-    pub stribeck: Option<Stribeck>,
-}
-
-/// The Stribeck term `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` of a friction element: the extra
-/// friction at low speed that the Coulomb + viscous model misses at every velocity
-/// reversal. Linear in `Fs` for a fixed Stribeck velocity `vs`, so it stays a regressor
-/// column.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Stribeck {
-    /// Index of `Fs` (N·m or N) in the parameter vector.
-    pub param: usize,
-    /// Stribeck velocity `vs` (rad/s or m/s), positive.
-    pub velocity: f64,
-}
-
-impl Stribeck {
-    /// The regressor factor of `Fs` at joint rate `sd`.
-    #[inline]
-    pub fn factor(&self, sd: f64) -> f64 {
-        let x = sd / self.velocity;
-        crate::dynamics::sign0(sd) * (-x * x).exp()
-    }
-}
-
-/// A motor (rotor) inertia on a frame whose joint value is `ratio·q[coordinate] + const`.
-#[derive(Clone, Debug)]
-pub struct MotorInertia {
-    pub param: usize,
-    pub coordinate: usize,
-    pub ratio: f64,
-}
-
-/// A spring of stiffness `K` acting as `tau -= a·K·dl(q)` (the 2019 convention).
-#[derive(Clone, Debug)]
-pub struct Spring {
-    pub param: usize,
-    /// Deflection `dl(q)` (m or rad; may be nonlinear).
-    pub deflection: Deflection,
-}
-
-/// A spring deflection: affine ones (the common case) skip the expression evaluator.
-#[derive(Clone, Debug)]
-pub enum Deflection {
-    Affine(Affine),
-    Expr(Box<Expr>),
-}
-
-impl Deflection {
-    /// From an expression, kept affine when it is.
-    pub fn new(expr: Expr, n_coordinates: usize) -> Self {
-        match expr.affine(n_coordinates) {
-            Ok(a) => Deflection::Affine(a),
-            Err(_) => Deflection::Expr(Box::new(expr)),
-        }
-    }
-
-    #[inline]
-    pub fn eval(&self, q: &[f64]) -> f64 {
-        match self {
-            Deflection::Affine(a) => a.eval(q),
-            Deflection::Expr(e) => e.eval(q),
-        }
-    }
-}
-
-/// A known generalized force `tau += grad(s)·p(s)`, `s` affine in q; p's coefficients
-/// are highest degree first (N·m or N).
-#[derive(Clone, Debug)]
-pub struct KnownForce {
-    pub along: Affine,
-    pub polynomial: Vec<f64>,
-}
-
-impl KnownForce {
-    /// The polynomial at the current coordinates (N·m or N along `s`).
-    #[inline]
-    pub fn value(&self, q: &[f64]) -> f64 {
-        let s = self.along.eval(q);
-        self.polynomial.iter().fold(0.0, |acc, &c| acc * s + c)
-    }
-}
-
-/// Prior (nominal) values of one frame's parameters, standard (centre-of-mass) form.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct Nominal {
-    /// kg
-    pub mass: Option<f64>,
-    /// centre of mass in the frame (m)
-    pub com: Option<[f64; 3]>,
-    /// inertia about the centre of mass, frame axes: xx, xy, xz, yy, yz, zz (kg·m²)
-    pub inertia: Option<[f64; 6]>,
-    pub fc: Option<f64>,
-    pub fv: Option<f64>,
-    pub fo: Option<f64>,
-    /// Stribeck friction (N·m or N), for frames with a Stribeck term.
-    pub fs: Option<f64>,
-    pub ia: Option<f64>,
-    pub k: Option<f64>,
-}
-
-/// Per-frame bounds for the physically consistent fit.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct FrameBounds {
-    /// kg
-    pub mass: Option<[f64; 2]>,
-    /// centre of mass box in the frame, per axis [min, max] (m)
-    pub com: Option<[[f64; 2]; 3]>,
-    pub fc_max: Option<f64>,
-    pub fv_max: Option<f64>,
-    pub fo_max: Option<f64>,
-    pub ia_max: Option<f64>,
-    pub spring: Option<[f64; 2]>,
-}
-
-/// Lower bounds applied to every element by the physically consistent fit.
-///
-/// The default is [`GlobalBounds::PHYSICAL`]: friction cannot be negative and a motor
-/// has some inertia, and nothing more is known of them a priori. [`GlobalBounds::WANG_2019`] are
-/// the bounds of the 2019 fit, kept to reproduce it: they exclude the small wrist
-/// friction and motor inertias the real PSM and MTM data ask for.
-#[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct GlobalBounds {
-    /// Coulomb friction, N·m or N
-    pub fc_min: f64,
-    /// viscous friction, N·m·s/rad or N·s/m
-    pub fv_min: f64,
-    /// motor inertia, kg·m²
-    pub ia_min: f64,
-    /// `J ⪰ eps·I` for every link pseudo-inertia (kg·m²)
-    pub pseudo_inertia_eps: f64,
-}
-
-impl GlobalBounds {
-    /// `Fc, Fv ≥ 0`, `Ia ≥ 1e-6`, `J ⪰ 1e-6·I`: the physical constraints. A motor
-    /// inertia is kept positive, by the margin of the pseudo-inertias: a coordinate that
-    /// moves no link with inertia (the PSM's jaw) has only its motor's, and with `Ia = 0`
-    /// the mass matrix would be singular (no forward dynamics).
-    pub const PHYSICAL: GlobalBounds = GlobalBounds {
-        fc_min: 0.0,
-        fv_min: 0.0,
-        ia_min: 1e-6,
-        pseudo_inertia_eps: 1e-6,
-    };
-
-    /// `Fc, Fv, Ia ≥ 0.001`, `J ⪰ 1e-6·I`: the bounds of Wang et al. (RA-L 2019).
-    pub const WANG_2019: GlobalBounds = GlobalBounds {
-        fc_min: 0.001,
-        fv_min: 0.001,
-        ia_min: 0.001,
-        pseudo_inertia_eps: 1e-6,
-    };
-}
-
-impl Default for GlobalBounds {
-    fn default() -> Self {
-        GlobalBounds::PHYSICAL
     }
 }
 
@@ -356,12 +190,50 @@ pub struct Frame {
     pub post: Transform,
     /// Parameter index of `L{i}xx` when the frame carries a rigid link.
     pub inertia: Option<usize>,
-    pub friction: Option<Friction>,
-    pub motor_inertia: Option<MotorInertia>,
-    pub spring: Option<Spring>,
-    pub known_force: Option<KnownForce>,
+    /// What acts on the joint value besides the links (friction, springs...), in
+    /// parameter order (see [`Element`]).
+    pub elements: Vec<Element>,
     pub nominal: Nominal,
     pub bounds: FrameBounds,
+}
+
+impl Frame {
+    /// The friction element, if any.
+    pub fn friction(&self) -> Option<&Friction> {
+        self.elements.iter().find_map(|e| match e {
+            Element::Friction(x) => Some(x),
+            _ => None,
+        })
+    }
+
+    /// The Stribeck term of the friction, if any.
+    pub fn stribeck(&self) -> Option<&Stribeck> {
+        self.friction().and_then(|f| f.stribeck.as_ref())
+    }
+
+    /// The motor inertia, if any.
+    pub fn motor_inertia(&self) -> Option<&MotorInertia> {
+        self.elements.iter().find_map(|e| match e {
+            Element::MotorInertia(x) => Some(x),
+            _ => None,
+        })
+    }
+
+    /// The spring, if any.
+    pub fn spring(&self) -> Option<&Spring> {
+        self.elements.iter().find_map(|e| match e {
+            Element::Spring(x) => Some(x),
+            _ => None,
+        })
+    }
+
+    /// The known force, if any.
+    pub fn known_force(&self) -> Option<&KnownForce> {
+        self.elements.iter().find_map(|e| match e {
+            Element::KnownForce(x) => Some(x),
+            _ => None,
+        })
+    }
 }
 
 /// The measured (e.g. dVRK/ROS) joint space.
@@ -425,54 +297,6 @@ impl Measured {
     }
 }
 
-/// The kind of a parameter, for estimators that treat them differently (bounds, LMIs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ParamKind {
-    /// One of the 10 barycentric link parameters; `index` 0..10 in
-    /// `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
-    Inertia {
-        index: usize,
-    },
-    Coulomb,
-    Viscous,
-    Offset,
-    MotorInertia,
-    Spring,
-    /// Stribeck friction `Fs` (see [`Stribeck`]).
-    Stribeck,
-}
-
-/// Name, kind and owning frame of one parameter.
-#[derive(Clone, Debug)]
-pub struct Param {
-    pub name: String,
-    pub kind: ParamKind,
-    /// Frame index (1-based, base = 0).
-    pub frame: usize,
-}
-
-/// Suffixes of the 10 barycentric parameters, in order.
-pub const INERTIA_SUFFIXES: [&str; 10] = ["xx", "xy", "xz", "yy", "yz", "zz", "x", "y", "z", ""];
-
-impl Param {
-    /// The 10 link parameters of frame `frame`, named in the 2019 convention:
-    /// `L{i}xx … L{i}zz` (inertia about the origin), `l{i}x l{i}y l{i}z`, `m{i}`.
-    pub fn inertia_block(frame: usize) -> impl Iterator<Item = Param> {
-        INERTIA_SUFFIXES
-            .iter()
-            .enumerate()
-            .map(move |(k, suffix)| Param {
-                name: match k {
-                    0..=5 => format!("L{frame}{suffix}"),
-                    6..=8 => format!("l{frame}{suffix}"),
-                    _ => format!("m{frame}"),
-                },
-                kind: ParamKind::Inertia { index: k },
-                frame,
-            })
-    }
-}
-
 /// The robot model. Build with [`Model::load`], [`Model::builtin`],
 /// [`Model::from_toml_str`] or [`Model::from_urdf_str`].
 #[derive(Clone, Debug)]
@@ -511,6 +335,24 @@ pub struct Model {
     pub(crate) bodies: Vec<Body>,
     /// The regressor's link blocks (see [`RegressorPlan`]).
     pub(crate) regressor_plan: RegressorPlan,
+    /// The elements in the order the per-sample passes visit them (see [`ElementPlan`]).
+    pub(crate) element_plan: ElementPlan,
+}
+
+/// The elements in a flat list, each with its frame's joint value: frames in order and
+/// within a frame its forces before its acceleration terms (the order of the sums of the
+/// first results, which stay identical to the bit). The per-sample passes run one loop
+/// over contiguous memory, with no frame lookup and nothing for frames without elements.
+/// A copy of `Frame::elements`, derived in `finish` (and again by `Model::add_stribeck`).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct ElementPlan {
+    /// Every element, with its frame's joint value.
+    pub all: Vec<(Affine, Element)>,
+    /// The forces alone (not `Element::inertial`), in the same order: forward dynamics
+    /// has the acceleration terms in the mass matrix.
+    pub forces: Vec<(Affine, Element)>,
+    /// The acceleration terms alone (`Element::inertial`), for the mass matrix.
+    pub inertial: Vec<Element>,
 }
 
 /// Where the link columns of the regressor come from: each link `j` adds `a·S_kᵀ·Y_j`
@@ -725,19 +567,8 @@ impl Model {
                 let bary = crate::inertia::barycentric_from_standard(m, c, ic);
                 pi[p0..p0 + 10].copy_from_slice(&bary);
             }
-            if let Some(fr) = &f.friction {
-                pi[fr.param] = nom.fc.unwrap_or(0.0);
-                pi[fr.param + 1] = nom.fv.unwrap_or(0.0);
-                pi[fr.param + 2] = nom.fo.unwrap_or(0.0);
-                if let Some(st) = &fr.stribeck {
-                    pi[st.param] = nom.fs.unwrap_or(0.0);
-                }
-            }
-            if let Some(mi) = &f.motor_inertia {
-                pi[mi.param] = nom.ia?;
-            }
-            if let Some(sp) = &f.spring {
-                pi[sp.param] = nom.k?;
+            for e in &f.elements {
+                e.nominal(nom, &mut pi)?;
             }
         }
         Some(pi)
@@ -746,11 +577,8 @@ impl Model {
     /// Known generalized forces (e.g. a cable) at `q`, added into `tau` (N·m or N).
     pub fn add_known_forces(&self, q: &[f64], tau: &mut [f64]) {
         for f in &self.frames {
-            if let Some(kf) = &f.known_force {
-                let v = kf.value(q);
-                for &(k, c) in &kf.along.terms {
-                    tau[k] += c * v;
-                }
+            for e in &f.elements {
+                e.add_known(q, tau);
             }
         }
     }
@@ -773,16 +601,18 @@ impl Model {
         let Some(f) = frame.checked_sub(1).and_then(|i| self.frames.get_mut(i)) else {
             return Err(numeric(format!("no frame {frame}")));
         };
-        let Some(fr) = f.friction.as_mut() else {
+        let name = f.name.clone();
+        let Some(fr) = f.elements.iter_mut().find_map(|e| match e {
+            Element::Friction(x) => Some(x),
+            _ => None,
+        }) else {
             return Err(numeric(format!(
-                "frame {frame} ({}) has no friction to add a Stribeck term to",
-                f.name
+                "frame {frame} ({name}) has no friction to add a Stribeck term to"
             )));
         };
         if fr.stribeck.is_some() {
             return Err(numeric(format!(
-                "frame {frame} ({}) already has a Stribeck term",
-                f.name
+                "frame {frame} ({name}) already has a Stribeck term"
             )));
         }
         fr.stribeck = Some(Stribeck { param: p, velocity });
@@ -791,6 +621,7 @@ impl Model {
             kind: ParamKind::Stribeck,
             frame,
         });
+        self.element_plan = self.derive_element_plan();
         Ok(())
     }
 
@@ -808,10 +639,8 @@ impl Model {
         let mut m = self.clone();
         let frames: Vec<usize> = (1..=m.frames.len())
             .filter(|&i| {
-                m.frames[i - 1]
-                    .friction
-                    .as_ref()
-                    .is_some_and(|fr| fr.stribeck.is_none())
+                let f = &m.frames[i - 1];
+                f.friction().is_some() && f.stribeck().is_none()
             })
             .collect();
         for i in frames {
@@ -822,7 +651,9 @@ impl Model {
 
     /// True if the model has known forces to subtract before fitting.
     pub fn has_known_forces(&self) -> bool {
-        self.frames.iter().any(|f| f.known_force.is_some())
+        self.frames
+            .iter()
+            .any(|f| f.elements.iter().any(Element::is_known))
     }
 
     /// Maps measured joint positions to model coordinates: `q = M⁻¹ q_measured`.
@@ -878,9 +709,30 @@ impl Model {
                 f.pre.compose(&joint).compose(&f.post)
             }))
             .collect();
+        self.element_plan = self.derive_element_plan();
         self.bodies = self.derive_bodies();
         self.regressor_plan = self.derive_regressor_plan();
         self
+    }
+
+    /// The elements' plan (see [`ElementPlan`]).
+    pub(crate) fn derive_element_plan(&self) -> ElementPlan {
+        let mut plan = ElementPlan::default();
+        for f in &self.frames {
+            // Known forces are no part of `H·π` (`Model::add_known_forces` adds them).
+            let forces = f.elements.iter().filter(|e| !e.inertial() && !e.is_known());
+            let inertial = f.elements.iter().filter(|e| e.inertial());
+            plan.all.extend(
+                forces
+                    .clone()
+                    .chain(inertial.clone())
+                    .map(|e| (f.value.clone(), e.clone())),
+            );
+            plan.forces
+                .extend(forces.clone().map(|e| (f.value.clone(), e.clone())));
+            plan.inertial.extend(inertial.cloned());
+        }
+        plan
     }
 
     /// The regressor's plan (see [`RegressorPlan`]), in the order the regressor adds.

@@ -14,7 +14,7 @@
 use nalgebra::Vector3;
 use wide::f64x2;
 
-use crate::dynamics::{sign0, Motion};
+use crate::dynamics::Motion;
 use crate::model::{Model, Transform};
 use crate::workspace::Workspace;
 
@@ -139,32 +139,9 @@ impl Model {
                 }
             }
         }
-        for f in &self.frames {
-            if let Some(fr) = &f.friction {
-                let sd = f.value.dot(dq);
-                let sg = sign0(sd);
-                for &(coord, a) in &f.value.terms {
-                    let base = coord * p + fr.param;
-                    out[base] += a * sg;
-                    out[base + 1] += a * sd;
-                    out[base + 2] += a;
-                }
-                if let Some(st) = &fr.stribeck {
-                    let v = st.factor(sd);
-                    for &(coord, a) in &f.value.terms {
-                        out[coord * p + st.param] += a * v;
-                    }
-                }
-            }
-            if let Some(mi) = &f.motor_inertia {
-                out[mi.coordinate * p + mi.param] += mi.ratio * ddq[mi.coordinate];
-            }
-            if let Some(sp) = &f.spring {
-                let dl = sp.deflection.eval(q);
-                for &(coord, a) in &f.value.terms {
-                    out[coord * p + sp.param] -= a * dl;
-                }
-            }
+        for (value, e) in &self.element_plan.all {
+            let s = crate::element::Sample { value, q, dq, ddq };
+            e.add_regressor(&s, p, out);
         }
     }
 
@@ -177,20 +154,13 @@ impl Model {
         for (r, blocks) in self.regressor_plan.blocks.iter().enumerate() {
             rows[r].extend(blocks.iter().flat_map(|&c| c..c + 10));
         }
+        // An element writes its columns on the rows of its frame's joint value (a motor
+        // inertia: its coordinate, which is that joint value's one coordinate).
         for f in &self.frames {
-            let mut columns = Vec::new();
-            if let Some(fr) = &f.friction {
-                columns.extend([fr.param, fr.param + 1, fr.param + 2]);
-                columns.extend(fr.stribeck.iter().map(|st| st.param));
-            }
-            if let Some(sp) = &f.spring {
-                columns.push(sp.param);
-            }
-            for &(c, _) in &f.value.terms {
-                rows[c].extend(&columns);
-            }
-            if let Some(mi) = &f.motor_inertia {
-                rows[mi.coordinate].insert(mi.param);
+            for e in &f.elements {
+                for &(c, _) in &f.value.terms {
+                    rows[c].extend(e.columns());
+                }
             }
         }
         rows.into_iter().map(|r| r.into_iter().collect()).collect()

@@ -16,8 +16,8 @@ pub struct FrameSummary {
     pub joint: String,
     /// The joint value as an affine expression of the coordinates (rad or m).
     pub value: String,
-    /// Element flags: `inertia`, `friction`, `stribeck`, `motor_inertia`, `spring`,
-    /// `known_force`.
+    /// `inertia` for a link, then the elements' labels (`friction`, `stribeck`,
+    /// `motor_inertia`, `spring`, `known_force`, `quadratic_viscous`), in parameter order.
     pub elements: Vec<String>,
 }
 
@@ -63,22 +63,13 @@ impl Model {
                 .iter()
                 .enumerate()
                 .map(|(i, f)| {
-                    let mut elements = Vec::new();
-                    for (on, name) in [
-                        (f.inertia.is_some(), "inertia"),
-                        (f.friction.is_some(), "friction"),
-                        (
-                            f.friction.as_ref().is_some_and(|fr| fr.stribeck.is_some()),
-                            "stribeck",
-                        ),
-                        (f.motor_inertia.is_some(), "motor_inertia"),
-                        (f.spring.is_some(), "spring"),
-                        (f.known_force.is_some(), "known_force"),
-                    ] {
-                        if on {
-                            elements.push(name.to_string());
-                        }
-                    }
+                    let elements = f
+                        .inertia
+                        .map(|_| "inertia")
+                        .into_iter()
+                        .chain(f.elements.iter().flat_map(|e| e.labels().iter().copied()))
+                        .map(String::from)
+                        .collect();
                     FrameSummary {
                         index: i + 1,
                         name: f.name.clone(),

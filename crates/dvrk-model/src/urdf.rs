@@ -359,10 +359,7 @@ impl Model {
                 pre,
                 post,
                 inertia: Some(p0),
-                friction: None,
-                motor_inertia: None,
-                spring: None,
-                known_force: None,
+                elements: Vec::new(),
                 nominal,
                 bounds: FrameBounds::default(),
             });
@@ -394,6 +391,7 @@ impl Model {
             post_identity: Vec::new(),
             bodies: Vec::new(),
             regressor_plan: Default::default(),
+            element_plan: Default::default(),
         }
         .finish())
     }

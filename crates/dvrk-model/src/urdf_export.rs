@@ -777,7 +777,7 @@ impl Model {
             let c = f.value.offset;
             // Friction on a one-coordinate joint value is URDF <dynamics>.
             let mut dynamics = None;
-            if let Some(fr) = &f.friction {
+            if let Some(fr) = f.friction() {
                 let (fc, fv, fo) = (params[fr.param], params[fr.param + 1], params[fr.param + 2]);
                 let (nc, nv, no) = (
                     &self.params[fr.param].name,
@@ -876,43 +876,15 @@ impl Model {
         }
 
         for f in &self.frames {
-            if let Some(st) = f.friction.as_ref().and_then(|fr| fr.stribeck) {
-                notes.push(format!(
-                    "Stribeck friction {} = {} of frame {} (velocity {}, on {})",
-                    self.params[st.param].name,
-                    params[st.param],
-                    f.name,
-                    st.velocity,
-                    expr(&f.value)
-                ));
-            }
-            if let Some(mi) = &f.motor_inertia {
-                notes.push(format!(
-                    "motor inertia {} = {} of frame {} (on {})",
-                    self.params[mi.param].name,
-                    params[mi.param],
-                    f.name,
-                    expr(&f.value)
-                ));
-            }
-            if let Some(sp) = &f.spring {
-                let deflection = match &sp.deflection {
-                    Deflection::Affine(a) => expr(a),
-                    Deflection::Expr(e) => e.text().to_string(),
-                };
-                notes.push(format!(
-                    "spring {} = {} of frame {} (deflection {deflection})",
-                    self.params[sp.param].name, params[sp.param], f.name
-                ));
-            }
-            if let Some(kf) = &f.known_force {
-                notes.push(format!(
-                    "known force of frame {}: polynomial {:?} (highest degree first) along {}",
-                    f.name,
-                    kf.polynomial,
-                    expr(&kf.along)
-                ));
-            }
+            let on = expr(&f.value);
+            let note = crate::element::Note {
+                params,
+                names: &self.params,
+                coordinates: &self.coordinates,
+                frame: &f.name,
+                on: &on,
+            };
+            notes.extend(f.elements.iter().filter_map(|e| e.note(&note)));
         }
         let inconsistent: Vec<&str> = self
             .frames

@@ -238,7 +238,7 @@ fn forward_dynamics_refuses_a_singular_mass_matrix() {
         .unwrap();
     let p0 = model.frames[roll].inertia.unwrap();
     pi[p0..p0 + 10].fill(0.0);
-    for mi in model.frames.iter().filter_map(|f| f.motor_inertia.as_ref()) {
+    for mi in model.frames.iter().filter_map(|f| f.motor_inertia()) {
         if mi.coordinate == 6 {
             pi[mi.param] = 0.0;
         }

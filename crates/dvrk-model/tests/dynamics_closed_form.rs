@@ -414,9 +414,9 @@ fn springs_friction_motor_inertia() {
         model.param_names(),
         ["K1", "K2", "Fc3", "Fv3", "Fo3", "Fc4", "Fv4", "Fo4", "Ia5", "Ia6"]
     );
-    let mi = model.frame(5).motor_inertia.as_ref().unwrap();
+    let mi = model.frame(5).motor_inertia().unwrap();
     assert_eq!((mi.coordinate, mi.ratio), (0, 1.5));
-    let mi = model.frame(6).motor_inertia.as_ref().unwrap();
+    let mi = model.frame(6).motor_inertia().unwrap();
     assert_eq!((mi.coordinate, mi.ratio), (1, -2.0));
     let pi = ELEMENT_PARAMS.to_vec();
     let mut ws = Workspace::new(&model);

@@ -312,7 +312,7 @@ fn generate_round_trip(model: &Model, seed: u64) -> (String, urdf_rs::Robot) {
     }
     // Friction of a frame driven by one coordinate is its joint's <dynamics>.
     for f in &model.frames {
-        let Some(fr) = f.friction.as_ref().filter(|_| f.value.terms.len() == 1) else {
+        let Some(fr) = f.friction().filter(|_| f.value.terms.len() == 1) else {
             continue;
         };
         let motion = format!("{}_motion", f.name);

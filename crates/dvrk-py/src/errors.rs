@@ -221,8 +221,7 @@ pub fn excite_kind(e: &ExciteError) -> Kind {
 
 pub fn fourier_kind(e: &FourierError) -> Kind {
     match e {
-        FourierError::Io { path, .. } if !std::path::Path::new(path).exists() => Kind::NotFound,
-        FourierError::Io { .. } => Kind::Io,
+        FourierError::Io { source, .. } => io_kind(source),
         _ => Kind::Input,
     }
 }
@@ -232,7 +231,7 @@ pub fn ident_kind(e: &IdentError) -> Kind {
         IdentError::Model(m) => model_kind(m),
         IdentError::Log(l) => log_kind(l),
         IdentError::Sdp(_) => Kind::Solver,
-        IdentError::Io { .. } => Kind::Io,
+        IdentError::Io { source, .. } => io_kind(source),
         IdentError::Output(o) => io_kind(&o.source),
         IdentError::Excite(x) => excite_kind(x),
         _ => Kind::Input,

@@ -7,7 +7,7 @@ use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::request::{self, FitRequest, LogSource, Streaming, Training};
+use dvrk_ident::request::{self, FitRequest, LogSource, PriorSource, Streaming, Training};
 use dvrk_ident::result::{wpi_params_json, write_atomic};
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::Trajectory;
@@ -77,6 +77,22 @@ fn delay_option(d: &Bound<'_, PyAny>) -> PyResult<DelayOption> {
     .map_err(|e| input(format!("delay: {e}")))
 }
 
+/// `prior=`: ``"nominal"``, the path of a result document, or a :class:`Result`.
+fn prior_source(p: &Bound<'_, PyAny>) -> PyResult<PriorSource> {
+    if let Ok(r) = p.cast::<FitResultPy>() {
+        return Ok(PriorSource::Result(Arc::new(r.get().inner.clone())));
+    }
+    if let Ok(text) = p.extract::<String>() {
+        return text
+            .parse::<PriorSource>()
+            .map_err(|e| input(format!("prior: {e}")));
+    }
+    let path: PathBuf = p.extract().map_err(|_| {
+        input("prior: expected \"nominal\", the path of a result document, or a Result")
+    })?;
+    Ok(PriorSource::File(path))
+}
+
 /// The keyword arguments that change the settings, shared by `fit`, `observe` and
 /// `prepare`: a base (`settings`) and the library's [`request::Overrides`].
 #[derive(Default)]
@@ -95,6 +111,9 @@ pub(crate) struct Overrides<'a, 'py> {
     pub stribeck: Option<f64>,
     pub bounds: Option<&'a str>,
     pub delay: Option<&'a Bound<'py, PyAny>>,
+    pub prior: Option<&'a Bound<'py, PyAny>>,
+    pub prior_weight: Option<f64>,
+    pub prior_metric: Option<&'a str>,
 }
 
 impl Overrides<'_, '_> {
@@ -154,6 +173,16 @@ impl Overrides<'_, '_> {
                 .filter(|d| !d.is_none())
                 .map(delay_option)
                 .transpose()?,
+            prior: self
+                .prior
+                .filter(|p| !p.is_none())
+                .map(prior_source)
+                .transpose()?,
+            prior_weight: self.prior_weight,
+            prior_metric: self
+                .prior_metric
+                .map(|m| crate::convert::named("prior_metric", m))
+                .transpose()?,
         })
     }
 
@@ -197,6 +226,13 @@ impl Overrides<'_, '_> {
 /// - ``bounds``: ``"physical"`` (friction ≥ 0, motor inertias ≥ 1e-6) or ``"2019"`` (≥ 0.001,
 ///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
 ///   robot description's (``dvrk-ident fit --bounds``);
+/// - ``prior``: regularize the semidefinite fit toward ``"nominal"`` (the robot
+///   description's nominal parameters, e.g. a URDF's inertias), a result document's
+///   path or a :class:`Result`; ``prior_weight`` (default 0.001, relative to the data
+///   term) and ``prior_metric`` (``"entropic"``, the default: the log-det divergence
+///   of each link's pseudo-inertia from the prior's, or ``"euclidean"``), as
+///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
+///   ``result.settings["prior"]``;
 /// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
@@ -218,7 +254,7 @@ impl Overrides<'_, '_> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -239,6 +275,9 @@ pub fn fit(
     stribeck: Option<f64>,
     bounds: Option<&str>,
     delay: Option<&Bound<'_, PyAny>>,
+    prior: Option<&Bound<'_, PyAny>>,
+    prior_weight: Option<f64>,
+    prior_metric: Option<&str>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
@@ -257,6 +296,9 @@ pub fn fit(
         stribeck,
         bounds,
         delay,
+        prior,
+        prior_weight,
+        prior_metric,
     };
     let train = match observations_arg(data)? {
         Some(states) => Training::Observations(states.into_iter().map(|s| (s, None)).collect()),
@@ -295,7 +337,7 @@ pub fn fit(
             .map_err(fail_ident)
     })?;
     let converged = inner.solver.converged;
-    let status = inner.solver.status.clone();
+    let status = inner.solver.status;
     let result = FitResultPy {
         inner,
         robot: Some(robot.clone().unbind()),
@@ -540,6 +582,13 @@ impl FitResultPy {
     #[getter]
     fn delay<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.delay)
+    }
+
+    /// With an entropic prior: the summed log-det divergence of the links from the
+    /// prior's (no units), or ``None``.
+    #[getter]
+    fn prior_divergence(&self) -> Option<f64> {
+        self.inner.prior_divergence
     }
 
     #[getter]

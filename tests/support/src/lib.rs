@@ -183,15 +183,15 @@ pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
             assert!(inertia::pseudo_inertia_min_eigenvalue(&bary) > 0.0);
             pi[p0..p0 + 10].copy_from_slice(&bary);
         }
-        if let Some(fr) = &f.friction {
+        if let Some(fr) = f.friction() {
             pi[fr.param] = rng.uniform(0.01, 0.3);
             pi[fr.param + 1] = rng.uniform(0.01, 0.3);
             pi[fr.param + 2] = rng.uniform(-0.2, 0.2);
         }
-        if let Some(mi) = &f.motor_inertia {
+        if let Some(mi) = f.motor_inertia() {
             pi[mi.param] = rng.uniform(0.01, 0.1);
         }
-        if let Some(sp) = &f.spring {
+        if let Some(sp) = f.spring() {
             pi[sp.param] = rng.uniform(0.1, 2.0);
         }
     }

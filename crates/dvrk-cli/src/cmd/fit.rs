@@ -8,7 +8,8 @@ use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, Streaming, Training};
+use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
+use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, Method, Trajectory};
 use dvrk_model::Model;
@@ -74,9 +75,22 @@ pub struct Args {
     /// Re-weighting passes of --method irls
     #[arg(long, value_name = "N")]
     pub irls_iterations: Option<usize>,
-    /// Tikhonov weight of the semidefinite fit toward zero, relative
+    /// Tikhonov weight of the semidefinite fit toward zero (toward the prior with
+    /// --prior), relative
     #[arg(long, value_name = "W")]
     pub sdp_regularization: Option<f64>,
+    /// Regularize the semidefinite fit toward a prior: `nominal` (the description's
+    /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
+    /// values are recorded in the result's settings)
+    #[arg(long, value_name = "FILE|nominal")]
+    pub prior: Option<String>,
+    /// Weight of the prior, relative to the data term scaled to at most 1 (default 0.001)
+    #[arg(long, value_name = "W")]
+    pub prior_weight: Option<f64>,
+    /// How the prior's distance is measured: `entropic` (the log-det divergence of each
+    /// link's pseudo-inertia from the prior's, the default) or `euclidean`
+    #[arg(long, value_parser = super::named::<PriorMetric>(), value_name = "METRIC")]
+    pub prior_metric: Option<PriorMetric>,
     /// Also write figures and report.html into this folder (see `dvrk-ident report`)
     #[arg(long, value_name = "DIR")]
     pub report: Option<String>,
@@ -122,6 +136,15 @@ fn request(args: &Args) -> Result<FitRequest> {
     overrides.irls_iterations = args.irls_iterations;
     overrides.sdp_regularization = args.sdp_regularization;
     overrides.bounds = args.bounds;
+    overrides.prior = match &args.prior {
+        Some(p) => Some(
+            p.parse::<PriorSource>()
+                .map_err(|e| anyhow::anyhow!("--prior: {e}"))?,
+        ),
+        None => None,
+    };
+    overrides.prior_weight = args.prior_weight;
+    overrides.prior_metric = args.prior_metric;
     overrides.delay = match &args.delay {
         Some(d) => Some(
             d.parse::<DelayOption>()
@@ -307,6 +330,18 @@ pub fn table(r: &FitResult) -> String {
         };
         let _ = writeln!(s, "torque delays ({how}, ms): {}", ms.join(" "));
     }
+    if let Some(p) = &r.settings.prior {
+        let divergence = r
+            .prior_divergence
+            .map_or(String::new(), |d| format!(", divergence from it {d:.4e}"));
+        let _ = writeln!(
+            s,
+            "prior {} ({} metric, weight {}){divergence}",
+            p.source,
+            p.metric.name(),
+            p.weight
+        );
+    }
     let _ = writeln!(
         s,
         "{:<8} {:>12} {:>12} {:>12} {:>12}",
@@ -326,7 +361,8 @@ pub fn table(r: &FitResult) -> String {
     // Each log with what was read of it (a recording's topics) and, when there are
     // several, its own errors.
     let _ = writeln!(s, "logs (samples after processing, sha256):");
-    for i in &r.inputs {
+    let logs: Vec<_> = r.inputs.iter().filter(|i| i.role != "prior").collect();
+    for i in &logs {
         let name = if i.source.is_empty() {
             &i.path
         } else {
@@ -339,7 +375,7 @@ pub fn table(r: &FitResult) -> String {
             i.metrics.as_ref().map_or(0, |m| m.samples),
             &i.sha256[..12.min(i.sha256.len())]
         );
-        if let (true, Some(m)) = (r.inputs.len() > 1, &i.metrics) {
+        if let (true, Some(m)) = (logs.len() > 1, &i.metrics) {
             let errors: Vec<String> = m.relative_error.iter().map(|e| format!("{e:.4}")).collect();
             let _ = writeln!(s, "        relative error {}", errors.join(" "));
         }

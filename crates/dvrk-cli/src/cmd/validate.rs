@@ -49,21 +49,34 @@ pub fn run(args: Args) -> Result<()> {
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
         super::check_metrics(&m, path)?;
+        // Beside the fit's own training (and test) errors, so a held-out log reads
+        // against them joint by joint.
+        let mut sets = vec![("fit train", &result.metrics.train)];
+        if let Some(t) = &result.metrics.test {
+            sets.push(("fit test", t));
+        }
+        sets.push(("this log", &m));
         let _ = writeln!(text, "{path} ({} samples)", m.samples);
-        let _ = writeln!(text, "{:<8} {:>12} {:>12}", "joint", "relative", "rms");
+        let _ = write!(text, "{:<8}", "joint");
+        for (name, _) in &sets {
+            let _ = write!(text, " {:>14} {:>10}", format!("{name} rel"), "rms");
+        }
+        let _ = writeln!(text);
         for (j, name) in m.joints.iter().enumerate() {
-            let _ = writeln!(
-                text,
-                "{name:<8} {:>12.4} {:>12.4}",
-                m.relative_error[j], m.rms[j]
-            );
+            let _ = write!(text, "{name:<8}");
+            for (_, s) in &sets {
+                let _ = write!(text, " {:>14.4} {:>10.4}", s.relative_error[j], s.rms[j]);
+            }
+            let _ = writeln!(text);
         }
         reports.push(json!({"log": path, "metrics": m}));
     }
     if args.json {
-        emit(&serde_json::to_string_pretty(
-            &json!({"result": args.result, "validations": reports}),
-        )?)
+        emit(&serde_json::to_string_pretty(&json!({
+            "result": args.result,
+            "fit": result.metrics,
+            "validations": reports,
+        }))?)
     } else {
         emit(&text)
     }

@@ -4,3 +4,6 @@
 
 pub mod ols;
 pub mod sdp;
+mod status;
+
+pub use status::SolverStatus;

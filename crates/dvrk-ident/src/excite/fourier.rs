@@ -40,11 +40,15 @@ use thiserror::Error;
 
 /// Why a Fourier trajectory could not be read or is not usable. Messages name the file
 /// (or source) and the offending field.
-#[derive(Debug, Error, Clone, PartialEq)]
+#[derive(Debug, Error)]
 pub enum FourierError {
     /// The file could not be read.
-    #[error("{path}: {message}")]
-    Io { path: String, message: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: String,
+        #[source]
+        source: std::io::Error,
+    },
     /// The file is not valid JSON of the expected shape.
     #[error("{path}: not a Fourier trajectory: {message}")]
     Json { path: String, message: String },
@@ -98,9 +102,9 @@ struct Wpi2019File {
 }
 
 fn read_text(path: &Path) -> Result<String, FourierError> {
-    dvrk_model::input::read_text(path).map_err(|e| FourierError::Io {
+    dvrk_model::input::read_text(path).map_err(|source| FourierError::Io {
         path: path.display().to_string(),
-        message: e.to_string(),
+        source,
     })
 }
 

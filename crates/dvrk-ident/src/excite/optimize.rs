@@ -337,17 +337,18 @@ impl<'a> CriterionEval<'a> {
             coulomb: model
                 .frames
                 .iter()
-                .filter_map(|f| {
-                    let fr = f.friction.as_ref()?;
+                .flat_map(|f| {
                     let scale = if f.kind == dvrk_model::JointKind::Prismatic {
                         0.1
                     } else {
                         1.0
                     };
-                    Some(CoulombColumn {
-                        param: fr.param,
-                        terms: f.value.terms.clone(),
-                        scale,
+                    f.elements.iter().filter_map(move |e| {
+                        Some(CoulombColumn {
+                            param: e.sign_column()?,
+                            terms: f.value.terms.clone(),
+                            scale,
+                        })
                     })
                 })
                 .collect(),

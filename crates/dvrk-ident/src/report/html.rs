@@ -52,28 +52,40 @@ th{background:#f2f2f2}td.l,th.l{text-align:left}\
 figure{margin:16px 0}figcaption{font-size:13px;color:#555}\
 figure svg{max-width:100%;height:auto}pre{background:#f7f7f7;padding:8px;font-size:12px;overflow:auto}";
 
+/// One table, the metrics of every set side by side (the fit's training and test
+/// logs, then the logs of this report), so held-out errors read against the fitted
+/// ones joint by joint.
 fn metrics_table(
     out: &mut String,
-    caption: &str,
-    m: &JointMetrics,
+    sets: &[(String, &JointMetrics)],
     unit: &dyn Fn(usize) -> &'static str,
 ) {
-    let _ = write!(
-        out,
-        "<table><caption>{} ({} samples)</caption><tr><th class=l>joint</th>\
-         <th>relative error</th><th>RMS</th><th class=l>unit</th></tr>",
-        escape(caption),
-        m.samples
-    );
-    for (j, name) in m.joints.iter().enumerate() {
+    out.push_str("<table><tr><th class=l rowspan=2>joint</th>");
+    for (caption, m) in sets {
         let _ = write!(
             out,
-            "<tr><td class=l>{}</td><td>{:.4}</td><td>{}</td><td class=l>{}</td></tr>",
-            escape(name),
-            m.relative_error.get(j).copied().unwrap_or(f64::NAN),
-            number(m.rms.get(j).copied().unwrap_or(f64::NAN)),
-            unit(j)
+            "<th colspan=2>{} ({} samples)</th>",
+            escape(caption),
+            m.samples
         );
+    }
+    out.push_str("<th class=l rowspan=2>unit</th></tr><tr>");
+    for _ in sets {
+        out.push_str("<th>relative error</th><th>RMS</th>");
+    }
+    out.push_str("</tr>");
+    let joints = sets.first().map_or(&[][..], |(_, m)| &m.joints[..]);
+    for (j, name) in joints.iter().enumerate() {
+        let _ = write!(out, "<tr><td class=l>{}</td>", escape(name));
+        for (_, m) in sets {
+            let _ = write!(
+                out,
+                "<td>{:.4}</td><td>{}</td>",
+                m.relative_error.get(j).copied().unwrap_or(f64::NAN),
+                number(m.rms.get(j).copied().unwrap_or(f64::NAN)),
+            );
+        }
+        let _ = write!(out, "<td class=l>{}</td></tr>", unit(j));
     }
     out.push_str("</table>");
 }
@@ -125,12 +137,12 @@ pub fn page(
          <tr><th class=l>observation rows</th><td class=l>{}</td></tr>\
          <tr><th class=l>condition number</th><td class=l>{}</td></tr>\
          <tr><th class=l>residual variance σ²</th><td class=l>{}</td></tr>\
-         <tr><th class=l>tool</th><td class=l>{}</td></tr></table>",
+         <tr><th class=l>tool</th><td class=l>{}</td></tr>",
         escape(&result.robot),
         escape(&result.robot_source),
         escape(&result.method),
         escape(&result.solver.name),
-        escape(&result.solver.status),
+        result.solver.status,
         converged,
         result.solver.iterations,
         result.solver.seconds,
@@ -140,21 +152,45 @@ pub fn page(
         number(result.sigma2),
         escape(&result.tool),
     );
+    let delays = &result.settings.processing.delay_s;
+    if !delays.is_empty() {
+        let how = if result.delay.is_some() {
+            "estimated"
+        } else {
+            "given"
+        };
+        let ms: Vec<String> = delays.iter().map(|d| format!("{:.1}", d * 1e3)).collect();
+        let _ = write!(
+            o,
+            "<tr><th class=l>torque delays ({how}, ms)</th><td class=l>{}</td></tr>",
+            ms.join(" ")
+        );
+    }
+    if let Some(p) = &result.settings.prior {
+        let divergence = result.prior_divergence.map_or(String::new(), |d| {
+            format!(", divergence from it {}", number(d))
+        });
+        let _ = write!(
+            o,
+            "<tr><th class=l>prior</th><td class=l>{} ({} metric, weight {}){}</td></tr>",
+            escape(&p.source),
+            p.metric.name(),
+            p.weight,
+            divergence
+        );
+    }
+    o.push_str("</table>");
 
     // Metrics of the result, then of every log drawn here.
     o.push_str("<h2>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
-    metrics_table(&mut o, "result: training", &result.metrics.train, &unit);
+    let mut sets = vec![("fit: training".to_string(), &result.metrics.train)];
     if let Some(test) = &result.metrics.test {
-        metrics_table(&mut o, "result: test", test, &unit);
+        sets.push(("fit: test".to_string(), test));
     }
     for log in logs {
-        metrics_table(
-            &mut o,
-            &format!("this report: {} ({})", log.role, log.source),
-            &log.metrics,
-            &unit,
-        );
+        sets.push((format!("{} ({})", log.role, log.source), &log.metrics));
     }
+    metrics_table(&mut o, &sets, &unit);
 
     // Parameters by link.
     o.push_str(

@@ -1,0 +1,110 @@
+//! How an estimator ended: Clarabel's statuses as a type of our own, so a result
+//! document names them the same way whatever the solver's version, and code matches on
+//! them instead of on strings.
+
+use serde::{Deserialize, Serialize};
+
+/// The end state of an estimator. Least squares always ends [`SolverStatus::Solved`];
+/// the semidefinite fit takes Clarabel's status. Serialized as the variant's name
+/// (`"Solved"`, `"AlmostSolved"`, ...).
+///
+/// ```rust
+/// use dvrk_ident::estimate::SolverStatus;
+///
+/// assert!(SolverStatus::Solved.converged());
+/// // Reduced accuracy is not a result.
+/// assert!(!SolverStatus::AlmostSolved.converged());
+/// assert_eq!(SolverStatus::AlmostSolved.to_string(), "AlmostSolved");
+/// assert_eq!(serde_json::to_string(&SolverStatus::MaxIterations).unwrap(), "\"MaxIterations\"");
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub enum SolverStatus {
+    Unsolved,
+    Solved,
+    PrimalInfeasible,
+    DualInfeasible,
+    AlmostSolved,
+    AlmostPrimalInfeasible,
+    AlmostDualInfeasible,
+    MaxIterations,
+    MaxTime,
+    NumericalError,
+    InsufficientProgress,
+    CallbackTerminated,
+}
+
+impl SolverStatus {
+    /// Only `Solved` is a result: the "almost" statuses met reduced tolerances.
+    pub fn converged(self) -> bool {
+        self == SolverStatus::Solved
+    }
+
+    /// The problem (bounds, constraints) has no solution, to the solver's tolerance.
+    pub fn infeasible(self) -> bool {
+        matches!(
+            self,
+            SolverStatus::PrimalInfeasible
+                | SolverStatus::DualInfeasible
+                | SolverStatus::AlmostPrimalInfeasible
+                | SolverStatus::AlmostDualInfeasible
+        )
+    }
+}
+
+impl std::fmt::Display for SolverStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        std::fmt::Debug::fmt(self, f)
+    }
+}
+
+impl From<clarabel::solver::SolverStatus> for SolverStatus {
+    fn from(s: clarabel::solver::SolverStatus) -> Self {
+        use clarabel::solver::SolverStatus as C;
+        match s {
+            C::Unsolved => SolverStatus::Unsolved,
+            C::Solved => SolverStatus::Solved,
+            C::PrimalInfeasible => SolverStatus::PrimalInfeasible,
+            C::DualInfeasible => SolverStatus::DualInfeasible,
+            C::AlmostSolved => SolverStatus::AlmostSolved,
+            C::AlmostPrimalInfeasible => SolverStatus::AlmostPrimalInfeasible,
+            C::AlmostDualInfeasible => SolverStatus::AlmostDualInfeasible,
+            C::MaxIterations => SolverStatus::MaxIterations,
+            C::MaxTime => SolverStatus::MaxTime,
+            C::NumericalError => SolverStatus::NumericalError,
+            C::InsufficientProgress => SolverStatus::InsufficientProgress,
+            C::CallbackTerminated => SolverStatus::CallbackTerminated,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every Clarabel status maps to ours with the same name, which is what result
+    /// documents written before this type hold.
+    #[test]
+    fn names_match_clarabel() {
+        use clarabel::solver::SolverStatus as C;
+        for c in [
+            C::Unsolved,
+            C::Solved,
+            C::PrimalInfeasible,
+            C::DualInfeasible,
+            C::AlmostSolved,
+            C::AlmostPrimalInfeasible,
+            C::AlmostDualInfeasible,
+            C::MaxIterations,
+            C::MaxTime,
+            C::NumericalError,
+            C::InsufficientProgress,
+            C::CallbackTerminated,
+        ] {
+            let ours = SolverStatus::from(c);
+            assert_eq!(ours.to_string(), format!("{c:?}"));
+            let json = serde_json::to_string(&ours).unwrap();
+            assert_eq!(serde_json::from_str::<SolverStatus>(&json).unwrap(), ours);
+            assert_eq!(ours.converged(), c == C::Solved);
+        }
+    }
+}

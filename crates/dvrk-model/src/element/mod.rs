@@ -1,0 +1,455 @@
+//! A frame's elements: what acts on its joint value besides the links — friction (with
+//! an optional Stribeck term), a motor inertia, a spring, a known force, a quadratic viscous
+//! friction. Each is a value of [`Element`], and each variant's module holds everything
+//! about it: its parameters (names, kinds, unit classes), its regressor columns, its
+//! torque, its share of the mass matrix, its nominal values, its bounds for the
+//! physically consistent fit, its consistency test, its export notes and its description
+//! syntax. The model, the estimator, the result and the exports iterate over
+//! [`Frame::elements`](crate::Frame::elements) and call these, as Pinocchio's algorithms
+//! visit joint models; an enum rather than trait objects keeps the per-sample loops free
+//! of allocation and indirect calls (one `match` per element).
+//!
+//! A new element is one module implementing [`Law`], plus its variant in [`Element`]
+//! (and the `each!` dispatch below) and its description field in [`ElementsDesc`].
+
+mod friction;
+mod known_force;
+mod motor_inertia;
+mod quadratic_viscous;
+mod spring;
+mod stribeck;
+
+use serde::Deserialize;
+
+use crate::error::ModelError;
+use crate::expr::{Affine, NumOrExpr};
+use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
+use crate::resolve::Ctx;
+
+pub use friction::Friction;
+pub use known_force::KnownForce;
+pub use motor_inertia::MotorInertia;
+pub use quadratic_viscous::QuadraticViscous;
+pub use spring::{Deflection, Spring};
+pub use stribeck::Stribeck;
+
+use known_force::KnownForceDesc;
+use quadratic_viscous::QuadraticViscousDesc;
+
+/// One sample as an element sees it: the joint value `s = a·q + b` of its frame and the
+/// coordinates' positions, rates and accelerations (rad or m, per s, per s²).
+#[derive(Clone, Copy)]
+pub struct Sample<'a> {
+    pub value: &'a Affine,
+    pub q: &'a [f64],
+    pub dq: &'a [f64],
+    pub ddq: &'a [f64],
+}
+
+/// What an export's note on an element names: the parameter values and names, the
+/// coordinates, the frame's name and its joint value as text.
+pub struct Note<'a> {
+    pub params: &'a [f64],
+    pub names: &'a [Param],
+    pub coordinates: &'a [String],
+    pub frame: &'a str,
+    pub on: &'a str,
+}
+
+/// `sign` with `sign(0) = 0` (numpy's convention, used by the 2019 package), so that a
+/// joint at rest gets no Coulomb force.
+#[inline]
+pub fn sign0(x: f64) -> f64 {
+    if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// What the physically consistent fit may assume of an element's parameters.
+#[derive(Clone, Copy)]
+pub struct BoundsContext<'a> {
+    /// Lower bounds of every element (the model's [`GlobalBounds`]).
+    pub global: &'a GlobalBounds,
+    /// The frame's own bounds (maxima, ranges).
+    pub frame: &'a FrameBounds,
+    /// `false` ignores the frame's bounds (`SdpOptions::override_bounds`), keeping the
+    /// global and physical ones.
+    pub use_frame: bool,
+}
+
+/// Where a bound comes from, for messages: a global lower bound, a field of the frame's
+/// `bounds`, or a physical constraint of the element.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BoundOrigin {
+    /// A field of the model's [`GlobalBounds`], e.g. `fc_min`.
+    Global(&'static str),
+    /// A field of the frame's bounds, e.g. `fc_max`.
+    Frame(&'static str),
+    /// A constraint of the element itself, e.g. `Fc + Fs ≥ 0`.
+    Physical(&'static str),
+}
+
+/// One linear bound `Σ a·π ≤ limit` of the physically consistent fit (`limit = +∞` is
+/// no bound).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BoundRow {
+    /// `(parameter index, coefficient)` pairs.
+    pub coefficients: Vec<(usize, f64)>,
+    pub limit: f64,
+    pub origin: BoundOrigin,
+}
+
+impl BoundRow {
+    /// `lo ≤ π[k]`.
+    pub fn at_least(k: usize, lo: f64, origin: BoundOrigin) -> BoundRow {
+        BoundRow {
+            coefficients: vec![(k, -1.0)],
+            limit: -lo,
+            origin,
+        }
+    }
+
+    /// `π[k] ≤ hi`.
+    pub fn at_most(k: usize, hi: f64, origin: BoundOrigin) -> BoundRow {
+        BoundRow {
+            coefficients: vec![(k, 1.0)],
+            limit: hi,
+            origin,
+        }
+    }
+}
+
+/// Moves `v` onto `[lo, hi]` when it misses by at most `1e-6·max(1, |bound|)` (a
+/// solver's feasibility tolerance): a larger miss is left visible.
+pub(crate) fn clamp_near(v: &mut f64, lo: f64, hi: Option<f64>) {
+    if let Some(hi) = hi.filter(|&hi| hi >= lo) {
+        if *v > hi && near(*v, hi) {
+            *v = hi;
+        }
+    }
+    if *v < lo && near(*v, lo) {
+        *v = lo;
+    }
+}
+
+/// `v` within `1e-6·max(1, |bound|)` of `bound`.
+pub(crate) fn near(v: f64, bound: f64) -> bool {
+    (v - bound).abs() <= 1e-6 * bound.abs().max(1.0)
+}
+
+/// What an element is and does; implemented by each variant of [`Element`], in its
+/// module. Parameters of an element are consecutive columns from [`Law::first`].
+pub(crate) trait Law {
+    /// Names of the element in summaries (`friction`, `spring`...; a friction with a
+    /// Stribeck term is both `friction` and `stribeck`).
+    fn labels(&self) -> &'static [&'static str];
+    /// Each parameter's column, name prefix (the frame index follows: `Fc3`) and kind,
+    /// in the order the element adds them to the parameter vector.
+    fn columns(&self, out: &mut Vec<(usize, &'static str, ParamKind)>);
+    /// Adds the element's regressor columns of one sample into `out` (row-major, `p`
+    /// columns per coordinate).
+    fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]);
+    /// Adds the element's generalized force (its part of `H·π`) into `tau`.
+    fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]);
+    /// Whether the torque is an acceleration term, which forward dynamics moves into
+    /// the mass matrix ([`Law::add_mass`]) instead.
+    #[inline(always)]
+    fn inertial(&self) -> bool {
+        false
+    }
+    /// Adds the element's share of the mass matrix (`n×n`, column-major).
+    #[inline(always)]
+    fn add_mass(&self, _params: &[f64], _n: usize, _out: &mut [f64]) {}
+    /// Adds what the element holds at rest at `q` when the motion starts in the
+    /// direction of sign `onset` along its frame's joint value (`0`: at rest).
+    #[inline(always)]
+    fn add_static(
+        &self,
+        _value: &Affine,
+        _q: &[f64],
+        _onset: f64,
+        _params: &[f64],
+        _tau: &mut [f64],
+    ) {
+    }
+    /// Adds a known (not identified) generalized force, e.g. a cable.
+    fn add_known(&self, _q: &[f64], _tau: &mut [f64]) {}
+    /// Writes the nominal values of the parameters into `pi`; `None` if one is unknown.
+    fn nominal(&self, nominal: &Nominal, pi: &mut [f64]) -> Option<()>;
+    /// The bounds of the physically consistent fit.
+    fn bound_rows(&self, _b: &BoundsContext, _rows: &mut Vec<BoundRow>) {}
+    /// Moves parameters that miss their bounds by a solver's tolerance onto them.
+    fn clamp(&self, _b: &BoundsContext, _params: &mut [f64]) {}
+    /// The element's sign conditions, to `tol` (negative: the rounding allowed).
+    fn consistent(&self, _params: &[f64], _tol: f64) -> bool {
+        true
+    }
+    /// A sentence for the exports that cannot hold the element (URDF), or `None`.
+    fn note(&self, _n: &Note) -> Option<String> {
+        None
+    }
+    /// Numbers and words that make the element's regressor, for model hashes.
+    fn fingerprint(&self, numbers: &mut Vec<f64>, words: &mut Vec<String>);
+    /// The 2019 package's `params.json` fields (`Fc Fv Fo Im K`) it fills.
+    fn wpi_fields(&self, _params: &[f64]) -> Vec<(&'static str, f64)> {
+        Vec::new()
+    }
+    /// The column that is `sign(ṡ)` along the frame's joint value, which a smooth
+    /// optimizer replaces by a smooth step.
+    fn sign_column(&self) -> Option<usize> {
+        None
+    }
+    /// The element's line in a description file (`robots/README.md`).
+    fn description(&self, coordinates: &[String]) -> String;
+}
+
+/// One element of a frame (see the module documentation).
+#[derive(Clone, Debug)]
+pub enum Element {
+    Friction(Friction),
+    MotorInertia(MotorInertia),
+    Spring(Spring),
+    KnownForce(KnownForce),
+    QuadraticViscous(QuadraticViscous),
+}
+
+/// Runs `$body` with `$e` bound to the variant's value.
+macro_rules! each {
+    ($self:expr, $e:ident => $body:expr) => {
+        match $self {
+            Element::Friction($e) => $body,
+            Element::MotorInertia($e) => $body,
+            Element::Spring($e) => $body,
+            Element::KnownForce($e) => $body,
+            Element::QuadraticViscous($e) => $body,
+        }
+    };
+}
+
+impl Element {
+    /// Names in summaries: `friction` (and `stribeck`), `motor_inertia`, `spring`,
+    /// `known_force`, `quadratic_viscous`.
+    pub fn labels(&self) -> &'static [&'static str] {
+        each!(self, e => e.labels())
+    }
+
+    /// The element's parameter columns.
+    pub fn columns(&self) -> Vec<usize> {
+        let mut out = Vec::new();
+        each!(self, e => e.columns(&mut out));
+        out.into_iter().map(|(c, _, _)| c).collect()
+    }
+
+    /// The parameters of this element on frame `frame` (names in the 2019 convention),
+    /// in column order.
+    pub fn params(&self, frame: usize) -> Vec<Param> {
+        let mut out = Vec::new();
+        each!(self, e => e.columns(&mut out));
+        out.into_iter()
+            .map(|(_, prefix, kind)| Param {
+                name: format!("{prefix}{frame}"),
+                kind,
+                frame,
+            })
+            .collect()
+    }
+
+    /// Adds the regressor columns of one sample into `out` (row-major, `p` columns).
+    #[inline(always)]
+    pub fn add_regressor(&self, s: &Sample, p: usize, out: &mut [f64]) {
+        each!(self, e => e.add_regressor(s, p, out))
+    }
+
+    /// Adds the element's part of `H·π` into `tau` (N·m or N).
+    #[inline(always)]
+    pub fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
+        each!(self, e => e.add_torque(s, params, tau))
+    }
+
+    /// Whether the torque is an acceleration term (in the mass matrix instead).
+    #[inline(always)]
+    pub fn inertial(&self) -> bool {
+        each!(self, e => e.inertial())
+    }
+
+    /// Adds the element's share of the mass matrix (`n×n`, column-major).
+    #[inline(always)]
+    pub fn add_mass(&self, params: &[f64], n: usize, out: &mut [f64]) {
+        each!(self, e => e.add_mass(params, n, out))
+    }
+
+    /// Adds the static torque at `q` for a motion starting with sign `onset` along the
+    /// frame's joint value `value` (see `Model::static_torque`).
+    #[inline(always)]
+    pub fn add_static(
+        &self,
+        value: &Affine,
+        q: &[f64],
+        onset: f64,
+        params: &[f64],
+        tau: &mut [f64],
+    ) {
+        each!(self, e => e.add_static(value, q, onset, params, tau))
+    }
+
+    /// Adds a known generalized force (not identified: the MTM's cable) into `tau`.
+    #[inline(always)]
+    pub fn add_known(&self, q: &[f64], tau: &mut [f64]) {
+        each!(self, e => e.add_known(q, tau))
+    }
+
+    /// Whether the element is a known force.
+    pub fn is_known(&self) -> bool {
+        matches!(self, Element::KnownForce(_))
+    }
+
+    /// Writes the nominal parameter values from the frame's `nominal` into `pi`; `None`
+    /// when one is missing.
+    pub fn nominal(&self, nominal: &Nominal, pi: &mut [f64]) -> Option<()> {
+        each!(self, e => e.nominal(nominal, pi))
+    }
+
+    /// Appends the linear bounds of the physically consistent fit.
+    pub fn bound_rows(&self, b: &BoundsContext, rows: &mut Vec<BoundRow>) {
+        each!(self, e => e.bound_rows(b, rows))
+    }
+
+    /// Moves parameters within `1e-6·max(1, |bound|)` outside their bounds onto them.
+    pub fn clamp(&self, b: &BoundsContext, params: &mut [f64]) {
+        each!(self, e => e.clamp(b, params))
+    }
+
+    /// The element's physical sign conditions, to `tol` (e.g. `Fc ≥ tol`).
+    pub fn consistent(&self, params: &[f64], tol: f64) -> bool {
+        each!(self, e => e.consistent(params, tol))
+    }
+
+    /// The note an export that cannot hold this element writes, or `None`.
+    pub fn note(&self, n: &Note) -> Option<String> {
+        each!(self, e => e.note(n))
+    }
+
+    /// Numbers and words that make the element's regressor (model hashes).
+    pub fn fingerprint(&self, numbers: &mut Vec<f64>, words: &mut Vec<String>) {
+        each!(self, e => e.fingerprint(numbers, words))
+    }
+
+    /// Its fields of the 2019 `params.json` layout (`Fc Fv Fo Im K`).
+    pub fn wpi_fields(&self, params: &[f64]) -> Vec<(&'static str, f64)> {
+        each!(self, e => e.wpi_fields(params))
+    }
+
+    /// The column that is `sign(ṡ)` along the frame's joint value, if any.
+    pub fn sign_column(&self) -> Option<usize> {
+        each!(self, e => e.sign_column())
+    }
+
+    /// The element's line in a description file, e.g. `friction = true`.
+    pub fn description(&self, coordinates: &[String]) -> String {
+        each!(self, e => e.description(coordinates))
+    }
+}
+
+/// A frame's element fields in a description file (`robots/README.md`), read by serde
+/// into the frame's table.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ElementsDesc {
+    #[serde(default)]
+    friction: bool,
+    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
+    stribeck_velocity: Option<NumOrExpr>,
+    #[serde(default)]
+    motor_inertia: bool,
+    spring: Option<String>,
+    known_force: Option<KnownForceDesc>,
+    quadratic_viscous: Option<QuadraticViscousDesc>,
+}
+
+/// The frame an element is read for.
+pub(crate) struct FrameContext<'a> {
+    pub ctx: &'a Ctx<'a>,
+    /// `frame 3 (name)`, for messages.
+    pub place: &'a str,
+    pub index: usize,
+    pub value: &'a Affine,
+    pub moving: bool,
+}
+
+impl FrameContext<'_> {
+    fn error(&self, field: &str, message: impl Into<String>) -> ModelError {
+        ModelError::field(self.ctx.file, self.place, field, message)
+    }
+
+    /// Errors unless the frame moves: friction, springs... act along its joint value.
+    fn need_motion(&self, field: &str) -> Result<(), ModelError> {
+        if self.moving {
+            Ok(())
+        } else {
+            Err(self.error(
+                field,
+                "needs a moving frame (theta or d depending on the coordinates)",
+            ))
+        }
+    }
+}
+
+/// The elements a description gives a frame.
+pub(crate) struct FrameElements {
+    pub elements: Vec<Element>,
+    /// Stribeck velocity (rad/s or m/s): the term is added after every frame, its `Fs`
+    /// parameter last, as `Model::with_stribeck` adds it.
+    pub stribeck_velocity: Option<f64>,
+}
+
+impl ElementsDesc {
+    /// Reads the elements, pushing their parameters onto `params`, in the order of the
+    /// parameter vector: friction, motor inertia, spring, quadratic viscous friction.
+    pub(crate) fn build(
+        &self,
+        fx: &FrameContext,
+        params: &mut Vec<Param>,
+    ) -> Result<FrameElements, ModelError> {
+        let mut elements = Vec::new();
+        let mut push = |e: Element, params: &mut Vec<Param>| {
+            params.extend(e.params(fx.index));
+            elements.push(e);
+        };
+        if self.friction {
+            fx.need_motion("friction")?;
+            let friction = Friction {
+                param: params.len(),
+                stribeck: None,
+            };
+            push(Element::Friction(friction), params);
+        }
+        let stribeck_velocity = match &self.stribeck_velocity {
+            Some(v) => Some(Stribeck::velocity_from_desc(fx, self.friction, v)?),
+            None => None,
+        };
+        if self.motor_inertia {
+            let m = MotorInertia::from_desc(fx, params.len())?;
+            push(Element::MotorInertia(m), params);
+        }
+        if let Some(text) = &self.spring {
+            let s = Spring::from_desc(fx, text, params.len())?;
+            push(Element::Spring(s), params);
+        }
+        if let Some(kf) = &self.known_force {
+            push(Element::KnownForce(KnownForce::from_desc(fx, kf)?), params);
+        }
+        if let Some(d) = &self.quadratic_viscous {
+            if let Some(e) = QuadraticViscous::from_desc(fx, d, params.len())? {
+                push(Element::QuadraticViscous(e), params);
+            }
+        }
+        Ok(FrameElements {
+            elements,
+            stribeck_velocity,
+        })
+    }
+}
