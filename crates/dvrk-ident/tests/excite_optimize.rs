@@ -281,6 +281,47 @@ velocity = ["10*deg", "30*deg"]
 }
 
 #[test]
+fn search_options_out_of_range_are_errors() {
+    let model = arm();
+    let base = model.base_parameters().unwrap();
+    let limits = Limits::of_model(&model);
+    for (o, needle) in [
+        (
+            ExciteOptions {
+                draws: 0,
+                ..opts(2, 0.25)
+            },
+            "one draw per start",
+        ),
+        (
+            ExciteOptions {
+                draws: 4000,
+                ..opts(2, 0.25)
+            },
+            "3 × 4000 draws",
+        ),
+        (
+            ExciteOptions {
+                hop_size: -0.1,
+                ..opts(2, 0.25)
+            },
+            "hop_size",
+        ),
+        (
+            ExciteOptions {
+                hop_size: f64::NAN,
+                ..opts(2, 0.25)
+            },
+            "hop_size",
+        ),
+    ] {
+        let e = optimize::optimize(&model, &base, &limits, &o, &Silent).unwrap_err();
+        assert!(matches!(e, ExciteError::Invalid(_)), "{e}");
+        assert!(e.to_string().contains(needle), "{e}");
+    }
+}
+
+#[test]
 fn dense_check_reports_the_worst_violation() {
     let model = arm();
     let mut t = some_trajectory(2, 2, 0.25);

@@ -85,9 +85,10 @@ fn optimizer_counts_its_starts() {
         *rec.stages.lock().unwrap(),
         [
             ("exploring starts".to_string(), Some(3)),
-            ("refining the best starts".to_string(), Some(2))
+            ("refining the best starts".to_string(), Some(2)),
+            ("hopping from the best".to_string(), Some(4))
         ]
     );
-    assert_eq!(rec.units.load(Ordering::Relaxed), 5);
-    assert_eq!(rec.finished.load(Ordering::Relaxed), 2);
+    assert_eq!(rec.units.load(Ordering::Relaxed), 3 + 2 + 4);
+    assert_eq!(rec.finished.load(Ordering::Relaxed), 3);
 }

@@ -536,7 +536,6 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         bounds: desc.bounds,
         params,
         links: Vec::new(),
-        subtree_links: Vec::new(),
         active: Vec::new(),
         motion: Vec::new(),
         fixed: Vec::new(),

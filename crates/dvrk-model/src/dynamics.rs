@@ -12,8 +12,8 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::element::{sign0, Sample};
 use crate::inertia::{sym3, transform_barycentric};
-use crate::model::{Model, Transform};
-use crate::workspace::Workspace;
+use crate::model::{Axis, Body, Model, Transform};
+use crate::workspace::{BodyBuffers, Workspace};
 
 /// The mass matrix is not positive definite at this configuration (the parameters are
 /// not those of physical bodies), so forward dynamics has no solution.
@@ -33,46 +33,12 @@ pub(crate) const ALL: Terms = Terms { inertial: true };
 
 /// Which motion a body pass includes; `false` stands for zero rates or accelerations.
 #[derive(Clone, Copy)]
-struct Motion {
-    velocity: bool,
-    acceleration: bool,
+pub(crate) struct Motion {
+    pub velocity: bool,
+    pub acceleration: bool,
 }
 
 impl Model {
-    /// Velocity and acceleration of every frame (body coordinates), from `ws.local`,
-    /// `ws.sd`, `ws.sdd`: the regressor's kinematics, per frame.
-    #[inline]
-    pub(crate) fn forward_pass(&self, ws: &mut Workspace, gravity: bool) {
-        ws.w[0] = Vector3::zeros();
-        ws.v[0] = Vector3::zeros();
-        ws.dw[0] = Vector3::zeros();
-        ws.a[0] = if gravity {
-            -self.gravity
-        } else {
-            Vector3::zeros()
-        };
-        for &fi in &self.active {
-            let p = self.frames[fi - 1].parent;
-            let x = &ws.local[fi];
-            let rt = x.rotation.transpose();
-            let (sw, sv) = &self.motion[fi];
-            let (sd, sdd) = (ws.sd[fi], ws.sdd[fi]);
-            let wsd = sw * sd;
-            let vsd = sv * sd;
-            let w = rt * ws.w[p] + wsd;
-            let v = rt * (ws.v[p] + ws.w[p].cross(&x.translation)) + vsd;
-            let dw = rt * ws.dw[p] + sw * sdd + w.cross(&wsd);
-            let a = rt * (ws.a[p] + ws.dw[p].cross(&x.translation))
-                + sv * sdd
-                + w.cross(&vsd)
-                + v.cross(&wsd);
-            ws.w[fi] = w;
-            ws.v[fi] = v;
-            ws.dw[fi] = dw;
-            ws.a[fi] = a;
-        }
-    }
-
     /// The bodies' inertias for `params` (fixed links merged), recomputed only when the
     /// parameters differ from the last call's.
     #[inline]
@@ -107,10 +73,72 @@ impl Model {
 
     /// Parent body → body transforms at `q`, into `ws.body.x`.
     #[inline]
-    fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
+    pub(crate) fn body_positions(&self, ws: &mut Workspace, q: &[f64]) {
         for (k, body) in self.bodies.iter().enumerate() {
-            let s = self.frames[body.frame - 1].value.eval(q);
+            let value = &self.frames[body.frame - 1].value;
+            let s = value.offset + body.rate(value, q);
             ws.body.x[k + 1] = self.joint_transform(body.frame, &body.pre, s);
+        }
+    }
+
+    /// Angular velocity ω (rad/s), origin velocity v (m/s), ω̇ (rad/s²) and linear
+    /// acceleration a (m/s², gravity included) of body `i` in its coordinates, from its
+    /// parent's in `b` and `b.x[i]`: the forward pass of Newton–Euler, shared by the
+    /// dynamics and the regressor. Zero rates or accelerations (`motion`) are skipped
+    /// rather than multiplied.
+    #[inline(always)]
+    pub(crate) fn body_velocity(
+        &self,
+        b: &BodyBuffers,
+        body: &Body,
+        i: usize,
+        dq: &[f64],
+        ddq: &[f64],
+        motion: Motion,
+    ) -> [Vector3<f64>; 4] {
+        let zero = Vector3::zeros();
+        let p = body.parent;
+        let value = &self.frames[body.frame - 1].value;
+        let x = &b.x[i];
+        let rt = x.rotation.transpose();
+        let (sw, sv) = &self.motion[body.frame];
+        let sdd = if motion.acceleration {
+            body.rate(value, ddq)
+        } else {
+            0.0
+        };
+        let revolute_z = matches!(body.axis, Axis::RevoluteZ);
+        if motion.velocity && revolute_z {
+            // S = (z, 0): the general branch's products with S written out.
+            let sd = body.rate(value, dq);
+            let mut w = rt * b.w[p];
+            w.z += sd;
+            let v = rt * (b.v[p] + b.w[p].cross(&x.translation));
+            let mut dw = rt * b.dw[p];
+            dw.x += w.y * sd;
+            dw.y -= w.x * sd;
+            dw.z += sdd;
+            let mut a = rt * (b.a[p] + b.dw[p].cross(&x.translation));
+            a.x += v.y * sd;
+            a.y -= v.x * sd;
+            [w, v, dw, a]
+        } else if motion.velocity {
+            let sd = body.rate(value, dq);
+            let (wsd, vsd) = (sw * sd, sv * sd);
+            let w = rt * b.w[p] + wsd;
+            let v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
+            let dw = rt * b.dw[p] + sw * sdd + w.cross(&wsd);
+            let a = rt * (b.a[p] + b.dw[p].cross(&x.translation))
+                + sv * sdd
+                + w.cross(&vsd)
+                + v.cross(&wsd);
+            [w, v, dw, a]
+        } else if motion.acceleration {
+            let dw = rt * b.dw[p] + sw * sdd;
+            let a = rt * (b.a[p] + b.dw[p].cross(&x.translation)) + sv * sdd;
+            [zero, zero, dw, a]
+        } else {
+            [zero, zero, zero, rt * b.a[p]]
         }
     }
 
@@ -135,38 +163,7 @@ impl Model {
         b.a[0] = if gravity { -self.gravity } else { zero };
         for (k, body) in self.bodies.iter().enumerate() {
             let i = k + 1;
-            let p = body.parent;
-            let value = &self.frames[body.frame - 1].value;
-            let x = &b.x[i];
-            let rt = x.rotation.transpose();
-            let (sw, sv) = &self.motion[body.frame];
-            let sdd = if motion.acceleration {
-                value.dot(ddq)
-            } else {
-                0.0
-            };
-            let (w, v, dw, a);
-            if motion.velocity {
-                let sd = value.dot(dq);
-                let (wsd, vsd) = (sw * sd, sv * sd);
-                w = rt * b.w[p] + wsd;
-                v = rt * (b.v[p] + b.w[p].cross(&x.translation)) + vsd;
-                dw = rt * b.dw[p] + sw * sdd + w.cross(&wsd);
-                a = rt * (b.a[p] + b.dw[p].cross(&x.translation))
-                    + sv * sdd
-                    + w.cross(&vsd)
-                    + v.cross(&wsd);
-            } else if motion.acceleration {
-                w = zero;
-                v = zero;
-                dw = rt * b.dw[p] + sw * sdd;
-                a = rt * (b.a[p] + b.dw[p].cross(&x.translation)) + sv * sdd;
-            } else {
-                w = zero;
-                v = zero;
-                dw = zero;
-                a = rt * b.a[p];
-            }
+            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, motion);
             let pp = &b.inertia[i];
             let l = Vector3::new(pp[6], pp[7], pp[8]);
             let m = pp[9];
@@ -391,6 +388,8 @@ impl Model {
     /// body's composite inertia `I_i` gives the force of a unit rate of its joint,
     /// `F = I_i·S_i`, carried down to the base one body at a time (`M_tree[i, j] =
     /// S_jᵀ·F` at every body `j` on the way), then `I_i` is added to its parent's.
+    /// (Composites in the base frame, one dot product per entry, cost more: every
+    /// body's inertia moved to the base frame outweighs the transforms of `F` saved.)
     fn mass_from_positions(&self, ws: &mut Workspace, params: &[f64], out: &mut [f64]) {
         let n = self.dof();
         let b = &mut ws.body;
@@ -403,12 +402,21 @@ impl Model {
             let (mut j, mut bj) = (i, body);
             loop {
                 let mij = bj.axis.dot(&force);
-                for &(ci, ai) in terms_i {
-                    for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
-                        let x = ai * aj * mij;
-                        out[ci + cj * n] += x;
-                        if j != i {
-                            out[cj + ci * n] += x;
+                if let (Some((ci, ai)), Some((cj, aj))) = (body.coordinate, bj.coordinate) {
+                    // The loops below without their overhead.
+                    let x = ai * aj * mij;
+                    out[ci + cj * n] += x;
+                    if j != i {
+                        out[cj + ci * n] += x;
+                    }
+                } else {
+                    for &(ci, ai) in terms_i {
+                        for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
+                            let x = ai * aj * mij;
+                            out[ci + cj * n] += x;
+                            if j != i {
+                                out[cj + ci * n] += x;
+                            }
                         }
                     }
                 }
@@ -430,6 +438,27 @@ impl Model {
         for e in &self.element_plan.inertial {
             e.add_mass(params, n, out);
         }
+    }
+
+    /// The pose of body `i` in the base frame, from its parent's and `b.x[i]`, and its
+    /// joint's unit motion there (about the base origin), into `b.world[i]` and
+    /// `b.axis[i]`.
+    #[inline(always)]
+    pub(crate) fn body_world(&self, b: &mut BodyBuffers, body: &Body, i: usize) {
+        let world = b.world[body.parent].compose(&b.x[i]);
+        let (w0, v0) = match body.axis {
+            Axis::RevoluteZ => {
+                let z: Vector3<f64> = world.rotation.column(2).into();
+                (z, world.translation.cross(&z))
+            }
+            _ => {
+                let (sw, sv) = &self.motion[body.frame];
+                let w0 = world.rotation * sw;
+                (w0, world.rotation * sv + world.translation.cross(&w0))
+            }
+        };
+        b.axis[i] = [w0[0], w0[1], w0[2], v0[0], v0[1], v0[2]];
+        b.world[i] = world;
     }
 
     /// Mass matrix `M(q)` as a matrix (allocates).

@@ -7,30 +7,10 @@ use crate::model::{JointKind, Model, Transform};
 use crate::workspace::Workspace;
 
 impl Model {
-    /// Joint values, rates and accelerations of the active frames: `s = A q + b`, `ṡ = A q̇`,
-    /// `s̈ = A q̈` (A is constant, which is what makes closed chains cheap).
-    #[inline]
-    pub(crate) fn joint_values(&self, ws: &mut Workspace, q: &[f64], dq: &[f64], ddq: &[f64]) {
-        for &fi in &self.active {
-            let value = &self.frames[fi - 1].value;
-            ws.s[fi] = value.eval(q);
-            ws.sd[fi] = value.dot(dq);
-            ws.sdd[fi] = value.dot(ddq);
-        }
-    }
-
     /// Parent → frame transforms of all frames from the joint values in `ws.s`.
     #[inline]
     pub(crate) fn local_transforms(&self, ws: &mut Workspace) {
         for fi in 1..=self.frames.len() {
-            self.local_transform(ws, fi);
-        }
-    }
-
-    /// Parent → frame transforms of the frames that carry link dynamics.
-    #[inline]
-    pub(crate) fn active_local_transforms(&self, ws: &mut Workspace) {
-        for &fi in &self.active {
             self.local_transform(ws, fi);
         }
     }
@@ -46,7 +26,7 @@ impl Model {
 
     /// `pre · joint(s) · post` of the moving frame `fi` (rotation about or translation
     /// along the joint frame's z axis by `s`, rad or m).
-    #[inline]
+    #[inline(always)]
     pub(crate) fn joint_transform(&self, fi: usize, pre: &Transform, s: f64) -> Transform {
         let f = &self.frames[fi - 1];
         let r = &pre.rotation;
@@ -103,14 +83,6 @@ impl Model {
         for (i, f) in self.frames.iter().enumerate() {
             let fi = i + 1;
             ws.world[fi] = ws.world[f.parent].compose(&ws.local[fi]);
-        }
-    }
-
-    #[inline]
-    pub(crate) fn active_world_transforms(&self, ws: &mut Workspace) {
-        for &fi in &self.active {
-            let parent = self.frames[fi - 1].parent;
-            ws.world[fi] = ws.world[parent].compose(&ws.local[fi]);
         }
     }
 

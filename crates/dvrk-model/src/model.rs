@@ -320,8 +320,6 @@ pub struct Model {
     // Derived, for the per-sample algorithms.
     /// Frames (1-based) carrying link inertia, in order.
     pub(crate) links: Vec<usize>,
-    /// For each frame index (0..=N), the link frames in its subtree (itself included).
-    pub(crate) subtree_links: Vec<Vec<usize>>,
     /// Frames (1-based, increasing) with at least one link in their subtree: the only
     /// ones whose motion matters to the link dynamics, so the per-sample passes skip the
     /// rest (e.g. the PSM's massless tool and virtual motor frames).
@@ -357,30 +355,56 @@ pub(crate) struct ElementPlan {
     pub inertial: Vec<Element>,
 }
 
-/// Where the link columns of the regressor come from: for each moving frame `k`, each
-/// link `j` of its subtree adds `a·S_kᵀ·Y_j` to row `c` for each term `a·q_c` of `k`'s
-/// joint value. The first addition to a (row, link) block writes it instead, and only
-/// the entries no link block writes are zeroed: most of a regressor row is link blocks.
+/// Where the link columns of the regressor come from: each link `j` adds `a·S_kᵀ·Y_j`
+/// to row `c` for each moving frame `k` on its path to the base and each term `a·q_c`
+/// of `k`'s joint value. The regressor runs over the bodies (fixed links merged, see
+/// [`Body`]): their kinematics once, then each body's links, each against the joints
+/// of the body's path, several joints at a time. The first addition to a (row, link)
+/// block writes it instead, and only the entries no link block writes are zeroed: most
+/// of a regressor row is link blocks.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct RegressorPlan {
-    pub frames: Vec<PlanFrame>,
+    /// The bodies that carry links, parents first.
+    pub bodies: Vec<PlanBody>,
+    /// Per [`PlanBody`], its joints: the bodies (1-based) from itself down to the base,
+    /// padded to an even number with 0 (the base: no motion, nothing written), as the
+    /// regressor takes them two at a time.
+    pub joints: Vec<usize>,
+    pub links: Vec<PlanLink>,
+    /// See [`PlanLink::columns`].
+    pub columns: Vec<(usize, usize)>,
+    /// Per link and joint of its body (in the order of [`RegressorPlan::joints`]), the
+    /// range of [`RegressorPlan::terms`] it adds to.
+    pub targets: Vec<std::ops::Range<usize>>,
+    /// `(row, a, write rather than add)` per term `a·q_row` of a joint's value.
+    pub terms: Vec<(usize, f64, bool)>,
     /// Per row (coordinate), the first columns of the link blocks written, increasing.
     pub blocks: Vec<Vec<usize>>,
+    /// The stretches of the rows that no link block writes, as `(row, first column,
+    /// end column)` with `None` for the end of the row (the element columns follow the
+    /// link columns, and their number may grow, see [`Model::add_stribeck`]).
+    pub gaps: Vec<(usize, usize, Option<usize>)>,
 }
 
 #[derive(Clone, Debug)]
-pub(crate) struct PlanFrame {
-    pub frame: usize,
-    pub links: Vec<PlanLink>,
+pub(crate) struct PlanBody {
+    /// Body index (1-based, as in [`Model::bodies`] + 1).
+    pub body: usize,
+    /// `joints[start..end]` of the plan.
+    pub joints: std::ops::Range<usize>,
+    /// `links[start..end]` of the plan.
+    pub links: std::ops::Range<usize>,
 }
 
+/// Links of one body at the same pose in it, whose rows are therefore the same (e.g. a
+/// gripper's two fingers): computed once, written to each link's columns.
 #[derive(Clone, Debug)]
 pub(crate) struct PlanLink {
-    /// Link frame and the column of its `L{j}xx`.
-    pub link: usize,
-    pub col0: usize,
-    /// `(row, a, write rather than add)` per term `a·q_row` of the joint value.
-    pub targets: Vec<(usize, f64, bool)>,
+    /// The links' pose in their body's frame (`None`: the body's own frame).
+    pub pose: Option<Transform>,
+    /// `columns[start..end]` of the plan: per link, the column of its `L{j}xx` and its
+    /// first entry in [`RegressorPlan::targets`] (one per joint of the body).
+    pub columns: std::ops::Range<usize>,
 }
 
 /// A moving frame with link dynamics in its subtree, and the links rigidly attached to
@@ -402,6 +426,21 @@ pub(crate) struct Body {
     pub links: Vec<(usize, Option<Transform>)>,
     /// The joint's motion subspace in the body's coordinates.
     pub axis: Axis,
+    /// `(c, a)` when the joint value moves with one coordinate only, `s = a·q_c + b`
+    /// (every joint of a serial chain): the mass matrix then skips the term loops.
+    pub coordinate: Option<(usize, f64)>,
+}
+
+impl Body {
+    /// `a·x` of the joint value `value` (this body's frame's): its rate for coordinate
+    /// rates `x`, the same number as [`Affine::dot`] without its loop for one term.
+    #[inline(always)]
+    pub fn rate(&self, value: &Affine, x: &[f64]) -> f64 {
+        match self.coordinate {
+            Some((c, a)) => a * x[c],
+            None => value.dot(x),
+        }
+    }
 }
 
 /// A joint's unit motion `(ω, v)` in its frame's coordinates. Most joints turn about or
@@ -628,19 +667,16 @@ impl Model {
         self.links = (1..=n_frames)
             .filter(|&i| self.frames[i - 1].inertia.is_some())
             .collect();
-        let mut subtree = vec![Vec::new(); n_frames + 1];
+        // Frames with a link in their subtree: the links and their ancestors.
+        let mut carries = vec![false; n_frames + 1];
         for &j in &self.links {
             let mut k = j;
-            loop {
-                subtree[k].push(j);
-                if k == 0 {
-                    break;
-                }
+            while k != 0 && !carries[k] {
+                carries[k] = true;
                 k = self.frames[k - 1].parent;
             }
         }
-        self.active = (1..=n_frames).filter(|&k| !subtree[k].is_empty()).collect();
-        self.subtree_links = subtree;
+        self.active = (1..=n_frames).filter(|&k| carries[k]).collect();
         self.motion = std::iter::once((Vector3::zeros(), Vector3::zeros()))
             .chain(self.frames.iter().map(|f| {
                 // Body coordinates of the unit joint twist about/along z of the joint
@@ -702,36 +738,68 @@ impl Model {
     /// The regressor's plan (see [`RegressorPlan`]), in the order the regressor adds.
     fn derive_regressor_plan(&self) -> RegressorPlan {
         let mut written = std::collections::BTreeSet::new();
-        let frames = self
-            .active
-            .iter()
-            .filter(|&&k| self.frames[k - 1].kind != JointKind::Fixed)
-            .map(|&k| PlanFrame {
-                frame: k,
-                links: self.subtree_links[k]
-                    .iter()
-                    .map(|&j| {
-                        let col0 = self.frames[j - 1].inertia.expect("link frame");
-                        let targets = self.frames[k - 1]
-                            .value
-                            .terms
-                            .iter()
-                            .map(|&(c, a)| (c, a, written.insert((c, col0))))
-                            .collect();
-                        PlanLink {
-                            link: j,
-                            col0,
-                            targets,
+        let mut plan = RegressorPlan::default();
+        for (k, body) in self.bodies.iter().enumerate() {
+            if body.links.is_empty() {
+                continue;
+            }
+            let j0 = plan.joints.len();
+            let mut b = k + 1;
+            while b != 0 {
+                plan.joints.push(b);
+                b = self.bodies[b - 1].parent;
+            }
+            if (plan.joints.len() - j0) % 2 == 1 {
+                plan.joints.push(0);
+            }
+            let l0 = plan.links.len();
+            let mut poses: Vec<Option<Transform>> = Vec::new();
+            for (_, pose) in &body.links {
+                if !poses.contains(pose) {
+                    poses.push(*pose);
+                }
+            }
+            for pose in poses {
+                let c0 = plan.columns.len();
+                for (col0, _) in body.links.iter().filter(|(_, x)| *x == pose) {
+                    plan.columns.push((*col0, plan.targets.len()));
+                    for &b in &plan.joints[j0..] {
+                        let t0 = plan.terms.len();
+                        if b != 0 {
+                            let value = &self.frames[self.bodies[b - 1].frame - 1].value;
+                            for &(c, a) in &value.terms {
+                                plan.terms.push((c, a, written.insert((c, *col0))));
+                            }
                         }
-                    })
-                    .collect(),
-            })
-            .collect();
-        let mut blocks = vec![Vec::new(); self.dof()];
-        for (c, col0) in written {
-            blocks[c].push(col0);
+                        plan.targets.push(t0..plan.terms.len());
+                    }
+                }
+                plan.links.push(PlanLink {
+                    pose,
+                    columns: c0..plan.columns.len(),
+                });
+            }
+            plan.bodies.push(PlanBody {
+                body: k + 1,
+                joints: j0..plan.joints.len(),
+                links: l0..plan.links.len(),
+            });
         }
-        RegressorPlan { frames, blocks }
+        plan.blocks = vec![Vec::new(); self.dof()];
+        for (c, col0) in written {
+            plan.blocks[c].push(col0);
+        }
+        for (r, blocks) in plan.blocks.iter().enumerate() {
+            let mut from = 0;
+            for &c in blocks {
+                if c > from {
+                    plan.gaps.push((r, from, Some(c)));
+                }
+                from = c + 10;
+            }
+            plan.gaps.push((r, from, None));
+        }
+        plan
     }
 
     /// The bodies of the tree (see [`Body`]), from `active` and `fixed`.
@@ -758,6 +826,10 @@ impl Model {
                 pre: x.compose(&frame.pre),
                 links: Vec::new(),
                 axis: Axis::new(self.motion[fi]),
+                coordinate: match frame.value.terms.as_slice() {
+                    &[term] => Some(term),
+                    _ => None,
+                },
             });
             body_of[fi] = bodies.len();
         }

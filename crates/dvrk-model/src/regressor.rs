@@ -2,15 +2,20 @@
 //!
 //! Link columns: the tree joint `k` collects `S_kᵀ·Y_j` over the links `j` of its
 //! subtree, `Y_j` the link's 6×10 body regressor (its spatial force as a linear function
-//! of its barycentric parameters), and `Aᵀ` maps tree joints to coordinates. Each
-//! `S_kᵀ·Y_j` is written out in the link's coordinates from its velocity and
-//! acceleration (`link_row`), so `Y_j` itself is never formed; the link blocks are
-//! written in place (the first one of a row) and only the rest of a row is zeroed.
-//! Element columns follow `docs/identification.md` §3.2.
+//! of its barycentric parameters), and `Aᵀ` maps tree joints to coordinates. The
+//! kinematics run over the bodies (moving frames, fixed links merged, as the dynamics):
+//! a link fixed to a body takes its motion from the body's. Each `S_kᵀ·Y_j` is written
+//! out in the link's coordinates ([`LinkRows`]), so `Y_j` itself is never formed: its
+//! coefficients are formed once per link, then the joints of the link's path go two at
+//! a time through SIMD lanes; links of a body at the same pose share their rows. The
+//! link blocks are written in place (the first one of a row) and only the rest of a
+//! row is zeroed. Element columns follow `docs/identification.md` §3.2.
 
 use nalgebra::Vector3;
+use wide::f64x2;
 
-use crate::model::Model;
+use crate::dynamics::Motion;
+use crate::model::{Model, Transform};
 use crate::workspace::Workspace;
 
 impl Model {
@@ -52,41 +57,83 @@ impl Model {
         );
         assert_eq!(out.len(), n * p, "regressor buffer must have n*p entries");
         // Zero what no link block writes.
-        for (r, row) in out.chunks_exact_mut(p).enumerate() {
-            let mut from = 0;
-            for &c in &self.regressor_plan.blocks[r] {
-                row[from..c].fill(0.0);
-                from = c + 10;
-            }
-            row[from..].fill(0.0);
+        for &(r, from, to) in &self.regressor_plan.gaps {
+            out[r * p + from..r * p + to.unwrap_or(p)].fill(0.0);
         }
-        self.joint_values(ws, q, dq, ddq);
-        self.active_local_transforms(ws);
-        self.active_world_transforms(ws);
-        self.forward_pass(ws, true);
+        self.body_positions(ws, q);
+        let b = &mut ws.body;
+        let zero = Vector3::zeros();
+        b.w[0] = zero;
+        b.v[0] = zero;
+        b.dw[0] = zero;
+        b.a[0] = -self.gravity;
+        let full = Motion {
+            velocity: true,
+            acceleration: true,
+        };
+        for (k, body) in self.bodies.iter().enumerate() {
+            let i = k + 1;
+            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, full);
+            b.w[i] = w;
+            b.v[i] = v;
+            b.dw[i] = dw;
+            b.a[i] = a;
+            self.body_world(b, body, i);
+        }
 
-        for &j in &self.links {
-            let (w, v) = (ws.w[j], ws.v[j]);
-            ws.ac[j] = ws.a[j] + w.cross(&v);
-        }
-        for plan in &self.regressor_plan.frames {
-            let (sw, sv) = &self.motion[plan.frame];
-            let pose = &ws.world[plan.frame];
-            let w0 = pose.rotation * sw;
-            let v0 = pose.rotation * sv + pose.translation.cross(&w0);
-            for link in &plan.links {
-                let (row, col0) = (link_row(ws, link.link, &w0, &v0), link.col0);
-                for &(coord, a, write) in &link.targets {
-                    let dst: &mut [f64; 10] = (&mut out[coord * p + col0..coord * p + col0 + 10])
-                        .try_into()
-                        .expect("10 columns");
-                    if write {
-                        for (d, r) in dst.iter_mut().zip(&row) {
-                            *d = a * r;
-                        }
-                    } else {
-                        for (d, r) in dst.iter_mut().zip(&row) {
-                            *d += a * r;
+        let plan = &self.regressor_plan;
+        for pb in &plan.bodies {
+            let i = pb.body;
+            let (w, dw, world) = (&b.w[i], &b.dw[i], &b.world[i]);
+            let ac = b.a[i] + w.cross(&b.v[i]);
+            let joints = &plan.joints[pb.joints.clone()];
+            for link in &plan.links[pb.links.clone()] {
+                let rows = match &link.pose {
+                    None => LinkRows::new(w, dw, &ac, world),
+                    Some(x) => {
+                        // A link fixed to the body: its frame's motion.
+                        let (rt, t) = (x.rotation.transpose(), &x.translation);
+                        let ac_link = rt * (ac + dw.cross(t) + w.cross(&w.cross(t)));
+                        LinkRows::new(&(rt * w), &(rt * dw), &ac_link, &world.compose(x))
+                    }
+                };
+                let columns = &plan.columns[link.columns.clone()];
+                for (chunk, pair) in joints.chunks_exact(2).enumerate() {
+                    let (s0, s1) = (&b.axis[pair[0]], &b.axis[pair[1]]);
+                    let e = rows.rows(&std::array::from_fn(|c| f64x2::new([s0[c], s1[c]])));
+                    // Entries (2i, 2i+1) of the first joint's row, then of the second's.
+                    let halves: [[f64x2; 2]; 5] =
+                        std::array::from_fn(|i| f64x2::transpose([e[2 * i], e[2 * i + 1]]));
+                    for &(col0, targets) in columns {
+                        let pair_targets =
+                            &plan.targets[targets + 2 * chunk..targets + 2 * chunk + 2];
+                        for (l, t) in pair_targets.iter().enumerate() {
+                            let terms = &plan.terms[t.clone()];
+                            if let &[(coord, 1.0, true)] = terms {
+                                // The common case (one coordinate, coefficient 1):
+                                // a plain copy.
+                                let at = coord * p + col0;
+                                let dst: &mut [f64; 10] =
+                                    (&mut out[at..at + 10]).try_into().expect("10 columns");
+                                for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
+                                    d.copy_from_slice(&h[l].to_array());
+                                }
+                                continue;
+                            }
+                            for &(coord, a, write) in terms {
+                                let at = coord * p + col0;
+                                let dst: &mut [f64; 10] =
+                                    (&mut out[at..at + 10]).try_into().expect("10 columns");
+                                let a = f64x2::splat(a);
+                                for (d, h) in dst.chunks_exact_mut(2).zip(&halves) {
+                                    let x = if write {
+                                        a * h[l]
+                                    } else {
+                                        a * h[l] + f64x2::new([d[0], d[1]])
+                                    };
+                                    d.copy_from_slice(&x.to_array());
+                                }
+                            }
                         }
                     }
                 }
@@ -134,32 +181,89 @@ impl Model {
     }
 }
 
-/// The regressor row of link `j`'s ten parameters for a joint whose unit motion is
-/// `(w0, v0)` in the base frame (rad/s, m/s, about the base origin): the power
-/// `Sᵀ·Y_j` of the link's spatial force per unit parameter, written out in the link's
-/// coordinates with `s = (sω, sv)` the joint's motion there. Inertia about the origin:
+/// Link `j`'s regressor rows as a linear map of a joint's unit motion: the power
+/// `Sᵀ·Y_j` of the link's spatial force per unit parameter, in the link's coordinates
+/// with `s = (sω, sv)` the joint's motion there. Inertia about the origin:
 /// `n = L·ω̇ + ω × L·ω` gives `sωᵀ·L·ω̇ + (sω × ω)ᵀ·L·ω`; first moment: `n = l × a_c`,
 /// `f = ω̇ × l + ω × (ω × l)` give `l·(a_c × sω + sv × ω̇ + ω (ω·sv) − sv |ω|²)`; mass:
-/// `f = m·a_c` gives `sv·a_c`.
-#[inline(always)]
-fn link_row(ws: &Workspace, j: usize, w0: &Vector3<f64>, v0: &Vector3<f64>) -> [f64; 10] {
-    let pose = &ws.world[j];
-    let rt = pose.rotation.transpose();
-    let s_w = rt * w0;
-    let s_v = rt * (v0 + w0.cross(&pose.translation));
-    let (w, dw, ac) = (&ws.w[j], &ws.dw[j], &ws.ac[j]);
-    let u = s_w.cross(w);
-    let lin = ac.cross(&s_w) + s_v.cross(dw) + w * w.dot(&s_v) - s_v * w.dot(w);
-    [
-        s_w[0] * dw[0] + u[0] * w[0],
-        s_w[0] * dw[1] + s_w[1] * dw[0] + u[0] * w[1] + u[1] * w[0],
-        s_w[0] * dw[2] + s_w[2] * dw[0] + u[0] * w[2] + u[2] * w[0],
-        s_w[1] * dw[1] + u[1] * w[1],
-        s_w[1] * dw[2] + s_w[2] * dw[1] + u[1] * w[2] + u[2] * w[1],
-        s_w[2] * dw[2] + u[2] * w[2],
-        lin[0],
-        lin[1],
-        lin[2],
-        s_v.dot(ac),
-    ]
+/// `f = m·a_c` gives `sv·a_c`. Their coefficients on `sω` and `sv` depend on the link's
+/// state only, so they are formed once per link; each of its joints then costs moving
+/// `s` into the link's coordinates and a sparse 10×6 product, two joints at a time in
+/// the two lanes of SIMD registers (every coefficient held in both lanes).
+struct LinkRows {
+    /// Coefficients of `sω` in the six inertia entries.
+    inertia: [[f64x2; 3]; 6],
+    /// Coefficients of `sv` in the first moment (its `sω` part is `a_c × sω`).
+    moment: [[f64x2; 3]; 3],
+    /// `a_c` (m/s²).
+    ac: [f64x2; 3],
+    /// The link's pose in the base frame: its columns (`rotation[c][r]`) and origin (m).
+    rotation: [[f64x2; 3]; 3],
+    translation: [f64x2; 3],
+}
+
+impl LinkRows {
+    /// From the link's angular velocity ω (rad/s), acceleration ω̇ (rad/s²), origin
+    /// acceleration `a_c` (m/s², gravity included) in its coordinates, and its pose.
+    #[inline(always)]
+    fn new(w: &Vector3<f64>, dw: &Vector3<f64>, ac: &Vector3<f64>, pose: &Transform) -> Self {
+        let (w0, w1, w2) = (w[0], w[1], w[2]);
+        let (d0, d1, d2) = (dw[0], dw[1], dw[2]);
+        let (w00, w11, w22) = (w0 * w0, w1 * w1, w2 * w2);
+        let (w01, w02, w12) = (w0 * w1, w0 * w2, w1 * w2);
+        let splat = |x: [f64; 3]| x.map(f64x2::splat);
+        let r = &pose.rotation.data.0;
+        LinkRows {
+            inertia: [
+                splat([d0, w02, -w01]),
+                splat([d1 - w02, d0 + w12, w00 - w11]),
+                splat([d2 + w01, w22 - w00, d0 - w12]),
+                splat([-w12, d1, w01]),
+                splat([w11 - w22, d2 - w01, d1 + w02]),
+                splat([w12, -w02, d2]),
+            ],
+            moment: [
+                splat([-(w11 + w22), w01 + d2, w02 - d1]),
+                splat([w01 - d2, -(w00 + w22), w12 + d0]),
+                splat([w02 + d1, w12 - d0, -(w00 + w11)]),
+            ],
+            ac: splat([ac[0], ac[1], ac[2]]),
+            rotation: [splat(r[0]), splat(r[1]), splat(r[2])],
+            translation: splat([
+                pose.translation[0],
+                pose.translation[1],
+                pose.translation[2],
+            ]),
+        }
+    }
+
+    /// The ten entries, each for two joints (one per lane), whose unit motions are
+    /// `s = (ω0, v0)` in the base frame (rad/s, m/s, about the base origin):
+    /// `sω = Rᵀ·ω0`, `sv = Rᵀ·(v0 + ω0 × t)`.
+    #[inline(always)]
+    fn rows(&self, s: &[f64x2; 6]) -> [f64x2; 10] {
+        let (r, t) = (&self.rotation, &self.translation);
+        let w0 = [s[0], s[1], s[2]];
+        let v0 = [
+            s[3] + w0[1] * t[2] - w0[2] * t[1],
+            s[4] + w0[2] * t[0] - w0[0] * t[2],
+            s[5] + w0[0] * t[1] - w0[1] * t[0],
+        ];
+        let dot = |k: &[f64x2; 3], x: &[f64x2; 3]| k[0] * x[0] + k[1] * x[1] + k[2] * x[2];
+        let sw = [dot(&r[0], &w0), dot(&r[1], &w0), dot(&r[2], &w0)];
+        let sv = [dot(&r[0], &v0), dot(&r[1], &v0), dot(&r[2], &v0)];
+        let (k, m, c) = (&self.inertia, &self.moment, &self.ac);
+        [
+            dot(&k[0], &sw),
+            dot(&k[1], &sw),
+            dot(&k[2], &sw),
+            dot(&k[3], &sw),
+            dot(&k[4], &sw),
+            dot(&k[5], &sw),
+            dot(&m[0], &sv) + c[1] * sw[2] - c[2] * sw[1],
+            dot(&m[1], &sv) + c[2] * sw[0] - c[0] * sw[2],
+            dot(&m[2], &sv) + c[0] * sw[1] - c[1] * sw[0],
+            dot(c, &sv),
+        ]
+    }
 }

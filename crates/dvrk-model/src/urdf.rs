@@ -385,7 +385,6 @@ impl Model {
             bounds: GlobalBounds::default(),
             params,
             links: Vec::new(),
-            subtree_links: Vec::new(),
             active: Vec::new(),
             motion: Vec::new(),
             fixed: Vec::new(),

@@ -12,22 +12,12 @@ use crate::model::{Model, Transform};
 pub struct Workspace {
     pub(crate) n_frames: usize,
     pub(crate) dof: usize,
-    /// Joint values, rates and accelerations per frame (index 0 = base, unused).
+    /// Joint values per frame (index 0 = base, unused).
     pub(crate) s: Vec<f64>,
-    pub(crate) sd: Vec<f64>,
-    pub(crate) sdd: Vec<f64>,
     /// Parent → frame transform.
     pub(crate) local: Vec<Transform>,
     /// Base → frame transform (pose of the frame in the base frame).
     pub(crate) world: Vec<Transform>,
-    /// Body-frame angular velocity ω (rad/s), origin velocity v (m/s), ω̇ (rad/s²) and
-    /// spatial linear acceleration a (m/s², gravity included as a base acceleration).
-    pub(crate) w: Vec<Vector3<f64>>,
-    pub(crate) v: Vec<Vector3<f64>>,
-    pub(crate) dw: Vec<Vector3<f64>>,
-    pub(crate) a: Vec<Vector3<f64>>,
-    /// Acceleration of the origin `a + ω × v` (m/s², gravity included) per link frame.
-    pub(crate) ac: Vec<Vector3<f64>>,
     /// Per body (index 0 = base, as frames): the dynamics of [`Model::inverse_dynamics`],
     /// [`Model::mass_matrix_into`] and friends run over bodies (see `model::Body`).
     pub(crate) body: BodyBuffers,
@@ -55,6 +45,11 @@ pub(crate) struct BodyBuffers {
     pub inertia_of: Vec<f64>,
     /// Mass matrix: the composite inertia of each body's subtree (body coordinates).
     pub composite: Vec<[f64; 10]>,
+    /// Regressor: base → body transform (the body's pose in the base frame), and the
+    /// unit motion `(ω, v)` of its joint in the base frame about the base origin
+    /// (rad/s, m/s per unit joint rate; zero for the base).
+    pub world: Vec<Transform>,
+    pub axis: Vec<[f64; 6]>,
 }
 
 impl Workspace {
@@ -66,15 +61,8 @@ impl Workspace {
             n_frames: nf,
             dof: n,
             s: vec![0.0; nf],
-            sd: vec![0.0; nf],
-            sdd: vec![0.0; nf],
             local: vec![Transform::identity(); nf],
             world: vec![Transform::identity(); nf],
-            w: vec![Vector3::zeros(); nf],
-            v: vec![Vector3::zeros(); nf],
-            dw: vec![Vector3::zeros(); nf],
-            a: vec![Vector3::zeros(); nf],
-            ac: vec![Vector3::zeros(); nf],
             body: BodyBuffers::new(model.bodies.len() + 1, model.n_params()),
             mass: vec![0.0; n * n],
         }
@@ -109,6 +97,8 @@ impl BodyBuffers {
             inertia: vec![[0.0; 10]; nb],
             inertia_of: Vec::with_capacity(n_params),
             composite: vec![[0.0; 10]; nb],
+            world: vec![Transform::identity(); nb],
+            axis: vec![[0.0; 6]; nb],
         }
     }
 }
