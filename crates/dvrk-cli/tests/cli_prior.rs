@@ -144,7 +144,7 @@ fn prior_errors_name_the_flag_and_write_nothing() {
     write_arm_log(&urdf, &log);
     let out = dir.join("out.json");
     let missing = dir.join("missing.json");
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 7] = [
         (&["--prior-weight", "0.1"], "--prior-weight: needs a prior"),
         (
             &["--prior-metric", "euclidean"],
@@ -152,7 +152,11 @@ fn prior_errors_name_the_flag_and_write_nothing() {
         ),
         (
             &["--prior", "nominal", "--prior-weight", "-1"],
-            "--prior-weight: must be finite and >= 0",
+            "--prior-weight: must be in [0, 1e6]",
+        ),
+        (
+            &["--prior", "nominal", "--prior-weight", "1e9"],
+            "--prior-weight: must be in [0, 1e6], got 1000000000",
         ),
         (
             &["--prior", "nominal", "--method", "ols"],

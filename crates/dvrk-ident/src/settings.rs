@@ -138,10 +138,11 @@ impl Prior {
             name: name.into(),
             message,
         };
-        if !(self.weight.is_finite() && self.weight >= 0.0) {
+        let max = crate::estimate::sdp::MAX_PRIOR_WEIGHT;
+        if !(self.weight >= 0.0 && self.weight <= max) {
             return Err(setting(
                 "prior_weight",
-                format!("must be finite and >= 0, got {}", self.weight),
+                format!("must be in [0, {max:e}], got {}", self.weight),
             ));
         }
         if method != Method::Sdp {

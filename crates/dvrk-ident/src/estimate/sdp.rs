@@ -414,10 +414,13 @@ pub fn solve_sdp(
             message: format!("must be finite and >= 0, got {}", options.regularization),
         });
     }
-    if !(options.prior_weight.is_finite() && options.prior_weight >= 0.0) {
+    if !(options.prior_weight >= 0.0 && options.prior_weight <= MAX_PRIOR_WEIGHT) {
         return Err(SdpError::Option {
             name: "prior_weight",
-            message: format!("must be finite and >= 0, got {}", options.prior_weight),
+            message: format!(
+                "must be in [0, {MAX_PRIOR_WEIGHT:e}], got {}",
+                options.prior_weight
+            ),
         });
     }
     if options.prior_weight > 0.0 && options.prior.is_none() {
@@ -740,6 +743,11 @@ fn lower_index(i: usize, c: usize) -> usize {
 fn pseudo_inertia_of(bary: &[f64]) -> Matrix4<f64> {
     dvrk_model::inertia::pseudo_inertia(bary)
 }
+
+/// Largest prior weight: the data term is about 1 at the solution, so beyond this the
+/// data have no say, and on the bundled example a weight of 1e9 left the solver a
+/// point outside the cone of its own divergence (1e6 solves).
+pub const MAX_PRIOR_WEIGHT: f64 = 1e6;
 
 /// Smallest eigenvalue of a prior's balanced pseudo-inertia `T·J₀·T` kept by the
 /// entropic metric, relative to its largest.

@@ -742,13 +742,6 @@ pub fn optimize(
             "at least one start, one draw per start and one refined start are needed".into(),
         ));
     }
-    if opts.starts.saturating_mul(opts.draws) > MAX_STARTS || opts.hops > MAX_STARTS {
-        return Err(ExciteError::Invalid(format!(
-            "at most {MAX_STARTS} draws (starts × draws) and {MAX_STARTS} hops are accepted \
-             (got {} × {} draws, {} hops)",
-            opts.starts, opts.draws, opts.hops
-        )));
-    }
     if !(opts.hop_size >= 0.0 && opts.hop_size.is_finite()) {
         return Err(ExciteError::Invalid(format!(
             "hop_size must be finite and ≥ 0 (got {})",
@@ -763,6 +756,14 @@ pub fn optimize(
             "at most {MAX_STARTS} starts and {MAX_ITERATIONS} iterations per stage are \
              accepted (got {} starts, {} and {} iterations)",
             opts.starts, opts.iterations_per_stage, opts.refine_iterations_per_stage
+        )));
+    }
+    // After the starts alone, so `--starts` too large is named as such.
+    if opts.starts.saturating_mul(opts.draws) > MAX_STARTS || opts.hops > MAX_STARTS {
+        return Err(ExciteError::Invalid(format!(
+            "at most {MAX_STARTS} draws (starts × draws) and {MAX_STARTS} hops are accepted \
+             (got {} × {} draws, {} hops)",
+            opts.starts, opts.draws, opts.hops
         )));
     }
     if !(opts.margin >= 0.0 && opts.margin < 0.5 && opts.coulomb_smoothing >= 0.0) {
