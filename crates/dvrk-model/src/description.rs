@@ -17,6 +17,8 @@ use crate::resolve::Ctx;
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
+/// How a DH frame's `a`, `alpha`, `d`, `theta` compose into the transform from the
+/// parent frame (the description's `convention` field).
 pub enum Convention {
     /// Craig: `RotX(alpha)·TransX(a)·RotZ(theta)·TransZ(d)`
     Modified,

@@ -75,6 +75,7 @@ impl Affine {
         numbers.push(self.offset);
     }
 
+    /// Whether no coordinate appears (the value does not depend on `q`).
     pub fn is_constant(&self) -> bool {
         self.terms.is_empty()
     }
@@ -148,7 +149,10 @@ pub(crate) fn format_coefficient(x: f64) -> String {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
 pub enum NumOrExpr {
+    /// A plain number.
     Num(f64),
+    /// An expression (constants, coordinates, arithmetic) evaluated when the file is
+    /// loaded.
     Expr(String),
 }
 
@@ -213,7 +217,9 @@ impl std::error::Error for ExprError {}
 
 /// Names an expression may refer to: constants (with values) and coordinates (by index).
 pub struct Scope<'a> {
+    /// Named constants of the description and their values.
     pub constants: &'a [(String, f64)],
+    /// Coordinate names; a name's position is the coordinate's index in `q`.
     pub coordinates: &'a [String],
 }
 

@@ -26,6 +26,8 @@
 //! assert_eq!(tau, [0.0; 7]);
 //! ```
 
+#![warn(missing_docs)]
+
 mod base;
 mod builtin;
 mod description;

@@ -35,8 +35,10 @@ use crate::resolve::Ctx;
 #[serde(deny_unknown_fields)]
 pub struct LimitsSpec {
     #[serde(default)]
+    /// The `[[limits]]` tables (joint limits).
     pub limits: Vec<JointLimitSpec>,
     #[serde(default)]
+    /// The `[[cartesian_limits]]` tables (boxes on frame origins).
     pub cartesian_limits: Vec<CartesianLimitSpec>,
 }
 
@@ -75,10 +77,13 @@ pub struct JointLimitSpec {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CartesianLimitSpec {
+    /// Name of the frame whose origin is kept in the box.
     pub frame: String,
     #[serde(serialize_with = "as_list::array")]
+    /// Lower corner of the box, x y z in the base frame (m); `-inf` leaves that side open.
     pub min: [NumOrExpr; 3],
     #[serde(serialize_with = "as_list::array")]
+    /// Upper corner of the box, x y z in the base frame (m); `inf` leaves that side open.
     pub max: [NumOrExpr; 3],
 }
 
@@ -116,7 +121,9 @@ mod as_list {
 /// Compiled limits of an excitation: joint limits and Cartesian boxes.
 #[derive(Clone, Debug, Default)]
 pub struct Limits {
+    /// Ranges on affine combinations of the coordinates.
     pub joint: Vec<Limit>,
+    /// Boxes (base frame, m) the origins of some frames must stay in.
     pub cartesian: Vec<CartesianLimit>,
 }
 
@@ -129,6 +136,7 @@ impl Limits {
         }
     }
 
+    /// Whether there is no limit at all, so an excitation is unconstrained.
     pub fn is_empty(&self) -> bool {
         self.joint.is_empty() && self.cartesian.is_empty()
     }

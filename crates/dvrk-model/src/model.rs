@@ -26,12 +26,14 @@ pub enum JointKind {
 /// A rigid transform: `x_parent = rotation · x_child + translation`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Transform {
+    /// Rotation from the child frame's axes to the parent frame's.
     pub rotation: Matrix3<f64>,
     /// m
     pub translation: Vector3<f64>,
 }
 
 impl Transform {
+    /// No rotation, no translation.
     pub fn identity() -> Self {
         Transform {
             rotation: Matrix3::identity(),
@@ -39,6 +41,7 @@ impl Transform {
         }
     }
 
+    /// A pure rotation by `angle` (rad) about the x axis.
     pub fn rot_x(angle: f64) -> Self {
         let (s, c) = angle.sin_cos();
         Transform {
@@ -47,6 +50,7 @@ impl Transform {
         }
     }
 
+    /// A pure rotation by `angle` (rad) about the z axis.
     pub fn rot_z(angle: f64) -> Self {
         let (s, c) = angle.sin_cos();
         Transform {
@@ -55,6 +59,7 @@ impl Transform {
         }
     }
 
+    /// A pure translation by `(x, y, z)` (m).
     pub fn trans(x: f64, y: f64, z: f64) -> Self {
         Transform {
             rotation: Matrix3::identity(),
@@ -71,6 +76,7 @@ impl Transform {
         }
     }
 
+    /// The rigid inverse: `x_child = Rᵀ·x_parent − Rᵀ·t`.
     pub fn inverse(&self) -> Transform {
         let rt = self.rotation.transpose();
         Transform {
@@ -97,6 +103,8 @@ impl Transform {
 pub struct Limit {
     /// The source text (e.g. `1.2177*(q7 - q6)`), for messages.
     pub label: String,
+    /// The limited combination `a·q + b` of the coordinates (rad or m), which the
+    /// ranges below apply to.
     pub expr: Affine,
     /// rad or m
     pub position: Option<[f64; 2]>,
@@ -177,9 +185,11 @@ impl CartesianLimit {
 /// One frame of the tree (frame index = position in [`Model::frames`] + 1; 0 is the base).
 #[derive(Clone, Debug)]
 pub struct Frame {
+    /// The frame's name in the description (a URDF link name for URDF models).
     pub name: String,
     /// Parent frame index (0 = base); always smaller than this frame's index.
     pub parent: usize,
+    /// How the frame moves relative to its parent: about z, along z, or not at all.
     pub kind: JointKind,
     /// Joint value `s = a·q + b` (rad or m); constant for fixed frames.
     pub value: Affine,
@@ -193,7 +203,9 @@ pub struct Frame {
     /// What acts on the joint value besides the links (friction, springs...), in
     /// parameter order (see [`Element`]).
     pub elements: Vec<Element>,
+    /// Prior values of the frame's parameters, from the description.
     pub nominal: Nominal,
+    /// The frame's own bounds for the physically consistent fit.
     pub bounds: FrameBounds,
 }
 
@@ -301,6 +313,7 @@ impl Measured {
 /// [`Model::from_toml_str`] or [`Model::from_urdf_str`].
 #[derive(Clone, Debug)]
 pub struct Model {
+    /// The robot's name, e.g. `psm` (the description's `name`, or the URDF robot's name).
     pub name: String,
     /// Where the model came from (file path or `builtin:psm`), for error messages.
     pub source: String,
@@ -308,14 +321,19 @@ pub struct Model {
     pub coordinates: Vec<String>,
     /// Whether each coordinate is a length (m) rather than an angle (rad).
     pub coordinate_is_length: Vec<bool>,
+    /// Frames of the tree in order (frame `i` at index `i - 1`; parents come first).
     pub frames: Vec<Frame>,
     /// Gravity in the base frame (m/s²).
     pub gravity: Vector3<f64>,
+    /// The measured (e.g. dVRK/ROS) joint names and their coupling to the model coordinates.
     pub measured: Measured,
+    /// The `[[limits]]` of the description: ranges on affine combinations of coordinates.
     pub limits: Vec<Limit>,
     /// Boxes on frame origins (`[[cartesian_limits]]`).
     pub cartesian_limits: Vec<CartesianLimit>,
+    /// Lower bounds applied to every element by the physically consistent fit.
     pub bounds: GlobalBounds,
+    /// Every parameter's name, kind and frame, in regressor column order.
     pub params: Vec<Param>,
     // Derived, for the per-sample algorithms.
     /// Frames (1-based) carrying link inertia, in order.

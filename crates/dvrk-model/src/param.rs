@@ -8,12 +8,19 @@ pub enum ParamKind {
     /// One of the 10 barycentric link parameters; `index` 0..10 in
     /// `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
     Inertia {
+        /// Position in the block of 10 (0..6 inertia about the frame origin, kg·m²; 6..9
+        /// first moment, kg·m; 9 mass, kg).
         index: usize,
     },
+    /// Coulomb friction `Fc` (N·m or N).
     Coulomb,
+    /// Viscous friction `Fv` (N·m·s/rad or N·s/m).
     Viscous,
+    /// Constant force offset `Fo` (N·m or N), independent of the motion.
     Offset,
+    /// Motor (rotor) inertia `Ia` reflected on a coordinate (kg·m²).
     MotorInertia,
+    /// Spring stiffness `K` (N·m or N per unit of deflection, m or rad).
     Spring,
     /// Stribeck friction `Fs` (see [`Stribeck`](crate::Stribeck)).
     Stribeck,
@@ -40,7 +47,9 @@ impl ParamKind {
 /// Name, kind and owning frame of one parameter.
 #[derive(Clone, Debug)]
 pub struct Param {
+    /// The name used in reports and descriptions, e.g. `L3xx`, `Fc4`, `m2`.
     pub name: String,
+    /// What the parameter is, which decides its unit and the bounds applied to it.
     pub kind: ParamKind,
     /// Frame index (1-based, base = 0).
     pub frame: usize,
@@ -78,12 +87,17 @@ pub struct Nominal {
     pub com: Option<[f64; 3]>,
     /// inertia about the centre of mass, frame axes: xx, xy, xz, yy, yz, zz (kg·m²)
     pub inertia: Option<[f64; 6]>,
+    /// Coulomb friction `Fc` (N·m or N).
     pub fc: Option<f64>,
+    /// Viscous friction `Fv` (N·m·s/rad or N·s/m).
     pub fv: Option<f64>,
+    /// Offset `Fo` (N·m or N).
     pub fo: Option<f64>,
     /// Stribeck friction (N·m or N), for frames with a Stribeck term.
     pub fs: Option<f64>,
+    /// Motor inertia `Ia` (kg·m²).
     pub ia: Option<f64>,
+    /// Spring stiffness `K` (N·m or N per unit of deflection, m or rad).
     pub k: Option<f64>,
 }
 
@@ -95,10 +109,15 @@ pub struct FrameBounds {
     pub mass: Option<[f64; 2]>,
     /// centre of mass box in the frame, per axis [min, max] (m)
     pub com: Option<[[f64; 2]; 3]>,
+    /// Upper bound on Coulomb friction `Fc` (N·m or N).
     pub fc_max: Option<f64>,
+    /// Upper bound on viscous friction `Fv` (N·m·s/rad or N·s/m).
     pub fv_max: Option<f64>,
+    /// Bound on the offset's magnitude, `|Fo| ≤ fo_max` (N·m or N).
     pub fo_max: Option<f64>,
+    /// Upper bound on motor inertia `Ia` (kg·m²).
     pub ia_max: Option<f64>,
+    /// Spring stiffness range `[min, max]` (N·m or N per unit of deflection).
     pub spring: Option<[f64; 2]>,
 }
 

@@ -9,8 +9,11 @@ use crate::model::{JointKind, Model};
 /// One frame, as listed in a summary.
 #[derive(Clone, Debug, Serialize)]
 pub struct FrameSummary {
+    /// Frame index (1-based; 0 is the base).
     pub index: usize,
+    /// The frame's name in the description.
     pub name: String,
+    /// Parent frame index (0 = base).
     pub parent: usize,
     /// `revolute`, `prismatic` or `fixed`
     pub joint: String,
@@ -24,25 +27,34 @@ pub struct FrameSummary {
 /// One base parameter.
 #[derive(Clone, Debug, Serialize)]
 pub struct BaseSummary {
+    /// Name of the base parameter's leading (kept) standard parameter.
     pub name: String,
+    /// The base parameter as a readable combination, e.g. `L2xy + L6xy + 0.2159*l2x`.
     pub expression: String,
 }
 
 /// The document printed by `dvrk-ident model ROBOT --json`.
 #[derive(Clone, Debug, Serialize)]
 pub struct ModelSummary {
+    /// The robot's name, e.g. `psm`.
     pub name: String,
+    /// Where the model came from (file path or `builtin:psm`).
     pub source: String,
+    /// Generalized coordinate names, in order.
     pub coordinates: Vec<String>,
+    /// Measured (e.g. dVRK/ROS) joint names, one per coordinate.
     pub measured_joints: Vec<String>,
     /// `q_measured = coupling · q_model`, rows.
     pub coupling: Vec<Vec<f64>>,
+    /// Every frame of the tree, in index order.
     pub frames: Vec<FrameSummary>,
     /// Parameter names in regressor column order.
     pub parameters: Vec<String>,
     /// One expression string per base parameter.
     pub base_parameters: Vec<String>,
+    /// Each base parameter's name and expression together.
     pub base: Vec<BaseSummary>,
+    /// Gravity in the base frame (m/s²).
     pub gravity: [f64; 3],
 }
 

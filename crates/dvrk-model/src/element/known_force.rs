@@ -13,6 +13,8 @@ use crate::param::{Nominal, ParamKind};
 /// A known force (see the module documentation).
 #[derive(Clone, Debug)]
 pub struct KnownForce {
+    /// The affine function `s(q)` the force acts along (rad or m): its gradient `∇s` maps
+    /// the force into the coordinates. Defaults to the frame's joint value.
     pub along: Affine,
     /// Coefficients of `p`, highest degree first (N·m or N).
     pub polynomial: Vec<f64>,

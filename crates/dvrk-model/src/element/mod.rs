@@ -40,19 +40,30 @@ use quadratic_viscous::QuadraticViscousDesc;
 /// coordinates' positions, rates and accelerations (rad or m, per s, per s²).
 #[derive(Clone, Copy)]
 pub struct Sample<'a> {
+    /// The frame's joint value `s = a·q + b` (rad or m), whose coefficients `a` map the
+    /// element's force into the coordinates.
     pub value: &'a Affine,
+    /// Coordinate positions (rad or m).
     pub q: &'a [f64],
+    /// Coordinate rates (rad/s or m/s).
     pub dq: &'a [f64],
+    /// Coordinate accelerations (rad/s² or m/s²).
     pub ddq: &'a [f64],
 }
 
 /// What an export's note on an element names: the parameter values and names, the
 /// coordinates, the frame's name and its joint value as text.
 pub struct Note<'a> {
+    /// The whole parameter vector (SI units per parameter kind).
     pub params: &'a [f64],
+    /// Names and kinds of the parameters, indexed like `params`.
     pub names: &'a [Param],
+    /// The model's coordinate names, for writing expressions.
     pub coordinates: &'a [String],
+    /// Name of the frame the element is on.
     pub frame: &'a str,
+    /// The frame's joint value as an expression text (e.g. `q2 - q3`), what the element
+    /// acts along.
     pub on: &'a str,
 }
 
@@ -99,7 +110,9 @@ pub enum BoundOrigin {
 pub struct BoundRow {
     /// `(parameter index, coefficient)` pairs.
     pub coefficients: Vec<(usize, f64)>,
+    /// Right-hand side of the bound, in the unit of the combination (`+∞`: no bound).
     pub limit: f64,
+    /// Which field or constraint the bound comes from, so messages can name it.
     pub origin: BoundOrigin,
 }
 
@@ -210,10 +223,16 @@ pub(crate) trait Law {
 /// One element of a frame (see the module documentation).
 #[derive(Clone, Debug)]
 pub enum Element {
+    /// Coulomb, viscous and offset friction, with an optional Stribeck term.
     Friction(Friction),
+    /// A motor (rotor) inertia reflected onto one coordinate.
     MotorInertia(MotorInertia),
+    /// A linear spring on a (possibly nonlinear) deflection.
     Spring(Spring),
+    /// A known force without parameters (e.g. the MTM's cable polynomial), subtracted
+    /// before a fit.
     KnownForce(KnownForce),
+    /// Friction quadratic in the joint rate.
     QuadraticViscous(QuadraticViscous),
 }
 

@@ -11,7 +11,11 @@ use crate::param::{Nominal, ParamKind};
 pub struct MotorInertia {
     /// Index of `Ia` (kg·m²) in the parameter vector.
     pub param: usize,
+    /// The coordinate whose motor it is: the frame's joint value is a multiple of this
+    /// coordinate only.
     pub coordinate: usize,
+    /// The frame's joint value per unit of `q[coordinate]` (`a` in `s = a·q + b`); the
+    /// torque is `ratio·Ia·q̈`.
     pub ratio: f64,
 }
 

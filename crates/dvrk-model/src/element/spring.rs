@@ -18,7 +18,9 @@ pub struct Spring {
 /// A spring deflection: affine ones (the common case) skip the expression evaluator.
 #[derive(Clone, Debug)]
 pub enum Deflection {
+    /// An affine deflection of the coordinates (m or rad), evaluated as a dot product.
     Affine(Affine),
+    /// A nonlinear deflection, evaluated by the expression interpreter.
     Expr(Box<Expr>),
 }
 
@@ -32,6 +34,7 @@ impl Deflection {
     }
 
     #[inline(always)]
+    /// The deflection `dl(q)` (m or rad) at coordinates `q`.
     pub fn eval(&self, q: &[f64]) -> f64 {
         match self {
             Deflection::Affine(a) => a.eval(q),
