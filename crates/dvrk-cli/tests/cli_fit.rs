@@ -3,17 +3,14 @@
 
 mod support;
 use std::path::Path;
-use support::{run, temp_dir};
+use support::{run, temp_dir, write_model_log};
 
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
-use dvrk_model::{inertia, Model, Workspace};
-use nalgebra::DMatrix;
+use dvrk_model::{inertia, Model};
 
 /// A noise-free MTM log in model coordinates (the 2019 CSV layout) from consistent
 /// parameters; `phase` changes the motion so train and test differ.
 fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
     let model = Model::builtin("mtm").unwrap();
-    let n = model.dof();
     let mut pi = vec![0.0; model.n_params()];
     for f in &model.frames {
         if let Some(p0) = f.inertia {
@@ -46,44 +43,17 @@ fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
             pi[sp.param] = 270.0;
         }
     }
-    let rate = 200.0;
-    let count = 3000;
-    let time = uniform_time(count, rate);
-    let (mut q, mut dq, mut tau) = (
-        DMatrix::zeros(count, n),
-        DMatrix::zeros(count, n),
-        DMatrix::zeros(count, n),
-    );
-    let mut ws = Workspace::new(&model);
-    let (mut a, mut b, mut c, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    for (k, &tk) in time.iter().enumerate() {
-        for j in 0..n {
-            let (w1, w2) = (0.6 + 0.13 * j as f64, 1.7 + 0.11 * j as f64);
-            let p = phase + j as f64;
-            a[j] = 0.4 * (w1 * tk + p).sin()
+    write_model_log(&model, &pi, 3000, path, |j, tk| {
+        let (w1, w2) = (0.6 + 0.13 * j as f64, 1.7 + 0.11 * j as f64);
+        let p = phase + j as f64;
+        (
+            0.4 * (w1 * tk + p).sin()
                 + 0.2 * (w2 * tk + 2.0 * p).sin()
-                + if j == 1 { 0.5 } else { 0.0 };
-            b[j] = 0.4 * w1 * (w1 * tk + p).cos() + 0.2 * w2 * (w2 * tk + 2.0 * p).cos();
-            c[j] = -0.4 * w1 * w1 * (w1 * tk + p).sin() - 0.2 * w2 * w2 * (w2 * tk + 2.0 * p).sin();
-        }
-        model.inverse_dynamics(&mut ws, &pi, &a, &b, &c, &mut t);
-        model.add_known_forces(&a, &mut t);
-        for j in 0..n {
-            q[(k, j)] = a[j];
-            dq[(k, j)] = b[j];
-            tau[(k, j)] = t[j];
-        }
-    }
-    let traj = Trajectory {
-        time,
-        q,
-        dq: Some(dq),
-        tau,
-        joint_names: model.coordinates.clone(),
-        coordinates: Coordinates::Model,
-        source: "test".into(),
-    };
-    dvrk_ident::log::write(path, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+                + if j == 1 { 0.5 } else { 0.0 },
+            0.4 * w1 * (w1 * tk + p).cos() + 0.2 * w2 * (w2 * tk + 2.0 * p).cos(),
+            -0.4 * w1 * w1 * (w1 * tk + p).sin() - 0.2 * w2 * w2 * (w2 * tk + 2.0 * p).sin(),
+        )
+    });
     pi
 }
 

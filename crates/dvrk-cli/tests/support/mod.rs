@@ -96,30 +96,31 @@ pub const ARM: &str = r#"<?xml version="1.0"?>
 </robot>
 "#;
 
-/// A noise-free log of the arm (2019 CSV layout, model coordinates) with its URDF's
-/// nominal parameters.
-pub fn write_arm_log(urdf: &Path, log: &Path) {
-    let model = Model::load(&s(urdf)).unwrap();
-    let pi = model.nominal_parameters().unwrap();
+/// A noise-free 200 Hz log of `count` samples in the 2019 CSV layout (model
+/// coordinates): `motion(j, t)` is coordinate `j`'s `(q, q̇, q̈)` at `t` (s), the torques
+/// are `model`'s inverse dynamics with `pi` plus its known forces.
+pub fn write_model_log(
+    model: &Model,
+    pi: &[f64],
+    count: usize,
+    path: &Path,
+    motion: impl Fn(usize, f64) -> (f64, f64, f64),
+) {
     let n = model.dof();
-    let rate = 200.0;
-    let count = 2000;
-    let time = uniform_time(count, rate);
+    let time = uniform_time(count, 200.0);
     let (mut q, mut dq, mut tau) = (
         DMatrix::zeros(count, n),
         DMatrix::zeros(count, n),
         DMatrix::zeros(count, n),
     );
-    let mut ws = Workspace::new(&model);
+    let mut ws = Workspace::new(model);
     let (mut a, mut b, mut c, mut t) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     for (k, &tk) in time.iter().enumerate() {
         for j in 0..n {
-            let (w1, w2, p) = (0.7 + 0.17 * j as f64, 1.9 + 0.23 * j as f64, j as f64);
-            a[j] = 0.8 * (w1 * tk + p).sin() + 0.3 * (w2 * tk + 2.0 * p).sin();
-            b[j] = 0.8 * w1 * (w1 * tk + p).cos() + 0.3 * w2 * (w2 * tk + 2.0 * p).cos();
-            c[j] = -0.8 * w1 * w1 * (w1 * tk + p).sin() - 0.3 * w2 * w2 * (w2 * tk + 2.0 * p).sin();
+            (a[j], b[j], c[j]) = motion(j, tk);
         }
-        model.inverse_dynamics(&mut ws, &pi, &a, &b, &c, &mut t);
+        model.inverse_dynamics(&mut ws, pi, &a, &b, &c, &mut t);
+        model.add_known_forces(&a, &mut t);
         for j in 0..n {
             q[(k, j)] = a[j];
             dq[(k, j)] = b[j];
@@ -135,5 +136,20 @@ pub fn write_arm_log(urdf: &Path, log: &Path) {
         coordinates: Coordinates::Model,
         source: "test".into(),
     };
-    dvrk_ident::log::write(log, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+    dvrk_ident::log::write(path, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+}
+
+/// A noise-free log of the arm (2019 CSV layout, model coordinates) with its URDF's
+/// nominal parameters.
+pub fn write_arm_log(urdf: &Path, log: &Path) {
+    let model = Model::load(&s(urdf)).unwrap();
+    let pi = model.nominal_parameters().unwrap();
+    write_model_log(&model, &pi, 2000, log, |j, tk| {
+        let (w1, w2, p) = (0.7 + 0.17 * j as f64, 1.9 + 0.23 * j as f64, j as f64);
+        (
+            0.8 * (w1 * tk + p).sin() + 0.3 * (w2 * tk + 2.0 * p).sin(),
+            0.8 * w1 * (w1 * tk + p).cos() + 0.3 * w2 * (w2 * tk + 2.0 * p).cos(),
+            -0.8 * w1 * w1 * (w1 * tk + p).sin() - 0.3 * w2 * w2 * (w2 * tk + 2.0 * p).sin(),
+        )
+    });
 }
