@@ -93,6 +93,7 @@ use std::time::Instant;
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
+use dvrk_model::inertia::pseudo_inertia;
 use dvrk_model::{BoundOrigin, BoundsContext, Model};
 use nalgebra::{DMatrix, Matrix4};
 use thiserror::Error;
@@ -614,7 +615,7 @@ pub fn solve_sdp(
             .map(|k| {
                 let mut e = [0.0; 10];
                 e[k] = 1.0;
-                wh * pseudo_inertia_of(&e) * wh.transpose()
+                wh * pseudo_inertia(&e) * wh.transpose()
             })
             .collect();
         for (k, bk) in basis.iter().enumerate() {
@@ -740,10 +741,6 @@ fn lower_index(i: usize, c: usize) -> usize {
     (0..c).map(|k| 4 - k).sum::<usize>() + (i - c)
 }
 
-fn pseudo_inertia_of(bary: &[f64]) -> Matrix4<f64> {
-    dvrk_model::inertia::pseudo_inertia(bary)
-}
-
 /// Largest prior weight: the data term is about 1 at the solution, so beyond this the
 /// data have no say, and on the bundled example a weight of 1e9 left the solver a
 /// point outside the cone of its own divergence (1e6 solves).
@@ -774,7 +771,7 @@ fn whitenings(
     let mut out = Vec::new();
     for (fi, f) in model.frames.iter().enumerate() {
         let Some(p0) = f.inertia else { continue };
-        let j0 = pseudo_inertia_of(&prior[p0..p0 + 10]);
+        let j0 = pseudo_inertia(&prior[p0..p0 + 10]);
         let eig = j0.symmetric_eigen();
         let inconsistent = || SdpError::PriorInconsistent {
             link: f.name.clone(),
@@ -809,7 +806,7 @@ fn whitenings(
 /// `d(J‖J₀) = tr(J̃) − log det J̃ − 4`, `J̃ = L₀⁻¹·J·L₀⁻ᵀ` (`whitening` = `L₀⁻¹`);
 /// infinite when `J` is not positive definite.
 fn log_det_divergence(whitening: &Matrix4<f64>, bary: &[f64]) -> f64 {
-    let jt = whitening * pseudo_inertia_of(bary) * whitening.transpose();
+    let jt = whitening * pseudo_inertia(bary) * whitening.transpose();
     match jt.cholesky() {
         Some(c) => {
             let log_det: f64 = (0..4).map(|i| 2.0 * c.l()[(i, i)].ln()).sum();
