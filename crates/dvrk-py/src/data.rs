@@ -675,7 +675,8 @@ pub fn read_log(
     Ok(DataPy::new(traj, Some(absolute(&path))))
 }
 
-fn absolute(path: &Path) -> PathBuf {
+/// `path` made absolute, for the provenance (the file as given when that fails).
+pub fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 

@@ -119,7 +119,7 @@ pub(crate) struct Overrides<'a, 'py> {
 impl Overrides<'_, '_> {
     /// The base settings: `settings` (the result document's `settings` layout; missing
     /// fields take the defaults) or the defaults.
-    fn base(&self, py: Python<'_>) -> PyResult<FitSettings> {
+    pub(crate) fn base(&self, py: Python<'_>) -> PyResult<FitSettings> {
         match self.settings.filter(|s| !s.is_none()) {
             Some(obj) => from_python::<FitSettings>(py, obj, "settings"),
             None => Ok(FitSettings::default()),
@@ -127,7 +127,7 @@ impl Overrides<'_, '_> {
     }
 
     /// The keywords that are not `None`, as the library's overrides.
-    fn overrides(&self) -> PyResult<request::Overrides> {
+    pub(crate) fn overrides(&self) -> PyResult<request::Overrides> {
         let cutoff = match self.cutoff.filter(|c| !c.is_none()) {
             None => None,
             Some(c) => {
