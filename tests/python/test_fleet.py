@@ -126,7 +126,7 @@ def test_observations_of_other_settings_or_robots_are_refused(psm, fleet, tmp_pa
     with pytest.raises(di.InputError, match="processing settings"):
         a + b
     with pytest.raises(di.InputError, match="reduced for robot psm"):
-        di.fit(di.Robot.load("psm_simplified"), a, method="wls")
+        di.fit(di.Model.load("psm_simplified"), a, method="wls")
     with pytest.raises(di.InputError, match="processing .* of observation states are their own"):
         di.fit(psm, a, method="wls", cutoff=3.0)
     with pytest.raises(di.InputError, match="format version 9"):

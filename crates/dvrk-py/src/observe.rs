@@ -11,11 +11,11 @@ use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
 use crate::convert::background;
-use crate::data::{absolute, fail_ident, DataPy};
+use crate::data::{absolute, fail_ident, JointLogPy};
 use crate::errors::{from_ident, input};
-use crate::fit::Overrides;
+use crate::overrides::Overrides;
 use crate::json::to_python;
-use crate::robot::Robot;
+use crate::classes::ModelPy;
 
 /// The training logs of a fit reduced to their R factors (see :func:`observe`): the
 /// robot and processing they were reduced for, each log's provenance and factors, and
@@ -119,7 +119,7 @@ impl ObservationPy {
         Ok(list)
     }
 
-    /// The processing settings the logs were reduced with (``Result.settings``'s
+    /// The processing settings the logs were reduced with (``FitResult.settings``'s
     /// ``processing`` layout).
     #[getter]
     fn processing<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -136,11 +136,11 @@ impl ObservationPy {
     }
 }
 
-/// The logs of `data`: a :class:`Data` (its samples), a path (read as :func:`read_log`
+/// The logs of `data`: a :class:`JointLog` (its samples), a path (read as :func:`read_log`
 /// reads it for the robot, with its absolute path for the provenance) or a list of them.
 fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
     let one = |d: &Bound<'_, PyAny>| -> PyResult<LogSource> {
-        if let Ok(d) = d.cast::<DataPy>() {
+        if let Ok(d) = d.cast::<JointLogPy>() {
             return Ok(LogSource::Samples {
                 samples: d.get().traj.clone(),
                 file: d.get().path.clone(),
@@ -148,13 +148,13 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
         }
         let path: PathBuf = d.extract().map_err(|_| {
             input(format!(
-                "data: expected a Data, a path or a list of them, got {}",
+                "data: expected a JointLog, a path or a list of them, got {}",
                 d.get_type()
             ))
         })?;
         Ok(LogSource::File(absolute(&path)))
     };
-    let single = data.cast::<DataPy>().is_ok()
+    let single = data.cast::<JointLogPy>().is_ok()
         || data.extract::<String>().is_ok()
         || data.hasattr("__fspath__")?;
     if single {
@@ -162,7 +162,7 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
     }
     let logs = data
         .try_iter()
-        .map_err(|_| input("data: expected a Data, a path or a list of them"))?
+        .map_err(|_| input("data: expected a JointLog, a path or a list of them"))?
         .map(|d| one(&d?))
         .collect::<PyResult<Vec<_>>>()?;
     if logs.is_empty() {
@@ -171,7 +171,7 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
     Ok(logs)
 }
 
-/// The map of a fit over many processes: the logs of ``data`` (a :class:`Data`, a path
+/// The map of a fit over many processes: the logs of ``data`` (a :class:`JointLog`, a path
 /// read with :func:`read_log`, or a list of them) processed as :func:`fit` processes
 /// them (same keywords and defaults: ``cutoff``, ``filter_torque``, ``trim``,
 /// ``decimate``, ``min_speed``, ``resample``, ``stribeck``, ``settings``) and reduced to
@@ -189,7 +189,7 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
 #[allow(clippy::too_many_arguments)]
 pub fn observe(
     py: Python<'_>,
-    robot: &Bound<'_, Robot>,
+    robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, PyAny>,
     cutoff: Option<&Bound<'_, PyAny>>,
     filter_torque: Option<bool>,
