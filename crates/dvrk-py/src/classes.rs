@@ -103,4 +103,3 @@ pub struct FitResultPy {
     /// The robot it was fitted with (`None` when read from JSON without one).
     pub robot: Option<Py<ModelPy>>,
 }
-

@@ -12,11 +12,11 @@ use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PySlice, PyTuple};
 
+use crate::classes::ModelPy;
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
 use crate::errors::{from_ident, from_log, ident_kind, input, log_kind};
 use crate::frame;
 use crate::json::to_python;
-use crate::classes::ModelPy;
 
 /// A joint-space log: sample times and one row per sample of positions, velocities
 /// (optional) and efforts, in the robot's measured joints or in its model coordinates.

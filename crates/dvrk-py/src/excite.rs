@@ -10,10 +10,10 @@ use dvrk_ident::result::write_atomic;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 
+use crate::classes::ModelPy;
 use crate::convert::{array, background, matrix, rows, vector, Failure};
 use crate::errors::{error, excite_kind, fourier_kind, from_ident, input};
 use crate::json::to_python;
-use crate::classes::ModelPy;
 use crate::limits::limits_of;
 
 /// A float64 numpy array.
@@ -140,7 +140,11 @@ impl FourierTrajectoryPy {
     /// Deprecated name of :meth:`wpi_names`.
     #[staticmethod]
     fn wpi2019_names(py: Python<'_>, path: PathBuf) -> PyResult<Vec<String>> {
-        crate::deprecated::warn(py, "FourierTrajectory.wpi2019_names", "FourierTrajectory.wpi_names")?;
+        crate::deprecated::warn(
+            py,
+            "FourierTrajectory.wpi2019_names",
+            "FourierTrajectory.wpi_names",
+        )?;
         Self::wpi_names(path)
     }
 

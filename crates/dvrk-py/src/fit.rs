@@ -15,13 +15,13 @@ use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::classes::{FitResultPy, ModelPy};
 use crate::convert::{array, background, matrix, py_bool, py_str};
 use crate::data::{fail_ident, JointLogPy, PreparedPy};
 use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input, Kind};
 use crate::excite::FourierTrajectoryPy;
 use crate::json::to_python;
 use crate::observe::observations_arg;
-use crate::classes::{FitResultPy, ModelPy};
 use crate::overrides::Overrides;
 
 /// A :class:`JointLog` or a list of them: the samples and the files they were read from.
@@ -176,16 +176,18 @@ pub fn fit(
     };
     let excitation = match excitation.filter(|e| !e.is_none()) {
         None => None,
-        Some(e) => Some(match e.cast::<FourierTrajectoryPy>() {
-            Ok(t) => t.get().inner.clone(),
-            Err(_) => {
-                let path: PathBuf = e.extract().map_err(|_| {
+        Some(e) => {
+            Some(match e.cast::<FourierTrajectoryPy>() {
+                Ok(t) => t.get().inner.clone(),
+                Err(_) => {
+                    let path: PathBuf = e.extract().map_err(|_| {
                     input("excitation: expected a FourierTrajectory or the path of its JSON document")
                 })?;
-                FourierTrajectory::from_json_file(&path)
-                    .map_err(|err| error(fourier_kind(&err), err.to_string()))?
-            }
-        }),
+                    FourierTrajectory::from_json_file(&path)
+                        .map_err(|err| error(fourier_kind(&err), err.to_string()))?
+                }
+            })
+        }
     };
     let request = FitRequest {
         test,

@@ -34,4 +34,3 @@ pub(crate) fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResu
     let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
     Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_model)
 }
-

@@ -10,12 +10,12 @@ use dvrk_ident::state::ObservationState;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
+use crate::classes::ModelPy;
 use crate::convert::background;
 use crate::data::{absolute, fail_ident, JointLogPy};
 use crate::errors::{from_ident, input};
-use crate::overrides::Overrides;
 use crate::json::to_python;
-use crate::classes::ModelPy;
+use crate::overrides::Overrides;
 
 /// The training logs of a fit reduced to their R factors (see :func:`observe`): the
 /// robot and processing they were reduced for, each log's provenance and factors, and

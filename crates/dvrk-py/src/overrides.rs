@@ -146,4 +146,3 @@ impl Overrides<'_, '_> {
         Ok(self.overrides()?.apply(self.base(py)?))
     }
 }
-

@@ -26,7 +26,11 @@ impl ModelPy {
 
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
-    pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<ModelPy> {
+    pub fn of_result(
+        py: Python<'_>,
+        robot_source: &str,
+        stribeck: Option<f64>,
+    ) -> PyResult<ModelPy> {
         let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
         let (model, origin) = py
             .detach(move || {

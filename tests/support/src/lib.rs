@@ -199,6 +199,53 @@ pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
     pi
 }
 
+/// Parameters inside the description's bounds, the same every run: per link the mass
+/// `mass(bounds)` picks from its bounds (`None`: the link has none), the centre of mass at
+/// the middle of its box, the inertia of a 6 x 5 x 4 cm box about it; Coulomb 0.5,
+/// viscous 0.3 and offset 0.2 of their maxima (0.1 without); every motor inertia
+/// `motor_inertia` (kg·m²); springs at mid-range.
+pub fn bounded_params(
+    model: &Model,
+    mass: impl Fn(Option<[f64; 2]>) -> f64,
+    motor_inertia: f64,
+) -> Vec<f64> {
+    let mut pi = vec![0.0; model.n_params()];
+    for f in &model.frames {
+        if let Some(p0) = f.inertia {
+            let m = mass(f.bounds.mass);
+            let c = f.bounds.com.map_or([0.0; 3], |b| {
+                [
+                    0.5 * (b[0][0] + b[0][1]),
+                    0.5 * (b[1][0] + b[1][1]),
+                    0.5 * (b[2][0] + b[2][1]),
+                ]
+            });
+            let (x, y, z) = (0.06, 0.05, 0.04);
+            let ic = [
+                m * (y * y + z * z) / 12.0,
+                0.0,
+                0.0,
+                m * (x * x + z * z) / 12.0,
+                0.0,
+                m * (x * x + y * y) / 12.0,
+            ];
+            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
+        }
+        if let Some(fr) = f.friction() {
+            pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
+            pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
+            pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
+        }
+        if let Some(mi) = f.motor_inertia() {
+            pi[mi.param] = motor_inertia;
+        }
+        if let Some(sp) = f.spring() {
+            pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
+        }
+    }
+    pi
+}
+
 /// Copy of `params` keeping only the parameters for which `keep` is true (others 0).
 pub fn filter_params(model: &Model, params: &[f64], keep: impl Fn(ParamKind) -> bool) -> Vec<f64> {
     model
