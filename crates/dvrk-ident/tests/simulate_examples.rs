@@ -32,7 +32,14 @@ fn example_params(model: &Model) -> Vec<f64> {
         let [lo, hi] = bounds.unwrap_or([0.5, 1.5]);
         (0.5 * (lo + hi)).min(lo + 0.5)
     };
-    dvrk_test_support::bounded_params(model, mass, 0.002)
+    dvrk_test_support::ParamRule {
+        mass: Box::new(mass),
+        inertia_com: Box::new(dvrk_test_support::box_inertia),
+        friction: Box::new(dvrk_test_support::friction_within_bounds),
+        motor_inertia: 0.002,
+        spring: Box::new(dvrk_test_support::mid_spring),
+    }
+    .params(model)
 }
 
 #[test]

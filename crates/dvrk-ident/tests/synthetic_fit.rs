@@ -13,7 +13,14 @@ use nalgebra::DMatrix;
 fn consistent_params(model: &Model) -> Vec<f64> {
     let mass =
         |bounds: Option<[f64; 2]>| bounds.map_or(1.0, |[a, b]| 0.5 * (a + b).min(2.0 * a + 1.0));
-    dvrk_test_support::bounded_params(model, mass, 0.01)
+    dvrk_test_support::ParamRule {
+        mass: Box::new(mass),
+        inertia_com: Box::new(dvrk_test_support::box_inertia),
+        friction: Box::new(dvrk_test_support::friction_within_bounds),
+        motor_inertia: 0.01,
+        spring: Box::new(dvrk_test_support::mid_spring),
+    }
+    .params(model)
 }
 
 /// Sum-of-sines trajectory per coordinate, centred in the description's position limit

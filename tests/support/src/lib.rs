@@ -199,51 +199,96 @@ pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
     pi
 }
 
-/// Parameters inside the description's bounds, the same every run: per link the mass
-/// `mass(bounds)` picks from its bounds (`None`: the link has none), the centre of mass at
-/// the middle of its box, the inertia of a 6 x 5 x 4 cm box about it; Coulomb 0.5,
-/// viscous 0.3 and offset 0.2 of their maxima (0.1 without); every motor inertia
-/// `motor_inertia` (kg·m²); springs at mid-range.
-pub fn bounded_params(
-    model: &Model,
-    mass: impl Fn(Option<[f64; 2]>) -> f64,
-    motor_inertia: f64,
-) -> Vec<f64> {
-    let mut pi = vec![0.0; model.n_params()];
-    for f in &model.frames {
-        if let Some(p0) = f.inertia {
-            let m = mass(f.bounds.mass);
-            let c = f.bounds.com.map_or([0.0; 3], |b| {
-                [
-                    0.5 * (b[0][0] + b[0][1]),
-                    0.5 * (b[1][0] + b[1][1]),
-                    0.5 * (b[2][0] + b[2][1]),
-                ]
-            });
-            let (x, y, z) = (0.06, 0.05, 0.04);
-            let ic = [
-                m * (y * y + z * z) / 12.0,
-                0.0,
-                0.0,
-                m * (x * x + z * z) / 12.0,
-                0.0,
-                m * (x * x + y * y) / 12.0,
-            ];
-            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
+/// How [`ParamRule::params`] picks each link's and element's value from the description's
+/// bounds: deterministic parameters inside them, the same every run (the examples, the
+/// synthetic fits and the command-line tests each keep their own rule).
+pub struct ParamRule {
+    /// A link's mass (kg) from its bounds (`None`: the link has none).
+    pub mass: Box<dyn Fn(Option<[f64; 2]>) -> f64>,
+    /// A link's inertia about its centre of mass (kg·m², xx xy xz yy yz zz) from its mass.
+    pub inertia_com: Box<dyn Fn(f64) -> [f64; 6]>,
+    /// Coulomb (N·m), viscous (N·m·s/rad) and offset (N·m) friction from the frame's
+    /// bounds.
+    pub friction: Box<dyn Fn(&dvrk_model::FrameBounds) -> [f64; 3]>,
+    /// Every motor inertia, kg·m².
+    pub motor_inertia: f64,
+    /// A spring's stiffness from its bounds.
+    pub spring: Box<dyn Fn(Option<[f64; 2]>) -> f64>,
+}
+
+/// The inertia of a 6 x 5 x 4 cm box of mass `m` about its centre, kg·m².
+pub fn box_inertia(m: f64) -> [f64; 6] {
+    let (x, y, z) = (0.06, 0.05, 0.04);
+    [
+        m * (y * y + z * z) / 12.0,
+        0.0,
+        0.0,
+        m * (x * x + z * z) / 12.0,
+        0.0,
+        m * (x * x + y * y) / 12.0,
+    ]
+}
+
+/// Coulomb 0.5, viscous 0.3 and offset 0.2 of their maxima (0.1 without).
+pub fn friction_within_bounds(b: &dvrk_model::FrameBounds) -> [f64; 3] {
+    [
+        0.5 * b.fc_max.unwrap_or(0.1),
+        0.3 * b.fv_max.unwrap_or(0.1),
+        0.2 * b.fo_max.unwrap_or(0.1),
+    ]
+}
+
+/// A spring at mid-range of its bounds (0.1 without).
+pub fn mid_spring(b: Option<[f64; 2]>) -> f64 {
+    b.map_or(0.1, |[a, b]| 0.5 * (a + b))
+}
+
+impl ParamRule {
+    /// The parameters of `model` by this rule, each link's centre of mass at the middle
+    /// of its box.
+    pub fn params(&self, model: &Model) -> Vec<f64> {
+        let mut pi = vec![0.0; model.n_params()];
+        for f in &model.frames {
+            if let Some(p0) = f.inertia {
+                let m = (self.mass)(f.bounds.mass);
+                let c = f.bounds.com.map_or([0.0; 3], |b| {
+                    [
+                        0.5 * (b[0][0] + b[0][1]),
+                        0.5 * (b[1][0] + b[1][1]),
+                        0.5 * (b[2][0] + b[2][1]),
+                    ]
+                });
+                let ic = (self.inertia_com)(m);
+                pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
+            }
+            if let Some(fr) = f.friction() {
+                pi[fr.param..fr.param + 3].copy_from_slice(&(self.friction)(&f.bounds));
+            }
+            if let Some(mi) = f.motor_inertia() {
+                pi[mi.param] = self.motor_inertia;
+            }
+            if let Some(sp) = f.spring() {
+                pi[sp.param] = (self.spring)(f.bounds.spring);
+            }
         }
-        if let Some(fr) = f.friction() {
-            pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
-            pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
-            pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
-        }
-        if let Some(mi) = f.motor_inertia() {
-            pi[mi.param] = motor_inertia;
-        }
-        if let Some(sp) = f.spring() {
-            pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
-        }
+        pi
     }
-    pi
+}
+
+/// The command-line and streaming tests' MTM rule: 1.5 times each lower mass bound, a
+/// small diagonal inertia, Coulomb `coulomb` (N·m), viscous 0.02, offset 0.01, motor
+/// inertias 0.005, springs 270.
+pub fn mtm_rule(coulomb: f64) -> ParamRule {
+    ParamRule {
+        mass: Box::new(|b| b.map_or(1.0, |[a, _]| 1.5 * a)),
+        inertia_com: Box::new(|m| {
+            let d = 0.05 * m;
+            [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008]
+        }),
+        friction: Box::new(move |_| [coulomb, 0.02, 0.01]),
+        motor_inertia: 0.005,
+        spring: Box::new(|_| 270.0),
+    }
 }
 
 /// Copy of `params` keeping only the parameters for which `keep` is true (others 0).
