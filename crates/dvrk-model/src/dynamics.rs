@@ -12,7 +12,8 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::element::{sign0, Sample};
 use crate::inertia::{sym3, transform_barycentric};
-use crate::model::{Axis, Body, Model, Transform};
+use crate::model::{Axis, Body, Model};
+use crate::spatial::Transform;
 use crate::workspace::{BodyBuffers, Workspace};
 
 /// The mass matrix is not positive definite at this configuration (the parameters are

@@ -2,6 +2,9 @@
 //! joints, axes not along z, rotated inertials, the rpy convention, limits, and the
 //! error messages (which must name the file and the problem).
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{JointKind, Model, Transform, Workspace};
 use nalgebra::{Matrix3, Vector3};
 
