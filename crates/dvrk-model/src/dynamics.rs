@@ -216,29 +216,6 @@ impl Model {
         assert_eq!(params.len(), self.n_params(), "parameter vector length");
     }
 
-    /// Core of the inverse dynamics; writes `tau` (length n).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn rnea(
-        &self,
-        ws: &mut Workspace,
-        params: &[f64],
-        q: &[f64],
-        dq: &[f64],
-        ddq: &[f64],
-        terms: Terms,
-        tau: &mut [f64],
-    ) {
-        self.check_state(ws, params, &[q, dq, ddq, tau]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
-        let motion = Motion {
-            velocity: true,
-            acceleration: true,
-        };
-        self.body_rnea(ws, dq, ddq, motion, true, tau);
-        self.add_elements(params, q, dq, ddq, terms, tau);
-    }
-
     /// The elements' torques (friction, springs, motor inertias...), added into `tau`.
     #[inline]
     fn add_elements(
@@ -283,7 +260,15 @@ impl Model {
         ddq: &[f64],
         tau: &mut [f64],
     ) {
-        self.rnea(ws, params, q, dq, ddq, ALL, tau);
+        self.check_state(ws, params, &[q, dq, ddq, tau]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        let motion = Motion {
+            velocity: true,
+            acceleration: true,
+        };
+        self.body_rnea(ws, dq, ddq, motion, true, tau);
+        self.add_elements(params, q, dq, ddq, ALL, tau);
     }
 
     /// Gravity torque `g(q)` of the links alone (N·m or N), as Pinocchio's

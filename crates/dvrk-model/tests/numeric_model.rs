@@ -10,6 +10,7 @@ use dvrk_model::{
     Affine, Convention, ElementSpec, FrameSpec, Joint, JointKind, Model, ModelBuilder, Transform,
     Workspace,
 };
+use dvrk_test_support::PlanarTwoLink;
 
 const G: f64 = 9.81;
 const L1: f64 = 0.7; // m
@@ -86,26 +87,14 @@ fn params(model: &Model) -> Vec<f64> {
     p
 }
 
-/// Mass matrix, Coriolis/centrifugal and gravity of the two links (Spong, Robot
-/// Modeling and Control, §7.4), with the motor inertia on `M22`.
-fn closed_form(q: [f64; 2], dq: [f64; 2]) -> ([[f64; 2]; 2], [f64; 2], [f64; 2]) {
-    let (c1, c2, s2) = (q[0].cos(), q[1].cos(), q[1].sin());
-    let c12 = (q[0] + q[1]).cos();
-    let m11 = IZZ[0]
-        + IZZ[1]
-        + M[0] * LC[0] * LC[0]
-        + M[1] * (L1 * L1 + LC[1] * LC[1] + 2.0 * L1 * LC[1] * c2);
-    let m12 = IZZ[1] + M[1] * (LC[1] * LC[1] + L1 * LC[1] * c2);
-    let m22 = IZZ[1] + M[1] * LC[1] * LC[1] + IA;
-    let h = M[1] * L1 * LC[1] * s2;
-    let coriolis = [
-        -h * (2.0 * dq[0] * dq[1] + dq[1] * dq[1]),
-        h * dq[0] * dq[0],
-    ];
-    let g2 = M[1] * LC[1] * G * c12;
-    let gravity = [(M[0] * LC[0] + M[1] * L1) * G * c1 + g2, g2];
-    ([[m11, m12], [m12, m22]], coriolis, gravity)
-}
+/// The links' closed form (the motor inertia and the friction are added by the tests).
+const ARM: PlanarTwoLink = PlanarTwoLink {
+    mass: M,
+    com: LC,
+    inertia: IZZ,
+    length: L1,
+    gravity: G,
+};
 
 const STATES: [([f64; 2], [f64; 2], [f64; 2]); 4] = [
     ([0.4, -0.8], [1.0, -0.5], [2.0, 0.3]),
@@ -131,7 +120,9 @@ fn two_link_arm_matches_the_closed_form() {
     let p = params(&model);
     let mut ws = Workspace::new(&model);
     for (q, dq, ddq) in STATES {
-        let (mm, c, g) = closed_form(q, dq);
+        let mut mm = ARM.mass_matrix(q);
+        mm[1][1] += IA;
+        let (c, g) = (ARM.coriolis(q, dq), ARM.gravity_torque(q));
 
         let mut gravity = [0.0; 2];
         model.gravity_torque(&mut ws, &p, &q, &mut gravity);
