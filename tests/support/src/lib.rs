@@ -9,7 +9,8 @@
 //! - [`temp_dir`]: a fresh scratch folder per test;
 //! - [`repo`], [`example`]: the repository and its bundled examples;
 //! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
-//!   parameters, physically consistent ones included.
+//!   parameters, physically consistent ones included;
+//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics.
 #![allow(clippy::missing_panics_doc)]
 
 use std::io::Write;
@@ -375,4 +376,65 @@ pub fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64], seed: u64
 /// The rigid-body parameters of `params` (friction, motor inertias, springs zeroed).
 pub fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
     filter_params(model, params, |k| matches!(k, ParamKind::Inertia { .. }))
+}
+
+/// A planar arm of two revolute joints, the textbook closed form of its dynamics (Spong,
+/// Hutchinson & Vidyasagar, Robot Modeling and Control, §7.4): angles `q` (rad) from the
+/// horizontal, gravity `gravity` (m/s²) pulling down in the plane of motion.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanarTwoLink {
+    /// Link masses (kg).
+    pub mass: [f64; 2],
+    /// Distance of each link's centre of mass from its joint, along the link (m).
+    pub com: [f64; 2],
+    /// Each link's moment of inertia about its centre of mass, about the joint axes (kg·m²).
+    pub inertia: [f64; 2],
+    /// Length of the first link: the second joint's distance from the first (m).
+    pub length: f64,
+    /// Gravity's magnitude (m/s²).
+    pub gravity: f64,
+}
+
+impl PlanarTwoLink {
+    /// The mass matrix (kg·m²).
+    pub fn mass_matrix(&self, q: [f64; 2]) -> [[f64; 2]; 2] {
+        let (m, lc, i, l1) = (self.mass, self.com, self.inertia, self.length);
+        let c2 = q[1].cos();
+        let m11 = i[0]
+            + i[1]
+            + m[0] * lc[0] * lc[0]
+            + m[1] * (l1 * l1 + lc[1] * lc[1] + 2.0 * l1 * lc[1] * c2);
+        let m12 = i[1] + m[1] * (lc[1] * lc[1] + l1 * lc[1] * c2);
+        let m22 = i[1] + m[1] * lc[1] * lc[1];
+        [[m11, m12], [m12, m22]]
+    }
+
+    /// Coriolis and centrifugal torques `C(q, q̇)·q̇` (N·m).
+    pub fn coriolis(&self, q: [f64; 2], dq: [f64; 2]) -> [f64; 2] {
+        let h = self.mass[1] * self.length * self.com[1] * q[1].sin();
+        [
+            -h * (2.0 * dq[0] * dq[1] + dq[1] * dq[1]),
+            h * dq[0] * dq[0],
+        ]
+    }
+
+    /// Gravity torques `g(q)` (N·m).
+    pub fn gravity_torque(&self, q: [f64; 2]) -> [f64; 2] {
+        let (m, lc, g) = (self.mass, self.com, self.gravity);
+        let g2 = m[1] * lc[1] * g * (q[0] + q[1]).cos();
+        [
+            (m[0] * lc[0] + m[1] * self.length) * g * q[0].cos() + g2,
+            g2,
+        ]
+    }
+
+    /// Inverse dynamics `M(q)·q̈ + C(q, q̇)·q̇ + g(q)` (N·m).
+    pub fn torque(&self, q: [f64; 2], dq: [f64; 2], ddq: [f64; 2]) -> [f64; 2] {
+        let (mm, c, g) = (
+            self.mass_matrix(q),
+            self.coriolis(q, dq),
+            self.gravity_torque(q),
+        );
+        [0, 1].map(|k| mm[k][0] * ddq[0] + mm[k][1] * ddq[1] + c[k] + g[k])
+    }
 }
