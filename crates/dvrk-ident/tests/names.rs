@@ -41,6 +41,7 @@ fn every_option_name_parses_back() {
     check(&[Method::Ols, Method::Wls, Method::Irls, Method::Sdp]);
     check(&[BoundsSet::Physical, BoundsSet::Wang2019]);
     check(&[Criterion::Condition, Criterion::LogDet]);
+    check(&[PriorMetric::Entropic, PriorMetric::Euclidean]);
     check(&[Coordinates::Measured, Coordinates::Model]);
     check(&[
         TimeSource::HeaderStamp,
