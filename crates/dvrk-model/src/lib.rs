@@ -11,7 +11,9 @@
 //! Design, as in Pinocchio: an immutable [`Model`] built once, and a mutable
 //! [`Workspace`] reused per sample, so the real-time calls (inverse dynamics, gravity,
 //! regressor into a buffer) allocate nothing. The crate has no dependency on the
-//! identification stack and can be embedded in a controller.
+//! identification stack and can be embedded in a controller: without its default feature
+//! `description` (`default-features = false`) it parses no file (no TOML, URDF, XML or
+//! serde) and [`ModelBuilder`] builds the model from numbers.
 //!
 //! ```
 //! use dvrk_model::{Model, Workspace};

@@ -235,8 +235,9 @@ impl Measured {
     }
 }
 
-/// The robot model. Build with [`Model::load`], [`Model::builtin`],
-/// [`Model::from_toml_str`] or [`Model::from_urdf_str`].
+/// The robot model. Build it from numbers with [`ModelBuilder`](crate::ModelBuilder), or,
+/// with the `description` feature (default), from a file with `Model::load`,
+/// `Model::builtin`, `Model::from_toml_str` or `Model::from_urdf_str`.
 #[derive(Clone, Debug)]
 pub struct Model {
     /// The robot's name, e.g. `psm` (the description's `name`, or the URDF robot's name).

@@ -37,10 +37,10 @@ fn dh(a: f64, theta: Affine) -> Joint {
     }
 }
 
-/// The arm in the x-y plane, gravity along −y, joints about z: `q1` at the base, `q2`
-/// at `L1` along link 1.
-fn planar_arm() -> Model {
-    let mut b = ModelBuilder::new("planar", &["q1", "q2"]).unwrap();
+/// A two-coordinate arm in the x-y plane, gravity along −y, with its first link: joint
+/// `q1` about z at the base, with friction.
+fn first_link(name: &str, coordinates: &[&str]) -> ModelBuilder {
+    let mut b = ModelBuilder::new(name, coordinates).unwrap();
     b.set_gravity([0.0, -G, 0.0]).unwrap();
     let friction = ElementSpec::Friction {
         stribeck_velocity: None,
@@ -52,6 +52,13 @@ fn planar_arm() -> Model {
         vec![friction],
     ))
     .unwrap();
+    b
+}
+
+/// The arm in the x-y plane, gravity along −y, joints about z: `q1` at the base, `q2`
+/// at `L1` along link 1.
+fn planar_arm() -> Model {
+    let mut b = first_link("planar", &["q1", "q2"]);
     let motor = ElementSpec::MotorInertia;
     b.add_frame(link(
         "link2",
@@ -169,18 +176,7 @@ fn two_link_arm_matches_the_closed_form() {
 #[test]
 fn a_coupled_joint_follows_the_chain_rule() {
     let relative = planar_arm();
-    let mut b = ModelBuilder::new("absolute", &["u1", "u2"]).unwrap();
-    b.set_gravity([0.0, -G, 0.0]).unwrap();
-    let friction = ElementSpec::Friction {
-        stribeck_velocity: None,
-    };
-    b.add_frame(link(
-        "link1",
-        "base",
-        dh(0.0, Affine::coordinate(0)),
-        vec![friction],
-    ))
-    .unwrap();
+    let mut b = first_link("absolute", &["u1", "u2"]);
     let coupled = Joint::Transform {
         kind: JointKind::Revolute,
         value: Affine {

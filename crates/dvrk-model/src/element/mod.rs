@@ -10,7 +10,8 @@
 //! of allocation and indirect calls (one `match` per element).
 //!
 //! A new element is one module implementing [`Law`], plus its variant in [`Element`]
-//! (and the `each!` dispatch below) and its description field in [`ElementsDesc`].
+//! (and the `each!` dispatch below), its description field in `ElementsDesc` and its
+//! variant in [`ElementSpec`] (the numeric constructor's).
 
 mod friction;
 mod known_force;
