@@ -23,6 +23,8 @@
 //! faer, so no system library is linked) and `report` (figures and the HTML report,
 //! [`report`]; a program that only fits can leave it out).
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod estimate;
 pub mod excite;

@@ -306,7 +306,10 @@ pub enum LogSource {
     File(PathBuf),
     /// Samples already read, and the file they came from (for the provenance).
     Samples {
+        /// The samples (in the log's joints, as read).
         samples: Arc<Trajectory>,
+        /// The file or rosbag2 folder they were read from, hashed into the result's `inputs`;
+        /// `None` hashes the samples.
         file: Option<PathBuf>,
     },
 }
@@ -363,17 +366,22 @@ pub fn is_large(path: &Path) -> bool {
 /// A whole fit: see the module docs.
 #[derive(Clone, Debug)]
 pub struct FitRequest {
+    /// What the fit reduces: logs or observation states.
     pub train: Training,
+    /// Logs the fitted model is tested on (the result's `metrics.test`); none by default.
     pub test: Vec<LogSource>,
     /// How the files are read (the robot's joints are added, see
     /// [`ReadOptions::for_model`]).
     pub read: ReadOptions,
     /// The base settings (defaults, or a result's), before [`FitRequest::overrides`].
     pub settings: FitSettings,
+    /// The CLI's flags and Python's keyword arguments, applied to `settings` the same way
+    /// for both.
     pub overrides: Overrides,
     /// The excitation the logs follow: with test logs but no test window, the metrics
     /// cover its first period (the 2019 protocol).
     pub excitation: Option<FourierTrajectory>,
+    /// Whether the logs are read block by block (default: by size).
     pub streaming: Streaming,
 }
 
@@ -387,6 +395,7 @@ pub struct FitOutcome {
     pub model: Model,
     /// The settings used (overrides applied, test window derived).
     pub settings: FitSettings,
+    /// The result document.
     pub result: FitResult,
     /// The logs when they were held in memory (not streamed, not observation
     /// states), for figures.
