@@ -200,6 +200,9 @@ pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
     pi
 }
 
+/// Coulomb (N·m), viscous (N·m·s/rad) and offset (N·m) friction from a frame's bounds.
+pub type FrictionRule = Box<dyn Fn(&dvrk_model::FrameBounds) -> [f64; 3]>;
+
 /// How [`ParamRule::params`] picks each link's and element's value from the description's
 /// bounds: deterministic parameters inside them, the same every run (the examples, the
 /// synthetic fits and the command-line tests each keep their own rule).
@@ -210,7 +213,7 @@ pub struct ParamRule {
     pub inertia_com: Box<dyn Fn(f64) -> [f64; 6]>,
     /// Coulomb (N·m), viscous (N·m·s/rad) and offset (N·m) friction from the frame's
     /// bounds.
-    pub friction: Box<dyn Fn(&dvrk_model::FrameBounds) -> [f64; 3]>,
+    pub friction: FrictionRule,
     /// Every motor inertia, kg·m².
     pub motor_inertia: f64,
     /// A spring's stiffness from its bounds.
