@@ -44,11 +44,17 @@ impl Model {
     /// parameters differ from the last call's.
     #[inline]
     fn body_inertias(&self, ws: &mut Workspace, params: &[f64]) {
-        let b = &mut ws.body;
-        let same = same_bits(&b.inertia_of, params);
-        if same {
-            return;
+        if !same_bits(&ws.body.inertia_of, params) {
+            self.merge_inertias(ws, params);
         }
+    }
+
+    /// [`Model::body_inertias`]' computation, out of line: it runs when the parameters
+    /// change, not per sample.
+    #[cold]
+    #[inline(never)]
+    fn merge_inertias(&self, ws: &mut Workspace, params: &[f64]) {
+        let b = &mut ws.body;
         b.inertia_of.clear();
         b.inertia_of.extend_from_slice(params);
         for (k, body) in self.bodies.iter().enumerate() {
