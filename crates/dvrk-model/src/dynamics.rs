@@ -9,6 +9,7 @@
 //! merged, see `model::Body`) and allocate nothing.
 
 use nalgebra::{DMatrix, DVector, Vector3};
+use wide::f64x2;
 
 use crate::element::{sign0, Sample};
 use crate::inertia::{sym3, transform_barycentric};
@@ -44,16 +45,17 @@ impl Model {
     /// parameters differ from the last call's.
     #[inline]
     fn body_inertias(&self, ws: &mut Workspace, params: &[f64]) {
-        let b = &mut ws.body;
-        let same = b.inertia_of.len() == params.len()
-            && b.inertia_of
-                .iter()
-                .zip(params)
-                .fold(0u64, |acc, (x, y)| acc | (x.to_bits() ^ y.to_bits()))
-                == 0;
-        if same {
-            return;
+        if !same_bits(&ws.body.inertia_of, params) {
+            self.merge_inertias(ws, params);
         }
+    }
+
+    /// [`Model::body_inertias`]' computation, out of line: it runs when the parameters
+    /// change, not per sample.
+    #[cold]
+    #[inline(never)]
+    fn merge_inertias(&self, ws: &mut Workspace, params: &[f64]) {
+        let b = &mut ws.body;
         b.inertia_of.clear();
         b.inertia_of.extend_from_slice(params);
         for (k, body) in self.bodies.iter().enumerate() {
@@ -376,53 +378,98 @@ impl Model {
     /// S_jᵀ·F` at every body `j` on the way), then `I_i` is added to its parent's.
     /// (Composites in the base frame, one dot product per entry, cost more: every
     /// body's inertia moved to the base frame outweighs the transforms of `F` saved.)
+    ///
+    /// A body whose parent is the body before it (every link of a serial chain) is
+    /// taken with its parent: once its force is in the parent's frame, both forces go
+    /// down together, the two in the lanes of one vector, so that each transform on the
+    /// way serves two columns; each lane computes what the single column would.
     fn mass_from_positions(&self, ws: &mut Workspace, params: &[f64], out: &mut [f64]) {
         let n = self.dof();
         let b = &mut ws.body;
         b.composite.copy_from_slice(&b.inertia);
         out.fill(0.0);
-        for (k, body) in self.bodies.iter().enumerate().rev() {
-            let i = k + 1;
-            let mut force = body.axis.inertia_times(&b.composite[i]);
-            let terms_i = &self.frames[body.frame - 1].value.terms;
-            let (mut j, mut bj) = (i, body);
-            loop {
-                let mij = bj.axis.dot(&force);
-                if let (Some((ci, ai)), Some((cj, aj))) = (body.coordinate, bj.coordinate) {
-                    // The loops below without their overhead.
-                    let x = ai * aj * mij;
-                    out[ci + cj * n] += x;
-                    if j != i {
-                        out[cj + ci * n] += x;
-                    }
-                } else {
-                    for &(ci, ai) in terms_i {
-                        for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
-                            let x = ai * aj * mij;
-                            out[ci + cj * n] += x;
-                            if j != i {
-                                out[cj + ci * n] += x;
-                            }
-                        }
-                    }
+        let mut i = self.bodies.len();
+        while i > 0 {
+            let body = &self.bodies[i - 1];
+            let force = body.axis.inertia_times(&b.composite[i]);
+            self.mass_entry(out, body, body, body.axis.dot(&force), true);
+            let p = body.parent;
+            if p == 0 {
+                i -= 1;
+                continue;
+            }
+            self.composite_to_parent(b, body, i);
+            let mut force = force_to_parent(&b.x[i], &force);
+            let parent = &self.bodies[p - 1];
+            self.mass_entry(out, body, parent, parent.axis.dot(&force), false);
+            if p + 1 != i {
+                // Alone down to the base.
+                let (mut j, mut bj) = (p, parent);
+                while bj.parent != 0 {
+                    force = force_to_parent(&b.x[j], &force);
+                    j = bj.parent;
+                    bj = &self.bodies[j - 1];
+                    self.mass_entry(out, body, bj, bj.axis.dot(&force), false);
                 }
-                if bj.parent == 0 {
-                    break;
-                }
-                force = force_to_parent(&b.x[j], &force);
+                i -= 1;
+                continue;
+            }
+            // With the parent: its composite is complete (its other children come
+            // after `i`, already done).
+            let own = parent.axis.inertia_times(&b.composite[p]);
+            self.mass_entry(out, parent, parent, parent.axis.dot(&own), true);
+            let mut pair: [f64x2; 6] = std::array::from_fn(|r| f64x2::new([force[r], own[r]]));
+            let (mut j, mut bj) = (p, parent);
+            while bj.parent != 0 {
+                pair = forces_to_parent(&b.x[j], &pair);
                 j = bj.parent;
                 bj = &self.bodies[j - 1];
+                let [child, own] = axis_dot_lanes(&bj.axis, &pair);
+                self.mass_entry(out, body, bj, child, false);
+                self.mass_entry(out, parent, bj, own, false);
             }
-            if body.parent != 0 {
-                let x = &b.x[i];
-                let moved = transform_barycentric(&x.rotation, &x.translation, &b.composite[i]);
-                for (s, m) in b.composite[body.parent].iter_mut().zip(moved) {
-                    *s += m;
-                }
+            if parent.parent != 0 {
+                self.composite_to_parent(b, parent, p);
             }
+            i -= 2;
         }
         for e in &self.element_plan.inertial {
             e.add_mass(params, n, out);
+        }
+    }
+
+    /// Adds `m = S_jᵀ·I_i·S_i` of bodies `bi` and `bj` (`bj` = `bi` or below it) to the
+    /// mass matrix `out` (n×n column-major): at `(ci, cj)` and `(cj, ci)` (`diagonal`:
+    /// once) for every term `a_i·q_ci` of body `i`'s joint value and `a_j·q_cj` of `j`'s.
+    #[inline(always)]
+    fn mass_entry(&self, out: &mut [f64], bi: &Body, bj: &Body, m: f64, diagonal: bool) {
+        let n = self.dof();
+        let mut add = |ci: usize, ai: f64, cj: usize, aj: f64| {
+            let x = ai * aj * m;
+            out[ci + cj * n] += x;
+            if !diagonal {
+                out[cj + ci * n] += x;
+            }
+        };
+        if let (Some((ci, ai)), Some((cj, aj))) = (bi.coordinate, bj.coordinate) {
+            // The loops below without their overhead.
+            add(ci, ai, cj, aj);
+        } else {
+            for &(ci, ai) in &self.frames[bi.frame - 1].value.terms {
+                for &(cj, aj) in &self.frames[bj.frame - 1].value.terms {
+                    add(ci, ai, cj, aj);
+                }
+            }
+        }
+    }
+
+    /// Adds body `i`'s composite inertia, moved to its parent's frame, to its parent's.
+    #[inline(always)]
+    fn composite_to_parent(&self, b: &mut BodyBuffers, body: &Body, i: usize) {
+        let x = &b.x[i];
+        let moved = transform_barycentric(&x.rotation, &x.translation, &b.composite[i]);
+        for (s, m) in b.composite[body.parent].iter_mut().zip(moved) {
+            *s += m;
         }
     }
 
@@ -589,4 +636,73 @@ fn force_to_parent(x: &Transform, force: &[f64; 6]) -> [f64; 6] {
         f2[1],
         f2[2],
     ]
+}
+
+/// [`force_to_parent`] of two forces at once, one in each lane (`[n; f]` by
+/// component), with the same operations per lane.
+#[inline(always)]
+fn forces_to_parent(x: &Transform, force: &[f64x2; 6]) -> [f64x2; 6] {
+    let r = &x.rotation.data.0; // r[column][row]
+    let t = &x.translation;
+    let sp = f64x2::splat;
+    let rot = |v: [f64x2; 3], row: usize| {
+        sp(r[0][row]) * v[0] + sp(r[1][row]) * v[1] + sp(r[2][row]) * v[2]
+    };
+    let (n, f) = (
+        [force[0], force[1], force[2]],
+        [force[3], force[4], force[5]],
+    );
+    let f2 = [rot(f, 0), rot(f, 1), rot(f, 2)];
+    let (t0, t1, t2) = (sp(t[0]), sp(t[1]), sp(t[2]));
+    [
+        rot(n, 0) + t1 * f2[2] - t2 * f2[1],
+        rot(n, 1) + t2 * f2[0] - t0 * f2[2],
+        rot(n, 2) + t0 * f2[1] - t1 * f2[0],
+        f2[0],
+        f2[1],
+        f2[2],
+    ]
+}
+
+/// [`Axis::dot`] of the two forces in the lanes of `force`, with the same operations.
+#[inline(always)]
+fn axis_dot_lanes(axis: &Axis, force: &[f64x2; 6]) -> [f64; 2] {
+    match axis {
+        Axis::RevoluteZ => force[2],
+        Axis::PrismaticZ => force[5],
+        Axis::General(w, v) => {
+            let sp = f64x2::splat;
+            sp(w[0]) * force[0]
+                + sp(w[1]) * force[1]
+                + sp(w[2]) * force[2]
+                + sp(v[0]) * force[3]
+                + sp(v[1]) * force[4]
+                + sp(v[2]) * force[5]
+        }
+    }
+    .to_array()
+}
+
+/// Whether `a` and `b` hold the same numbers bit for bit (a NaN or a `-0.0` counts as a
+/// change): the check, on every call, that the cached body inertias are still those of
+/// the parameters. No early exit and four lanes at a time, so that the compiler makes it
+/// a few vector instructions per four parameters rather than a compare and branch each.
+#[inline]
+fn same_bits(a: &[f64], b: &[f64]) -> bool {
+    if a.len() != b.len() {
+        return false;
+    }
+    let mut acc = [0u64; 4];
+    let (ca, cb) = (a.chunks_exact(4), b.chunks_exact(4));
+    let tail = ca
+        .remainder()
+        .iter()
+        .zip(cb.remainder())
+        .fold(0u64, |d, (x, y)| d | (x.to_bits() ^ y.to_bits()));
+    for (x, y) in ca.zip(cb) {
+        for k in 0..4 {
+            acc[k] |= x[k].to_bits() ^ y[k].to_bits();
+        }
+    }
+    (acc[0] | acc[1] | acc[2] | acc[3] | tail) == 0
 }

@@ -60,49 +60,48 @@ pub fn transform_barycentric(
     translation: &Vector3<f64>,
     p: &[f64; 10],
 ) -> [f64; 10] {
-    // Written out on the arrays, entries 0 and 1 of each 3-vector in the two lanes of
-    // an f64x2 (every entry is the same sum of the same products as in scalar code):
-    // a third of nalgebra's generic products' instructions, and this runs for every
-    // body in every mass matrix.
+    // Written out on the arrays with the rows 0 and 1 of a column of R (or of a
+    // 3-vector) in the two lanes of an f64x2, row 2 apart: `R·L·Rᵀ` as `v_j = L·r_j`
+    // (`r_j` row j of R), then `r_i·v_j`, its diagonal and off-diagonal pairs taken
+    // lane by lane (no broadcast), a third of nalgebra's generic products'
+    // instructions; this runs for every body in every mass matrix.
     use wide::f64x2;
     let r = &rotation.data.0; // r[column][row]
-    let xy = |c: &[f64; 3]| f64x2::new([c[0], c[1]]);
-    let (c0, c1, c2) = (xy(&r[0]), xy(&r[1]), xy(&r[2]));
-    let dot_z = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    let row2 = [r[0][2], r[1][2], r[2][2]];
     let sp = f64x2::splat;
-    // R·x: rows 0 and 1 in the lanes, row 2 apart.
-    let rot = |x: &[f64; 3]| {
-        (
-            c0 * sp(x[0]) + c1 * sp(x[1]) + c2 * sp(x[2]),
-            dot_z(&row2, x),
-        )
+    let lanes = |v: &[f64; 3]| f64x2::new([v[0], v[1]]);
+    let swap = |v: f64x2| {
+        let [a, b] = v.to_array();
+        f64x2::new([b, a])
     };
-    let t = [translation[0], translation[1], translation[2]];
+    let c = [lanes(&r[0]), lanes(&r[1]), lanes(&r[2])];
+    let row2 = [r[0][2], r[1][2], r[2][2]];
+    let dot_z = |a: &[f64; 3], b: &[f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let l = [[p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]];
+    // (v_0k, v_1k) = Σ_l L_kl·(R_0l, R_1l), and v_2k.
+    let v01 = l.map(|lk| sp(lk[0]) * c[0] + sp(lk[1]) * c[1] + sp(lk[2]) * c[2]);
+    let v2 = l.map(|lk| dot_z(&lk, &row2));
+    // (B_00, B_11), (B_10, B_01), (B_02, B_12) and B_22 of B = R·L·Rᵀ.
+    let diag = c[0] * v01[0] + c[1] * v01[1] + c[2] * v01[2];
+    let off = swap(c[0]) * v01[0] + swap(c[1]) * v01[1] + swap(c[2]) * v01[2];
+    let col2 = c[0] * sp(v2[0]) + c[1] * sp(v2[1]) + c[2] * sp(v2[2]);
+    let b22 = dot_z(&row2, &v2);
+    // u = R·l, h' = u + m·t, d = t·(h' + u).
     let m = p[9];
-    let (rl, rl2) = rot(&[p[6], p[7], p[8]]);
-    let t01 = f64x2::new([t[0], t[1]]);
-    let h = sp(m) * t01 + rl;
-    let h2 = m * t[2] + rl2;
-    let [d0, d1] = (t01 * (h + rl)).to_array();
-    let d = d0 + d1 + t[2] * (h2 + rl2);
-    // Rows of R·L (L symmetric: its rows are its columns): a_k = (r_0·L_k, r_1·L_k) in
-    // the lanes, r_2·L_k apart.
-    let (lx, ly, lz) = ([p[0], p[1], p[2]], [p[1], p[3], p[4]], [p[2], p[4], p[5]]);
-    let (a0, a20) = rot(&lx);
-    let (a1, a21) = rot(&ly);
-    let (a2, a22) = rot(&lz);
-    let [h0, h1] = h.to_array();
-    let hs = [h0, h1, h2];
-    // Entries (0, j) and (1, j): a_i·r_j − (t_i·h_j + rl_i·t_j).
-    let big = |j: usize| {
-        a0 * sp(r[0][j]) + a1 * sp(r[1][j]) + a2 * sp(r[2][j]) - (t01 * sp(hs[j]) + rl * sp(t[j]))
-    };
-    let [b00, _] = big(0).to_array();
-    let [b01, b11] = big(1).to_array();
-    let [b02, b12] = big(2).to_array();
-    let b22 = dot_z(&[a20, a21, a22], &row2) - (t[2] * h2 + rl2 * t[2]);
-    [b00 + d, b01, b02, b11 + d, b12, b22 + d, h0, h1, h2, m]
+    let u01 = c[0] * sp(p[6]) + c[1] * sp(p[7]) + c[2] * sp(p[8]);
+    let u2 = dot_z(&row2, &[p[6], p[7], p[8]]);
+    let t01 = f64x2::new([translation[0], translation[1]]);
+    let t2 = translation[2];
+    let h01 = u01 + sp(m) * t01;
+    let h2 = u2 + m * t2;
+    let [d0, d1] = (t01 * (h01 + u01)).to_array();
+    let d = d0 + d1 + t2 * (h2 + u2);
+    // L' = B + d·I − (t·h'ᵀ + u·tᵀ), pair by pair as B.
+    let [l00, l11] = (diag - (t01 * h01 + u01 * t01) + sp(d)).to_array();
+    let [l01, _] = (off - (t01 * swap(h01) + u01 * swap(t01))).to_array();
+    let [l02, l12] = (col2 - (t01 * sp(h2) + u01 * sp(t2))).to_array();
+    let l22 = b22 - (t2 * h2 + u2 * t2) + d;
+    let [h0, h1] = h01.to_array();
+    [l00, l01, l02, l11, l12, l22, h0, h1, h2, m]
 }
 
 /// Standard parameters of one link.
