@@ -450,7 +450,7 @@ pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Re
 /// layout, else a headered CSV. Anything else is an error saying what the file looks
 /// like and what is supported.
 pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
-    use self::mcap::bag::{sniff, Content, Storage};
+    use self::mcap::sniff::{sniff, Content, Storage};
     let path = path.as_ref();
     let meta = std::fs::metadata(path).map_err(|source| LogError::Io {
         path: path.to_path_buf(),
@@ -508,7 +508,7 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
 /// The files that hold the log at `path`: the file itself, or a rosbag2 folder's
 /// `metadata.yaml` and recording files in order (what the result's provenance hashes).
 pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
-    use self::mcap::bag::{sniff, Content};
+    use self::mcap::sniff::{sniff, Content};
     let path = path.as_ref();
     // Only a folder or its metadata.yaml stand for other files: any other file is
     // itself, whatever its content (it is hashed, not read, here).
@@ -628,20 +628,6 @@ pub fn write_atomic(
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
     crate::output::write_with(path, fill).map_err(|source| LogError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// [`write_atomic`] for writers that need the file itself (the MCAP writer seeks back to
-/// fill in lengths): `fill` gets a buffered file and returns it when done.
-pub(crate) fn write_atomic_file(
-    path: &Path,
-    fill: impl FnOnce(
-        std::io::BufWriter<std::fs::File>,
-    ) -> Result<std::io::BufWriter<std::fs::File>, LogError>,
-) -> Result<(), LogError> {
-    crate::output::write_seekable(path, fill, |source| LogError::Io {
         path: path.to_path_buf(),
         source,
     })

@@ -13,7 +13,8 @@
 //! slices (each payload copied once out of its chunk), so a log can be read block by
 //! block and read again.
 
-use super::channels::{mcap_error, ChannelInfo, Channels, RawMessage};
+use super::channels::{ChannelInfo, Channels, RawMessage};
+use super::problem::mcap_error;
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
 use ::mcap::records::{op, Record};

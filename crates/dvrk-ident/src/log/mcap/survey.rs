@@ -17,8 +17,8 @@ use std::sync::Arc;
 use nalgebra::DMatrix;
 
 use super::bag::Bag;
-use super::channels::mcap_error;
 use super::container::{scan, MessageRef, Scanner};
+use super::problem::mcap_error;
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::{
     JointStateSeries, McapOptions, McapProblem, TimeSource, TimingReport, GAP_FACTOR,
