@@ -7,6 +7,11 @@
 //! message in file order (`container`, `sqlite`, `ros1`) and decoded to the same
 //! JointState (CDR, JSON or ROS 1 serialization), so everything below holds for each.
 //!
+//! The readers and the writer need the default feature `recordings` (the MCAP, CDR,
+//! SQLite, ROS 1 bag, YAML, zstd and lz4 crates). Without it, [`McapOptions`],
+//! [`TimeSource`] and [`McapProblem`] remain, and a recording is still recognized by its
+//! content: reading or writing one is a [`LogError::RecordingsNotBuilt`].
+//!
 //! # Reading
 //!
 //! [`McapReader`] reads a log block by block without holding it: [`McapReader::open`]
@@ -77,31 +82,50 @@
 //! definition, CDR messages, zstd chunks with CRCs, summary and indexes), atomically
 //! (temporary file and rename).
 
-pub(crate) mod bag;
-mod blocks;
-mod channels;
-mod container;
-mod joint_state;
+// Always built: what the rest of the crate names (options, time source, the error) and
+// the recognition of a recording by its content.
 mod options;
 mod problem;
-mod read;
-mod ros1;
 mod schema;
 pub(crate) mod sniff;
+
+// The readers and the writer (feature `recordings`).
+#[cfg(feature = "recordings")]
+pub(crate) mod bag;
+#[cfg(feature = "recordings")]
+mod blocks;
+#[cfg(feature = "recordings")]
+mod channels;
+#[cfg(feature = "recordings")]
+mod container;
+#[cfg(feature = "recordings")]
+mod joint_state;
+#[cfg(feature = "recordings")]
+mod read;
+#[cfg(feature = "recordings")]
+mod ros1;
+#[cfg(feature = "recordings")]
 mod sqlite;
+#[cfg(feature = "recordings")]
 mod survey;
+#[cfg(feature = "recordings")]
 mod topic;
+#[cfg(feature = "recordings")]
 mod write;
 
-pub use self::blocks::McapBlocks;
 pub use self::options::{McapOptions, TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 pub use self::problem::{McapProblem, TopicInfo};
+pub use self::schema::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
+
+#[cfg(feature = "recordings")]
+pub use self::blocks::McapBlocks;
+#[cfg(feature = "recordings")]
 pub use self::read::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, JointStateSeries, McapLog,
     McapReader, TimingReport,
 };
-pub use self::schema::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
+#[cfg(feature = "recordings")]
 pub use self::write::{write_mcap, McapCompression, McapWriteOptions, DEFAULT_TOPIC};
 
 #[allow(unused_imports)] // the docs' links
-use crate::trajectory::Trajectory;
+use crate::{log::LogError, trajectory::Trajectory};

@@ -331,6 +331,15 @@ pub enum LogError {
         /// What is wrong.
         problem: Box<mcap::McapProblem>,
     },
+    /// A recording (or a compressed file) read or written by a build of dvrk-ident
+    /// without its `recordings` feature.
+    #[error("{}: {what}: reading and writing recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) needs dvrk-ident's `recordings` feature, which this build leaves out", path.display())]
+    RecordingsNotBuilt {
+        /// The file.
+        path: PathBuf,
+        /// What it is (e.g. `a recording (mcap)`).
+        what: String,
+    },
     /// Resampling a log to a uniform rate failed.
     #[error("{}: resample to {rate_hz} Hz: {source}", path.display())]
     Resample {
@@ -429,12 +438,15 @@ pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Re
     match format {
         LogFormat::Wpi => write_wpi(path, traj),
         LogFormat::Csv => write_headered(path, traj),
+        #[cfg(feature = "recordings")]
         LogFormat::Mcap => mcap::write_mcap(
             path,
             traj,
             mcap::DEFAULT_TOPIC,
             &mcap::McapWriteOptions::default(),
         ),
+        #[cfg(not(feature = "recordings"))]
+        LogFormat::Mcap => Err(recordings_not_built(path, LogFormat::Mcap)),
         other => Err(LogError::Unsupported {
             path: path.to_path_buf(),
             format: other,
@@ -522,8 +534,22 @@ pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
     if !is_bag {
         return Ok(vec![path.to_path_buf()]);
     }
-    let located = mcap::bag::locate(path)?;
-    Ok(located.metadata.into_iter().chain(located.files).collect())
+    #[cfg(feature = "recordings")]
+    {
+        let located = mcap::bag::locate(path)?;
+        Ok(located.metadata.into_iter().chain(located.files).collect())
+    }
+    #[cfg(not(feature = "recordings"))]
+    Err(recordings_not_built(path, LogFormat::Rosbag2))
+}
+
+/// The error of a build without the `recordings` feature for a log of `format`.
+#[cfg(not(feature = "recordings"))]
+pub(crate) fn recordings_not_built(path: &Path, format: LogFormat) -> LogError {
+    LogError::RecordingsNotBuilt {
+        path: path.to_path_buf(),
+        what: format!("a recording ({format})"),
+    }
 }
 
 /// Samples per block when a reader's blocks are collected into a whole log.
@@ -672,5 +698,77 @@ mod tests {
             assert_eq!(s.parse::<f64>().unwrap().to_bits(), v.to_bits(), "{s}");
             assert!(s.len() < 30, "{s}");
         }
+    }
+
+    /// A build without `recordings` (what `.ci/run` tests with `--no-default-features
+    /// --features rust-lapack --lib`): a CSV log is read and fitted as usual, and the
+    /// bundled MCAP example is recognized and refused with the error naming the feature.
+    #[cfg(not(feature = "recordings"))]
+    #[test]
+    fn without_recordings_csv_fits_and_a_recording_is_refused() {
+        use crate::excite::FourierTrajectory;
+        use crate::simulate::{simulate, Simulation};
+        use crate::{fit, FitSettings, Method};
+        use dvrk_model::Model;
+
+        let model = Model::builtin("psm").unwrap();
+        let examples = dvrk_test_support::repo().join("examples");
+        let json = dvrk_test_support::read_json(&examples.join("psm_params.json"));
+        let truth: Vec<f64> = model
+            .param_names()
+            .iter()
+            .map(|name| json["parameters"][name].as_f64().unwrap())
+            .collect();
+        let excitation =
+            FourierTrajectory::from_json_file(examples.join("psm_trajectory.json")).unwrap();
+        let noise = 0.005; // N·m
+        let simulation = Simulation {
+            duration_s: Some(60.0),
+            noise_std: vec![noise],
+            seed: 1,
+            ..Simulation::default()
+        };
+        let log = simulate(&model, &truth, &excitation, &simulation).unwrap();
+        let dir = dvrk_test_support::temp_dir("without-recordings");
+        let csv = dir.join("psm.csv");
+        write_headered(&csv, &log).unwrap();
+        let read = ReadOptions::default().for_model(&model).read(&csv).unwrap();
+        assert_eq!(read.q, log.q);
+        assert_eq!(read.tau, log.tau);
+
+        let mut settings = FitSettings {
+            method: Method::Ols,
+            ..FitSettings::default()
+        };
+        // Exact signals: no filter; derivatives of the analytic velocity are accurate.
+        settings.processing.filter = None;
+        settings.processing.trim = 10;
+        let result = fit(&model, &read, None, &settings).unwrap();
+        let beta_true = model.base_parameters().unwrap().project(&truth);
+        for (b, t) in result.base_parameters.iter().zip(&beta_true) {
+            assert!(
+                (b.value - t).abs() <= 6.0 * b.std + 1e-6,
+                "{}: {} vs {t} (std {})",
+                b.expression,
+                b.value,
+                b.std
+            );
+        }
+
+        let mcap = examples.join("psm_excitation.mcap");
+        assert_eq!(detect_format(&mcap).unwrap(), LogFormat::Mcap);
+        let err = ReadOptions::default().read(&mcap).unwrap_err();
+        assert!(matches!(err, LogError::RecordingsNotBuilt { .. }), "{err}");
+        let text = err.to_string();
+        assert!(
+            text.starts_with(&format!("{}: a recording (mcap): ", mcap.display()))
+                && text.contains("`recordings` feature"),
+            "{text}"
+        );
+        let out = dir.join("out.mcap");
+        let err = write(&out, &log, LogFormat::Mcap).unwrap_err();
+        assert!(matches!(err, LogError::RecordingsNotBuilt { .. }), "{err}");
+        assert!(!out.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -7,6 +7,7 @@ use std::path::Path;
 
 use dvrk_model::Model;
 
+#[allow(unused_imports)] // McapOptions: the docs' link without `recordings`
 use super::mcap::{McapOptions, TimeSource};
 use super::{LogError, LogFormat, LogReader};
 use crate::trajectory::Trajectory;
@@ -88,6 +89,7 @@ impl ReadOptions {
     }
 
     /// The recording reader's options.
+    #[cfg(feature = "recordings")]
     pub(super) fn recording(&self) -> McapOptions {
         McapOptions {
             topics: self.topics.clone(),

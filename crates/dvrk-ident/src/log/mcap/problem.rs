@@ -2,6 +2,7 @@
 //! [`LogError::Mcap`] wraps with the file and the topic.
 
 use serde::{Deserialize, Serialize};
+#[cfg(feature = "recordings")]
 use std::path::Path;
 
 use thiserror::Error;
@@ -9,6 +10,7 @@ use thiserror::Error;
 use super::options::{TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 use super::schema::JOINT_STATE_TYPE;
 use super::sniff;
+#[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
 use crate::trajectory::{Signal, TrajectoryError};
 
@@ -289,6 +291,7 @@ fn fmt_ms(s: f64) -> String {
     format!("{:.3}", s * 1e3)
 }
 
+#[cfg(feature = "recordings")]
 /// The error of a recording's file (and topic).
 pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem) -> LogError {
     LogError::Mcap {

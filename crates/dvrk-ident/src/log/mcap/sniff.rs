@@ -7,6 +7,7 @@
 use std::io::Read;
 use std::path::Path;
 
+#[cfg(feature = "recordings")]
 use super::problem::{mcap_error, McapProblem};
 use crate::log::LogError;
 
@@ -73,17 +74,9 @@ pub(crate) fn sniff(path: &Path) -> Result<Content, LogError> {
     let file = std::fs::File::open(path).map_err(io_error(path))?;
     let bytes = head(file, SNIFF_BYTES).map_err(io_error(path))?;
     let (packing, inner) = if bytes.starts_with(ZSTD_MAGIC) {
-        let file = std::fs::File::open(path).map_err(io_error(path))?;
-        let inner = zstd::stream::read::Decoder::new(file)
-            .and_then(|d| head(d, 64))
-            .map_err(|e| unreadable(path, "zstd", &e))?;
-        (Packing::Zstd, inner)
+        (Packing::Zstd, unpacked_head(path, Packing::Zstd)?)
     } else if bytes.starts_with(LZ4_MAGIC) {
-        let file = std::fs::File::open(path).map_err(io_error(path))?;
-        let inner = lz4::Decoder::new(file)
-            .and_then(|d| head(d, 64))
-            .map_err(|e| unreadable(path, "lz4", &e))?;
-        (Packing::Lz4, inner)
+        (Packing::Lz4, unpacked_head(path, Packing::Lz4)?)
     } else {
         (Packing::None, bytes)
     };
@@ -110,6 +103,39 @@ pub(crate) fn sniff(path: &Path) -> Result<Content, LogError> {
     })
 }
 
+/// The first bytes of a file compressed as a whole (`packing` zstd or lz4), decompressed.
+#[cfg(feature = "recordings")]
+fn unpacked_head(path: &Path, packing: Packing) -> Result<Vec<u8>, LogError> {
+    let file = std::fs::File::open(path).map_err(io_error(path))?;
+    if packing == Packing::Zstd {
+        zstd::stream::read::Decoder::new(file)
+            .and_then(|d| head(d, 64))
+            .map_err(|e| unreadable(path, "zstd", &e))
+    } else {
+        lz4::Decoder::new(file)
+            .and_then(|d| head(d, 64))
+            .map_err(|e| unreadable(path, "lz4", &e))
+    }
+}
+
+/// Without the decompressors a compressed file is taken for a compressed recording, the
+/// only compressed logs there are: refused for the missing feature.
+#[cfg(not(feature = "recordings"))]
+fn unpacked_head(path: &Path, packing: Packing) -> Result<Vec<u8>, LogError> {
+    Err(LogError::RecordingsNotBuilt {
+        path: path.to_path_buf(),
+        what: format!(
+            "{}-compressed data",
+            if packing == Packing::Zstd {
+                "zstd"
+            } else {
+                "lz4"
+            }
+        ),
+    })
+}
+
+#[cfg(feature = "recordings")]
 fn unreadable(path: &Path, what: &str, e: &std::io::Error) -> LogError {
     mcap_error(
         path,

@@ -178,6 +178,6 @@ fn write_atomic_seek(
                 ),
             })
         },
-        &io,
+        io,
     )
 }
