@@ -14,9 +14,6 @@ pub enum IdentError {
     Trajectory(#[from] crate::trajectory::TrajectoryError),
     #[error(transparent)]
     Sdp(#[from] crate::estimate::sdp::SdpError),
-    #[cfg(feature = "report")]
-    #[error(transparent)]
-    Report(#[from] crate::report::ReportError),
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
     #[error(transparent)]
