@@ -9,7 +9,6 @@ use thiserror::Error;
 
 use super::options::{TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 use super::schema::JOINT_STATE_TYPE;
-use super::sniff;
 #[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
 use crate::trajectory::{Signal, TrajectoryError};
@@ -42,6 +41,12 @@ impl std::fmt::Display for TopicInfo {
     }
 }
 
+/// The text of errors about files that are no log, after what the file looks like.
+const SUPPORTED: &str = "supported: a rosbag2 folder (metadata.yaml with MCAP or \
+    sqlite3 files, split recordings, zstd or lz4 compressed files or messages), an MCAP \
+    file, a rosbag2 sqlite3 .db3 file, a ROS 1 .bag (format 2.0), each possibly \
+    zstd/lz4-compressed, the 2019 headerless CSV layout and the headered CSV";
+
 /// Why an MCAP log could not be read or written. [`LogError::Mcap`] adds the file and,
 /// where it matters, the topic.
 #[derive(Debug, Error)]
@@ -51,10 +56,7 @@ pub enum McapProblem {
     #[error("not an MCAP file (it does not start with the MCAP magic bytes)")]
     NotMcap,
     /// A file (or folder) that is no recording of a supported format.
-    #[error(
-        "not a supported log: it looks like {looks_like}; {}",
-        sniff::SUPPORTED
-    )]
+    #[error("not a supported log: it looks like {looks_like}; {}", SUPPORTED)]
     NotARecording {
         /// What it looks like.
         looks_like: String,

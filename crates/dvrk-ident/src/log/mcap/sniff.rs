@@ -46,12 +46,6 @@ pub(crate) enum Content {
     Other(String),
 }
 
-/// The text of errors about files that are no log, after what the file looks like.
-pub(crate) const SUPPORTED: &str = "supported: a rosbag2 folder (metadata.yaml with MCAP or \
-    sqlite3 files, split recordings, zstd or lz4 compressed files or messages), an MCAP \
-    file, a rosbag2 sqlite3 .db3 file, a ROS 1 .bag (format 2.0), each possibly \
-    zstd/lz4-compressed, the 2019 headerless CSV layout and the headered CSV";
-
 /// Bytes read to recognize a file.
 const SNIFF_BYTES: usize = 4096;
 
