@@ -43,6 +43,8 @@ pub mod signal;
 pub mod simulate;
 pub mod state;
 pub mod trajectory;
+#[cfg(all(test, not(feature = "recordings")))]
+mod without_recordings;
 
 pub use error::IdentError;
 pub use trajectory::{Coordinates, Trajectory, TrajectoryError};

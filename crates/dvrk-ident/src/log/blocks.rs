@@ -186,6 +186,19 @@ impl LogReader {
     }
 }
 
+impl ReadOptions {
+    /// Opens `path` for reading block by block (every check of the header, the first
+    /// row or the recording's index is made here).
+    pub fn open(&self, path: impl AsRef<Path>) -> Result<LogReader, LogError> {
+        LogReader::open(path.as_ref(), self)
+    }
+
+    /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
+    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+        self.open(path)?.read_all()
+    }
+}
+
 enum Source<'a> {
     Wpi(WpiBlocks),
     Csv(HeaderedBlocks),

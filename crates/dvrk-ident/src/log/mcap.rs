@@ -121,9 +121,10 @@ pub use self::schema::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
 pub use self::blocks::McapBlocks;
 #[cfg(feature = "recordings")]
 pub use self::read::{
-    list_topics, read_joint_states, read_mcap, read_mcap_log, JointStateSeries, McapLog,
-    McapReader, TimingReport,
+    list_topics, read_joint_states, read_mcap, read_mcap_log, McapLog, McapReader,
 };
+#[cfg(feature = "recordings")]
+pub use self::survey::{JointStateSeries, TimingReport};
 #[cfg(feature = "recordings")]
 pub use self::write::{write_mcap, McapCompression, McapWriteOptions, DEFAULT_TOPIC};
 

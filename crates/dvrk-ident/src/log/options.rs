@@ -9,8 +9,7 @@ use dvrk_model::Model;
 
 #[allow(unused_imports)] // McapOptions: the docs' link without `recordings`
 use super::mcap::{McapOptions, TimeSource};
-use super::{LogError, LogFormat, LogReader};
-use crate::trajectory::Trajectory;
+use super::{LogError, LogFormat};
 
 /// How to read a log, whatever its format.
 ///
@@ -75,17 +74,6 @@ impl ReadOptions {
             dof: Some(model.dof()),
             ..self.clone()
         }
-    }
-
-    /// Opens `path` for reading block by block (every check of the header, the first
-    /// row or the recording's index is made here).
-    pub fn open(&self, path: impl AsRef<Path>) -> Result<LogReader, LogError> {
-        LogReader::open(path.as_ref(), self)
-    }
-
-    /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
-    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
-        self.open(path)?.read_all()
     }
 
     /// The recording reader's options.

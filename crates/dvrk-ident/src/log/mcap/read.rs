@@ -4,59 +4,15 @@
 use std::path::Path;
 use std::sync::Arc;
 
-use nalgebra::DMatrix;
-use serde::{Deserialize, Serialize};
-
 use super::blocks::McapBlocks;
 use super::options::{McapOptions, TimeSource};
-#[allow(unused_imports)] // the docs' links
-use super::options::{GAP_FACTOR, JITTER_TOLERANCE};
 use super::problem::TopicInfo;
+use super::survey::{JointStateSeries, TimingReport};
 use super::{bag, container, survey};
 use crate::log::LogError;
 #[allow(unused_imports)] // the docs' links
 use crate::log::LogFormat;
 use crate::trajectory::Trajectory;
-
-/// The joint states of one topic as recorded: one row per message, columns in the
-/// joint order of the first message.
-#[derive(Clone, Debug, PartialEq)]
-pub struct JointStateSeries {
-    /// Topic name.
-    pub topic: String,
-    /// Joint names (the first message's order). Messages without names get
-    /// `joint_1`, `joint_2`, ...
-    pub joint_names: Vec<String>,
-    /// `header.frame_id` of the first message.
-    pub frame_id: String,
-    /// Sample times, ns since the epoch, from the chosen [`TimeSource`].
-    pub stamps_ns: Vec<i64>,
-    /// Positions, rad or m.
-    pub position: DMatrix<f64>,
-    /// Velocities; `None` when the messages' velocity arrays are empty.
-    pub velocity: Option<DMatrix<f64>>,
-    /// Efforts; `None` when the messages' effort arrays are empty.
-    pub effort: Option<DMatrix<f64>>,
-}
-
-/// What the timing checks found on the clock topic (before any resampling).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct TimingReport {
-    /// Number of samples checked.
-    pub samples: usize,
-    /// Median time step, s.
-    pub median_step_s: f64,
-    /// Steps longer than [`GAP_FACTOR`] median steps.
-    pub gaps: usize,
-    /// Other steps off the median by more than [`JITTER_TOLERANCE`] (relative).
-    pub jittered: usize,
-    /// Longest step, s.
-    pub largest_step_s: f64,
-    /// Index of the second sample of the first gap or jittered step.
-    pub first_irregular: Option<usize>,
-    /// The rate the log was resampled to, Hz, if it was.
-    pub resampled_hz: Option<f64>,
-}
 
 /// A log read by [`read_mcap_log`]: the trajectory and what is known about it.
 #[derive(Clone, Debug, PartialEq)]
