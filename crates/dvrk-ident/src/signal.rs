@@ -28,10 +28,9 @@ pub use butter::{
 };
 pub use filter::{filtfilt, lfilter, lfilter_zi, odd_ext, sosfilt, sosfilt_zi, sosfiltfilt};
 pub use ops::{
-    central_difference, decimate_rows, differentiate, moving_samples, select_rows, trim_rows,
-    Stencil,
+    central_difference, decimate_rows, differentiate, moving_samples, resample_linear, select_rows,
+    trim_rows, Stencil,
 };
-pub use stream::resample_linear;
 
 use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};
 use nalgebra::DMatrix;

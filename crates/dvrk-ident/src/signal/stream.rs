@@ -13,7 +13,6 @@ mod timing;
 mod zero_phase;
 
 pub use processor::{BlockProcessor, SETTLE_TOLERANCE};
-pub use resample::resample_linear;
 pub(crate) use resample::Resampler;
 pub use timing::{LogTiming, TimingSurvey};
 

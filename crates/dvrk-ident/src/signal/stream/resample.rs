@@ -2,8 +2,6 @@
 //! implementation behind [`crate::signal::resample_linear`] (which feeds it a whole
 //! matrix), the readers' `resample_hz` and the processing's.
 
-use nalgebra::DMatrix;
-
 use crate::signal::butter::check_rate;
 use crate::signal::SignalError;
 
@@ -132,74 +130,5 @@ impl Resampler {
             self.emit(times, out)?;
         }
         Ok(())
-    }
-}
-
-/// Resamples `m` (rows at the strictly increasing times `time`, s) onto the uniform grid
-/// `time[0] + k / rate_hz` up to `time[last]`, by linear interpolation between the
-/// neighbouring samples. Filtering and differentiation need a uniform clock; logs with
-/// jitter or gaps (e.g. ROS time stamps) are made uniform this way first.
-///
-/// ```rust
-/// use nalgebra::DMatrix;
-/// use dvrk_ident::signal::resample_linear;
-/// let time = [0.0, 0.1, 0.3];
-/// let m = DMatrix::from_column_slice(3, 1, &[0.0, 1.0, 3.0]);
-/// let (t, r) = resample_linear(&time, &m, 10.0).unwrap();
-/// assert_eq!(t.len(), 4);
-/// assert!((r[(2, 0)] - 2.0).abs() < 1e-12);
-/// ```
-pub fn resample_linear(
-    time: &[f64],
-    m: &DMatrix<f64>,
-    rate_hz: f64,
-) -> Result<(Vec<f64>, DMatrix<f64>), SignalError> {
-    let mut resampler = Resampler::new(m.ncols(), rate_hz)?;
-    let n = time.len();
-    if n != m.nrows() {
-        return Err(SignalError::InvalidSetting {
-            name: "time",
-            reason: format!("{} time stamps for {} samples", n, m.nrows()),
-        });
-    }
-    let (mut grid, mut values) = (Vec::new(), Vec::new());
-    let mut row = vec![0.0; m.ncols()];
-    for (i, &t) in time.iter().enumerate() {
-        for (j, v) in row.iter_mut().enumerate() {
-            *v = m[(i, j)];
-        }
-        resampler.push(t, &row, &mut grid, &mut values)?;
-    }
-    resampler.finish(&mut grid, &mut values)?;
-    let out = DMatrix::from_row_slice(grid.len(), m.ncols(), &values);
-    Ok((grid, out))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn resampling_linear_signals_is_exact() {
-        // Jittered clock, linear signal: interpolation reproduces it exactly.
-        let time: Vec<f64> = (0..50)
-            .map(|k| k as f64 * 0.01 + if k % 3 == 1 { 0.002 } else { 0.0 })
-            .collect();
-        let m = DMatrix::from_fn(50, 2, |i, j| (j as f64 + 1.0) * time[i] - 0.3);
-        let (t, r) = resample_linear(&time, &m, 100.0).unwrap();
-        assert_eq!(t.len(), 50);
-        for (i, ti) in t.iter().enumerate() {
-            assert!((ti - i as f64 * 0.01).abs() < 1e-12);
-            for j in 0..2 {
-                assert!((r[(i, j)] - ((j as f64 + 1.0) * ti - 0.3)).abs() < 1e-12);
-            }
-        }
-        // Upsampling by 2 over [0, 0.49]: 99 points.
-        let (t2, _) = resample_linear(&time, &m, 200.0).unwrap();
-        assert_eq!(t2.len(), 99);
-        assert!(resample_linear(&time, &m, 0.0).is_err());
-        assert!(resample_linear(&time[..10], &m, 100.0).is_err());
-        let bad = [0.0, 0.0, 1.0];
-        assert!(resample_linear(&bad, &DMatrix::zeros(3, 1), 10.0).is_err());
     }
 }
