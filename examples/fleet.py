@@ -70,7 +70,7 @@ def main():
     import dask.bag as db
     import distributed
 
-    psm = di.Robot.load("psm")
+    psm = di.Model.load("psm")
     with tempfile.TemporaryDirectory() as folder:
         paths = args.logs or simulate(folder, args.count, args.periods)
         print(f"{len(paths)} logs, {os.cpu_count()} CPUs, load {os.getloadavg()[0]:.1f}")

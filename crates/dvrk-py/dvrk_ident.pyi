@@ -18,8 +18,8 @@ FloatArray = npt.NDArray[np.float64]
 ArrayLike = npt.ArrayLike
 PathLike = Union[str, "os.PathLike[str]"]
 #: A parameter vector (``len(robot.parameter_names)`` values, in that order), a mapping
-#: ``{name: value}`` with every parameter, or a fit ``Result``.
-Params = Union[ArrayLike, Mapping[str, float], "Result"]
+#: ``{name: value}`` with every parameter, or a fit ``FitResult``.
+Params = Union[ArrayLike, Mapping[str, float], "FitResult"]
 
 class DvrkError(Exception):
     """Base class of every error raised by dvrk_ident."""
@@ -38,22 +38,22 @@ class SolverError(DvrkError, RuntimeError):
     """A numerical failure (solver, base parameters) or an internal error."""
 
 class NotConvergedError(SolverError):
-    """The fit's solver did not converge; ``result`` holds the unconverged Result."""
+    """The fit's solver did not converge; ``result`` holds the unconverged FitResult."""
 
-    result: "Result"
+    result: "FitResult"
 
-class Robot:
+class Model:
     """A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``,
     ``"mtm"``), a ``.toml`` description or a ``.urdf`` file."""
 
     def __init__(self, name_or_path: PathLike) -> None: ...
     @staticmethod
-    def load(name_or_path: PathLike) -> "Robot":
+    def load(name_or_path: PathLike) -> "Model":
         """Loads a built-in robot or a ``.toml``/``.urdf`` file."""
     @staticmethod
-    def from_toml(text: str, source: str = "<string>") -> "Robot": ...
+    def from_toml(text: str, source: str = "<string>") -> "Model": ...
     @staticmethod
-    def from_urdf(text: str, source: str = "<string>") -> "Robot": ...
+    def from_urdf(text: str, source: str = "<string>") -> "Model": ...
     @staticmethod
     def builtin_names() -> List[str]: ...
     @property
@@ -148,10 +148,10 @@ class BaseParameters:
     def regressor(
         self, q: ArrayLike, dq: Optional[ArrayLike] = None, ddq: Optional[ArrayLike] = None
     ) -> FloatArray:
-        """The base regressor, as ``Robot.base_regressor``."""
+        """The base regressor, as ``Model.base_regressor``."""
     def to_dict(self) -> Dict[str, Any]: ...
 
-class Data:
+class JointLog:
     """A joint-space log: times, positions, velocities (optional), efforts. Times are
     float seconds, datetime64/timedelta64 or integer nanoseconds (exact); DataFrame
     columns give the joint names; slices, :meth:`concat`, pickling."""
@@ -169,16 +169,16 @@ class Data:
     ) -> None: ...
     @staticmethod
     def from_dataframe(
-        df: Any, robot: Optional[Robot] = None, *, time: Optional[str] = None,
+        df: Any, robot: Optional[Model] = None, *, time: Optional[str] = None,
         source: str = "dataframe",
-    ) -> "Data":
+    ) -> "JointLog":
         """``time``, ``position.<joint>``, ``velocity.<joint>``, ``effort.<joint>``
         columns (or a ``(signal, joint)`` MultiIndex; the time as a column or the index);
         model or measured coordinates from the names."""
     def to_dataframe(self) -> Any:
         """A pandas DataFrame in the layout :meth:`from_dataframe` reads."""
     @staticmethod
-    def concat(logs: Sequence["Data"], *, source: Optional[str] = None) -> "Data":
+    def concat(logs: Sequence["JointLog"], *, source: Optional[str] = None) -> "JointLog":
         """The samples of several logs as one log (one clock)."""
     @property
     def time(self) -> FloatArray:
@@ -208,7 +208,7 @@ class Data:
     def rate(self) -> Optional[float]:
         """Sampling rate estimate, Hz."""
     def __len__(self) -> int: ...
-    def to_model(self, robot: Robot) -> "Data":
+    def to_model(self, robot: Model) -> "JointLog":
         """The data in the robot's model coordinates."""
     def write(
         self, path: PathLike, format: Optional[str] = None, topic: Optional[str] = None
@@ -237,13 +237,13 @@ class Prepared:
         ``effort.<q>``."""
     def __len__(self) -> int: ...
 
-class Result:
+class FitResult:
     """The result document of a fit (``dvrk-ident fit --out``)."""
 
     @staticmethod
-    def from_json(text: str, robot: Optional[Robot] = None) -> "Result": ...
+    def from_json(text: str, robot: Optional[Model] = None) -> "FitResult": ...
     @staticmethod
-    def read(path: PathLike, robot: Optional[Robot] = None) -> "Result": ...
+    def read(path: PathLike, robot: Optional[Model] = None) -> "FitResult": ...
     def to_json(self) -> str: ...
     def to_dict(self) -> Dict[str, Any]: ...
     def write(self, path: PathLike) -> None: ...
@@ -296,31 +296,31 @@ class Result:
     def condition_number(self) -> float: ...
     @property
     def sigma2(self) -> float: ...
-    def load_robot(self) -> Robot: ...
-    def prepare(self, data: Data, robot: Optional[Robot] = None) -> Prepared: ...
+    def load_robot(self) -> Model: ...
+    def prepare(self, data: JointLog, robot: Optional[Model] = None) -> Prepared: ...
     def predict(
-        self, data: Union[Data, Prepared], robot: Optional[Robot] = None, *,
+        self, data: Union[JointLog, Prepared], robot: Optional[Model] = None, *,
         as_dataframe: bool = False,
     ) -> Any:
         """Predicted torques ``(N, dof)`` at the processed samples of ``data``
         (rows of ``self.prepare(data)``), known forces excluded; with
         ``as_dataframe``, a DataFrame with ``time`` and ``effort.<q>`` columns."""
     def validate(
-        self, data: Data, test_window: Optional[int] = None, robot: Optional[Robot] = None
+        self, data: JointLog, test_window: Optional[int] = None, robot: Optional[Model] = None
     ) -> Dict[str, Any]: ...
-    def wpi_params(self, robot: Optional[Robot] = None) -> Dict[str, Any]: ...
-    def dvrk_gc(self, robot: Optional[Robot] = None, points: int = 7) -> Dict[str, Any]:
+    def wpi_params(self, robot: Optional[Model] = None) -> Dict[str, Any]: ...
+    def dvrk_gc(self, robot: Optional[Model] = None, points: int = 7) -> Dict[str, Any]:
         """The dVRK controller's MTM gravity-compensation file (version "2.0")."""
 
 def read_log(
     path: PathLike,
-    robot: Optional[Robot] = None,
+    robot: Optional[Model] = None,
     format: Optional[str] = None,
     rate: Optional[float] = None,
     topic: Optional[Union[str, Sequence[str]]] = None,
     time_source: Optional[str] = None,
     resample: Optional[float] = None,
-) -> Data:
+) -> JointLog:
     """Reads a log recognized by content: a rosbag2 folder (or its metadata.yaml), an
     MCAP, sqlite3 .db3 or ROS 1 .bag file (zstd/lz4 compressed too), a 2019 CSV
     (``rate`` required) or a headered CSV; ``resample`` (Hz) resamples any format."""
@@ -351,8 +351,8 @@ class Observation:
     def processing(self) -> Dict[str, Any]: ...
 
 def observe(
-    robot: Robot,
-    data: Union[Data, PathLike, Sequence[Union[Data, PathLike]]],
+    robot: Model,
+    data: Union[JointLog, PathLike, Sequence[Union[JointLog, PathLike]]],
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
     filter_torque: Optional[bool] = None,
@@ -367,15 +367,15 @@ def observe(
     over many processes or machines."""
 
 def fit(
-    robot: Robot,
-    data: Union[Data, Sequence[Data], Observation, Sequence[Observation]],
+    robot: Model,
+    data: Union[JointLog, Sequence[JointLog], Observation, Sequence[Observation]],
     method: Optional[str] = None,
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
     filter_torque: Optional[bool] = None,
-    test: Optional[Union[Data, Sequence[Data]]] = None,
+    test: Optional[Union[JointLog, Sequence[JointLog]]] = None,
     test_window: Optional[int] = None,
-    excitation: Optional[Union[Trajectory, PathLike]] = None,
+    excitation: Optional[Union[FourierTrajectory, PathLike]] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
     min_speed: Optional[float] = None,
@@ -385,23 +385,23 @@ def fit(
     stribeck: Optional[float] = None,
     bounds: Optional[str] = None,
     delay: Optional[Union[str, float, Sequence[float]]] = None,
-    prior: Optional[Union[str, PathLike, Result]] = None,
+    prior: Optional[Union[str, PathLike, FitResult]] = None,
     prior_weight: Optional[float] = None,
     prior_metric: Optional[str] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
-) -> Result:
+) -> FitResult:
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
     ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
-    ``prior``: ``"nominal"``, a result file or a :class:`Result` to regularize the
+    ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
     ``"entropic"`` (default) or ``"euclidean"``."""
 
 def prepare(
-    robot: Robot,
-    data: Data,
+    robot: Model,
+    data: JointLog,
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
     trim: Optional[int] = None,
@@ -416,7 +416,7 @@ def prepare(
 #: ``[[limits]]`` and ``[[cartesian_limits]]`` tables) or a dict in that layout.
 LimitsArg = Optional[Union[PathLike, Mapping[str, Any]]]
 
-class Trajectory:
+class FourierTrajectory:
     """A periodic Fourier excitation trajectory per model coordinate (the JSON of
     ``dvrk-ident excite``): ``q_j(t) = q0_j + Σ_l (a_jl sin(l w t) − b_jl cos(l w t))
     / (l w)``, ``w = 2π f0``."""
@@ -431,13 +431,16 @@ class Trajectory:
         coordinates: Optional[Sequence[str]] = None,
     ) -> None: ...
     @staticmethod
-    def read(path: PathLike, pick: Optional[str] = None) -> "Trajectory":
+    def read(path: PathLike, pick: Optional[str] = None) -> "FourierTrajectory":
         """A trajectory JSON file, or with ``pick`` one trajectory of a 2019-layout
         coefficient file."""
     @staticmethod
-    def from_json(text: str, source: str = "<string>") -> "Trajectory": ...
+    def from_json(text: str, source: str = "<string>") -> "FourierTrajectory": ...
     @staticmethod
-    def wpi2019_names(path: PathLike) -> List[str]: ...
+    def wpi_names(path: PathLike) -> List[str]: ...
+    @staticmethod
+    def wpi2019_names(path: PathLike) -> List[str]:
+        """Deprecated name of :meth:`wpi_names` (warns)."""
     @property
     def order(self) -> int: ...
     @property
@@ -460,7 +463,7 @@ class Trajectory:
     def coordinates(self) -> List[str]: ...
     def sample(self, time: ArrayLike) -> "tuple[FloatArray, FloatArray, FloatArray]":
         """``(q, dq, ddq)``, each ``(N, dof)``, at the times (s)."""
-    def setpoints(self, robot: Robot, rate: float = 200.0) -> "tuple[FloatArray, FloatArray]":
+    def setpoints(self, robot: Model, rate: float = 200.0) -> "tuple[FloatArray, FloatArray]":
         """One period at ``rate`` Hz in measured joint space: ``(time (N,), q (N, m))``."""
     def to_json(self) -> str: ...
     def to_dict(self) -> Dict[str, Any]: ...
@@ -470,7 +473,7 @@ class Excitation:
     """An optimized trajectory with its criterion and dense feasibility check."""
 
     @property
-    def trajectory(self) -> Trajectory: ...
+    def trajectory(self) -> FourierTrajectory: ...
     @property
     def criterion(self) -> Dict[str, Any]:
         """``{"name": "condition" | "log_det", "value": float}``."""
@@ -486,7 +489,7 @@ class Excitation:
     def write(self, path: PathLike) -> None: ...
 
 def excite(
-    robot: Robot,
+    robot: Model,
     order: int = 6,
     f0: float = 0.18,
     *,
@@ -500,7 +503,7 @@ def excite(
     samples_per_harmonic: int = 15,
     rest: bool = False,
     smooth: bool = True,
-    init: Optional[Trajectory] = None,
+    init: Optional[FourierTrajectory] = None,
     check_rate: float = 1000.0,
 ) -> Excitation:
     """Optimizes an excitation trajectory (``dvrk-ident excite``): condition number
@@ -508,8 +511,8 @@ def excite(
     when no feasible trajectory is found, ``InputError`` for impossible limits."""
 
 def evaluate_trajectory(
-    robot: Robot,
-    trajectory: Trajectory,
+    robot: Model,
+    trajectory: FourierTrajectory,
     *,
     limits: LimitsArg = None,
     criterion: str = "condition",
@@ -518,3 +521,10 @@ def evaluate_trajectory(
 ) -> Dict[str, Any]:
     """``dvrk-ident excite --evaluate --json``: ``{criterion, feasible,
     worst_violation, violated, check_samples, check_rate_hz}``."""
+
+# The first release's names, kept one more release: accessing them warns
+# (DeprecationWarning) and gives the class of the new name.
+Robot = Model
+Data = JointLog
+Result = FitResult
+Trajectory = FourierTrajectory

@@ -60,12 +60,12 @@ def run_cli(cli):
 
 @pytest.fixture(scope="session")
 def psm():
-    return di.Robot.load("psm")
+    return di.Model.load("psm")
 
 
 @pytest.fixture(scope="session")
 def mtm():
-    return di.Robot.load("mtm")
+    return di.Model.load("mtm")
 
 
 def shared_file(*parts):
@@ -109,10 +109,10 @@ def psm_logs(psm, psm_excitation, tmp_path_factory):
     in measured joints; a second, different excitation as a test log."""
     d = tmp_path_factory.mktemp("logs")
     e = psm_excitation
-    model = di.Data(e["t"], e["q"], e["noisy"], dq=e["dq"], source="synthetic")
+    model = di.JointLog(e["t"], e["q"], e["noisy"], dq=e["dq"], source="synthetic")
     model.write(d / "train.csv")
     C = psm.coupling
-    measured = di.Data(
+    measured = di.JointLog(
         e["t"],
         e["q"] @ C.T,
         e["noisy"] @ np.linalg.inv(C),
@@ -124,5 +124,5 @@ def psm_logs(psm, psm_excitation, tmp_path_factory):
     e2 = excitation(psm, seconds=20.0, seed=1)
     # Same parameters as the training log, another trajectory.
     tau2 = psm.inverse_dynamics(e["params"], e2["q"], e2["dq"], e2["ddq"])
-    di.Data(e2["t"], e2["q"], tau2, dq=e2["dq"]).write(d / "test.csv")
+    di.JointLog(e2["t"], e2["q"], tau2, dq=e2["dq"]).write(d / "test.csv")
     return dict(dir=d, csv=d / "train.csv", mcap=d / "train.mcap", test=d / "test.csv")

@@ -36,7 +36,7 @@ def recordings(psm, tmp_path_factory):
     paired = bags.psm_topics(names, stamps, q, dq, tau)
     single = bags.psm_topics(names, stamps, q, dq, tau, jaw_topic=False)
     csv = d / "log.csv"
-    di.Data(stamps, q, tau, dq=dq, joint_names=names).write(csv)
+    di.JointLog(stamps, q, tau, dq=dq, joint_names=names).write(csv)
     files = {
         "rosbag2 mcap folder": bags.rosbag2(d / "mcap_bag", paired, storage="mcap"),
         "metadata.yaml": bags.rosbag2(d / "meta_bag", paired, storage="mcap") / "metadata.yaml",
@@ -113,10 +113,10 @@ def test_times_from_stamps_are_exact(psm, recordings):
     np.testing.assert_array_equal(from_bag.time, (k * 5_000_000) / 1e9)
     for t in (stamps, stamps.astype("datetime64[ns]"), (stamps - T0_NS).astype("timedelta64[ns]"),
               stamps.astype("datetime64[ns]").astype("datetime64[us]")):
-        d = di.Data(t, q, tau, dq=dq, joint_names=psm.measured_joints)
+        d = di.JointLog(t, q, tau, dq=dq, joint_names=psm.measured_joints)
         np.testing.assert_array_equal(d.time, from_bag.time)
     # Float seconds since the epoch have lost the nanoseconds: the rate shows it.
-    lossy = di.Data(stamps / 1e9, q, tau, dq=dq, joint_names=psm.measured_joints)
+    lossy = di.JointLog(stamps / 1e9, q, tau, dq=dq, joint_names=psm.measured_joints)
     assert abs(lossy.rate - 200.0) > 1e-6
     assert abs(from_bag.rate - 200.0) < 1e-9
 
@@ -170,7 +170,7 @@ def test_real_psm_data_in_a_rosbag2_folder_and_a_ros1_bag(psm, tmp_path):
     q, dq, tau = wpi.q @ C.T, wpi.dq @ C.T, wpi.tau @ np.linalg.inv(C)
     topics = bags.psm_topics(psm.measured_joints, stamps, q, dq, tau)
     csv = tmp_path / "one.csv"
-    di.Data(stamps, q, tau, dq=dq, joint_names=psm.measured_joints).write(csv)
+    di.JointLog(stamps, q, tau, dq=dq, joint_names=psm.measured_joints).write(csv)
     want = base_values(di.fit(psm, di.read_log(csv, psm), method="ols", cutoff=16.965))
     for rec in (bags.rosbag2(tmp_path / "one_bag", topics, storage="sqlite3", split=2),
                 bags.ros1(tmp_path / "one.bag", topics, compression="lz4")):

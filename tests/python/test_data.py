@@ -18,9 +18,9 @@ pd = pytest.importorskip("pandas")
 @pytest.fixture(scope="module")
 def logs(psm):
     e = excitation(psm, seconds=20.0)
-    model = di.Data(e["t"], e["q"], e["noisy"], dq=e["dq"])
+    model = di.JointLog(e["t"], e["q"], e["noisy"], dq=e["dq"])
     C = psm.coupling
-    meas = di.Data(e["t"], e["q"] @ C.T, e["noisy"] @ np.linalg.inv(C), dq=e["dq"] @ C.T,
+    meas = di.JointLog(e["t"], e["q"] @ C.T, e["noisy"] @ np.linalg.inv(C), dq=e["dq"] @ C.T,
                    joint_names=psm.measured_joints)
     return model, meas
 
@@ -40,26 +40,26 @@ def test_dataframe_round_trip_and_coordinates(psm, logs):
     for d in (model, meas):
         df = d.to_dataframe()
         assert list(df.columns[:2]) == ["time", f"position.{d.joint_names[0]}"]
-        same(di.Data.from_dataframe(df, psm), d)
-        same(di.Data.from_dataframe(df), d)
+        same(di.JointLog.from_dataframe(df, psm), d)
+        same(di.JointLog.from_dataframe(df), d)
     assert meas.coordinates == "measured" and model.coordinates == "model"
     # A MultiIndex (signal, joint) with the time as a timedelta index, columns shuffled.
     df = meas.to_dataframe()
     t = df.pop("time")
     df.columns = pd.MultiIndex.from_tuples([tuple(c.split(".", 1)) for c in df.columns])
     df.index = pd.to_timedelta(np.round(t.to_numpy() * 1e9).astype(np.int64), unit="ns")
-    back = di.Data.from_dataframe(df[df.columns[::-1]], psm)
+    back = di.JointLog.from_dataframe(df[df.columns[::-1]], psm)
     assert back.joint_names == list(reversed(psm.measured_joints))
     np.testing.assert_array_equal(back.time, df.index.to_numpy().astype(np.int64) / 1e9)
     np.testing.assert_array_equal(back.to_model(psm).q, meas.to_model(psm).q)
     # Names that are neither the robot's coordinates nor its measured joints.
     bad = model.to_dataframe().rename(columns=lambda c: c.replace(".q3", ".outer_insertion"))
     with pytest.raises(di.InputError, match="neither coordinates of robot"):
-        di.Data.from_dataframe(bad, psm)
+        di.JointLog.from_dataframe(bad, psm)
     with pytest.raises(di.InputError, match="no effort column"):
-        di.Data.from_dataframe(model.to_dataframe().drop(columns="effort.q2"))
+        di.JointLog.from_dataframe(model.to_dataframe().drop(columns="effort.q2"))
     with pytest.raises(di.InputError, match="no sample times"):
-        di.Data.from_dataframe(model.to_dataframe().drop(columns="time"))
+        di.JointLog.from_dataframe(model.to_dataframe().drop(columns="time"))
 
 
 def test_dataframe_columns_are_joint_names(psm, logs):
@@ -68,11 +68,11 @@ def test_dataframe_columns_are_joint_names(psm, logs):
     _, meas = logs
     q = pd.DataFrame(meas.q, columns=meas.joint_names)
     tau = pd.DataFrame(meas.tau, columns=meas.joint_names)[meas.joint_names[::-1]]
-    d = di.Data(meas.time, q, tau)
+    d = di.JointLog(meas.time, q, tau)
     assert d.coordinates == "measured" and d.joint_names == psm.measured_joints
     np.testing.assert_array_equal(d.tau, meas.tau)
     with pytest.raises(di.InputError, match="differ from q's columns"):
-        di.Data(meas.time, q, tau, joint_names=psm.coordinates)
+        di.JointLog(meas.time, q, tau, joint_names=psm.coordinates)
 
 
 def test_times(psm, logs):
@@ -82,14 +82,14 @@ def test_times(psm, logs):
     want = (np.arange(n) * 5_000_000) / 1e9
     for t in (ns, ns.astype("datetime64[ns]"), pd.to_datetime(ns).tz_localize("UTC"),
               pd.Series(pd.to_datetime(ns)), (ns - ns[0]).astype("timedelta64[ns]")):
-        d = di.Data(t, model.q, model.tau)
+        d = di.JointLog(t, model.q, model.tau)
         np.testing.assert_array_equal(d.time, want)
         assert abs(d.rate - 200.0) < 1e-9
     with pytest.raises(di.InputError, match="NaT"):
-        di.Data(np.array(["NaT"] * n, dtype="datetime64[ns]"), model.q, model.tau)
+        di.JointLog(np.array(["NaT"] * n, dtype="datetime64[ns]"), model.q, model.tau)
     # Exact times give the same fit as the float times they equal.
-    a = di.fit(psm, di.Data(ns, model.q, model.tau, dq=model.dq), method="ols")
-    b = di.fit(psm, di.Data(want, model.q, model.tau, dq=model.dq), method="ols")
+    a = di.fit(psm, di.JointLog(ns, model.q, model.tau, dq=model.dq), method="ols")
+    b = di.fit(psm, di.JointLog(want, model.q, model.tau, dq=model.dq), method="ols")
     assert a.parameters == b.parameters
 
 
@@ -104,12 +104,12 @@ def test_slicing_and_concat(psm, logs):
         model[::-1]
     with pytest.raises(di.InputError):
         model[3]
-    joined = di.Data.concat([model[:1000], model[1000:]])
+    joined = di.JointLog.concat([model[:1000], model[1000:]])
     same(joined, model)
     with pytest.raises(di.InputError, match="not after"):
-        di.Data.concat([model[1000:], model[:1000]])
+        di.JointLog.concat([model[1000:], model[:1000]])
     with pytest.raises(di.InputError, match="joints"):
-        di.Data.concat([model, logs[1]])
+        di.JointLog.concat([model, logs[1]])
 
 
 def test_prepared_and_predictions_as_dataframes(psm, logs):
@@ -128,23 +128,23 @@ def test_prepared_and_predictions_as_dataframes(psm, logs):
 def test_pickle_and_deepcopy(psm, logs, tmp_path):
     model, meas = logs
     r = di.fit(psm, [model[:2000], model[2000:]], method="ols")
-    traj = di.Trajectory(2, 0.2, np.zeros(7), np.full((7, 2), 0.01), np.zeros((7, 2)))
+    traj = di.FourierTrajectory(2, 0.2, np.zeros(7), np.full((7, 2), 0.01), np.zeros((7, 2)))
     # A description from a file: pickled by its text, independent of the file after.
     text = (REPO / "robots" / "psm.toml").read_text()
     desc = tmp_path / "psm.toml"
     desc.write_text(text)
-    from_file = di.Robot.load(str(desc))
-    for obj in (psm, from_file, di.Robot.from_toml(text, "inline"), model, meas, r, traj):
+    from_file = di.Model.load(str(desc))
+    for obj in (psm, from_file, di.Model.from_toml(text, "inline"), model, meas, r, traj):
         for copied in (pickle.loads(pickle.dumps(obj)), copy.deepcopy(obj)):
             assert type(copied) is type(obj)
-            if isinstance(obj, di.Robot):
+            if isinstance(obj, di.Model):
                 assert copied.parameter_names == obj.parameter_names
                 x = np.full(7, 0.1)
                 np.testing.assert_array_equal(copied.regressor(x), obj.regressor(x))
-            elif isinstance(obj, di.Data):
+            elif isinstance(obj, di.JointLog):
                 same(copied, obj)
                 assert copied.path == obj.path
-            elif isinstance(obj, di.Result):
+            elif isinstance(obj, di.FitResult):
                 assert copied.to_json() == obj.to_json()
                 np.testing.assert_array_equal(copied.predict(model), obj.predict(model))
             else:
@@ -154,7 +154,7 @@ def test_pickle_and_deepcopy(psm, logs, tmp_path):
     assert restored.n_parameters == psm.n_parameters
     # A result with Stribeck terms pickles with its extended robot.
     rs = di.fit(psm, model, method="ols", settings={"stribeck_velocity": 0.3})
-    extended = di.Result.from_json(rs.to_json()).load_robot()
+    extended = di.FitResult.from_json(rs.to_json()).load_robot()
     back = pickle.loads(pickle.dumps(extended))
     assert back.n_parameters == extended.n_parameters > psm.n_parameters
 

@@ -22,19 +22,19 @@ def test_hierarchy():
 
 def test_unknown_robot():
     with pytest.raises(di.InputError, match=r"unknown robot `nope` \(built-in robots: psm"):
-        di.Robot.load("nope")
+        di.Model.load("nope")
     # A path that does not exist is a missing file, not an unknown robot name.
     with pytest.raises(di.DvrkFileNotFoundError, match="no/such/file.toml"):
-        di.Robot("no/such/file.toml")
+        di.Model("no/such/file.toml")
 
 
 def test_bad_description(tmp_path):
     p = tmp_path / "bad.toml"
     p.write_text("this is = not [a description")
     with pytest.raises(di.InputError, match="bad.toml"):
-        di.Robot.load(p)
+        di.Model.load(p)
     with pytest.raises(di.InputError, match="URDF"):
-        di.Robot.from_urdf("<robot name='x'><link name='a'/><joint/></robot>")
+        di.Model.from_urdf("<robot name='x'><link name='a'/><joint/></robot>")
 
 
 @pytest.mark.parametrize(
@@ -93,7 +93,7 @@ def test_missing_files(psm, tmp_path):
     with pytest.raises(di.DvrkFileNotFoundError):
         di.read_log(tmp_path / "nope.mcap")
     with pytest.raises(FileNotFoundError):
-        di.Result.read(tmp_path / "nope.json")
+        di.FitResult.read(tmp_path / "nope.json")
     with pytest.raises(di.DvrkIOError):
         di.read_log(tmp_path, format="csv")  # a directory
 
@@ -125,29 +125,29 @@ def test_data_errors(psm):
     t = np.arange(10) / 200.0
     q = np.zeros((10, 7))
     with pytest.raises(di.InputError, match="time is not strictly increasing"):
-        di.Data(t[::-1].copy(), q, q)
+        di.JointLog(t[::-1].copy(), q, q)
     bad = q.copy()
     bad[4, 1] = np.nan
     with pytest.raises(di.InputError, match=r"non-finite effort value NaN for joint \"q2\" at sample 4"):
-        di.Data(t, q, bad)
+        di.JointLog(t, q, bad)
     with pytest.raises(di.InputError, match="tau has shape 10x6"):
-        di.Data(t, q, np.zeros((10, 6)))
+        di.JointLog(t, q, np.zeros((10, 6)))
     with pytest.raises(di.InputError, match="joint_names are required in measured"):
-        di.Data(t, q, q, coordinates="measured")
+        di.JointLog(t, q, q, coordinates="measured")
     with pytest.raises(di.InputError, match="coordinates"):
-        di.Data(t, q, q, coordinates="joint")
+        di.JointLog(t, q, q, coordinates="joint")
     with pytest.raises(di.InputError, match="q: expected a 2-D array"):
-        di.Data(t, np.zeros(10), np.zeros(10))
-    measured = di.Data(t, q, q, joint_names=[f"j{k}" for k in range(7)], coordinates="measured")
+        di.JointLog(t, np.zeros(10), np.zeros(10))
+    measured = di.JointLog(t, q, q, joint_names=[f"j{k}" for k in range(7)], coordinates="measured")
     with pytest.raises(di.InputError, match="joint `outer_yaw` of robot psm is missing"):
         measured.to_model(psm)
     with pytest.raises(di.InputError, match="no sample left|too short|padlen|trimming"):
-        di.fit(psm, di.Data(t, q, q), method="ols")
+        di.fit(psm, di.JointLog(t, q, q), method="ols")
 
 
 def test_fit_setting_errors(psm):
     t = np.arange(2000) / 200.0
-    data = di.Data(t, np.zeros((2000, 7)), np.zeros((2000, 7)))
+    data = di.JointLog(t, np.zeros((2000, 7)), np.zeros((2000, 7)))
     with pytest.raises(di.InputError, match="method: unknown method \"lasso\": expected ols, wls, irls or sdp"):
         di.fit(psm, data, method="lasso")
     with pytest.raises(di.InputError, match="cutoff"):
@@ -165,9 +165,9 @@ def test_fit_setting_errors(psm):
 
 def test_result_json_errors(psm):
     with pytest.raises(di.InputError, match="not a dvrk-ident result"):
-        di.Result.from_json("{}")
+        di.FitResult.from_json("{}")
     with pytest.raises(di.InputError, match="not a dvrk-ident result"):
-        di.Result.from_json("not json")
+        di.FitResult.from_json("not json")
 
 
 def test_result_for_another_robot(psm, mtm, psm_logs):
@@ -177,4 +177,4 @@ def test_result_for_another_robot(psm, mtm, psm_logs):
     doc = json.loads(result.to_json())
     doc["parameters"]["m1"] = None
     with pytest.raises(di.InputError):
-        di.Result.from_json(json.dumps(doc)).parameter_array
+        di.FitResult.from_json(json.dumps(doc)).parameter_array

@@ -29,7 +29,7 @@ def arm_file():
 
 @pytest.fixture(scope="module")
 def arm(arm_file):
-    return di.Robot.load(arm_file)
+    return di.Model.load(arm_file)
 
 
 def series(order, f0, q0, a, b, t):
@@ -45,7 +45,7 @@ def series(order, f0, q0, a, b, t):
 def test_trajectory_matches_the_closed_form_and_round_trips(tmp_path):
     rng = np.random.default_rng(1)
     q0, a, b = rng.normal(size=3), rng.normal(size=(3, 4)), rng.normal(size=(3, 4))
-    t = di.Trajectory(4, 0.2, q0, a, b, coordinates=["x", "y", "z"])
+    t = di.FourierTrajectory(4, 0.2, q0, a, b, coordinates=["x", "y", "z"])
     assert (t.order, t.dof, t.base_frequency_hz, t.period) == (4, 3, 0.2, 5.0)
     assert t.coordinates == ["x", "y", "z"]
     np.testing.assert_array_equal(t.a, a)
@@ -64,9 +64,9 @@ def test_trajectory_matches_the_closed_form_and_round_trips(tmp_path):
     np.testing.assert_allclose((qp - qm) / (2 * h), dq, atol=1e-7)
     np.testing.assert_allclose((dqp - dqm) / (2 * h), ddq, atol=1e-6)
     # JSON and files round-trip exactly.
-    assert di.Trajectory.from_json(t.to_json()) == t
+    assert di.FourierTrajectory.from_json(t.to_json()) == t
     t.write(tmp_path / "t.json")
-    assert di.Trajectory.read(tmp_path / "t.json") == t
+    assert di.FourierTrajectory.read(tmp_path / "t.json") == t
     doc = json.loads((tmp_path / "t.json").read_text())
     assert doc["order"] == 4 and doc["base_frequency_hz"] == 0.2
     assert doc["a"] == a.tolist() and doc["q0"] == q0.tolist()
@@ -75,18 +75,18 @@ def test_trajectory_matches_the_closed_form_and_round_trips(tmp_path):
 
 def test_trajectory_input_errors(tmp_path):
     with pytest.raises(di.InputError, match="invalid Fourier trajectory"):
-        di.Trajectory(2, 0.2, [0.0, 0.0], [[1.0, 2.0]], [[0.0, 0.0]])
+        di.FourierTrajectory(2, 0.2, [0.0, 0.0], [[1.0, 2.0]], [[0.0, 0.0]])
     with pytest.raises(di.InputError, match="base"):
-        di.Trajectory(1, -0.2, [0.0], [[1.0]], [[0.0]])
+        di.FourierTrajectory(1, -0.2, [0.0], [[1.0]], [[0.0]])
     with pytest.raises(di.InputError, match="non-finite"):
-        di.Trajectory(1, 0.2, [np.nan], [[1.0]], [[0.0]])
+        di.FourierTrajectory(1, 0.2, [np.nan], [[1.0]], [[0.0]])
     with pytest.raises(di.InputError, match="2-D"):
-        di.Trajectory(1, 0.2, [0.0], [1.0], [[0.0]])
+        di.FourierTrajectory(1, 0.2, [0.0], [1.0], [[0.0]])
     with pytest.raises(di.DvrkFileNotFoundError, match="missing.json"):
-        di.Trajectory.read(tmp_path / "missing.json")
+        di.FourierTrajectory.read(tmp_path / "missing.json")
     (tmp_path / "bad.json").write_text('{"order": 1}')
     with pytest.raises(di.InputError, match="bad.json"):
-        di.Trajectory.read(tmp_path / "bad.json")
+        di.FourierTrajectory.read(tmp_path / "bad.json")
 
 
 def test_excite_equals_the_command_line(arm, arm_file, run_cli, cli, tmp_path):
@@ -103,7 +103,7 @@ def test_excite_equals_the_command_line(arm, arm_file, run_cli, cli, tmp_path):
     assert r.returncode == 0, r.stderr
     doc = json.loads(out.read_text())
     # Same seed, same options: the same trajectory to the last bit.
-    assert di.Trajectory.read(out) == ex.trajectory
+    assert di.FourierTrajectory.read(out) == ex.trajectory
     assert doc["criterion"] == ex.criterion
     assert ex.to_dict()["criterion"] == doc["criterion"]
     assert ex.to_dict()["feasibility"] == doc["feasibility"]
@@ -118,7 +118,7 @@ def test_excite_equals_the_command_line(arm, arm_file, run_cli, cli, tmp_path):
     np.testing.assert_allclose(table[:, 0], time, atol=1e-6)
     np.testing.assert_allclose(table[:, 1:], qm, atol=1e-9)
     # The Python evaluation of the written file agrees with the optimizer's.
-    ev = di.evaluate_trajectory(arm, di.Trajectory.read(out))
+    ev = di.evaluate_trajectory(arm, di.FourierTrajectory.read(out))
     assert ev["feasible"] is True
     assert ev["criterion"]["value"] == pytest.approx(ex.criterion["value"], rel=1e-12)
     assert ev == run_cli("excite", "--robot", arm_file, "--evaluate", out, "--json")
@@ -182,7 +182,7 @@ def test_robot_limits_round_trip(arm):
                                 "velocity": [-1.5, 1.5], "acceleration": [-4.0, 4.0]}
     # The dict gives the description's limits back: the same optimum.
     assert di.excite(arm, limits=lim, **QUICK).trajectory == di.excite(arm, **QUICK).trajectory
-    psm = di.Robot.load("psm")
+    psm = di.Model.load("psm")
     jaw = [x for x in psm.limits["limits"] if x["expr"] == "1.2177*(q7 - q6)"]
     assert len(jaw) == 1 and jaw[0]["position"][0] == pytest.approx(0.15)
 
@@ -207,19 +207,19 @@ def test_excite_errors(arm, tmp_path):
             {"frame": "tip", "min": [1.0, -1, -1], "max": [2.0, 1, 1]}]}, **QUICK)
     with pytest.raises(di.DvrkFileNotFoundError, match="nope.toml"):
         di.excite(arm, limits=tmp_path / "nope.toml", **QUICK)
-    wrong = di.Trajectory(1, 0.2, [0.0, 0.0, 0.0], [[1.0]] * 3, [[0.0]] * 3)
+    wrong = di.FourierTrajectory(1, 0.2, [0.0, 0.0, 0.0], [[1.0]] * 3, [[0.0]] * 3)
     with pytest.raises(di.InputError, match="3 coordinates"):
         di.evaluate_trajectory(arm, wrong)
     with pytest.raises(di.InputError, match="rate"):
-        di.Trajectory(1, 0.2, [0.0, 0.5], [[1.0]] * 2, [[0.0]] * 2).setpoints(arm, rate=0.0)
+        di.FourierTrajectory(1, 0.2, [0.0, 0.5], [[1.0]] * 2, [[0.0]] * 2).setpoints(arm, rate=0.0)
 
 
 def test_2019_trajectories_evaluated_as_by_the_command_line(run_cli):
     path = shared_file("anchors", "wpi2019_excitation_trajectories.json")
-    assert "psm_one" in di.Trajectory.wpi2019_names(path)
-    old = di.Trajectory.read(path, pick="psm_one")
+    assert "psm_one" in di.FourierTrajectory.wpi_names(path)
+    old = di.FourierTrajectory.read(path, pick="psm_one")
     assert (old.order, old.base_frequency_hz, old.dof) == (6, 0.18, 7)
-    ev = di.evaluate_trajectory(di.Robot.load("psm_simplified"), old)
+    ev = di.evaluate_trajectory(di.Model.load("psm_simplified"), old)
     # The 2019 psm_one: condition 334.1 and four limits exceeded (q1 velocity worst).
     assert ev["criterion"]["value"] == pytest.approx(334.114, abs=1e-3)
     assert not ev["feasible"]

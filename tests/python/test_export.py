@@ -300,10 +300,10 @@ def physical_params(robot, rng):
 
 
 ROBOTS = {
-    "psm": lambda: di.Robot.load("psm"),
-    "mtm": lambda: di.Robot.load("mtm"),
-    "dh_2w": lambda: di.Robot.from_toml(DH.replace("THREE", "2*w"), "dh.toml"),
-    "dh_chain": lambda: di.Robot.from_toml(DH.replace("THREE", "w"), "dh.toml"),
+    "psm": lambda: di.Model.load("psm"),
+    "mtm": lambda: di.Model.load("mtm"),
+    "dh_2w": lambda: di.Model.from_toml(DH.replace("THREE", "2*w"), "dh.toml"),
+    "dh_chain": lambda: di.Model.from_toml(DH.replace("THREE", "w"), "dh.toml"),
 }
 
 
@@ -316,7 +316,7 @@ def test_exported_urdf_loads_everywhere_with_its_mimics(name, tmp_path, capsys):
     path = tmp_path / f"{name}.urdf"
     path.write_text(text)
     # Our importer: the same coordinates, in the same order.
-    back = di.Robot.from_urdf(text, str(path))
+    back = di.Model.from_urdf(text, str(path))
     assert back.coordinates == robot.coordinates
     if shutil.which("check_urdf"):
         r = subprocess.run(["check_urdf", path], capture_output=True, text=True)

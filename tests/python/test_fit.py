@@ -148,7 +148,7 @@ def test_prior_matches_cli(psm, psm_logs, run_cli, tmp_path, metric):
 def test_excitation_window_matches_cli(psm, psm_logs, run_cli, tmp_path):
     """--excitation with a test log and no --test-window: the metrics cover one period
     of the excitation (the 2019 rule), in both front ends."""
-    traj = di.Trajectory(order=1, base_frequency_hz=0.125, q0=[0.0] * 7,
+    traj = di.FourierTrajectory(order=1, base_frequency_hz=0.125, q0=[0.0] * 7,
                          a=[[0.1]] * 7, b=[[0.0]] * 7)
     path = tmp_path / "excitation.json"
     traj.write(path)
@@ -202,7 +202,7 @@ def test_resampled_csv_matches_cli(psm, psm_excitation, run_cli, tmp_path):
     t = e["t"].copy()
     t[3000:] += 0.3 / 200.0  # one jittered step: refused unless resampled
     path = tmp_path / "jitter.csv"
-    di.Data(t, e["q"], e["noisy"], dq=e["dq"]).write(path)
+    di.JointLog(t, e["q"], e["noisy"], dq=e["dq"]).write(path)
     with pytest.raises(di.InputError, match="resample"):
         di.fit(psm, di.read_log(path), method="ols", cutoff=5.0)
     data = di.read_log(path, resample=200.0)
@@ -218,9 +218,9 @@ def test_result_files_interoperate_with_cli(psm, psm_logs, run_cli, tmp_path):
     wpi = tmp_path / "params.json"
     run_cli("fit", psm_logs["csv"], "--robot", "psm", "--method", "ols", "--cutoff", "5",
             "--out", out, "--wpi-json", wpi, "--json")
-    from_cli = di.Result.read(out)
+    from_cli = di.FitResult.read(out)
     assert from_cli.to_json() == out.read_text()
-    assert di.Result.from_json(out.read_text()).parameters == from_cli.parameters
+    assert di.FitResult.from_json(out.read_text()).parameters == from_cli.parameters
     # The result without a robot loads it from robot_source for predictions.
     assert from_cli.load_robot().name == "psm"
     assert from_cli.wpi_params() == json.loads(wpi.read_text())
@@ -269,10 +269,10 @@ def test_result_api(psm, psm_logs, psm_excitation):
     np.testing.assert_array_equal(r.weights, doc["weights"])
     assert r.to_dict() == doc
     assert repr(r) == (
-        "Result(robot='psm', method='ols', converged=True, physically_consistent=False)"
+        "FitResult(robot='psm', method='ols', converged=True, physically_consistent=False)"
     )
     # JSON round trip: the same document, the same numbers.
-    again = di.Result.from_json(r.to_json())
+    again = di.FitResult.from_json(r.to_json())
     assert again.to_json() == r.to_json()
     # Fitting again with the result's settings gives the same parameters.
     again = di.fit(psm, train, settings=r.settings)
@@ -365,7 +365,7 @@ def test_ctrl_c_stops_a_long_per_sample_call(psm, held):
                     reason="signals are delivered to the main thread")
 def test_ctrl_c_stops_waiting_for_a_fit(psm, psm_excitation, held):
     e = psm_excitation
-    data = di.Data(e["t"], e["q"], e["noisy"], dq=e["dq"])
+    data = di.JointLog(e["t"], e["q"], e["noisy"], dq=e["dq"])
     sender = interrupt_when_held()
     with pytest.raises(KeyboardInterrupt):
         di.fit(psm, data, method="irls", irls_iterations=12, cutoff=5.0)

@@ -94,13 +94,39 @@ def test_observation_round_trips_and_merges(psm, fleet, direct):
     assert_same_fit(di.fit(psm, other, method="wls"), direct)
 
 
+OBSERVE_OPTIONS = [
+    ({}, []),
+    ({"cutoff": 8.0}, ["--cutoff", "8"]),
+    ({"cutoff": "none"}, ["--cutoff", "none"]),
+    ({"filter_torque": True}, ["--filter-torque"]),
+    ({"trim": 40}, ["--trim", "40"]),
+    ({"decimate": 3}, ["--decimate", "3"]),
+    ({"min_speed": 0.01}, ["--min-speed", "0.01"]),
+    ({"stribeck": 0.05}, ["--stribeck", "0.05"]),
+]
+
+
+@pytest.mark.parametrize("kwargs,flags", OBSERVE_OPTIONS,
+                         ids=[" ".join(f) or "defaults" for _, f in OBSERVE_OPTIONS])
+def test_observe_matches_cli(psm, fleet, cli, tmp_path, kwargs, flags):
+    """observe(**kwargs) and `dvrk-ident observe FLAGS` map onto one library request:
+    the same state file, byte for byte (both record the log's absolute path)."""
+    out = tmp_path / "cli.obs"
+    subprocess.run([cli, "observe", fleet[0], fleet[1], "--robot", "psm", *flags,
+                    "--out", out, "--quiet"], check=True)
+    ours = di.observe(psm, [fleet[0], fleet[1]], **kwargs)
+    assert bytes(ours) == out.read_bytes()
+    if kwargs:
+        assert bytes(ours) != bytes(di.observe(psm, [fleet[0], fleet[1]]))
+
+
 def test_observations_of_other_settings_or_robots_are_refused(psm, fleet, tmp_path):
     a = di.observe(psm, fleet[0])
     b = di.observe(psm, fleet[1], cutoff=8.0)
     with pytest.raises(di.InputError, match="processing settings"):
         a + b
     with pytest.raises(di.InputError, match="reduced for robot psm"):
-        di.fit(di.Robot.load("psm_simplified"), a, method="wls")
+        di.fit(di.Model.load("psm_simplified"), a, method="wls")
     with pytest.raises(di.InputError, match="processing .* of observation states are their own"):
         di.fit(psm, a, method="wls", cutoff=3.0)
     with pytest.raises(di.InputError, match="format version 9"):

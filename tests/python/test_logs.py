@@ -22,7 +22,7 @@ def small(psm, n=50, velocities=True):
 
 def test_data_from_numpy(psm):
     t, q, dq, tau = small(psm)
-    d = di.Data(t, q, tau, dq=dq)
+    d = di.JointLog(t, q, tau, dq=dq)
     assert len(d) == 50 and d.dof == 7
     assert d.coordinates == "model" and d.joint_names == psm.coordinates
     assert d.source == "numpy" and d.path is None
@@ -33,7 +33,7 @@ def test_data_from_numpy(psm):
     # Attributes are copies.
     d.q[0, 0] = 99.0
     assert d.q[0, 0] == q[0, 0]
-    assert di.Data(t, q, tau).dq is None
+    assert di.JointLog(t, q, tau).dq is None
     assert "50 samples, 7 joints, model coordinates" in repr(d)
 
 
@@ -41,9 +41,9 @@ def test_data_from_numpy(psm):
 def test_round_trip(psm, tmp_path, fmt, suffix):
     t, q, dq, tau = small(psm)
     if fmt == "mcap":  # JointState messages hold measured joints
-        d = di.Data(t, q, tau, dq=dq, joint_names=psm.measured_joints, coordinates="measured")
+        d = di.JointLog(t, q, tau, dq=dq, joint_names=psm.measured_joints, coordinates="measured")
     else:
-        d = di.Data(t, q, tau, dq=dq)
+        d = di.JointLog(t, q, tau, dq=dq)
     path = tmp_path / f"log{suffix}"
     d.write(path, format=fmt)
     back = di.read_log(path, psm, format=fmt if fmt != "wpi" else "wpi-csv", rate=200)
@@ -62,7 +62,7 @@ def test_round_trip(psm, tmp_path, fmt, suffix):
 def test_measured_to_model(psm, tmp_path):
     t, q, dq, tau = small(psm)
     C = psm.coupling
-    measured = di.Data(
+    measured = di.JointLog(
         t, q @ C.T, tau @ np.linalg.inv(C), dq=dq @ C.T,
         joint_names=psm.measured_joints, coordinates="measured", source="sim",
     )
@@ -73,7 +73,7 @@ def test_measured_to_model(psm, tmp_path):
     np.testing.assert_allclose(model.tau, tau, atol=1e-12)
     # Columns are matched by name: any order, extra joints ignored.
     order = [3, 0, 6, 1, 5, 2, 4]
-    shuffled = di.Data(
+    shuffled = di.JointLog(
         t,
         np.hstack([(q @ C.T)[:, order], np.ones((50, 1))]),
         np.hstack([(tau @ np.linalg.inv(C))[:, order], np.ones((50, 1))]),
@@ -100,14 +100,14 @@ def test_measured_to_model(psm, tmp_path):
         di.read_log(tmp_path / "m.mcap", topic="/nope")
     # The MTM's joints are not in this log.
     with pytest.raises(di.InputError, match="robot mtm is missing"):
-        di.read_log(tmp_path / "m.mcap", di.Robot.load("mtm"))
+        di.read_log(tmp_path / "m.mcap", di.Model.load("mtm"))
 
 
 def test_mcap_without_velocities_and_resampling(psm, tmp_path):
     t, q, _, tau = small(psm, velocities=False)
     t = t.copy()
     t[30:] += 0.5 * (t[1] - t[0])  # a jittered step
-    d = di.Data(t, q, tau, joint_names=psm.measured_joints, coordinates="measured")
+    d = di.JointLog(t, q, tau, joint_names=psm.measured_joints, coordinates="measured")
     d.write(tmp_path / "j.mcap")
     with pytest.raises(di.InputError, match="resample"):
         di.read_log(tmp_path / "j.mcap")
@@ -118,7 +118,7 @@ def test_mcap_without_velocities_and_resampling(psm, tmp_path):
 
 def test_wpi_write_needs_model_coordinates(psm, tmp_path):
     t, q, dq, tau = small(psm)
-    d = di.Data(t, q, tau, dq=dq, joint_names=psm.measured_joints, coordinates="measured")
+    d = di.JointLog(t, q, tau, dq=dq, joint_names=psm.measured_joints, coordinates="measured")
     with pytest.raises(di.InputError, match="model coordinates"):
         d.write(tmp_path / "x.csv", format="wpi")
     with pytest.raises(di.InputError, match="topic"):
@@ -127,7 +127,7 @@ def test_wpi_write_needs_model_coordinates(psm, tmp_path):
 
 def test_prepare(psm, psm_excitation):
     e = psm_excitation
-    data = di.Data(e["t"], e["q"], e["noisy"], dq=e["dq"])
+    data = di.JointLog(e["t"], e["q"], e["noisy"], dq=e["dq"])
     p = di.prepare(psm, data, cutoff=5.0)
     n = len(e["t"]) - 400  # 200 trimmed at each end by default
     assert len(p) == n

@@ -26,7 +26,7 @@ def state(robot, n, seed=3):
 
 
 def test_builtin_names_and_properties(psm):
-    assert di.Robot.builtin_names() == ["psm", "psm_simplified", "mtm"]
+    assert di.Model.builtin_names() == ["psm", "psm_simplified", "mtm"]
     assert psm.name == "psm"
     assert psm.source == "builtin:psm"
     assert psm.dof == 7
@@ -40,20 +40,20 @@ def test_builtin_names_and_properties(psm):
     assert psm.frame_names[0] == "base"
     np.testing.assert_array_equal(psm.gravity_vector, [0.0, 0.0, -9.81])
     assert psm.nominal_parameters is None
-    assert "Robot('psm'" in repr(psm)
+    assert "Model('psm'" in repr(psm)
     # Same object either way.
-    assert di.Robot("psm").parameter_names == psm.parameter_names
+    assert di.Model("psm").parameter_names == psm.parameter_names
 
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_summary_matches_cli(run_cli, name):
-    robot = di.Robot.load(name)
+    robot = di.Model.load(name)
     assert robot.summary() == run_cli("model", name, "--json")
 
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_regressor_matches_cli(run_cli, name):
-    robot = di.Robot.load(name)
+    robot = di.Model.load(name)
     q, dq, ddq = state(robot, 3)
     H = robot.regressor(q, dq, ddq)
     assert H.shape == (3 * robot.dof, robot.n_parameters) and H.dtype == np.float64
@@ -97,7 +97,7 @@ def test_regressor_single_sample_and_defaults(psm):
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_torque_matches_cli(run_cli, tmp_path, name):
-    robot = di.Robot.load(name)
+    robot = di.Model.load(name)
     rng = np.random.default_rng(7)
     params = rng.uniform(-0.1, 0.1, robot.n_parameters)
     path = tmp_path / "params.json"
@@ -117,7 +117,7 @@ def test_torque_matches_cli(run_cli, tmp_path, name):
 
 @pytest.mark.parametrize("name", ROBOTS)
 def test_regressor_times_params_is_inverse_dynamics(name):
-    robot = di.Robot.load(name)
+    robot = di.Model.load(name)
     q, dq, ddq = state(robot, 50)
     params = np.random.default_rng(1).uniform(-0.1, 0.1, robot.n_parameters)
     H = robot.regressor(q, dq, ddq)
@@ -132,7 +132,7 @@ def test_regressor_times_params_is_inverse_dynamics(name):
 
 
 def test_base_parameters(psm, mtm):
-    for robot, rank in [(psm, 49), (mtm, 73), (di.Robot.load("psm_simplified"), 48)]:
+    for robot, rank in [(psm, 49), (mtm, 73), (di.Model.load("psm_simplified"), 48)]:
         base = robot.base()
         assert base.rank == len(base) == rank
         assert len(base.names) == len(base.expressions) == len(base.independent) == rank
@@ -182,7 +182,7 @@ def test_known_forces(psm, mtm):
 
 
 def test_forward_kinematics():
-    mtm = di.Robot.load("mtm")
+    mtm = di.Model.load("mtm")
     poses = mtm.forward_kinematics(np.zeros((2, 7)))
     frames = len(mtm.frame_names)
     assert poses.shape == (2, frames, 4, 4)
@@ -216,7 +216,7 @@ PENDULUM = """<?xml version="1.0"?>
 
 
 def test_urdf_pendulum_nominal_dynamics():
-    robot = di.Robot.from_urdf(PENDULUM, "pendulum.urdf")
+    robot = di.Model.from_urdf(PENDULUM, "pendulum.urdf")
     assert robot.dof == 1
     nominal = robot.nominal_parameters
     assert nominal is not None and nominal.shape == (robot.n_parameters,)
@@ -236,7 +236,7 @@ def test_urdf_pendulum_nominal_dynamics():
 def test_urdf_file_matches_cli(run_cli, tmp_path):
     path = tmp_path / "pendulum.urdf"
     path.write_text(PENDULUM)
-    robot = di.Robot.load(path)  # a pathlib.Path is accepted
+    robot = di.Model.load(path)  # a pathlib.Path is accepted
     assert robot.source == str(path)
     doc = run_cli("model", path, "--torque", "--q", "0.7", "--dq", "0.2", "--ddq", "-1.5")
     np.testing.assert_allclose(
@@ -246,14 +246,14 @@ def test_urdf_file_matches_cli(run_cli, tmp_path):
 
 
 def test_toml_text_equals_builtin(psm):
-    robot = di.Robot.from_toml((REPO / "robots" / "psm.toml").read_text(), "psm.toml")
+    robot = di.Model.from_toml((REPO / "robots" / "psm.toml").read_text(), "psm.toml")
     q, dq, ddq = state(psm, 5)
     np.testing.assert_array_equal(robot.regressor(q, dq, ddq), psm.regressor(q, dq, ddq))
 
 
 def test_panda_against_pinocchio():
     ref = json.loads(shared_file("anchors", "pinocchio_reference.json").read_text())
-    panda = di.Robot.load(shared_file("anchors", "panda_arm_7dof.urdf"))
+    panda = di.Model.load(shared_file("anchors", "panda_arm_7dof.urdf"))
     params = panda.nominal_parameters
     assert params is not None
     s = ref["samples"]

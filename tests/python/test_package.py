@@ -5,6 +5,8 @@ import ast
 import inspect
 from pathlib import Path
 
+import pytest
+
 import dvrk_ident as di
 
 PACKAGE = Path(di.__file__).parent
@@ -53,13 +55,37 @@ def test_stubs_match_the_module():
 
 
 def test_docstrings():
-    for name in ("Robot", "Data", "Result", "BaseParameters", "Prepared", "fit", "read_log",
-                 "prepare", "list_topics", "Trajectory", "Excitation", "excite",
+    for name in ("Model", "JointLog", "FitResult", "BaseParameters", "Prepared", "fit",
+                 "read_log", "prepare", "list_topics", "FourierTrajectory", "Excitation", "excite",
                  "evaluate_trajectory"):
         assert inspect.getdoc(getattr(di, name)), name
     for name in ("regressor", "inverse_dynamics", "mass_matrix", "forward_kinematics", "base"):
-        assert inspect.getdoc(getattr(di.Robot, name)), name
-    assert "Example" in di.fit.__doc__ and "Example" in di.Robot.__doc__
-    assert "Example" in di.excite.__doc__ and "Example" in di.Trajectory.__doc__
-    assert "predict" in di.Result.__doc__ or di.Result.predict.__doc__
-    assert "prepare(data).time" in di.Result.predict.__doc__
+        assert inspect.getdoc(getattr(di.Model, name)), name
+    assert "Example" in di.fit.__doc__ and "Example" in di.Model.__doc__
+    assert "Example" in di.excite.__doc__ and "Example" in di.FourierTrajectory.__doc__
+    assert "predict" in di.FitResult.__doc__ or di.FitResult.predict.__doc__
+    assert "prepare(data).time" in di.FitResult.predict.__doc__
+
+
+@pytest.mark.parametrize("old,new", [("Robot", "Model"), ("Data", "JointLog"),
+                                     ("Result", "FitResult"), ("Trajectory", "FourierTrajectory")])
+def test_old_class_names_warn_and_are_the_new_classes(old, new):
+    """The first release's names stay one more release, each with a DeprecationWarning
+    that names its replacement; the stubs declare them as aliases."""
+    with pytest.warns(DeprecationWarning, match=f"dvrk_ident.{old} is deprecated.*dvrk_ident.{new}"):
+        cls = getattr(di, old)
+    assert cls is getattr(di, new)
+    assert f"{old} = {new}" in (PACKAGE / "__init__.pyi").read_text()
+    assert old not in dir(di)
+    with pytest.raises(AttributeError, match="has no attribute 'Robots'"):
+        di.Robots
+
+
+def test_wpi2019_names_warns(tmp_path):
+    path = tmp_path / "coefficients.json"
+    path.write_text('{"trajectories": {"b": {"dof": 1, "order": 1, "base_freq_hz": 0.18, '
+                    '"coefficients": [0.1, 0.0, 0.0]}, "a": {"dof": 1, "order": 1, '
+                    '"base_freq_hz": 0.18, "coefficients": [0.1, 0.0, 0.0]}}}')
+    with pytest.warns(DeprecationWarning, match="FourierTrajectory.wpi_names"):
+        old = di.FourierTrajectory.wpi2019_names(path)
+    assert old == di.FourierTrajectory.wpi_names(path) == ["a", "b"]

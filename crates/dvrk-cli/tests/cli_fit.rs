@@ -5,44 +5,15 @@ mod support;
 use std::path::Path;
 use support::{run, temp_dir, write_model_log};
 
-use dvrk_model::{inertia, Model};
+use dvrk_model::Model;
 
 /// A noise-free MTM log in model coordinates (the 2019 CSV layout) from consistent
 /// parameters; `phase` changes the motion so train and test differ.
 fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
     let model = Model::builtin("mtm").unwrap();
-    let mut pi = vec![0.0; model.n_params()];
-    for f in &model.frames {
-        if let Some(p0) = f.inertia {
-            let m = f.bounds.mass.map_or(1.0, |[a, _]| 1.5 * a);
-            let c = f.bounds.com.map_or([0.0; 3], |b| {
-                [
-                    0.5 * (b[0][0] + b[0][1]),
-                    0.5 * (b[1][0] + b[1][1]),
-                    0.5 * (b[2][0] + b[2][1]),
-                ]
-            });
-            let d = 0.05 * m;
-            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(
-                m,
-                c,
-                [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
-            ));
-        }
-        if let Some(fr) = f.friction() {
-            // Coulomb too: the default processing filters the motion only, so the
-            // measured torques keep their sign steps, as the regressor does.
-            pi[fr.param] = 0.03;
-            pi[fr.param + 1] = 0.02;
-            pi[fr.param + 2] = 0.01;
-        }
-        if let Some(mi) = f.motor_inertia() {
-            pi[mi.param] = 0.005;
-        }
-        if let Some(sp) = f.spring() {
-            pi[sp.param] = 270.0;
-        }
-    }
+    // Coulomb too: the default processing filters the motion only, so the measured
+    // torques keep their sign steps, as the regressor does.
+    let pi = dvrk_test_support::mtm_rule(0.03).params(&model);
     write_model_log(&model, &pi, 3000, path, |j, tk| {
         let (w1, w2) = (0.6 + 0.13 * j as f64, 1.7 + 0.11 * j as f64);
         let p = phase + j as f64;

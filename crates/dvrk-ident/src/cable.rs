@@ -32,8 +32,10 @@ pub struct CableFit {
     /// Coefficients, highest degree first (N·m per rad^k): the robot description's
     /// `known_force.polynomial`.
     pub polynomial: Vec<f64>,
-    /// The fits of each sweep direction (highest first).
+    /// The fit of the first half of the sweep (the way out), highest degree first; it
+    /// carries friction of one sign, which the average with `backward` cancels.
     pub forward: Vec<f64>,
+    /// The fit of the second half (the way back), highest degree first.
     pub backward: Vec<f64>,
     /// RMS of (mean curve − measured torque) over the kept samples, N·m.
     pub rms: f64,

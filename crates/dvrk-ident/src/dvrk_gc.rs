@@ -176,12 +176,15 @@ pub fn alpha(qd: f64, db_vel: f64, sat_vel: f64, ratio: f64) -> f64 {
 pub struct Residuals {
     /// Gravity columns against the links' gravity torque.
     pub gravity_max: Vec<f64>,
+    /// RMS over the grid of the same error, N·m.
     pub gravity_rms: Vec<f64>,
     /// `Y·pos` against the static torque for positive motion of the joint.
     pub pos_max: Vec<f64>,
+    /// RMS over the grid of the same error, N·m.
     pub pos_rms: Vec<f64>,
     /// `Y·neg` against the static torque for negative motion of the joint.
     pub neg_max: Vec<f64>,
+    /// RMS over the grid of the same error, N·m.
     pub neg_rms: Vec<f64>,
 }
 
@@ -196,15 +199,23 @@ pub struct DvrkGc {
     /// `safe_upper_torque_limit`, `safe_lower_torque_limit` (N·m): the range of the
     /// compensation over the grid, widened (joint 7: 0, it is not compensated).
     pub upper: Vec<f64>,
+    /// `safe_lower_torque_limit` (N·m), per joint: the lower end of that range.
     pub lower: Vec<f64>,
     /// `db_vel_vec`, `sat_vec_vec` (rad/s), `fric_comp_ratio_vec`: CUHK defaults.
     pub db_vel: Vec<f64>,
+    /// `sat_vec_vec` (the key as the controller spells it), rad/s: the speed beyond which
+    /// the blend [`alpha`] of `pos` and `neg` stops changing.
     pub sat_vel: Vec<f64>,
+    /// `fric_comp_ratio_vec` (0 to 1): the share of the friction difference `pos − neg`
+    /// compensated at full speed ([`alpha`] = `0.5 ± 0.5·ratio`).
     pub fric_comp_ratio: Vec<f64>,
+    /// How far the file's compensation is from the model over the grid, per joint (N·m).
     pub residuals: Residuals,
     /// Joint ranges of the grid (rad, joints 1–6) and points per joint.
     pub ranges: Vec<[f64; 2]>,
+    /// Grid points per joint (6 to 10).
     pub points: usize,
+    /// Configurations of the grid, `points⁶`.
     pub configurations: usize,
     /// The robot the model was loaded as.
     pub robot: String,

@@ -6,53 +6,84 @@ use thiserror::Error;
 /// Error of the identification pipeline.
 #[derive(Debug, Error)]
 pub enum IdentError {
+    /// A robot description that could not be loaded, or parameters that do not fit it.
     #[error(transparent)]
     Model(#[from] dvrk_model::ModelError),
+    /// A log that could not be read or parsed (any format).
     #[error(transparent)]
     Log(#[from] crate::log::LogError),
+    /// Samples that do not form a trajectory (sizes, time not increasing, not finite).
     #[error(transparent)]
     Trajectory(#[from] crate::trajectory::TrajectoryError),
+    /// The semidefinite program could not be built or solved.
     #[error(transparent)]
     Sdp(#[from] crate::estimate::sdp::SdpError),
+    /// An export (URDF, gravity compensation, params.json, CSV) could not be written.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),
+    /// An excitation trajectory could not be optimized, read or checked.
     #[error(transparent)]
     Excite(#[from] crate::excite::ExciteError),
+    /// Filtering or differentiating one log's signals failed (e.g. a cut-off above Nyquist,
+    /// too few samples for the filter).
     #[error("{}", prefixed(source_name, error))]
     Signal {
+        /// The log (file or Python data) whose signals failed.
         source_name: String,
+        /// What failed.
         error: crate::signal::SignalError,
     },
     /// The log does not fit the robot (joints, sizes).
     #[error("{source_name}: {message}")]
     Mismatch {
+        /// The log that does not fit.
         source_name: String,
+        /// What differs (a missing joint, a column count).
         message: String,
     },
     /// The data do not determine the parameters (too few or unexciting samples).
     #[error("{source_name}: {message}")]
     RankDeficient {
+        /// The log (or `fit` for several) whose regressor lacks rank.
         source_name: String,
+        /// Which parameters or why.
         message: String,
     },
     /// A setting is out of range.
     #[error("invalid setting {name}: {message}")]
-    Setting { name: String, message: String },
+    Setting {
+        /// The setting's name (e.g. `delay`, `prior`, `cutoff_hz`).
+        name: String,
+        /// The value and the range it should be in.
+        message: String,
+    },
     /// A file that could not be read (its cause kept: Python maps a missing file to
     /// `FileNotFoundError`).
     #[error("{file}: {source}")]
     Io {
+        /// The path that failed.
         file: String,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
     /// A file whose content is not what it should be (not JSON, not a result, a value
     /// out of range).
     #[error("{file}: {message}")]
-    Format { file: String, message: String },
+    Format {
+        /// The file, or what stands for it (e.g. `result`).
+        file: String,
+        /// What is wrong and where.
+        message: String,
+    },
     /// An observation state file that is not one, or not of this format version.
     #[error("{file}: {message}")]
-    State { file: String, message: String },
+    State {
+        /// The state file.
+        file: String,
+        /// What is wrong (version, robot, content).
+        message: String,
+    },
 }
 
 /// `source: error`, unless the error already starts with the source (errors of one

@@ -30,16 +30,22 @@ pub const ELEMENT_TOLERANCE: f64 = 1e-9;
 /// Processed samples in model coordinates, known forces subtracted from the torques.
 #[derive(Clone, Debug)]
 pub struct Prepared {
+    /// The log the samples came from (a file, or a name given in Python), for messages.
     pub source: String,
+    /// Time of each processed sample, s (after trimming and decimation).
     pub time: Vec<f64>,
+    /// Positions in model coordinates, samples × coordinates, rad or m (filtered).
     pub q: DMatrix<f64>,
+    /// Velocities, rad/s or m/s (measured or differentiated, filtered).
     pub dq: DMatrix<f64>,
+    /// Accelerations, rad/s² or m/s² (differentiated from the raw velocity, filtered).
     pub ddq: DMatrix<f64>,
     /// N·m or N, known forces subtracted
     pub tau: DMatrix<f64>,
 }
 
 impl Prepared {
+    /// The samples as the regressor and the metrics read them.
     pub fn samples(&self) -> Samples<'_> {
         Samples {
             q: &self.q,
@@ -49,10 +55,12 @@ impl Prepared {
         }
     }
 
+    /// Number of processed samples.
     pub fn len(&self) -> usize {
         self.q.nrows()
     }
 
+    /// Whether no sample is left.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -225,6 +233,7 @@ pub struct MetricSums {
 }
 
 impl MetricSums {
+    /// Empty sums for `model`'s coordinates.
     pub fn new(model: &Model) -> Self {
         let n = model.dof();
         MetricSums {
@@ -324,6 +333,8 @@ impl MetricSums {
             .collect()
     }
 
+    /// The relative and RMS errors per coordinate of the samples summed so far (a joint
+    /// without torque gets a NaN relative error).
     pub fn metrics(&self, model: &Model) -> JointMetrics {
         JointMetrics {
             joints: model.coordinates.clone(),
@@ -354,6 +365,7 @@ pub struct TorqueRange {
 }
 
 impl TorqueRange {
+    /// An empty range over `joints` coordinates.
     pub fn new(joints: usize) -> Self {
         TorqueRange {
             min: vec![f64::INFINITY; joints],
@@ -432,7 +444,10 @@ pub(crate) fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> 
 /// rosbag2 folder (hashed into the result's provenance; without one, the samples are).
 #[derive(Clone, Copy, Debug)]
 pub struct LogData<'a> {
+    /// The samples, in the log's joints (mapped to model coordinates by the fit).
     pub samples: &'a Trajectory,
+    /// The file or rosbag2 folder they were read from, hashed into `inputs`; `None` hashes
+    /// the samples.
     pub file: Option<&'a std::path::Path>,
 }
 
@@ -580,7 +595,9 @@ fn log_info(role: &str, log: &LogData<'_>, source: &str) -> Result<InputInfo, Id
 /// which its own training metrics come.
 #[derive(Clone, Debug)]
 pub struct ObservedLog {
+    /// The log's provenance (role, path, hash) and, once fitted, its own metrics.
     pub info: InputInfo,
+    /// The log's unweighted factors, one per model coordinate.
     pub parts: Vec<Observation>,
 }
 
@@ -591,9 +608,11 @@ pub struct ObservedLog {
 /// fit of their logs.
 #[derive(Clone, Debug)]
 pub struct Observed {
+    /// Each training log's own reduction, in the order given.
     pub logs: Vec<ObservedLog>,
     /// The logs' factors merged, one per coordinate.
     pub parts: Vec<Observation>,
+    /// The torque range of all the logs, per coordinate: the WLS and SDP weights.
     pub range: TorqueRange,
 }
 

@@ -24,6 +24,8 @@
 //! the MCAP writer, [`log::mcap`]) and `report` (figures and the HTML report, [`report`]);
 //! a program that only fits CSV logs can leave out the last two.
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod estimate;
 pub mod excite;

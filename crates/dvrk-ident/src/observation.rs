@@ -60,10 +60,12 @@ pub struct Samples<'a> {
 }
 
 impl Samples<'_> {
+    /// Number of samples.
     pub fn len(&self) -> usize {
         self.q.nrows()
     }
 
+    /// Whether there is no sample.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -264,6 +266,7 @@ pub struct PerCoordinate {
 }
 
 impl PerCoordinate {
+    /// An empty reduction for `model`'s coordinates and parameters.
     pub fn new(model: &Model) -> Self {
         let n = model.dof();
         let p = model.n_params();

@@ -327,6 +327,7 @@ pub struct Outputs {
 }
 
 impl Outputs {
+    /// No output yet.
     pub fn new() -> Outputs {
         Outputs::default()
     }

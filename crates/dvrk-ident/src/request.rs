@@ -306,7 +306,10 @@ pub enum LogSource {
     File(PathBuf),
     /// Samples already read, and the file they came from (for the provenance).
     Samples {
+        /// The samples (in the log's joints, as read).
         samples: Arc<Trajectory>,
+        /// The file or rosbag2 folder they were read from, hashed into the result's `inputs`;
+        /// `None` hashes the samples.
         file: Option<PathBuf>,
     },
 }
@@ -363,17 +366,22 @@ pub fn is_large(path: &Path) -> bool {
 /// A whole fit: see the module docs.
 #[derive(Clone, Debug)]
 pub struct FitRequest {
+    /// What the fit reduces: logs or observation states.
     pub train: Training,
+    /// Logs the fitted model is tested on (the result's `metrics.test`); none by default.
     pub test: Vec<LogSource>,
     /// How the files are read (the robot's joints are added, see
     /// [`ReadOptions::for_model`]).
     pub read: ReadOptions,
     /// The base settings (defaults, or a result's), before [`FitRequest::overrides`].
     pub settings: FitSettings,
+    /// The CLI's flags and Python's keyword arguments, applied to `settings` the same way
+    /// for both.
     pub overrides: Overrides,
     /// The excitation the logs follow: with test logs but no test window, the metrics
     /// cover its first period (the 2019 protocol).
     pub excitation: Option<FourierTrajectory>,
+    /// Whether the logs are read block by block (default: by size).
     pub streaming: Streaming,
 }
 
@@ -387,6 +395,7 @@ pub struct FitOutcome {
     pub model: Model,
     /// The settings used (overrides applied, test window derived).
     pub settings: FitSettings,
+    /// The result document.
     pub result: FitResult,
     /// The logs when they were held in memory (not streamed, not observation
     /// states), for figures.
@@ -593,6 +602,99 @@ impl FitRequest {
             return Ok(Some(samples / settings.processing.decimate.max(1)));
         }
         Ok(settings.test_window)
+    }
+}
+
+/// The map of a distributed fit as the front ends ask for it (`dvrk-ident observe`,
+/// Python's `observe`): the logs processed and reduced exactly as a [`FitRequest`]
+/// processes them before its estimator, into one [`ObservationState`]. Reading,
+/// overriding and the streaming decision happen here, so both front ends give the same
+/// state byte for byte.
+///
+/// ```rust
+/// use dvrk_ident::progress::Silent;
+/// use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
+/// use dvrk_model::Model;
+///
+/// let log = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/psm_excitation.mcap");
+/// let psm = Model::load("psm").unwrap();
+/// let request = ObserveRequest {
+///     overrides: Overrides { trim: Some(20), ..Overrides::default() },
+///     ..ObserveRequest::new(vec![LogSource::File(log.into())])
+/// };
+/// let state = request.run(&psm, &Silent).unwrap();
+/// assert_eq!((state.robot.as_str(), state.processing.trim), ("psm", 20));
+/// // Read block by block, the state is the same to the last bit.
+/// let streamed = ObserveRequest { streaming: Streaming::Always, ..request }.run(&psm, &Silent);
+/// assert_eq!(streamed.unwrap().to_bytes(), state.to_bytes());
+/// ```
+#[derive(Clone, Debug)]
+pub struct ObserveRequest {
+    /// The logs, each processed on its own; the state holds them all.
+    pub logs: Vec<LogSource>,
+    /// How the files are read (the robot's joints are added, see
+    /// [`ReadOptions::for_model`]).
+    pub read: ReadOptions,
+    /// The base settings (defaults, or a result's), before [`ObserveRequest::overrides`].
+    pub settings: FitSettings,
+    /// The processing (and Stribeck terms) changed from the base; a delay search is
+    /// refused (it needs every log of the fit at once).
+    pub overrides: Overrides,
+    /// Whether the files are read block by block.
+    pub streaming: Streaming,
+}
+
+impl ObserveRequest {
+    /// A request for these logs with every option at its default.
+    pub fn new(logs: Vec<LogSource>) -> ObserveRequest {
+        ObserveRequest {
+            logs,
+            read: ReadOptions::default(),
+            settings: FitSettings::default(),
+            overrides: Overrides::default(),
+            streaming: Streaming::Auto,
+        }
+    }
+
+    /// Whether the logs will be read block by block (the rule of
+    /// [`FitRequest::streams`]).
+    pub fn streams(&self) -> bool {
+        FitRequest {
+            streaming: self.streaming,
+            ..FitRequest::new(Training::Logs(self.logs.clone()))
+        }
+        .streams()
+    }
+
+    /// The observation state of `robot` (a built-in, description or URDF model).
+    pub fn run(
+        &self,
+        robot: &Model,
+        progress: &dyn Progress,
+    ) -> Result<ObservationState, IdentError> {
+        if self.logs.is_empty() {
+            return Err(crate::fit::no_training_log());
+        }
+        let settings = self.overrides.settings_for(self.settings.clone(), robot)?;
+        crate::fit::no_delay_search(&settings, "an observation state")?;
+        let read = self.read.for_model(settings.model(robot)?.as_ref());
+        if self.streams() {
+            let readers = self
+                .logs
+                .iter()
+                .filter_map(|l| l.path())
+                .map(|p| Ok(read.open(p)?))
+                .collect::<Result<Vec<LogReader>, IdentError>>()?;
+            return ObservationState::observe_stream(
+                robot,
+                &readers.iter().collect::<Vec<_>>(),
+                &settings,
+                BLOCK_SAMPLES,
+                progress,
+            );
+        }
+        let data = read_all(&read, &self.logs, progress)?;
+        ObservationState::observe(robot, &log_data(&data, &self.logs), &settings, progress)
     }
 }
 

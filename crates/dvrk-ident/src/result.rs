@@ -16,7 +16,9 @@ use crate::settings::FitSettings;
 /// Standard parameters of one link (frame axes).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct LinkResult {
+    /// Index of the link's frame in the model (1-based, the description's frame order).
     pub frame: usize,
+    /// The link's name in the robot description.
     pub link: String,
     /// kg
     pub mass: f64,
@@ -29,18 +31,25 @@ pub struct LinkResult {
 /// Physical consistency of one link: the smallest eigenvalue of its 4×4 pseudo-inertia.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Consistency {
+    /// Index of the link's frame in the model (as in [`LinkResult::frame`]).
     pub frame: usize,
+    /// The link's name in the robot description.
     pub link: String,
     /// kg·m²; positive means realizable by a positive mass density
     pub min_eigenvalue: f64,
+    /// `min_eigenvalue > 0`: the link's inertial parameters are physically realizable.
     pub consistent: bool,
 }
 
 /// One base parameter with its value and standard deviation.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct BaseParameterResult {
+    /// The name of the base parameter's leading (kept) parameter, e.g. `L2xx`.
     pub name: String,
+    /// The base parameter as a combination of standard parameters, e.g.
+    /// `L2xy + L6xy + 0.2159*l2x`.
     pub expression: String,
+    /// The fitted value of that combination (units of its leading parameter).
     pub value: f64,
     /// Standard deviation from the least-squares fit of the same weighted data.
     pub std: f64,
@@ -49,10 +58,17 @@ pub struct BaseParameterResult {
 /// Solver statistics; `converged` false means the numbers are NOT a result.
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct SolverInfo {
+    /// `qr` for the least-squares methods, `clarabel` for the semidefinite one.
     pub name: String,
+    /// The solver's end state (Clarabel's status name; always `Solved` for least
+    /// squares); anything but `Solved`, `AlmostSolved` included, is not a result.
     pub status: crate::estimate::SolverStatus,
+    /// `status` is `Solved`: the flag scripts should check before using the numbers.
     pub converged: bool,
+    /// Wall time, s: Clarabel's solve time, or for least squares the estimation from the
+    /// observation's R factors (IRLS re-weightings included).
     pub seconds: f64,
+    /// Solver iterations: Clarabel's, or 1 + the re-weightings for IRLS, 1 for OLS/WLS.
     pub iterations: u32,
     /// The semidefinite solver's feasibility and gap tolerance (relative, in its scaled
     /// problem): the link pseudo-inertias satisfy `J ⪰ eps·I` to it, while friction and
@@ -64,7 +80,9 @@ pub struct SolverInfo {
 /// Per-joint errors on one trajectory (model coordinates).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct JointMetrics {
+    /// Model coordinate names, one per entry of `relative_error` and `rms`.
     pub joints: Vec<String>,
+    /// Samples the errors cover (after trimming and decimation; the test window if any).
     pub samples: usize,
     /// `‖τ − τ̂‖ / ‖τ‖` per joint
     pub relative_error: Vec<f64>,
@@ -72,9 +90,12 @@ pub struct JointMetrics {
     pub rms: Vec<f64>,
 }
 
+/// Train and test errors of a fit, per joint (the result's `metrics`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Metrics {
+    /// Errors on the training logs, all of them together.
     pub train: JointMetrics,
+    /// Errors on the test logs (`--test`, within the test window); `None` without them.
     pub test: Option<JointMetrics>,
 }
 
@@ -164,24 +185,37 @@ impl InputInfo {
 /// The result of a fit.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FitResult {
+    /// The program and version that wrote the document, `dvrk-ident X.Y.Z`.
     pub tool: String,
+    /// The robot's name from its description, e.g. `psm`.
     pub robot: String,
+    /// Where the robot came from: `builtin:<name>` or the description file's path (see
+    /// [`FitResult::robot`]).
     pub robot_source: String,
+    /// The estimator: `ols`, `wls`, `irls` or `sdp`.
     pub method: String,
+    /// Every setting of the fit (processing, bounds, prior...): what `fit --from` and a re-run
+    /// repeat, and what `validate`, `report` and `export` apply.
     pub settings: FitSettings,
+    /// Provenance and own metrics of every log read (train, test) and of a prior's file.
     pub inputs: Vec<InputInfo>,
     /// Every parameter by name (barycentric: inertia about the frame origin, first
     /// moment, mass; friction; motor inertia; spring). For least squares, a
     /// representative: base parameters on their kept columns, zero elsewhere.
     pub parameters: IndexMap<String, f64>,
+    /// The parameter names in the model's order (the order of `parameters`, for readers
+    /// that do not keep JSON key order).
     pub parameter_order: Vec<String>,
     /// Standard parameters per link.
     pub links: Vec<LinkResult>,
+    /// The identifiable combinations with their values and standard deviations.
     pub base_parameters: Vec<BaseParameterResult>,
+    /// Smallest pseudo-inertia eigenvalue of each link.
     pub consistency: Vec<Consistency>,
     /// Every link pseudo-inertia positive definite, friction/motor inertia ≥ 0 and, with
     /// a Stribeck term, `Fc + Fs ≥ 0`.
     pub physically_consistent: bool,
+    /// How the solver ended; `solver.converged` false means the numbers are NOT a result.
     pub solver: SolverInfo,
     /// Row weights per coordinate used by the estimator (1/N·m or 1/N).
     pub weights: Vec<f64>,
@@ -191,6 +225,7 @@ pub struct FitResult {
     pub condition_number: f64,
     /// Residual variance of the weighted least-squares fit.
     pub sigma2: f64,
+    /// Per-joint errors of the fitted model on the training and test logs.
     pub metrics: Metrics,
     /// The measurement delays estimated by `delay auto` (applied through
     /// `settings.processing.delay_s`, which holds them for validate, report, export).
@@ -226,6 +261,7 @@ impl FitResult {
         Ok(self.settings.model(&model)?.into_owned())
     }
 
+    /// The result document as pretty-printed JSON (the file `--out` writes).
     pub fn to_json(&self) -> String {
         serde_json::to_string_pretty(self).expect("serializable")
     }

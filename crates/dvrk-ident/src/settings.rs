@@ -162,7 +162,9 @@ impl Prior {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct FitSettings {
+    /// The estimator (`ols`, `wls`, `irls`, `sdp`; default `sdp`).
     pub method: Method,
+    /// How the logs are filtered, differentiated, trimmed and decimated before the fit.
     pub processing: Processing,
     /// Metrics on the first N processed samples of the test log only (the 2019 protocol
     /// uses the first period). `None`: all samples.

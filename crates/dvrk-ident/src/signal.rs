@@ -20,6 +20,7 @@ pub mod advance;
 mod butter;
 mod filter;
 mod ops;
+mod resample;
 pub mod stream;
 
 pub use butter::{

@@ -75,14 +75,19 @@ const FORMAT: &str = "dvrk-ident observation";
 /// processing they were reduced for (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ObservationState {
+    /// The robot's name from its description, e.g. `psm`.
     pub robot: String,
     /// `builtin:psm` or the description's path, as [`Model::load`] takes it (without
     /// `builtin:`).
     pub robot_source: String,
     /// [`model_hash`] of the model of the fit (Stribeck terms included).
     pub robot_hash: String,
+    /// The processing the logs were reduced with; a fit of the state uses it unchanged.
     pub processing: Processing,
+    /// The Stribeck velocity of the model the logs were reduced for, rad/s or m/s (it adds
+    /// regressor columns); states to merge must agree on it.
     pub stribeck_velocity: Option<f64>,
+    /// The reduced logs: each log's factors, their merge and the torque range.
     pub observed: Observed,
 }
 

@@ -28,42 +28,18 @@ fn write_examples() -> bool {
 /// inertia of a 6 x 5 x 4 cm box about it; Coulomb 0.5, viscous 0.3 and offset 0.2 of
 /// their maxima; motor inertias 0.002; springs at mid-range.
 fn example_params(model: &Model) -> Vec<f64> {
-    let mut pi = vec![0.0; model.n_params()];
-    for f in &model.frames {
-        if let Some(p0) = f.inertia {
-            let [lo, hi] = f.bounds.mass.unwrap_or([0.5, 1.5]);
-            let m = (0.5 * (lo + hi)).min(lo + 0.5);
-            let c = f.bounds.com.map_or([0.0; 3], |b| {
-                [
-                    0.5 * (b[0][0] + b[0][1]),
-                    0.5 * (b[1][0] + b[1][1]),
-                    0.5 * (b[2][0] + b[2][1]),
-                ]
-            });
-            let (x, y, z) = (0.06, 0.05, 0.04);
-            let ic = [
-                m * (y * y + z * z) / 12.0,
-                0.0,
-                0.0,
-                m * (x * x + z * z) / 12.0,
-                0.0,
-                m * (x * x + y * y) / 12.0,
-            ];
-            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
-        }
-        if let Some(fr) = f.friction() {
-            pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
-            pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
-            pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
-        }
-        if let Some(mi) = f.motor_inertia() {
-            pi[mi.param] = 0.002;
-        }
-        if let Some(sp) = f.spring() {
-            pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
-        }
+    let mass = |bounds: Option<[f64; 2]>| {
+        let [lo, hi] = bounds.unwrap_or([0.5, 1.5]);
+        (0.5 * (lo + hi)).min(lo + 0.5)
+    };
+    dvrk_test_support::ParamRule {
+        mass: Box::new(mass),
+        inertia_com: Box::new(dvrk_test_support::box_inertia),
+        friction: Box::new(dvrk_test_support::friction_within_bounds),
+        motor_inertia: 0.002,
+        spring: Box::new(dvrk_test_support::mid_spring),
     }
-    pi
+    .params(model)
 }
 
 #[test]

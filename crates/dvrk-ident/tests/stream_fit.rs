@@ -14,7 +14,7 @@ use dvrk_ident::log::{self, LogFormat, ReadOptions};
 use dvrk_ident::progress::{Progress, Silent};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::{fit, FitResult, FitSettings, Method, Trajectory};
-use dvrk_model::{inertia, Model};
+use dvrk_model::Model;
 
 fn example() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap")
@@ -117,37 +117,7 @@ fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
 
 /// Consistent MTM parameters (the cable is a known force: it is subtracted too).
 fn mtm_params(model: &Model) -> Vec<f64> {
-    let mut pi = vec![0.0; model.n_params()];
-    for f in &model.frames {
-        if let Some(p0) = f.inertia {
-            let m = f.bounds.mass.map_or(1.0, |[a, _]| 1.5 * a);
-            let c = f.bounds.com.map_or([0.0; 3], |b| {
-                [
-                    0.5 * (b[0][0] + b[0][1]),
-                    0.5 * (b[1][0] + b[1][1]),
-                    0.5 * (b[2][0] + b[2][1]),
-                ]
-            });
-            let d = 0.05 * m;
-            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(
-                m,
-                c,
-                [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008],
-            ));
-        }
-        if let Some(fr) = f.friction() {
-            pi[fr.param] = 0.05;
-            pi[fr.param + 1] = 0.02;
-            pi[fr.param + 2] = 0.01;
-        }
-        if let Some(mi) = f.motor_inertia() {
-            pi[mi.param] = 0.005;
-        }
-        if let Some(sp) = f.spring() {
-            pi[sp.param] = 270.0;
-        }
-    }
-    pi
+    dvrk_test_support::mtm_rule(0.05).params(model)
 }
 
 fn excitation(n: usize, phase: f64) -> FourierTrajectory {

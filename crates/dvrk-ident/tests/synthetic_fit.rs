@@ -8,63 +8,19 @@ use dvrk_ident::{fit, FitSettings, Method};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::DMatrix;
 
-/// A deterministic generator (tests must not depend on a crate's RNG stream).
-struct Lcg(u64);
-impl Lcg {
-    fn uniform(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn normal(&mut self) -> f64 {
-        let (u, v) = (self.uniform().max(1e-300), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
-    }
-}
-
 /// Parameters inside the description's bounds: mid-range masses and centres of mass,
 /// box-shaped inertias, friction and springs inside their ranges.
 fn consistent_params(model: &Model) -> Vec<f64> {
-    let mut pi = vec![0.0; model.n_params()];
-    for f in &model.frames {
-        if let Some(p0) = f.inertia {
-            let m = f
-                .bounds
-                .mass
-                .map_or(1.0, |[a, b]| 0.5 * (a + b).min(2.0 * a + 1.0));
-            let c = f.bounds.com.map_or([0.0; 3], |b| {
-                [
-                    0.5 * (b[0][0] + b[0][1]),
-                    0.5 * (b[1][0] + b[1][1]),
-                    0.5 * (b[2][0] + b[2][1]),
-                ]
-            });
-            let (x, y, z) = (0.06, 0.05, 0.04);
-            let ic = [
-                m * (y * y + z * z) / 12.0,
-                0.0,
-                0.0,
-                m * (x * x + z * z) / 12.0,
-                0.0,
-                m * (x * x + y * y) / 12.0,
-            ];
-            pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
-        }
-        if let Some(fr) = f.friction() {
-            pi[fr.param] = 0.5 * f.bounds.fc_max.unwrap_or(0.1);
-            pi[fr.param + 1] = 0.3 * f.bounds.fv_max.unwrap_or(0.1);
-            pi[fr.param + 2] = 0.2 * f.bounds.fo_max.unwrap_or(0.1);
-        }
-        if let Some(mi) = f.motor_inertia() {
-            pi[mi.param] = 0.01;
-        }
-        if let Some(sp) = f.spring() {
-            pi[sp.param] = f.bounds.spring.map_or(0.1, |[a, b]| 0.5 * (a + b));
-        }
+    let mass =
+        |bounds: Option<[f64; 2]>| bounds.map_or(1.0, |[a, b]| 0.5 * (a + b).min(2.0 * a + 1.0));
+    dvrk_test_support::ParamRule {
+        mass: Box::new(mass),
+        inertia_com: Box::new(dvrk_test_support::box_inertia),
+        friction: Box::new(dvrk_test_support::friction_within_bounds),
+        motor_inertia: 0.01,
+        spring: Box::new(dvrk_test_support::mid_spring),
     }
-    pi
+    .params(model)
 }
 
 /// Sum-of-sines trajectory per coordinate, centred in the description's position limit
@@ -80,7 +36,8 @@ fn simulate(
     let n = model.dof();
     let count = (seconds * rate) as usize;
     let time = uniform_time(count, rate);
-    let mut rng = Lcg(seed);
+    let mut rng = dvrk_test_support::Rng::new(seed);
+    let mut gauss = dvrk_ident::simulate::Gaussian::new(seed);
     let mut centre = vec![0.0; n];
     let mut amp = vec![0.5; n];
     for l in &model.limits {
@@ -94,8 +51,8 @@ fn simulate(
             let mut h = [(0.0, 0.0, 0.0); 3];
             for (i, e) in h.iter_mut().enumerate() {
                 *e = (
-                    0.2 * (i + 1) as f64 + 0.05 * rng.uniform(),
-                    rng.uniform() * 6.0,
+                    0.2 * (i + 1) as f64 + 0.05 * rng.uniform(0.0, 1.0),
+                    rng.uniform(0.0, 6.0),
                     1.0 / (i + 1) as f64,
                 );
             }
@@ -133,7 +90,7 @@ fn simulate(
         model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
         model.add_known_forces(&qk, &mut tk);
         for j in 0..n {
-            tau[(k, j)] = tk[j] + noise * rng.normal();
+            tau[(k, j)] = tk[j] + noise * gauss.sample();
         }
     }
     Trajectory {

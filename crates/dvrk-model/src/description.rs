@@ -4,27 +4,16 @@
 
 use std::collections::BTreeMap;
 
-use nalgebra::{DMatrix, Vector3};
 use serde::Deserialize;
 
-use crate::element::{ElementsDesc, FrameContext, FrameElements};
+use crate::builder::{dh_geometry, Convention, FrameInput, Geometry, ModelBuilder};
+use crate::element::{ElementsDesc, FrameContext};
 use crate::error::ModelError;
-use crate::expr::{Affine, Expr, ExprError, NumOrExpr, Scope};
+use crate::expr::{Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
-use crate::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, Limits, LimitsSpec};
+use crate::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, LimitsSpec};
 use crate::model::*;
 use crate::resolve::Ctx;
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "lowercase")]
-/// How a DH frame's `a`, `alpha`, `d`, `theta` compose into the transform from the
-/// parent frame (the description's `convention` field).
-pub enum Convention {
-    /// Craig: `RotX(alpha)·TransX(a)·RotZ(theta)·TransZ(d)`
-    Modified,
-    /// `RotZ(theta)·TransZ(d)·TransX(a)·RotX(alpha)`
-    Standard,
-}
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -161,59 +150,6 @@ fn mentions(text: &str, name: &str) -> bool {
         .any(|token| token == name)
 }
 
-/// A frame's nominal values: a rigid body where they give one (mass, centre of mass and
-/// inertia), every other value finite and within range.
-fn check_nominal(n: &Nominal) -> Result<(), String> {
-    if let Some(m) = n.mass.filter(|&m| m < 0.0) {
-        return Err(format!("mass {m} kg: must be non-negative"));
-    }
-    if let (Some(mass), Some(com), Some(inertia)) = (n.mass, n.com, n.inertia) {
-        input::check_rigid_body(mass, com, inertia)?;
-    }
-    let scalars = [
-        ("mass", n.mass),
-        ("fc", n.fc),
-        ("fv", n.fv),
-        ("fo", n.fo),
-        ("fs", n.fs),
-        ("ia", n.ia),
-        ("k", n.k),
-    ];
-    for (name, v) in scalars {
-        if let Some(v) = v {
-            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
-        }
-    }
-    for (name, values) in [
-        ("com", n.com.as_ref().map(|c| &c[..])),
-        ("inertia", n.inertia.as_ref().map(|i| &i[..])),
-    ] {
-        for &v in values.unwrap_or(&[]) {
-            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
-        }
-    }
-    Ok(())
-}
-
-fn check_range(
-    file: &str,
-    place: &str,
-    field: &str,
-    r: Option<[f64; 2]>,
-) -> Result<(), ModelError> {
-    if let Some([lo, hi]) = r {
-        if !(lo.is_finite() && hi.is_finite() && lo <= hi) {
-            return Err(ModelError::field(
-                file,
-                place,
-                field,
-                format!("invalid range [{lo}, {hi}]"),
-            ));
-        }
-    }
-    Ok(())
-}
-
 impl Model {
     /// Builds a model from description text; `file` names it in error messages.
     pub fn from_toml_str(text: &str, file: &str) -> Result<Model, ModelError> {
@@ -225,331 +161,80 @@ impl Model {
     }
 }
 
+/// The model of a parsed description: its constants resolved, then its frames, measured
+/// joints and limits built through [`ModelBuilder`] (whose checks name the file).
 fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
-    let n = desc.coordinates.len();
-    if n > input::MAX_COORDINATES {
-        return Err(ModelError::field(
-            file,
-            "top level",
-            "coordinates",
-            format!(
-                "{n} coordinates; at most {} are accepted",
-                input::MAX_COORDINATES
-            ),
-        ));
-    }
-    if desc.frames.len() > input::MAX_FRAMES {
-        return Err(ModelError::field(
-            file,
-            "frames",
-            "",
-            format!(
-                "{} frames; at most {} are accepted",
-                desc.frames.len(),
-                input::MAX_FRAMES
-            ),
-        ));
-    }
-    if n == 0 {
-        return Err(ModelError::field(
-            file,
-            "top level",
-            "coordinates",
-            "no coordinate",
-        ));
-    }
-    for (i, c) in desc.coordinates.iter().enumerate() {
-        if desc.coordinates[..i].contains(c) {
-            return Err(ModelError::field(
-                file,
-                "top level",
-                "coordinates",
-                format!("`{c}` appears twice"),
-            ));
-        }
-    }
+    let mut b = ModelBuilder::start(
+        desc.name.clone(),
+        file,
+        desc.coordinates.clone(),
+        desc.frames.len(),
+    )?;
     let constants = resolve_constants(file, &desc.constants, &desc.coordinates)?;
     let ctx = Ctx {
         file,
         constants,
         coordinates: &desc.coordinates,
     };
-    let gravity = match &desc.gravity {
-        Some(g) => {
-            let mut v = Vector3::zeros();
-            for k in 0..3 {
-                v[k] = ctx.number("top level", "gravity", &g[k], (input::MAX_GRAVITY, "m/s²"))?;
-            }
-            v
+    if let Some(g) = &desc.gravity {
+        let mut v = [0.0; 3];
+        for k in 0..3 {
+            v[k] = ctx.number("top level", "gravity", &g[k], (input::MAX_GRAVITY, "m/s²"))?;
         }
-        None => Vector3::new(0.0, 0.0, -9.81),
-    };
-
-    let mut names: Vec<String> = vec!["base".into()];
-    let mut frames = Vec::with_capacity(desc.frames.len());
-    let mut params: Vec<Param> = Vec::new();
-    let mut stribeck: Vec<(usize, f64)> = Vec::new();
-    for (i, fd) in desc.frames.iter().enumerate() {
-        let idx = i + 1;
-        let place = format!("frame {idx} ({})", fd.name);
-        if names.contains(&fd.name) {
-            return Err(ModelError::field(
-                file,
-                &place,
-                "name",
-                "duplicate frame name",
-            ));
-        }
-        let parent = names.iter().position(|n| *n == fd.parent).ok_or_else(|| {
-            ModelError::field(
-                file,
-                &place,
-                "parent",
-                format!("`{}` is not the base nor an earlier frame", fd.parent),
-            )
-        })?;
-        let (length, angle) = ((input::MAX_LENGTH_M, "m"), (input::MAX_ANGLE_RAD, "rad"));
-        let a = ctx.number(&place, "a", &fd.a, length)?;
-        let alpha = ctx.number(&place, "alpha", &fd.alpha, angle)?;
-        let theta = ctx.affine(&place, "theta", &fd.theta, angle)?;
-        let d = ctx.affine(&place, "d", &fd.d, length)?;
-        if !theta.is_constant() && !d.is_constant() {
-            return Err(ModelError::field(
-                file,
-                &place,
-                "theta/d",
-                "only one of theta and d may depend on the coordinates",
-            ));
-        }
-        let kind = if !theta.is_constant() {
-            JointKind::Revolute
-        } else if !d.is_constant() {
-            JointKind::Prismatic
-        } else {
-            JointKind::Fixed
-        };
-        let (th0, d0) = (theta.offset, d.offset);
-        let (pre, post, value) = match (desc.convention, kind) {
-            (Convention::Modified, JointKind::Revolute) => (
-                Transform::rot_x(alpha).compose(&Transform::trans(a, 0.0, 0.0)),
-                Transform::trans(0.0, 0.0, d0),
-                theta,
-            ),
-            (Convention::Modified, JointKind::Prismatic) => (
-                Transform::rot_x(alpha)
-                    .compose(&Transform::trans(a, 0.0, 0.0))
-                    .compose(&Transform::rot_z(th0)),
-                Transform::identity(),
-                d,
-            ),
-            (Convention::Modified, JointKind::Fixed) => (
-                Transform::rot_x(alpha)
-                    .compose(&Transform::trans(a, 0.0, 0.0))
-                    .compose(&Transform::rot_z(th0))
-                    .compose(&Transform::trans(0.0, 0.0, d0)),
-                Transform::identity(),
-                Affine::constant(0.0),
-            ),
-            (Convention::Standard, JointKind::Revolute) => (
-                Transform::identity(),
-                Transform::trans(0.0, 0.0, d0)
-                    .compose(&Transform::trans(a, 0.0, 0.0))
-                    .compose(&Transform::rot_x(alpha)),
-                theta,
-            ),
-            (Convention::Standard, JointKind::Prismatic) => (
-                Transform::rot_z(th0),
-                Transform::trans(a, 0.0, 0.0).compose(&Transform::rot_x(alpha)),
-                d,
-            ),
-            (Convention::Standard, JointKind::Fixed) => (
-                Transform::rot_z(th0)
-                    .compose(&Transform::trans(0.0, 0.0, d0))
-                    .compose(&Transform::trans(a, 0.0, 0.0))
-                    .compose(&Transform::rot_x(alpha)),
-                Transform::identity(),
-                Affine::constant(0.0),
-            ),
-        };
-        let moving = kind != JointKind::Fixed;
-
-        let inertia = if fd.inertia {
-            let p0 = params.len();
-            params.extend(Param::inertia_block(idx));
-            Some(p0)
-        } else {
-            None
-        };
-        let FrameElements {
-            elements,
-            stribeck_velocity,
-        } = fd.elements.build(
-            &FrameContext {
-                ctx: &ctx,
-                place: &place,
-                index: idx,
-                value: &value,
-                moving,
-            },
-            &mut params,
-        )?;
-        if let Some(v) = stribeck_velocity {
-            stribeck.push((idx, v));
-        }
-        let nominal = fd.nominal.clone().unwrap_or_default();
-        check_nominal(&nominal).map_err(|m| ModelError::field(file, &place, "nominal", m))?;
-        let bounds = fd.bounds.clone().unwrap_or_default();
-        for (field, v) in [
-            ("bounds.fc_max", bounds.fc_max),
-            ("bounds.fv_max", bounds.fv_max),
-            ("bounds.fo_max", bounds.fo_max),
-            ("bounds.ia_max", bounds.ia_max),
-        ] {
-            if let Some(v) = v {
-                input::check_magnitude(v, input::MAX_VALUE, "")
-                    .map_err(|m| ModelError::field(file, &place, field, m))?;
-            }
-        }
-        if (bounds.mass.is_some() || bounds.com.is_some()) && inertia.is_none() {
-            return Err(ModelError::field(
-                file,
-                &place,
-                "bounds",
-                "mass/com bounds on a frame without link inertia",
-            ));
-        }
-        check_range(file, &place, "bounds.mass", bounds.mass)?;
-        check_range(file, &place, "bounds.spring", bounds.spring)?;
-        if let Some(com) = bounds.com {
-            for r in com {
-                check_range(file, &place, "bounds.com", Some(r))?;
-            }
-        }
-        frames.push(Frame {
-            name: fd.name.clone(),
-            parent,
-            kind,
-            value,
-            pre,
-            post,
-            inertia,
-            elements,
-            nominal,
-            bounds,
-        });
-        names.push(fd.name.clone());
+        b.set_gravity(v)?;
     }
-    if params.is_empty() {
-        return Err(ModelError::field(
-            file,
-            "frames",
-            "",
-            "the model has no parameter",
-        ));
+    for fd in &desc.frames {
+        add_frame(&mut b, &ctx, desc.convention, fd)?;
     }
-    input::check_parameter_count(params.len() + stribeck.len())
-        .map_err(|m| ModelError::field(file, "frames", "", m))?;
-
-    let measured = match &desc.measured {
-        Some(m) => {
-            if m.joints.len() != n {
-                return Err(ModelError::field(
-                    file,
-                    "measured",
-                    "joints",
-                    format!("{} names for {n} coordinates", m.joints.len()),
-                ));
-            }
-            let coupling = match &m.coupling {
-                Some(rows) => {
-                    if rows.len() != n || rows.iter().any(|r| r.len() != n) {
-                        return Err(ModelError::field(
-                            file,
-                            "measured",
-                            "coupling",
-                            format!("must be {n} rows of {n} numbers"),
-                        ));
-                    }
-                    for (r, row) in rows.iter().enumerate() {
-                        for (c, &x) in row.iter().enumerate() {
-                            input::check_magnitude(x, input::MAX_ANGLE_RAD, "").map_err(|m| {
-                                ModelError::field(
-                                    file,
-                                    "measured",
-                                    "coupling",
-                                    format!("row {}, column {}: {m}", r + 1, c + 1),
-                                )
-                            })?;
-                        }
-                    }
-                    DMatrix::from_fn(n, n, |r, c| rows[r][c])
-                }
-                None => DMatrix::identity(n, n),
-            };
-            if coupling.clone().try_inverse().is_none() {
-                return Err(ModelError::field(
-                    file,
-                    "measured",
-                    "coupling",
-                    "the matrix is singular",
-                ));
-            }
-            Measured {
-                joints: m.joints.clone(),
-                coupling,
-            }
-        }
-        None => Measured {
-            joints: desc.coordinates.clone(),
-            coupling: DMatrix::identity(n, n),
-        },
-    };
-
+    b.check_parameters()?;
+    if let Some(m) = &desc.measured {
+        b.set_measured(m.joints.clone(), m.coupling.clone())?;
+    }
     let spec = LimitsSpec {
         limits: desc.limits,
         cartesian_limits: desc.cartesian_limits,
     };
-    let Limits {
-        joint: limits,
-        cartesian: cartesian_limits,
-    } = spec.compile_in(&LimitScope {
+    let limits = spec.compile_in(&LimitScope {
         ctx: &ctx,
-        measured: &measured,
-        frame_names: &names,
+        measured: &b.measured(),
+        frame_names: b.frame_names(),
     })?;
+    b.set_limits(limits)?;
+    b.set_bounds(desc.bounds);
+    b.build()
+}
 
-    let coordinate_is_length = (0..n)
-        .map(|k| {
-            frames
-                .iter()
-                .any(|f| f.kind == JointKind::Prismatic && f.value.terms.iter().any(|t| t.0 == k))
-        })
-        .collect();
-    let mut model = Model {
-        name: desc.name,
-        source: file.to_string(),
-        coordinates: desc.coordinates,
-        coordinate_is_length,
-        frames,
-        gravity,
-        measured,
-        limits,
-        cartesian_limits,
-        bounds: desc.bounds,
-        params,
-        links: Vec::new(),
-        active: Vec::new(),
-        motion: Vec::new(),
-        fixed: Vec::new(),
-        post_identity: Vec::new(),
-        bodies: Vec::new(),
-        regressor_plan: Default::default(),
-        element_plan: Default::default(),
-    }
-    .finish();
-    // Stribeck parameters come after all the others, as `Model::with_stribeck` adds them.
-    for (frame, v) in stribeck {
-        model.add_stribeck(frame, v)?;
-    }
-    Ok(model)
+/// One `[[frames]]` table: its DH numbers and elements resolved against the file's
+/// constants and coordinates.
+fn add_frame(
+    b: &mut ModelBuilder,
+    ctx: &Ctx,
+    convention: Convention,
+    fd: &FrameDesc,
+) -> Result<usize, ModelError> {
+    b.frame_with(FrameInput {
+        name: &fd.name,
+        parent: &fd.parent,
+        geometry: |place: &str| dh_frame(ctx, convention, place, fd),
+        link: fd.inertia,
+        elements: |fx: &FrameContext, params: &mut Vec<Param>| fd.elements.build(ctx, fx, params),
+        nominal: fd.nominal.clone().unwrap_or_default(),
+        bounds: fd.bounds.clone().unwrap_or_default(),
+    })
+}
+
+/// The frame's `a`, `alpha`, `theta`, `d` and what they make.
+fn dh_frame(
+    ctx: &Ctx,
+    convention: Convention,
+    place: &str,
+    fd: &FrameDesc,
+) -> Result<Geometry, ModelError> {
+    let (length, angle) = ((input::MAX_LENGTH_M, "m"), (input::MAX_ANGLE_RAD, "rad"));
+    let a = ctx.number(place, "a", &fd.a, length)?;
+    let alpha = ctx.number(place, "alpha", &fd.alpha, angle)?;
+    let theta = ctx.affine(place, "theta", &fd.theta, angle)?;
+    let d = ctx.affine(place, "d", &fd.d, length)?;
+    dh_geometry(convention, a, alpha, &theta, &d)
+        .map_err(|m| ModelError::field(ctx.file, place, "theta/d", m))
 }

@@ -12,7 +12,8 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::element::{sign0, Sample};
 use crate::inertia::{sym3, transform_barycentric};
-use crate::model::{Axis, Body, Model, Transform};
+use crate::model::{Axis, Body, Model};
+use crate::spatial::Transform;
 use crate::workspace::{BodyBuffers, Workspace};
 
 /// The mass matrix is not positive definite at this configuration (the parameters are
@@ -215,29 +216,6 @@ impl Model {
         assert_eq!(params.len(), self.n_params(), "parameter vector length");
     }
 
-    /// Core of the inverse dynamics; writes `tau` (length n).
-    #[allow(clippy::too_many_arguments)]
-    pub(crate) fn rnea(
-        &self,
-        ws: &mut Workspace,
-        params: &[f64],
-        q: &[f64],
-        dq: &[f64],
-        ddq: &[f64],
-        terms: Terms,
-        tau: &mut [f64],
-    ) {
-        self.check_state(ws, params, &[q, dq, ddq, tau]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
-        let motion = Motion {
-            velocity: true,
-            acceleration: true,
-        };
-        self.body_rnea(ws, dq, ddq, motion, true, tau);
-        self.add_elements(params, q, dq, ddq, terms, tau);
-    }
-
     /// The elements' torques (friction, springs, motor inertias...), added into `tau`.
     #[inline]
     fn add_elements(
@@ -282,7 +260,15 @@ impl Model {
         ddq: &[f64],
         tau: &mut [f64],
     ) {
-        self.rnea(ws, params, q, dq, ddq, ALL, tau);
+        self.check_state(ws, params, &[q, dq, ddq, tau]);
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
+        let motion = Motion {
+            velocity: true,
+            acceleration: true,
+        };
+        self.body_rnea(ws, dq, ddq, motion, true, tau);
+        self.add_elements(params, q, dq, ddq, ALL, tau);
     }
 
     /// Gravity torque `g(q)` of the links alone (N·m or N), as Pinocchio's

@@ -8,7 +8,6 @@
 
 use exmex::prelude::*;
 use exmex::FlatEx;
-use serde::{Deserialize, Serialize};
 
 /// Largest number of distinct names (coordinates and constants) in one expression: the
 /// size of the evaluation buffer.
@@ -43,6 +42,14 @@ pub struct Affine {
 }
 
 impl Affine {
+    /// The coordinate `q_k` itself (rad or m).
+    pub fn coordinate(k: usize) -> Self {
+        Affine {
+            terms: vec![(k, 1.0)],
+            offset: 0.0,
+        }
+    }
+
     /// A constant.
     pub fn constant(b: f64) -> Self {
         Affine {
@@ -146,8 +153,12 @@ pub(crate) fn format_coefficient(x: f64) -> String {
 }
 
 /// A number, or an expression string evaluated at load time.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Serialize, serde::Deserialize),
+    serde(untagged)
+)]
 pub enum NumOrExpr {
     /// A plain number.
     Num(f64),

@@ -106,7 +106,8 @@ pub fn transform_barycentric(
 }
 
 /// Standard parameters of one link.
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct StandardInertia {
     /// kg
     pub mass: f64,

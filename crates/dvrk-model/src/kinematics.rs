@@ -3,7 +3,8 @@
 
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-use crate::model::{JointKind, Model, Transform};
+use crate::model::{JointKind, Model};
+use crate::spatial::Transform;
 use crate::workspace::Workspace;
 
 impl Model {

@@ -11,7 +11,9 @@
 //! Design, as in Pinocchio: an immutable [`Model`] built once, and a mutable
 //! [`Workspace`] reused per sample, so the real-time calls (inverse dynamics, gravity,
 //! regressor into a buffer) allocate nothing. The crate has no dependency on the
-//! identification stack and can be embedded in a controller.
+//! identification stack and can be embedded in a controller: without its default feature
+//! `description` (`default-features = false`) it parses no file (no TOML, URDF, XML or
+//! serde) and [`ModelBuilder`] builds the model from numbers.
 //!
 //! ```
 //! use dvrk_model::{Model, Workspace};
@@ -29,7 +31,10 @@
 #![warn(missing_docs)]
 
 mod base;
+mod builder;
+#[cfg(feature = "description")]
 mod builtin;
+#[cfg(feature = "description")]
 mod description;
 mod dynamics;
 mod element;
@@ -42,23 +47,30 @@ mod limits;
 mod model;
 mod param;
 mod regressor;
+#[cfg(feature = "description")]
 mod resolve;
+mod spatial;
 mod summary;
+#[cfg(feature = "description")]
 mod urdf;
+#[cfg(feature = "description")]
 mod urdf_export;
 mod workspace;
 
 pub use base::BaseParameters;
+pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
+#[cfg(feature = "description")]
 pub use builtin::is_urdf_document;
-pub use description::Convention;
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
-    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, Friction, KnownForce,
-    MotorInertia, Note, QuadraticViscous, Sample, Spring, Stribeck,
+    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
+    KnownForce, MotorInertia, Note, QuadraticViscous, Sample, Spring, Stribeck,
 };
 pub use error::ModelError;
-pub use expr::NumOrExpr;
-pub use limits::{CartesianLimitSpec, JointLimitSpec, Limits, LimitsSpec};
+pub use expr::{Affine, NumOrExpr};
+pub use limits::Limits;
+#[cfg(feature = "description")]
+pub use limits::{CartesianLimitSpec, JointLimitSpec, LimitsSpec};
 pub use model::*;
 pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use workspace::Workspace;

@@ -22,14 +22,22 @@
 //! assert_eq!(again.joint[0].expr, limits.joint[0].expr);
 //! ```
 
+#[cfg(feature = "description")]
 use serde::{Deserialize, Serialize};
 
+#[cfg(feature = "description")]
 use crate::error::ModelError;
+#[cfg(feature = "description")]
 use crate::expr::NumOrExpr;
+#[cfg(feature = "description")]
 use crate::input;
-use crate::model::{CartesianLimit, Limit, Measured, Model};
+#[cfg(feature = "description")]
+use crate::model::Measured;
+use crate::model::{CartesianLimit, Limit, Model};
+#[cfg(feature = "description")]
 use crate::resolve::Ctx;
 
+#[cfg(feature = "description")]
 /// Limits as written: joint limits and Cartesian boxes (the tables of a limits file).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -42,6 +50,7 @@ pub struct LimitsSpec {
     pub cartesian_limits: Vec<CartesianLimitSpec>,
 }
 
+#[cfg(feature = "description")]
 /// One `[[limits]]` table: ranges on an affine expression of coordinates and measured
 /// joints. A missing range is unlimited.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -72,6 +81,7 @@ pub struct JointLimitSpec {
     pub acceleration: Option<[NumOrExpr; 2]>,
 }
 
+#[cfg(feature = "description")]
 /// One `[[cartesian_limits]]` table: a box, in the base frame (m), that the origin of
 /// `frame` must stay in; an infinite side leaves the box open.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -87,6 +97,7 @@ pub struct CartesianLimitSpec {
     pub max: [NumOrExpr; 3],
 }
 
+#[cfg(feature = "description")]
 /// Ranges and corners written as lists (serde writes fixed arrays as tuples, which
 /// Python would get as `tuple`s where a limits file and JSON have lists).
 mod as_list {
@@ -141,6 +152,7 @@ impl Limits {
         self.joint.is_empty() && self.cartesian.is_empty()
     }
 
+    #[cfg(feature = "description")]
     /// The limits of a limits file's text for `model` (see [`LimitsSpec::from_toml_str`]
     /// and [`LimitsSpec::compile`]); `file` names it in messages.
     pub fn from_toml_str(model: &Model, text: &str, file: &str) -> Result<Limits, ModelError> {
@@ -148,6 +160,7 @@ impl Limits {
     }
 }
 
+#[cfg(feature = "description")]
 /// Where a spec's names and numbers are resolved: the file, its constants and the
 /// coordinates (`ctx`), the measured joints and the frame names (base first).
 pub(crate) struct LimitScope<'a> {
@@ -156,6 +169,7 @@ pub(crate) struct LimitScope<'a> {
     pub frame_names: &'a [String],
 }
 
+#[cfg(feature = "description")]
 /// The constants a limits file knows (a description adds its own `[constants]`).
 fn file_constants() -> Vec<(String, f64)> {
     vec![
@@ -164,6 +178,7 @@ fn file_constants() -> Vec<(String, f64)> {
     ]
 }
 
+#[cfg(feature = "description")]
 impl LimitsSpec {
     /// Reads a limits file's text; `file` names it in messages. A file without any
     /// table is refused (an empty `--limits` file is almost certainly a mistake: it

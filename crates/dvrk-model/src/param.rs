@@ -78,8 +78,12 @@ impl Param {
 }
 
 /// Prior (nominal) values of one frame's parameters, standard (centre-of-mass) form.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(deny_unknown_fields)
+)]
 pub struct Nominal {
     /// kg
     pub mass: Option<f64>,
@@ -102,8 +106,12 @@ pub struct Nominal {
 }
 
 /// Per-frame bounds for the physically consistent fit.
-#[derive(Clone, Debug, Default, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields)]
+#[derive(Clone, Debug, Default, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(deny_unknown_fields)
+)]
 pub struct FrameBounds {
     /// kg
     pub mass: Option<[f64; 2]>,
@@ -127,8 +135,12 @@ pub struct FrameBounds {
 /// has some inertia, and nothing more is known of them a priori. [`GlobalBounds::WANG_2019`] are
 /// the bounds of the 2019 fit, kept to reproduce it: they exclude the small wrist
 /// friction and motor inertias the real PSM and MTM data ask for.
-#[derive(Clone, Debug, PartialEq, serde::Deserialize, serde::Serialize)]
-#[serde(deny_unknown_fields, default)]
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(deny_unknown_fields, default)
+)]
 pub struct GlobalBounds {
     /// Coulomb friction, N·m or N
     pub fc_min: f64,

@@ -15,7 +15,8 @@ use nalgebra::Vector3;
 use wide::f64x2;
 
 use crate::dynamics::Motion;
-use crate::model::{Model, Transform};
+use crate::model::Model;
+use crate::spatial::Transform;
 use crate::workspace::Workspace;
 
 impl Model {

@@ -1,13 +1,12 @@
 //! A serializable overview of a model, shared by the CLI (`dvrk-ident model --json`) and
 //! the Python module so that both print the same document.
 
-use serde::Serialize;
-
 use crate::base::BaseParameters;
 use crate::model::{JointKind, Model};
 
 /// One frame, as listed in a summary.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct FrameSummary {
     /// Frame index (1-based; 0 is the base).
     pub index: usize,
@@ -25,7 +24,8 @@ pub struct FrameSummary {
 }
 
 /// One base parameter.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct BaseSummary {
     /// Name of the base parameter's leading (kept) standard parameter.
     pub name: String,
@@ -34,7 +34,8 @@ pub struct BaseSummary {
 }
 
 /// The document printed by `dvrk-ident model ROBOT --json`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize))]
 pub struct ModelSummary {
     /// The robot's name, e.g. `psm`.
     pub name: String,

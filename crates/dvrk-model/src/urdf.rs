@@ -13,9 +13,11 @@
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
+use crate::builder::{assemble, ModelParts};
 use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::input;
+use crate::limits::Limits;
 use crate::model::*;
 
 fn rpy(r: &[f64; 3]) -> Matrix3<f64> {
@@ -76,284 +78,26 @@ impl Model {
                 "cannot parse the document (malformed XML or a missing element): {e}"
             ))
         })?;
-        if robot.joints.len() > input::MAX_FRAMES {
-            return Err(err(format!(
-                "{} joints; at most {} are accepted",
-                robot.joints.len(),
-                input::MAX_FRAMES
-            )));
-        }
-        // Every joint's child link carries 10 parameters.
-        input::check_parameter_count(10 * robot.joints.len()).map_err(err)?;
-        let mut seen = std::collections::HashSet::new();
-        if let Some(l) = robot.links.iter().find(|l| !seen.insert(l.name.as_str())) {
-            return Err(err(format!("link `{}` is defined twice", l.name)));
-        }
-        let mut seen = std::collections::HashSet::new();
-        if let Some(j) = robot.joints.iter().find(|j| !seen.insert(j.name.as_str())) {
-            return Err(err(format!("joint `{}` is defined twice", j.name)));
-        }
-        let is_child = |l: &str| robot.joints.iter().any(|j| j.child.link == l);
-        let roots: Vec<&str> = robot
-            .links
-            .iter()
-            .map(|l| l.name.as_str())
-            .filter(|l| !is_child(l))
-            .collect();
-        if roots.len() != 1 {
-            return Err(err(format!(
-                "expected one root link, found {}: {:?}",
-                roots.len(),
-                roots
-            )));
-        }
-        // Breadth-first order from the root so parents precede children.
-        let mut order: Vec<usize> = Vec::new();
-        let mut frontier = std::collections::VecDeque::from([roots[0].to_string()]);
-        let mut link_frame: std::collections::HashMap<String, usize> =
-            [(roots[0].to_string(), 0usize)].into_iter().collect();
-        while let Some(link) = frontier.pop_front() {
-            for (ji, j) in robot.joints.iter().enumerate() {
-                if j.parent.link == link {
-                    if link_frame.contains_key(&j.child.link) {
-                        return Err(err(format!(
-                            "link `{}` has two parents (joint `{}` closes a loop or duplicates another joint)",
-                            j.child.link, j.name
-                        )));
-                    }
-                    order.push(ji);
-                    link_frame.insert(j.child.link.clone(), order.len());
-                    frontier.push_back(j.child.link.clone());
-                }
-            }
-        }
-        if order.len() != robot.joints.len() {
-            let lost: Vec<String> = robot
-                .joints
-                .iter()
-                .enumerate()
-                .filter(|(ji, _)| !order.contains(ji))
-                .map(|(_, j)| format!("`{}` (parent link `{}`)", j.name, j.parent.link))
-                .collect();
-            return Err(err(format!(
-                "joints not connected to the root link `{}`: {}",
-                roots[0],
-                lost.join(", ")
-            )));
-        }
-        // Coordinates: moving joints without mimic, in tree order.
-        let mut coordinates = Vec::new();
-        let mut coordinate_is_length = Vec::new();
-        for &ji in &order {
-            let j = &robot.joints[ji];
-            match j.joint_type {
-                urdf_rs::JointType::Revolute
-                | urdf_rs::JointType::Continuous
-                | urdf_rs::JointType::Prismatic => {
-                    if j.mimic.is_none() {
-                        coordinates.push(j.name.clone());
-                        coordinate_is_length.push(j.joint_type == urdf_rs::JointType::Prismatic);
-                    }
-                }
-                urdf_rs::JointType::Fixed => {}
-                ref other => {
-                    let kind = format!("{other:?}").to_lowercase();
-                    return Err(err(format!(
-                        "joint `{}`: type `{kind}` is not supported (revolute, continuous, prismatic, fixed)",
-                        j.name
-                    )));
-                }
-            }
-        }
-        if coordinates.len() > input::MAX_COORDINATES {
-            return Err(err(format!(
-                "{} moving joints; at most {} are accepted",
-                coordinates.len(),
-                input::MAX_COORDINATES
-            )));
-        }
-        let finite = |v: &[f64; 3], max: f64| v.iter().all(|x| x.is_finite() && x.abs() <= max);
-        let coord_of = |name: &str| coordinates.iter().position(|c| c == name);
+        check_sizes_and_names(&robot).map_err(err)?;
+        let tree = Tree::of(&robot).map_err(err)?;
+        let (coordinates, coordinate_is_length) = coordinates(&robot, &tree.order).map_err(err)?;
         let mut frames = Vec::new();
         let mut params = Vec::new();
         let mut limits = Vec::new();
-        for (fi, &ji) in order.iter().enumerate() {
-            let idx = fi + 1;
+        for (fi, &ji) in tree.order.iter().enumerate() {
             let j = &robot.joints[ji];
-            if !finite(&j.origin.xyz.0, input::MAX_LENGTH_M)
-                || !finite(&j.origin.rpy.0, input::MAX_ANGLE_RAD)
-            {
-                return Err(err(format!(
-                    "joint `{}`: origin xyz {:?} m, rpy {:?} rad: must be finite, within ±{:e} m \
-                     and ±{:e} rad",
-                    j.name,
-                    j.origin.xyz.0,
-                    j.origin.rpy.0,
-                    input::MAX_LENGTH_M,
-                    input::MAX_ANGLE_RAD
-                )));
-            }
-            let origin = Transform {
-                rotation: rpy(&j.origin.rpy.0),
-                translation: Vector3::from(j.origin.xyz.0),
-            };
-            let kind = match j.joint_type {
-                urdf_rs::JointType::Prismatic => JointKind::Prismatic,
-                urdf_rs::JointType::Fixed => JointKind::Fixed,
-                _ => JointKind::Revolute,
-            };
-            let (pre, post) = if kind == JointKind::Fixed {
-                (origin, Transform::identity())
-            } else {
-                let axis = Vector3::from(j.axis.xyz.0);
-                if !axis.iter().all(|x| x.is_finite()) || axis.norm() < 1e-12 {
-                    return Err(err(format!(
-                        "joint `{}`: axis {:?} is zero or not finite",
-                        j.name, j.axis.xyz.0
-                    )));
-                }
-                let r = align_z(&axis.normalize());
-                (
-                    origin.compose(&Transform {
-                        rotation: r,
-                        translation: Vector3::zeros(),
-                    }),
-                    Transform {
-                        rotation: r.transpose(),
-                        translation: Vector3::zeros(),
-                    },
-                )
-            };
-            let value = if kind == JointKind::Fixed {
-                Affine::constant(0.0)
-            } else if let Some(m) = &j.mimic {
-                let k = coord_of(&m.joint).ok_or_else(|| {
-                    let why = match robot.joints.iter().find(|o| o.name == m.joint) {
-                        None => "no joint has that name",
-                        Some(o) if o.mimic.is_some() => "it is itself a mimic joint",
-                        Some(_) => "it is not a moving joint",
-                    };
-                    err(format!("joint `{}` mimics `{}`: {why}", j.name, m.joint))
-                })?;
-                let multiplier = m.multiplier.unwrap_or(1.0);
-                let offset = m.offset.unwrap_or(0.0);
-                let max = input::MAX_ANGLE_RAD;
-                if !(multiplier.is_finite()
-                    && offset.is_finite()
-                    && multiplier.abs() <= max
-                    && offset.abs() <= max)
-                {
-                    return Err(err(format!(
-                        "joint `{}`: mimic multiplier {multiplier} and offset {offset} must be \
-                         finite and within ±{max:e}",
-                        j.name
-                    )));
-                }
-                Affine {
-                    terms: vec![(k, multiplier)],
-                    offset,
-                }
-            } else {
-                Affine {
-                    terms: vec![(coord_of(&j.name).expect("coordinate"), 1.0)],
-                    offset: 0.0,
-                }
-            };
+            let (kind, pre, post) = joint_pose(j).map_err(err)?;
+            let value = joint_value(&robot, j, kind, &coordinates).map_err(err)?;
             if kind != JointKind::Fixed {
-                // Limits on the joint value s (for a mimic joint, multiplier·q + offset).
-                let lim = &j.limit;
-                if [
-                    lim.lower,
-                    lim.upper,
-                    lim.velocity,
-                    lim.acceleration,
-                    lim.effort,
-                ]
-                .iter()
-                .any(|v| v.is_nan())
-                {
-                    return Err(err(format!("joint `{}`: <limit> has a NaN value", j.name)));
-                }
-                let position = (j.joint_type != urdf_rs::JointType::Continuous
-                    && lim.lower.is_finite()
-                    && lim.upper.is_finite()
-                    && lim.lower < lim.upper)
-                    .then_some([lim.lower, lim.upper]);
-                let symmetric = |v: f64| (v.is_finite() && v > 0.0).then_some([-v, v]);
-                let velocity = symmetric(lim.velocity);
-                let acceleration = symmetric(lim.acceleration);
-                if position.is_some() || velocity.is_some() || acceleration.is_some() {
-                    limits.push(Limit {
-                        label: j.name.clone(),
-                        expr: value.clone(),
-                        position,
-                        velocity,
-                        acceleration,
-                    });
-                }
+                limits.extend(joint_limit(j, &value).map_err(err)?);
             }
-            let link = robot
-                .links
-                .iter()
-                .find(|l| l.name == j.child.link)
-                .ok_or_else(|| {
-                    err(format!(
-                        "joint `{}`: child link `{}` is not defined",
-                        j.name, j.child.link
-                    ))
-                })?;
-            let inertial = &link.inertial;
-            let i = &inertial.inertia;
-            let values = [
-                inertial.mass.value,
-                i.ixx,
-                i.ixy,
-                i.ixz,
-                i.iyy,
-                i.iyz,
-                i.izz,
-            ];
-            if !values.iter().all(|x| x.is_finite())
-                || !finite(&inertial.origin.xyz.0, input::MAX_LENGTH_M)
-                || !finite(&inertial.origin.rpy.0, input::MAX_ANGLE_RAD)
-            {
-                return Err(err(format!(
-                    "link `{}`: inertial values must be finite (origin within ±{:e} m, ±{:e} rad)",
-                    link.name,
-                    input::MAX_LENGTH_M,
-                    input::MAX_ANGLE_RAD
-                )));
-            }
-            // Inertia about the centre of mass, rotated from the inertial frame to the link frame.
-            let ri = rpy(&inertial.origin.rpy.0);
-            let ic =
-                ri * Matrix3::new(
-                    i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
-                ) * ri.transpose();
-            input::check_rigid_body(
-                inertial.mass.value,
-                inertial.origin.xyz.0,
-                [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz],
-            )
-            .map_err(|m| err(format!("link `{}`: <inertial>: {m}", link.name)))?;
-            let nominal = Nominal {
-                mass: Some(inertial.mass.value),
-                com: Some(inertial.origin.xyz.0),
-                inertia: Some([
-                    ic[(0, 0)],
-                    ic[(0, 1)],
-                    ic[(0, 2)],
-                    ic[(1, 1)],
-                    ic[(1, 2)],
-                    ic[(2, 2)],
-                ]),
-                ..Default::default()
-            };
+            let link = child_link(&robot, j).map_err(err)?;
+            let nominal = link_nominal(link).map_err(err)?;
             let p0 = params.len();
-            params.extend(Param::inertia_block(idx));
+            params.extend(Param::inertia_block(fi + 1));
             frames.push(Frame {
                 name: link.name.clone(),
-                parent: link_frame[&j.parent.link],
+                parent: tree.link_frame[&j.parent.link],
                 kind,
                 value,
                 pre,
@@ -369,7 +113,7 @@ impl Model {
             return Err(err("no moving joint".into()));
         }
         let n = coordinates.len();
-        Ok(Model {
+        Ok(assemble(ModelParts {
             name: robot.name.clone(),
             source: file.to_string(),
             measured: Measured {
@@ -380,19 +124,339 @@ impl Model {
             coordinate_is_length,
             frames,
             gravity: Vector3::new(0.0, 0.0, -9.81),
-            limits,
-            cartesian_limits: Vec::new(),
+            limits: Limits {
+                joint: limits,
+                cartesian: Vec::new(),
+            },
             bounds: GlobalBounds::default(),
             params,
-            links: Vec::new(),
-            active: Vec::new(),
-            motion: Vec::new(),
-            fixed: Vec::new(),
-            post_identity: Vec::new(),
-            bodies: Vec::new(),
-            regressor_plan: Default::default(),
-            element_plan: Default::default(),
-        }
-        .finish())
+        }))
     }
+}
+
+/// Within the size limits (joints, parameters), each link and joint defined once.
+fn check_sizes_and_names(robot: &urdf_rs::Robot) -> Result<(), String> {
+    if robot.joints.len() > input::MAX_FRAMES {
+        return Err(format!(
+            "{} joints; at most {} are accepted",
+            robot.joints.len(),
+            input::MAX_FRAMES
+        ));
+    }
+    // Every joint's child link carries 10 parameters.
+    input::check_parameter_count(10 * robot.joints.len())?;
+    let mut seen = std::collections::HashSet::new();
+    if let Some(l) = robot.links.iter().find(|l| !seen.insert(l.name.as_str())) {
+        return Err(format!("link `{}` is defined twice", l.name));
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(j) = robot.joints.iter().find(|j| !seen.insert(j.name.as_str())) {
+        return Err(format!("joint `{}` is defined twice", j.name));
+    }
+    Ok(())
+}
+
+/// The joints in breadth-first order from the root link, so parents precede children.
+struct Tree {
+    /// Joint indices, in frame order.
+    order: Vec<usize>,
+    /// Frame index of each link (the root link is the base, 0).
+    link_frame: std::collections::HashMap<String, usize>,
+}
+
+impl Tree {
+    /// The tree of `robot`: one root link, no link with two parents, every joint
+    /// connected.
+    fn of(robot: &urdf_rs::Robot) -> Result<Tree, String> {
+        let is_child = |l: &str| robot.joints.iter().any(|j| j.child.link == l);
+        let roots: Vec<&str> = robot
+            .links
+            .iter()
+            .map(|l| l.name.as_str())
+            .filter(|l| !is_child(l))
+            .collect();
+        if roots.len() != 1 {
+            return Err(format!(
+                "expected one root link, found {}: {:?}",
+                roots.len(),
+                roots
+            ));
+        }
+        let mut order: Vec<usize> = Vec::new();
+        let mut frontier = std::collections::VecDeque::from([roots[0].to_string()]);
+        let mut link_frame: std::collections::HashMap<String, usize> =
+            [(roots[0].to_string(), 0usize)].into_iter().collect();
+        while let Some(link) = frontier.pop_front() {
+            for (ji, j) in robot.joints.iter().enumerate() {
+                if j.parent.link == link {
+                    if link_frame.contains_key(&j.child.link) {
+                        return Err(format!(
+                            "link `{}` has two parents (joint `{}` closes a loop or duplicates another joint)",
+                            j.child.link, j.name
+                        ));
+                    }
+                    order.push(ji);
+                    link_frame.insert(j.child.link.clone(), order.len());
+                    frontier.push_back(j.child.link.clone());
+                }
+            }
+        }
+        if order.len() != robot.joints.len() {
+            let lost: Vec<String> = robot
+                .joints
+                .iter()
+                .enumerate()
+                .filter(|(ji, _)| !order.contains(ji))
+                .map(|(_, j)| format!("`{}` (parent link `{}`)", j.name, j.parent.link))
+                .collect();
+            return Err(format!(
+                "joints not connected to the root link `{}`: {}",
+                roots[0],
+                lost.join(", ")
+            ));
+        }
+        Ok(Tree { order, link_frame })
+    }
+}
+
+/// The coordinates (moving joints without mimic, in tree order) and whether each is a
+/// length; unsupported joint types are refused.
+fn coordinates(
+    robot: &urdf_rs::Robot,
+    order: &[usize],
+) -> Result<(Vec<String>, Vec<bool>), String> {
+    let mut coordinates = Vec::new();
+    let mut coordinate_is_length = Vec::new();
+    for &ji in order {
+        let j = &robot.joints[ji];
+        match j.joint_type {
+            urdf_rs::JointType::Revolute
+            | urdf_rs::JointType::Continuous
+            | urdf_rs::JointType::Prismatic => {
+                if j.mimic.is_none() {
+                    coordinates.push(j.name.clone());
+                    coordinate_is_length.push(j.joint_type == urdf_rs::JointType::Prismatic);
+                }
+            }
+            urdf_rs::JointType::Fixed => {}
+            ref other => {
+                let kind = format!("{other:?}").to_lowercase();
+                return Err(format!(
+                    "joint `{}`: type `{kind}` is not supported (revolute, continuous, prismatic, fixed)",
+                    j.name
+                ));
+            }
+        }
+    }
+    if coordinates.len() > input::MAX_COORDINATES {
+        return Err(format!(
+            "{} moving joints; at most {} are accepted",
+            coordinates.len(),
+            input::MAX_COORDINATES
+        ));
+    }
+    Ok((coordinates, coordinate_is_length))
+}
+
+/// All of `v` finite and within ±`max`.
+fn finite(v: &[f64; 3], max: f64) -> bool {
+    v.iter().all(|x| x.is_finite() && x.abs() <= max)
+}
+
+/// The joint's kind and its `pre`/`post` transforms: the origin, then z turned onto the
+/// joint's axis (and back after the motion).
+fn joint_pose(j: &urdf_rs::Joint) -> Result<(JointKind, Transform, Transform), String> {
+    if !finite(&j.origin.xyz.0, input::MAX_LENGTH_M)
+        || !finite(&j.origin.rpy.0, input::MAX_ANGLE_RAD)
+    {
+        return Err(format!(
+            "joint `{}`: origin xyz {:?} m, rpy {:?} rad: must be finite, within ±{:e} m \
+             and ±{:e} rad",
+            j.name,
+            j.origin.xyz.0,
+            j.origin.rpy.0,
+            input::MAX_LENGTH_M,
+            input::MAX_ANGLE_RAD
+        ));
+    }
+    let origin = Transform {
+        rotation: rpy(&j.origin.rpy.0),
+        translation: Vector3::from(j.origin.xyz.0),
+    };
+    let kind = match j.joint_type {
+        urdf_rs::JointType::Prismatic => JointKind::Prismatic,
+        urdf_rs::JointType::Fixed => JointKind::Fixed,
+        _ => JointKind::Revolute,
+    };
+    if kind == JointKind::Fixed {
+        return Ok((kind, origin, Transform::identity()));
+    }
+    let axis = Vector3::from(j.axis.xyz.0);
+    if !axis.iter().all(|x| x.is_finite()) || axis.norm() < 1e-12 {
+        return Err(format!(
+            "joint `{}`: axis {:?} is zero or not finite",
+            j.name, j.axis.xyz.0
+        ));
+    }
+    let r = align_z(&axis.normalize());
+    let pre = origin.compose(&Transform {
+        rotation: r,
+        translation: Vector3::zeros(),
+    });
+    let post = Transform {
+        rotation: r.transpose(),
+        translation: Vector3::zeros(),
+    };
+    Ok((kind, pre, post))
+}
+
+/// The joint value: its own coordinate, a mimic's `multiplier·q + offset`, or a constant
+/// for a fixed joint.
+fn joint_value(
+    robot: &urdf_rs::Robot,
+    j: &urdf_rs::Joint,
+    kind: JointKind,
+    coordinates: &[String],
+) -> Result<Affine, String> {
+    let coord_of = |name: &str| coordinates.iter().position(|c| c == name);
+    if kind == JointKind::Fixed {
+        return Ok(Affine::constant(0.0));
+    }
+    let Some(m) = &j.mimic else {
+        return Ok(Affine {
+            terms: vec![(coord_of(&j.name).expect("coordinate"), 1.0)],
+            offset: 0.0,
+        });
+    };
+    let k = coord_of(&m.joint).ok_or_else(|| {
+        let why = match robot.joints.iter().find(|o| o.name == m.joint) {
+            None => "no joint has that name",
+            Some(o) if o.mimic.is_some() => "it is itself a mimic joint",
+            Some(_) => "it is not a moving joint",
+        };
+        format!("joint `{}` mimics `{}`: {why}", j.name, m.joint)
+    })?;
+    let multiplier = m.multiplier.unwrap_or(1.0);
+    let offset = m.offset.unwrap_or(0.0);
+    let max = input::MAX_ANGLE_RAD;
+    if !(multiplier.is_finite()
+        && offset.is_finite()
+        && multiplier.abs() <= max
+        && offset.abs() <= max)
+    {
+        return Err(format!(
+            "joint `{}`: mimic multiplier {multiplier} and offset {offset} must be \
+             finite and within ±{max:e}",
+            j.name
+        ));
+    }
+    Ok(Affine {
+        terms: vec![(k, multiplier)],
+        offset,
+    })
+}
+
+/// The `<limit>` of a moving joint on its value `value` (for a mimic joint,
+/// multiplier·q + offset), if it limits anything.
+fn joint_limit(j: &urdf_rs::Joint, value: &Affine) -> Result<Option<Limit>, String> {
+    let lim = &j.limit;
+    if [
+        lim.lower,
+        lim.upper,
+        lim.velocity,
+        lim.acceleration,
+        lim.effort,
+    ]
+    .iter()
+    .any(|v| v.is_nan())
+    {
+        return Err(format!("joint `{}`: <limit> has a NaN value", j.name));
+    }
+    let position = (j.joint_type != urdf_rs::JointType::Continuous
+        && lim.lower.is_finite()
+        && lim.upper.is_finite()
+        && lim.lower < lim.upper)
+        .then_some([lim.lower, lim.upper]);
+    let symmetric = |v: f64| (v.is_finite() && v > 0.0).then_some([-v, v]);
+    let velocity = symmetric(lim.velocity);
+    let acceleration = symmetric(lim.acceleration);
+    if position.is_none() && velocity.is_none() && acceleration.is_none() {
+        return Ok(None);
+    }
+    Ok(Some(Limit {
+        label: j.name.clone(),
+        expr: value.clone(),
+        position,
+        velocity,
+        acceleration,
+    }))
+}
+
+/// The joint's child link, which must be defined.
+fn child_link<'a>(
+    robot: &'a urdf_rs::Robot,
+    j: &urdf_rs::Joint,
+) -> Result<&'a urdf_rs::Link, String> {
+    robot
+        .links
+        .iter()
+        .find(|l| l.name == j.child.link)
+        .ok_or_else(|| {
+            format!(
+                "joint `{}`: child link `{}` is not defined",
+                j.name, j.child.link
+            )
+        })
+}
+
+/// The link's `<inertial>` as nominal values in the link frame: a rigid body of finite
+/// numbers, its inertia about the centre of mass rotated from the inertial frame.
+fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, String> {
+    let inertial = &link.inertial;
+    let i = &inertial.inertia;
+    let values = [
+        inertial.mass.value,
+        i.ixx,
+        i.ixy,
+        i.ixz,
+        i.iyy,
+        i.iyz,
+        i.izz,
+    ];
+    if !values.iter().all(|x| x.is_finite())
+        || !finite(&inertial.origin.xyz.0, input::MAX_LENGTH_M)
+        || !finite(&inertial.origin.rpy.0, input::MAX_ANGLE_RAD)
+    {
+        return Err(format!(
+            "link `{}`: inertial values must be finite (origin within ±{:e} m, ±{:e} rad)",
+            link.name,
+            input::MAX_LENGTH_M,
+            input::MAX_ANGLE_RAD
+        ));
+    }
+    // Inertia about the centre of mass, rotated from the inertial frame to the link frame.
+    let ri = rpy(&inertial.origin.rpy.0);
+    let ic =
+        ri * Matrix3::new(
+            i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+        ) * ri.transpose();
+    input::check_rigid_body(
+        inertial.mass.value,
+        inertial.origin.xyz.0,
+        [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz],
+    )
+    .map_err(|m| format!("link `{}`: <inertial>: {m}", link.name))?;
+    Ok(Nominal {
+        mass: Some(inertial.mass.value),
+        com: Some(inertial.origin.xyz.0),
+        inertia: Some([
+            ic[(0, 0)],
+            ic[(0, 1)],
+            ic[(0, 2)],
+            ic[(1, 1)],
+            ic[(1, 2)],
+            ic[(2, 2)],
+        ]),
+        ..Default::default()
+    })
 }

@@ -4,7 +4,8 @@
 
 use nalgebra::Vector3;
 
-use crate::model::{Model, Transform};
+use crate::model::Model;
+use crate::spatial::Transform;
 
 /// Mutable buffers for one thread. Create one per model and thread with
 /// [`Workspace::new`]; every algorithm overwrites what it uses.

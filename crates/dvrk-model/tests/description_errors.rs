@@ -1,6 +1,9 @@
 //! Every mistake in a description file is reported with the file, the frame (or section)
 //! and the field, so that the user finds the line.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{Model, ModelError};
 
 const FILE: &str = "robots/my_arm.toml";

@@ -7,6 +7,9 @@
 //! built-in robots and on a chain with fixed links between and after moving frames
 //! (merged into their moving parent).
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};

@@ -2,6 +2,9 @@
 //! the textbook planar two-link arm, a prismatic joint along gravity, springs, friction,
 //! motor inertias on coupled frames, standard vs modified DH, known forces.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::{inertia, sign0, Model, Workspace};

@@ -2,6 +2,9 @@
 //! dynamics, mass matrix, forward dynamics, energy balance, gravity, Jacobians — on the
 //! built-in PSM, simplified PSM and MTM at seeded random samples.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::{Model, ParamKind, Workspace};

@@ -4,6 +4,9 @@
 //! test binary re-run on the one test) on a thread with the default 2 MiB stack of
 //! `std::thread` and of the test harness.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use std::process::Command;
 
 use dvrk_model::{Model, Workspace};

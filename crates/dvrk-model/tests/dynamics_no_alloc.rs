@@ -2,6 +2,9 @@
 //! allocator (this test binary only) counts allocations on the current thread while a
 //! flag is set.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 

@@ -5,6 +5,9 @@
 //! the built-in robots, the invariants each element must keep (its columns partition the
 //! non-link parameters, its description line reads back as itself).
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::{

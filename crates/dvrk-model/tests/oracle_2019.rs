@@ -1,6 +1,9 @@
 //! The regressor against the 2019 package's symbolic (sympy, Lagrangian) models, column by
 //! column by parameter name, and base-parameter spans.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{Model, Workspace};
 use dvrk_test_support::*;
 use nalgebra::DMatrix;

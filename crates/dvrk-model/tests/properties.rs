@@ -3,6 +3,9 @@
 //! robot and the MTM with Stribeck friction terms. The seed is fixed, so a run is
 //! reproducible.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};

@@ -13,6 +13,9 @@
 //!   carriers, a −q one): the coordinates read back in order, every mimic after the
 //!   joint it mimics in the depth-first, by-name order of urdfdom and Pinocchio.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_test_support as support;
 
 use dvrk_model::Model;

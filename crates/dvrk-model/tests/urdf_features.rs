@@ -2,7 +2,11 @@
 //! joints, axes not along z, rotated inertials, the rpy convention, limits, and the
 //! error messages (which must name the file and the problem).
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{JointKind, Model, Transform, Workspace};
+use dvrk_test_support::PlanarTwoLink;
 use nalgebra::{Matrix3, Vector3};
 
 const G: f64 = 9.81;
@@ -346,35 +350,6 @@ fn fixed_joint() {
     }
 }
 
-/// Planar 2R arm with both axes along −y (so the angles lift the links from +x towards
-/// +z), point-like links: the textbook closed form.
-#[allow(clippy::too_many_arguments)]
-fn planar_2r(
-    th: [f64; 2],
-    dth: [f64; 2],
-    ddth: [f64; 2],
-    m: [f64; 2],
-    lc: [f64; 2],
-    a1: f64,
-    i: [f64; 2],
-) -> [f64; 2] {
-    let (c2, s2) = (th[1].cos(), th[1].sin());
-    let m11 = i[0]
-        + i[1]
-        + m[0] * lc[0] * lc[0]
-        + m[1] * (a1 * a1 + lc[1] * lc[1] + 2.0 * a1 * lc[1] * c2);
-    let m12 = i[1] + m[1] * (lc[1] * lc[1] + a1 * lc[1] * c2);
-    let m22 = i[1] + m[1] * lc[1] * lc[1];
-    let h = m[1] * a1 * lc[1] * s2;
-    let c12 = (th[0] + th[1]).cos();
-    let g1 = (m[0] * lc[0] + m[1] * a1) * G * th[0].cos() + m[1] * lc[1] * G * c12;
-    let g2 = m[1] * lc[1] * G * c12;
-    [
-        m11 * ddth[0] + m12 * ddth[1] - h * (2.0 * dth[0] * dth[1] + dth[1] * dth[1]) + g1,
-        m12 * ddth[0] + m22 * ddth[1] + h * dth[0] * dth[0] + g2,
-    ]
-}
-
 fn two_link(mimic: &str) -> String {
     format!(
         r#"<robot name="two_link">
@@ -447,7 +422,14 @@ fn mimic_joint() {
     assert_eq!(lim.position, Some([-1.0, 1.5]));
     assert_eq!(lim.velocity, Some([-2.0, 2.0]));
 
-    let (m, lc, a1, i) = ([2.0, 1.5], [0.15, 0.2], 0.4, [0.03, 0.02]);
+    // Both axes along −y, so the angles lift the links from +x towards +z.
+    let arm = PlanarTwoLink {
+        mass: [2.0, 1.5],
+        com: [0.15, 0.2],
+        inertia: [0.03, 0.02],
+        length: 0.4,
+        gravity: G,
+    };
     for (q, dq, ddq) in [
         (0.9, 1.3, -2.1),
         (-0.5, -2.0, 0.7),
@@ -458,7 +440,7 @@ fn mimic_joint() {
         let th = [q, k * q + b];
         let (dth, ddth) = ([dq, k * dq], [ddq, k * ddq]);
         let t_open = torque(&open, &th, &dth, &ddth);
-        let t_ref = planar_2r(th, dth, ddth, m, lc, a1, i);
+        let t_ref = arm.torque(th, dth, ddth);
         close(t_open[0], t_ref[0], 1e-13, "open chain tau1");
         close(t_open[1], t_ref[1], 1e-13, "open chain tau2");
         // Virtual work: the mimic coordinate's torque is tau1 + multiplier·tau2.

@@ -5,6 +5,9 @@
 //! it at q = 0, and the corresponding sinusoid for a tilted axis. `I_n = nᵀ I_C n` with
 //! `I_C` rotated by the inertial's rpy; no velocity term (rotation about a fixed axis).
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{Model, Workspace};
 use nalgebra::{Matrix3, Vector3};
 

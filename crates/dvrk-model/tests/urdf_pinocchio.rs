@@ -10,6 +10,9 @@
 //! the moving parent body. Our model keeps one frame per URDF joint (fixed ones included)
 //! with barycentric `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]`.
 
+// Reads descriptions (TOML, URDF): needs the default `description` feature.
+#![cfg(feature = "description")]
+
 use dvrk_model::{Model, Transform, Workspace};
 use dvrk_test_support::*;
 use nalgebra::{DMatrix, Matrix3, Vector3};

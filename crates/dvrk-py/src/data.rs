@@ -1,4 +1,4 @@
-//! Joint-space logs: `Data` (a trajectory as read or built from numpy), `Prepared`
+//! Joint-space logs: `JointLog` (a trajectory as read or built from numpy), `Prepared`
 //! (processed samples in model coordinates), `read_log`, `list_topics`.
 
 use std::path::{Path, PathBuf};
@@ -12,11 +12,11 @@ use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PySlice, PyTuple};
 
+use crate::classes::ModelPy;
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
 use crate::errors::{from_ident, from_log, ident_kind, input, log_kind};
 use crate::frame;
 use crate::json::to_python;
-use crate::robot::Robot;
 
 /// A joint-space log: sample times and one row per sample of positions, velocities
 /// (optional) and efforts, in the robot's measured joints or in its model coordinates.
@@ -24,9 +24,9 @@ use crate::robot::Robot;
 /// Read one with :func:`read_log`, build one from numpy arrays or pandas DataFrames::
 ///
 ///     >>> t = np.arange(2000) / 200.0                       # s, uniform
-///     >>> data = di.Data(t, q, tau, dq=dq)                   # model coordinates q1..qn
-///     >>> data = di.Data(t, q_meas, tau_meas, joint_names=psm.measured_joints)
-///     >>> data = di.Data.from_dataframe(df, psm)             # position.<joint> columns
+///     >>> data = di.JointLog(t, q, tau, dq=dq)                   # model coordinates q1..qn
+///     >>> data = di.JointLog(t, q_meas, tau_meas, joint_names=psm.measured_joints)
+///     >>> data = di.JointLog.from_dataframe(df, psm)             # position.<joint> columns
 ///
 /// ``time``: float seconds, or ``datetime64``/``timedelta64`` (any unit, pandas
 /// datetimes too) or integer nanoseconds, which are converted exactly to seconds from
@@ -42,11 +42,11 @@ use crate::robot::Robot;
 ///
 /// ``data[a:b]`` is a slice of the samples (times kept), :meth:`concat` joins logs
 /// into one (one clock: the filters then run across the joints; give a fit a list of
-/// logs to keep them apart), :meth:`to_dataframe` gives a DataFrame; ``Data`` pickles
+/// logs to keep them apart), :meth:`to_dataframe` gives a DataFrame; ``JointLog`` pickles
 /// (multiprocessing, joblib, ``copy.deepcopy``). Arrays returned by the attributes
 /// are copies.
-#[pyclass(name = "Data", module = "dvrk_ident", frozen)]
-pub struct DataPy {
+#[pyclass(name = "JointLog", module = "dvrk_ident", frozen)]
+pub struct JointLogPy {
     pub traj: Arc<Trajectory>,
     /// The file it was read from (for the result's provenance).
     pub path: Option<PathBuf>,
@@ -82,9 +82,9 @@ pub fn parse_format(text: Option<&str>) -> PyResult<Option<LogFormat>> {
     }
 }
 
-impl DataPy {
+impl JointLogPy {
     pub fn new(traj: Trajectory, path: Option<PathBuf>) -> Self {
-        DataPy {
+        JointLogPy {
             traj: Arc::new(traj),
             path,
         }
@@ -126,7 +126,7 @@ fn coordinates_arg(text: Option<&str>, names: &[String]) -> PyResult<Coordinates
 }
 
 #[pymethods]
-impl DataPy {
+impl JointLogPy {
     #[new]
     #[pyo3(signature = (time, q, tau, dq = None, *, joint_names = None, coordinates = None, source = "numpy"))]
     #[allow(clippy::too_many_arguments)]
@@ -180,14 +180,14 @@ impl DataPy {
             source: source.to_string(),
         };
         traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(DataPy::new(traj, None))
+        Ok(JointLogPy::new(traj, None))
     }
 
     /// A log from a pandas DataFrame laid out as the headered CSV: a ``time`` column
     /// (or ``time=`` another one, or the index: datetime, timedelta or float), and
     /// ``position.<joint>``, ``effort.<joint>`` and optionally ``velocity.<joint>``
     /// columns for each joint (also ``q.``, ``tau.``, ``dq.``), or a two-level column
-    /// MultiIndex ``(signal, joint)``. Times as in :class:`Data`. With ``robot``, the
+    /// MultiIndex ``(signal, joint)``. Times as in :class:`JointLog`. With ``robot``, the
     /// joints must all be its coordinates (model coordinates) or all its measured
     /// joints (measured coordinates); without, names ``q<k>`` are model coordinates.
     /// :meth:`to_dataframe` gives this layout back.
@@ -196,7 +196,7 @@ impl DataPy {
     fn from_dataframe(
         py: Python<'_>,
         df: &Bound<'_, PyAny>,
-        robot: Option<&Bound<'_, Robot>>,
+        robot: Option<&Bound<'_, ModelPy>>,
         time: Option<&str>,
         source: &str,
     ) -> PyResult<Self> {
@@ -213,7 +213,7 @@ impl DataPy {
             source: source.to_string(),
         };
         traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(DataPy::new(traj, None))
+        Ok(JointLogPy::new(traj, None))
     }
 
     /// The samples as a pandas DataFrame: ``time`` (s), ``position.<joint>``,
@@ -231,14 +231,14 @@ impl DataPy {
     }
 
     /// ``data[a:b]`` (a slice, positive step): those samples, times kept.
-    fn __getitem__(&self, index: &Bound<'_, PyAny>) -> PyResult<DataPy> {
+    fn __getitem__(&self, index: &Bound<'_, PyAny>) -> PyResult<JointLogPy> {
         let slice = index
             .cast::<PySlice>()
-            .map_err(|_| input("Data: index with a slice of samples, e.g. data[100:500]"))?;
+            .map_err(|_| input("JointLog: index with a slice of samples, e.g. data[100:500]"))?;
         let ind = slice.indices(self.traj.len() as isize)?;
         if ind.step <= 0 {
             return Err(input(
-                "Data: a slice must keep the time order (positive step)",
+                "JointLog: a slice must keep the time order (positive step)",
             ));
         }
         let rows: Vec<usize> = (ind.start..ind.stop)
@@ -248,7 +248,7 @@ impl DataPy {
         let t = &self.traj;
         let pick =
             |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
-        Ok(DataPy::new(
+        Ok(JointLogPy::new(
             Trajectory {
                 time: rows.iter().map(|&k| t.time[k]).collect(),
                 q: pick(&t.q),
@@ -268,7 +268,7 @@ impl DataPy {
     /// :func:`fit` the list instead.
     #[staticmethod]
     #[pyo3(signature = (logs, *, source = None))]
-    fn concat(logs: Vec<Bound<'_, DataPy>>, source: Option<String>) -> PyResult<DataPy> {
+    fn concat(logs: Vec<Bound<'_, JointLogPy>>, source: Option<String>) -> PyResult<JointLogPy> {
         let Some(first) = logs.first() else {
             return Err(input("concat: no logs"));
         };
@@ -319,7 +319,7 @@ impl DataPy {
             source: source.unwrap_or_else(|| sources.join(" + ")),
         };
         traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(DataPy::new(traj, None))
+        Ok(JointLogPy::new(traj, None))
     }
 
     /// Pickling (and ``copy.deepcopy``): the arrays and names.
@@ -361,7 +361,7 @@ impl DataPy {
         coordinates: &str,
         source: String,
         path: Option<PathBuf>,
-    ) -> PyResult<DataPy> {
+    ) -> PyResult<JointLogPy> {
         let arr = float_array(py, time, "time")?;
         let time: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
         let traj = Trajectory {
@@ -374,7 +374,7 @@ impl DataPy {
             source,
         };
         traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(DataPy::new(traj, path))
+        Ok(JointLogPy::new(traj, path))
     }
 
     /// Sample times, s, shape ``(N,)``.
@@ -445,15 +445,15 @@ impl DataPy {
 
     /// The data in ``robot``'s model coordinates: columns matched to its measured
     /// joints by name, ``q = M⁻¹ q_measured``, ``dq = M⁻¹ dq_measured``,
-    /// ``tau = Mᵀ tau_measured``. Data already in model coordinates are returned as
+    /// ``tau = Mᵀ tau_measured``. JointLog already in model coordinates are returned as
     /// they are (after checking the number of joints).
-    fn to_model(&self, py: Python<'_>, robot: &Bound<'_, Robot>) -> PyResult<DataPy> {
+    fn to_model(&self, py: Python<'_>, robot: &Bound<'_, ModelPy>) -> PyResult<JointLogPy> {
         let model = robot.get().model.clone();
         let traj = self.traj.clone();
         let t = py
             .detach(move || to_model_coordinates(&model, &traj))
             .map_err(from_ident)?;
-        Ok(DataPy::new(t, self.path.clone()))
+        Ok(JointLogPy::new(t, self.path.clone()))
     }
 
     /// Writes the data as a log, atomically. ``format``: ``"csv"`` (headered:
@@ -494,7 +494,7 @@ impl DataPy {
 
     fn __repr__(&self) -> String {
         format!(
-            "Data({} samples, {} joints, {} coordinates, velocities {}, source={})",
+            "JointLog({} samples, {} joints, {} coordinates, velocities {}, source={})",
             self.traj.len(),
             self.traj.dof(),
             self.traj.coordinates,
@@ -599,7 +599,7 @@ pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
     (ident_kind(&e), e.to_string())
 }
 
-/// Reads a log into :class:`Data`.
+/// Reads a log into :class:`JointLog`.
 ///
 /// ``path`` is a file or a rosbag2 folder, recognized by content (``format=None``): a
 /// rosbag2 folder or its ``metadata.yaml`` (MCAP or sqlite3 files, split recordings,
@@ -633,13 +633,13 @@ pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
 pub fn read_log(
     py: Python<'_>,
     path: PathBuf,
-    robot: Option<&Bound<'_, Robot>>,
+    robot: Option<&Bound<'_, ModelPy>>,
     format: Option<&str>,
     rate: Option<f64>,
     topic: Option<&Bound<'_, PyAny>>,
     time_source: Option<&str>,
     resample: Option<f64>,
-) -> PyResult<DataPy> {
+) -> PyResult<JointLogPy> {
     let topics: Vec<String> = match topic.filter(|t| !t.is_none()) {
         None => Vec::new(),
         Some(t) => match t.extract::<String>() {
@@ -672,10 +672,11 @@ pub fn read_log(
         }
         Ok(traj)
     })?;
-    Ok(DataPy::new(traj, Some(absolute(&path))))
+    Ok(JointLogPy::new(traj, Some(absolute(&path))))
 }
 
-fn absolute(path: &Path) -> PathBuf {
+/// `path` made absolute, for the provenance (the file as given when that fails).
+pub fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf())
 }
 

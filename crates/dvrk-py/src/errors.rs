@@ -10,7 +10,7 @@
 //! | `DvrkIOError` | `DvrkError`, `OSError` | a file that cannot be read or written |
 //! | `DvrkFileNotFoundError` | `DvrkIOError`, `FileNotFoundError` | a file that does not exist |
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
-//! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `Result` |
+//! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `FitResult` |
 
 use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;

@@ -1,4 +1,4 @@
-//! Excitation trajectories: `Trajectory` (a Fourier trajectory file), `excite` (the
+//! Excitation trajectories: `FourierTrajectory` (a Fourier trajectory file), `excite` (the
 //! optimizer of `dvrk-ident excite`) and `evaluate_trajectory` (its `--evaluate`).
 
 use std::path::PathBuf;
@@ -7,15 +7,14 @@ use dvrk_ident::excite::optimize::{self, Criterion, Excitation, ExciteError, Exc
 use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::result::write_atomic;
-use dvrk_model::{Limits, LimitsSpec, Model};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
 
+use crate::classes::ModelPy;
 use crate::convert::{array, background, matrix, rows, vector, Failure};
-use crate::errors::{error, excite_kind, fourier_kind, from_ident, from_io, from_model, input};
+use crate::errors::{error, excite_kind, fourier_kind, from_ident, input};
 use crate::json::to_python;
-use crate::robot::Robot;
+use crate::limits::limits_of;
 
 /// A float64 numpy array.
 type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
@@ -34,32 +33,6 @@ fn from_fourier(e: FourierError) -> PyErr {
 
 fn parse_criterion(text: &str) -> PyResult<Criterion> {
     crate::convert::named("criterion", text)
-}
-
-/// `robot`'s limits (description `[[limits]]` and `[[cartesian_limits]]`) as a dict in
-/// the layout of a limits file, which `excite(..., limits=...)` reads back to the same
-/// limits.
-pub fn limits_dict<'py>(py: Python<'py>, model: &Model) -> PyResult<Bound<'py, PyAny>> {
-    let spec = LimitsSpec::of(model, &Limits::of_model(model));
-    serde_pyobject::to_pyobject(py, &spec).map_err(PyErr::from)
-}
-
-/// The limits of `excite`/`evaluate_trajectory`: the description's (None), a limits
-/// file (a path), or a dict in the file's layout (the same serde schema as the file).
-fn limits_of(model: &Model, obj: Option<&Bound<'_, PyAny>>) -> PyResult<Limits> {
-    let Some(obj) = obj.filter(|o| !o.is_none()) else {
-        return Ok(Limits::of_model(model));
-    };
-    if obj.is_instance_of::<PyDict>() {
-        let spec: LimitsSpec = serde_pyobject::from_pyobject(obj.clone())
-            .map_err(|e| input(format!("limits: not a limits dict: {}", PyErr::from(e))))?;
-        return spec.compile(model, "limits").map_err(from_model);
-    }
-    let path: PathBuf = obj.extract().map_err(|_| {
-        input("limits: expected None (the robot's limits), a limits file path or a dict")
-    })?;
-    let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
-    Limits::from_toml_str(model, &text, &path.display().to_string()).map_err(from_model)
 }
 
 /// Coefficients `a` or `b`: a 2-D array of `order` columns, one row per coordinate.
@@ -86,17 +59,17 @@ fn coefficient_rows(
 ///
 /// Example::
 ///
-///     >>> t = di.Trajectory(order=1, base_frequency_hz=0.5, q0=[0.2], a=[[1.0]], b=[[0.0]])
+///     >>> t = di.FourierTrajectory(order=1, base_frequency_hz=0.5, q0=[0.2], a=[[1.0]], b=[[0.0]])
 ///     >>> q, dq, ddq = t.sample([0.0, 0.5])
 ///     >>> dq[0, 0]
 ///     1.0
-#[pyclass(name = "Trajectory", module = "dvrk_ident", frozen)]
-pub struct TrajectoryPy {
+#[pyclass(name = "FourierTrajectory", module = "dvrk_ident", frozen)]
+pub struct FourierTrajectoryPy {
     pub inner: FourierTrajectory,
 }
 
 #[pymethods]
-impl TrajectoryPy {
+impl FourierTrajectoryPy {
     /// Pickling (and ``copy.deepcopy``): the JSON document of :meth:`write`.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
         let py = slf.py();
@@ -107,7 +80,7 @@ impl TrajectoryPy {
     /// The inverse of ``__reduce__``.
     #[staticmethod]
     fn _restore(text: &str) -> PyResult<Self> {
-        Ok(TrajectoryPy {
+        Ok(FourierTrajectoryPy {
             inner: FourierTrajectory::from_json_str(text, "<pickle>")
                 .map_err(|e| input(e.to_string()))?,
         })
@@ -132,8 +105,8 @@ impl TrajectoryPy {
             b: coefficient_rows(py, b, order, "b")?,
             coordinates: coordinates.unwrap_or_default(),
         };
-        inner.validate("Trajectory").map_err(from_fourier)?;
-        Ok(TrajectoryPy { inner })
+        inner.validate("FourierTrajectory").map_err(from_fourier)?;
+        Ok(FourierTrajectoryPy { inner })
     }
 
     /// Reads a trajectory file: the JSON of ``dvrk-ident excite`` (any file with the
@@ -147,7 +120,7 @@ impl TrajectoryPy {
             None => FourierTrajectory::from_json_file(&path),
         }
         .map_err(from_fourier)?;
-        Ok(TrajectoryPy { inner })
+        Ok(FourierTrajectoryPy { inner })
     }
 
     /// Parses the JSON layout; ``source`` names the text in error messages.
@@ -155,13 +128,24 @@ impl TrajectoryPy {
     #[pyo3(signature = (text, source = "<string>"))]
     fn from_json(text: &str, source: &str) -> PyResult<Self> {
         let inner = FourierTrajectory::from_json_str(text, source).map_err(from_fourier)?;
-        Ok(TrajectoryPy { inner })
+        Ok(FourierTrajectoryPy { inner })
     }
 
     /// The trajectory names of a 2019-layout coefficient file (sorted).
     #[staticmethod]
-    fn wpi2019_names(path: PathBuf) -> PyResult<Vec<String>> {
+    fn wpi_names(path: PathBuf) -> PyResult<Vec<String>> {
         FourierTrajectory::wpi2019_names(&path).map_err(from_fourier)
+    }
+
+    /// Deprecated name of :meth:`wpi_names`.
+    #[staticmethod]
+    fn wpi2019_names(py: Python<'_>, path: PathBuf) -> PyResult<Vec<String>> {
+        crate::deprecated::warn(
+            py,
+            "FourierTrajectory.wpi2019_names",
+            "FourierTrajectory.wpi_names",
+        )?;
+        Self::wpi_names(path)
     }
 
     /// Number of harmonics ``L``.
@@ -236,7 +220,7 @@ impl TrajectoryPy {
     fn setpoints<'py>(
         &self,
         py: Python<'py>,
-        robot: &Bound<'py, Robot>,
+        robot: &Bound<'py, ModelPy>,
         rate: f64,
     ) -> PyResult<(Array<'py>, Array<'py>)> {
         let model = &robot.get().model;
@@ -264,13 +248,13 @@ impl TrajectoryPy {
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
         other
-            .cast::<TrajectoryPy>()
+            .cast::<FourierTrajectoryPy>()
             .is_ok_and(|o| o.get().inner == self.inner)
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "Trajectory(order={}, base_frequency_hz={}, dof={})",
+            "FourierTrajectory(order={}, base_frequency_hz={}, dof={})",
             self.inner.order,
             self.inner.base_frequency_hz,
             self.inner.dof()
@@ -287,10 +271,10 @@ pub struct ExcitationPy {
 
 #[pymethods]
 impl ExcitationPy {
-    /// The optimized :class:`Trajectory`.
+    /// The optimized :class:`FourierTrajectory`.
     #[getter]
-    fn trajectory(&self) -> TrajectoryPy {
-        TrajectoryPy {
+    fn trajectory(&self) -> FourierTrajectoryPy {
+        FourierTrajectoryPy {
             inner: self.inner.trajectory.clone(),
         }
     }
@@ -356,10 +340,10 @@ impl ExcitationPy {
 /// ``{"limits": [{"expr": "q1", "position": [-1, 1], "velocity": [-2, 2]}],
 /// "cartesian_limits": [{"frame": "tip", "min": [-1, -1, 0.1], "max": [1, 1, 1]}]}``
 /// (box corners in metres, base frame; ``float("inf")`` leaves a side open). A file
-/// or dict replaces the robot's limits: start from a copy of :attr:`Robot.limits` to
+/// or dict replaces the robot's limits: start from a copy of :attr:`Model.limits` to
 /// add to them.
 /// ``rest=True``: zero velocity and acceleration at the start and end of the period.
-/// ``init``: a :class:`Trajectory` (same order and base frequency) refined by the
+/// ``init``: a :class:`FourierTrajectory` (same order and base frequency) refined by the
 /// first start. Deterministic for a ``seed``.
 ///
 /// The result passed the dense check (``check_rate`` Hz, at least 1 kHz); when no
@@ -369,7 +353,7 @@ impl ExcitationPy {
 ///
 /// Example::
 ///
-///     >>> ex = di.excite(di.Robot.load("psm_simplified"), order=6, f0=0.18, seed=0)
+///     >>> ex = di.excite(di.Model.load("psm_simplified"), order=6, f0=0.18, seed=0)
 ///     >>> ex.criterion["value"], ex.feasible
 ///     >>> ex.trajectory.write("traj.json")
 #[pyfunction]
@@ -377,7 +361,7 @@ impl ExcitationPy {
 #[allow(clippy::too_many_arguments)]
 pub fn excite(
     py: Python<'_>,
-    robot: &Bound<'_, Robot>,
+    robot: &Bound<'_, ModelPy>,
     order: usize,
     f0: f64,
     limits: Option<&Bound<'_, PyAny>>,
@@ -390,7 +374,7 @@ pub fn excite(
     samples_per_harmonic: usize,
     rest: bool,
     smooth: bool,
-    init: Option<&Bound<'_, TrajectoryPy>>,
+    init: Option<&Bound<'_, FourierTrajectoryPy>>,
     check_rate: f64,
 ) -> PyResult<ExcitationPy> {
     let model = robot.get().model.clone();
@@ -428,15 +412,15 @@ pub fn excite(
 ///
 /// Example::
 ///
-///     >>> old = di.Trajectory.read("wpi2019_excitation_trajectories.json", pick="psm_one")
-///     >>> di.evaluate_trajectory(di.Robot.load("psm_simplified"), old)["feasible"]
+///     >>> old = di.FourierTrajectory.read("wpi2019_excitation_trajectories.json", pick="psm_one")
+///     >>> di.evaluate_trajectory(di.Model.load("psm_simplified"), old)["feasible"]
 ///     False
 #[pyfunction]
 #[pyo3(signature = (robot, trajectory, *, limits = None, criterion = "condition", samples_per_harmonic = 15, check_rate = 1000.0))]
 pub fn evaluate_trajectory<'py>(
     py: Python<'py>,
-    robot: &Bound<'py, Robot>,
-    trajectory: &Bound<'py, TrajectoryPy>,
+    robot: &Bound<'py, ModelPy>,
+    trajectory: &Bound<'py, FourierTrajectoryPy>,
     limits: Option<&Bound<'py, PyAny>>,
     criterion: &str,
     samples_per_harmonic: usize,

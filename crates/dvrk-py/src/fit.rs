@@ -1,54 +1,49 @@
-//! `fit`, `prepare` and the fit `Result`.
+//! `fit`, `prepare` and the fit `FitResult`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::request::{self, FitRequest, LogSource, PriorSource, Streaming, Training};
+use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::result::{wpi_params_json, write_atomic};
-use dvrk_ident::signal::Cutoff;
 use dvrk_ident::Trajectory;
-use dvrk_ident::{FitResult, FitSettings, Method};
+use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use crate::classes::{FitResultPy, ModelPy};
 use crate::convert::{array, background, matrix, py_bool, py_str};
-use crate::data::{fail_ident, DataPy, PreparedPy};
+use crate::data::{fail_ident, JointLogPy, PreparedPy};
 use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input, Kind};
-use crate::excite::TrajectoryPy;
-use crate::json::{from_python, to_python};
+use crate::excite::FourierTrajectoryPy;
+use crate::json::to_python;
 use crate::observe::observations_arg;
-use crate::robot::Robot;
+use crate::overrides::Overrides;
 
-fn parse_method(text: &str) -> PyResult<Method> {
-    crate::convert::named("method", text)
-}
-
-/// A :class:`Data` or a list of them: the samples and the files they were read from.
+/// A :class:`JointLog` or a list of them: the samples and the files they were read from.
 fn logs_arg(
     obj: &Bound<'_, PyAny>,
     name: &str,
 ) -> PyResult<Vec<(Arc<Trajectory>, Option<PathBuf>)>> {
     let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<Trajectory>, Option<PathBuf>)> {
-        let d = d.cast::<DataPy>().map_err(|_| {
+        let d = d.cast::<JointLogPy>().map_err(|_| {
             input(format!(
-                "{name}: expected a Data or a list of Data, got {}",
+                "{name}: expected a JointLog or a list of JointLog, got {}",
                 d.get_type()
             ))
         })?;
         Ok((d.get().traj.clone(), d.get().path.clone()))
     };
-    if obj.cast::<DataPy>().is_ok() {
+    if obj.cast::<JointLogPy>().is_ok() {
         return Ok(vec![one(obj)?]);
     }
     let logs = obj
         .try_iter()
-        .map_err(|_| input(format!("{name}: expected a Data or a list of Data")))?
+        .map_err(|_| input(format!("{name}: expected a JointLog or a list of JointLog")))?
         .map(|d| one(&d?))
         .collect::<PyResult<Vec<_>>>()?;
     if logs.is_empty() {
@@ -63,135 +58,6 @@ fn samples(logs: Vec<(Arc<Trajectory>, Option<PathBuf>)>) -> Vec<LogSource> {
         .collect()
 }
 
-/// `delay=`: ``"auto"``, seconds, or a list of seconds (one per coordinate).
-fn delay_option(d: &Bound<'_, PyAny>) -> PyResult<DelayOption> {
-    if let Ok(text) = d.extract::<String>() {
-        text.parse::<DelayOption>()
-    } else if let Ok(v) = d.extract::<f64>() {
-        Ok(DelayOption::Fixed(vec![v]))
-    } else if let Ok(v) = d.extract::<Vec<f64>>() {
-        Ok(DelayOption::Fixed(v))
-    } else {
-        Err("expected \"auto\", seconds, or a list of seconds".to_string())
-    }
-    .map_err(|e| input(format!("delay: {e}")))
-}
-
-/// `prior=`: ``"nominal"``, the path of a result document, or a :class:`Result`.
-fn prior_source(p: &Bound<'_, PyAny>) -> PyResult<PriorSource> {
-    if let Ok(r) = p.cast::<FitResultPy>() {
-        return Ok(PriorSource::Result(Arc::new(r.get().inner.clone())));
-    }
-    if let Ok(text) = p.extract::<String>() {
-        return text
-            .parse::<PriorSource>()
-            .map_err(|e| input(format!("prior: {e}")));
-    }
-    let path: PathBuf = p.extract().map_err(|_| {
-        input("prior: expected \"nominal\", the path of a result document, or a Result")
-    })?;
-    Ok(PriorSource::File(path))
-}
-
-/// The keyword arguments that change the settings, shared by `fit`, `observe` and
-/// `prepare`: a base (`settings`) and the library's [`request::Overrides`].
-#[derive(Default)]
-pub(crate) struct Overrides<'a, 'py> {
-    pub settings: Option<&'a Bound<'py, PyAny>>,
-    pub method: Option<&'a str>,
-    pub cutoff: Option<&'a Bound<'py, PyAny>>,
-    pub filter_torque: Option<bool>,
-    pub trim: Option<usize>,
-    pub test_window: Option<usize>,
-    pub decimate: Option<usize>,
-    pub min_speed: Option<f64>,
-    pub resample: Option<f64>,
-    pub irls_iterations: Option<usize>,
-    pub sdp_regularization: Option<f64>,
-    pub stribeck: Option<f64>,
-    pub bounds: Option<&'a str>,
-    pub delay: Option<&'a Bound<'py, PyAny>>,
-    pub prior: Option<&'a Bound<'py, PyAny>>,
-    pub prior_weight: Option<f64>,
-    pub prior_metric: Option<&'a str>,
-}
-
-impl Overrides<'_, '_> {
-    /// The base settings: `settings` (the result document's `settings` layout; missing
-    /// fields take the defaults) or the defaults.
-    fn base(&self, py: Python<'_>) -> PyResult<FitSettings> {
-        match self.settings.filter(|s| !s.is_none()) {
-            Some(obj) => from_python::<FitSettings>(py, obj, "settings"),
-            None => Ok(FitSettings::default()),
-        }
-    }
-
-    /// The keywords that are not `None`, as the library's overrides.
-    fn overrides(&self) -> PyResult<request::Overrides> {
-        let cutoff = match self.cutoff.filter(|c| !c.is_none()) {
-            None => None,
-            Some(c) => {
-                let bad = || {
-                    input(
-                        "cutoff: expected a number (Hz), one number per coordinate, \
-                         or \"none\" (no filter)",
-                    )
-                };
-                Some(if c.extract::<bool>().ok() == Some(false) {
-                    None
-                } else if let Ok(text) = c.extract::<String>() {
-                    Cutoff::parse_flag(&text).map_err(|e| input(format!("cutoff: {e}")))?
-                } else if c.is_instance_of::<pyo3::types::PyBool>() {
-                    return Err(bad());
-                } else if let Ok(v) = c.extract::<f64>() {
-                    Some(Cutoff::All(v))
-                } else {
-                    Some(Cutoff::PerJoint(
-                        c.extract::<Vec<f64>>().map_err(|_| bad())?,
-                    ))
-                })
-            }
-        };
-        Ok(request::Overrides {
-            method: self.method.map(parse_method).transpose()?,
-            cutoff,
-            filter_torque: self.filter_torque,
-            trim: self.trim,
-            decimate: self.decimate,
-            min_speed: self.min_speed,
-            resample_hz: self.resample,
-            test_window: self.test_window,
-            irls_iterations: self.irls_iterations,
-            sdp_regularization: self.sdp_regularization,
-            stribeck_velocity: self.stribeck,
-            bounds: self
-                .bounds
-                .map(|b| crate::convert::named("bounds", b))
-                .transpose()?,
-            delay: self
-                .delay
-                .filter(|d| !d.is_none())
-                .map(delay_option)
-                .transpose()?,
-            prior: self
-                .prior
-                .filter(|p| !p.is_none())
-                .map(prior_source)
-                .transpose()?,
-            prior_weight: self.prior_weight,
-            prior_metric: self
-                .prior_metric
-                .map(|m| crate::convert::named("prior_metric", m))
-                .transpose()?,
-        })
-    }
-
-    /// `settings` (or the defaults), then each keyword that is not `None`.
-    pub fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
-        Ok(self.overrides()?.apply(self.base(py)?))
-    }
-}
-
 /// Identifies the robot's parameters from logs: the pipeline of ``dvrk-ident fit``
 /// (model coordinates, known forces subtracted, zero-phase low-pass, derivatives,
 /// trimming, the R factor of the weighted regressor, the estimator) and the same
@@ -203,16 +69,16 @@ impl Overrides<'_, '_> {
 ///   accelerations), Hz, one number or one per coordinate (default 5.4 Hz; the 2019
 ///   PSM/MTM fits effectively used 16.965/5.655), or ``"none"`` (or ``False``) for no
 ///   filter; ``filter_torque=True`` filters the torques too (the 2019 protocol);
-/// - ``data``: a :class:`Data` or a list of them (``dvrk-ident fit a b c``): each log is
+/// - ``data``: a :class:`JointLog` or a list of them (``dvrk-ident fit a b c``): each log is
 ///   processed on its own (filters and trimming never cross from one to the next) and
 ///   their observations merged; ``result.inputs`` lists every log with its hash (of
 ///   the file it was read from, else of its samples) and its own metrics. Or an
 ///   :class:`Observation` or a list of them (:func:`observe`, ``dvrk-ident fit
 ///   --from``): merged in order and fitted with their own processing settings, the
 ///   result of the fit of their logs;
-/// - ``test``: a :class:`Data` or a list to validate on, ``test_window``: metrics on
+/// - ``test``: a :class:`JointLog` or a list to validate on, ``test_window``: metrics on
 ///   the first N processed samples of each only; ``excitation``: the
-///   :class:`Trajectory` the logs follow (or the path of its JSON document): with
+///   :class:`FourierTrajectory` the logs follow (or the path of its JSON document): with
 ///   ``test`` but no ``test_window`` the test metrics cover its first period (the 2019
 ///   protocol, ``--excitation``);
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
@@ -228,12 +94,12 @@ impl Overrides<'_, '_> {
 ///   robot description's (``dvrk-ident fit --bounds``);
 /// - ``prior``: regularize the semidefinite fit toward ``"nominal"`` (the robot
 ///   description's nominal parameters, e.g. a URDF's inertias), a result document's
-///   path or a :class:`Result`; ``prior_weight`` (default 0.001, relative to the data
+///   path or a :class:`FitResult`; ``prior_weight`` (default 0.001, relative to the data
 ///   term) and ``prior_metric`` (``"entropic"``, the default: the log-det divergence
 ///   of each link's pseudo-inertia from the prior's, or ``"euclidean"``), as
 ///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
 ///   ``result.settings["prior"]``;
-/// - ``settings``: a dict in the layout of ``Result.settings`` (missing fields take
+/// - ``settings``: a dict in the layout of ``FitResult.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
 ///
@@ -242,7 +108,7 @@ impl Overrides<'_, '_> {
 /// (``dvrk_ident::request::FitRequest``), so both give the same result document.
 ///
 /// A fit whose solver did not converge raises ``NotConvergedError`` (its ``result``
-/// attribute holds the unconverged :class:`Result`) unless ``allow_unconverged``.
+/// attribute holds the unconverged :class:`FitResult`) unless ``allow_unconverged``.
 ///
 /// The work runs without the GIL on a worker thread; Ctrl-C raises
 /// ``KeyboardInterrupt`` within 50 ms, while the interrupted computation finishes in
@@ -258,7 +124,7 @@ impl Overrides<'_, '_> {
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
-    robot: &Bound<'_, Robot>,
+    robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, PyAny>,
     method: Option<&str>,
     cutoff: Option<&Bound<'_, PyAny>>,
@@ -310,16 +176,18 @@ pub fn fit(
     };
     let excitation = match excitation.filter(|e| !e.is_none()) {
         None => None,
-        Some(e) => Some(match e.cast::<TrajectoryPy>() {
-            Ok(t) => t.get().inner.clone(),
-            Err(_) => {
-                let path: PathBuf = e.extract().map_err(|_| {
-                    input("excitation: expected a Trajectory or the path of its JSON document")
+        Some(e) => {
+            Some(match e.cast::<FourierTrajectoryPy>() {
+                Ok(t) => t.get().inner.clone(),
+                Err(_) => {
+                    let path: PathBuf = e.extract().map_err(|_| {
+                    input("excitation: expected a FourierTrajectory or the path of its JSON document")
                 })?;
-                FourierTrajectory::from_json_file(&path)
-                    .map_err(|err| error(fourier_kind(&err), err.to_string()))?
-            }
-        }),
+                    FourierTrajectory::from_json_file(&path)
+                        .map_err(|err| error(fourier_kind(&err), err.to_string()))?
+                }
+            })
+        }
     };
     let request = FitRequest {
         test,
@@ -363,8 +231,8 @@ pub fn fit(
 #[allow(clippy::too_many_arguments)]
 pub fn prepare(
     py: Python<'_>,
-    robot: &Bound<'_, Robot>,
-    data: &Bound<'_, DataPy>,
+    robot: &Bound<'_, ModelPy>,
+    data: &Bound<'_, JointLogPy>,
     cutoff: Option<&Bound<'_, PyAny>>,
     trim: Option<usize>,
     decimate: Option<usize>,
@@ -388,7 +256,7 @@ pub fn prepare(
 fn prepared(
     py: Python<'_>,
     model: Arc<Model>,
-    data: &DataPy,
+    data: &JointLogPy,
     settings: FitSettings,
 ) -> PyResult<PreparedPy> {
     let traj = data.traj.clone();
@@ -402,30 +270,10 @@ fn prepared(
     })
 }
 
-/// The result of :func:`fit`: the document of ``dvrk-ident fit --out`` (see
-/// :meth:`to_json`), with its fields as attributes and the identified model's
-/// predictions.
-///
-/// Attributes (the JSON keys): ``parameters`` (dict name → value, model order),
-/// ``base_parameters`` (list of ``{name, expression, value, std}``), ``links``,
-/// ``consistency`` (list of ``{frame, link, min_eigenvalue, consistent}``),
-/// ``physically_consistent``, ``solver`` (``{name, status, converged, seconds,
-/// iterations}``), ``metrics`` (``{train, test}``, each ``{joints, samples,
-/// relative_error, rms}`` or ``None``), ``method``, ``robot`` (name),
-/// ``robot_source``, ``settings``, ``inputs``, ``weights``, ``rows``,
-/// ``condition_number``, ``sigma2``, ``tool``. Non-finite numbers are ``None``, as in
-/// the JSON.
-#[pyclass(name = "Result", module = "dvrk_ident", frozen)]
-pub struct FitResultPy {
-    pub inner: FitResult,
-    /// The robot it was fitted with (`None` when read from JSON without one).
-    pub robot: Option<Py<Robot>>,
-}
-
 impl FitResultPy {
     /// The model: `robot`, else the one fitted with, else loaded from `robot_source`;
     /// with the fit's model options (Stribeck terms) applied.
-    fn model(&self, py: Python<'_>, robot: Option<&Bound<'_, Robot>>) -> PyResult<Arc<Model>> {
+    fn model(&self, py: Python<'_>, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Arc<Model>> {
         let base = if let Some(r) = robot {
             r.get().model.clone()
         } else if let Some(r) = &self.robot {
@@ -446,7 +294,7 @@ impl FitResultPy {
     }
 }
 
-fn with_robot(inner: FitResult, robot: Option<&Bound<'_, Robot>>) -> FitResultPy {
+fn with_robot(inner: FitResult, robot: Option<&Bound<'_, ModelPy>>) -> FitResultPy {
     FitResultPy {
         inner,
         robot: robot.map(|r| r.clone().unbind()),
@@ -460,7 +308,7 @@ impl FitResultPy {
     /// ``robot_source``.
     #[staticmethod]
     #[pyo3(signature = (text, robot = None))]
-    fn from_json(text: &str, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+    fn from_json(text: &str, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
         let inner = FitResult::from_json(text, "<string>").map_err(|e| input(e.to_string()))?;
         Ok(with_robot(inner, robot))
     }
@@ -468,7 +316,7 @@ impl FitResultPy {
     /// Reads a result file (``dvrk-ident fit --out``).
     #[staticmethod]
     #[pyo3(signature = (path, robot = None))]
-    fn read(path: PathBuf, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+    fn read(path: PathBuf, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
         let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
         let inner = FitResult::from_json(&text, &path.display().to_string())
             .map_err(|e| input(e.to_string()))?;
@@ -492,7 +340,7 @@ impl FitResultPy {
     /// The inverse of ``__reduce__``.
     #[staticmethod]
     #[pyo3(signature = (text, robot = None))]
-    fn _restore(text: &str, robot: Option<&Bound<'_, Robot>>) -> PyResult<Self> {
+    fn _restore(text: &str, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
         let inner = FitResult::from_json(text, "<pickle>").map_err(|e| input(e.to_string()))?;
         Ok(with_robot(inner, robot))
     }
@@ -522,7 +370,7 @@ impl FitResultPy {
     }
 
     /// The parameter values as an array in ``parameter_order`` (the robot's
-    /// ``parameter_names``), for :meth:`Robot.inverse_dynamics` and friends.
+    /// ``parameter_names``), for :meth:`Model.inverse_dynamics` and friends.
     #[getter]
     fn parameter_array<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let v: Vec<f64> = self
@@ -644,16 +492,16 @@ impl FitResultPy {
         self.inner.sigma2
     }
 
-    /// The :class:`Robot` of this result: the one it was fitted (or read) with, else
+    /// The :class:`Model` of this result: the one it was fitted (or read) with, else
     /// loaded from ``robot_source``.
-    fn load_robot(&self, py: Python<'_>) -> PyResult<Py<Robot>> {
+    fn load_robot(&self, py: Python<'_>) -> PyResult<Py<ModelPy>> {
         if let Some(r) = &self.robot {
             return Ok(r.clone_ref(py));
         }
         let stribeck = self.inner.settings.stribeck_velocity;
         Py::new(
             py,
-            Robot::of_result(py, &self.inner.robot_source, stribeck)?,
+            ModelPy::of_result(py, &self.inner.robot_source, stribeck)?,
         )
     }
 
@@ -663,8 +511,8 @@ impl FitResultPy {
     fn prepare(
         &self,
         py: Python<'_>,
-        data: &Bound<'_, DataPy>,
-        robot: Option<&Bound<'_, Robot>>,
+        data: &Bound<'_, JointLogPy>,
+        robot: Option<&Bound<'_, ModelPy>>,
     ) -> PyResult<PreparedPy> {
         let model = self.model(py, robot)?;
         prepared(py, model, data.get(), self.inner.settings.clone())
@@ -673,7 +521,7 @@ impl FitResultPy {
     /// Torques predicted by the identified parameters, ``H(q, dq, ddq) @ params``
     /// (N·m or N), shape ``(N, dof)``, in model coordinates and without known forces.
     ///
-    /// ``data`` is a :class:`Data` (a log as read) or a :class:`Prepared`. A ``Data``
+    /// ``data`` is a :class:`JointLog` (a log as read) or a :class:`Prepared`. A ``JointLog``
     /// is first processed with this result's settings, exactly as for the fit and its
     /// metrics: mapped to model coordinates, filtered, differentiated and trimmed, so
     /// row ``k`` is the sample at ``self.prepare(data).time[k]`` and compares with
@@ -687,7 +535,7 @@ impl FitResultPy {
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
-        robot: Option<&Bound<'py, Robot>>,
+        robot: Option<&Bound<'py, ModelPy>>,
         as_dataframe: bool,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
@@ -701,10 +549,10 @@ impl FitResultPy {
                 )));
             }
             p.get().inner.clone()
-        } else if let Ok(d) = data.cast::<DataPy>() {
+        } else if let Ok(d) = data.cast::<JointLogPy>() {
             prepared(py, model.clone(), d.get(), self.inner.settings.clone())?.inner
         } else {
-            return Err(input("data: expected a Data or a Prepared"));
+            return Err(input("data: expected a JointLog or a Prepared"));
         };
         let times = prepared.time.clone();
         let names = model.coordinates.clone();
@@ -724,9 +572,9 @@ impl FitResultPy {
     fn validate<'py>(
         &self,
         py: Python<'py>,
-        data: &Bound<'py, DataPy>,
+        data: &Bound<'py, JointLogPy>,
         test_window: Option<usize>,
-        robot: Option<&Bound<'py, Robot>>,
+        robot: Option<&Bound<'py, ModelPy>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
@@ -745,7 +593,7 @@ impl FitResultPy {
     fn wpi_params<'py>(
         &self,
         py: Python<'py>,
-        robot: Option<&Bound<'py, Robot>>,
+        robot: Option<&Bound<'py, ModelPy>>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
@@ -761,7 +609,7 @@ impl FitResultPy {
     fn dvrk_gc<'py>(
         &self,
         py: Python<'py>,
-        robot: Option<&Bound<'py, Robot>>,
+        robot: Option<&Bound<'py, ModelPy>>,
         points: usize,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
@@ -774,7 +622,7 @@ impl FitResultPy {
 
     fn __repr__(&self) -> String {
         format!(
-            "Result(robot={}, method={}, converged={}, physically_consistent={})",
+            "FitResult(robot={}, method={}, converged={}, physically_consistent={})",
             py_str(&self.inner.robot),
             py_str(&self.inner.method),
             py_bool(self.inner.solver.converged),

@@ -1,4 +1,4 @@
-//! pandas and numpy conventions for `Data`: sample times in any of numpy's time types
+//! pandas and numpy conventions for `JointLog`: sample times in any of numpy's time types
 //! (converted exactly), joint columns named `position.<joint>` (or a MultiIndex), and
 //! DataFrames out. pandas is imported only when a DataFrame is asked for.
 

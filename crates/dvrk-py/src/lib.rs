@@ -6,14 +6,18 @@
 //! without the GIL (per-sample loops in chunks with a signal check between them, fits
 //! and log reading on a worker thread polled for Ctrl-C).
 
+mod classes;
 mod convert;
 mod data;
+mod deprecated;
 mod errors;
 mod excite;
 mod fit;
 mod frame;
 mod json;
+mod limits;
 mod observe;
+mod overrides;
 mod robot;
 
 use pyo3::prelude::*;
@@ -25,7 +29,7 @@ use pyo3::prelude::*;
 /// Example::
 ///
 ///     >>> import dvrk_ident as di
-///     >>> psm = di.Robot.load("psm")
+///     >>> psm = di.Model.load("psm")
 ///     >>> train = di.read_log("one_results.csv", psm, format="wpi-csv", rate=200)
 ///     >>> result = di.fit(psm, train, method="ols", cutoff=16.965)
 ///     >>> result.metrics["train"]["relative_error"]
@@ -34,22 +38,28 @@ mod dvrk_ident_module {
     use super::*;
 
     #[pymodule_export]
-    use crate::robot::{BaseParametersPy, Robot};
+    use crate::classes::{FitResultPy, ModelPy};
 
     #[pymodule_export]
-    use crate::data::{list_topics, read_log, DataPy, PreparedPy};
+    use crate::robot::BaseParametersPy;
 
     #[pymodule_export]
-    use crate::fit::{fit, prepare, FitResultPy};
+    use crate::data::{list_topics, read_log, JointLogPy, PreparedPy};
+
+    #[pymodule_export]
+    use crate::fit::{fit, prepare};
 
     #[pymodule_export]
     use crate::observe::{observe, ObservationPy};
 
     #[pymodule_export]
-    use crate::excite::{evaluate_trajectory, excite, ExcitationPy, TrajectoryPy};
+    use crate::excite::{evaluate_trajectory, excite, ExcitationPy, FourierTrajectoryPy};
 
     #[pymodule_export]
     use crate::convert::{held_computations, hold_computations};
+
+    #[pymodule_export]
+    use crate::deprecated::module_getattr;
 
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -4,19 +4,18 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::fit::LogData;
 use dvrk_ident::progress::Silent;
+use dvrk_ident::request::{LogSource, ObserveRequest};
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::Trajectory;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
+use crate::classes::ModelPy;
 use crate::convert::background;
-use crate::data::{fail_ident, read_log, DataPy};
+use crate::data::{absolute, fail_ident, JointLogPy};
 use crate::errors::{from_ident, input};
-use crate::fit::Overrides;
 use crate::json::to_python;
-use crate::robot::Robot;
+use crate::overrides::Overrides;
 
 /// The training logs of a fit reduced to their R factors (see :func:`observe`): the
 /// robot and processing they were reduced for, each log's provenance and factors, and
@@ -120,7 +119,7 @@ impl ObservationPy {
         Ok(list)
     }
 
-    /// The processing settings the logs were reduced with (``Result.settings``'s
+    /// The processing settings the logs were reduced with (``FitResult.settings``'s
     /// ``processing`` layout).
     #[getter]
     fn processing<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
@@ -137,27 +136,25 @@ impl ObservationPy {
     }
 }
 
-/// The logs of `data`: a :class:`Data`, a path (read with :func:`read_log` for the
-/// robot) or a list of them.
-fn logs_or_paths(
-    py: Python<'_>,
-    robot: &Bound<'_, Robot>,
-    data: &Bound<'_, PyAny>,
-) -> PyResult<Vec<(Arc<Trajectory>, Option<PathBuf>)>> {
-    let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<Trajectory>, Option<PathBuf>)> {
-        if let Ok(d) = d.cast::<DataPy>() {
-            return Ok((d.get().traj.clone(), d.get().path.clone()));
+/// The logs of `data`: a :class:`JointLog` (its samples), a path (read as :func:`read_log`
+/// reads it for the robot, with its absolute path for the provenance) or a list of them.
+fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
+    let one = |d: &Bound<'_, PyAny>| -> PyResult<LogSource> {
+        if let Ok(d) = d.cast::<JointLogPy>() {
+            return Ok(LogSource::Samples {
+                samples: d.get().traj.clone(),
+                file: d.get().path.clone(),
+            });
         }
         let path: PathBuf = d.extract().map_err(|_| {
             input(format!(
-                "data: expected a Data, a path or a list of them, got {}",
+                "data: expected a JointLog, a path or a list of them, got {}",
                 d.get_type()
             ))
         })?;
-        let read = read_log(py, path, Some(robot), None, None, None, None, None)?;
-        Ok((read.traj.clone(), read.path.clone()))
+        Ok(LogSource::File(absolute(&path)))
     };
-    let single = data.cast::<DataPy>().is_ok()
+    let single = data.cast::<JointLogPy>().is_ok()
         || data.extract::<String>().is_ok()
         || data.hasattr("__fspath__")?;
     if single {
@@ -165,7 +162,7 @@ fn logs_or_paths(
     }
     let logs = data
         .try_iter()
-        .map_err(|_| input("data: expected a Data, a path or a list of them"))?
+        .map_err(|_| input("data: expected a JointLog, a path or a list of them"))?
         .map(|d| one(&d?))
         .collect::<PyResult<Vec<_>>>()?;
     if logs.is_empty() {
@@ -174,7 +171,7 @@ fn logs_or_paths(
     Ok(logs)
 }
 
-/// The map of a fit over many processes: the logs of ``data`` (a :class:`Data`, a path
+/// The map of a fit over many processes: the logs of ``data`` (a :class:`JointLog`, a path
 /// read with :func:`read_log`, or a list of them) processed as :func:`fit` processes
 /// them (same keywords and defaults: ``cutoff``, ``filter_torque``, ``trim``,
 /// ``decimate``, ``min_speed``, ``resample``, ``stribeck``, ``settings``) and reduced to
@@ -192,7 +189,7 @@ fn logs_or_paths(
 #[allow(clippy::too_many_arguments)]
 pub fn observe(
     py: Python<'_>,
-    robot: &Bound<'_, Robot>,
+    robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, PyAny>,
     cutoff: Option<&Bound<'_, PyAny>>,
     filter_torque: Option<bool>,
@@ -203,7 +200,7 @@ pub fn observe(
     stribeck: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<ObservationPy> {
-    let settings = Overrides {
+    let kw = Overrides {
         settings,
         cutoff,
         filter_torque,
@@ -213,20 +210,14 @@ pub fn observe(
         resample,
         stribeck,
         ..Overrides::default()
-    }
-    .apply(py)?;
-    let logs = logs_or_paths(py, robot, data)?;
+    };
+    let request = ObserveRequest {
+        settings: kw.base(py)?,
+        overrides: kw.overrides()?,
+        ..ObserveRequest::new(log_sources(data)?)
+    };
     let model = robot.get().model.clone();
-    let state = background(py, move || {
-        let logs: Vec<LogData> = logs
-            .iter()
-            .map(|(samples, path)| LogData {
-                samples,
-                file: path.as_deref(),
-            })
-            .collect();
-        ObservationState::observe(&model, &logs, &settings, &Silent).map_err(fail_ident)
-    })?;
+    let state = background(py, move || request.run(&model, &Silent).map_err(fail_ident))?;
     Ok(wrap(state))
 }
 

@@ -1,4 +1,4 @@
-//! `Robot` (a loaded model) and `BaseParameters`: kinematics, regressors and dynamics
+//! `Model` (a loaded model) and `BaseParameters`: kinematics, regressors and dynamics
 //! over batches of samples.
 
 use std::path::PathBuf;
@@ -9,88 +9,14 @@ use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
+use crate::classes::{ModelPy, Origin};
 use crate::convert::{array, per_sample, py_str, rows, rows_or_zeros, vector, Rows};
 use crate::errors::{error, from_ident, from_model, input, Kind};
 use crate::json::to_python;
 
-/// A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``, ``"mtm"``), a
-/// ``.toml`` description or a ``.urdf`` file.
-///
-/// Arrays are float64. Functions of the state take one sample as 1-D arrays of
-/// ``dof`` values, or ``N`` samples as 2-D arrays of shape ``(N, dof)``; the output
-/// then has a leading sample axis (see each method). ``dq`` and ``ddq`` default to
-/// zeros. Parameters (``params``) are a vector of ``len(parameter_names)`` values in
-/// ``parameter_names`` order, a dict ``{name: value}`` with every parameter, or a fit
-/// ``Result``.
-///
-/// Example::
-///
-///     >>> import numpy as np, dvrk_ident as di
-///     >>> psm = di.Robot.load("psm")
-///     >>> psm.dof, len(psm.parameter_names), len(psm.base().names)
-///     (7, 115, 49)
-///     >>> psm.regressor(np.zeros((10, 7))).shape
-///     (70, 115)
-#[pyclass(name = "Robot", module = "dvrk_ident", frozen)]
-pub struct Robot {
-    pub model: Arc<Model>,
-    base: OnceLock<Arc<BaseParameters>>,
-    /// What the model was built from, and the Stribeck velocity a fit added to it
-    /// (rad/s or m/s), for pickling.
-    origin: Origin,
-    stribeck: Option<f64>,
-}
-
-/// What a robot was built from: enough to build it again in another process (a file
-/// is kept as its text, so the copy does not depend on the file).
-#[derive(Clone, Debug)]
-pub enum Origin {
-    Builtin(String),
-    Toml { text: String, source: String },
-    Urdf { text: String, source: String },
-}
-
-impl Origin {
-    /// The model it describes, with Stribeck terms of velocity `stribeck` if given.
-    fn build(&self, stribeck: Option<f64>) -> Result<Model, dvrk_model::ModelError> {
-        let model = match self {
-            Origin::Builtin(name) => Model::builtin(name)?,
-            Origin::Toml { text, source } => Model::from_toml_str(text, source)?,
-            Origin::Urdf { text, source } => Model::from_urdf_str(text, source)?,
-        };
-        match stribeck {
-            Some(v) => model.with_stribeck(v),
-            None => Ok(model),
-        }
-    }
-
-    /// A built-in name or a description file, as `Model::load` takes it.
-    pub fn load(name_or_path: &str) -> Result<(Model, Origin), dvrk_model::ModelError> {
-        if Model::builtin_names().contains(&name_or_path) {
-            return Ok((
-                Model::builtin(name_or_path)?,
-                Origin::Builtin(name_or_path.to_string()),
-            ));
-        }
-        let model = Model::load(name_or_path)?;
-        let text =
-            std::fs::read_to_string(name_or_path).map_err(|source| dvrk_model::ModelError::Io {
-                file: name_or_path.to_string(),
-                source,
-            })?;
-        let source = name_or_path.to_string();
-        let origin = if dvrk_model::is_urdf_document(std::path::Path::new(name_or_path), &text) {
-            Origin::Urdf { text, source }
-        } else {
-            Origin::Toml { text, source }
-        };
-        Ok((model, origin))
-    }
-}
-
-impl Robot {
+impl ModelPy {
     pub fn new(model: Model, origin: Origin) -> Self {
-        Robot {
+        ModelPy {
             model: Arc::new(model),
             base: OnceLock::new(),
             origin,
@@ -100,7 +26,11 @@ impl Robot {
 
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
-    pub fn of_result(py: Python<'_>, robot_source: &str, stribeck: Option<f64>) -> PyResult<Robot> {
+    pub fn of_result(
+        py: Python<'_>,
+        robot_source: &str,
+        stribeck: Option<f64>,
+    ) -> PyResult<ModelPy> {
         let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
         let (model, origin) = py
             .detach(move || {
@@ -112,9 +42,9 @@ impl Robot {
                 Ok::<_, dvrk_model::ModelError>((model, origin))
             })
             .map_err(from_model)?;
-        Ok(Robot {
+        Ok(ModelPy {
             stribeck,
-            ..Robot::new(model, origin)
+            ..ModelPy::new(model, origin)
         })
     }
 
@@ -145,9 +75,9 @@ impl Robot {
     }
 }
 
-/// A parameter vector from an array, a `{name: value}` mapping or a fit `Result`.
+/// A parameter vector from an array, a `{name: value}` mapping or a fit `FitResult`.
 pub fn params_of(py: Python<'_>, model: &Model, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
-    if let Ok(r) = obj.cast::<crate::fit::FitResultPy>() {
+    if let Ok(r) = obj.cast::<crate::classes::FitResultPy>() {
         let inner = &r.get().inner;
         let model = inner.settings.model(model).map_err(from_ident)?;
         return inner.params_for(&model).map_err(from_ident);
@@ -194,10 +124,10 @@ fn state_of(
     Ok((q, dq, ddq))
 }
 
-fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Robot> {
+fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<ModelPy> {
     let name = name_or_path.to_string_lossy().to_string();
     let (model, origin) = py.detach(move || Origin::load(&name)).map_err(from_model)?;
-    Ok(Robot::new(model, origin))
+    Ok(ModelPy::new(model, origin))
 }
 
 /// Full regressor rows of `n` samples into `out` (`n·dof × p`), shared with
@@ -225,8 +155,8 @@ fn regressor_rows(
 }
 
 #[pymethods]
-impl Robot {
-    /// Same as :meth:`Robot.load`.
+impl ModelPy {
+    /// Same as :meth:`Model.load`.
     #[new]
     fn py_new(py: Python<'_>, name_or_path: PathBuf) -> PyResult<Self> {
         load(py, name_or_path)
@@ -246,7 +176,7 @@ impl Robot {
     #[staticmethod]
     #[pyo3(signature = (text, source = "<string>"))]
     fn from_toml(text: &str, source: &str) -> PyResult<Self> {
-        Ok(Robot::new(
+        Ok(ModelPy::new(
             Model::from_toml_str(text, source).map_err(from_model)?,
             Origin::Toml {
                 text: text.to_string(),
@@ -259,7 +189,7 @@ impl Robot {
     #[staticmethod]
     #[pyo3(signature = (text, source = "<string>"))]
     fn from_urdf(text: &str, source: &str) -> PyResult<Self> {
-        Ok(Robot::new(
+        Ok(ModelPy::new(
             Model::from_urdf_str(text, source).map_err(from_model)?,
             Origin::Urdf {
                 text: text.to_string(),
@@ -296,13 +226,13 @@ impl Robot {
             "builtin" => Origin::Builtin(text),
             "toml" => Origin::Toml { text, source },
             "urdf" => Origin::Urdf { text, source },
-            other => return Err(input(format!("Robot: unknown pickled kind {other:?}"))),
+            other => return Err(input(format!("Model: unknown pickled kind {other:?}"))),
         };
         let o = origin.clone();
         let model = py.detach(move || o.build(stribeck)).map_err(from_model)?;
-        Ok(Robot {
+        Ok(ModelPy {
             stribeck,
-            ..Robot::new(model, origin)
+            ..ModelPy::new(model, origin)
         })
     }
 
@@ -312,7 +242,7 @@ impl Robot {
         Model::builtin_names()
     }
 
-    /// Robot name (from the description).
+    /// Model name (from the description).
     #[getter]
     fn name(&self) -> String {
         self.model.name.clone()
@@ -376,7 +306,7 @@ impl Robot {
     /// box on a frame origin.
     #[getter]
     fn limits<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        crate::excite::limits_dict(py, &self.model)
+        crate::limits::limits_dict(py, &self.model)
     }
 
     /// Gravity in the base frame, m/s², shape ``(3,)``.
@@ -497,7 +427,7 @@ impl Robot {
     }
 
     /// A URDF of the whole robot with the inertials of ``params`` (an array, a
-    /// ``{name: value}`` mapping or a fit ``Result``), as ``dvrk-ident export --urdf``
+    /// ``{name: value}`` mapping or a fit ``FitResult``), as ``dvrk-ident export --urdf``
     /// generates it: one link per frame, mimic joints for the couplings, what URDF
     /// cannot hold listed in its header. Raises ``ModelError`` for parameters that are
     /// not rigid bodies.
@@ -612,7 +542,7 @@ impl Robot {
 
     fn __repr__(&self) -> String {
         format!(
-            "Robot({}, dof={}, parameters={}, source={})",
+            "Model({}, dof={}, parameters={}, source={})",
             py_str(&self.model.name),
             self.model.dof(),
             self.model.n_params(),
@@ -671,7 +601,7 @@ impl BaseParametersPy {
     }
 
     /// ``beta = combination @ params``, shape ``(rank,)``; ``params`` as in
-    /// :meth:`Robot.inverse_dynamics`.
+    /// :meth:`Model.inverse_dynamics`.
     fn project<'py>(
         &self,
         py: Python<'py>,
@@ -683,7 +613,7 @@ impl BaseParametersPy {
         Ok(array(py, beta, &[r]))
     }
 
-    /// The base regressor, as :meth:`Robot.base_regressor`.
+    /// The base regressor, as :meth:`Model.base_regressor`.
     #[pyo3(signature = (q, dq = None, ddq = None))]
     fn regressor<'py>(
         &self,

@@ -9,7 +9,8 @@
 //! - [`temp_dir`]: a fresh scratch folder per test;
 //! - [`repo`], [`example`]: the repository and its bundled examples;
 //! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
-//!   parameters, physically consistent ones included.
+//!   parameters, physically consistent ones included;
+//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics.
 #![allow(clippy::missing_panics_doc)]
 
 use std::io::Write;
@@ -199,6 +200,101 @@ pub fn physical_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
     pi
 }
 
+/// Coulomb (N·m), viscous (N·m·s/rad) and offset (N·m) friction from a frame's bounds.
+pub type FrictionRule = Box<dyn Fn(&dvrk_model::FrameBounds) -> [f64; 3]>;
+
+/// How [`ParamRule::params`] picks each link's and element's value from the description's
+/// bounds: deterministic parameters inside them, the same every run (the examples, the
+/// synthetic fits and the command-line tests each keep their own rule).
+pub struct ParamRule {
+    /// A link's mass (kg) from its bounds (`None`: the link has none).
+    pub mass: Box<dyn Fn(Option<[f64; 2]>) -> f64>,
+    /// A link's inertia about its centre of mass (kg·m², xx xy xz yy yz zz) from its mass.
+    pub inertia_com: Box<dyn Fn(f64) -> [f64; 6]>,
+    /// Coulomb (N·m), viscous (N·m·s/rad) and offset (N·m) friction from the frame's
+    /// bounds.
+    pub friction: FrictionRule,
+    /// Every motor inertia, kg·m².
+    pub motor_inertia: f64,
+    /// A spring's stiffness from its bounds.
+    pub spring: Box<dyn Fn(Option<[f64; 2]>) -> f64>,
+}
+
+/// The inertia of a 6 x 5 x 4 cm box of mass `m` about its centre, kg·m².
+pub fn box_inertia(m: f64) -> [f64; 6] {
+    let (x, y, z) = (0.06, 0.05, 0.04);
+    [
+        m * (y * y + z * z) / 12.0,
+        0.0,
+        0.0,
+        m * (x * x + z * z) / 12.0,
+        0.0,
+        m * (x * x + y * y) / 12.0,
+    ]
+}
+
+/// Coulomb 0.5, viscous 0.3 and offset 0.2 of their maxima (0.1 without).
+pub fn friction_within_bounds(b: &dvrk_model::FrameBounds) -> [f64; 3] {
+    [
+        0.5 * b.fc_max.unwrap_or(0.1),
+        0.3 * b.fv_max.unwrap_or(0.1),
+        0.2 * b.fo_max.unwrap_or(0.1),
+    ]
+}
+
+/// A spring at mid-range of its bounds (0.1 without).
+pub fn mid_spring(b: Option<[f64; 2]>) -> f64 {
+    b.map_or(0.1, |[a, b]| 0.5 * (a + b))
+}
+
+impl ParamRule {
+    /// The parameters of `model` by this rule, each link's centre of mass at the middle
+    /// of its box.
+    pub fn params(&self, model: &Model) -> Vec<f64> {
+        let mut pi = vec![0.0; model.n_params()];
+        for f in &model.frames {
+            if let Some(p0) = f.inertia {
+                let m = (self.mass)(f.bounds.mass);
+                let c = f.bounds.com.map_or([0.0; 3], |b| {
+                    [
+                        0.5 * (b[0][0] + b[0][1]),
+                        0.5 * (b[1][0] + b[1][1]),
+                        0.5 * (b[2][0] + b[2][1]),
+                    ]
+                });
+                let ic = (self.inertia_com)(m);
+                pi[p0..p0 + 10].copy_from_slice(&inertia::barycentric_from_standard(m, c, ic));
+            }
+            if let Some(fr) = f.friction() {
+                pi[fr.param..fr.param + 3].copy_from_slice(&(self.friction)(&f.bounds));
+            }
+            if let Some(mi) = f.motor_inertia() {
+                pi[mi.param] = self.motor_inertia;
+            }
+            if let Some(sp) = f.spring() {
+                pi[sp.param] = (self.spring)(f.bounds.spring);
+            }
+        }
+        pi
+    }
+}
+
+/// The command-line and streaming tests' MTM rule: 1.5 times each lower mass bound, a
+/// small diagonal inertia, Coulomb `coulomb` (N·m), viscous 0.02, offset 0.01, motor
+/// inertias 0.005, springs 270.
+pub fn mtm_rule(coulomb: f64) -> ParamRule {
+    ParamRule {
+        mass: Box::new(|b| b.map_or(1.0, |[a, _]| 1.5 * a)),
+        inertia_com: Box::new(|m| {
+            let d = 0.05 * m;
+            [d * 0.01, 0.0, 0.0, d * 0.012, 0.0, d * 0.008]
+        }),
+        friction: Box::new(move |_| [coulomb, 0.02, 0.01]),
+        motor_inertia: 0.005,
+        spring: Box::new(|_| 270.0),
+    }
+}
+
 /// Copy of `params` keeping only the parameters for which `keep` is true (others 0).
 pub fn filter_params(model: &Model, params: &[f64], keep: impl Fn(ParamKind) -> bool) -> Vec<f64> {
     model
@@ -283,4 +379,65 @@ pub fn torque_difference(a: &Model, pa: &[f64], b: &Model, pb: &[f64], seed: u64
 /// The rigid-body parameters of `params` (friction, motor inertias, springs zeroed).
 pub fn rigid_only(model: &Model, params: &[f64]) -> Vec<f64> {
     filter_params(model, params, |k| matches!(k, ParamKind::Inertia { .. }))
+}
+
+/// A planar arm of two revolute joints, the textbook closed form of its dynamics (Spong,
+/// Hutchinson & Vidyasagar, Robot Modeling and Control, §7.4): angles `q` (rad) from the
+/// horizontal, gravity `gravity` (m/s²) pulling down in the plane of motion.
+#[derive(Clone, Copy, Debug)]
+pub struct PlanarTwoLink {
+    /// Link masses (kg).
+    pub mass: [f64; 2],
+    /// Distance of each link's centre of mass from its joint, along the link (m).
+    pub com: [f64; 2],
+    /// Each link's moment of inertia about its centre of mass, about the joint axes (kg·m²).
+    pub inertia: [f64; 2],
+    /// Length of the first link: the second joint's distance from the first (m).
+    pub length: f64,
+    /// Gravity's magnitude (m/s²).
+    pub gravity: f64,
+}
+
+impl PlanarTwoLink {
+    /// The mass matrix (kg·m²).
+    pub fn mass_matrix(&self, q: [f64; 2]) -> [[f64; 2]; 2] {
+        let (m, lc, i, l1) = (self.mass, self.com, self.inertia, self.length);
+        let c2 = q[1].cos();
+        let m11 = i[0]
+            + i[1]
+            + m[0] * lc[0] * lc[0]
+            + m[1] * (l1 * l1 + lc[1] * lc[1] + 2.0 * l1 * lc[1] * c2);
+        let m12 = i[1] + m[1] * (lc[1] * lc[1] + l1 * lc[1] * c2);
+        let m22 = i[1] + m[1] * lc[1] * lc[1];
+        [[m11, m12], [m12, m22]]
+    }
+
+    /// Coriolis and centrifugal torques `C(q, q̇)·q̇` (N·m).
+    pub fn coriolis(&self, q: [f64; 2], dq: [f64; 2]) -> [f64; 2] {
+        let h = self.mass[1] * self.length * self.com[1] * q[1].sin();
+        [
+            -h * (2.0 * dq[0] * dq[1] + dq[1] * dq[1]),
+            h * dq[0] * dq[0],
+        ]
+    }
+
+    /// Gravity torques `g(q)` (N·m).
+    pub fn gravity_torque(&self, q: [f64; 2]) -> [f64; 2] {
+        let (m, lc, g) = (self.mass, self.com, self.gravity);
+        let g2 = m[1] * lc[1] * g * (q[0] + q[1]).cos();
+        [
+            (m[0] * lc[0] + m[1] * self.length) * g * q[0].cos() + g2,
+            g2,
+        ]
+    }
+
+    /// Inverse dynamics `M(q)·q̈ + C(q, q̇)·q̇ + g(q)` (N·m).
+    pub fn torque(&self, q: [f64; 2], dq: [f64; 2], ddq: [f64; 2]) -> [f64; 2] {
+        let (mm, c, g) = (
+            self.mass_matrix(q),
+            self.coriolis(q, dq),
+            self.gravity_torque(q),
+        );
+        [0, 1].map(|k| mm[k][0] * ddq[0] + mm[k][1] * ddq[1] + c[k] + g[k])
+    }
 }

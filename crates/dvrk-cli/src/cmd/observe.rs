@@ -5,12 +5,8 @@
 use std::path::Path;
 
 use anyhow::Result;
-use dvrk_ident::fit::stream::BLOCK_SAMPLES;
-use dvrk_ident::fit::LogData;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::request::is_large;
-use dvrk_ident::state::ObservationState;
-use dvrk_ident::FitSettings;
+use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
 use dvrk_model::Model;
 
 use super::args::LogArgs;
@@ -41,42 +37,25 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("--out", Some(args.out.as_str()))], &[])?;
     let model = Model::load(&args.robot)?;
-    let mut settings = args.log_args.settings(FitSettings::default())?;
-    settings.stribeck_velocity = args.stribeck;
-    let fitted = settings.model(&model)?;
-    let read = args.log_args.read_options().for_model(&fitted);
-    let readers = args
-        .logs
-        .iter()
-        .map(|p| read.open(p))
-        .collect::<Result<Vec<_>, _>>()?;
-    let bars = crate::progress::Bars::new();
-    let state = if args.stream || args.logs.iter().any(|p| is_large(Path::new(p))) {
-        ObservationState::observe_stream(
-            &model,
-            &readers.iter().collect::<Vec<_>>(),
-            &settings,
-            BLOCK_SAMPLES,
-            &bars,
-        )?
-    } else {
-        let data = readers
-            .iter()
-            .map(|r| {
-                let name = format!("reading {}", r.path().display());
-                Ok(bars.spin(&name, || r.read_all())?)
-            })
-            .collect::<Result<Vec<_>>>()?;
-        let logs: Vec<LogData> = data
-            .iter()
-            .zip(&args.logs)
-            .map(|(samples, path)| LogData {
-                samples,
-                file: Some(Path::new(path)),
-            })
-            .collect();
-        ObservationState::observe(&model, &logs, &settings, &bars)?
+    let request = ObserveRequest {
+        read: args.log_args.read_options(),
+        overrides: Overrides {
+            stribeck_velocity: args.stribeck,
+            ..args.log_args.overrides()?
+        },
+        streaming: if args.stream {
+            Streaming::Always
+        } else {
+            Streaming::Auto
+        },
+        ..ObserveRequest::new(
+            args.logs
+                .iter()
+                .map(|p| LogSource::File(p.into()))
+                .collect(),
+        )
     };
+    let state = request.run(&model, &crate::progress::Bars::new())?;
     let bytes = state.to_bytes();
     let mut outputs = Outputs::new();
     outputs.add(Path::new(&args.out), &bytes)?;

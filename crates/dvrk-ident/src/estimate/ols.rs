@@ -23,6 +23,8 @@ pub struct BaseEstimate {
 pub struct NotExcited {
     /// Names of the base parameters the data leave (almost) undetermined.
     pub parameters: Vec<String>,
+    /// Observation rows (samples × coordinates) the data had; fewer than the base
+    /// parameters is one way to fail.
     pub rows: usize,
 }
 

@@ -19,17 +19,29 @@ use serde::{Deserialize, Serialize};
 /// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum SolverStatus {
+    /// The solver did not start or was not run to an end.
     Unsolved,
+    /// Solved to full accuracy: the only status that is a result.
     Solved,
+    /// No parameters satisfy the constraints (bounds, pseudo-inertia LMIs).
     PrimalInfeasible,
+    /// The dual problem is infeasible: the objective is unbounded below on the constraints.
     DualInfeasible,
+    /// Met only Clarabel's reduced tolerances: not a result.
     AlmostSolved,
+    /// Infeasible to reduced tolerances.
     AlmostPrimalInfeasible,
+    /// Dual infeasible (unbounded) to reduced tolerances.
     AlmostDualInfeasible,
+    /// Stopped at the iteration limit.
     MaxIterations,
+    /// Stopped at the time limit.
     MaxTime,
+    /// Stopped by a numerical failure (e.g. a singular factorization).
     NumericalError,
+    /// Stopped because the iterates no longer improved.
     InsufficientProgress,
+    /// Stopped by a user callback (not used by this crate).
     CallbackTerminated,
 }
 

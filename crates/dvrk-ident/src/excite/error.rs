@@ -17,6 +17,8 @@ pub enum ExciteError {
     /// Bad options or a trajectory that does not fit the model.
     #[error("{0}")]
     Invalid(String),
+    /// A Fourier trajectory that could not be read or is not usable (a starting point,
+    /// or the trajectory to check).
     #[error(transparent)]
     Fourier(#[from] FourierError),
 }

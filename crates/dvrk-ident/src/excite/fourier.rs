@@ -45,24 +45,36 @@ pub enum FourierError {
     /// The file could not be read.
     #[error("{path}: {source}")]
     Io {
+        /// The file.
         path: String,
+        /// The operating system's error.
         #[source]
         source: std::io::Error,
     },
     /// The file is not valid JSON of the expected shape.
     #[error("{path}: not a Fourier trajectory: {message}")]
-    Json { path: String, message: String },
+    Json {
+        /// The file (or the name of the text).
+        path: String,
+        /// The parser's message.
+        message: String,
+    },
     /// Inconsistent sizes or values out of range.
     #[error("{source_name}: invalid Fourier trajectory: {message}")]
     Invalid {
+        /// The file or the trajectory's origin.
         source_name: String,
+        /// Which field is wrong and how.
         message: String,
     },
     /// A 2019-layout file without the requested trajectory.
     #[error("{path}: no trajectory {name:?} (available: {available})")]
     UnknownName {
+        /// The 2019 coefficient file.
         path: String,
+        /// The trajectory asked for.
         name: String,
+        /// The names the file has, comma-separated.
         available: String,
     },
 }

@@ -47,9 +47,11 @@ pub struct Violation {
 /// Result of the dense feasibility check.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Feasibility {
+    /// No limit exceeded by more than 1e-9 at any sample.
     pub feasible: bool,
     /// Samples checked (whole period).
     pub samples: usize,
+    /// The sampling rate of the check, Hz (the rate asked for, at least 1 kHz).
     pub rate_hz: f64,
     /// The largest excess over all limits and samples (None: no limits).
     pub worst: Option<Violation>,

@@ -131,7 +131,9 @@ impl std::str::FromStr for Criterion {
 /// A criterion value with its name.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CriterionValue {
+    /// The criterion's name (`condition` or `log_det`).
     pub name: String,
+    /// Its value as reported: the condition number (no units, ≥ 1), or `log det` (≤ 0).
     pub value: f64,
 }
 
@@ -142,6 +144,7 @@ pub struct ExciteOptions {
     pub order: usize,
     /// Base frequency `f0`, Hz.
     pub base_frequency_hz: f64,
+    /// What the search optimizes (default: the condition number).
     pub criterion: Criterion,
     /// Regressor samples per period per harmonic (criterion grid: this × `order`).
     pub samples_per_harmonic: usize,
@@ -222,7 +225,9 @@ impl Default for ExciteOptions {
 /// Criterion and feasibility of a trajectory.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Evaluation {
+    /// The criterion of the trajectory on the criterion grid.
     pub criterion: CriterionValue,
+    /// The dense check of the trajectory against the limits.
     pub feasibility: Feasibility,
 }
 
@@ -246,7 +251,9 @@ impl Evaluation {
 /// An optimized trajectory with its evaluation.
 #[derive(Clone, Debug)]
 pub struct Excitation {
+    /// The best trajectory over all starts.
     pub trajectory: FourierTrajectory,
+    /// Its criterion and dense feasibility check.
     pub evaluation: Evaluation,
     /// Criterion of each start's final trajectory (None: not refined, or failed).
     pub starts: Vec<Option<f64>>,
@@ -573,6 +580,8 @@ pub const MAX_GRID_VALUES: usize = 10_000_000;
 /// Most random starts (draws included: `starts · draws`) and hops, and L-BFGS
 /// iterations per stage.
 pub const MAX_STARTS: usize = 10_000;
+/// Most L-BFGS iterations per stage (`iterations_per_stage`,
+/// `refine_iterations_per_stage`).
 pub const MAX_ITERATIONS: usize = 100_000;
 
 /// Checks the sizes of the grids a trajectory of `order` harmonics at `f0` Hz needs

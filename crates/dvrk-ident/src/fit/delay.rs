@@ -40,7 +40,9 @@ const CHUNK: usize = 512;
 /// one per coordinate (`0`: none, today's behaviour).
 #[derive(Clone, Debug, PartialEq)]
 pub enum DelayOption {
+    /// Estimate the delays over `[0, DEFAULT_MAX_DELAY_S]` and fit with them.
     Auto,
+    /// Fixed delays, s: one value for every coordinate, or one per coordinate.
     Fixed(Vec<f64>),
 }
 

@@ -17,8 +17,11 @@ use super::plot::{colors, DrawResult, Figure};
 /// convention: azimuth about the base z axis from x, elevation above the x–y plane).
 #[derive(Clone, Debug, PartialEq)]
 pub struct View {
+    /// The view's caption in the figure, e.g. `front view (x–z plane)`.
     pub name: String,
+    /// Camera azimuth about the base z axis from x, degrees.
     pub azimuth_deg: f64,
+    /// Camera elevation above the base x–y plane, degrees.
     pub elevation_deg: f64,
 }
 
@@ -57,7 +60,9 @@ impl View {
 pub struct DrawnFrame {
     /// 1-based frame index (0 is the base).
     pub index: usize,
+    /// The frame's name in the description (`base` for index 0).
     pub name: String,
+    /// The parent frame's index (0: the base; the base is its own parent).
     pub parent: usize,
     /// Pose in the base frame (m).
     pub pose: Transform,
@@ -68,9 +73,11 @@ pub struct DrawnFrame {
 /// The kinematic tree of a model at one configuration, ready to render.
 #[derive(Clone, Debug)]
 pub struct KinematicDrawing {
+    /// Text above the views (the robot and the configuration).
     pub title: String,
     /// Base first (index 0), then every frame in model order.
     pub frames: Vec<DrawnFrame>,
+    /// The views drawn side by side, in order.
     pub views: Vec<View>,
     /// Length of the drawn axes, m.
     pub axis_length: f64,

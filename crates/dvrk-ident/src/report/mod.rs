@@ -29,7 +29,12 @@ pub enum ReportError {
     Draw(String),
     /// A requested output format or figure input is not usable.
     #[error("{file}: {message}")]
-    Format { file: String, message: String },
+    Format {
+        /// The file, or the input it stands for (e.g. `excitation trajectory`).
+        file: String,
+        /// What is wrong.
+        message: String,
+    },
     /// What the report runs of the identification (the result's model, processing,
     /// prediction) or writing its files failed. The report depends on the pipeline's
     /// error, never the reverse.
@@ -42,6 +47,7 @@ pub enum ReportError {
 pub struct ReportLog<'a> {
     /// Shown in titles and tables, e.g. `training` or `test`.
     pub role: &'a str,
+    /// The log as read (measured joints), processed here with the result's settings.
     pub trajectory: &'a Trajectory,
     /// Metrics on the first N processed samples only (the 2019 test protocol).
     pub window: Option<usize>,
@@ -50,8 +56,12 @@ pub struct ReportLog<'a> {
 /// What a report is made from.
 #[derive(Clone, Debug)]
 pub struct ReportInput<'a> {
+    /// The robot as loaded, without the fit's Stribeck terms (the result's settings add them).
     pub model: &'a Model,
+    /// The fit whose parameters predict the logs.
     pub result: &'a FitResult,
+    /// The logs to draw and to compute metrics on, in order; the first also poses the
+    /// kinematic drawing.
     pub logs: Vec<ReportLog<'a>>,
     /// Excitation trajectory to plot against the model's limits.
     pub excitation: Option<&'a FourierTrajectory>,
@@ -62,24 +72,33 @@ pub struct ReportInput<'a> {
 pub struct RenderedFigure {
     /// File stem, e.g. `torque_1_training`.
     pub stem: String,
+    /// The caption under the figure in the page.
     pub caption: String,
+    /// The SVG document.
     pub svg: String,
+    /// The PNG file's bytes.
     pub png: Vec<u8>,
 }
 
 /// Per-log numbers computed for the report.
 #[derive(Clone, Debug)]
 pub struct LogSummary {
+    /// The log's role, as in [`ReportLog::role`].
     pub role: String,
+    /// The log's source (file, or name given in Python).
     pub source: String,
+    /// The fitted model's errors on the log (over its window, if any).
     pub metrics: JointMetrics,
 }
 
 /// A report in memory.
 #[derive(Clone, Debug)]
 pub struct Report {
+    /// Every figure, in page order.
     pub figures: Vec<RenderedFigure>,
+    /// The numbers of each log, in the order given.
     pub logs: Vec<LogSummary>,
+    /// The self-contained page `report.html`: tables, and the figures inlined as SVG.
     pub html: String,
 }
 

@@ -25,7 +25,9 @@ pub type DrawResult = Result<(), Box<dyn Error>>;
 /// Output encoding of a figure.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum ImageFormat {
+    /// Scalable vector graphics (text), for documents and the HTML report.
     Svg,
+    /// An RGB bitmap, 8 bits per channel.
     Png,
 }
 
@@ -47,6 +49,7 @@ impl ImageFormat {
         }
     }
 
+    /// The file extension of the format, without the dot.
     pub fn extension(self) -> &'static str {
         match self {
             ImageFormat::Svg => "svg",
@@ -119,12 +122,17 @@ fn encode_png(rgb: &[u8], w: u32, h: u32) -> Result<Vec<u8>, ReportError> {
 /// How a series is drawn.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SeriesStyle {
+    /// A solid line through the points.
     Line,
+    /// A dashed line through the points.
     Dashed,
+    /// A filled circle at each point, no line.
     Points,
     /// Points with vertical bars from `lower[i]` to `upper[i]`.
     ErrorBars {
+        /// Lower end of each bar, in y units (absolute, not an offset).
         lower: Vec<f64>,
+        /// Upper end of each bar, in y units (absolute, not an offset).
         upper: Vec<f64>,
     },
 }
@@ -134,13 +142,18 @@ pub enum SeriesStyle {
 pub struct Series {
     /// Legend text (empty: no legend entry).
     pub label: String,
+    /// The curve's colour.
     pub color: RGBColor,
+    /// How the points are drawn.
     pub style: SeriesStyle,
+    /// Abscissae, in the panel's x units (e.g. s).
     pub x: Vec<f64>,
+    /// Ordinates, one per abscissa, in the panel's y units.
     pub y: Vec<f64>,
 }
 
 impl Series {
+    /// A solid line through `(x[i], y[i])`.
     pub fn line(label: &str, color: RGBColor, x: Vec<f64>, y: Vec<f64>) -> Series {
         Series {
             label: label.into(),
@@ -155,9 +168,13 @@ impl Series {
 /// One chart of a grid: title, axis descriptions (with units) and curves.
 #[derive(Clone, Debug, Default)]
 pub struct Panel {
+    /// Text above the chart.
     pub title: String,
+    /// The x axis' description with its unit, e.g. `time (s)`.
     pub x_label: String,
+    /// The y axis' description with its unit, e.g. `torque (N·m)`.
     pub y_label: String,
+    /// The curves, drawn in order (later ones on top).
     pub series: Vec<Series>,
     /// Horizontal reference lines (value, colour), e.g. limits; drawn dashed.
     pub hlines: Vec<(f64, RGBColor)>,
@@ -166,10 +183,13 @@ pub struct Panel {
 /// Panels on a grid under a common title.
 #[derive(Clone, Debug)]
 pub struct PanelGrid {
+    /// Text above the whole grid.
     pub title: String,
+    /// Panels per row; the rows follow from the number of panels.
     pub columns: usize,
     /// Size of one panel in pixels.
     pub panel_size: (u32, u32),
+    /// The charts, row by row.
     pub panels: Vec<Panel>,
 }
 
@@ -374,14 +394,23 @@ const TITLE_HEIGHT: u32 = 36;
 /// A palette that stays readable in print: measured, predicted, error, then extras.
 pub mod colors {
     use plotters::style::RGBColor;
+    /// Measured values (the log's torque), and the main series of other figures.
     pub const MEASURED: RGBColor = RGBColor(31, 119, 180);
+    /// The model's prediction.
     pub const PREDICTED: RGBColor = RGBColor(214, 39, 40);
+    /// Measured minus predicted, and zero reference lines.
     pub const ERROR: RGBColor = RGBColor(127, 127, 127);
+    /// Signals before processing.
     pub const RAW: RGBColor = RGBColor(170, 170, 170);
+    /// Signals after processing (filtered, differentiated).
     pub const FILTERED: RGBColor = RGBColor(31, 119, 180);
+    /// Limits drawn against a trajectory.
     pub const LIMIT: RGBColor = RGBColor(214, 39, 40);
+    /// A frame's x axis in a kinematic drawing.
     pub const AXIS_X: RGBColor = RGBColor(214, 39, 40);
+    /// A frame's y axis in a kinematic drawing.
     pub const AXIS_Y: RGBColor = RGBColor(44, 160, 44);
+    /// A frame's z axis in a kinematic drawing.
     pub const AXIS_Z: RGBColor = RGBColor(31, 119, 180);
     /// One colour per coordinate (tab10).
     pub const CYCLE: [RGBColor; 10] = [

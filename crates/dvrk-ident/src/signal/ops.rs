@@ -172,7 +172,7 @@ pub fn resample_linear(
     m: &DMatrix<f64>,
     rate_hz: f64,
 ) -> Result<(Vec<f64>, DMatrix<f64>), SignalError> {
-    let mut resampler = super::stream::Resampler::new(m.ncols(), rate_hz)?;
+    let mut resampler = super::resample::Resampler::new(m.ncols(), rate_hz)?;
     let n = time.len();
     if n != m.nrows() {
         return Err(SignalError::InvalidSetting {

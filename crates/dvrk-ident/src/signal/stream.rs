@@ -8,12 +8,11 @@
 
 mod difference;
 mod processor;
-mod resample;
 mod timing;
 mod zero_phase;
 
+pub(crate) use super::resample::Resampler;
 pub use processor::{BlockProcessor, SETTLE_TOLERANCE};
-pub(crate) use resample::Resampler;
 pub use timing::{LogTiming, TimingSurvey};
 
 use super::{Processed, Processing, SignalError};

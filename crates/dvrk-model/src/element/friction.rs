@@ -2,7 +2,11 @@
 //! `F = Fc·sign(ṡ) + Fv·ṡ + Fo` (the 2019 model), acting as `τ += aᵀ·F`, optionally
 //! with a [`Stribeck`] term `Fs·sign(ṡ)·exp(−(ṡ/vs)²)` in the same force.
 
-use super::{clamp_near, sign0, BoundOrigin, BoundRow, BoundsContext, Law, Note, Sample, Stribeck};
+use super::{
+    clamp_near, sign0, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law, Note, Sample,
+    Stribeck,
+};
+use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::param::{Nominal, ParamKind};
 
@@ -15,6 +19,17 @@ pub struct Friction {
     /// The low-speed term, whose `Fs` is added after every other parameter (see
     /// `Model::add_stribeck`).
     pub stribeck: Option<Stribeck>,
+}
+
+impl Friction {
+    /// Friction on a moving frame, its `Fc` at column `param` (no Stribeck term yet).
+    pub(super) fn on(fx: &FrameContext, param: usize) -> Result<Self, ModelError> {
+        fx.need_motion("friction")?;
+        Ok(Friction {
+            param,
+            stribeck: None,
+        })
+    }
 }
 
 impl Law for Friction {

@@ -3,12 +3,17 @@
 //! before a fit, and predictions (and the static torque) add it back with
 //! `Model::add_known_forces`.
 
+#[cfg(feature = "description")]
 use serde::Deserialize;
 
 use super::{FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
-use crate::expr::{Affine, ExprError};
+use crate::expr::Affine;
+#[cfg(feature = "description")]
+use crate::expr::ExprError;
 use crate::param::{Nominal, ParamKind};
+#[cfg(feature = "description")]
+use crate::resolve::Ctx;
 
 /// A known force (see the module documentation).
 #[derive(Clone, Debug)]
@@ -22,6 +27,7 @@ pub struct KnownForce {
 
 /// `known_force = { polynomial = [...], along = "..." }` (`along` defaults to the
 /// frame's joint value).
+#[cfg(feature = "description")]
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct KnownForceDesc {
@@ -37,28 +43,54 @@ impl KnownForce {
         self.polynomial.iter().fold(0.0, |acc, &c| acc * s + c)
     }
 
-    pub(super) fn from_desc(fx: &FrameContext, kf: &KnownForceDesc) -> Result<Self, ModelError> {
-        let n = fx.ctx.coordinates.len();
+    #[cfg(feature = "description")]
+    pub(super) fn from_desc(
+        ctx: &Ctx,
+        fx: &FrameContext,
+        kf: &KnownForceDesc,
+    ) -> Result<Self, ModelError> {
         let along = match &kf.along {
-            Some(text) => fx
-                .ctx
-                .expr(fx.place, "known_force.along", text)?
-                .affine(n)
-                .map_err(|e: ExprError| fx.error("known_force.along", e.to_string()))?,
+            Some(text) => Some(
+                ctx.expr(fx.place, "known_force.along", text)?
+                    .affine(fx.n_coordinates)
+                    .map_err(|e: ExprError| fx.error("known_force.along", e.to_string()))?,
+            ),
+            None => None,
+        };
+        KnownForce::on(fx, along, &kf.polynomial)
+    }
+
+    /// A known force along `along` (`None`: the frame's joint value, which must move).
+    pub(super) fn on(
+        fx: &FrameContext,
+        along: Option<Affine>,
+        polynomial: &[f64],
+    ) -> Result<Self, ModelError> {
+        let along = match along {
+            Some(a) => a,
             None => {
                 fx.need_motion("known_force")?;
                 fx.value.clone()
             }
         };
-        if kf.polynomial.is_empty() || kf.polynomial.iter().any(|c| !c.is_finite()) {
+        if polynomial.is_empty() || polynomial.iter().any(|c| !c.is_finite()) {
             return Err(fx.error(
                 "known_force.polynomial",
                 "needs at least one finite coefficient",
             ));
         }
+        if let Some(&(k, _)) = along.terms.iter().find(|t| t.0 >= fx.n_coordinates) {
+            return Err(fx.error(
+                "known_force.along",
+                format!(
+                    "coordinate {k} does not exist ({} coordinates)",
+                    fx.n_coordinates
+                ),
+            ));
+        }
         Ok(KnownForce {
             along,
-            polynomial: kf.polynomial.clone(),
+            polynomial: polynomial.to_vec(),
         })
     }
 }

@@ -10,7 +10,8 @@
 //! of allocation and indirect calls (one `match` per element).
 //!
 //! A new element is one module implementing [`Law`], plus its variant in [`Element`]
-//! (and the `each!` dispatch below) and its description field in [`ElementsDesc`].
+//! (and the `each!` dispatch below), its description field in `ElementsDesc` and its
+//! variant in [`ElementSpec`] (the numeric constructor's).
 
 mod friction;
 mod known_force;
@@ -19,11 +20,15 @@ mod quadratic_viscous;
 mod spring;
 mod stribeck;
 
+#[cfg(feature = "description")]
 use serde::Deserialize;
 
 use crate::error::ModelError;
-use crate::expr::{Affine, NumOrExpr};
+use crate::expr::Affine;
+#[cfg(feature = "description")]
+use crate::expr::NumOrExpr;
 use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
+#[cfg(feature = "description")]
 use crate::resolve::Ctx;
 
 pub use friction::Friction;
@@ -33,7 +38,9 @@ pub use quadratic_viscous::QuadraticViscous;
 pub use spring::{Deflection, Spring};
 pub use stribeck::Stribeck;
 
+#[cfg(feature = "description")]
 use known_force::KnownForceDesc;
+#[cfg(feature = "description")]
 use quadratic_viscous::QuadraticViscousDesc;
 
 /// One sample as an element sees it: the joint value `s = a·q + b` of its frame and the
@@ -373,35 +380,56 @@ impl Element {
     }
 }
 
-/// A frame's element fields in a description file (`robots/README.md`), read by serde
-/// into the frame's table.
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ElementsDesc {
-    #[serde(default)]
-    friction: bool,
-    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
-    stribeck_velocity: Option<NumOrExpr>,
-    #[serde(default)]
-    motor_inertia: bool,
-    spring: Option<String>,
-    known_force: Option<KnownForceDesc>,
-    quadratic_viscous: Option<QuadraticViscousDesc>,
+/// An element as the numeric constructor ([`ModelBuilder`](crate::ModelBuilder)) takes
+/// it: what a description's element fields say, in numbers. Its parameters are
+/// allocated by the constructor (names `Fc{i}`, `Ia{i}`... of the frame's index `i`).
+#[derive(Clone, Debug)]
+pub enum ElementSpec {
+    /// Coulomb, viscous and offset friction (`Fc Fv Fo`), with a Stribeck term of this
+    /// velocity (rad/s or m/s, positive) when given (its `Fs` comes after every other
+    /// parameter, as [`Model::with_stribeck`](crate::Model::with_stribeck) adds it).
+    Friction {
+        /// Stribeck velocity (rad/s or m/s), or no Stribeck term.
+        stribeck_velocity: Option<f64>,
+    },
+    /// A motor inertia `Ia`: the frame's joint value must be one coordinate's multiple.
+    MotorInertia,
+    /// A spring `K` on this deflection (m or rad).
+    Spring(Deflection),
+    /// A known force: the polynomial's coefficients, highest degree first (N·m or N),
+    /// along an affine function of the coordinates (`None`: the frame's joint value).
+    KnownForce {
+        /// What the force acts along (rad or m); `None` for the frame's joint value.
+        along: Option<Affine>,
+        /// Coefficients, highest degree first (N·m or N).
+        polynomial: Vec<f64>,
+    },
+    /// Quadratic viscous friction `Fq` with its nominal value and upper bound
+    /// (N·m·s²/rad² or N·s²/m²).
+    QuadraticViscous {
+        /// Nominal `Fq` (`None`: 0).
+        nominal: Option<f64>,
+        /// Upper bound of `Fq` for the physically consistent fit.
+        max: Option<f64>,
+    },
 }
 
-/// The frame an element is read for.
+/// The frame an element is built for.
 pub(crate) struct FrameContext<'a> {
-    pub ctx: &'a Ctx<'a>,
+    /// The description file or the numeric model's source, for messages.
+    pub file: &'a str,
     /// `frame 3 (name)`, for messages.
     pub place: &'a str,
     pub index: usize,
     pub value: &'a Affine,
     pub moving: bool,
+    /// Number of coordinates of the model.
+    pub n_coordinates: usize,
 }
 
 impl FrameContext<'_> {
     fn error(&self, field: &str, message: impl Into<String>) -> ModelError {
-        ModelError::field(self.ctx.file, self.place, field, message)
+        ModelError::field(self.file, self.place, field, message)
     }
 
     /// Errors unless the frame moves: friction, springs... act along its joint value.
@@ -417,7 +445,8 @@ impl FrameContext<'_> {
     }
 }
 
-/// The elements a description gives a frame.
+/// A frame's elements as built: the elements, with their parameters pushed.
+#[derive(Default)]
 pub(crate) struct FrameElements {
     pub elements: Vec<Element>,
     /// Stribeck velocity (rad/s or m/s): the term is added after every frame, its `Fs`
@@ -425,50 +454,104 @@ pub(crate) struct FrameElements {
     pub stribeck_velocity: Option<f64>,
 }
 
+impl FrameElements {
+    /// Adds `e`, pushing its parameters onto `params`.
+    fn push(&mut self, fx: &FrameContext, e: Element, params: &mut Vec<Param>) {
+        params.extend(e.params(fx.index));
+        self.elements.push(e);
+    }
+}
+
+impl ElementSpec {
+    /// Checks the element against its frame and adds it to `out`, its parameters to
+    /// `params`.
+    pub(crate) fn build(
+        &self,
+        fx: &FrameContext,
+        params: &mut Vec<Param>,
+        out: &mut FrameElements,
+    ) -> Result<(), ModelError> {
+        match self {
+            ElementSpec::Friction { stribeck_velocity } => {
+                let f = Friction::on(fx, params.len())?;
+                if let Some(v) = stribeck_velocity {
+                    out.stribeck_velocity = Some(Stribeck::check_velocity(fx, *v)?);
+                }
+                out.push(fx, Element::Friction(f), params);
+            }
+            ElementSpec::MotorInertia => {
+                let m = MotorInertia::on(fx, params.len())?;
+                out.push(fx, Element::MotorInertia(m), params);
+            }
+            ElementSpec::Spring(d) => {
+                let s = Spring::on(fx, d.clone(), params.len())?;
+                out.push(fx, Element::Spring(s), params);
+            }
+            ElementSpec::KnownForce { along, polynomial } => {
+                let k = KnownForce::on(fx, along.clone(), polynomial)?;
+                out.push(fx, Element::KnownForce(k), params);
+            }
+            ElementSpec::QuadraticViscous { nominal, max } => {
+                let q = QuadraticViscous::on(fx, *nominal, *max, params.len())?;
+                out.push(fx, Element::QuadraticViscous(q), params);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A frame's element fields in a description file (`robots/README.md`), read by serde
+/// into the frame's table.
+#[cfg(feature = "description")]
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct ElementsDesc {
+    #[serde(default)]
+    friction: bool,
+    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
+    stribeck_velocity: Option<NumOrExpr>,
+    #[serde(default)]
+    motor_inertia: bool,
+    spring: Option<String>,
+    known_force: Option<KnownForceDesc>,
+    quadratic_viscous: Option<QuadraticViscousDesc>,
+}
+
+#[cfg(feature = "description")]
 impl ElementsDesc {
     /// Reads the elements, pushing their parameters onto `params`, in the order of the
     /// parameter vector: friction, motor inertia, spring, quadratic viscous friction.
     pub(crate) fn build(
         &self,
+        ctx: &Ctx,
         fx: &FrameContext,
         params: &mut Vec<Param>,
     ) -> Result<FrameElements, ModelError> {
-        let mut elements = Vec::new();
-        let mut push = |e: Element, params: &mut Vec<Param>| {
-            params.extend(e.params(fx.index));
-            elements.push(e);
-        };
+        let mut out = FrameElements::default();
         if self.friction {
-            fx.need_motion("friction")?;
-            let friction = Friction {
-                param: params.len(),
-                stribeck: None,
-            };
-            push(Element::Friction(friction), params);
+            let friction = Friction::on(fx, params.len())?;
+            out.push(fx, Element::Friction(friction), params);
         }
-        let stribeck_velocity = match &self.stribeck_velocity {
-            Some(v) => Some(Stribeck::velocity_from_desc(fx, self.friction, v)?),
-            None => None,
-        };
+        if let Some(v) = &self.stribeck_velocity {
+            out.stribeck_velocity = Some(Stribeck::velocity_from_desc(ctx, fx, self.friction, v)?);
+        }
         if self.motor_inertia {
-            let m = MotorInertia::from_desc(fx, params.len())?;
-            push(Element::MotorInertia(m), params);
+            let m = MotorInertia::on(fx, params.len())?;
+            out.push(fx, Element::MotorInertia(m), params);
         }
         if let Some(text) = &self.spring {
-            let s = Spring::from_desc(fx, text, params.len())?;
-            push(Element::Spring(s), params);
+            let s = Spring::from_desc(ctx, fx, text, params.len())?;
+            out.push(fx, Element::Spring(s), params);
         }
         if let Some(kf) = &self.known_force {
-            push(Element::KnownForce(KnownForce::from_desc(fx, kf)?), params);
+            let k = KnownForce::from_desc(ctx, fx, kf)?;
+            out.push(fx, Element::KnownForce(k), params);
         }
         if let Some(d) = &self.quadratic_viscous {
             if let Some(e) = QuadraticViscous::from_desc(fx, d, params.len())? {
-                push(Element::QuadraticViscous(e), params);
+                out.push(fx, Element::QuadraticViscous(e), params);
             }
         }
-        Ok(FrameElements {
-            elements,
-            stribeck_velocity,
-        })
+        Ok(out)
     }
 }

@@ -22,7 +22,7 @@ pub struct MotorInertia {
 impl MotorInertia {
     /// `motor_inertia = true` on a moving frame whose joint value is one coordinate's
     /// multiple (plus a constant).
-    pub(super) fn from_desc(fx: &FrameContext, param: usize) -> Result<Self, ModelError> {
+    pub(super) fn on(fx: &FrameContext, param: usize) -> Result<Self, ModelError> {
         fx.need_motion("motor_inertia")?;
         if fx.value.terms.len() != 1 {
             return Err(fx.error(

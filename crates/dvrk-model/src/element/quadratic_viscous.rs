@@ -11,6 +11,7 @@
 //! its variant in [`Element`](super::Element), its field in the description and its
 //! [`ParamKind`].
 
+#[cfg(feature = "description")]
 use serde::Deserialize;
 
 use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law, Note, Sample};
@@ -30,6 +31,7 @@ pub struct QuadraticViscous {
 }
 
 /// `quadratic_viscous = true | { nominal = x, max = y }`.
+#[cfg(feature = "description")]
 #[derive(Debug, Deserialize)]
 #[serde(untagged)]
 pub(super) enum QuadraticViscousDesc {
@@ -37,6 +39,7 @@ pub(super) enum QuadraticViscousDesc {
     With(QuadraticViscousTable),
 }
 
+#[cfg(feature = "description")]
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct QuadraticViscousTable {
@@ -46,6 +49,7 @@ pub(super) struct QuadraticViscousTable {
 
 impl QuadraticViscous {
     /// The element of a description's `quadratic_viscous` field (`None` for `false`).
+    #[cfg(feature = "description")]
     pub(super) fn from_desc(
         fx: &FrameContext,
         desc: &QuadraticViscousDesc,
@@ -56,6 +60,16 @@ impl QuadraticViscous {
             QuadraticViscousDesc::On(true) => (None, None),
             QuadraticViscousDesc::With(t) => (t.nominal, t.max),
         };
+        QuadraticViscous::on(fx, nominal, max, param).map(Some)
+    }
+
+    /// Quadratic viscous friction on a moving frame, its `Fq` at column `param`.
+    pub(super) fn on(
+        fx: &FrameContext,
+        nominal: Option<f64>,
+        max: Option<f64>,
+        param: usize,
+    ) -> Result<Self, ModelError> {
         fx.need_motion("quadratic_viscous")?;
         let unit = "N·m·s²/rad² or N·s²/m²";
         for (field, v) in [
@@ -73,11 +87,11 @@ impl QuadraticViscous {
                 format!("{m}: below the physical lower bound 0"),
             ));
         }
-        Ok(Some(QuadraticViscous {
+        Ok(QuadraticViscous {
             param,
             nominal: nominal.unwrap_or(0.0),
             max,
-        }))
+        })
     }
 
     /// The regressor factor of `Fq` at joint rate `sd`: `ṡ·|ṡ|`.

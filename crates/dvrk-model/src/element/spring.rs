@@ -5,6 +5,8 @@ use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law,
 use crate::error::ModelError;
 use crate::expr::{Affine, Expr};
 use crate::param::{Nominal, ParamKind};
+#[cfg(feature = "description")]
+use crate::resolve::Ctx;
 
 /// A spring (see the module documentation).
 #[derive(Clone, Debug)]
@@ -53,14 +55,25 @@ impl Deflection {
 
 impl Spring {
     /// `spring = "deflection"` on a moving frame.
+    #[cfg(feature = "description")]
     pub(super) fn from_desc(
+        ctx: &Ctx,
         fx: &FrameContext,
         text: &str,
         param: usize,
     ) -> Result<Self, ModelError> {
         fx.need_motion("spring")?;
-        let n = fx.ctx.coordinates.len();
-        let deflection = Deflection::new(fx.ctx.expr(fx.place, "spring", text)?, n);
+        let deflection = Deflection::new(ctx.expr(fx.place, "spring", text)?, fx.n_coordinates);
+        Spring::on(fx, deflection, param)
+    }
+
+    /// A spring on a moving frame, its `K` at column `param`.
+    pub(super) fn on(
+        fx: &FrameContext,
+        deflection: Deflection,
+        param: usize,
+    ) -> Result<Self, ModelError> {
+        fx.need_motion("spring")?;
         Ok(Spring { param, deflection })
     }
 

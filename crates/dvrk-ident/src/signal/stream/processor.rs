@@ -5,9 +5,9 @@ use std::collections::VecDeque;
 use nalgebra::DMatrix;
 
 use super::difference::Difference;
-use super::resample::Resampler;
 use super::timing::LogTiming;
 use super::zero_phase::{settle_margin, ZeroPhase};
+use super::Resampler;
 use crate::signal::advance::Advance;
 use crate::signal::{AccelerationSource, Processed, Processing, SignalError};
 use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};

@@ -2,8 +2,8 @@
 //! implementation behind [`crate::signal::resample_linear`] (which feeds it a whole
 //! matrix), the readers' `resample_hz` and the processing's.
 
-use crate::signal::butter::check_rate;
-use crate::signal::SignalError;
+use super::butter::check_rate;
+use super::SignalError;
 
 /// Resampler of every column onto `t0 + k / rate` (`t0`: the first time) up to the last
 /// time. A grid time is interpolated as soon as a sample at or after it arrives,
