@@ -448,6 +448,65 @@ fn solve(obs: &Observation, what: &str) -> Result<Vec<f64>, IdentError> {
 /// (6 to 10: the quartics need five distinct positions, one more to see a residual;
 /// 10⁶ configurations take about 20 s and 250 MB).
 pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, IdentError> {
+    let to_model = check_inputs(model, params, points)?;
+    let grid = Grid {
+        ranges: joint_ranges(model)?,
+        points,
+        configurations: points.pow(6),
+    };
+    let statics = evaluate(model, params, &to_model, &grid)?;
+    let gravity = fit_gravity(&statics, &grid)?;
+    let (pos, neg) = fit_quartics(&statics, &grid, &gravity)?;
+    let (residuals, upper, lower) = residuals_and_limits(&statics, &grid, &gravity, &pos, &neg);
+    let out = DvrkGc {
+        pos,
+        neg,
+        upper,
+        lower,
+        db_vel: DB_VEL.to_vec(),
+        sat_vel: SAT_VEL.to_vec(),
+        fric_comp_ratio: FRIC_COMP_RATIO.to_vec(),
+        residuals,
+        ranges: grid.ranges,
+        points: grid.points,
+        configurations: grid.configurations,
+        robot: model.name.clone(),
+    };
+    let finite = out
+        .pos
+        .iter()
+        .chain(&out.neg)
+        .chain(&out.upper)
+        .chain(&out.lower)
+        .all(|v| v.is_finite());
+    if !finite {
+        return Err(IdentError::RankDeficient {
+            source_name: "dVRK gravity compensation".into(),
+            message: "the fit gave non-finite values".into(),
+        });
+    }
+    Ok(out)
+}
+
+/// The grid the file is fitted over: `points` positions per joint in `ranges`,
+/// `configurations = points⁶` in all.
+struct Grid {
+    ranges: Vec<[f64; 2]>,
+    points: usize,
+    configurations: usize,
+}
+
+/// A robot that is not the MTM, or parameters that do not fit it.
+fn mismatch(model: &Model, message: String) -> IdentError {
+    IdentError::Mismatch {
+        source_name: format!("robot `{}`", model.name),
+        message,
+    }
+}
+
+/// Refuses a grid size, a robot or parameters the file cannot be made from; returns
+/// the measured-to-model joint matrix.
+fn check_inputs(model: &Model, params: &[f64], points: usize) -> Result<DMatrix<f64>, IdentError> {
     if !(6..=10).contains(&points) {
         return Err(IdentError::Setting {
             name: "points".into(),
@@ -456,10 +515,7 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
             ),
         });
     }
-    let mismatch = |message: String| IdentError::Mismatch {
-        source_name: format!("robot `{}`", model.name),
-        message,
-    };
+    let mismatch = |message: String| mismatch(model, message);
     if model
         .measured
         .joints
@@ -481,14 +537,20 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
             params.len()
         )));
     }
-    let to_model = model
+    model
         .measured_to_model_matrix()
-        .ok_or_else(|| mismatch("the coupling matrix is singular".into()))?;
+        .ok_or_else(|| mismatch("the coupling matrix is singular".into()))
+}
+
+/// The model at every grid configuration, once (21 numbers each), in parallel.
+fn evaluate(
+    model: &Model,
+    params: &[f64],
+    to_model: &DMatrix<f64>,
+    grid: &Grid,
+) -> Result<Vec<Static>, IdentError> {
     let to_measured_torque = to_model.transpose();
-    let ranges = joint_ranges(model)?;
-    let configurations = points.pow(6);
-    // The model at every grid configuration, once (21 numbers each), in parallel.
-    let statics: Option<Vec<Static>> = (0..configurations)
+    let statics: Option<Vec<Static>> = (0..grid.configurations)
         .into_par_iter()
         .chunks(BLOCK)
         .flat_map_iter(|chunk| {
@@ -501,28 +563,30 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
             };
             chunk
                 .into_iter()
-                .map(|c| ev.eval(&grid_point(&ranges, points, c)))
+                .map(|c| ev.eval(&grid_point(&grid.ranges, grid.points, c)))
                 .collect::<Vec<_>>()
         })
         .collect();
-    let statics = statics.ok_or_else(|| {
+    statics.ok_or_else(|| {
         mismatch(
+            model,
             "its gravity torque depends on the wrist roll (joint 7) otherwise than a rigid \
              body turning about the roll axis; the controller cannot represent it"
                 .into(),
         )
-    })?;
+    })
+}
 
-    // Stage 1: gravity columns on the gravity torque of joints 2–6.
+/// Stage 1: gravity columns on the gravity torque of joints 2–6.
+fn fit_gravity(statics: &[Static], grid: &Grid) -> Result<Vec<f64>, IdentError> {
     let mut gravity_obs = Observation::new(GRAVITY_COLUMNS);
-    // Stage 2 (after stage 1): per joint and direction, [1, q, q², q³, q⁴].
     let mut block = DMatrix::zeros(0, GRAVITY_COLUMNS + 1);
     let mut start = 0;
-    while start < configurations {
-        let end = (start + BLOCK).min(configurations);
+    while start < grid.configurations {
+        let end = (start + BLOCK).min(grid.configurations);
         block = block.resize((end - start) * 5, GRAVITY_COLUMNS + 1, 0.0);
         for (c, st) in statics.iter().enumerate().take(end).skip(start) {
-            let y = regressor(&grid_point(&ranges, points, c));
+            let y = regressor(&grid_point(&grid.ranges, grid.points, c));
             for (j, row) in y.iter().enumerate().take(6).skip(1) {
                 let r = (c - start) * 5 + j - 1;
                 for (k, v) in row[..GRAVITY_COLUMNS].iter().enumerate() {
@@ -534,11 +598,21 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
         gravity_obs.add_rows(&block);
         start = end;
     }
-    let gravity = solve(&gravity_obs, "gravity parameters")?;
-    let gravity_part = |y: &[[f64; COLUMNS]; JOINTS], j: usize| -> f64 {
-        (0..GRAVITY_COLUMNS).map(|k| y[j][k] * gravity[k]).sum()
-    };
+    solve(&gravity_obs, "gravity parameters")
+}
 
+/// The gravity columns' share of joint `j`'s torque.
+fn gravity_part(y: &[[f64; COLUMNS]; JOINTS], j: usize, gravity: &[f64]) -> f64 {
+    (0..GRAVITY_COLUMNS).map(|k| y[j][k] * gravity[k]).sum()
+}
+
+/// Stage 2 (after stage 1): per joint and direction, the quartic `[1, q, q², q³, q⁴]`
+/// of what gravity leaves; returns the `pos` and `neg` coefficient vectors.
+fn fit_quartics(
+    statics: &[Static],
+    grid: &Grid,
+    gravity: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>), IdentError> {
     let mut quartic_obs: Vec<[Observation; 2]> = (0..6)
         .map(|_| [Observation::new(5), Observation::new(5)])
         .collect();
@@ -546,17 +620,17 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
         .map(|_| [DMatrix::zeros(0, 6), DMatrix::zeros(0, 6)])
         .collect();
     let mut start = 0;
-    while start < configurations {
-        let end = (start + BLOCK).min(configurations);
+    while start < grid.configurations {
+        let end = (start + BLOCK).min(grid.configurations);
         for pair in blocks.iter_mut() {
             for b in pair.iter_mut() {
                 *b = std::mem::replace(b, DMatrix::zeros(0, 0)).resize(end - start, 6, 0.0);
             }
         }
         for (c, st) in statics.iter().enumerate().take(end).skip(start) {
-            let y = regressor(&grid_point(&ranges, points, c));
+            let y = regressor(&grid_point(&grid.ranges, grid.points, c));
             for (j, pair) in blocks.iter_mut().enumerate() {
-                let g = gravity_part(&y, j);
+                let g = gravity_part(&y, j, gravity);
                 for (b, target) in pair.iter_mut().zip([st.pos[j], st.neg[j]]) {
                     for k in 0..5 {
                         b[(c - start, k)] = y[j][GRAVITY_COLUMNS + 5 * j + k];
@@ -572,26 +646,36 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
         start = end;
     }
     let mut pos = vec![0.0; COLUMNS];
-    pos[..GRAVITY_COLUMNS].copy_from_slice(&gravity);
+    pos[..GRAVITY_COLUMNS].copy_from_slice(gravity);
     let mut neg = pos.clone();
     for (j, obs) in quartic_obs.iter().enumerate() {
         let cols = GRAVITY_COLUMNS + 5 * j..GRAVITY_COLUMNS + 5 * j + 5;
         pos[cols.clone()].copy_from_slice(&solve(&obs[0], &format!("quartic of joint {}", j + 1))?);
         neg[cols].copy_from_slice(&solve(&obs[1], &format!("quartic of joint {}", j + 1))?);
     }
+    Ok((pos, neg))
+}
 
-    // Residuals and the range of the compensation, on the same grid.
+/// Residuals and the range of the compensation, on the same grid; returns the
+/// residuals and the upper and lower torque limits.
+fn residuals_and_limits(
+    statics: &[Static],
+    grid: &Grid,
+    gravity: &[f64],
+    pos: &[f64],
+    neg: &[f64],
+) -> (Residuals, Vec<f64>, Vec<f64>) {
     let mut max = [[0.0f64; JOINTS]; 3];
     let mut sum2 = [[0.0f64; JOINTS]; 3];
     let mut low = [f64::INFINITY; JOINTS];
     let mut high = [f64::NEG_INFINITY; JOINTS];
     for (c, st) in statics.iter().enumerate() {
-        let y = regressor(&grid_point(&ranges, points, c));
+        let y = regressor(&grid_point(&grid.ranges, grid.points, c));
         for j in 0..JOINTS {
             let tp: f64 = (0..COLUMNS).map(|k| y[j][k] * pos[k]).sum();
             let tn: f64 = (0..COLUMNS).map(|k| y[j][k] * neg[k]).sum();
             let errors = [
-                gravity_part(&y, j) - st.gravity[j],
+                gravity_part(&y, j, gravity) - st.gravity[j],
                 tp - st.pos[j],
                 tn - st.neg[j],
             ];
@@ -609,7 +693,7 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
     let rms = |i: usize| -> Vec<f64> {
         sum2[i]
             .iter()
-            .map(|s| (s / configurations as f64).sqrt())
+            .map(|s| (s / grid.configurations as f64).sqrt())
             .collect()
     };
     let mut upper = vec![0.0; JOINTS];
@@ -619,41 +703,15 @@ pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, I
         upper[j] = high[j] + margin;
         lower[j] = low[j] - margin;
     }
-    let out = DvrkGc {
-        pos,
-        neg,
-        upper,
-        lower,
-        db_vel: DB_VEL.to_vec(),
-        sat_vel: SAT_VEL.to_vec(),
-        fric_comp_ratio: FRIC_COMP_RATIO.to_vec(),
-        residuals: Residuals {
-            gravity_max: max[0].to_vec(),
-            gravity_rms: rms(0),
-            pos_max: max[1].to_vec(),
-            pos_rms: rms(1),
-            neg_max: max[2].to_vec(),
-            neg_rms: rms(2),
-        },
-        ranges,
-        points,
-        configurations,
-        robot: model.name.clone(),
+    let residuals = Residuals {
+        gravity_max: max[0].to_vec(),
+        gravity_rms: rms(0),
+        pos_max: max[1].to_vec(),
+        pos_rms: rms(1),
+        neg_max: max[2].to_vec(),
+        neg_rms: rms(2),
     };
-    let finite = out
-        .pos
-        .iter()
-        .chain(&out.neg)
-        .chain(&out.upper)
-        .chain(&out.lower)
-        .all(|v| v.is_finite());
-    if !finite {
-        return Err(IdentError::RankDeficient {
-            source_name: "dVRK gravity compensation".into(),
-            message: "the fit gave non-finite values".into(),
-        });
-    }
-    Ok(out)
+    (residuals, upper, lower)
 }
 
 #[cfg(test)]

@@ -18,10 +18,6 @@ pub enum IdentError {
     /// The semidefinite program could not be built or solved.
     #[error(transparent)]
     Sdp(#[from] crate::estimate::sdp::SdpError),
-    /// A report, figure or drawing could not be drawn or written.
-    #[cfg(feature = "report")]
-    #[error(transparent)]
-    Report(#[from] crate::report::ReportError),
     /// An export (URDF, gravity compensation, params.json, CSV) could not be written.
     #[error(transparent)]
     Output(#[from] crate::output::OutputError),

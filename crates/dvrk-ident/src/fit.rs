@@ -690,16 +690,12 @@ pub(crate) fn fit_observed(
         Method::Wls | Method::Sdp => observed.range.weights(),
     };
     let source = joined_sources(observed.logs.iter().map(|l| l.info.source.as_str()));
-    let estimated = estimate(
-        model,
-        &base,
-        &observed.parts,
-        weights,
-        settings,
-        &source,
+    let run = Run {
+        source: &source,
         started,
         progress,
-    )?;
+    };
+    let estimated = estimate(model, &base, &observed.parts, weights, settings, &run)?;
     // Training metrics from each log's factors: no second pass over the samples.
     let train_sums: Vec<MetricSums> = observed
         .logs
@@ -777,23 +773,34 @@ pub(crate) struct Estimated {
     pub prior_divergence: Option<f64>,
 }
 
+/// What an [`estimate`] reports to: the data's name (in its errors), when the fit
+/// started (the solver time counts from it) and where its progress goes.
+#[derive(Clone, Copy)]
+pub(crate) struct Run<'a> {
+    pub source: &'a str,
+    pub started: std::time::Instant,
+    pub progress: &'a dyn Progress,
+}
+
 /// The estimator on the per-coordinate observation parts, shared by the in-memory and
 /// the streamed fit so that both give the same document: weighted least squares from
 /// `weights`; for IRLS, passes re-weighted by the inverse residual RMS of each
 /// coordinate (from the parts, [`MetricSums::from_factors`]: no pass over the data);
 /// then the semidefinite program or the least-squares representative.
 /// `source` names the data when they do not determine the base parameters.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn estimate(
     model: &Model,
     base: &BaseParameters,
     parts: &[Observation],
     mut weights: Vec<f64>,
     settings: &FitSettings,
-    source: &str,
-    started: std::time::Instant,
-    progress: &dyn Progress,
+    run: &Run<'_>,
 ) -> Result<Estimated, IdentError> {
+    let Run {
+        source,
+        started,
+        progress,
+    } = *run;
     let p = model.n_params();
     let mut obs = Observation::weighted(parts, &weights);
     let mut estimate: BaseEstimate =

@@ -20,8 +20,9 @@
 //! bug of one of the mappings.
 //!
 //! Cargo features (all default): `rust-lapack` (Clarabel's BLAS/LAPACK in Rust over
-//! faer, so no system library is linked) and `report` (figures and the HTML report,
-//! [`report`]; a program that only fits can leave it out).
+//! faer, so no system library is linked), `recordings` (the readers of ROS recordings and
+//! the MCAP writer, [`log::mcap`]) and `report` (figures and the HTML report, [`report`]);
+//! a program that only fits CSV logs can leave out the last two.
 
 #![warn(missing_docs)]
 
@@ -44,6 +45,8 @@ pub mod signal;
 pub mod simulate;
 pub mod state;
 pub mod trajectory;
+#[cfg(all(test, not(feature = "recordings")))]
+mod without_recordings;
 
 pub use error::IdentError;
 pub use trajectory::{Coordinates, Trajectory, TrajectoryError};

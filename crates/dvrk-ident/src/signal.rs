@@ -628,42 +628,14 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, SignalError> {
     traj.validate()?;
     settings.check(traj.dof())?;
-    let (time, q, dq_raw, tau, rate_hz) = match settings.resample_hz {
-        Some(rate) => {
-            let (t, q) = resample_linear(&traj.time, &traj.q, rate)?;
-            let (_, tau) = resample_linear(&traj.time, &traj.tau, rate)?;
-            let dq = match &traj.dq {
-                Some(d) => Some(resample_linear(&traj.time, d, rate)?.1),
-                None => None,
-            };
-            (t, q, dq, tau, rate)
-        }
-        None => {
-            let rate = traj.check_uniform(settings.uniform_tolerance)?;
-            (
-                traj.time.clone(),
-                traj.q.clone(),
-                traj.dq.clone(),
-                traj.tau.clone(),
-                rate,
-            )
-        }
-    };
-    let tau = match advance::Advance::new(&settings.delay_s, rate_hz) {
-        Some(mut a) => {
-            let mut out = Vec::with_capacity(tau.len());
-            let mut row = vec![0.0; tau.ncols()];
-            for k in 0..tau.nrows() {
-                for (j, r) in row.iter_mut().enumerate() {
-                    *r = tau[(k, j)];
-                }
-                a.push(&row, &mut out);
-            }
-            a.finish(&mut out);
-            DMatrix::from_row_slice(tau.nrows(), tau.ncols(), &out)
-        }
-        None => tau,
-    };
+    let Uniform {
+        time,
+        q,
+        dq: dq_raw,
+        tau,
+        rate_hz,
+    } = uniform_signals(traj, settings)?;
+    let tau = advanced(tau, &settings.delay_s, rate_hz);
     let n = time.len();
     if 2 * settings.trim >= n {
         return Err(SignalError::TrimTooLong {
@@ -725,19 +697,7 @@ pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, Si
         "acceleration",
     )?;
 
-    // Trim, decimate, select.
-    let mut rows: Vec<usize> = (settings.trim..n - settings.trim)
-        .step_by(settings.decimate)
-        .collect();
-    if let Some(min_speed) = settings.min_speed {
-        rows.retain(|&i| dq_f.row(i).iter().all(|v| v.abs() >= min_speed));
-        if rows.is_empty() {
-            return Err(SignalError::NoSamplesLeft {
-                source_name: traj.source.clone(),
-                min_speed,
-            });
-        }
-    }
+    let rows = kept_rows(settings, n, &dq_f, &traj.source)?;
     Ok(Processed {
         time: rows.iter().map(|&i| time[i]).collect(),
         q: select_rows(&q_f, &rows),
@@ -750,6 +710,92 @@ pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, Si
         dq_measured: dq_raw.is_some(),
         source: traj.source.clone(),
     })
+}
+
+/// A log's signals on a uniform clock.
+struct Uniform {
+    /// s.
+    time: Vec<f64>,
+    q: DMatrix<f64>,
+    /// The measured velocities, if any.
+    dq: Option<DMatrix<f64>>,
+    tau: DMatrix<f64>,
+    rate_hz: f64,
+}
+
+/// The signals on a uniform clock: resampled to `settings.resample_hz`, or checked
+/// uniform.
+fn uniform_signals(traj: &Trajectory, settings: &Processing) -> Result<Uniform, SignalError> {
+    Ok(match settings.resample_hz {
+        Some(rate) => {
+            let (t, q) = resample_linear(&traj.time, &traj.q, rate)?;
+            let (_, tau) = resample_linear(&traj.time, &traj.tau, rate)?;
+            let dq = match &traj.dq {
+                Some(d) => Some(resample_linear(&traj.time, d, rate)?.1),
+                None => None,
+            };
+            Uniform {
+                time: t,
+                q,
+                dq,
+                tau,
+                rate_hz: rate,
+            }
+        }
+        None => {
+            let rate = traj.check_uniform(settings.uniform_tolerance)?;
+            Uniform {
+                time: traj.time.clone(),
+                q: traj.q.clone(),
+                dq: traj.dq.clone(),
+                tau: traj.tau.clone(),
+                rate_hz: rate,
+            }
+        }
+    })
+}
+
+/// The torques advanced by each coordinate's measurement delay (`delay_s`, s), unchanged
+/// without delays.
+fn advanced(tau: DMatrix<f64>, delay_s: &[f64], rate_hz: f64) -> DMatrix<f64> {
+    match advance::Advance::new(delay_s, rate_hz) {
+        Some(mut a) => {
+            let mut out = Vec::with_capacity(tau.len());
+            let mut row = vec![0.0; tau.ncols()];
+            for k in 0..tau.nrows() {
+                for (j, r) in row.iter_mut().enumerate() {
+                    *r = tau[(k, j)];
+                }
+                a.push(&row, &mut out);
+            }
+            a.finish(&mut out);
+            DMatrix::from_row_slice(tau.nrows(), tau.ncols(), &out)
+        }
+        None => tau,
+    }
+}
+
+/// The samples kept: trimmed at both ends, decimated, and (with a minimum speed) those
+/// whose every joint moves at least that fast.
+fn kept_rows(
+    settings: &Processing,
+    n: usize,
+    dq_f: &DMatrix<f64>,
+    source: &str,
+) -> Result<Vec<usize>, SignalError> {
+    let mut rows: Vec<usize> = (settings.trim..n - settings.trim)
+        .step_by(settings.decimate)
+        .collect();
+    if let Some(min_speed) = settings.min_speed {
+        rows.retain(|&i| dq_f.row(i).iter().all(|v| v.abs() >= min_speed));
+        if rows.is_empty() {
+            return Err(SignalError::NoSamplesLeft {
+                source_name: source.to_owned(),
+                min_speed,
+            });
+        }
+    }
+    Ok(rows)
 }
 
 #[cfg(test)]

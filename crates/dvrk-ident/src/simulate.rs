@@ -116,6 +116,28 @@ pub fn simulate(
     traj: &FourierTrajectory,
     sim: &Simulation,
 ) -> Result<Trajectory, IdentError> {
+    check_inputs(model, params, traj)?;
+    let (noise, delay, count) = check_simulation(model.dof(), traj, sim)?;
+    let time = uniform_time(count, sim.rate_hz);
+    let (q, dq, ddq) = traj.sample(&time);
+    let mut tau = torques(model, params, traj, &time, (&q, &dq, &ddq), &delay);
+    add_noise(&mut tau, &noise, sim.seed);
+    let in_model = Trajectory {
+        time,
+        q,
+        dq: Some(dq),
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: format!("simulated {}", model.name),
+    };
+    let measured = to_measured_coordinates(model, &in_model)?;
+    measured.validate()?;
+    Ok(measured)
+}
+
+/// Refuses a trajectory or parameters that do not fit `model`.
+fn check_inputs(model: &Model, params: &[f64], traj: &FourierTrajectory) -> Result<(), IdentError> {
     let n = model.dof();
     let mismatch = |message: String| IdentError::Mismatch {
         source_name: "simulation".into(),
@@ -152,6 +174,17 @@ pub fn simulate(
             model.params[k].name, params[k]
         )));
     }
+    Ok(())
+}
+
+/// Checks the simulation's settings against `n` coordinates; returns the noise standard
+/// deviation (N·m or N) and the torque delay (s) of each coordinate, and the number of
+/// samples.
+fn check_simulation(
+    n: usize,
+    traj: &FourierTrajectory,
+    sim: &Simulation,
+) -> Result<(Vec<f64>, Vec<f64>, usize), IdentError> {
     if !(sim.rate_hz.is_finite() && sim.rate_hz > 0.0) {
         return Err(setting(
             "rate",
@@ -217,15 +250,28 @@ pub fn simulate(
             format!("the log would have {count} samples (more than {MAX_SAMPLES})"),
         ));
     }
-    let time = uniform_time(count, sim.rate_hz);
-    let (q, dq, ddq) = traj.sample(&time);
+    Ok((noise, delay, count))
+}
+
+/// The torques `τ = H(q, q̇, q̈)·π + known forces(q)` at the samples `motion` = `(q, q̇,
+/// q̈)` of `traj` at `time`, each coordinate's from the motion `delay[j]` s earlier.
+fn torques(
+    model: &Model,
+    params: &[f64],
+    traj: &FourierTrajectory,
+    time: &[f64],
+    motion: (&DMatrix<f64>, &DMatrix<f64>, &DMatrix<f64>),
+    delay: &[f64],
+) -> DMatrix<f64> {
+    let (q, dq, ddq) = motion;
+    let (count, n) = (time.len(), model.dof());
     let mut ws = Workspace::new(model);
     let mut tau = DMatrix::zeros(count, n);
     let (mut qk, mut dqk, mut ddqk, mut tk) =
         (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     // The torques of each distinct delay from the motion that much earlier (the
     // trajectory is periodic, so before its start too).
-    let mut distinct = delay.clone();
+    let mut distinct = delay.to_vec();
     distinct.sort_by(f64::total_cmp);
     distinct.dedup();
     for &d in &distinct {
@@ -248,7 +294,14 @@ pub fn simulate(
             }
         }
     }
-    let mut rng = Gaussian::new(sim.seed);
+    tau
+}
+
+/// Independent Gaussian noise of standard deviation `noise[j]` added to coordinate `j`
+/// of every sample, in sample order (the generator's stream is the same for a seed).
+fn add_noise(tau: &mut DMatrix<f64>, noise: &[f64], seed: u64) {
+    let (count, n) = tau.shape();
+    let mut rng = Gaussian::new(seed);
     for k in 0..count {
         for j in 0..n {
             if noise[j] > 0.0 {
@@ -256,18 +309,6 @@ pub fn simulate(
             }
         }
     }
-    let in_model = Trajectory {
-        time,
-        q,
-        dq: Some(dq),
-        tau,
-        joint_names: model.coordinates.clone(),
-        coordinates: Coordinates::Model,
-        source: format!("simulated {}", model.name),
-    };
-    let measured = to_measured_coordinates(model, &in_model)?;
-    measured.validate()?;
-    Ok(measured)
 }
 
 /// The inverse of [`crate::fit::to_model_coordinates`]: a model-coordinate trajectory

@@ -418,6 +418,94 @@ pub fn solve_sdp(
     let started = Instant::now();
     #[cfg(feature = "rust-lapack")]
     crate::lapack::link();
+    let prior = check_inputs(model, r, options)?;
+    let p = model.n_params();
+    let eps = model.bounds.pseudo_inertia_eps;
+    let (s, gamma) = scaling(model, r);
+    let penalty = Penalty {
+        lambda: options.regularization,
+        w: options.prior_weight,
+        entropic: options.prior_weight > 0.0 && options.prior_metric == PriorMetric::Entropic,
+    };
+    let entropic = penalty.entropic;
+    // Per link: the Lxx index and the whitening `L₀⁻¹` of the prior's pseudo-inertia.
+    let whitening: Vec<(usize, Matrix4<f64>)> = if entropic {
+        whitenings(model, &prior, options.override_bounds)?
+    } else {
+        Vec::new()
+    };
+
+    // --- Variables x = [u (p); t; per entropic link: Z (10, lower triangle), τ (4)].
+    // Without an entropic prior: minimize t subject to
+    // ‖[R̃·u − R[:, p]/γ; √(λ + w)·(u − u_prior)]‖ ≤ t (one second-order cone). With it:
+    // minimize t + w·Σ(tr J̃ − Σ τ) subject to ‖[R̃·u − R[:, p]/γ; √λ·(u − u_prior);
+    // √w·(u − u_prior) on the other parameters]‖² ≤ t. ---
+    let n = p + 1 + LOGDET_VARS * whitening.len();
+    let pmat = CscMatrix::zeros((n, n));
+    let mut q = vec![0.0; n];
+    q[p] = 1.0;
+    let mut rows = Rows::default();
+    objective_rows(&mut rows, r, (&s, gamma), &prior, &penalty, &whitening);
+    linear_rows(&mut rows, model, &s, options.override_bounds)?;
+    lmi_rows_of_links(&mut rows, model, &s, eps, options.override_bounds);
+    entropic_rows(&mut rows, &mut q, &whitening, &s, penalty.w);
+    let Rows {
+        ai,
+        aj,
+        av,
+        b,
+        cones,
+    } = rows;
+    let m_rows = b.len();
+    let amat = CscMatrix::new_from_triplets(m_rows, n, ai, aj, av);
+
+    let settings = DefaultSettingsBuilder::default()
+        .verbose(false)
+        .max_iter(options.max_iter)
+        .tol_gap_abs(options.tolerance)
+        .tol_gap_rel(options.tolerance)
+        .tol_feas(options.tolerance)
+        // The entropic problem is scaled here (data in the currency of its residual,
+        // whitened pseudo-inertias); Clarabel's own equilibration of it left 2 of 20
+        // real-data fits (MTM, weights 1e-3 and 1e-2) at `AlmostSolved`, none without.
+        .equilibrate_enable(!entropic)
+        .build()
+        .map_err(|e| SdpError::Solver(e.to_string()))?;
+    let mut solver = DefaultSolver::new(&pmat, &q, &amat, &b, &cones, settings)
+        .map_err(|e| SdpError::Solver(format!("{e:?}")))?;
+    solver.solve();
+    let sol = &solver.solution;
+    let mut params: Vec<f64> = (0..p).map(|i| s[i] * sol.x[i]).collect();
+    let status = super::SolverStatus::from(sol.status);
+    let converged = status.converged();
+    if converged {
+        clamp_element_bounds(model, &mut params, options.override_bounds);
+    }
+    let objective = residual_sum_of_squares(r, &params);
+    let divergence = entropic.then(|| {
+        whitening
+            .iter()
+            .map(|(p0, wh)| log_det_divergence(wh, &params[*p0..*p0 + 10]))
+            .sum()
+    });
+    Ok(SdpSolution {
+        params,
+        status,
+        converged,
+        seconds: started.elapsed().as_secs_f64(),
+        iterations: sol.iterations,
+        objective,
+        divergence,
+    })
+}
+
+/// Refuses a malformed problem (R's size, non-finite values, options out of range, a
+/// prior of the wrong length); returns the prior values (zeros without a prior).
+fn check_inputs(
+    model: &Model,
+    r: &DMatrix<f64>,
+    options: &SdpOptions,
+) -> Result<Vec<f64>, SdpError> {
     let p = model.n_params();
     let np1 = p + 1;
     if r.nrows() != np1 || r.ncols() != np1 {
@@ -489,8 +577,14 @@ pub fn solve_sdp(
             what: "bounds.pseudo_inertia_eps".into(),
         });
     }
+    Ok(prior)
+}
 
-    // --- Scaling: πᵢ = sᵢ·uᵢ with sᵢ = γ/dᵢ. ---
+/// Scaling: `πᵢ = sᵢ·uᵢ` with `sᵢ = γ/dᵢ`, `dᵢ` the norm of R's column `i` (the median
+/// of the seen columns of its unit class for a column the data do not see) and `γ` the
+/// norm of the torque column; returns `(s, γ)`.
+fn scaling(model: &Model, r: &DMatrix<f64>) -> (Vec<f64>, f64) {
+    let p = model.n_params();
     let norms: Vec<f64> = (0..p).map(|c| r.column(c).norm()).collect();
     let max_norm = norms.iter().cloned().fold(0.0, f64::max);
     let seen = |c: usize| max_norm > 0.0 && norms[c] > 1e-9 * max_norm;
@@ -510,50 +604,65 @@ pub fn solve_sdp(
     let tau_norm = r.column(p).norm();
     let gamma = if tau_norm > 0.0 { tau_norm } else { 1.0 };
     let s: Vec<f64> = d.iter().map(|di| gamma / di).collect();
-    let lambda = options.regularization;
-    let w = options.prior_weight;
-    let entropic = w > 0.0 && options.prior_metric == PriorMetric::Entropic;
-    // Per link: the Lxx index and the whitening `L₀⁻¹` of the prior's pseudo-inertia.
-    let whitening: Vec<(usize, Matrix4<f64>)> = if entropic {
-        whitenings(model, &prior, options.override_bounds)?
-    } else {
-        Vec::new()
-    };
+    (s, gamma)
+}
+
+/// The Tikhonov and prior weights of the objective: `λ` (regularization), `w` (prior
+/// weight) and whether the prior is the entropic one.
+struct Penalty {
+    lambda: f64,
+    w: f64,
+    entropic: bool,
+}
+
+/// The conic program's constraint rows `s = b − A·x ∈ cones`, as triplets, in the order
+/// they are added.
+#[derive(Default)]
+struct Rows {
+    ai: Vec<usize>,
+    aj: Vec<usize>,
+    av: Vec<f64>,
+    b: Vec<f64>,
+    cones: Vec<SupportedConeT<f64>>,
+}
+
+/// The objective's second-order cone: the epigraph row(s) of `t`, the residual and the
+/// Tikhonov rows; `scaled` = `(s, γ)`.
+fn objective_rows(
+    rows: &mut Rows,
+    r: &DMatrix<f64>,
+    scaled: (&[f64], f64),
+    prior: &[f64],
+    penalty: &Penalty,
+    whitening: &[(usize, Matrix4<f64>)],
+) {
+    let (s, gamma) = scaled;
+    let (p, np1) = (r.ncols() - 1, r.ncols());
+    let Penalty {
+        lambda,
+        w,
+        entropic,
+    } = *penalty;
     let is_link_param = {
         let mut v = vec![false; p];
-        for (p0, _) in &whitening {
+        for (p0, _) in whitening {
             v[*p0..*p0 + 10].iter_mut().for_each(|x| *x = true);
         }
         v
     };
-
-    // --- Variables x = [u (p); t; per entropic link: Z (10, lower triangle), τ (4)].
-    // Without an entropic prior: minimize t subject to
-    // ‖[R̃·u − R[:, p]/γ; √(λ + w)·(u − u_prior)]‖ ≤ t (one second-order cone). With it:
-    // minimize t + w·Σ(tr J̃ − Σ τ) subject to ‖[R̃·u − R[:, p]/γ; √λ·(u − u_prior);
-    // √w·(u − u_prior) on the other parameters]‖² ≤ t. ---
-    let n = p + 1 + LOGDET_VARS * whitening.len();
-    let pmat = CscMatrix::zeros((n, n));
-    let mut q = vec![0.0; n];
-    q[p] = 1.0;
-    let mut ai = Vec::new();
-    let mut aj = Vec::new();
-    let mut av = Vec::new();
-    let mut b = Vec::new();
-    let mut cones = Vec::new();
     // Cone rows s = b − A·x: the epigraph row(s) of t, then the residual R̃·u − r̃, then
     // the Tikhonov rows.
     if entropic {
         // s₀ = (t + 1)/2, s₁ = (t − 1)/2.
-        ai.extend([0, 1]);
-        aj.extend([p, p]);
-        av.extend([-0.5, -0.5]);
-        b.extend([0.5, -0.5]);
+        rows.ai.extend([0, 1]);
+        rows.aj.extend([p, p]);
+        rows.av.extend([-0.5, -0.5]);
+        rows.b.extend([0.5, -0.5]);
     } else {
-        ai.push(0);
-        aj.push(p);
-        av.push(-1.0);
-        b.push(0.0);
+        rows.ai.push(0);
+        rows.aj.push(p);
+        rows.av.push(-1.0);
+        rows.b.push(0.0);
     }
     // The entropic objective adds a divergence to the squared residual, so the residual's
     // currency matters: it is measured against the least-squares residual (the rows of
@@ -564,16 +673,16 @@ pub fn solve_sdp(
         1.0
     };
     for row in 0..np1 {
-        let at = b.len();
+        let at = rows.b.len();
         for c in 0..p {
             let v = r[(row, c)];
             if v != 0.0 {
-                ai.push(at);
-                aj.push(c);
-                av.push(-v * s[c] / gamma * currency);
+                rows.ai.push(at);
+                rows.aj.push(c);
+                rows.av.push(-v * s[c] / gamma * currency);
             }
         }
-        b.push(-r[(row, p)] / gamma * currency);
+        rows.b.push(-r[(row, p)] / gamma * currency);
     }
     let tikhonov = |i: usize| {
         let euclidean = if entropic { !is_link_param[i] } else { true };
@@ -583,52 +692,77 @@ pub fn solve_sdp(
         let weight = tikhonov(i);
         if weight > 0.0 {
             let sl = weight.sqrt() * currency;
-            ai.push(b.len());
-            aj.push(i);
-            av.push(-sl);
-            b.push(-sl * prior[i] / s[i]);
+            rows.ai.push(rows.b.len());
+            rows.aj.push(i);
+            rows.av.push(-sl);
+            rows.b.push(-sl * prior[i] / s[i]);
         }
     }
-    cones.push(SupportedConeT::SecondOrderConeT(b.len()));
-    // Linear bounds, each row scaled to a unit largest coefficient.
-    let lin = bounds_rows(model, options.override_bounds)?;
+    rows.cones
+        .push(SupportedConeT::SecondOrderConeT(rows.b.len()));
+}
+
+/// Linear bounds, each row scaled to a unit largest coefficient.
+fn linear_rows(
+    rows: &mut Rows,
+    model: &Model,
+    s: &[f64],
+    override_bounds: bool,
+) -> Result<(), SdpError> {
+    let lin = bounds_rows(model, override_bounds)?;
     for (coefs, c) in &lin.rows {
         let scaled: Vec<(usize, f64)> = coefs.iter().map(|&(k, a)| (k, a * s[k])).collect();
         let w = scaled.iter().fold(0.0f64, |m, &(_, a)| m.max(a.abs()));
         let w = if w > 0.0 { w } else { 1.0 };
-        let row = b.len();
+        let row = rows.b.len();
         for (k, a) in scaled {
-            ai.push(row);
-            aj.push(k);
-            av.push(a / w);
+            rows.ai.push(row);
+            rows.aj.push(k);
+            rows.av.push(a / w);
         }
-        b.push(c / w);
+        rows.b.push(c / w);
     }
     if !lin.rows.is_empty() {
-        cones.push(SupportedConeT::NonnegativeConeT(lin.rows.len()));
+        rows.cones
+            .push(SupportedConeT::NonnegativeConeT(lin.rows.len()));
     }
-    // Pseudo-inertia LMIs.
+    Ok(())
+}
+
+/// Pseudo-inertia LMIs, one 4×4 block per link.
+fn lmi_rows_of_links(rows: &mut Rows, model: &Model, s: &[f64], eps: f64, override_bounds: bool) {
     for (fi, f) in model.frames.iter().enumerate() {
         let Some(p0) = f.inertia else { continue };
-        let tau = link_length(model, fi, options.override_bounds);
-        let rows = lmi_rows(p0, eps, tau);
+        let tau = link_length(model, fi, override_bounds);
+        let block = lmi_rows(p0, eps, tau);
         // Normalize the block so its largest scaled coefficient is 1.
-        let w = rows
+        let w = block
             .iter()
             .flat_map(|(a, _)| a.iter().map(|&(k, v)| (v * s[k]).abs()))
             .fold(0.0f64, f64::max);
         let w = if w > 0.0 { w } else { 1.0 };
-        for (coefs, bv) in rows {
-            let row = b.len();
+        for (coefs, bv) in block {
+            let row = rows.b.len();
             for (k, a) in coefs {
-                ai.push(row);
-                aj.push(k);
-                av.push(a * s[k] / w);
+                rows.ai.push(row);
+                rows.aj.push(k);
+                rows.av.push(a * s[k] / w);
             }
-            b.push(bv / w);
+            rows.b.push(bv / w);
         }
-        cones.push(SupportedConeT::PSDTriangleConeT(4));
+        rows.cones.push(SupportedConeT::PSDTriangleConeT(4));
     }
+}
+
+/// The entropic prior's cones and objective terms (nothing without it).
+fn entropic_rows(
+    rows: &mut Rows,
+    q: &mut [f64],
+    whitening: &[(usize, Matrix4<f64>)],
+    s: &[f64],
+    w: f64,
+) {
+    let p = s.len();
     // Entropic prior: per link, [[J̃, Z], [Zᵀ, diag(Z)]] ⪰ 0 and τᵢ ≤ log Zᵢᵢ, and
     // w·(tr J̃ − Σ τᵢ) in the objective.
     for (l, (p0, wh)) in whitening.iter().enumerate() {
@@ -651,7 +785,7 @@ pub fn solve_sdp(
         }
         for col in 0..8 {
             for row in 0..=col {
-                let at = b.len();
+                let at = rows.b.len();
                 let scale = if row == col {
                     1.0
                 } else {
@@ -661,9 +795,9 @@ pub fn solve_sdp(
                     for (k, bk) in basis.iter().enumerate() {
                         let c = bk[(row, col)];
                         if c != 0.0 {
-                            ai.push(at);
-                            aj.push(p0 + k);
-                            av.push(-scale * c * s[p0 + k]);
+                            rows.ai.push(at);
+                            rows.aj.push(p0 + k);
+                            rows.av.push(-scale * c * s[p0 + k]);
                         }
                     }
                 } else {
@@ -675,66 +809,25 @@ pub fn solve_sdp(
                         (row - 4 == c).then(|| z(c, c))
                     };
                     if let Some(v) = var {
-                        ai.push(at);
-                        aj.push(v);
-                        av.push(-scale);
+                        rows.ai.push(at);
+                        rows.aj.push(v);
+                        rows.av.push(-scale);
                     }
                 }
-                b.push(0.0);
+                rows.b.push(0.0);
             }
         }
-        cones.push(SupportedConeT::PSDTriangleConeT(8));
+        rows.cones.push(SupportedConeT::PSDTriangleConeT(8));
         for i in 0..4 {
             // (τᵢ, 1, Zᵢᵢ) ∈ K_exp: e^τᵢ ≤ Zᵢᵢ.
-            let at = b.len();
-            ai.extend([at, at + 2]);
-            aj.extend([tau(i), z(i, i)]);
-            av.extend([-1.0, -1.0]);
-            b.extend([0.0, 1.0, 0.0]);
-            cones.push(SupportedConeT::ExponentialConeT());
+            let at = rows.b.len();
+            rows.ai.extend([at, at + 2]);
+            rows.aj.extend([tau(i), z(i, i)]);
+            rows.av.extend([-1.0, -1.0]);
+            rows.b.extend([0.0, 1.0, 0.0]);
+            rows.cones.push(SupportedConeT::ExponentialConeT());
         }
     }
-    let m_rows = b.len();
-    let amat = CscMatrix::new_from_triplets(m_rows, n, ai, aj, av);
-
-    let settings = DefaultSettingsBuilder::default()
-        .verbose(false)
-        .max_iter(options.max_iter)
-        .tol_gap_abs(options.tolerance)
-        .tol_gap_rel(options.tolerance)
-        .tol_feas(options.tolerance)
-        // The entropic problem is scaled here (data in the currency of its residual,
-        // whitened pseudo-inertias); Clarabel's own equilibration of it left 2 of 20
-        // real-data fits (MTM, weights 1e-3 and 1e-2) at `AlmostSolved`, none without.
-        .equilibrate_enable(!entropic)
-        .build()
-        .map_err(|e| SdpError::Solver(e.to_string()))?;
-    let mut solver = DefaultSolver::new(&pmat, &q, &amat, &b, &cones, settings)
-        .map_err(|e| SdpError::Solver(format!("{e:?}")))?;
-    solver.solve();
-    let sol = &solver.solution;
-    let mut params: Vec<f64> = (0..p).map(|i| s[i] * sol.x[i]).collect();
-    let status = super::SolverStatus::from(sol.status);
-    let converged = status.converged();
-    if converged {
-        clamp_element_bounds(model, &mut params, options.override_bounds);
-    }
-    let objective = residual_sum_of_squares(r, &params);
-    let divergence = entropic.then(|| {
-        whitening
-            .iter()
-            .map(|(p0, wh)| log_det_divergence(wh, &params[*p0..*p0 + 10]))
-            .sum()
-    });
-    Ok(SdpSolution {
-        params,
-        status,
-        converged,
-        seconds: started.elapsed().as_secs_f64(),
-        iterations: sol.iterations,
-        objective,
-        divergence,
-    })
 }
 
 /// `ρ = min ‖R[:, 0..p]·π − R[:, p]‖` over all π (by SVD: `R11` is rank deficient),

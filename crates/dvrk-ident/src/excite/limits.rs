@@ -143,6 +143,30 @@ impl Item {
 /// A joint position limit: the item, its terms and its offset.
 type LinearItem<'a> = (&'a Item, &'a Vec<(usize, f64)>, f64);
 
+/// Where the limits are enforced: at the instants of `grid`, with every bound shrunk
+/// by `margin` (a fraction of its range).
+#[derive(Clone, Copy)]
+pub(crate) struct Enforced<'a> {
+    pub grid: &'a Grid,
+    pub margin: f64,
+}
+
+/// The augmented Lagrangian's multipliers `λ` (one per bound side and instant, as
+/// [`Constraints::multipliers`] counts them; empty: all zero, the exterior penalty) and
+/// its penalty weight `μ`.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Multipliers<'a> {
+    pub lambda: &'a [f64],
+    pub mu: f64,
+}
+
+/// The gradient slices of one sample, with respect to its `q`, `q̇` and `q̈`.
+struct SampleGradient<'a> {
+    q: &'a mut [f64],
+    dq: &'a mut [f64],
+    ddq: &'a mut [f64],
+}
+
 /// The limits of one model as items, with what evaluating them needs.
 pub(crate) struct Constraints {
     pub items: Vec<Item>,
@@ -269,17 +293,19 @@ impl Constraints {
 
     /// Adds `weight · ∂v_item/∂(q, q̇, q̈)` of one sample to its gradient slices; `ws`
     /// must hold that sample's kinematics ([`Constraints::sample`]).
-    #[allow(clippy::too_many_arguments)]
     fn add_gradient(
         &self,
         model: &Model,
         ws: &Workspace,
         item: usize,
         weight: f64,
-        gq: &mut [f64],
-        gdq: &mut [f64],
-        gddq: &mut [f64],
+        gradient: SampleGradient<'_>,
     ) {
+        let SampleGradient {
+            q: gq,
+            dq: gdq,
+            ddq: gddq,
+        } = gradient;
         let it = &self.items[item];
         match &it.source {
             Source::Linear { terms, .. } => {
@@ -305,18 +331,17 @@ impl Constraints {
     /// `margin`): `Σ (max(0, λ + μ c)² − λ²) / (2μ)` over the normalized constraint
     /// values `c ≤ 0`; with `λ = 0` it is the quadratic exterior penalty `μ/2 Σ max(0,
     /// c)²`. The gradient with respect to `x` is added to `gx` when given.
-    #[allow(clippy::too_many_arguments)]
     pub fn lagrangian(
         &self,
         model: &Model,
         ws: &mut Workspace,
         x: &[f64],
-        grid: &Grid,
-        margin: f64,
-        lambda: &[f64],
-        mu: f64,
+        on: Enforced<'_>,
+        multipliers: Multipliers<'_>,
         gx: Option<&mut [f64]>,
     ) -> f64 {
+        let Enforced { grid, margin } = on;
+        let Multipliers { lambda, mu } = multipliers;
         let n = model.dof();
         let m = self.len();
         if m == 0 {
@@ -364,7 +389,12 @@ impl Constraints {
                         &mut gdq[s.clone()],
                         &mut gddq[s.clone()],
                     );
-                    self.add_gradient(model, ws, i, dv, a, b, c);
+                    let gradient = SampleGradient {
+                        q: a,
+                        dq: b,
+                        ddq: c,
+                    };
+                    self.add_gradient(model, ws, i, dv, gradient);
                 }
             }
         }
@@ -376,17 +406,16 @@ impl Constraints {
 
     /// Updates the multipliers after an inner minimization, `λ ← max(0, λ + μ c)`, and
     /// returns the largest normalized violation `max(0, c)`.
-    #[allow(clippy::too_many_arguments)]
     pub fn update_multipliers(
         &self,
         model: &Model,
         ws: &mut Workspace,
         x: &[f64],
-        grid: &Grid,
-        margin: f64,
+        on: Enforced<'_>,
         lambda: &mut [f64],
         mu: f64,
     ) -> f64 {
+        let Enforced { grid, margin } = on;
         let mut worst = 0.0f64;
         self.for_each_value(model, ws, x, grid, |k, i, v| {
             let item = &self.items[i];
@@ -513,17 +542,16 @@ impl Constraints {
     /// the joint limits (linear in `s`); with Cartesian boxes, the segment is bisected
     /// against the grid, which finds a feasible point (not always the farthest: a box
     /// may be left and re-entered along the segment).
-    #[allow(clippy::too_many_arguments)]
     pub fn feasible_step(
         &self,
         model: &Model,
         ws: &mut Workspace,
         x0: &[f64],
         x1: &[f64],
-        grid: &Grid,
-        margin: f64,
+        on: Enforced<'_>,
         slack: &[f64],
     ) -> f64 {
+        let Enforced { grid, margin } = on;
         let n = model.dof();
         let (q0, dq0, ddq0) = grid.eval(x0, n);
         let (q1, dq1, ddq1) = grid.eval(x1, n);
@@ -725,7 +753,12 @@ impl Constraints {
                 continue;
             };
             total += e * e;
-            self.add_gradient(model, ws, i, 2.0 * e / sc, g, &mut gdq, &mut gddq);
+            let gradient = SampleGradient {
+                q: g,
+                dq: &mut gdq,
+                ddq: &mut gddq,
+            };
+            self.add_gradient(model, ws, i, 2.0 * e / sc, gradient);
         }
         total
     }

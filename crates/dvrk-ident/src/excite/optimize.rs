@@ -72,7 +72,7 @@ use serde::{Deserialize, Serialize};
 pub use super::error::ExciteError;
 use super::grid::{from_x, project_rest, to_x, Grid};
 use super::lbfgs::{dot, lbfgs};
-use super::limits::Constraints;
+use super::limits::{Constraints, Enforced, Multipliers};
 pub use super::limits::{Feasibility, Limits, Violation};
 use super::rng::Rng;
 use super::FourierTrajectory;
@@ -375,9 +375,43 @@ impl<'a> CriterionEval<'a> {
     /// The objective (`log cond` or `−log det`) and, if `grad` is given, its gradient
     /// (overwritten). None when the regressor is rank deficient.
     fn objective(&mut self, x: &[f64], grad: Option<&mut [f64]>) -> Option<f64> {
+        let (n, r) = (self.model.dof(), self.cols.len());
+        let (q, dq, ddq) = self.grid.eval(x, n);
+        let (yn, norms) = self.normalized_regressor(&q, &dq, &ddq)?;
+        let gram = yn.tr_mul(&yn);
+        let eig = gram.symmetric_eigen();
+        let lam = &eig.eigenvalues;
+        let (mut imax, mut imin) = (0, 0);
+        for i in 0..r {
+            if lam[i] > lam[imax] {
+                imax = i;
+            }
+            if lam[i] < lam[imin] {
+                imin = i;
+            }
+        }
+        if !(lam[imin] > 0.0) {
+            return None;
+        }
+        let (obj, m) = self.criterion_of(&eig, imax, imin);
+        if !obj.is_finite() {
+            return None;
+        }
+        let Some(grad) = grad else { return Some(obj) };
+        self.gradient((&q, &dq, &ddq), &yn, &norms, &m, grad);
+        Some(obj)
+    }
+
+    /// The base regressor stacked over the grid's samples (`t·n × r`) with unit columns,
+    /// and the columns' norms; None when a column is zero or not finite.
+    fn normalized_regressor(
+        &mut self,
+        q: &[f64],
+        dq: &[f64],
+        ddq: &[f64],
+    ) -> Option<(DMatrix<f64>, Vec<f64>)> {
         let (n, p, r) = (self.model.dof(), self.model.n_params(), self.cols.len());
         let t = self.grid.len();
-        let (q, dq, ddq) = self.grid.eval(x, n);
         let mut y = DMatrix::zeros(t * n, r);
         for k in 0..t {
             self.regress(&q[k * n..][..n], &dq[k * n..][..n], &ddq[k * n..][..n]);
@@ -395,23 +429,22 @@ impl<'a> CriterionEval<'a> {
         for (c, &d) in norms.iter().enumerate() {
             yn.column_mut(c).unscale_mut(d);
         }
-        let gram = yn.tr_mul(&yn);
-        let eig = gram.symmetric_eigen();
+        Some((yn, norms))
+    }
+
+    /// The criterion from the eigen-decomposition of the normalized Gram matrix (`imax`,
+    /// `imin`: its largest and smallest eigenvalue), and the matrix `M` of its gradient
+    /// (`d obj / d Yn = Yn·M`).
+    fn criterion_of(
+        &self,
+        eig: &nalgebra::linalg::SymmetricEigen<f64, nalgebra::Dyn>,
+        imax: usize,
+        imin: usize,
+    ) -> (f64, DMatrix<f64>) {
+        let r = self.cols.len();
         let lam = &eig.eigenvalues;
-        let (mut imax, mut imin) = (0, 0);
-        for i in 0..r {
-            if lam[i] > lam[imax] {
-                imax = i;
-            }
-            if lam[i] < lam[imin] {
-                imin = i;
-            }
-        }
-        if !(lam[imin] > 0.0) {
-            return None;
-        }
         let v = &eig.eigenvectors;
-        let (obj, m) = match self.criterion {
+        match self.criterion {
             Criterion::Condition if self.soft_p.is_finite() => {
                 let pp = self.soft_p;
                 let ll: Vec<f64> = lam.iter().map(|l| l.ln()).collect();
@@ -451,13 +484,25 @@ impl<'a> CriterionEval<'a> {
                 let inv = DMatrix::from_diagonal(&lam.map(|l| 1.0 / l));
                 (obj, -2.0 * v * inv * v.transpose())
             }
-        };
-        if !obj.is_finite() {
-            return None;
         }
-        let Some(grad) = grad else { return Some(obj) };
+    }
+
+    /// The objective's gradient with respect to `x` (overwritten into `grad`), from
+    /// `M` through the column normalization, then per sample by differences of
+    /// `φ_k = <G_k, Y_k(q, q̇, q̈)>`, then back through the grid.
+    fn gradient(
+        &mut self,
+        motion: (&[f64], &[f64], &[f64]),
+        yn: &DMatrix<f64>,
+        norms: &[f64],
+        m: &DMatrix<f64>,
+        grad: &mut [f64],
+    ) {
+        let (q, dq, ddq) = motion;
+        let (n, p, r) = (self.model.dof(), self.model.n_params(), self.cols.len());
+        let t = self.grid.len();
         // d obj / d Yn = Yn·M, then through the column normalization.
-        let gn = &yn * &m;
+        let gn = yn * m;
         let mut gy = gn;
         for c in 0..r {
             let dot = yn.column(c).dot(&gy.column(c));
@@ -511,7 +556,6 @@ impl<'a> CriterionEval<'a> {
         }
         grad.fill(0.0);
         self.grid.backprop(n, &gq, &gdq, &gddq, grad);
-        Some(obj)
     }
 }
 
@@ -722,7 +766,12 @@ pub fn penalty_and_gradient(
     let x = to_x(traj);
     let mut g = vec![0.0; x.len()];
     let mut ws = Workspace::new(model);
-    let v = cons.lagrangian(model, &mut ws, &x, &grid, margin, &[], mu, Some(&mut g));
+    let on = Enforced {
+        grid: &grid,
+        margin,
+    };
+    let exterior = Multipliers { lambda: &[], mu };
+    let v = cons.lagrangian(model, &mut ws, &x, on, exterior, Some(&mut g));
     Ok((v, g))
 }
 
@@ -746,6 +795,64 @@ pub fn optimize(
     let order = opts.order;
     let f0 = opts.base_frequency_hz;
     check_grids(order, f0, opts.samples_per_harmonic, opts.check_rate_hz)?;
+    check_options(opts)?;
+    let cons = Constraints::new(model, limits)?;
+    check_init(model, opts)?;
+    let xs = {
+        let q = cons.static_pose(model, opts.margin)?;
+        let mut x = vec![0.0; n * (2 * order + 1)];
+        x[..n].copy_from_slice(&q);
+        x
+    };
+    let samples = (opts.samples_per_harmonic.max(1) * order).max(base.rank().div_ceil(n) + 1);
+    let cgrid = constraint_grid(order, f0);
+    let dense = dense_grid(order, f0, opts.check_rate_hz);
+    let room = coordinate_room(model, &cons, &xs, &cgrid, opts.margin);
+    let setup = Setup {
+        model,
+        base,
+        opts,
+        cons: &cons,
+        xs: &xs,
+        cgrid: &cgrid,
+        dense: &dense,
+        samples,
+        room,
+    };
+
+    let (starts, mut best) = explore_and_refine(&setup, progress);
+    hop_from_best(&setup, progress, &mut best);
+    let Some((obj, x)) = best else {
+        return Err(ExciteError::Infeasible(
+            "every start failed (rank-deficient regressor or no feasible motion)".into(),
+        ));
+    };
+    let trajectory = from_x(&x, n, order, f0, &model.coordinates);
+    let mut ws = Workspace::new(model);
+    let feasibility = cons.check(model, &mut ws, &x, &dense, opts.check_rate_hz);
+    if !feasibility.feasible {
+        let w = feasibility.worst.as_ref().expect("violation");
+        return Err(ExciteError::Infeasible(format!(
+            "dense check: {} {} = {} beyond {} by {} at t = {} s",
+            w.limit, w.quantity, w.value, w.bound, w.excess, w.time_s
+        )));
+    }
+    Ok(Excitation {
+        trajectory,
+        evaluation: Evaluation {
+            criterion: CriterionValue {
+                name: opts.criterion.name().into(),
+                value: opts.criterion.report(obj),
+            },
+            feasibility,
+        },
+        starts,
+    })
+}
+
+/// Refuses option values the search cannot run with (before the limits are compiled,
+/// so that a too large `--starts` is named as such).
+fn check_options(opts: &ExciteOptions) -> Result<(), ExciteError> {
     if opts.starts == 0 || opts.refine == 0 || opts.draws == 0 {
         return Err(ExciteError::Invalid(
             "at least one start, one draw per start and one refined start are needed".into(),
@@ -781,7 +888,12 @@ pub fn optimize(
             opts.margin, opts.coulomb_smoothing
         )));
     }
-    let cons = Constraints::new(model, limits)?;
+    Ok(())
+}
+
+/// Refuses an initial trajectory that does not fit the robot or the options.
+fn check_init(model: &Model, opts: &ExciteOptions) -> Result<(), ExciteError> {
+    let (order, f0) = (opts.order, opts.base_frequency_hz);
     if let Some(t) = &opts.init {
         check_dof(model, t)?;
         if t.order != order || (t.base_frequency_hz - f0).abs() > 1e-12 * f0 {
@@ -791,28 +903,19 @@ pub fn optimize(
             )));
         }
     }
-    let xs = {
-        let q = cons.static_pose(model, opts.margin)?;
-        let mut x = vec![0.0; n * (2 * order + 1)];
-        x[..n].copy_from_slice(&q);
-        x
-    };
-    let samples = (opts.samples_per_harmonic.max(1) * order).max(base.rank().div_ceil(n) + 1);
-    let cgrid = constraint_grid(order, f0);
-    let dense = dense_grid(order, f0, opts.check_rate_hz);
-    let room = coordinate_room(model, &cons, &xs, &cgrid, opts.margin);
-    let setup = Setup {
-        model,
-        base,
-        opts,
-        cons: &cons,
-        xs: &xs,
-        cgrid: &cgrid,
-        dense: &dense,
-        samples,
-        room,
-    };
+    Ok(())
+}
 
+/// The best point of the search, if any: its objective and coefficient vector.
+type Best = Option<(f64, Vec<f64>)>;
+
+/// Explores every start, then refines the warm start and the best merits; returns the
+/// criterion reached from each start and the best `(objective, x)`.
+fn explore_and_refine(
+    setup: &Setup<'_>,
+    progress: &dyn crate::progress::Progress,
+) -> (Vec<Option<f64>>, Best) {
+    let opts = setup.opts;
     progress.stage("exploring starts", Some(opts.starts as u64));
     let mut explored: Vec<Option<Run>> = (0..opts.starts)
         .into_par_iter()
@@ -863,6 +966,12 @@ pub fn optimize(
             }
         }
     }
+    (starts, best)
+}
+
+/// Basin hopping from `best`, which it replaces by a better point.
+fn hop_from_best(setup: &Setup<'_>, progress: &dyn crate::progress::Progress, best: &mut Best) {
+    let opts = setup.opts;
     // Basin hopping from the best, two hops at a time (a fixed number, so that the
     // result does not depend on the thread count). No refinement, no hops: a warm start
     // with 0 iterations is only pulled inside the limits.
@@ -890,32 +999,6 @@ pub fn optimize(
         }
         progress.finish();
     }
-    let Some((obj, x)) = best else {
-        return Err(ExciteError::Infeasible(
-            "every start failed (rank-deficient regressor or no feasible motion)".into(),
-        ));
-    };
-    let trajectory = from_x(&x, n, order, f0, &model.coordinates);
-    let mut ws = Workspace::new(model);
-    let feasibility = cons.check(model, &mut ws, &x, &dense, opts.check_rate_hz);
-    if !feasibility.feasible {
-        let w = feasibility.worst.as_ref().expect("violation");
-        return Err(ExciteError::Infeasible(format!(
-            "dense check: {} {} = {} beyond {} by {} at t = {} s",
-            w.limit, w.quantity, w.value, w.bound, w.excess, w.time_s
-        )));
-    }
-    Ok(Excitation {
-        trajectory,
-        evaluation: Evaluation {
-            criterion: CriterionValue {
-                name: opts.criterion.name().into(),
-                value: opts.criterion.report(obj),
-            },
-            feasibility,
-        },
-        starts,
-    })
 }
 
 /// Per coordinate, half the width of the positions it can take alone from the static
@@ -934,7 +1017,7 @@ fn coordinate_room(
             for (s, sign) in step.iter_mut().zip([1.0, -1.0]) {
                 let mut x1 = xs.to_vec();
                 x1[j] += sign;
-                *s = cons.feasible_step(model, &mut ws, xs, &x1, grid, margin, &[]);
+                *s = cons.feasible_step(model, &mut ws, xs, &x1, Enforced { grid, margin }, &[]);
             }
             let half = 0.5 * (step[0] + step[1]);
             if half.is_finite() && half > 0.0 {
@@ -1003,7 +1086,15 @@ fn coordinate_of(i: usize, n: usize, order: usize) -> usize {
     }
 }
 
-impl Setup<'_> {
+impl<'a> Setup<'a> {
+    /// The limits on the constraint grid, with the options' margin.
+    fn enforced(&self) -> Enforced<'a> {
+        Enforced {
+            grid: self.cgrid,
+            margin: self.opts.margin,
+        }
+    }
+
     fn criterion_eval(&self) -> CriterionEval<'_> {
         let mut ev = CriterionEval::new(
             self.model,
@@ -1097,7 +1188,7 @@ impl Setup<'_> {
         }
         let room = |ws: &mut Workspace, d: &[f64]| {
             let x1: Vec<f64> = xs.iter().zip(d).map(|(a, b)| a + b).collect();
-            cons.feasible_step(model, ws, xs, &x1, self.cgrid, opts.margin, &[])
+            cons.feasible_step(model, ws, xs, &x1, self.enforced(), &[])
         };
         for j in 0..n {
             let mut dj = vec![0.0; dim];
@@ -1153,7 +1244,11 @@ impl Setup<'_> {
         // Pull back onto the segment from the static pose if the dense grid needs it,
         // with the slack that keeps the limits between its samples too.
         let slack = cons.between_samples(model, &mut ws, &x, self.dense);
-        let s = cons.feasible_step(model, &mut ws, xs, &x, self.dense, 0.0, &slack);
+        let dense = Enforced {
+            grid: self.dense,
+            margin: 0.0,
+        };
+        let s = cons.feasible_step(model, &mut ws, xs, &x, dense, &slack);
         if s < 1.0 {
             let s = s * (1.0 - 1e-9);
             for (xi, x0) in x.iter_mut().zip(xs) {
@@ -1233,10 +1328,8 @@ impl Setup<'_> {
                     model,
                     ws,
                     &xb,
-                    self.cgrid,
-                    opts.margin,
-                    lambda,
-                    mu,
+                    self.enforced(),
+                    Multipliers { lambda, mu },
                     Some(&mut pg),
                 );
                 for (gi, pi) in g.iter_mut().zip(&pg) {
@@ -1263,8 +1356,7 @@ impl Setup<'_> {
                 model,
                 ws,
                 &run.x,
-                self.cgrid,
-                opts.margin,
+                self.enforced(),
                 &mut run.lambda,
                 run.mu,
             );

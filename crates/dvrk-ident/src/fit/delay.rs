@@ -125,7 +125,57 @@ pub fn estimate_delays(
     let base = model.base_parameters()?;
     let kept = &base.independent;
     let r = kept.len();
-    // Each log processed at every whole-sample shift 0..=K (K from the first log's rate).
+    let Shifted {
+        logs: shifted,
+        rate_hz: rate,
+        shifts,
+    } = shifted_logs(model, logs, settings, max_s)?;
+    let rate = rate.ok_or_else(crate::fit::no_training_log)?;
+    let columns = shifts + 1;
+    let weights = match settings.method {
+        Method::Ols | Method::Irls => vec![1.0; n],
+        Method::Wls | Method::Sdp => {
+            let mut range = TorqueRange::new(n);
+            for all in &shifted {
+                range.add(&all[0].tau);
+            }
+            range.weights()
+        }
+    };
+    let (gram, rows) = gram_matrices(model, kept, &shifted, &weights, columns);
+    let search = Search::new(&gram, r, columns, rate, max_s)?;
+    let (delay_s, sweeps) = search.minimize();
+    let residual = search.residual(&delay_s);
+    let dof = rows.saturating_sub(r + n).max(1);
+    let sigma2 = residual.max(0.0) / dof as f64;
+    let std_s = (0..n)
+        .map(|j| {
+            let curvature = search.curvature(j, &delay_s);
+            if curvature > 0.0 {
+                (2.0 * sigma2 / curvature).sqrt().min(max_s)
+            } else {
+                max_s
+            }
+        })
+        .collect();
+    Ok(DelayEstimate {
+        delay_s,
+        std_s,
+        max_s,
+        residual,
+        sweeps,
+    })
+}
+
+/// Each log processed at every whole-sample shift `0..=K` (`K` from the first log's
+/// rate).
+fn shifted_logs(
+    model: &Model,
+    logs: &[LogData<'_>],
+    settings: &crate::fit::FitSettings,
+    max_s: f64,
+) -> Result<Shifted, IdentError> {
+    let n = model.dof();
     let mut shifted: Vec<Vec<Processed>> = Vec::with_capacity(logs.len());
     let mut rate: Option<f64> = None;
     let mut shifts = 0usize;
@@ -167,19 +217,34 @@ pub fn estimate_delays(
         }
         shifted.push(all);
     }
-    let rate = rate.ok_or_else(crate::fit::no_training_log)?;
-    let columns = shifts + 1;
-    let weights = match settings.method {
-        Method::Ols | Method::Irls => vec![1.0; n],
-        Method::Wls | Method::Sdp => {
-            let mut range = TorqueRange::new(n);
-            for all in &shifted {
-                range.add(&all[0].tau);
-            }
-            range.weights()
-        }
-    };
-    // Gram matrices of [w·H_j | w·P_0 … w·P_K] per coordinate.
+    Ok(Shifted {
+        logs: shifted,
+        rate_hz: rate,
+        shifts,
+    })
+}
+
+/// The training logs processed at every shift.
+struct Shifted {
+    /// Per log, processed at `0..=shifts` samples of delay.
+    logs: Vec<Vec<Processed>>,
+    /// The logs' rate, Hz; `None` without logs.
+    rate_hz: Option<f64>,
+    shifts: usize,
+}
+
+/// Gram matrices of `[w·H_j | w·P_0 … w·P_K]` per coordinate `j` (`H_j` the regressor
+/// row of the `kept` columns, `P_k` the torque shifted by `k` samples, `w` the
+/// coordinate's weight), and the number of rows.
+fn gram_matrices(
+    model: &Model,
+    kept: &[usize],
+    shifted: &[Vec<Processed>],
+    weights: &[f64],
+    columns: usize,
+) -> (Vec<DMatrix<f64>>, usize) {
+    let n = model.dof();
+    let r = kept.len();
     let width = r + columns;
     let mut gram = vec![DMatrix::<f64>::zeros(width, width); n];
     let mut rows = 0usize;
@@ -187,7 +252,7 @@ pub fn estimate_delays(
     let mut ws = Workspace::new(model);
     let mut h = vec![0.0; n * p];
     let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-    for all in &shifted {
+    for all in shifted {
         let motion = &all[0];
         let len = motion.time.len();
         rows += len;
@@ -218,28 +283,7 @@ pub fn estimate_delays(
             start = end;
         }
     }
-    let search = Search::new(&gram, r, columns, rate, max_s)?;
-    let (delay_s, sweeps) = search.minimize();
-    let residual = search.residual(&delay_s);
-    let dof = rows.saturating_sub(r + n).max(1);
-    let sigma2 = residual.max(0.0) / dof as f64;
-    let std_s = (0..n)
-        .map(|j| {
-            let curvature = search.curvature(j, &delay_s);
-            if curvature > 0.0 {
-                (2.0 * sigma2 / curvature).sqrt().min(max_s)
-            } else {
-                max_s
-            }
-        })
-        .collect();
-    Ok(DelayEstimate {
-        delay_s,
-        std_s,
-        max_s,
-        residual,
-        sweeps,
-    })
+    (gram, rows)
 }
 
 /// The residual as a function of the delays, from the Gram blocks.

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::DMatrix;
 
 use super::csv::{HeaderedBlocks, WpiBlocks};
+#[cfg(feature = "recordings")]
 use super::mcap::{McapBlocks, McapReader};
 use super::{detect_format, LogError, LogFormat, ReadOptions};
 use crate::signal::stream::Resampler;
@@ -25,6 +26,7 @@ pub struct LogReader {
     dof: Option<usize>,
     /// Resampling of the CSV formats (MCAP logs resample while merging).
     resample_hz: Option<f64>,
+    #[cfg(feature = "recordings")]
     mcap: Option<McapReader>,
     joint_names: Vec<String>,
     coordinates: Coordinates,
@@ -46,6 +48,7 @@ impl LogReader {
             rate_hz,
             dof: options.dof,
             resample_hz: options.resample_hz,
+            #[cfg(feature = "recordings")]
             mcap: None,
             joint_names: Vec::new(),
             coordinates: Coordinates::Measured,
@@ -70,6 +73,9 @@ impl LogReader {
                 reader.coordinates = b.coordinates();
                 reader.has_velocity = b.has_velocity();
             }
+            #[cfg(not(feature = "recordings"))]
+            other => return Err(super::recordings_not_built(path, other)),
+            #[cfg(feature = "recordings")]
             _ => {
                 let m = McapReader::open(path, &options.recording())?;
                 reader.format = m.format();
@@ -92,8 +98,15 @@ impl LogReader {
     /// order: one pass over the file.
     pub fn blocks(&self, block_samples: usize) -> Result<LogBlocks<'_>, LogError> {
         let path = self.path.as_path();
-        let source = match (&self.mcap, self.format) {
-            (Some(m), _) => Source::Mcap(Box::new(m.blocks(block_samples)?)),
+        #[cfg(feature = "recordings")]
+        let recording = match &self.mcap {
+            Some(m) => Some(Source::Mcap(Box::new(m.blocks(block_samples)?))),
+            None => None,
+        };
+        #[cfg(not(feature = "recordings"))]
+        let recording = None;
+        let source = match (recording, self.format) {
+            (Some(s), _) => s,
             (None, LogFormat::Wpi) => Source::Wpi(WpiBlocks::open(
                 path,
                 self.rate_hz.unwrap_or(f64::NAN),
@@ -158,19 +171,43 @@ impl LogReader {
 
     /// The topics read (recordings; the clock first), empty for CSV logs.
     pub fn topics(&self) -> &[String] {
-        self.mcap.as_ref().map_or(&[], |m| m.topics())
+        #[cfg(feature = "recordings")]
+        return self.mcap.as_ref().map_or(&[], |m| m.topics());
+        #[cfg(not(feature = "recordings"))]
+        &[]
     }
 
     /// Number of samples, when known without a pass over the file (MCAP).
     pub fn samples(&self) -> Option<usize> {
-        self.mcap.as_ref().map(McapReader::samples)
+        #[cfg(feature = "recordings")]
+        return self.mcap.as_ref().map(McapReader::samples);
+        #[cfg(not(feature = "recordings"))]
+        None
+    }
+}
+
+impl ReadOptions {
+    /// Opens `path` for reading block by block (every check of the header, the first
+    /// row or the recording's index is made here).
+    pub fn open(&self, path: impl AsRef<Path>) -> Result<LogReader, LogError> {
+        LogReader::open(path.as_ref(), self)
+    }
+
+    /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
+    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+        self.open(path)?.read_all()
     }
 }
 
 enum Source<'a> {
     Wpi(WpiBlocks),
     Csv(HeaderedBlocks),
+    #[cfg(feature = "recordings")]
     Mcap(Box<McapBlocks<'a>>),
+    /// Keeps the lifetime of the blocks of a recording in builds without them.
+    #[cfg(not(feature = "recordings"))]
+    #[allow(dead_code)]
+    Never(std::marker::PhantomData<&'a ()>, std::convert::Infallible),
 }
 
 /// One pass over a log, block by block (see [`LogReader::blocks`]).
@@ -193,7 +230,10 @@ impl LogBlocks<'_> {
             let raw = match &mut self.source {
                 Source::Wpi(b) => b.next_block(self.block)?,
                 Source::Csv(b) => b.next_block(self.block)?,
+                #[cfg(feature = "recordings")]
                 Source::Mcap(b) => b.next().transpose()?,
+                #[cfg(not(feature = "recordings"))]
+                Source::Never(_, never) => match *never {},
             };
             let Some(r) = &mut self.resampler else {
                 // Every sample a reader gives is valid (in range, time increasing): the

@@ -331,6 +331,15 @@ pub enum LogError {
         /// What is wrong.
         problem: Box<mcap::McapProblem>,
     },
+    /// A recording (or a compressed file) read or written by a build of dvrk-ident
+    /// without its `recordings` feature.
+    #[error("{}: {what}: reading and writing recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) needs dvrk-ident's `recordings` feature, which this build leaves out", path.display())]
+    RecordingsNotBuilt {
+        /// The file.
+        path: PathBuf,
+        /// What it is (e.g. `a recording (mcap)`).
+        what: String,
+    },
     /// Resampling a log to a uniform rate failed.
     #[error("{}: resample to {rate_hz} Hz: {source}", path.display())]
     Resample {
@@ -429,12 +438,15 @@ pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Re
     match format {
         LogFormat::Wpi => write_wpi(path, traj),
         LogFormat::Csv => write_headered(path, traj),
+        #[cfg(feature = "recordings")]
         LogFormat::Mcap => mcap::write_mcap(
             path,
             traj,
             mcap::DEFAULT_TOPIC,
             &mcap::McapWriteOptions::default(),
         ),
+        #[cfg(not(feature = "recordings"))]
+        LogFormat::Mcap => Err(recordings_not_built(path, LogFormat::Mcap)),
         other => Err(LogError::Unsupported {
             path: path.to_path_buf(),
             format: other,
@@ -450,7 +462,7 @@ pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Re
 /// layout, else a headered CSV. Anything else is an error saying what the file looks
 /// like and what is supported.
 pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
-    use self::mcap::bag::{sniff, Content, Storage};
+    use self::mcap::sniff::{sniff, Content, Storage};
     let path = path.as_ref();
     let meta = std::fs::metadata(path).map_err(|source| LogError::Io {
         path: path.to_path_buf(),
@@ -508,7 +520,7 @@ pub fn detect_format(path: impl AsRef<Path>) -> Result<LogFormat, LogError> {
 /// The files that hold the log at `path`: the file itself, or a rosbag2 folder's
 /// `metadata.yaml` and recording files in order (what the result's provenance hashes).
 pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
-    use self::mcap::bag::{sniff, Content};
+    use self::mcap::sniff::{sniff, Content};
     let path = path.as_ref();
     // Only a folder or its metadata.yaml stand for other files: any other file is
     // itself, whatever its content (it is hashed, not read, here).
@@ -522,8 +534,22 @@ pub fn files_of(path: impl AsRef<Path>) -> Result<Vec<PathBuf>, LogError> {
     if !is_bag {
         return Ok(vec![path.to_path_buf()]);
     }
-    let located = mcap::bag::locate(path)?;
-    Ok(located.metadata.into_iter().chain(located.files).collect())
+    #[cfg(feature = "recordings")]
+    {
+        let located = mcap::bag::locate(path)?;
+        Ok(located.metadata.into_iter().chain(located.files).collect())
+    }
+    #[cfg(not(feature = "recordings"))]
+    Err(recordings_not_built(path, LogFormat::Rosbag2))
+}
+
+/// The error of a build without the `recordings` feature for a log of `format`.
+#[cfg(not(feature = "recordings"))]
+pub(crate) fn recordings_not_built(path: &Path, format: LogFormat) -> LogError {
+    LogError::RecordingsNotBuilt {
+        path: path.to_path_buf(),
+        what: format!("a recording ({format})"),
+    }
 }
 
 /// Samples per block when a reader's blocks are collected into a whole log.
@@ -628,20 +654,6 @@ pub fn write_atomic(
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
     crate::output::write_with(path, fill).map_err(|source| LogError::Io {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
-/// [`write_atomic`] for writers that need the file itself (the MCAP writer seeks back to
-/// fill in lengths): `fill` gets a buffered file and returns it when done.
-pub(crate) fn write_atomic_file(
-    path: &Path,
-    fill: impl FnOnce(
-        std::io::BufWriter<std::fs::File>,
-    ) -> Result<std::io::BufWriter<std::fs::File>, LogError>,
-) -> Result<(), LogError> {
-    crate::output::write_seekable(path, fill, |source| LogError::Io {
         path: path.to_path_buf(),
         source,
     })

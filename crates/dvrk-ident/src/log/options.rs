@@ -7,9 +7,9 @@ use std::path::Path;
 
 use dvrk_model::Model;
 
+#[allow(unused_imports)] // McapOptions: the docs' link without `recordings`
 use super::mcap::{McapOptions, TimeSource};
-use super::{LogError, LogFormat, LogReader};
-use crate::trajectory::Trajectory;
+use super::{LogError, LogFormat};
 
 /// How to read a log, whatever its format.
 ///
@@ -76,18 +76,8 @@ impl ReadOptions {
         }
     }
 
-    /// Opens `path` for reading block by block (every check of the header, the first
-    /// row or the recording's index is made here).
-    pub fn open(&self, path: impl AsRef<Path>) -> Result<LogReader, LogError> {
-        LogReader::open(path.as_ref(), self)
-    }
-
-    /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
-    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
-        self.open(path)?.read_all()
-    }
-
     /// The recording reader's options.
+    #[cfg(feature = "recordings")]
     pub(super) fn recording(&self) -> McapOptions {
         McapOptions {
             topics: self.topics.clone(),

@@ -116,7 +116,19 @@ pub fn page(
         method = escape(&result.method)
     );
 
-    // Summary and solver.
+    summary(&mut o, result);
+    metrics(&mut o, result, logs, &unit);
+    links(&mut o, result);
+    joint_elements(&mut o, model, result);
+    base_parameters(&mut o, result);
+    figures_section(&mut o, figures);
+    settings_and_provenance(&mut o, result);
+    o.push_str("</body></html>\n");
+    o
+}
+
+/// Summary and solver.
+fn summary(o: &mut String, result: &FitResult) {
     let consistent = if result.physically_consistent {
         "<span class=ok>yes</span>"
     } else {
@@ -180,8 +192,15 @@ pub fn page(
         );
     }
     o.push_str("</table>");
+}
 
-    // Metrics of the result, then of every log drawn here.
+/// Metrics of the result, then of every log drawn here.
+fn metrics(
+    o: &mut String,
+    result: &FitResult,
+    logs: &[LogSummary],
+    unit: &dyn Fn(usize) -> &'static str,
+) {
     o.push_str("<h2>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
     let mut sets = vec![("fit: training".to_string(), &result.metrics.train)];
     if let Some(test) = &result.metrics.test {
@@ -190,9 +209,11 @@ pub fn page(
     for log in logs {
         sets.push((format!("{} ({})", log.role, log.source), &log.metrics));
     }
-    metrics_table(&mut o, &sets, &unit);
+    metrics_table(o, &sets, unit);
+}
 
-    // Parameters by link.
+/// Parameters by link.
+fn links(o: &mut String, result: &FitResult) {
     o.push_str(
         "<h2>Links</h2><p>Standard parameters in each link's frame: mass (kg), centre of mass (m), \
          inertia about the centre of mass (kg·m²); consistency is the smallest eigenvalue of the \
@@ -230,8 +251,10 @@ pub fn page(
         }
     }
     o.push_str("</table>");
+}
 
-    // Joint elements (friction, motor inertia, spring) by frame.
+/// Joint elements (friction, motor inertia, spring) by frame.
+fn joint_elements(o: &mut String, model: &Model, result: &FitResult) {
     o.push_str(
         "<h2>Joint elements</h2><p>Coulomb Fc, viscous Fv and offset Fo friction (N·m, N·m·s/rad; N, N·s/m), \
          motor inertia Im (kg·m²), spring K, by frame.</p>\
@@ -252,8 +275,10 @@ pub fn page(
         );
     }
     o.push_str("</table>");
+}
 
-    // Base parameters.
+/// Base parameters.
+fn base_parameters(o: &mut String, result: &FitResult) {
     let _ = write!(
         o,
         "<h2>Base parameters</h2><p>{} independent combinations the data determine; std is the \
@@ -275,8 +300,10 @@ pub fn page(
         );
     }
     o.push_str("</table>");
+}
 
-    // Figures.
+/// Figures.
+fn figures_section(o: &mut String, figures: &[RenderedFigure]) {
     o.push_str("<h2>Figures</h2>");
     for f in figures {
         let _ = write!(
@@ -289,8 +316,10 @@ pub fn page(
             caption = escape(&f.caption)
         );
     }
+}
 
-    // Settings and provenance.
+/// Settings and provenance.
+fn settings_and_provenance(o: &mut String, result: &FitResult) {
     let settings = serde_json::to_string_pretty(&result.settings).unwrap_or_default();
     let _ = write!(
         o,
@@ -317,8 +346,7 @@ pub fn page(
             i.bytes
         );
     }
-    o.push_str("</table></body></html>\n");
-    o
+    o.push_str("</table>");
 }
 
 #[cfg(test)]

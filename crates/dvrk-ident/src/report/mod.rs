@@ -35,6 +35,11 @@ pub enum ReportError {
         /// What is wrong.
         message: String,
     },
+    /// What the report runs of the identification (the result's model, processing,
+    /// prediction) or writing its files failed. The report depends on the pipeline's
+    /// error, never the reverse.
+    #[error(transparent)]
+    Ident(#[from] IdentError),
 }
 
 /// One log shown in the report.
@@ -114,14 +119,15 @@ pub fn render_both(
 }
 
 /// Renders one figure for `path` (SVG or PNG by its extension).
-pub fn figure_bytes(figure: &impl Figure, path: &Path) -> Result<Vec<u8>, IdentError> {
-    Ok(render(figure, ImageFormat::from_path(path)?)?)
+pub fn figure_bytes(figure: &impl Figure, path: &Path) -> Result<Vec<u8>, ReportError> {
+    render(figure, ImageFormat::from_path(path)?)
 }
 
 /// Renders one figure to `path` (SVG or PNG by extension), atomically.
-pub fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), IdentError> {
+pub fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), ReportError> {
     let bytes = figure_bytes(figure, path)?;
-    crate::log::write_atomic(path, |w| w.write_all(&bytes)).map_err(IdentError::from)
+    crate::log::write_atomic(path, |w| w.write_all(&bytes))
+        .map_err(|e| ReportError::Ident(e.into()))
 }
 
 /// A file-name-safe version of a role (`test 2` → `test_2`).
@@ -143,7 +149,7 @@ fn slug(text: &str) -> String {
 /// and drawn (torques, and raw vs processed signals: the same processing without the
 /// low-pass filter, so both line up). The tree is drawn at the first sample of the
 /// first log (at zero without logs).
-pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
+pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
     let result = input.result;
     let model_cow = result.settings.model(input.model)?;
     let model: &Model = &model_cow;
@@ -208,8 +214,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, IdentError> {
                     model.name,
                     model.dof()
                 ),
-            }
-            .into());
+            });
         }
         figures.push(render_both(
             &figures::excitation_figure(model, traj, &model.limits, 200.0),
@@ -254,17 +259,19 @@ impl Report {
         &self,
         outputs: &mut crate::output::Outputs,
         dir: &Path,
-    ) -> Result<Vec<PathBuf>, IdentError> {
-        Ok(outputs.add_dir(dir, &self.files())?)
+    ) -> Result<Vec<PathBuf>, ReportError> {
+        Ok(outputs
+            .add_dir(dir, &self.files())
+            .map_err(IdentError::from)?)
     }
 
     /// Writes `report.html` and every figure as SVG and PNG into `dir` (created if
     /// missing, but not its parent), all of them or none; returns the paths written,
     /// the page last.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, IdentError> {
+    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
         let mut outputs = crate::output::Outputs::new();
         let written = self.stage(&mut outputs, dir)?;
-        outputs.commit()?;
+        outputs.commit().map_err(IdentError::from)?;
         Ok(written)
     }
 }

@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use super::bag::Bag;
-use super::channels::mcap_error;
 use super::container::Scanner;
+use super::problem::mcap_error;
 use super::survey::{seconds_between, Plan};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::McapProblem;

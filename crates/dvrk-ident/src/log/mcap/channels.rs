@@ -1,13 +1,8 @@
 //! What every storage backend of a recording (MCAP files in [`super::container`],
 //! rosbag2's sqlite3 in [`super::sqlite`], ROS 1 bags in [`super::ros1`]) shares: the
-//! channel registry, the raw message they hand out, and the error that names the file.
+//! channel registry and the raw message they hand out.
 //! A leaf: the backends and the container that dispatches over them depend on it, and
 //! not on each other.
-
-use std::path::Path;
-
-use super::McapProblem;
-use crate::log::LogError;
 
 /// A channel with its schema's name and encoding.
 #[derive(Debug)]
@@ -56,13 +51,4 @@ pub(crate) struct RawMessage<'a> {
     pub log_time: u64,
     pub publish_time: u64,
     pub data: &'a [u8],
-}
-
-/// The error of a recording's file (and topic).
-pub(crate) fn mcap_error(path: &Path, topic: Option<&str>, problem: McapProblem) -> LogError {
-    LogError::Mcap {
-        path: path.to_path_buf(),
-        topic: topic.map(str::to_owned),
-        problem: Box::new(problem),
-    }
 }

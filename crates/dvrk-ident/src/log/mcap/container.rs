@@ -13,7 +13,8 @@
 //! slices (each payload copied once out of its chunk), so a log can be read block by
 //! block and read again.
 
-use super::channels::{mcap_error, ChannelInfo, Channels, RawMessage};
+use super::channels::{ChannelInfo, Channels, RawMessage};
+use super::problem::mcap_error;
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
 use ::mcap::records::{op, Record};
@@ -230,50 +231,52 @@ impl McapFile {
         })
     }
 
-    fn next(&mut self, registry: &mut Channels) -> Result<Option<RawMessage<'_>>, LogError> {
+    /// Reads up to `need` bytes (at most [`READ_PIECE`]) of the file into the reader.
+    fn read_more(&mut self, need: usize) -> Result<(), LogError> {
         let path = self.path.as_path();
-        let container =
-            |e: McapError, offset: u64| mcap_error(path, None, container_problem(e, offset));
+        let buf = self.reader.insert(need.min(READ_PIECE));
+        let n = loop {
+            match self.src.read(buf) {
+                Ok(n) => break n,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                // A compressed file that stops decompressing is corrupted.
+                Err(e) if self.packed && e.kind() != std::io::ErrorKind::NotFound => {
+                    return Err(mcap_error(
+                        path,
+                        None,
+                        McapProblem::Container {
+                            reason: format!("the compressed file does not decompress: {e}"),
+                        },
+                    ))
+                }
+                Err(source) => {
+                    return Err(LogError::Io {
+                        path: path.to_path_buf(),
+                        source,
+                    })
+                }
+            }
+        };
+        self.bytes_read += n as u64;
+        self.reader.notify_read(n);
+        Ok(())
+    }
+
+    fn next(&mut self, registry: &mut Channels) -> Result<Option<RawMessage<'_>>, LogError> {
         let found = loop {
             let Some(event) = self.reader.next_event() else {
                 return Ok(None);
             };
-            match event.map_err(|e| container(e, self.bytes_read))? {
-                LinearReadEvent::ReadRequest(need) => {
-                    let buf = self.reader.insert(need.min(READ_PIECE));
-                    let n = loop {
-                        match self.src.read(buf) {
-                            Ok(n) => break n,
-                            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-                            // A compressed file that stops decompressing is corrupted.
-                            Err(e) if self.packed && e.kind() != std::io::ErrorKind::NotFound => {
-                                return Err(mcap_error(
-                                    path,
-                                    None,
-                                    McapProblem::Container {
-                                        reason: format!(
-                                            "the compressed file does not decompress: {e}"
-                                        ),
-                                    },
-                                ))
-                            }
-                            Err(source) => {
-                                return Err(LogError::Io {
-                                    path: path.to_path_buf(),
-                                    source,
-                                })
-                            }
-                        }
-                    };
-                    self.bytes_read += n as u64;
-                    self.reader.notify_read(n);
-                }
+            match event
+                .map_err(|e| mcap_error(&self.path, None, container_problem(e, self.bytes_read)))?
+            {
+                LinearReadEvent::ReadRequest(need) => self.read_more(need)?,
                 LinearReadEvent::Record { opcode, data } => match opcode {
                     op::DATA_END => self.past_data_end = true,
                     op::SCHEMA | op::CHANNEL | op::MESSAGE => {
                         if !lengths_fit(opcode, data) {
                             return Err(mcap_error(
-                                path,
+                                &self.path,
                                 None,
                                 McapProblem::Container {
                                     reason: format!(
@@ -289,8 +292,9 @@ impl McapFile {
                                 },
                             ));
                         }
-                        let record = ::mcap::parse_record(opcode, data)
-                            .map_err(|e| container(e, self.bytes_read))?;
+                        let record = ::mcap::parse_record(opcode, data).map_err(|e| {
+                            mcap_error(&self.path, None, container_problem(e, self.bytes_read))
+                        })?;
                         match record {
                             Record::Schema { header, .. } => {
                                 self.schemas.entry(header.id).or_insert(header.name);
@@ -304,7 +308,7 @@ impl McapFile {
                                 } else {
                                     self.schemas.get(&c.schema_id).cloned().ok_or_else(|| {
                                         mcap_error(
-                                            path,
+                                            &self.path,
                                             Some(&c.topic),
                                             McapProblem::Container {
                                                 reason: format!(
@@ -322,7 +326,7 @@ impl McapFile {
                                 let &channel =
                                     self.channels.get(&header.channel_id).ok_or_else(|| {
                                         mcap_error(
-                                            path,
+                                            &self.path,
                                             None,
                                             McapProblem::Container {
                                                 reason: format!(

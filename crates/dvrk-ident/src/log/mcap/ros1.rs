@@ -11,7 +11,8 @@ use std::path::{Path, PathBuf};
 use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
 
 use super::bag::BagFile;
-use super::channels::{mcap_error, Channels, RawMessage};
+use super::channels::{Channels, RawMessage};
+use super::problem::mcap_error;
 use super::McapProblem;
 use crate::log::LogError;
 

@@ -10,7 +10,8 @@ use std::path::PathBuf;
 use rusqlite::{Connection, OpenFlags};
 
 use super::bag::BagFile;
-use super::channels::{mcap_error, Channels, RawMessage};
+use super::channels::{Channels, RawMessage};
+use super::problem::mcap_error;
 use super::McapProblem;
 use crate::log::LogError;
 

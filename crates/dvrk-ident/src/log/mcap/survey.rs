@@ -15,17 +15,55 @@ use std::path::Path;
 use std::sync::Arc;
 
 use nalgebra::DMatrix;
+use serde::{Deserialize, Serialize};
 
 use super::bag::Bag;
-use super::channels::mcap_error;
 use super::container::{scan, MessageRef, Scanner};
+use super::problem::mcap_error;
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
-use super::{
-    JointStateSeries, McapOptions, McapProblem, TimeSource, TimingReport, GAP_FACTOR,
-    JITTER_TOLERANCE,
-};
+use super::{McapOptions, McapProblem, TimeSource, TopicInfo, GAP_FACTOR, JITTER_TOLERANCE};
 use crate::log::LogError;
 use crate::median::{ExactMedian, MedianPass};
+
+/// The joint states of one topic as recorded: one row per message, columns in the
+/// joint order of the first message.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointStateSeries {
+    /// Topic name.
+    pub topic: String,
+    /// Joint names (the first message's order). Messages without names get
+    /// `joint_1`, `joint_2`, ...
+    pub joint_names: Vec<String>,
+    /// `header.frame_id` of the first message.
+    pub frame_id: String,
+    /// Sample times, ns since the epoch, from the chosen [`TimeSource`].
+    pub stamps_ns: Vec<i64>,
+    /// Positions, rad or m.
+    pub position: DMatrix<f64>,
+    /// Velocities; `None` when the messages' velocity arrays are empty.
+    pub velocity: Option<DMatrix<f64>>,
+    /// Efforts; `None` when the messages' effort arrays are empty.
+    pub effort: Option<DMatrix<f64>>,
+}
+
+/// What the timing checks found on the clock topic (before any resampling).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct TimingReport {
+    /// Number of samples checked.
+    pub samples: usize,
+    /// Median time step, s.
+    pub median_step_s: f64,
+    /// Steps longer than [`GAP_FACTOR`] median steps.
+    pub gaps: usize,
+    /// Other steps off the median by more than [`JITTER_TOLERANCE`] (relative).
+    pub jittered: usize,
+    /// Longest step, s.
+    pub largest_step_s: f64,
+    /// Index of the second sample of the first gap or jittered step.
+    pub first_irregular: Option<usize>,
+    /// The rate the log was resampled to, Hz, if it was.
+    pub resampled_hz: Option<f64>,
+}
 
 /// Order, count and step statistics of a stamp sequence, fed one stamp at a time.
 #[derive(Clone, Debug, Default)]
@@ -248,6 +286,19 @@ pub(super) fn survey(
         }
     };
     let scanned = scan(bag, on_message)?;
+    choose(path, topics, joints, surveys, scanned.topics)
+}
+
+/// The surveyed topics to read: the requested ones, or the automatic choice among the
+/// candidates (`topics` empty); each must have held messages without error.
+fn choose(
+    path: &Path,
+    topics: &[String],
+    joints: &[String],
+    mut surveys: BTreeMap<String, TopicSurvey>,
+    available: Vec<TopicInfo>,
+) -> Result<Vec<TopicSurvey>, LogError> {
+    let auto = topics.is_empty();
     let chosen: Vec<TopicSurvey> = if auto {
         let candidates: Vec<&TopicSurvey> = surveys
             .values()
@@ -266,7 +317,7 @@ pub(super) fn survey(
                 path,
                 None,
                 McapProblem::NoJointStates {
-                    available: scanned.topics,
+                    available,
                     rejected,
                 },
             ));
@@ -289,11 +340,11 @@ pub(super) fn survey(
             return Err(e);
         }
         if s.state.count == 0 {
-            let problem = if scanned.topics.iter().any(|i| i.topic == s.state.topic) {
+            let problem = if available.iter().any(|i| i.topic == s.state.topic) {
                 McapProblem::EmptyTopic
             } else {
                 McapProblem::TopicNotFound {
-                    available: scanned.topics.clone(),
+                    available: available.clone(),
                 }
             };
             return Err(mcap_error(path, Some(&s.state.topic), problem));
@@ -561,52 +612,8 @@ pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogErr
     }
     let ts = options.time_source;
     let mut surveys = survey(bag, &options.topics, &options.joints, ts, false)?;
-    for s in &surveys {
-        if !s.state.has_effort {
-            return Err(mcap_error(
-                path,
-                Some(&s.state.topic),
-                McapProblem::NoEffort,
-            ));
-        }
-    }
+    check_topics(path, &surveys, ts)?;
     let topics: Vec<String> = surveys.iter().map(|s| s.state.topic.clone()).collect();
-    // Joint names unique across topics.
-    let mut owner: HashMap<&str, &str> = HashMap::new();
-    for s in &surveys {
-        for n in &s.state.names {
-            if let Some(first) = owner.insert(n.as_str(), s.state.topic.as_str()) {
-                return Err(mcap_error(
-                    path,
-                    Some(&s.state.topic),
-                    McapProblem::DuplicateJoint {
-                        joint: n.clone(),
-                        context: format!(
-                            "also on topic {first}; merged topics need distinct joint names"
-                        ),
-                    },
-                ));
-            }
-        }
-    }
-    for s in &surveys {
-        if let Some((index, previous, stamp)) = s.stats.first_bad {
-            let st = &s.stats;
-            return Err(mcap_error(
-                path,
-                Some(&s.state.topic),
-                McapProblem::NotIncreasing {
-                    index,
-                    time_s: seconds_between(st.first, stamp),
-                    previous_s: seconds_between(st.first, previous),
-                    backwards: st.backwards,
-                    duplicates: st.duplicates,
-                    samples: st.count,
-                    time_source: ts,
-                },
-            ));
-        }
-    }
     // Gaps in the other topics would be bridged by interpolation: refuse them too.
     for k in 0..surveys.len() {
         let full = (surveys[k].stats.first, surveys[k].stats.last);
@@ -626,47 +633,136 @@ pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogErr
     let (stats, trimmed) = if span == (clock.first, clock.last) {
         (clock.clone(), (0, 0))
     } else {
-        // The clock's statistics over the span the other topics cover.
-        let (mut below, mut above) = (0, 0);
-        let mut stats = StampStats::default();
-        stamp_pass(bag, &topics, ts, |t, stamp| {
-            if t != 0 {
-            } else if stamp < lo {
-                below += 1;
-            } else if stamp > hi {
-                above += 1;
-            } else {
-                stats.observe(stamp);
-            }
-        })?;
-        if stats.count == 0 {
-            let mut detail = String::new();
-            let t0 = clock.first;
-            for s in &surveys {
-                let _ = write!(
-                    detail,
-                    "{}{} from {} s to {} s",
-                    if detail.is_empty() { "" } else { ", " },
-                    s.state.topic,
-                    seconds_between(t0, s.stats.first),
-                    seconds_between(t0, s.stats.last)
-                );
-            }
-            return Err(mcap_error(path, None, McapProblem::NoOverlap { detail }));
-        }
-        finish_median(bag, &topics, ts, 0, (lo, hi), &mut stats)?;
-        (stats, (below, above))
+        clock_within(bag, &topics, ts, &surveys, (lo, hi))?
     };
     let (mut timing, around) = classify(bag, &topics, ts, 0, span, &stats)?;
     if options.resample_hz.is_none() && timing.first_irregular.is_some() {
         return Err(non_uniform(path, &topics[0], &timing, around, ts));
     }
-    let samples = match options.resample_hz {
+    let samples = sample_count(path, &topics[0], options.resample_hz, &stats, &mut timing)?;
+    Ok(Plan {
+        with_velocity: surveys.iter().all(|s| s.state.has_velocity),
+        joints: surveys.iter().map(|s| s.state.names.clone()).collect(),
+        topics,
+        span,
+        start_time_ns: stats.first,
+        trimmed,
+        timing,
+        time_source: ts,
+        resample_hz: options.resample_hz,
+        samples,
+    })
+}
+
+/// The checks of the chosen topics before their clocks: efforts on every topic, joint
+/// names unique across topics, stamps strictly increasing.
+fn check_topics(path: &Path, surveys: &[TopicSurvey], ts: TimeSource) -> Result<(), LogError> {
+    for s in surveys {
+        if !s.state.has_effort {
+            return Err(mcap_error(
+                path,
+                Some(&s.state.topic),
+                McapProblem::NoEffort,
+            ));
+        }
+    }
+    // Joint names unique across topics.
+    let mut owner: HashMap<&str, &str> = HashMap::new();
+    for s in surveys {
+        for n in &s.state.names {
+            if let Some(first) = owner.insert(n.as_str(), s.state.topic.as_str()) {
+                return Err(mcap_error(
+                    path,
+                    Some(&s.state.topic),
+                    McapProblem::DuplicateJoint {
+                        joint: n.clone(),
+                        context: format!(
+                            "also on topic {first}; merged topics need distinct joint names"
+                        ),
+                    },
+                ));
+            }
+        }
+    }
+    for s in surveys {
+        if let Some((index, previous, stamp)) = s.stats.first_bad {
+            let st = &s.stats;
+            return Err(mcap_error(
+                path,
+                Some(&s.state.topic),
+                McapProblem::NotIncreasing {
+                    index,
+                    time_s: seconds_between(st.first, stamp),
+                    previous_s: seconds_between(st.first, previous),
+                    backwards: st.backwards,
+                    duplicates: st.duplicates,
+                    samples: st.count,
+                    time_source: ts,
+                },
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The clock's statistics over the span `lo..=hi` the other topics cover, and the clock
+/// samples below and above it (a pass over the file).
+fn clock_within(
+    bag: &Arc<Bag>,
+    topics: &[String],
+    ts: TimeSource,
+    surveys: &[TopicSurvey],
+    (lo, hi): (i64, i64),
+) -> Result<(StampStats, (usize, usize)), LogError> {
+    let path = bag.path.as_path();
+    let clock = &surveys[0].stats;
+    // The clock's statistics over the span the other topics cover.
+    let (mut below, mut above) = (0, 0);
+    let mut stats = StampStats::default();
+    stamp_pass(bag, topics, ts, |t, stamp| {
+        if t != 0 {
+        } else if stamp < lo {
+            below += 1;
+        } else if stamp > hi {
+            above += 1;
+        } else {
+            stats.observe(stamp);
+        }
+    })?;
+    if stats.count == 0 {
+        let mut detail = String::new();
+        let t0 = clock.first;
+        for s in surveys {
+            let _ = write!(
+                detail,
+                "{}{} from {} s to {} s",
+                if detail.is_empty() { "" } else { ", " },
+                s.state.topic,
+                seconds_between(t0, s.stats.first),
+                seconds_between(t0, s.stats.last)
+            );
+        }
+        return Err(mcap_error(path, None, McapProblem::NoOverlap { detail }));
+    }
+    finish_median(bag, topics, ts, 0, (lo, hi), &mut stats)?;
+    Ok((stats, (below, above)))
+}
+
+/// The number of samples the reader gives: the clock's, or the resampled grid's (then
+/// recorded in `timing`).
+fn sample_count(
+    path: &Path,
+    clock_topic: &str,
+    resample_hz: Option<f64>,
+    stats: &StampStats,
+    timing: &mut TimingReport,
+) -> Result<usize, LogError> {
+    Ok(match resample_hz {
         Some(rate) => {
             let r = crate::signal::stream::Resampler::new(1, rate).map_err(|e| {
                 mcap_error(
                     path,
-                    Some(&topics[0]),
+                    Some(clock_topic),
                     McapProblem::Resample {
                         reason: e.to_string(),
                     },
@@ -680,17 +776,5 @@ pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogErr
             }
         }
         None => stats.count,
-    };
-    Ok(Plan {
-        with_velocity: surveys.iter().all(|s| s.state.has_velocity),
-        joints: surveys.iter().map(|s| s.state.names.clone()).collect(),
-        topics,
-        span,
-        start_time_ns: stats.first,
-        trimmed,
-        timing,
-        time_source: ts,
-        resample_hz: options.resample_hz,
-        samples,
     })
 }

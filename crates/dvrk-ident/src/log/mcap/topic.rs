@@ -93,7 +93,7 @@ impl TopicState {
     /// (automatic mode, then `Ok(false)`).
     pub(super) fn check(
         &mut self,
-        msg: JointStateMsg,
+        mut msg: JointStateMsg,
         stamp: i64,
         auto: bool,
         row: &mut JointRow,
@@ -105,61 +105,108 @@ impl TopicState {
                 .map(|k| format!("joint_{k}"))
                 .collect()
         } else {
-            msg.name
+            std::mem::take(&mut msg.name)
         };
-        if index == 0 {
-            if auto && msg.position.is_empty() {
-                self.rejected = Some("no positions");
-                return Ok(false);
-            }
-            if auto && msg.effort.is_empty() {
-                self.rejected = Some("no efforts");
-                return Ok(false);
-            }
-            if names.is_empty() {
-                return Err(Box::new(McapProblem::NoJoints { index }));
-            }
-            for (k, n) in names.iter().enumerate() {
-                if self.index_of.insert(n.clone(), k).is_some() {
-                    return Err(Box::new(McapProblem::DuplicateJoint {
-                        joint: n.clone(),
-                        context: "in message 0".into(),
-                    }));
-                }
-            }
-            self.names = names.clone();
-            self.frame_id = msg.header.frame_id;
-            self.has_velocity = !msg.velocity.is_empty();
-            self.has_effort = !msg.effort.is_empty();
+        if index == 0 && !self.first_message(&msg, &names, auto)? {
+            return Ok(false);
         }
-        let joints = self.names.len();
         // The permutation from this message's order to the first message's.
         let perm: Option<&[usize]> = if names == self.names {
             None
         } else {
-            let cached = matches!(&self.reorder, Some((order, _)) if *order == names);
-            if !cached {
-                let changed = || {
-                    Box::new(McapProblem::JointsChanged {
-                        index,
-                        first: self.names.clone(),
-                        found: names.clone(),
-                    })
-                };
-                if names.len() != joints {
-                    return Err(changed());
-                }
-                let mut perm = vec![usize::MAX; joints];
-                for (k, n) in names.iter().enumerate() {
-                    match self.index_of.get(n) {
-                        Some(&j) if perm[j] == usize::MAX => perm[j] = k,
-                        _ => return Err(changed()),
-                    }
-                }
-                self.reorder = Some((names.clone(), perm));
-            }
+            self.reorder_to(&names, index)?;
             self.reorder.as_ref().map(|(_, p)| p.as_slice())
         };
+        self.check_arrays(&msg, &names, index, stamp)?;
+        // (Empty arrays stay empty: a topic without velocities or efforts.)
+        let copy = |out: &mut Vec<f64>, values: &[f64]| {
+            out.clear();
+            match perm {
+                _ if values.is_empty() => {}
+                None => out.extend_from_slice(values),
+                Some(p) => out.extend(p.iter().map(|&k| values[k])),
+            }
+        };
+        copy(&mut row.position, &msg.position);
+        copy(&mut row.velocity, &msg.velocity);
+        copy(&mut row.effort, &msg.effort);
+        row.stamp = stamp;
+        self.first_stamp.get_or_insert(stamp);
+        Ok(true)
+    }
+
+    /// Message 0 sets the joints and which arrays the topic has; `Ok(false)`: the topic
+    /// is rejected (automatic mode: no positions or no efforts).
+    fn first_message(
+        &mut self,
+        msg: &JointStateMsg,
+        names: &[String],
+        auto: bool,
+    ) -> Result<bool, Box<McapProblem>> {
+        if auto && msg.position.is_empty() {
+            self.rejected = Some("no positions");
+            return Ok(false);
+        }
+        if auto && msg.effort.is_empty() {
+            self.rejected = Some("no efforts");
+            return Ok(false);
+        }
+        if names.is_empty() {
+            return Err(Box::new(McapProblem::NoJoints { index: 0 }));
+        }
+        for (k, n) in names.iter().enumerate() {
+            if self.index_of.insert(n.clone(), k).is_some() {
+                return Err(Box::new(McapProblem::DuplicateJoint {
+                    joint: n.clone(),
+                    context: "in message 0".into(),
+                }));
+            }
+        }
+        self.names = names.to_vec();
+        self.frame_id = msg.header.frame_id.clone();
+        self.has_velocity = !msg.velocity.is_empty();
+        self.has_effort = !msg.effort.is_empty();
+        Ok(true)
+    }
+
+    /// Caches the permutation from the order `names` of message `index` to the first
+    /// message's, or refuses a changed set of joints.
+    fn reorder_to(&mut self, names: &[String], index: usize) -> Result<(), Box<McapProblem>> {
+        let joints = self.names.len();
+        let cached = matches!(&self.reorder, Some((order, _)) if *order == names);
+        if !cached {
+            let changed = || {
+                Box::new(McapProblem::JointsChanged {
+                    index,
+                    first: self.names.clone(),
+                    found: names.to_vec(),
+                })
+            };
+            if names.len() != joints {
+                return Err(changed());
+            }
+            let mut perm = vec![usize::MAX; joints];
+            for (k, n) in names.iter().enumerate() {
+                match self.index_of.get(n) {
+                    Some(&j) if perm[j] == usize::MAX => perm[j] = k,
+                    _ => return Err(changed()),
+                }
+            }
+            self.reorder = Some((names.to_vec(), perm));
+        }
+        Ok(())
+    }
+
+    /// Every array of message `index`: present as in message 0, one value per joint,
+    /// finite.
+    fn check_arrays(
+        &self,
+        msg: &JointStateMsg,
+        names: &[String],
+        index: usize,
+        stamp: i64,
+    ) -> Result<(), Box<McapProblem>> {
+        let joints = self.names.len();
         let arrays = [
             ("position", Signal::Position, &msg.position, true),
             (
@@ -209,20 +256,6 @@ impl TopicState {
                 }));
             }
         }
-        // (Empty arrays stay empty: a topic without velocities or efforts.)
-        let copy = |out: &mut Vec<f64>, values: &[f64]| {
-            out.clear();
-            match perm {
-                _ if values.is_empty() => {}
-                None => out.extend_from_slice(values),
-                Some(p) => out.extend(p.iter().map(|&k| values[k])),
-            }
-        };
-        copy(&mut row.position, &msg.position);
-        copy(&mut row.velocity, &msg.velocity);
-        copy(&mut row.effort, &msg.effort);
-        row.stamp = stamp;
-        self.first_stamp.get_or_insert(stamp);
-        Ok(true)
+        Ok(())
     }
 }
