@@ -22,7 +22,7 @@ pub fn scratch(data: &[u8], extension: &str) -> PathBuf {
 
 /// An accepted log holds only finite samples in the documented range, with increasing
 /// time: what every reader promises.
-pub fn check_log(t: &dvrk_ident::Trajectory) {
+pub fn check_log(t: &dvrk_ident::JointLog) {
     t.validate().expect("an accepted log is valid");
 }
 

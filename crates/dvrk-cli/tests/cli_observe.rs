@@ -6,12 +6,12 @@
 mod support;
 
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::Trajectory;
+use dvrk_ident::JointLog;
 use support::{example, files, run, s, temp_dir};
 
-fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
     let rows = |m: &nalgebra::DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-    Trajectory {
+    JointLog {
         time: t.time[lo..hi].to_vec(),
         q: rows(&t.q),
         dq: t.dq.as_ref().map(rows),

@@ -8,13 +8,13 @@ mod support;
 use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::{FitSettings, Method, Trajectory};
+use dvrk_ident::{FitSettings, JointLog, Method};
 use dvrk_model::Model;
 use support::{example, files, run, s, temp_dir};
 
-fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
     let rows = |m: &nalgebra::DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-    Trajectory {
+    JointLog {
         time: t.time[lo..hi].to_vec(),
         q: rows(&t.q),
         dq: t.dq.as_ref().map(rows),
@@ -86,7 +86,7 @@ fn several_logs_of_mixed_formats() {
 
     // The library on the same logs: the same parameters and metrics.
     let model = Model::builtin("psm").unwrap();
-    let read: Vec<Trajectory> = [&a, &bag, &c]
+    let read: Vec<JointLog> = [&a, &bag, &c]
         .iter()
         .map(|p| log::read(p, None, None).unwrap())
         .collect();

@@ -37,7 +37,7 @@ fn main() {
         let started = Instant::now();
         let result = optimize::optimize(&model, &base, &limits, &opts, &Silent);
         let seconds = started.elapsed().as_secs_f64();
-        let reference = FourierTrajectory::from_wpi2019_file(WPI2019, pick)
+        let reference = FourierTrajectory::from_wpi_file(WPI2019, pick)
             .ok()
             .and_then(|old| {
                 optimize::evaluate(

@@ -12,12 +12,12 @@ use nalgebra::DMatrix;
 use crate::error::IdentError;
 use crate::estimate::ols::{base_least_squares, representative, BaseEstimate};
 use crate::estimate::sdp::{solve_sdp, PriorMetric, SdpOptions};
+use crate::joint_log::{Coordinates, JointLog};
 use crate::observation::{Observation, Samples};
 use crate::progress::{Progress, Silent};
 use crate::result::*;
 use crate::signal::stream::process_in_blocks;
 use crate::signal::Processing;
-use crate::trajectory::{Coordinates, Trajectory};
 
 pub use crate::settings::{BoundsSet, FitSettings, Method};
 
@@ -69,7 +69,7 @@ impl Prepared {
 /// The trajectory in model coordinates: columns matched to the robot's measured joint
 /// names (any order, extra joints ignored), then `q = M⁻¹ q_measured`,
 /// `q̇ = M⁻¹ q̇_measured`, `τ = Mᵀ τ_measured`.
-pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajectory, IdentError> {
+pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, IdentError> {
     let n = model.dof();
     let mismatch = |message: String| IdentError::Mismatch {
         source_name: traj.source.clone(),
@@ -126,7 +126,7 @@ pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajecto
     let q = map(&traj.q, &minv);
     let dq = traj.dq.as_ref().map(|d| map(d, &minv));
     let tau = map(&traj.tau, &mt);
-    Ok(Trajectory {
+    Ok(JointLog {
         time: traj.time.clone(),
         q,
         dq,
@@ -139,7 +139,7 @@ pub fn to_model_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajecto
 
 /// Subtracts the known forces (e.g. the MTM cable) from the torques of `t` (model
 /// coordinates), evaluated on the raw positions as in 2019.
-pub(crate) fn subtract_known_forces(model: &Model, t: &mut Trajectory) {
+pub(crate) fn subtract_known_forces(model: &Model, t: &mut JointLog) {
     if !model.has_known_forces() {
         return;
     }
@@ -164,7 +164,7 @@ pub(crate) fn subtract_known_forces(model: &Model, t: &mut Trajectory) {
 /// [`stream::fit_stream`] sees of the same log read from its file).
 pub fn prepare(
     model: &Model,
-    traj: &Trajectory,
+    traj: &JointLog,
     processing: &Processing,
 ) -> Result<Prepared, IdentError> {
     let mut t = to_model_coordinates(model, traj)?;
@@ -445,7 +445,7 @@ pub(crate) fn not_excited(source: &str, e: crate::estimate::ols::NotExcited) -> 
 #[derive(Clone, Copy, Debug)]
 pub struct LogData<'a> {
     /// The samples, in the log's joints (mapped to model coordinates by the fit).
-    pub samples: &'a Trajectory,
+    pub samples: &'a JointLog,
     /// The file or rosbag2 folder they were read from, hashed into `inputs`; `None` hashes
     /// the samples.
     pub file: Option<&'a std::path::Path>,
@@ -453,7 +453,7 @@ pub struct LogData<'a> {
 
 impl<'a> LogData<'a> {
     /// Samples without a file.
-    pub fn new(samples: &'a Trajectory) -> Self {
+    pub fn new(samples: &'a JointLog) -> Self {
         LogData {
             samples,
             file: None,
@@ -465,8 +465,8 @@ impl<'a> LogData<'a> {
 /// `settings.test_window`. See [`fit_logs`] for several logs.
 pub fn fit(
     model: &Model,
-    train: &Trajectory,
-    test: Option<&Trajectory>,
+    train: &JointLog,
+    test: Option<&JointLog>,
     settings: &FitSettings,
 ) -> Result<FitResult, IdentError> {
     fit_with_progress(model, train, test, settings, &Silent)
@@ -476,8 +476,8 @@ pub fn fit(
 /// to `progress`.
 pub fn fit_with_progress(
     model: &Model,
-    train: &Trajectory,
-    test: Option<&Trajectory>,
+    train: &JointLog,
+    test: Option<&JointLog>,
     settings: &FitSettings,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {

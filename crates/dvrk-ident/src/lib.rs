@@ -1,6 +1,6 @@
 //! Identification pipeline for coupled robot arms (dVRK PSM/MTM and others).
 //!
-//! Data flows one way: [`log`] reads joint-space logs into a [`Trajectory`],
+//! Data flows one way: [`log`] reads joint-space logs into a [`JointLog`],
 //! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
 //! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
 //! the parameters (least squares or the physically consistent semidefinite program),
@@ -29,6 +29,7 @@
 pub mod error;
 pub mod estimate;
 pub mod excite;
+pub mod joint_log;
 #[cfg(feature = "rust-lapack")]
 mod lapack;
 pub mod log;
@@ -44,12 +45,11 @@ pub mod settings;
 pub mod signal;
 pub mod simulate;
 pub mod state;
-pub mod trajectory;
 #[cfg(all(test, not(feature = "recordings")))]
 mod without_recordings;
 
 pub use error::IdentError;
-pub use trajectory::{Coordinates, Trajectory, TrajectoryError};
+pub use joint_log::{Coordinates, JointLog, JointLogError};
 pub mod fit;
 pub mod result;
 

@@ -19,7 +19,7 @@ use crate::progress::Progress;
 use crate::settings::{Prior, PriorMetric};
 use crate::signal::Cutoff;
 use crate::state::ObservationState;
-use crate::{BoundsSet, FitResult, FitSettings, IdentError, Method, Trajectory};
+use crate::{BoundsSet, FitResult, FitSettings, IdentError, JointLog, Method};
 
 /// Settings changed from a base (the defaults, or a result's `settings`): each field
 /// that is `Some` replaces the base's value, the same way for every front end.
@@ -307,7 +307,7 @@ pub enum LogSource {
     /// Samples already read, and the file they came from (for the provenance).
     Samples {
         /// The samples (in the log's joints, as read).
-        samples: Arc<Trajectory>,
+        samples: Arc<JointLog>,
         /// The file or rosbag2 folder they were read from, hashed into the result's `inputs`;
         /// `None` hashes the samples.
         file: Option<PathBuf>,
@@ -386,7 +386,7 @@ pub struct FitRequest {
 }
 
 /// The training and the test logs of a fit, in order.
-pub type HeldLogs = (Vec<Arc<Trajectory>>, Vec<Arc<Trajectory>>);
+pub type HeldLogs = (Vec<Arc<JointLog>>, Vec<Arc<JointLog>>);
 
 /// What a [`FitRequest`] gives back.
 #[derive(Debug)]
@@ -572,7 +572,7 @@ impl FitRequest {
         read: &ReadOptions,
         settings: &mut FitSettings,
         progress: &dyn Progress,
-    ) -> Result<Vec<Arc<Trajectory>>, IdentError> {
+    ) -> Result<Vec<Arc<JointLog>>, IdentError> {
         let test = read_all(read, &self.test, progress)?;
         settings.test_window = self.test_window(settings, &test)?;
         Ok(test)
@@ -584,7 +584,7 @@ impl FitRequest {
     fn test_window(
         &self,
         settings: &FitSettings,
-        test: &[Arc<Trajectory>],
+        test: &[Arc<JointLog>],
     ) -> Result<Option<usize>, IdentError> {
         if let (None, Some(traj), Some(t)) = (settings.test_window, &self.excitation, test.first())
         {
@@ -703,7 +703,7 @@ fn read_all(
     read: &ReadOptions,
     logs: &[LogSource],
     progress: &dyn Progress,
-) -> Result<Vec<Arc<Trajectory>>, IdentError> {
+) -> Result<Vec<Arc<JointLog>>, IdentError> {
     logs.iter()
         .map(|l| match l {
             LogSource::File(p) => {
@@ -717,7 +717,7 @@ fn read_all(
         .collect()
 }
 
-fn log_data<'a>(data: &'a [Arc<Trajectory>], logs: &'a [LogSource]) -> Vec<LogData<'a>> {
+fn log_data<'a>(data: &'a [Arc<JointLog>], logs: &'a [LogSource]) -> Vec<LogData<'a>> {
     data.iter()
         .zip(logs)
         .map(|(samples, l)| LogData {

@@ -153,7 +153,7 @@ impl InputInfo {
     }
 
     /// Hashes samples that were not read from a file (see [`InputInfo::sha256`]).
-    pub fn from_samples(role: &str, traj: &crate::Trajectory) -> InputInfo {
+    pub fn from_samples(role: &str, traj: &crate::JointLog) -> InputInfo {
         let mut hash = Sha256::new();
         let mut bytes = 0u64;
         let mut put = |v: f64| {

@@ -1,6 +1,6 @@
 //! Signal processing for identification: zero-phase Butterworth low-pass, numerical
 //! derivatives, edge trimming, decimation, sample selection, resampling, and the
-//! [`process`] pipeline that turns a [`Trajectory`] into filtered `q, dq, ddq, tau`.
+//! [`process`] pipeline that turns a [`JointLog`] into filtered `q, dq, ddq, tau`.
 //!
 //! The filters reproduce scipy.signal (`butter`, `filtfilt`, `sosfiltfilt`) to rounding,
 //! because published identification results (the 2019 dVRK package) were computed with
@@ -13,8 +13,8 @@
 //! `Wn = fc / (fs/2)`: the filters it applied cut off at `pi*fc`, not `fc` (16.965 Hz
 //! instead of the stated 5.4 Hz for the PSM, 5.655 Hz instead of 1.8 Hz for the MTM; see
 //! `docs/dvrk.md` §5 and `docs/identification.md` §5.1). That is available
-//! explicitly as [`CutoffConvention::Wpi2019`] (and [`LowPass::wpi2019`],
-//! [`Processing::wpi2019`]) for reproducing the published numbers, never as a default.
+//! explicitly as [`CutoffConvention::Wpi`] (and [`LowPass::wpi`],
+//! [`Processing::wpi`]) for reproducing the published numbers, never as a default.
 
 pub mod advance;
 mod butter;
@@ -33,7 +33,7 @@ pub use ops::{
     trim_rows, Stencil,
 };
 
-use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};
+use crate::joint_log::{Coordinates, JointLog, JointLogError};
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
@@ -141,7 +141,7 @@ pub enum SignalError {
     },
     /// The input trajectory is invalid.
     #[error(transparent)]
-    Trajectory(#[from] TrajectoryError),
+    JointLog(#[from] JointLogError),
 }
 
 /// Form in which the Butterworth filter is designed and applied.
@@ -164,8 +164,10 @@ pub enum CutoffConvention {
     #[default]
     Standard,
     /// `Wn = 2 pi fc / fs`, the 2019 code's (mistaken) conversion: the filter actually
-    /// cuts off at `pi * fc`. Only for reproducing the 2019 published results.
-    Wpi2019,
+    /// cuts off at `pi * fc`. Only for reproducing the 2019 published results. Written
+    /// `wpi`; result documents of 0.1.0 spell it `wpi2019`, still read.
+    #[serde(alias = "wpi2019")]
+    Wpi,
 }
 
 impl CutoffConvention {
@@ -174,28 +176,28 @@ impl CutoffConvention {
     /// ```rust
     /// use dvrk_ident::signal::CutoffConvention;
     /// assert_eq!(CutoffConvention::Standard.wn(5.0, 200.0), 0.05);
-    /// let wn = CutoffConvention::Wpi2019.wn(5.4, 200.0);
+    /// let wn = CutoffConvention::Wpi.wn(5.4, 200.0);
     /// assert!((wn - 2.0 * std::f64::consts::PI * 5.4 / 200.0).abs() < 1e-15);
     /// ```
     pub fn wn(self, cutoff_hz: f64, rate_hz: f64) -> f64 {
         match self {
             CutoffConvention::Standard => cutoff_hz / (rate_hz / 2.0),
-            CutoffConvention::Wpi2019 => 2.0 * PI * cutoff_hz / rate_hz,
+            CutoffConvention::Wpi => 2.0 * PI * cutoff_hz / rate_hz,
         }
     }
 
     /// The cut-off the designed filter really has, Hz: `cutoff_hz` for
-    /// [`Standard`](Self::Standard), `pi * cutoff_hz` for [`Wpi2019`](Self::Wpi2019).
+    /// [`Standard`](Self::Standard), `pi * cutoff_hz` for [`Wpi`](Self::Wpi).
     ///
     /// ```rust
     /// use dvrk_ident::signal::CutoffConvention;
-    /// let fc = CutoffConvention::Wpi2019.effective_cutoff_hz(5.4);
+    /// let fc = CutoffConvention::Wpi.effective_cutoff_hz(5.4);
     /// assert!((fc - 16.9646).abs() < 1e-4); // the PSM's 2019 filter
     /// ```
     pub fn effective_cutoff_hz(self, cutoff_hz: f64) -> f64 {
         match self {
             CutoffConvention::Standard => cutoff_hz,
-            CutoffConvention::Wpi2019 => PI * cutoff_hz,
+            CutoffConvention::Wpi => PI * cutoff_hz,
         }
     }
 }
@@ -312,12 +314,12 @@ impl LowPass {
     /// The 2019 filter for a *stated* cut-off `stated_cutoff_hz` (5.4 Hz PSM, 1.8 Hz
     /// MTM): 6th order, `(b, a)` form, `Wn = 2 pi fc / fs` (effective cut-off `pi * fc`),
     /// odd padding of 20 samples.
-    pub fn wpi2019(stated_cutoff_hz: f64) -> Self {
+    pub fn wpi(stated_cutoff_hz: f64) -> Self {
         LowPass {
             order: 6,
             cutoff_hz: Cutoff::All(stated_cutoff_hz),
             form: FilterForm::Ba,
-            convention: CutoffConvention::Wpi2019,
+            convention: CutoffConvention::Wpi,
             padlen: Some(20),
         }
     }
@@ -491,10 +493,10 @@ impl Processing {
     /// ```
     /// use dvrk_ident::signal::{Cutoff, CutoffConvention, LowPass, Processing};
     /// let mut p = Processing::default();
-    /// p.filter = Some(LowPass::wpi2019(5.4));
+    /// p.filter = Some(LowPass::wpi(5.4));
     /// p.set_cutoff(Some(Cutoff::All(3.0)));
     /// let f = p.filter.clone().unwrap();
-    /// assert_eq!((f.cutoff_hz, f.convention), (Cutoff::All(3.0), CutoffConvention::Wpi2019));
+    /// assert_eq!((f.cutoff_hz, f.convention), (Cutoff::All(3.0), CutoffConvention::Wpi));
     /// p.set_cutoff(None);
     /// assert!(p.filter.is_none());
     /// ```
@@ -538,12 +540,12 @@ impl Processing {
     ///
     /// ```rust
     /// use dvrk_ident::signal::Processing;
-    /// let p = Processing::wpi2019(5.4);
+    /// let p = Processing::wpi(5.4);
     /// assert_eq!(p.trim, 200);
     /// ```
-    pub fn wpi2019(stated_cutoff_hz: f64) -> Self {
+    pub fn wpi(stated_cutoff_hz: f64) -> Self {
         Processing {
-            filter: Some(LowPass::wpi2019(stated_cutoff_hz)),
+            filter: Some(LowPass::wpi(stated_cutoff_hz)),
             filter_torque: true,
             ..Processing::default()
         }
@@ -603,12 +605,12 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 ///
 /// ```rust
 /// use dvrk_ident::signal::{process, Processing};
-/// use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+/// use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 /// use nalgebra::DMatrix;
 /// let n = 1000;
 /// let rate = 200.0;
 /// let t = uniform_time(n, rate);
-/// let traj = Trajectory {
+/// let traj = JointLog {
 ///     time: t.clone(),
 ///     q: DMatrix::from_fn(n, 1, |i, _| t[i].sin()),
 ///     dq: None,
@@ -625,7 +627,7 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 /// assert!((p.dq[(k, 0)] - tk.cos()).abs() < 1e-6);
 /// assert!((p.ddq[(k, 0)] + tk.sin()).abs() < 1e-6);
 /// ```
-pub fn process(traj: &Trajectory, settings: &Processing) -> Result<Processed, SignalError> {
+pub fn process(traj: &JointLog, settings: &Processing) -> Result<Processed, SignalError> {
     traj.validate()?;
     settings.check(traj.dof())?;
     let Uniform {
@@ -725,7 +727,7 @@ struct Uniform {
 
 /// The signals on a uniform clock: resampled to `settings.resample_hz`, or checked
 /// uniform.
-fn uniform_signals(traj: &Trajectory, settings: &Processing) -> Result<Uniform, SignalError> {
+fn uniform_signals(traj: &JointLog, settings: &Processing) -> Result<Uniform, SignalError> {
     Ok(match settings.resample_hz {
         Some(rate) => {
             let (t, q) = resample_linear(&traj.time, &traj.q, rate)?;
@@ -801,12 +803,12 @@ fn kept_rows(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::trajectory::uniform_time;
+    use crate::joint_log::uniform_time;
 
-    fn sine_traj(n: usize, rate: f64, with_dq: bool) -> Trajectory {
+    fn sine_traj(n: usize, rate: f64, with_dq: bool) -> JointLog {
         let t = uniform_time(n, rate);
         let w = [1.0, 2.0];
-        Trajectory {
+        JointLog {
             time: t.clone(),
             q: DMatrix::from_fn(n, 2, |i, j| (w[j] * t[i]).sin()),
             dq: with_dq.then(|| DMatrix::from_fn(n, 2, |i, j| w[j] * (w[j] * t[i]).cos())),
@@ -894,21 +896,21 @@ mod tests {
             .filter(|&k| (filtered.tau[(k, 0)].abs() - 0.3).abs() > 0.01)
             .count();
         assert!(smeared > 10, "{smeared}");
-        assert!(Processing::wpi2019(5.4).filter_torque);
+        assert!(Processing::wpi(5.4).filter_torque);
     }
 
     #[test]
-    fn wpi2019_settings_and_ba_path() {
+    fn wpi_settings_and_ba_path() {
         let traj = sine_traj(1200, 200.0, true);
-        let p = process(&traj, &Processing::wpi2019(1.8)).unwrap();
+        let p = process(&traj, &Processing::wpi(1.8)).unwrap();
         assert_eq!(p.len(), 800);
         // The 2019 filter equals a standard one at pi * fc.
         let std = Processing {
             filter: Some(LowPass {
                 cutoff_hz: Cutoff::All(PI * 1.8),
-                ..LowPass::wpi2019(1.8)
+                ..LowPass::wpi(1.8)
             }),
-            ..Processing::wpi2019(1.8)
+            ..Processing::wpi(1.8)
         };
         let std = Processing {
             filter: std.filter.map(|f| LowPass {
@@ -1061,7 +1063,7 @@ mod tests {
         let e = process(&traj, &base).unwrap_err();
         assert!(matches!(
             e,
-            SignalError::Trajectory(TrajectoryError::NonUniform { row: 300, .. })
+            SignalError::JointLog(JointLogError::NonUniform { row: 300, .. })
         ));
         let p = process(
             &traj,
@@ -1082,7 +1084,7 @@ mod tests {
         let e = process(&traj, &Processing::default()).unwrap_err();
         assert!(matches!(
             e,
-            SignalError::Trajectory(TrajectoryError::NonFinite { row: 5, .. })
+            SignalError::JointLog(JointLogError::NonFinite { row: 5, .. })
         ));
     }
 
@@ -1099,14 +1101,17 @@ mod tests {
         assert_eq!(f.cutoff_hz, Cutoff::PerJoint(vec![1.0, 2.0]));
         assert_eq!(f.order, 6);
         assert_eq!(f.form, FilterForm::Ba);
-        assert_eq!(f.convention, CutoffConvention::Wpi2019);
+        assert_eq!(f.convention, CutoffConvention::Wpi);
+        assert_eq!(
+            serde_json::to_string(&CutoffConvention::Wpi).unwrap(),
+            "\"wpi\""
+        );
         let p: Processing = serde_json::from_str(r#"{"filter": null}"#).unwrap();
         assert!(p.filter.is_none());
         assert!(serde_json::from_str::<Processing>(r#"{"trimm": 5}"#).is_err());
         let back: Processing =
-            serde_json::from_str(&serde_json::to_string(&Processing::wpi2019(5.4)).unwrap())
-                .unwrap();
-        assert_eq!(back, Processing::wpi2019(5.4));
+            serde_json::from_str(&serde_json::to_string(&Processing::wpi(5.4)).unwrap()).unwrap();
+        assert_eq!(back, Processing::wpi(5.4));
     }
 
     #[test]

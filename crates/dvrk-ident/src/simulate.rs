@@ -5,7 +5,7 @@
 //! torques `τ = H(q, q̇, q̈)·π + known forces(q) + noise` with independent Gaussian noise
 //! per model coordinate, then maps everything to the robot's measured joints
 //! ([`to_measured_coordinates`]): `q_meas = M q`, `q̇_meas = M q̇`, `τ_meas = M⁻ᵀ τ`
-//! with `M` = `model.measured.coupling`. The result is a [`Trajectory`] in
+//! with `M` = `model.measured.coupling`. The result is a [`JointLog`] in
 //! [`Coordinates::Measured`] with the model's measured joint names and the exact
 //! velocities, ready for [`crate::log::write`] (e.g. a ROS 2 MCAP log).
 //!
@@ -17,7 +17,7 @@ use nalgebra::DMatrix;
 
 use crate::error::IdentError;
 use crate::excite::FourierTrajectory;
-use crate::trajectory::{uniform_time, Coordinates, Trajectory};
+use crate::joint_log::{uniform_time, Coordinates, JointLog};
 
 /// Most samples [`simulate`] produces (a guard against a mistyped duration or rate).
 pub const MAX_SAMPLES: usize = 10_000_000;
@@ -115,14 +115,14 @@ pub fn simulate(
     params: &[f64],
     traj: &FourierTrajectory,
     sim: &Simulation,
-) -> Result<Trajectory, IdentError> {
+) -> Result<JointLog, IdentError> {
     check_inputs(model, params, traj)?;
     let (noise, delay, count) = check_simulation(model.dof(), traj, sim)?;
     let time = uniform_time(count, sim.rate_hz);
     let (q, dq, ddq) = traj.sample(&time);
     let mut tau = torques(model, params, traj, &time, (&q, &dq, &ddq), &delay);
     add_noise(&mut tau, &noise, sim.seed);
-    let in_model = Trajectory {
+    let in_model = JointLog {
         time,
         q,
         dq: Some(dq),
@@ -315,7 +315,7 @@ fn add_noise(tau: &mut DMatrix<f64>, noise: &[f64], seed: u64) {
 /// mapped to the robot's measured joints, `q_meas = M q`, `q̇_meas = M q̇`,
 /// `τ_meas = M⁻ᵀ τ` (`M` = `model.measured.coupling`), named by the measured joint
 /// names. A trajectory already in measured coordinates is returned as it is.
-pub fn to_measured_coordinates(model: &Model, traj: &Trajectory) -> Result<Trajectory, IdentError> {
+pub fn to_measured_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, IdentError> {
     if traj.coordinates == Coordinates::Measured {
         return Ok(traj.clone());
     }
@@ -336,7 +336,7 @@ pub fn to_measured_coordinates(model: &Model, traj: &Trajectory) -> Result<Traje
         .measured_to_model_matrix()
         .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
     let mt = m.transpose();
-    Ok(Trajectory {
+    Ok(JointLog {
         time: traj.time.clone(),
         q: &traj.q * &mt,
         dq: traj.dq.as_ref().map(|d| d * &mt),

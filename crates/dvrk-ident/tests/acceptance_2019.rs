@@ -8,7 +8,7 @@
 #[path = "support/protocol_2019.rs"]
 mod protocol_2019;
 
-use dvrk_ident::{fit, FitResult, Method, Trajectory};
+use dvrk_ident::{fit, FitResult, JointLog, Method};
 use dvrk_model::Model;
 use protocol_2019::{settings, stribeck_settings, Protocol};
 
@@ -161,7 +161,7 @@ fn run(case: &Case) {
 /// a Stribeck friction term (vs = 0.3 rad/s or m/s) on every friction element, and
 /// for the physically consistent fit also zero lower bounds on Fc, Fv and Ia (the 2019
 /// bounds of 0.001 exceed what the wrist data support, see `run`).
-fn beyond_2019(case: &Case, model: &Model, train: &Trajectory, test: &Trajectory) {
+fn beyond_2019(case: &Case, model: &Model, train: &JointLog, test: &JointLog) {
     let sdp_published = case.published[2].1;
     for (label, m, method, guard) in [
         (
@@ -291,8 +291,8 @@ fn mtm_2019_protocol() {
 }
 
 /// Rows `a..b` of a log.
-fn rows(t: &Trajectory, a: usize, b: usize) -> Trajectory {
-    Trajectory {
+fn rows(t: &JointLog, a: usize, b: usize) -> JointLog {
+    JointLog {
         time: t.time[a..b].to_vec(),
         q: t.q.rows(a, b - a).into_owned(),
         dq: t.dq.as_ref().map(|d| d.rows(a, b - a).into_owned()),

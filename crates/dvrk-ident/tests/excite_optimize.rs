@@ -155,7 +155,7 @@ fn criterion_gradient_matches_finite_differences_psm() {
     let model = Model::builtin("psm_simplified").unwrap();
     // A well-conditioned motion (a random one is nearly singular, cond ~1e4, and its
     // finite differences lose the digits).
-    let Ok(traj) = FourierTrajectory::from_wpi2019_file(WPI2019, "psm_one") else {
+    let Ok(traj) = FourierTrajectory::from_wpi_file(WPI2019, "psm_one") else {
         eprintln!("skipped: {WPI2019} not available");
         return;
     };
@@ -568,7 +568,7 @@ fn acceptance_psm_and_mtm_vs_2019() {
         dvrk_test_support::skip("the PSM/MTM optimizations run in release builds only");
         return;
     }
-    let Ok(names) = FourierTrajectory::wpi2019_names(WPI2019) else {
+    let Ok(names) = FourierTrajectory::wpi_names(WPI2019) else {
         dvrk_test_support::skip(format!("{WPI2019} not found (../shared absent)"));
         return;
     };
@@ -577,7 +577,7 @@ fn acceptance_psm_and_mtm_vs_2019() {
         let model = Model::builtin(robot).unwrap();
         let base = model.base_parameters().unwrap();
         let limits = Limits::of_model(&model);
-        let old = FourierTrajectory::from_wpi2019_file(WPI2019, pick).unwrap();
+        let old = FourierTrajectory::from_wpi_file(WPI2019, pick).unwrap();
         let ev_old = optimize::evaluate(
             &model,
             &base,

@@ -9,19 +9,19 @@ use dvrk_ident::fit::stream::fit_stream_logs;
 use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, LogData};
 use dvrk_ident::log::{self, LogFormat, LogReader, ReadOptions};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::{FitSettings, Method, Trajectory};
+use dvrk_ident::{FitSettings, JointLog, Method};
 use dvrk_model::{Model, Workspace};
 use nalgebra::{DMatrix, DVector};
 
-fn example() -> Trajectory {
+fn example() -> JointLog {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
     log::read(path, None, None).unwrap()
 }
 
 /// Rows `lo..hi` of a log, times kept.
-fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
     let rows = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-    Trajectory {
+    JointLog {
         time: t.time[lo..hi].to_vec(),
         q: rows(&t.q),
         dq: t.dq.as_ref().map(rows),
@@ -135,7 +135,7 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
 
     // The two halves as one log (filtered across the cut, one trimming) differ: the
     // boundary matters, and it is respected.
-    let joined = Trajectory {
+    let joined = JointLog {
         time: a.time.iter().chain(&b.time).copied().collect(),
         q: DMatrix::from_fn(a.len() + b.len(), n, |i, j| {
             if i < a.len() {
@@ -179,7 +179,7 @@ fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
         log::write(&path, t, *format).unwrap();
         paths.push(path);
     }
-    let read: Vec<Trajectory> = paths
+    let read: Vec<JointLog> = paths
         .iter()
         .map(|p| log::read(p, None, None).unwrap())
         .collect();

@@ -2,8 +2,8 @@
 //! for the CSV layouts (with and without `--resample`), and name bad rows by their line
 //! in the file wherever the block boundaries fall.
 
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::log::{write, LogError, LogFormat, LogReader, ReadOptions};
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use std::path::PathBuf;
 
@@ -11,9 +11,9 @@ fn temp(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("dvrk-ident-blocks-{}-{name}", std::process::id()))
 }
 
-fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> Trajectory {
+fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> JointLog {
     let time = uniform_time(n, 200.0);
-    Trajectory {
+    JointLog {
         q: DMatrix::from_fn(n, 3, |i, j| (0.01 * i as f64 + j as f64).sin()),
         dq: with_dq.then(|| DMatrix::from_fn(n, 3, |i, j| (0.02 * i as f64 - j as f64).cos())),
         tau: DMatrix::from_fn(n, 3, |i, j| (i % 17) as f64 * 0.1 - j as f64),
@@ -30,10 +30,10 @@ fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> Trajectory {
     }
 }
 
-fn read_blocks(reader: &LogReader, size: usize) -> Trajectory {
-    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
-    let rows: usize = blocks.iter().map(Trajectory::len).sum();
-    let cat = |f: &dyn Fn(&Trajectory) -> Option<&DMatrix<f64>>| {
+fn read_blocks(reader: &LogReader, size: usize) -> JointLog {
+    let blocks: Vec<JointLog> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
+    let rows: usize = blocks.iter().map(JointLog::len).sum();
+    let cat = |f: &dyn Fn(&JointLog) -> Option<&DMatrix<f64>>| {
         f(&blocks[0]).map(|_| {
             let mut m = DMatrix::zeros(rows, 3);
             let mut r = 0;
@@ -45,7 +45,7 @@ fn read_blocks(reader: &LogReader, size: usize) -> Trajectory {
             m
         })
     };
-    Trajectory {
+    JointLog {
         time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
         q: cat(&|b| Some(&b.q)).unwrap(),
         dq: cat(&|b| b.dq.as_ref()),

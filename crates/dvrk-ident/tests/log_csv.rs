@@ -1,10 +1,10 @@
 //! CSV log readers and writers: round trips, format detection and every error case.
 
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog, Signal};
 use dvrk_ident::log::{
     detect_format, read, read_headered, read_wpi, write, write_headered, write_wpi, LogError,
     LogFormat,
 };
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Signal, Trajectory};
 use nalgebra::DMatrix;
 use std::path::{Path, PathBuf};
 
@@ -37,8 +37,8 @@ fn awkward(i: usize, j: usize) -> f64 {
     v[(i * 3 + j) % v.len()] * if (i + j) % 2 == 0 { 1.0 } else { -1.0 }
 }
 
-fn sample(n: usize, dof: usize, coordinates: Coordinates, with_dq: bool) -> Trajectory {
-    Trajectory {
+fn sample(n: usize, dof: usize, coordinates: Coordinates, with_dq: bool) -> JointLog {
+    JointLog {
         time: uniform_time(n, 200.0),
         q: DMatrix::from_fn(n, dof, awkward),
         dq: with_dq.then(|| DMatrix::from_fn(n, dof, |i, j| awkward(i + 1, j))),

@@ -2,13 +2,13 @@
 //! `write_mcap`, and hand-made files (several topics, odd stamps, broken messages)
 //! written with the `mcap` and `cdr` crates directly, independently of the code tested.
 
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::log::mcap::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, write_mcap, McapCompression,
     McapOptions, McapProblem, McapReader, McapWriteOptions, TimeSource, JOINT_STATE_SCHEMA,
     JOINT_STATE_TYPE,
 };
 use dvrk_ident::log::{detect_format, read, write, LogError, LogFormat};
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
@@ -190,9 +190,9 @@ fn problem(e: &LogError) -> &McapProblem {
     }
 }
 
-fn trajectory(n: usize, with_dq: bool) -> Trajectory {
+fn trajectory(n: usize, with_dq: bool) -> JointLog {
     let dof = 7;
-    Trajectory {
+    JointLog {
         time: uniform_time(n, 200.0),
         q: DMatrix::from_fn(n, dof, |i, j| {
             ((i * 7 + j) as f64 * 0.37).sin() * if j == 2 { 0.05 } else { 1.3 }
@@ -1039,11 +1039,11 @@ fn mcap_cut_or_corrupted_files_never_panic() {
 }
 
 /// Every block of `reader` in blocks of `size`, concatenated.
-fn concatenated(reader: &McapReader, size: usize) -> Trajectory {
-    let blocks: Vec<Trajectory> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
+fn concatenated(reader: &McapReader, size: usize) -> JointLog {
+    let blocks: Vec<JointLog> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
     assert!(blocks.iter().all(|b| b.len() <= size));
-    let rows: usize = blocks.iter().map(Trajectory::len).sum();
-    let cat = |f: fn(&Trajectory) -> Option<&DMatrix<f64>>| {
+    let rows: usize = blocks.iter().map(JointLog::len).sum();
+    let cat = |f: fn(&JointLog) -> Option<&DMatrix<f64>>| {
         f(&blocks[0]).map(|m0| {
             let mut m = DMatrix::zeros(rows, m0.ncols());
             let mut r = 0;
@@ -1055,7 +1055,7 @@ fn concatenated(reader: &McapReader, size: usize) -> Trajectory {
             m
         })
     };
-    Trajectory {
+    JointLog {
         time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
         q: cat(|b| Some(&b.q)).unwrap(),
         dq: cat(|b| b.dq.as_ref()),

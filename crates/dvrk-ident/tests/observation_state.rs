@@ -10,19 +10,19 @@ use dvrk_ident::log;
 use dvrk_ident::progress::Silent;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::state::{ObservationState, MAGIC};
-use dvrk_ident::{FitResult, FitSettings, Method, Trajectory};
+use dvrk_ident::{FitResult, FitSettings, JointLog, Method};
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 
-fn example() -> Trajectory {
+fn example() -> JointLog {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
     log::read(path, None, None).unwrap()
 }
 
 /// Rows `lo..hi` of a log.
-fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
+fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
     let rows = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-    Trajectory {
+    JointLog {
         time: t.time[lo..hi].to_vec(),
         q: rows(&t.q),
         dq: t.dq.as_ref().map(rows),
@@ -34,7 +34,7 @@ fn part(t: &Trajectory, lo: usize, hi: usize) -> Trajectory {
 }
 
 /// Three consecutive pieces of the bundled log, each long enough for the trimming.
-fn pieces() -> [Trajectory; 3] {
+fn pieces() -> [JointLog; 3] {
     let whole = example();
     let n = whole.len();
     [
@@ -51,7 +51,7 @@ fn settings(method: Method) -> FitSettings {
     }
 }
 
-fn observe(model: &Model, log: &Trajectory, s: &FitSettings) -> ObservationState {
+fn observe(model: &Model, log: &JointLog, s: &FitSettings) -> ObservationState {
     ObservationState::observe(model, &[LogData::new(log)], s, &Silent).unwrap()
 }
 

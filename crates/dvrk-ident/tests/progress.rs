@@ -29,7 +29,7 @@ impl Progress for Recorder {
     }
 }
 
-fn example() -> dvrk_ident::Trajectory {
+fn example() -> dvrk_ident::JointLog {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("../../examples/psm_excitation.mcap");
     dvrk_ident::log::read(path, None, None).unwrap()

@@ -9,10 +9,10 @@
 //! The seeds are fixed, so a run is reproducible. (That a streamed fit equals the
 //! in-memory fit for any block size is in `stream_fit.rs`.)
 
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::observation::{Observation, Samples};
 use dvrk_ident::signal::stream::process_in_blocks;
 use dvrk_ident::signal::{process, Cutoff, LowPass, Processed, Processing};
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
@@ -48,7 +48,7 @@ fn signal(n: usize, waves: &[(f64, f64, f64)], step: f64, joint: usize) -> Vec<f
         .collect()
 }
 
-fn trajectory(n: usize, waves: &[(f64, f64, f64)], step: f64, with_dq: bool) -> Trajectory {
+fn trajectory(n: usize, waves: &[(f64, f64, f64)], step: f64, with_dq: bool) -> JointLog {
     let dof = 3;
     let column = |scale: f64, offset: usize| {
         let cols: Vec<Vec<f64>> = (0..dof)
@@ -56,7 +56,7 @@ fn trajectory(n: usize, waves: &[(f64, f64, f64)], step: f64, with_dq: bool) -> 
             .collect();
         DMatrix::from_fn(n, dof, |i, j| scale * cols[j][i])
     };
-    Trajectory {
+    JointLog {
         time: uniform_time(n, 200.0),
         q: column(1.0, 0),
         dq: with_dq.then(|| column(3.0, 5)),

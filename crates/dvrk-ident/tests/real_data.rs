@@ -1,9 +1,9 @@
 //! Reads the real 2019 dVRK logs from the shared data folder (not part of the
 //! repository). Skips with a message when they are not there.
 
+use dvrk_ident::joint_log::Coordinates;
 use dvrk_ident::log::{read, read_wpi, LogFormat};
 use dvrk_ident::signal::{process, Processing};
-use dvrk_ident::trajectory::Coordinates;
 use std::path::PathBuf;
 
 fn shared(rel: &str) -> Option<PathBuf> {
@@ -40,7 +40,7 @@ fn psm_one_results_processes_with_the_2019_protocol() {
         return;
     };
     let t = read_wpi(&path, 200.0, None).unwrap();
-    let p = process(&t, &Processing::wpi2019(5.4)).unwrap();
+    let p = process(&t, &Processing::wpi(5.4)).unwrap();
     assert_eq!(p.len(), 5999 - 400);
     assert!(p
         .q

@@ -8,10 +8,10 @@ use std::path::PathBuf;
 
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::{joint_metrics, predict, prepare};
+use dvrk_ident::joint_log::JointLog;
 use dvrk_ident::report::draw::kinematic_drawing;
 use dvrk_ident::report::plot::{render, Figure, ImageFormat, MAX_POINTS};
 use dvrk_ident::report::{build, figures, ReportInput, ReportLog};
-use dvrk_ident::trajectory::Trajectory;
 use dvrk_ident::{fit, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
@@ -19,12 +19,12 @@ fn examples() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
 }
 
-fn example_log(seconds: f64) -> Trajectory {
+fn example_log(seconds: f64) -> JointLog {
     let t = dvrk_ident::log::read(examples().join("psm_excitation.mcap"), None, None).unwrap();
     let t0 = t.time[0];
     let keep = t.time.iter().take_while(|&&s| s - t0 < seconds).count();
     let rows: Vec<usize> = (0..keep).collect();
-    Trajectory {
+    JointLog {
         time: t.time[..keep].to_vec(),
         q: t.q.select_rows(&rows),
         dq: t.dq.as_ref().map(|d| d.select_rows(&rows)),
@@ -42,7 +42,7 @@ fn settings() -> FitSettings {
     s
 }
 
-fn fitted() -> (Model, Trajectory, FitResult) {
+fn fitted() -> (Model, JointLog, FitResult) {
     let model = Model::builtin("psm").unwrap();
     let log = example_log(4.0);
     let result = fit(&model, &log, Some(&log), &settings()).unwrap();

@@ -124,12 +124,12 @@ fn sosfiltfilt_matches_scipy() {
 }
 
 #[test]
-fn wpi2019_lowpass_reproduces_the_2019_filter() {
+fn wpi_lowpass_reproduces_the_2019_filter() {
     let f = fixture();
     for c in f.cases.iter().filter(|c| c.stated_cutoff_hz.is_some()) {
         let (fc, rate) = (c.stated_cutoff_hz.unwrap(), c.rate_hz.unwrap());
-        assert!((CutoffConvention::Wpi2019.wn(fc, rate) - c.wn).abs() < 1e-15);
-        let y = LowPass::wpi2019(fc).apply_slice(&f.x, fc, rate).unwrap();
+        assert!((CutoffConvention::Wpi.wn(fc, rate) - c.wn).abs() < 1e-15);
+        let y = LowPass::wpi(fc).apply_slice(&f.x, fc, rate).unwrap();
         let e = max_abs(&y, &c.y_ba);
         assert!(e < 1e-10, "{}: {e:e}", c.name);
     }

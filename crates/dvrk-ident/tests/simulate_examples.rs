@@ -128,7 +128,7 @@ fn example_trajectory_is_the_2019_psm_one() {
         FourierTrajectory::from_json_file(&path).unwrap();
         return;
     };
-    let expected = FourierTrajectory::from_wpi2019_file(&anchor, "psm_one").unwrap();
+    let expected = FourierTrajectory::from_wpi_file(&anchor, "psm_one").unwrap();
     if write_examples() {
         std::fs::write(&path, expected.to_json() + "\n").unwrap();
     }

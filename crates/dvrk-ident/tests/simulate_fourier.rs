@@ -18,10 +18,10 @@ fn every_2019_trajectory_loads_in_the_documented_layout() {
     };
     let raw: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    let names = FourierTrajectory::wpi2019_names(&path).unwrap();
+    let names = FourierTrajectory::wpi_names(&path).unwrap();
     assert_eq!(names.len(), 9, "{names:?}");
     for name in &names {
-        let f = FourierTrajectory::from_wpi2019_file(&path, name).unwrap();
+        let f = FourierTrajectory::from_wpi_file(&path, name).unwrap();
         let e = &raw["trajectories"][name];
         let c: Vec<f64> = e["coefficients"]
             .as_array()
@@ -57,7 +57,7 @@ fn every_2019_trajectory_loads_in_the_documented_layout() {
             }
         }
     }
-    let e = FourierTrajectory::from_wpi2019_file(&path, "psm_five").unwrap_err();
+    let e = FourierTrajectory::from_wpi_file(&path, "psm_five").unwrap_err();
     assert!(matches!(e, FourierError::UnknownName { .. }));
     assert!(e.to_string().contains("psm_one"), "{e}");
 }
@@ -68,7 +68,7 @@ fn psm_one_stays_inside_the_psm_position_limits() {
         return;
     };
     let model = Model::builtin("psm").unwrap();
-    let f = FourierTrajectory::from_wpi2019_file(&path, "psm_one").unwrap();
+    let f = FourierTrajectory::from_wpi_file(&path, "psm_one").unwrap();
     let n = 2000;
     let (mut q, mut dq, mut ddq) = ([0.0; 7], [0.0; 7], [0.0; 7]);
     let mut worst = vec![(f64::INFINITY, f64::NEG_INFINITY); model.limits.len()];
@@ -102,7 +102,7 @@ fn derivatives_and_period_of_a_2019_trajectory() {
     let Some(path) = anchor("wpi2019_excitation_trajectories.json") else {
         return;
     };
-    let f = FourierTrajectory::from_wpi2019_file(&path, "mtm_two").unwrap();
+    let f = FourierTrajectory::from_wpi_file(&path, "mtm_two").unwrap();
     let h = 1e-5;
     let n = f.dof();
     let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);

@@ -115,7 +115,7 @@ fn noise_has_the_requested_level_and_is_reproducible() {
         to_model_coordinates(&model, &noisy).unwrap(),
         to_model_coordinates(
             &model,
-            &dvrk_ident::Trajectory {
+            &dvrk_ident::JointLog {
                 tau: clean.clone(),
                 ..noisy.clone()
             },

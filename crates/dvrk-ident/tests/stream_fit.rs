@@ -13,7 +13,7 @@ use dvrk_ident::fit::to_model_coordinates;
 use dvrk_ident::log::{self, LogFormat, ReadOptions};
 use dvrk_ident::progress::{Progress, Silent};
 use dvrk_ident::simulate::{simulate, Simulation};
-use dvrk_ident::{fit, FitResult, FitSettings, Method, Trajectory};
+use dvrk_ident::{fit, FitResult, FitSettings, JointLog, Method};
 use dvrk_model::Model;
 
 fn example() -> PathBuf {
@@ -135,7 +135,7 @@ fn excitation(n: usize, phase: f64) -> FourierTrajectory {
     }
 }
 
-fn simulated(model: &Model, phase: f64, seconds: f64, seed: u64) -> Trajectory {
+fn simulated(model: &Model, phase: f64, seconds: f64, seed: u64) -> JointLog {
     let sim = Simulation {
         duration_s: Some(seconds),
         noise_std: vec![0.01],
@@ -221,7 +221,7 @@ fn streamed_fit_errors_name_the_file() {
     // Too short for the trimming: the same error as in memory, before any long pass.
     let short = dir.join("short.mcap");
     let whole = log::read(example(), None, None).unwrap();
-    let first: Trajectory = Trajectory {
+    let first: JointLog = JointLog {
         time: whole.time[..300].to_vec(),
         q: whole.q.rows(0, 300).into_owned(),
         dq: whole.dq.as_ref().map(|d| d.rows(0, 300).into_owned()),

@@ -2,15 +2,15 @@
 //! settings, blocks from one sample to more than the log, a long synthetic signal with
 //! friction-like steps, noise and several frequencies.
 
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog, JointLogError};
 use dvrk_ident::signal::stream::{BlockProcessor, TimingSurvey};
 use dvrk_ident::signal::{
     process, AccelerationSource, Cutoff, LowPass, Processed, Processing, SignalError, Stencil,
 };
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory, TrajectoryError};
 use nalgebra::DMatrix;
 
 /// 3 joints, `n` samples at 200 Hz: slow and fast sines, a square wave and noise.
-fn synthetic(n: usize, with_dq: bool) -> Trajectory {
+fn synthetic(n: usize, with_dq: bool) -> JointLog {
     let time = uniform_time(n, 200.0);
     let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
     let mut noise = move || {
@@ -36,7 +36,7 @@ fn synthetic(n: usize, with_dq: bool) -> Trajectory {
         };
         2.0 * (0.9 * t).cos() + step + 0.02 * noise()
     });
-    Trajectory {
+    JointLog {
         time,
         q,
         dq: with_dq.then_some(dq),
@@ -47,9 +47,9 @@ fn synthetic(n: usize, with_dq: bool) -> Trajectory {
     }
 }
 
-fn block(traj: &Trajectory, start: usize, len: usize) -> Trajectory {
+fn block(traj: &JointLog, start: usize, len: usize) -> JointLog {
     let rows = |m: &DMatrix<f64>| m.rows(start, len).into_owned();
-    Trajectory {
+    JointLog {
         time: traj.time[start..start + len].to_vec(),
         q: rows(&traj.q),
         dq: traj.dq.as_ref().map(rows),
@@ -60,7 +60,7 @@ fn block(traj: &Trajectory, start: usize, len: usize) -> Trajectory {
     }
 }
 
-fn blocks(traj: &Trajectory, size: usize) -> Vec<Trajectory> {
+fn blocks(traj: &JointLog, size: usize) -> Vec<JointLog> {
     (0..traj.len())
         .step_by(size)
         .map(|s| block(traj, s, size.min(traj.len() - s)))
@@ -68,11 +68,7 @@ fn blocks(traj: &Trajectory, size: usize) -> Vec<Trajectory> {
 }
 
 /// The streamed processing of `traj` in blocks of `size`, concatenated.
-fn streamed(
-    traj: &Trajectory,
-    settings: &Processing,
-    size: usize,
-) -> Result<Processed, SignalError> {
+fn streamed(traj: &JointLog, settings: &Processing, size: usize) -> Result<Processed, SignalError> {
     let parts = blocks(traj, size);
     let mut survey = TimingSurvey::new();
     let timing = loop {
@@ -145,7 +141,7 @@ fn variants() -> Vec<(&'static str, Processing, bool)> {
             },
             true,
         ),
-        ("2019 (b, a), padlen 20", Processing::wpi2019(1.8), true),
+        ("2019 (b, a), padlen 20", Processing::wpi(1.8), true),
         (
             "per-joint cut-offs, decimate 7, min speed",
             Processing {
@@ -202,7 +198,7 @@ fn streamed_processing_equals_whole_log_processing() {
 #[test]
 fn streamed_errors_are_the_whole_log_errors() {
     let traj = synthetic(1000, true);
-    let cases: Vec<(Processing, Trajectory)> = vec![
+    let cases: Vec<(Processing, JointLog)> = vec![
         (
             Processing {
                 trim: 500,
@@ -261,9 +257,9 @@ fn streamed_errors_are_the_whole_log_errors() {
         let whole = process(&t, &Processing::default()).unwrap_err();
         assert!(matches!(
             whole,
-            SignalError::Trajectory(
-                TrajectoryError::NonUniform { row: 600, .. }
-                    | TrajectoryError::NonFinite { row: 777, .. }
+            SignalError::JointLog(
+                JointLogError::NonUniform { row: 600, .. }
+                    | JointLogError::NonFinite { row: 777, .. }
             )
         ));
         // (Debug text: NaN values are not equal to themselves.)

@@ -3,7 +3,7 @@
 //! that the base parameters come back within what the noise allows, and that the
 //! semidefinite fit is consistent.
 
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::{fit, FitSettings, Method};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::DMatrix;
@@ -32,7 +32,7 @@ fn simulate(
     rate: f64,
     noise: f64,
     seed: u64,
-) -> Trajectory {
+) -> JointLog {
     let n = model.dof();
     let count = (seconds * rate) as usize;
     let time = uniform_time(count, rate);
@@ -93,7 +93,7 @@ fn simulate(
             tau[(k, j)] = tk[j] + noise * gauss.sample();
         }
     }
-    Trajectory {
+    JointLog {
         time,
         q,
         dq: Some(dq),

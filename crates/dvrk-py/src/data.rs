@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use dvrk_ident::fit::{to_model_coordinates, Prepared};
+use dvrk_ident::joint_log::{Coordinates, JointLog};
 use dvrk_ident::log::{self, mcap, LogFormat, ReadOptions};
-use dvrk_ident::trajectory::{Coordinates, Trajectory};
 use nalgebra::DMatrix;
 use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
@@ -47,7 +47,7 @@ use crate::json::to_python;
 /// are copies.
 #[pyclass(name = "JointLog", module = "dvrk_ident", frozen)]
 pub struct JointLogPy {
-    pub traj: Arc<Trajectory>,
+    pub traj: Arc<JointLog>,
     /// The file it was read from (for the result's provenance).
     pub path: Option<PathBuf>,
 }
@@ -83,7 +83,7 @@ pub fn parse_format(text: Option<&str>) -> PyResult<Option<LogFormat>> {
 }
 
 impl JointLogPy {
-    pub fn new(traj: Trajectory, path: Option<PathBuf>) -> Self {
+    pub fn new(traj: JointLog, path: Option<PathBuf>) -> Self {
         JointLogPy {
             traj: Arc::new(traj),
             path,
@@ -170,7 +170,7 @@ impl JointLogPy {
             Some(d) => Some(with_names(d, "dq")?),
             None => None,
         };
-        let traj = Trajectory {
+        let traj = JointLog {
             time: frame::times(py, time, "time")?,
             q: dof_q,
             dq,
@@ -203,7 +203,7 @@ impl JointLogPy {
         let c = frame::read_frame(py, df, time)?;
         let model = robot.map(|r| r.get().model.clone());
         let coordinates = frame::infer_coordinates(&c.joints, model.as_deref())?;
-        let traj = Trajectory {
+        let traj = JointLog {
             time: frame::times(py, &c.time, "time")?,
             q: c.q,
             dq: c.dq,
@@ -249,7 +249,7 @@ impl JointLogPy {
         let pick =
             |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
         Ok(JointLogPy::new(
-            Trajectory {
+            JointLog {
                 time: rows.iter().map(|&k| t.time[k]).collect(),
                 q: pick(&t.q),
                 dq: t.dq.as_ref().map(pick),
@@ -309,7 +309,7 @@ impl JointLogPy {
             sources.push(t.source.clone());
         }
         let (n, dof) = (time.len(), f.dof());
-        let traj = Trajectory {
+        let traj = JointLog {
             time,
             q: DMatrix::from_row_slice(n, dof, &q),
             dq: f.dq.as_ref().map(|_| DMatrix::from_row_slice(n, dof, &dq)),
@@ -364,7 +364,7 @@ impl JointLogPy {
     ) -> PyResult<JointLogPy> {
         let arr = float_array(py, time, "time")?;
         let time: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
-        let traj = Trajectory {
+        let traj = JointLog {
             time,
             q: matrix_arg(py, q, "q")?,
             dq: dq.map(|d| matrix_arg(py, d, "dq")).transpose()?,

@@ -116,7 +116,7 @@ impl FourierTrajectoryPy {
     #[pyo3(signature = (path, pick = None))]
     fn read(path: PathBuf, pick: Option<&str>) -> PyResult<Self> {
         let inner = match pick {
-            Some(name) => FourierTrajectory::from_wpi2019_file(&path, name),
+            Some(name) => FourierTrajectory::from_wpi_file(&path, name),
             None => FourierTrajectory::from_json_file(&path),
         }
         .map_err(from_fourier)?;
@@ -134,7 +134,7 @@ impl FourierTrajectoryPy {
     /// The trajectory names of a 2019-layout coefficient file (sorted).
     #[staticmethod]
     fn wpi_names(path: PathBuf) -> PyResult<Vec<String>> {
-        FourierTrajectory::wpi2019_names(&path).map_err(from_fourier)
+        FourierTrajectory::wpi_names(&path).map_err(from_fourier)
     }
 
     /// Deprecated name of :meth:`wpi_names`.

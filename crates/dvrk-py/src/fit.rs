@@ -8,7 +8,7 @@ use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::result::{wpi_params_json, write_atomic};
-use dvrk_ident::Trajectory;
+use dvrk_ident::JointLog;
 use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
 use numpy::PyArrayDyn;
@@ -25,11 +25,8 @@ use crate::observe::observations_arg;
 use crate::overrides::Overrides;
 
 /// A :class:`JointLog` or a list of them: the samples and the files they were read from.
-fn logs_arg(
-    obj: &Bound<'_, PyAny>,
-    name: &str,
-) -> PyResult<Vec<(Arc<Trajectory>, Option<PathBuf>)>> {
-    let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<Trajectory>, Option<PathBuf>)> {
+fn logs_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<(Arc<JointLog>, Option<PathBuf>)>> {
+    let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<JointLog>, Option<PathBuf>)> {
         let d = d.cast::<JointLogPy>().map_err(|_| {
             input(format!(
                 "{name}: expected a JointLog or a list of JointLog, got {}",
@@ -52,7 +49,7 @@ fn logs_arg(
     Ok(logs)
 }
 
-fn samples(logs: Vec<(Arc<Trajectory>, Option<PathBuf>)>) -> Vec<LogSource> {
+fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
     logs.into_iter()
         .map(|(samples, file)| LogSource::Samples { samples, file })
         .collect()

@@ -2,7 +2,7 @@
 //! (converted exactly), joint columns named `position.<joint>` (or a MultiIndex), and
 //! DataFrames out. pandas is imported only when a DataFrame is asked for.
 
-use dvrk_ident::trajectory::Coordinates;
+use dvrk_ident::joint_log::Coordinates;
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 use pyo3::prelude::*;

@@ -7,7 +7,7 @@ use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::{LogFormat, ReadOptions};
 use dvrk_ident::request::Overrides;
 use dvrk_ident::signal::Cutoff;
-use dvrk_ident::{FitSettings, Trajectory};
+use dvrk_ident::{FitSettings, JointLog};
 
 /// Recording options, and resampling for every format (mapped onto
 /// [`ReadOptions`]).
@@ -42,7 +42,7 @@ pub fn read_options(format: Option<LogFormat>, rate: Option<f64>, mcap: &McapArg
 }
 
 /// Reads a log into memory, with a spinner.
-pub fn read(options: &ReadOptions, path: &str) -> Result<Trajectory> {
+pub fn read(options: &ReadOptions, path: &str) -> Result<JointLog> {
     let traj =
         crate::progress::Bars::new().spin(&format!("reading {path}"), || options.read(path))?;
     Ok(traj)

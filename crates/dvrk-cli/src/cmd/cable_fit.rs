@@ -3,7 +3,7 @@
 
 use anyhow::{Context, Result};
 use dvrk_ident::cable::{fit_cable, CableSettings};
-use dvrk_ident::trajectory::Signal;
+use dvrk_ident::joint_log::Signal;
 
 use super::emit;
 

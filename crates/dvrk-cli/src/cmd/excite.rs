@@ -185,7 +185,7 @@ pub fn run(args: Args) -> Result<()> {
 
     if let Some(path) = &args.evaluate {
         let traj = match &args.pick {
-            Some(name) => FourierTrajectory::from_wpi2019_file(path, name)?,
+            Some(name) => FourierTrajectory::from_wpi_file(path, name)?,
             None => FourierTrajectory::from_json_file(path)?,
         };
         let ev = optimize::evaluate(
@@ -222,7 +222,7 @@ pub fn run(args: Args) -> Result<()> {
         rest: args.rest,
         smooth: !args.no_smooth,
         init: match (&args.init, &args.init_pick) {
-            (Some(path), Some(name)) => Some(FourierTrajectory::from_wpi2019_file(path, name)?),
+            (Some(path), Some(name)) => Some(FourierTrajectory::from_wpi_file(path, name)?),
             (Some(path), None) => Some(FourierTrajectory::from_json_file(path)?),
             _ => None,
         },

@@ -11,7 +11,7 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
 use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::{BoundsSet, FitResult, IdentError, Method, Trajectory};
+use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
 use dvrk_model::Model;
 
 use super::args::LogArgs;
@@ -222,7 +222,7 @@ pub fn run(args: Args) -> Result<()> {
             };
             let train_roles = roles("training", train.len());
             let test_roles = roles("test", test.len());
-            let mut drawn: Vec<(&str, &Trajectory, Option<usize>)> = Vec::new();
+            let mut drawn: Vec<(&str, &JointLog, Option<usize>)> = Vec::new();
             for (role, t) in train_roles.iter().zip(train) {
                 drawn.push((role, &**t, None));
             }

@@ -165,7 +165,7 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
         bail!("{flag}: value {x} is not finite");
     }
     // The range of logged values (positions, velocities; accelerations alike).
-    let max = dvrk_ident::trajectory::Signal::Position.max_magnitude();
+    let max = dvrk_ident::joint_log::Signal::Position.max_magnitude();
     if let Some(x) = v.iter().find(|x| x.abs() > max) {
         bail!(
             "{flag}: value {} is beyond the accepted ±{max:e}",

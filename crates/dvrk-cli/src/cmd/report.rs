@@ -8,7 +8,7 @@ use dvrk_ident::excite::fourier::FourierTrajectory;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
 use dvrk_ident::result::InputInfo;
-use dvrk_ident::{FitResult, Trajectory};
+use dvrk_ident::{FitResult, JointLog};
 use dvrk_model::Model;
 
 use super::args::LogArgs;
@@ -41,7 +41,7 @@ pub struct Args {
 pub fn build(
     model: &Model,
     result: &FitResult,
-    logs: &[(&str, &Trajectory, Option<usize>)],
+    logs: &[(&str, &JointLog, Option<usize>)],
     excitation: Option<&FourierTrajectory>,
 ) -> Result<report::Report> {
     let input = ReportInput {
@@ -109,7 +109,7 @@ pub fn run(args: Args) -> Result<()> {
     for (role, path) in &sources {
         trajectories.push((role.clone(), super::args::read(&read, path)?));
     }
-    let logs: Vec<(&str, &Trajectory, Option<usize>)> = trajectories
+    let logs: Vec<(&str, &JointLog, Option<usize>)> = trajectories
         .iter()
         .map(|(role, t)| {
             let window = if role == "test" {

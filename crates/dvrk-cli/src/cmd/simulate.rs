@@ -81,7 +81,7 @@ pub fn output_format(path: &str, format: Option<LogFormat>) -> Result<LogFormat>
 /// Writes `traj` in `format`: MCAP on `topic`, the 2019 layout in model coordinates.
 pub fn write_log(
     model: Option<&Model>,
-    traj: &dvrk_ident::Trajectory,
+    traj: &dvrk_ident::JointLog,
     path: &str,
     format: LogFormat,
     topic: &str,
@@ -105,7 +105,7 @@ pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
     let params = read_params(&model, &args.params)?;
     let traj = match &args.pick {
-        Some(name) => FourierTrajectory::from_wpi2019_file(&args.trajectory, name)?,
+        Some(name) => FourierTrajectory::from_wpi_file(&args.trajectory, name)?,
         None => FourierTrajectory::from_json_file(&args.trajectory)?,
     };
     let noise: Vec<f64> = args

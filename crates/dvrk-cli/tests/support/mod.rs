@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-use dvrk_ident::trajectory::{uniform_time, Coordinates, Trajectory};
+use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
 
@@ -127,7 +127,7 @@ pub fn write_model_log(
             tau[(k, j)] = t[j];
         }
     }
-    let traj = Trajectory {
+    let traj = JointLog {
         time,
         q,
         dq: Some(dq),

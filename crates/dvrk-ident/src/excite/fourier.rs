@@ -28,7 +28,7 @@
 //!
 //! The 2019 package's coefficient files (one flat `coefficients` array per trajectory,
 //! `[q0, a1..aL, b1..bL]` per coordinate) are read by
-//! [`FourierTrajectory::from_wpi2019_file`].
+//! [`FourierTrajectory::from_wpi_file`].
 
 use std::collections::BTreeMap;
 use std::f64::consts::PI;
@@ -101,7 +101,7 @@ pub struct FourierTrajectory {
 
 /// One trajectory of the 2019 package's coefficient file.
 #[derive(Deserialize)]
-struct Wpi2019Entry {
+struct WpiEntry {
     dof: usize,
     order: usize,
     base_freq_hz: f64,
@@ -109,8 +109,8 @@ struct Wpi2019Entry {
 }
 
 #[derive(Deserialize)]
-struct Wpi2019File {
-    trajectories: BTreeMap<String, Wpi2019Entry>,
+struct WpiFile {
+    trajectories: BTreeMap<String, WpiEntry>,
 }
 
 fn read_text(path: &Path) -> Result<String, FourierError> {
@@ -276,22 +276,22 @@ impl FourierTrajectory {
     }
 
     /// Names of the trajectories of a 2019-layout coefficient file (sorted).
-    pub fn wpi2019_names(path: impl AsRef<Path>) -> Result<Vec<String>, FourierError> {
+    pub fn wpi_names(path: impl AsRef<Path>) -> Result<Vec<String>, FourierError> {
         let path = path.as_ref();
-        Ok(parse_wpi2019(path)?.trajectories.into_keys().collect())
+        Ok(parse_wpi(path)?.trajectories.into_keys().collect())
     }
 
     /// Reads trajectory `name` (e.g. `psm_one`) of the 2019 package's coefficient file
     /// (`{"trajectories": {name: {"dof", "order", "base_freq_hz", "coefficients"}}}`,
     /// where `coefficients[(2L+1)·d ..][..2L+1]` are `[q0, a1..aL, b1..bL]` of model
     /// coordinate `d`). The coordinates are named `q1..qn`.
-    pub fn from_wpi2019_file(
+    pub fn from_wpi_file(
         path: impl AsRef<Path>,
         name: &str,
     ) -> Result<FourierTrajectory, FourierError> {
         let path = path.as_ref();
         let source = format!("{} ({name})", path.display());
-        let mut file = parse_wpi2019(path)?;
+        let mut file = parse_wpi(path)?;
         let Some(e) = file.trajectories.remove(name) else {
             return Err(FourierError::UnknownName {
                 path: path.display().to_string(),
@@ -332,7 +332,7 @@ impl FourierTrajectory {
     }
 }
 
-fn parse_wpi2019(path: &Path) -> Result<Wpi2019File, FourierError> {
+fn parse_wpi(path: &Path) -> Result<WpiFile, FourierError> {
     serde_json::from_str(&read_text(path)?).map_err(|e| FourierError::Json {
         path: path.display().to_string(),
         message: format!("not a 2019 coefficient file: {e}"),

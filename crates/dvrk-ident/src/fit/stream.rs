@@ -34,13 +34,13 @@ use super::{
     MetricSums, Observed, ObservedLog, TorqueRange,
 };
 use crate::error::IdentError;
+use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogReader;
 use crate::observation::{PerCoordinate, Samples, CHUNK_SAMPLES};
 use crate::progress::{Progress, Silent};
 use crate::result::{FitResult, InputInfo};
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
-use crate::trajectory::{Coordinates, Trajectory};
 
 /// Samples per block read from a file: 4096 samples of a 7-joint log are about 1 MB
 /// through the processing, and each block's observation is assembled in parallel.
@@ -58,7 +58,7 @@ impl Source<'_> {
     /// [`super::prepare`] processes).
     fn model_blocks(
         &self,
-    ) -> Result<impl Iterator<Item = Result<Trajectory, IdentError>> + '_, IdentError> {
+    ) -> Result<impl Iterator<Item = Result<JointLog, IdentError>> + '_, IdentError> {
         Ok(self.reader.blocks(self.block)?.map(move |b| {
             let mut t = to_model_coordinates(self.model, &b?)?;
             subtract_known_forces(self.model, &mut t);

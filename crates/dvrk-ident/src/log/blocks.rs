@@ -9,8 +9,8 @@ use super::csv::{HeaderedBlocks, WpiBlocks};
 #[cfg(feature = "recordings")]
 use super::mcap::{McapBlocks, McapReader};
 use super::{detect_format, LogError, LogFormat, ReadOptions};
+use crate::joint_log::{Coordinates, JointLog};
 use crate::signal::stream::Resampler;
-use crate::trajectory::{Coordinates, Trajectory};
 
 /// A log opened for reading in blocks, as many times as needed (each
 /// [`LogReader::blocks`] is one pass over the file). Opening reads the header (CSV), the
@@ -88,7 +88,7 @@ impl LogReader {
         Ok(reader)
     }
 
-    fn set_header(&mut self, block: &Trajectory) {
+    fn set_header(&mut self, block: &JointLog) {
         self.joint_names = block.joint_names.clone();
         self.coordinates = block.coordinates;
         self.has_velocity = block.dq.is_some();
@@ -136,7 +136,7 @@ impl LogReader {
     }
 
     /// Every sample in memory: the blocks of one pass, collected.
-    pub fn read_all(&self) -> Result<Trajectory, LogError> {
+    pub fn read_all(&self) -> Result<JointLog, LogError> {
         let mut all = super::TrajectoryBuilder::default();
         for block in self.blocks(super::BLOCK_SAMPLES)? {
             all.push(&block?);
@@ -194,7 +194,7 @@ impl ReadOptions {
     }
 
     /// Every sample of `path` in memory (one pass of [`ReadOptions::open`]'s blocks).
-    pub fn read(&self, path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+    pub fn read(&self, path: impl AsRef<Path>) -> Result<JointLog, LogError> {
         self.open(path)?.read_all()
     }
 }
@@ -216,7 +216,7 @@ pub struct LogBlocks<'a> {
     resampler: Option<BlockResampler>,
     block: usize,
     /// The last block read, for the resampler's last samples.
-    last: Option<Trajectory>,
+    last: Option<JointLog>,
     done: bool,
     path: PathBuf,
     /// Samples read and the last time, to validate the blocks as parts of one log.
@@ -225,7 +225,7 @@ pub struct LogBlocks<'a> {
 }
 
 impl LogBlocks<'_> {
-    fn next_block(&mut self) -> Result<Option<Trajectory>, LogError> {
+    fn next_block(&mut self) -> Result<Option<JointLog>, LogError> {
         loop {
             let raw = match &mut self.source {
                 Source::Wpi(b) => b.next_block(self.block)?,
@@ -267,7 +267,7 @@ impl LogBlocks<'_> {
 }
 
 impl Iterator for LogBlocks<'_> {
-    type Item = Result<Trajectory, LogError>;
+    type Item = Result<JointLog, LogError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         if self.done {
@@ -323,7 +323,7 @@ impl BlockResampler {
     }
 
     /// The grid samples that `block` completes (with the block's names and source).
-    pub(crate) fn push(&mut self, block: &Trajectory) -> Result<Trajectory, LogError> {
+    pub(crate) fn push(&mut self, block: &JointLog) -> Result<JointLog, LogError> {
         block
             .validate_rows(self.rows, self.last_time)
             .map_err(|source| LogError::Samples {
@@ -345,7 +345,7 @@ impl BlockResampler {
     }
 
     /// The last grid samples (named like `last`, the log's last block).
-    pub(crate) fn finish(&mut self, last: &Trajectory) -> Result<Trajectory, LogError> {
+    pub(crate) fn finish(&mut self, last: &JointLog) -> Result<JointLog, LogError> {
         let (mut times, mut values) = (Vec::new(), Vec::new());
         self.resampler
             .finish(&mut times, &mut values)
@@ -353,10 +353,10 @@ impl BlockResampler {
         Ok(self.assemble(last, times, values))
     }
 
-    fn assemble(&self, like: &Trajectory, time: Vec<f64>, values: Vec<f64>) -> Trajectory {
+    fn assemble(&self, like: &JointLog, time: Vec<f64>, values: Vec<f64>) -> JointLog {
         let (rows, n) = (time.len(), self.dof);
         let all = DMatrix::from_row_slice(rows, 3 * n, &values);
-        Trajectory {
+        JointLog {
             time,
             q: all.columns(0, n).into_owned(),
             dq: self.with_velocity.then(|| all.columns(n, n).into_owned()),

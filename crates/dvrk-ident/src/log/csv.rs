@@ -5,7 +5,7 @@
 //! so a log too long for memory and a short one go through the same parsing and checks.
 
 use super::{fmt_f64, open_text, write_atomic, LogError, TrajectoryBuilder};
-use crate::trajectory::{Coordinates, Signal, Trajectory};
+use crate::joint_log::{Coordinates, JointLog, Signal};
 use csv::{ReaderBuilder, StringRecord, Trim, WriterBuilder};
 use nalgebra::DMatrix;
 use std::io::BufRead;
@@ -151,7 +151,7 @@ impl WpiBlocks {
 
     /// The next block of at most `max_rows` samples (at least 1); `None` after the last.
     /// A file without rows is an error.
-    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<Trajectory>, LogError> {
+    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<JointLog>, LogError> {
         let path = self.path.clone();
         let mut values: Vec<f64> = Vec::new();
         let mut count = 0;
@@ -210,7 +210,7 @@ impl WpiBlocks {
         let all = DMatrix::from_row_slice(count, ncols, &values);
         let first = self.rows;
         self.rows += count;
-        Ok(Some(Trajectory {
+        Ok(Some(JointLog {
             time: (first..self.rows)
                 .map(|k| k as f64 / self.rate_hz)
                 .collect(),
@@ -244,7 +244,7 @@ pub fn read_wpi(
     path: impl AsRef<Path>,
     rate_hz: f64,
     dof: Option<usize>,
-) -> Result<Trajectory, LogError> {
+) -> Result<JointLog, LogError> {
     let mut blocks = WpiBlocks::open(path, rate_hz, dof)?;
     let mut all = TrajectoryBuilder::default();
     while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
@@ -457,7 +457,7 @@ impl HeaderedBlocks {
 
     /// The next block of at most `max_rows` samples (at least 1); `None` after the last.
     /// A header without data rows is an error.
-    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<Trajectory>, LogError> {
+    pub fn next_block(&mut self, max_rows: usize) -> Result<Option<JointLog>, LogError> {
         let p = || self.path.clone();
         let dof = self.joints.len();
         let mut time = Vec::new();
@@ -521,7 +521,7 @@ impl HeaderedBlocks {
             return Ok(None);
         }
         self.rows += n;
-        Ok(Some(Trajectory {
+        Ok(Some(JointLog {
             time,
             q: DMatrix::from_row_slice(n, dof, &q),
             dq: self
@@ -557,7 +557,7 @@ impl HeaderedBlocks {
 /// assert_eq!(traj.tau[(1, 0)], 0.6);
 /// std::fs::remove_file(&path).unwrap();
 /// ```
-pub fn read_headered(path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
+pub fn read_headered(path: impl AsRef<Path>) -> Result<JointLog, LogError> {
     let mut blocks = HeaderedBlocks::open(path)?;
     let mut all = TrajectoryBuilder::default();
     while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
@@ -566,7 +566,7 @@ pub fn read_headered(path: impl AsRef<Path>) -> Result<Trajectory, LogError> {
     Ok(all.build())
 }
 
-fn validated(path: &Path, traj: &Trajectory) -> Result<(), LogError> {
+fn validated(path: &Path, traj: &JointLog) -> Result<(), LogError> {
     traj.validate().map_err(|source| LogError::Invalid {
         path: path.to_path_buf(),
         source,
@@ -577,7 +577,7 @@ fn validated(path: &Path, traj: &Trajectory) -> Result<(), LogError> {
 /// coordinates and velocities and no time stamps: a trajectory in measured coordinates
 /// or without velocities is refused, and the time stamps are dropped (the reader
 /// assumes a uniform clock at the rate it is given).
-pub fn write_wpi(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogError> {
+pub fn write_wpi(path: impl AsRef<Path>, traj: &JointLog) -> Result<(), LogError> {
     let path = path.as_ref();
     validated(path, traj)?;
     if traj.coordinates != Coordinates::Model {
@@ -612,7 +612,7 @@ pub fn write_wpi(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogErr
 /// which is how the reader tells the two joint spaces apart. Values are written with the
 /// shortest representation that reads back to the same `f64`, so a write-read round trip
 /// is exact.
-pub fn write_headered(path: impl AsRef<Path>, traj: &Trajectory) -> Result<(), LogError> {
+pub fn write_headered(path: impl AsRef<Path>, traj: &JointLog) -> Result<(), LogError> {
     let path = path.as_ref();
     validated(path, traj)?;
     let model_names: Vec<String>;

@@ -50,7 +50,7 @@
 //! the file (a recorder interleaves them), not by the log.
 //!
 //! **Time**: [`TimeSource::HeaderStamp`] (default, the time the controller measured the
-//! joints) or the MCAP log or publish time of each message. [`Trajectory::time`] is in
+//! joints) or the MCAP log or publish time of each message. [`JointLog::time`] is in
 //! seconds from the first kept sample, computed from integer nanoseconds
 //! (`(stamp_k - stamp_0) / 1e9`, so a 200 Hz log gives exactly `k / 200`); the absolute
 //! start is [`McapLog::start_time_ns`].
@@ -70,7 +70,7 @@
 //! between messages. Joints that only change *order* are reordered by name to the order
 //! of the first message.
 //!
-//! **Efforts**: [`read_mcap`] returns a [`Trajectory`], which always has efforts, so a
+//! **Efforts**: [`read_mcap`] returns a [`JointLog`], which always has efforts, so a
 //! topic with empty effort arrays (e.g. `setpoint_js`) is an error saying so: it cannot be
 //! fitted. [`read_joint_states`] reads such topics as they are (positions, and velocities
 //! and efforts when present) for other uses (e.g. comparing setpoints and measurements).
@@ -129,4 +129,4 @@ pub use self::survey::{JointStateSeries, TimingReport};
 pub use self::write::{write_mcap, McapCompression, McapWriteOptions, DEFAULT_TOPIC};
 
 #[allow(unused_imports)] // the docs' links
-use crate::{log::LogError, trajectory::Trajectory};
+use crate::{joint_log::JointLog, log::LogError};

@@ -44,7 +44,7 @@ pub use self::csv::{
 };
 pub use self::options::ReadOptions;
 
-use crate::trajectory::{Coordinates, Signal, Trajectory, TrajectoryError};
+use crate::joint_log::{Coordinates, JointLog, JointLogError, Signal};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -352,7 +352,7 @@ pub enum LogError {
         source: crate::signal::SignalError,
     },
     /// Samples the reader parsed but refuses: a value beyond its signal's range
-    /// ([`crate::trajectory::Signal::max_magnitude`]) or time not increasing (the
+    /// ([`crate::joint_log::Signal::max_magnitude`]) or time not increasing (the
     /// message names the file, the signal, the joint and the sample).
     #[error("{source}")]
     Samples {
@@ -360,7 +360,7 @@ pub enum LogError {
         path: PathBuf,
         /// What is wrong.
         #[source]
-        source: TrajectoryError,
+        source: JointLogError,
     },
     /// The trajectory to write is invalid.
     #[error("{}: cannot write an invalid trajectory: {source}", path.display())]
@@ -369,7 +369,7 @@ pub enum LogError {
         path: PathBuf,
         /// What is wrong with the trajectory.
         #[source]
-        source: TrajectoryError,
+        source: JointLogError,
     },
 }
 
@@ -384,10 +384,10 @@ pub enum LogError {
 ///
 /// ```rust
 /// use dvrk_ident::log::{read, write_wpi};
-/// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+/// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-read-{}.csv", std::process::id()));
-/// let traj = Trajectory {
+/// let traj = JointLog {
 ///     time: uniform_time(4, 200.0),
 ///     q: DMatrix::from_element(4, 2, 0.5),
 ///     dq: Some(DMatrix::zeros(4, 2)),
@@ -406,7 +406,7 @@ pub fn read(
     path: impl AsRef<Path>,
     format: Option<LogFormat>,
     rate_hz: Option<f64>,
-) -> Result<Trajectory, LogError> {
+) -> Result<JointLog, LogError> {
     ReadOptions {
         format,
         rate_hz,
@@ -417,7 +417,7 @@ pub fn read(
 
 /// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
 /// interpolation: what `--resample` does for logs read without MCAP's own resampling.
-pub fn resample(path: &Path, traj: Trajectory, hz: f64) -> Result<Trajectory, LogError> {
+pub fn resample(path: &Path, traj: JointLog, hz: f64) -> Result<JointLog, LogError> {
     traj.validate().map_err(|source| LogError::Samples {
         path: path.to_path_buf(),
         source,
@@ -433,7 +433,7 @@ pub fn resample(path: &Path, traj: Trajectory, hz: f64) -> Result<Trajectory, Lo
 /// [`write_headered`] and [`mcap::write_mcap`] (here on topic
 /// [`mcap::DEFAULT_TOPIC`] with [`mcap::McapWriteOptions::default`]) for what each layout
 /// requires.
-pub fn write(path: impl AsRef<Path>, traj: &Trajectory, format: LogFormat) -> Result<(), LogError> {
+pub fn write(path: impl AsRef<Path>, traj: &JointLog, format: LogFormat) -> Result<(), LogError> {
     let path = path.as_ref();
     match format {
         LogFormat::Wpi => write_wpi(path, traj),
@@ -577,17 +577,17 @@ pub(crate) fn open_text(path: &Path) -> Result<Box<dyn BufRead>, LogError> {
 /// names, coordinates and source).
 #[derive(Default)]
 pub(crate) struct TrajectoryBuilder {
-    first: Option<Trajectory>,
+    first: Option<JointLog>,
     time: Vec<f64>,
     /// Row-major `q`, `dq` and `tau`.
     values: [Vec<f64>; 3],
 }
 
 impl TrajectoryBuilder {
-    pub(crate) fn push(&mut self, block: &Trajectory) {
+    pub(crate) fn push(&mut self, block: &JointLog) {
         if self.first.is_none() {
             let dof = block.dof();
-            self.first = Some(Trajectory {
+            self.first = Some(JointLog {
                 time: Vec::new(),
                 q: nalgebra::DMatrix::zeros(0, dof),
                 dq: block.dq.as_ref().map(|_| nalgebra::DMatrix::zeros(0, dof)),
@@ -608,9 +608,9 @@ impl TrajectoryBuilder {
         }
     }
 
-    pub(crate) fn build(self) -> Trajectory {
+    pub(crate) fn build(self) -> JointLog {
         let Some(first) = self.first else {
-            return Trajectory {
+            return JointLog {
                 time: Vec::new(),
                 q: nalgebra::DMatrix::zeros(0, 0),
                 dq: None,
@@ -623,7 +623,7 @@ impl TrajectoryBuilder {
         let (n, dof) = (self.time.len(), first.dof());
         let [q, dq, tau] = self.values;
         let matrix = |v: &[f64]| nalgebra::DMatrix::from_row_slice(n, dof, v);
-        Trajectory {
+        JointLog {
             q: matrix(&q),
             dq: first.dq.as_ref().map(|_| matrix(&dq)),
             tau: matrix(&tau),

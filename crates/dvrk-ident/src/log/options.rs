@@ -15,11 +15,11 @@ use super::{LogError, LogFormat};
 ///
 /// ```rust
 /// use dvrk_ident::log::{write_wpi, LogFormat, ReadOptions};
-/// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+/// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 ///
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-options-{}.csv", std::process::id()));
-/// let traj = Trajectory {
+/// let traj = JointLog {
 ///     time: uniform_time(4, 200.0),
 ///     q: DMatrix::from_element(4, 2, 0.5),
 ///     dq: Some(DMatrix::zeros(4, 2)),

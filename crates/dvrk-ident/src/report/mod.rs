@@ -17,8 +17,8 @@ use thiserror::Error;
 use crate::error::IdentError;
 use crate::excite::fourier::FourierTrajectory;
 use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, Prepared};
+use crate::joint_log::JointLog;
 use crate::result::{FitResult, JointMetrics};
-use crate::trajectory::Trajectory;
 use plot::{render, Figure, ImageFormat};
 
 /// Errors of figure and report output.
@@ -48,7 +48,7 @@ pub struct ReportLog<'a> {
     /// Shown in titles and tables, e.g. `training` or `test`.
     pub role: &'a str,
     /// The log as read (measured joints), processed here with the result's settings.
-    pub trajectory: &'a Trajectory,
+    pub trajectory: &'a JointLog,
     /// Metrics on the first N processed samples only (the 2019 test protocol).
     pub window: Option<usize>,
 }

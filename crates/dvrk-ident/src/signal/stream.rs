@@ -16,15 +16,12 @@ pub use processor::{BlockProcessor, SETTLE_TOLERANCE};
 pub use timing::{LogTiming, TimingSurvey};
 
 use super::{Processed, Processing, SignalError};
-use crate::trajectory::Trajectory;
+use crate::joint_log::JointLog;
 
 /// The processing of a whole trajectory by a [`BlockProcessor`] (a timing survey, then
 /// one block): what a log streamed from disk gets, to the last bit, for a log in
 /// memory. It equals [`super::process`] to [`SETTLE_TOLERANCE`] relative.
-pub fn process_in_blocks(
-    traj: &Trajectory,
-    settings: &Processing,
-) -> Result<Processed, SignalError> {
+pub fn process_in_blocks(traj: &JointLog, settings: &Processing) -> Result<Processed, SignalError> {
     let mut survey = TimingSurvey::new();
     let timing = loop {
         survey.observe(traj)?;

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::signal::{Cutoff, LowPass};
-use dvrk_ident::{BoundsSet, FitSettings, Method, Trajectory};
+use dvrk_ident::{BoundsSet, FitSettings, JointLog, Method};
 use dvrk_model::Model;
 
 /// One robot's protocol.
@@ -42,7 +42,7 @@ pub fn data(rel: &str) -> Option<PathBuf> {
 
 /// The robot and its training ("one") and test ("two") logs, `None` (skipped) without
 /// `../shared`.
-pub fn load(protocol: &Protocol) -> Option<(Model, Trajectory, Trajectory)> {
+pub fn load(protocol: &Protocol) -> Option<(Model, JointLog, JointLog)> {
     let one = data(&format!("{}/one_results.csv", protocol.robot))?;
     let two = data(&format!("{}/two_results.csv", protocol.robot))?;
     let model = Model::builtin(protocol.robot).unwrap();

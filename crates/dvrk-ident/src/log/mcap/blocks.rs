@@ -17,9 +17,9 @@ use super::problem::mcap_error;
 use super::survey::{seconds_between, Plan};
 use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::McapProblem;
+use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogError;
 use crate::signal::stream::Resampler;
-use crate::trajectory::{Coordinates, Trajectory};
 
 /// Clock samples waiting for the other topics, and the other topics' recent samples.
 struct Merge {
@@ -265,7 +265,7 @@ impl<'a> McapBlocks<'a> {
     }
 
     /// The next block, validated like the whole trajectory.
-    fn next_block(&mut self) -> Result<Option<Trajectory>, LogError> {
+    fn next_block(&mut self) -> Result<Option<JointLog>, LogError> {
         self.fill()?;
         let n = self.times.len().min(self.block);
         if n == 0 {
@@ -275,7 +275,7 @@ impl<'a> McapBlocks<'a> {
         let time: Vec<f64> = self.times.drain(..n).collect();
         let values: Vec<f64> = self.rows.drain(..n * 3 * dof).collect();
         let all = nalgebra::DMatrix::from_row_slice(n, 3 * dof, &values);
-        let block = Trajectory {
+        let block = JointLog {
             q: all.columns(0, dof).into_owned(),
             dq: self
                 .plan
@@ -303,7 +303,7 @@ impl<'a> McapBlocks<'a> {
 }
 
 impl Iterator for McapBlocks<'_> {
-    type Item = Result<Trajectory, LogError>;
+    type Item = Result<JointLog, LogError>;
 
     fn next(&mut self) -> Option<Self::Item> {
         if self.failed {

@@ -9,9 +9,9 @@ use thiserror::Error;
 
 use super::options::{TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 use super::schema::JOINT_STATE_TYPE;
+use crate::joint_log::{JointLogError, Signal};
 #[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
-use crate::trajectory::{Signal, TrajectoryError};
 
 /// A topic of an MCAP file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -255,7 +255,7 @@ pub enum McapProblem {
     },
     /// The resulting trajectory is invalid.
     #[error("{0}")]
-    Invalid(TrajectoryError),
+    Invalid(JointLogError),
     /// Writing a model-coordinate trajectory.
     #[error("a JointState log holds measured joints but the trajectory is in model coordinates: map it to measured joints first")]
     WrongCoordinates,

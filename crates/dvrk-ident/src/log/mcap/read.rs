@@ -9,16 +9,16 @@ use super::options::{McapOptions, TimeSource};
 use super::problem::TopicInfo;
 use super::survey::{JointStateSeries, TimingReport};
 use super::{bag, container, survey};
+use crate::joint_log::JointLog;
 use crate::log::LogError;
 #[allow(unused_imports)] // the docs' links
 use crate::log::LogFormat;
-use crate::trajectory::Trajectory;
 
 /// A log read by [`read_mcap_log`]: the trajectory and what is known about it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct McapLog {
     /// Measured joints; time from 0 s at the first kept sample.
-    pub trajectory: Trajectory,
+    pub trajectory: JointLog,
     /// The absolute time of `trajectory.time[0]`, ns since the epoch, in the chosen
     /// [`TimeSource`].
     pub start_time_ns: i64,
@@ -40,9 +40,9 @@ pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>, LogError> {
     Ok(container::scan(&bag, |_| Ok(()))?.topics)
 }
 
-/// Reads an MCAP log into a [`Trajectory`] in measured coordinates (see the module docs
+/// Reads an MCAP log into a [`JointLog`] in measured coordinates (see the module docs
 /// for topic choice, merging, time and checks).
-pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<Trajectory, LogError> {
+pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointLog, LogError> {
     read_mcap_log(path, options).map(|log| log.trajectory)
 }
 
@@ -51,11 +51,11 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<Trajec
 ///
 /// ```rust
 /// use dvrk_ident::log::mcap::{read_mcap_log, write_mcap, McapOptions, McapWriteOptions};
-/// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+/// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-{}.mcap", std::process::id()));
 /// let n = 50;
-/// let traj = Trajectory {
+/// let traj = JointLog {
 ///     time: uniform_time(n, 200.0),
 ///     q: DMatrix::from_fn(n, 2, |i, j| (i * (j + 1)) as f64 * 1e-3),
 ///     dq: None,

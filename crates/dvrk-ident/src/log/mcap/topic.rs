@@ -8,7 +8,7 @@ use super::channels::ChannelInfo;
 use super::container::MessageRef;
 use super::joint_state::{self, JointStateMsg};
 use super::{McapProblem, TimeSource, JOINT_STATE_TYPE};
-use crate::trajectory::Signal;
+use crate::joint_log::Signal;
 
 /// Whether a channel holds JointState messages this reader decodes.
 pub(super) fn is_joint_state(c: &ChannelInfo) -> bool {

@@ -11,8 +11,8 @@ use super::problem::McapProblem;
 #[allow(unused_imports)] // the docs' links
 use super::read::read_mcap;
 use super::schema::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
+use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogError;
-use crate::trajectory::{Coordinates, Trajectory};
 
 /// Topic [`crate::log::write`] uses for MCAP files.
 pub const DEFAULT_TOPIC: &str = "/measured_js";
@@ -66,7 +66,7 @@ impl Default for McapWriteOptions {
 /// 1e9).
 pub fn write_mcap(
     path: impl AsRef<Path>,
-    traj: &Trajectory,
+    traj: &JointLog,
     topic: &str,
     options: &McapWriteOptions,
 ) -> Result<(), LogError> {

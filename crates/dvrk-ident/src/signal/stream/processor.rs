@@ -8,9 +8,9 @@ use super::difference::Difference;
 use super::timing::LogTiming;
 use super::zero_phase::{settle_margin, ZeroPhase};
 use super::Resampler;
+use crate::joint_log::{Coordinates, JointLog, JointLogError};
 use crate::signal::advance::Advance;
 use crate::signal::{AccelerationSource, Processed, Processing, SignalError};
-use crate::trajectory::{Coordinates, Trajectory, TrajectoryError};
 
 /// Relative size of the backward passes' start error within a block (see
 /// `settle_margin`): far below the 1e-9 agreement promised with the whole-log
@@ -116,13 +116,12 @@ impl BlockProcessor {
                 (Some(r), rate, n, None)
             }
             None => {
-                let median =
-                    timing
-                        .median_step_s
-                        .ok_or_else(|| TrajectoryError::TooFewSamples {
-                            source_name: source.to_string(),
-                            samples: timing.samples,
-                        })?;
+                let median = timing
+                    .median_step_s
+                    .ok_or_else(|| JointLogError::TooFewSamples {
+                        source_name: source.to_string(),
+                        samples: timing.samples,
+                    })?;
                 (None, 1.0 / median, timing.samples, Some(median))
             }
         };
@@ -257,7 +256,7 @@ impl BlockProcessor {
     }
 
     /// Processes the next block of the log; the samples that are done (possibly none).
-    pub fn push(&mut self, block: &Trajectory) -> Result<Processed, SignalError> {
+    pub fn push(&mut self, block: &JointLog) -> Result<Processed, SignalError> {
         let n = self.dof;
         if block.dof() != n || block.dq.is_some() != self.dq_measured {
             return Err(SignalError::InvalidSetting {
@@ -351,7 +350,7 @@ impl BlockProcessor {
                 let step = time - p;
                 let tolerance = self.settings.uniform_tolerance;
                 if (step - median).abs() > tolerance * median {
-                    return Err(TrajectoryError::NonUniform {
+                    return Err(JointLogError::NonUniform {
                         source_name: self.source.clone(),
                         row: self.inputs,
                         step_s: step,

@@ -1,8 +1,8 @@
 //! The first pass over a streamed log: what the processing must know before the first
 //! filtered sample, and what [`crate::signal::process`] checks on the whole log first.
 
+use crate::joint_log::{JointLog, JointLogError};
 use crate::median::{ExactMedian, MedianPass};
-use crate::trajectory::{Trajectory, TrajectoryError};
 
 /// The timing of a log, from [`TimingSurvey`].
 #[derive(Clone, Debug, PartialEq)]
@@ -13,7 +13,7 @@ pub struct LogTiming {
     pub first_s: f64,
     /// Time of the last sample, s.
     pub last_s: f64,
-    /// Median time step, s (as [`Trajectory::rate_hz`] computes it); `None` with
+    /// Median time step, s (as [`JointLog::rate_hz`] computes it); `None` with
     /// fewer than two samples.
     pub median_step_s: Option<f64>,
     /// Shortest and longest time steps, s; `None` with fewer than two samples.
@@ -22,7 +22,7 @@ pub struct LogTiming {
 
 impl LogTiming {
     /// Whether some step is off the median by more than `relative_tolerance` (the
-    /// check of [`Trajectory::check_uniform`]).
+    /// check of [`JointLog::check_uniform`]).
     pub fn is_uniform(&self, relative_tolerance: f64) -> bool {
         match (self.median_step_s, self.step_range_s) {
             (Some(m), Some((lo, hi))) => {
@@ -36,7 +36,7 @@ impl LogTiming {
 /// Validates a log given block by block and finds its timing, in one or more passes
 /// (more only when the steps take very many distinct values: see `median`).
 ///
-/// The first pass validates every block like [`Trajectory::validate`] (rows numbered
+/// The first pass validates every block like [`JointLog::validate`] (rows numbered
 /// from the start of the log, time increasing across blocks); later passes only read
 /// the time steps again.
 #[derive(Clone, Debug, Default)]
@@ -58,7 +58,7 @@ impl TimingSurvey {
     }
 
     /// The next block of the log (every pass must give the same blocks).
-    pub fn observe(&mut self, block: &Trajectory) -> Result<(), TrajectoryError> {
+    pub fn observe(&mut self, block: &JointLog) -> Result<(), JointLogError> {
         if self.pass == 0 {
             if self.joints.is_none() {
                 self.source = block.source.clone();
@@ -82,12 +82,12 @@ impl TimingSurvey {
     }
 
     /// Ends a pass: the timing once known, `None` to read the blocks again.
-    pub fn end_pass(&mut self) -> Result<Option<LogTiming>, TrajectoryError> {
+    pub fn end_pass(&mut self) -> Result<Option<LogTiming>, JointLogError> {
         let last = self.previous.take();
         if self.pass == 0 {
             let joints = self.joints.unwrap_or(0);
             if self.samples == 0 || joints == 0 {
-                return Err(TrajectoryError::Empty {
+                return Err(JointLogError::Empty {
                     source_name: self.source.clone(),
                     samples: self.samples,
                     joints,

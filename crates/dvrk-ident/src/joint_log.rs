@@ -1,15 +1,15 @@
 //! A joint-space log in memory: time stamps, positions, optional velocities and efforts.
 //!
-//! Every reader in [`crate::log`] produces a [`Trajectory`] and every processing step in
+//! Every reader in [`crate::log`] produces a [`JointLog`] and every processing step in
 //! [`crate::signal`] consumes one, so this is the one place that states what a well-formed
-//! log is (see [`Trajectory::validate`]). Matrices have one row per sample and one column
+//! log is (see [`JointLog::validate`]). Matrices have one row per sample and one column
 //! per joint, the layout of the CSV files they come from.
 
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-/// Which joint space the columns of a [`Trajectory`] are expressed in.
+/// Which joint space the columns of a [`JointLog`] are expressed in.
 ///
 /// The dVRK publishes *measured* joints (its ROS joint names); the identification models
 /// use *model* coordinates (motor-side angles for the coupled wrist joints). The two are
@@ -96,10 +96,10 @@ impl std::fmt::Display for Signal {
     }
 }
 
-/// Why a [`Trajectory`] is not usable. Every variant names the trajectory's `source`
+/// Why a [`JointLog`] is not usable. Every variant names the trajectory's `source`
 /// (usually the file it was read from) so that a message is actionable on its own.
 #[derive(Debug, Error, Clone, PartialEq)]
-pub enum TrajectoryError {
+pub enum JointLogError {
     /// No samples or no joints.
     #[error("{source_name}: empty trajectory ({samples} samples, {joints} joints)")]
     Empty {
@@ -201,7 +201,7 @@ pub enum TrajectoryError {
 /// prismatic ones. `dq == None` means the log has no velocity measurement and velocities
 /// are to be obtained by differentiating (filtered) positions.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Trajectory {
+pub struct JointLog {
     /// Sample times, s, strictly increasing.
     pub time: Vec<f64>,
     /// Positions, rad or m; rows = samples, columns = joints.
@@ -222,14 +222,14 @@ pub struct Trajectory {
 /// time stamps (e.g. the 2019 CSV files, 200 Hz).
 ///
 /// ```rust
-/// let t = dvrk_ident::trajectory::uniform_time(3, 200.0);
+/// let t = dvrk_ident::joint_log::uniform_time(3, 200.0);
 /// assert_eq!(t, vec![0.0, 0.005, 0.01]);
 /// ```
 pub fn uniform_time(n: usize, rate_hz: f64) -> Vec<f64> {
     (0..n).map(|k| k as f64 / rate_hz).collect()
 }
 
-impl Trajectory {
+impl JointLog {
     /// Number of samples (rows).
     pub fn len(&self) -> usize {
         self.q.nrows()
@@ -261,10 +261,10 @@ impl Trajectory {
     /// non-positive median step.
     ///
     /// ```rust
-    /// use dvrk_ident::trajectory::{Coordinates, Trajectory, uniform_time};
+    /// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
     /// use nalgebra::DMatrix;
     /// let n = 5;
-    /// let traj = Trajectory {
+    /// let traj = JointLog {
     ///     time: uniform_time(n, 200.0),
     ///     q: DMatrix::zeros(n, 1),
     ///     dq: None,
@@ -283,10 +283,10 @@ impl Trajectory {
     /// Checks that the trajectory is usable: non-empty, consistent shapes, all values
     /// finite and within [`Signal::max_magnitude`], time strictly increasing. The first problem found is returned; it names the
     /// source, the signal and joint (column) and the 0-based sample (row).
-    pub fn validate(&self) -> Result<(), TrajectoryError> {
+    pub fn validate(&self) -> Result<(), JointLogError> {
         let (n, dof) = (self.q.nrows(), self.q.ncols());
         if n == 0 || dof == 0 {
-            return Err(TrajectoryError::Empty {
+            return Err(JointLogError::Empty {
                 source_name: self.source.clone(),
                 samples: n,
                 joints: dof,
@@ -295,17 +295,17 @@ impl Trajectory {
         self.validate_rows(0, None)
     }
 
-    /// [`Trajectory::validate`] of a block of a longer log, without the emptiness
+    /// [`JointLog::validate`] of a block of a longer log, without the emptiness
     /// check: rows are numbered from `first_row`, and time must also increase from
     /// `previous_time` (the log's sample before the block).
     pub fn validate_rows(
         &self,
         first_row: usize,
         previous_time: Option<f64>,
-    ) -> Result<(), TrajectoryError> {
+    ) -> Result<(), JointLogError> {
         let (n, dof) = (self.q.nrows(), self.q.ncols());
         let src = || self.source.clone();
-        let shape_err = |what, rows, cols| TrajectoryError::Shape {
+        let shape_err = |what, rows, cols| JointLogError::Shape {
             source_name: src(),
             what,
             rows,
@@ -331,7 +331,7 @@ impl Trajectory {
         for row in 0..n {
             let t = self.time[row];
             if !t.is_finite() {
-                return Err(TrajectoryError::NonFinite {
+                return Err(JointLogError::NonFinite {
                     source_name: src(),
                     signal: Signal::Time,
                     column: "time".into(),
@@ -340,7 +340,7 @@ impl Trajectory {
                 });
             }
             if t.abs() > Signal::Time.max_magnitude() {
-                return Err(TrajectoryError::OutOfRange {
+                return Err(JointLogError::OutOfRange {
                     source_name: src(),
                     signal: Signal::Time,
                     column: "time".into(),
@@ -358,7 +358,7 @@ impl Trajectory {
                 for col in 0..dof {
                     let v = m[(row, col)];
                     if !v.is_finite() {
-                        return Err(TrajectoryError::NonFinite {
+                        return Err(JointLogError::NonFinite {
                             source_name: src(),
                             signal,
                             column: self.joint_names[col].clone(),
@@ -367,7 +367,7 @@ impl Trajectory {
                         });
                     }
                     if v.abs() > signal.max_magnitude() {
-                        return Err(TrajectoryError::OutOfRange {
+                        return Err(JointLogError::OutOfRange {
                             source_name: src(),
                             signal,
                             column: self.joint_names[col].clone(),
@@ -383,7 +383,7 @@ impl Trajectory {
                 previous_time
             };
             if let Some(previous) = previous.filter(|&p| t <= p) {
-                return Err(TrajectoryError::NonMonotonicTime {
+                return Err(JointLogError::NonMonotonicTime {
                     source_name: src(),
                     row: first_row + row,
                     previous,
@@ -398,9 +398,9 @@ impl Trajectory {
     /// returns the sampling rate, Hz (inverse median step). Zero-phase filtering and
     /// central differences assume a uniform clock; a log with gaps must be resampled
     /// ([`crate::signal::resample_linear`]) or rejected, and this says where the first
-    /// gap is. Call [`Trajectory::validate`] first.
-    pub fn check_uniform(&self, relative_tolerance: f64) -> Result<f64, TrajectoryError> {
-        let median = median_step(&self.time).ok_or_else(|| TrajectoryError::TooFewSamples {
+    /// gap is. Call [`JointLog::validate`] first.
+    pub fn check_uniform(&self, relative_tolerance: f64) -> Result<f64, JointLogError> {
+        let median = median_step(&self.time).ok_or_else(|| JointLogError::TooFewSamples {
             source_name: self.source.clone(),
             samples: self.time.len(),
         })?;
@@ -408,7 +408,7 @@ impl Trajectory {
             let step = w[1] - w[0];
             let within = (step - median).abs() <= relative_tolerance * median;
             if !within {
-                return Err(TrajectoryError::NonUniform {
+                return Err(JointLogError::NonUniform {
                     source_name: self.source.clone(),
                     row: k + 1,
                     step_s: step,
@@ -440,8 +440,8 @@ pub(crate) fn median_step(time: &[f64]) -> Option<f64> {
 mod tests {
     use super::*;
 
-    fn traj(n: usize, dof: usize) -> Trajectory {
-        Trajectory {
+    fn traj(n: usize, dof: usize) -> JointLog {
+        JointLog {
             time: uniform_time(n, 100.0),
             q: DMatrix::from_fn(n, dof, |i, j| (i + j) as f64),
             dq: Some(DMatrix::zeros(n, dof)),
@@ -467,7 +467,7 @@ mod tests {
     fn empty_is_rejected() {
         let t = traj(0, 3);
         let e = t.validate().unwrap_err();
-        assert!(matches!(e, TrajectoryError::Empty { samples: 0, .. }));
+        assert!(matches!(e, JointLogError::Empty { samples: 0, .. }));
         assert!(e.to_string().contains("unit-test"));
         assert!(t.rate_hz().is_none());
     }
@@ -478,7 +478,7 @@ mod tests {
         t.tau[(4, 1)] = f64::NAN;
         let e = t.validate().unwrap_err();
         match &e {
-            TrajectoryError::NonFinite {
+            JointLogError::NonFinite {
                 source_name,
                 signal,
                 column,
@@ -507,13 +507,13 @@ mod tests {
         let e = t.validate().unwrap_err();
         assert!(matches!(
             e,
-            TrajectoryError::NonFinite { signal: Signal::Velocity, row: 7, ref column, .. } if column == "q1"
+            JointLogError::NonFinite { signal: Signal::Velocity, row: 7, ref column, .. } if column == "q1"
         ));
         let mut t = traj(10, 2);
         t.time[3] = f64::NAN;
         assert!(matches!(
             t.validate().unwrap_err(),
-            TrajectoryError::NonFinite {
+            JointLogError::NonFinite {
                 signal: Signal::Time,
                 row: 3,
                 ..
@@ -526,10 +526,7 @@ mod tests {
         let mut t = traj(10, 2);
         t.time[5] = t.time[4];
         let e = t.validate().unwrap_err();
-        assert!(matches!(
-            e,
-            TrajectoryError::NonMonotonicTime { row: 5, .. }
-        ));
+        assert!(matches!(e, JointLogError::NonMonotonicTime { row: 5, .. }));
         assert!(e.to_string().contains("sample 5"));
     }
 
@@ -539,13 +536,13 @@ mod tests {
         t.tau = DMatrix::zeros(9, 2);
         assert!(matches!(
             t.validate().unwrap_err(),
-            TrajectoryError::Shape { what: "tau", .. }
+            JointLogError::Shape { what: "tau", .. }
         ));
         let mut t = traj(10, 2);
         t.joint_names.pop();
         assert!(matches!(
             t.validate().unwrap_err(),
-            TrajectoryError::Shape {
+            JointLogError::Shape {
                 what: "joint_names",
                 ..
             }
@@ -554,13 +551,13 @@ mod tests {
         t.time.push(1.0);
         assert!(matches!(
             t.validate().unwrap_err(),
-            TrajectoryError::Shape { what: "time", .. }
+            JointLogError::Shape { what: "time", .. }
         ));
         let mut t = traj(10, 2);
         t.dq = Some(DMatrix::zeros(10, 3));
         assert!(matches!(
             t.validate().unwrap_err(),
-            TrajectoryError::Shape { what: "dq", .. }
+            JointLogError::Shape { what: "dq", .. }
         ));
     }
 
@@ -574,7 +571,7 @@ mod tests {
         // The median step ignores the single gap.
         assert!((t.rate_hz().unwrap() - 100.0).abs() < 1e-9);
         let e = t.check_uniform(0.1).unwrap_err();
-        assert!(matches!(e, TrajectoryError::NonUniform { row: 10, .. }));
+        assert!(matches!(e, JointLogError::NonUniform { row: 10, .. }));
     }
 
     #[test]
