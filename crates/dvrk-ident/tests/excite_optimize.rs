@@ -338,7 +338,7 @@ fn dense_check_reports_the_worst_violation() {
 fn setpoints_are_in_measured_space() {
     let model = arm();
     let t = some_trajectory(2, 2, 0.5);
-    let csv = optimize::setpoints_csv(&model, &t, 100.0).unwrap();
+    let csv = dvrk_ident::excite::setpoints::setpoints_csv(&model, &t, 100.0).unwrap();
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(lines[0], "time,shoulder,elbow");
     assert_eq!(lines.len(), 1 + 200);

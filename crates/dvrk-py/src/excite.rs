@@ -224,7 +224,8 @@ impl FourierTrajectoryPy {
         rate: f64,
     ) -> PyResult<(Array<'py>, Array<'py>)> {
         let model = &robot.get().model;
-        let (t, q) = optimize::setpoints(model, &self.inner, rate).map_err(from_excite)?;
+        let (t, q) = dvrk_ident::excite::setpoints::setpoints(model, &self.inner, rate)
+            .map_err(from_excite)?;
         let n = t.len();
         Ok((array(py, t, &[n]), matrix(py, &q)))
     }

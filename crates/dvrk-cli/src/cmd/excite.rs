@@ -242,7 +242,8 @@ pub fn run(args: Args) -> Result<()> {
         outputs.add(Path::new(path), doc.clone() + "\n")?;
     }
     if let Some(path) = &args.csv {
-        let csv = optimize::setpoints_csv(&model, &result.trajectory, args.rate)?;
+        let csv =
+            dvrk_ident::excite::setpoints::setpoints_csv(&model, &result.trajectory, args.rate)?;
         outputs.add(Path::new(path), csv)?;
     }
     if let Some(path) = &args.plot {
