@@ -449,14 +449,7 @@ fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, String> {
     Ok(Nominal {
         mass: Some(inertial.mass.value),
         com: Some(inertial.origin.xyz.0),
-        inertia: Some([
-            ic[(0, 0)],
-            ic[(0, 1)],
-            ic[(0, 2)],
-            ic[(1, 1)],
-            ic[(1, 2)],
-            ic[(2, 2)],
-        ]),
+        inertia: Some(crate::inertia::sym6(&ic)),
         ..Default::default()
     })
 }
