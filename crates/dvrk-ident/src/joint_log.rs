@@ -245,6 +245,39 @@ impl JointLog {
         self.q.ncols()
     }
 
+    /// The samples at `rows` (indices in time order), joints, coordinates and source
+    /// kept: a part of a log (Python's `log[a:b:step]`, the tests' training windows).
+    ///
+    /// ```rust
+    /// use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
+    /// use nalgebra::DMatrix;
+    ///
+    /// let log = JointLog {
+    ///     time: uniform_time(4, 200.0),
+    ///     q: DMatrix::from_fn(4, 1, |k, _| k as f64),
+    ///     dq: None,
+    ///     tau: DMatrix::zeros(4, 1),
+    ///     joint_names: vec!["q1".into()],
+    ///     coordinates: Coordinates::Model,
+    ///     source: "sim".into(),
+    /// };
+    /// let part = log.select_rows(&[1, 3]);
+    /// assert_eq!((part.time, part.q[(1, 0)]), (vec![0.005, 0.015], 3.0));
+    /// ```
+    pub fn select_rows(&self, rows: &[usize]) -> JointLog {
+        let pick =
+            |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
+        JointLog {
+            time: rows.iter().map(|&k| self.time[k]).collect(),
+            q: pick(&self.q),
+            dq: self.dq.as_ref().map(pick),
+            tau: pick(&self.tau),
+            joint_names: self.joint_names.clone(),
+            coordinates: self.coordinates,
+            source: self.source.clone(),
+        }
+    }
+
     /// Sample `k` as one row `[q, dq, tau]` (`3·dof` values; dq zeros when not
     /// measured) into `row`: the layout the block resampler and processor take.
     pub(crate) fn stacked_row(&self, k: usize, row: &mut [f64]) {

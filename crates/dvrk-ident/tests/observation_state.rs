@@ -12,7 +12,6 @@ use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::state::{ObservationState, MAGIC};
 use dvrk_ident::{FitResult, FitSettings, JointLog, Method};
 use dvrk_model::Model;
-use nalgebra::DMatrix;
 
 fn example() -> JointLog {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
@@ -21,15 +20,9 @@ fn example() -> JointLog {
 
 /// Rows `lo..hi` of a log.
 fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
-    let rows = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
     JointLog {
-        time: t.time[lo..hi].to_vec(),
-        q: rows(&t.q),
-        dq: t.dq.as_ref().map(rows),
-        tau: rows(&t.tau),
-        joint_names: t.joint_names.clone(),
-        coordinates: t.coordinates,
         source: format!("{} [{lo}..{hi}]", t.source),
+        ..t.select_rows(&(lo..hi).collect::<Vec<_>>())
     }
 }
 

@@ -13,6 +13,7 @@
 use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};
+use dvrk_test_support::regressor_times;
 use support::{assert_close, physical_params, random_params, random_state, rigid_only, Rng};
 
 const SAMPLES: usize = 20;
@@ -89,23 +90,6 @@ fn models() -> Vec<Model> {
     models
 }
 
-/// `H(q, q̇, q̈)·π` from the regressor.
-fn h_times(
-    model: &Model,
-    ws: &mut Workspace,
-    pi: &[f64],
-    q: &[f64],
-    dq: &[f64],
-    ddq: &[f64],
-) -> Vec<f64> {
-    let (n, p) = (model.dof(), model.n_params());
-    let mut h = vec![0.0; n * p];
-    model.regressor_into(ws, q, dq, ddq, &mut h);
-    (0..n)
-        .map(|r| (0..p).map(|c| h[r * p + c] * pi[c]).sum())
-        .collect()
-}
-
 #[test]
 fn fixed_links_model_has_fixed_frames_with_links() {
     let model = Model::from_toml_str(FIXED_LINKS, "fixed_links.toml").unwrap();
@@ -135,11 +119,11 @@ fn mass_matrix_columns_are_unit_acceleration_torques() {
                 random_params(model, &mut rng)
             };
             model.mass_matrix_into(&mut ws, &pi, &q, &mut m);
-            let rest = h_times(model, &mut ws, &pi, &q, &zeros, &zeros);
+            let rest = regressor_times(model, &mut ws, &pi, &q, &zeros, &zeros);
             for k in 0..n {
                 let mut e = zeros.clone();
                 e[k] = 1.0;
-                let col: Vec<f64> = h_times(model, &mut ws, &pi, &q, &zeros, &e)
+                let col: Vec<f64> = regressor_times(model, &mut ws, &pi, &q, &zeros, &e)
                     .iter()
                     .zip(&rest)
                     .map(|(a, b)| a - b)
@@ -168,10 +152,10 @@ fn gravity_and_nonlinear_effects_are_the_links_regressor() {
             let pi = random_params(model, &mut rng);
             let links = rigid_only(model, &pi);
             model.gravity_torque(&mut ws, &pi, &q, &mut g);
-            let expect = h_times(model, &mut ws, &links, &q, &zeros, &zeros);
+            let expect = regressor_times(model, &mut ws, &links, &q, &zeros, &zeros);
             assert_close(&format!("{}: gravity", model.name), &g, &expect, 1e-12);
             model.nonlinear_effects(&mut ws, &pi, &q, &dq, &mut nle);
-            let expect = h_times(model, &mut ws, &links, &q, &dq, &zeros);
+            let expect = regressor_times(model, &mut ws, &links, &q, &dq, &zeros);
             assert_close(
                 &format!("{}: nonlinear effects", model.name),
                 &nle,
@@ -193,7 +177,7 @@ fn inverse_dynamics_is_the_regressor_on_fixed_links() {
         let (q, dq, ddq) = random_state(&model, &mut rng);
         let pi = random_params(&model, &mut rng);
         model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let expect = h_times(&model, &mut ws, &pi, &q, &dq, &ddq);
+        let expect = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("fixed links: inverse dynamics", &tau, &expect, 1e-12);
     }
 }
@@ -208,7 +192,7 @@ fn forward_dynamics_into_inverts_the_regressor() {
         for _ in 0..SAMPLES {
             let (q, dq, ddq) = random_state(model, &mut rng);
             let pi = physical_params(model, &mut rng);
-            let mut tau = h_times(model, &mut ws, &pi, &q, &dq, &ddq);
+            let mut tau = regressor_times(model, &mut ws, &pi, &q, &dq, &ddq);
             model.add_known_forces(&q, &mut tau);
             model
                 .forward_dynamics_into(&mut ws, &pi, &q, &dq, &tau, &mut acc)

@@ -8,29 +8,13 @@
 use dvrk_test_support as support;
 
 use dvrk_model::{inertia, sign0, Model, Workspace};
+use dvrk_test_support::regressor_times;
 use support::{assert_close, id, Rng};
 
 const G: f64 = 9.81;
 
 fn load(text: &str) -> Model {
     Model::from_toml_str(text, "test.toml").unwrap_or_else(|e| panic!("{e}"))
-}
-
-/// Regressor times parameters, for the same sample.
-fn h_times(
-    model: &Model,
-    ws: &mut Workspace,
-    q: &[f64],
-    dq: &[f64],
-    ddq: &[f64],
-    pi: &[f64],
-) -> Vec<f64> {
-    let (n, p) = (model.dof(), model.n_params());
-    let mut h = vec![0.0; n * p];
-    model.regressor_into(ws, q, dq, ddq, &mut h);
-    (0..n)
-        .map(|r| (0..p).map(|c| h[r * p + c] * pi[c]).sum())
-        .collect()
 }
 
 // ------------------------------------------------------------------------------------
@@ -90,7 +74,7 @@ fn pendulum_closed_form() {
             lzz * ddq + m * G * (c[0] * q.cos() - c[1] * q.sin()) + fc * sign0(dq) + fv * dq + fo;
         let tau = id(&model, &mut ws, &pi, &[q], &[dq], &[ddq]);
         assert_close("pendulum tau", &tau, &[expect], 1e-12);
-        let hp = h_times(&model, &mut ws, &[q], &[dq], &[ddq], &pi);
+        let hp = regressor_times(&model, &mut ws, &pi, &[q], &[dq], &[ddq]);
         assert_close("pendulum H·pi", &hp, &[expect], 1e-12);
 
         let mut g = [0.0];
@@ -227,7 +211,7 @@ fn two_link_arm_matches_spong() {
             .collect();
         let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("two-link tau", &tau, &expect, 1e-12);
-        let hp = h_times(&model, &mut ws, &q, &dq, &ddq, &pi);
+        let hp = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("two-link H·pi", &hp, &expect, 1e-12);
 
         let m = model.mass_matrix(&mut ws, &pi, &q);
@@ -436,7 +420,7 @@ fn springs_friction_motor_inertia() {
         let expect = elements_expected(&q, &dq, &ddq);
         let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("elements tau", &tau, &expect, 1e-13);
-        let hp = h_times(&model, &mut ws, &q, &dq, &ddq, &pi);
+        let hp = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("elements H·pi", &hp, &expect, 1e-13);
     }
 
@@ -814,7 +798,7 @@ fn stribeck_friction_closed_form() {
         expect[1] += fs4 * sign0(dq[1]) * (-(dq[1] / vs).powi(2)).exp();
         let tau = id(&all, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("stribeck tau", &tau, &expect, 1e-13);
-        let hp = h_times(&all, &mut ws, &q, &dq, &ddq, &pi);
+        let hp = regressor_times(&all, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("stribeck H·pi", &hp, &expect, 1e-13);
     }
 

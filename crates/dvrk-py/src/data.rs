@@ -245,21 +245,7 @@ impl JointLogPy {
             .step_by(ind.step as usize)
             .map(|k| k as usize)
             .collect();
-        let t = &self.traj;
-        let pick =
-            |m: &DMatrix<f64>| DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)]);
-        Ok(JointLogPy::new(
-            JointLog {
-                time: rows.iter().map(|&k| t.time[k]).collect(),
-                q: pick(&t.q),
-                dq: t.dq.as_ref().map(pick),
-                tau: pick(&t.tau),
-                joint_names: t.joint_names.clone(),
-                coordinates: t.coordinates,
-                source: t.source.clone(),
-            },
-            None,
-        ))
+        Ok(JointLogPy::new(self.traj.select_rows(&rows), None))
     }
 
     /// The samples of several logs as one (same joints, coordinates and velocities;

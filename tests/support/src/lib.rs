@@ -327,6 +327,24 @@ pub fn id(
     tau
 }
 
+/// `H(q, q̇, q̈)·π` from the regressor (row-major `n × p`): the torque the identity
+/// `H·π = inverse dynamics` compares with.
+pub fn regressor_times(
+    model: &Model,
+    ws: &mut Workspace,
+    params: &[f64],
+    q: &[f64],
+    dq: &[f64],
+    ddq: &[f64],
+) -> Vec<f64> {
+    let (n, p) = (model.dof(), model.n_params());
+    let mut h = vec![0.0; n * p];
+    model.regressor_into(ws, q, dq, ddq, &mut h);
+    (0..n)
+        .map(|r| (0..p).map(|c| h[r * p + c] * params[c]).sum())
+        .collect()
+}
+
 /// Asserts `|a - b| <= tol * scale` element-wise, scale = max(1, max |b|).
 #[track_caller]
 pub fn assert_close(what: &str, a: &[f64], b: &[f64], tol: f64) {
