@@ -54,7 +54,7 @@ pub enum SignalError {
         /// The requested normalized cut-off.
         wn: f64,
     },
-    /// A cut-off in Hz outside [`butter::CUTOFF_RANGE_WN`] of the Nyquist frequency.
+    /// A cut-off in Hz outside 0.001 to 0.95 of the Nyquist frequency (`CUTOFF_RANGE_WN`).
     #[error("cut-off {cutoff_hz} Hz at a {rate_hz} Hz sampling rate is {wn} of the Nyquist frequency: it must be between {} and {} of it ({} to {} Hz)", butter::CUTOFF_RANGE_WN[0], butter::CUTOFF_RANGE_WN[1], butter::CUTOFF_RANGE_WN[0] * rate_hz / 2.0, butter::CUTOFF_RANGE_WN[1] * rate_hz / 2.0)]
     InvalidCutoff {
         /// Requested cut-off, Hz.

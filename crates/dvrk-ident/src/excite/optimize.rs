@@ -51,7 +51,7 @@
 //! depending on the build; with 4 draws per start and 4 hops they end between 209.9 and
 //! 216.9 with both builds (README, "Excitation trajectories").
 //!
-//! The L-BFGS ([`super::lbfgs`]) and the random numbers ([`super::rng`]) are our own
+//! The L-BFGS (`excite/lbfgs.rs`) and the random numbers (`excite/rng.rs`) are our own
 //! although the project prefers crates; their modules say what the crates measured.
 
 // `!(x > 0.0)`-style tests are deliberate: they also catch NaN, which a reversed

@@ -7,12 +7,12 @@
 //!
 //! 1. a timing survey of each log (validation, median step; an extra pass only for
 //!    timing with very many distinct steps, see `median`);
-//! 2. the observation: one R factor per coordinate ([`Observation::add_per_coordinate`],
+//! 2. the observation: one R factor per coordinate ([`crate::observation::PerCoordinate::add`],
 //!    fed batches of whole chunks counted from the log's start, so that the factors
 //!    are those of the log in memory to the last bit), and the range of each processed
 //!    torque. The weights are only known at the end of the log (WLS, SDP: the torque
 //!    ranges), so the weighted observation is formed afterwards from the
-//!    per-coordinate factors ([`Observation::weighted`], exact);
+//!    per-coordinate factors ([`crate::observation::Observation::weighted`], exact);
 //! 3. IRLS only: one pass per re-weighting for the residuals (the weights are then
 //!    applied to the same factors, without assembling again);
 //! 4. the metrics (sums of squares per coordinate) on the training log, and on the

@@ -76,7 +76,7 @@ impl LogFormat {
         !matches!(self, LogFormat::Wpi | LogFormat::Csv)
     }
 
-    /// Whether [`write`] writes the format (the CSV layouts and MCAP; the other
+    /// Whether [`write()`] writes the format (the CSV layouts and MCAP; the other
     /// recordings are read only).
     pub fn is_writable(self) -> bool {
         matches!(self, LogFormat::Wpi | LogFormat::Csv | LogFormat::Mcap)
