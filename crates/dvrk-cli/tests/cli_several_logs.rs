@@ -13,14 +13,7 @@ use dvrk_model::Model;
 use support::{example, files, run, s, temp_dir};
 
 fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
-    let rows = |m: &nalgebra::DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-    JointLog {
-        time: t.time[lo..hi].to_vec(),
-        q: rows(&t.q),
-        dq: t.dq.as_ref().map(rows),
-        tau: rows(&t.tau),
-        ..t.clone()
-    }
+    t.select_rows(&(lo..hi).collect::<Vec<_>>())
 }
 
 #[test]

@@ -48,16 +48,7 @@ fn synthetic(n: usize, with_dq: bool) -> JointLog {
 }
 
 fn block(traj: &JointLog, start: usize, len: usize) -> JointLog {
-    let rows = |m: &DMatrix<f64>| m.rows(start, len).into_owned();
-    JointLog {
-        time: traj.time[start..start + len].to_vec(),
-        q: rows(&traj.q),
-        dq: traj.dq.as_ref().map(rows),
-        tau: rows(&traj.tau),
-        joint_names: traj.joint_names.clone(),
-        coordinates: traj.coordinates,
-        source: traj.source.clone(),
-    }
+    traj.select_rows(&(start..start + len).collect::<Vec<_>>())
 }
 
 fn blocks(traj: &JointLog, size: usize) -> Vec<JointLog> {
