@@ -664,22 +664,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn format_names() {
-        for f in [
-            LogFormat::Wpi,
-            LogFormat::Csv,
-            LogFormat::Mcap,
-            LogFormat::Rosbag2,
-            LogFormat::Sqlite3,
-            LogFormat::Ros1,
-        ] {
-            assert_eq!(f.to_string().parse::<LogFormat>().unwrap(), f);
-        }
-        assert_eq!("2019".parse::<LogFormat>().unwrap(), LogFormat::Wpi);
-        assert!("xls".parse::<LogFormat>().is_err());
-    }
-
-    #[test]
     fn float_format_round_trips() {
         for v in [
             0.0,

@@ -1,7 +1,7 @@
 // Instruction counts per call of Pinocchio's algorithms on the Panda, the counterpart of
 // ../count.rs (see README.md beside this file): `count URDF ALGORITHM ITERATIONS` calls
 // crba, crba_sym (crba, then the upper triangle copied to the lower one), aba or rnea
-// ITERATIONS times, cycling over panda.cpp's 64 seeded random states. Built with
+// ITERATIONS times, cycling over the 64 seeded random states of states.hpp (panda.cpp's). Built with
 // run.sh's compiler, flags and libraries (replace panda.cpp by count.cpp); run under
 // `valgrind --tool=cachegrind --cache-sim=no` with two iteration counts, the difference of
 // the instruction totals over the difference of the counts is the count per call.
@@ -16,6 +16,8 @@
 #include <cstring>
 #include <random>
 #include <vector>
+
+#include "states.hpp"
 namespace pin = pinocchio;
 int main(int argc, char **argv) {
   const char *which = argv[2];
@@ -23,20 +25,9 @@ int main(int argc, char **argv) {
   pin::Model model;
   pin::urdf::buildModel(argv[1], model);
   pin::Data data(model);
-  const int nq = model.nq, nv = model.nv, n = 64;
-  std::mt19937_64 rng(16);
-  std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
-  std::vector<Eigen::VectorXd> q(n, Eigen::VectorXd(nq)), v(n, Eigen::VectorXd(nv)),
-      a(n, Eigen::VectorXd(nv)), tau(n);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < nq; ++j) {
-      const double lo = model.lowerPositionLimit[j], hi = model.upperPositionLimit[j];
-      q[i][j] = lo + (hi - lo) * unit(rng);
-    }
-    for (int j = 0; j < nv; ++j) v[i][j] = sym(rng);
-    for (int j = 0; j < nv; ++j) a[i][j] = sym(rng);
-    tau[i] = pin::rnea(model, data, q[i], v[i], a[i]);
-  }
+  const int nv = model.nv, n = 64;
+  const States st = random_states(model, data, n);
+  const auto &q = st.q, &v = st.v, &a = st.a, &tau = st.tau;
   double checksum = 0.0;
   for (long k = 0; k < iters; ++k) {
     const int i = k % n;

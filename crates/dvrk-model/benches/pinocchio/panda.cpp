@@ -31,6 +31,8 @@
 #include <string>
 #include <vector>
 
+#include "states.hpp"
+
 namespace pin = pinocchio;
 
 struct Timing {
@@ -75,21 +77,9 @@ int main(int argc, char **argv) {
   pin::Data data(model);
   const int nq = model.nq, nv = model.nv;
 
-  // Seeded random states: q within the joint limits, v and a in [-1, 1].
-  std::mt19937_64 rng(16);
-  std::uniform_real_distribution<double> unit(0.0, 1.0), sym(-1.0, 1.0);
-  std::vector<Eigen::VectorXd> q(n, Eigen::VectorXd(nq)), v(n, Eigen::VectorXd(nv)),
-      a(n, Eigen::VectorXd(nv)), tau(n);
-  for (int i = 0; i < n; ++i) {
-    for (int j = 0; j < nq; ++j) {
-      const double lo = model.lowerPositionLimit[j], hi = model.upperPositionLimit[j];
-      q[i][j] = lo + (hi - lo) * unit(rng);
-    }
-    for (int j = 0; j < nv; ++j) v[i][j] = sym(rng);
-    for (int j = 0; j < nv; ++j) a[i][j] = sym(rng);
-    // ABA's torques: those of the state's own motion, so that it returns a[i].
-    tau[i] = pin::rnea(model, data, q[i], v[i], a[i]);
-  }
+  // Seeded random states (states.hpp, shared with count.cpp).
+  const States st = random_states(model, data, n);
+  const auto &q = st.q, &v = st.v, &a = st.a, &tau = st.tau;
 
   // Enough passes for rounds of some 30 ms at ~1 µs per sample.
   const int reps = std::max(1, 32768 / n);

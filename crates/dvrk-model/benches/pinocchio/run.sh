@@ -77,7 +77,7 @@ if [[ "$march" != x86-64 ]]; then
   echo "warning: -march=$march does not match the wheel's libraries; expect a crash" >&2
 fi
 bin="$work/panda-$march"
-if [[ ! -x "$bin" || "$here/panda.cpp" -nt "$bin" || "$0" -nt "$bin" ]]; then
+if [[ ! -x "$bin" || "$here/panda.cpp" -nt "$bin" || "$here/states.hpp" -nt "$bin" || "$0" -nt "$bin" ]]; then
   echo "compiling $bin (Pinocchio $version, -O3 -DNDEBUG -march=$march; a minute or two)" >&2
   "$cxx" -O3 -DNDEBUG -march="$march" -std=c++17 -w "${defs[@]}" \
     -isystem "$prefix/include" -isystem "$prefix/include/pinocchio/deprecated" \
