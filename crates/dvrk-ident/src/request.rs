@@ -346,6 +346,19 @@ pub enum Streaming {
     Never,
 }
 
+impl Streaming {
+    /// Whether `logs` are read block by block: never when some are samples already in
+    /// memory, always under [`Streaming::Always`], and under [`Streaming::Auto`] when one
+    /// of them [`is_large`].
+    fn applies<'a>(self, logs: impl Iterator<Item = &'a LogSource> + Clone) -> bool {
+        let mut logs = logs;
+        if self == Streaming::Never || !logs.clone().all(|l| matches!(l, LogSource::File(_))) {
+            return false;
+        }
+        self == Streaming::Always || logs.any(|l| l.path().is_some_and(is_large))
+    }
+}
+
 /// Logs larger than this are fitted streamed under [`Streaming::Auto`]: about a tenth
 /// of a 24 GiB machine's memory in samples and their processed copies.
 pub const STREAM_ABOVE_BYTES: u64 = 256 << 20;
@@ -418,15 +431,10 @@ impl FitRequest {
 
     /// Whether the logs will be read block by block.
     pub fn streams(&self) -> bool {
-        let train = match (&self.train, self.streaming) {
-            (Training::Observations(_), _) | (_, Streaming::Never) => return false,
-            (Training::Logs(train), _) => train,
-        };
-        let mut logs = train.iter().chain(&self.test);
-        if !logs.clone().all(|l| matches!(l, LogSource::File(_))) {
-            return false;
+        match &self.train {
+            Training::Observations(_) => false,
+            Training::Logs(train) => self.streaming.applies(train.iter().chain(&self.test)),
         }
-        self.streaming == Streaming::Always || logs.any(|l| l.path().is_some_and(is_large))
     }
 
     /// The fit of `robot` (a built-in, description or URDF model; for observation
@@ -476,13 +484,7 @@ impl FitRequest {
                         .into(),
                 });
             }
-            let open = |logs: &[LogSource]| -> Result<Vec<LogReader>, IdentError> {
-                logs.iter()
-                    .filter_map(|l| l.path())
-                    .map(|p| Ok(read.open(p)?))
-                    .collect()
-            };
-            let (train, test) = (open(train)?, open(&self.test)?);
+            let (train, test) = (open_all(&read, train)?, open_all(&read, &self.test)?);
             let result = fit_stream_logs(
                 &model,
                 &train.iter().collect::<Vec<_>>(),
@@ -659,11 +661,7 @@ impl ObserveRequest {
     /// Whether the logs will be read block by block (the rule of
     /// [`FitRequest::streams`]).
     pub fn streams(&self) -> bool {
-        FitRequest {
-            streaming: self.streaming,
-            ..FitRequest::new(Training::Logs(self.logs.clone()))
-        }
-        .streams()
+        self.streaming.applies(self.logs.iter())
     }
 
     /// The observation state of `robot` (a built-in, description or URDF model).
@@ -679,12 +677,7 @@ impl ObserveRequest {
         crate::fit::no_delay_search(&settings, "an observation state")?;
         let read = self.read.for_model(settings.model(robot)?.as_ref());
         if self.streams() {
-            let readers = self
-                .logs
-                .iter()
-                .filter_map(|l| l.path())
-                .map(|p| Ok(read.open(p)?))
-                .collect::<Result<Vec<LogReader>, IdentError>>()?;
+            let readers = open_all(&read, &self.logs)?;
             return ObservationState::observe_stream(
                 robot,
                 &readers.iter().collect::<Vec<_>>(),
@@ -696,6 +689,15 @@ impl ObserveRequest {
         let data = read_all(&read, &self.logs, progress)?;
         ObservationState::observe(robot, &log_data(&data, &self.logs), &settings, progress)
     }
+}
+
+/// A block reader of every log's file, in order (files only: a streamed request holds
+/// no samples in memory, see [`Streaming`]).
+fn open_all(read: &ReadOptions, logs: &[LogSource]) -> Result<Vec<LogReader>, IdentError> {
+    logs.iter()
+        .filter_map(|l| l.path())
+        .map(|p| Ok(read.open(p)?))
+        .collect()
 }
 
 /// Every log in memory, in order (files read with `read`).
