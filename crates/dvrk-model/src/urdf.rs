@@ -11,6 +11,8 @@
 //! `acceleration`); `<dynamics>` (damping, friction) is ignored. Gravity is −9.81 m/s²
 //! along the root link's z axis.
 
+use std::collections::HashMap;
+
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
 use crate::builder::{assemble, ModelParts};
@@ -36,33 +38,67 @@ fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
     }
 }
 
-/// Refuses attributes with a namespace prefix (other than `xmlns` declarations) before
-/// urdf-rs sees the document: URDF attributes have none, and urdf-rs 0.10 writes the
-/// parsed document back through RustyXML 0.3, which panics on a prefixed attribute whose
-/// prefix it has not bound (found by fuzzing: `<parent :ink="a"/>` under a default
-/// `xmlns`; reproducer `fuzz/seeds/urdf/crash-unbound-attribute-prefix.urdf`). Anything
-/// else malformed is left to urdf-rs's own error.
-fn check_attribute_names(text: &str) -> Result<(), String> {
-    use quick_xml::events::Event;
-    let mut reader = quick_xml::Reader::from_str(text);
-    loop {
-        match reader.read_event() {
-            Ok(Event::Start(e)) | Ok(Event::Empty(e)) => {
-                for a in e.attributes().flatten() {
-                    let key = a.key.as_ref();
-                    if key.contains(&b':') && !key.starts_with(b"xmlns") {
-                        return Err(format!(
-                            "attribute `{}` of <{}>: URDF attributes have no namespace prefix",
-                            String::from_utf8_lossy(key),
-                            String::from_utf8_lossy(e.name().as_ref())
-                        ));
-                    }
-                }
+/// Refuses, before urdf-rs sees the document, the namespace uses that urdf-rs 0.10 cannot
+/// survive: it parses the text with RustyXML 0.3 and writes it back through RustyXML's
+/// `Display`, which panics on an element or attribute whose namespace has no bound prefix
+/// (found by fuzzing: `<parent :ink="a"/>` and the malformed `<parent :ink9"a"/>` under a
+/// default `xmlns`; reproducers `fuzz/seeds/urdf/crash-unbound-*.urdf`). The walk is the
+/// one RustyXML's writer makes, on the tree RustyXML's own parser builds, so whatever
+/// that parser accepts is checked; URDF uses no namespaces, so nothing valid is refused.
+/// A document RustyXML cannot parse is left to urdf-rs's own error.
+fn check_namespaces(text: &str) -> Result<(), String> {
+    let Ok(root) = text.parse::<xml::Element>() else {
+        return Ok(());
+    };
+    // RustyXML's builder binds these two before any declaration.
+    let prefixes: HashMap<&str, &str> = [(XML_NS, "xml"), (XMLNS_NS, "xmlns")].into();
+    check_element_namespaces(&root, &prefixes, None)
+}
+
+const XML_NS: &str = "http://www.w3.org/XML/1998/namespace";
+const XMLNS_NS: &str = "http://www.w3.org/2000/xmlns/";
+
+/// One element of [`check_namespaces`]: `prefixes` maps each namespace bound so far to its
+/// prefix, `default` is the default namespace in scope.
+fn check_element_namespaces<'a>(
+    e: &'a xml::Element,
+    prefixes: &HashMap<&'a str, &'a str>,
+    default: Option<&'a str>,
+) -> Result<(), String> {
+    let mut prefixes = prefixes.clone();
+    let mut default = default;
+    for ((name, ns), value) in &e.attributes {
+        match ns.as_deref() {
+            None if name == "xmlns" => default = Some(value.as_str()).filter(|v| !v.is_empty()),
+            Some(XMLNS_NS) => {
+                prefixes.insert(value.as_str(), name.as_str());
             }
-            Ok(Event::Eof) | Err(_) => return Ok(()),
-            Ok(_) => {}
+            _ => {}
         }
     }
+    let unbound = |what: String| format!("{what}: URDF uses no namespaces");
+    if e.ns.as_deref() != default && !prefixes.contains_key(e.ns.as_deref().unwrap_or("")) {
+        return Err(unbound(format!(
+            "element <{}> is in a namespace with no bound prefix",
+            e.name
+        )));
+    }
+    for (name, ns) in e.attributes.keys() {
+        if let Some(ns) = ns.as_deref() {
+            if !prefixes.contains_key(ns) {
+                return Err(unbound(format!(
+                    "attribute `{name}` of <{}> has a namespace prefix that is not bound",
+                    e.name
+                )));
+            }
+        }
+    }
+    for child in &e.children {
+        if let xml::Xml::ElementNode(child) = child {
+            check_element_namespaces(child, &prefixes, default)?;
+        }
+    }
+    Ok(())
 }
 
 impl Model {
@@ -72,7 +108,7 @@ impl Model {
             file: file.to_string(),
             message,
         };
-        check_attribute_names(text).map_err(err)?;
+        check_namespaces(text).map_err(err)?;
         let robot = urdf_rs::read_from_string(text).map_err(|e| {
             err(format!(
                 "cannot parse the document (malformed XML or a missing element): {e}"

@@ -809,6 +809,44 @@ fn error_malformed_xml() {
     assert_names(&msg, &[path.to_str().unwrap(), "URDF", "cannot parse"]);
 }
 
+/// urdf-rs 0.10 writes the document back through RustyXML, which panics on a namespace
+/// with no bound prefix: both fuzzing reproducers are refused with the file named, and the
+/// `xmlns:xacro` declaration that xacro leaves on real URDFs still loads.
+#[test]
+fn namespaces() {
+    let seeds = concat!(env!("CARGO_MANIFEST_DIR"), "/../../fuzz/seeds/urdf/");
+    for (seed, attribute) in [
+        ("crash-unbound-attribute-prefix.urdf", "`ink`"),
+        ("crash-unbound-malformed-attribute.urdf", "`ink9"),
+    ] {
+        let text = std::fs::read_to_string(format!("{seeds}{seed}")).unwrap();
+        assert_names(
+            &error(&text, seed),
+            &[
+                seed,
+                "URDF",
+                attribute,
+                "<parent>",
+                "not bound",
+                "no namespaces",
+            ],
+        );
+    }
+    let xacro = format!(
+        r#"<robot name="x" xmlns:xacro="http://www.ros.org/wiki/xacro"><link name="a"/>{}
+           <joint name="j" type="continuous"><parent link="a"/><child link="b"/></joint></robot>"#,
+        link(
+            "b",
+            1.0,
+            [0.0, 0.0, 0.5],
+            [0.0; 3],
+            [0.1, 0.0, 0.0, 0.1, 0.0, 0.1]
+        )
+    );
+    let model = Model::from_urdf_str(&xacro, "xacro.urdf").unwrap();
+    assert_eq!(model.dof(), 1);
+}
+
 #[test]
 fn error_structure() {
     let joint = |name: &str, parent: &str, child: &str| {
