@@ -11,7 +11,7 @@ use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::figure_bytes;
 use dvrk_ident::report::figures::excitation_figure;
-use dvrk_model::{Limit, Model};
+use dvrk_model::{BaseParameters, Limit, Model};
 use std::path::Path;
 
 use super::{emit, emit_summary};
@@ -160,59 +160,88 @@ pub fn run(args: Args) -> Result<()> {
     }
     let model = Model::load(&args.robot)?;
     let base = model.base_parameters()?;
-    let limits = match &args.limits {
-        Some(path) => {
-            let text = dvrk_model::input::read_text(Path::new(path))
-                .with_context(|| format!("{path}: cannot read"))?;
-            Limits::from_toml_str(&model, &text, path)?
-        }
-        None => Limits::of_model(&model),
-    };
-    let criterion = args.criterion;
-    // Limit errors found while optimizing name where the limits come from.
-    let limits_source = match &args.limits {
-        Some(path) => path.clone(),
-        None => format!("{} (limits of the description)", model.source),
-    };
-    let name_limits = |e: optimize::ExciteError| -> anyhow::Error {
+    let limits = LimitsOf::load(&args, &model)?;
+    match &args.evaluate {
+        Some(path) => evaluate(&args, path, &model, &base, &limits, stdout_taken),
+        None => search(&args, &model, &base, &limits),
+    }
+}
+
+/// The limits of a run and where they come from, so that a limit error found while
+/// optimizing names the file (or the description) that set it.
+struct LimitsOf {
+    limits: Limits,
+    source: String,
+}
+
+impl LimitsOf {
+    fn load(args: &Args, model: &Model) -> Result<LimitsOf> {
+        Ok(match &args.limits {
+            Some(path) => {
+                let text = dvrk_model::input::read_text(Path::new(path))
+                    .with_context(|| format!("{path}: cannot read"))?;
+                LimitsOf {
+                    limits: Limits::from_toml_str(model, &text, path)?,
+                    source: path.clone(),
+                }
+            }
+            None => LimitsOf {
+                limits: Limits::of_model(model),
+                source: format!("{} (limits of the description)", model.source),
+            },
+        })
+    }
+
+    fn name(&self, e: optimize::ExciteError) -> anyhow::Error {
         match e {
-            optimize::ExciteError::ImpossibleLimits(m) if !m.starts_with(&limits_source) => {
-                anyhow::anyhow!("{limits_source}: impossible limits: {m}")
+            optimize::ExciteError::ImpossibleLimits(m) if !m.starts_with(&self.source) => {
+                anyhow::anyhow!("{}: impossible limits: {m}", self.source)
             }
             other => other.into(),
         }
+    }
+}
+
+/// `--evaluate`: the criterion and the dense feasibility check of a given trajectory.
+fn evaluate(
+    args: &Args,
+    path: &str,
+    model: &Model,
+    base: &BaseParameters,
+    limits: &LimitsOf,
+    stdout_taken: bool,
+) -> Result<()> {
+    let traj = match &args.pick {
+        Some(name) => FourierTrajectory::from_wpi_file(path, name)?,
+        None => FourierTrajectory::from_json_file(path)?,
     };
-
-    if let Some(path) = &args.evaluate {
-        let traj = match &args.pick {
-            Some(name) => FourierTrajectory::from_wpi_file(path, name)?,
-            None => FourierTrajectory::from_json_file(path)?,
-        };
-        let ev = optimize::evaluate(
-            &model,
-            &base,
-            &traj,
-            &limits,
-            criterion,
-            args.samples_per_harmonic,
-            args.check_rate,
-        )
-        .map_err(name_limits)?;
-        if let Some(path) = &args.plot {
-            let mut outputs = Outputs::new();
-            outputs.add(Path::new(path), plot(&model, &traj, &limits.joint, path)?)?;
-            outputs.commit()?;
-        }
-        return print_evaluation(&ev, args.json, stdout_taken);
+    let ev = optimize::evaluate(
+        model,
+        base,
+        &traj,
+        &limits.limits,
+        args.criterion,
+        args.samples_per_harmonic,
+        args.check_rate,
+    )
+    .map_err(|e| limits.name(e))?;
+    if let Some(path) = &args.plot {
+        let mut outputs = Outputs::new();
+        outputs.add(
+            Path::new(path),
+            plot(model, &traj, &limits.limits.joint, path)?,
+        )?;
+        outputs.commit()?;
     }
+    print_evaluation(&ev, args.json, stdout_taken)
+}
 
-    if limits.is_empty() {
-        eprintln!("dvrk-ident: warning: no limits (the motion is unconstrained)");
-    }
-    let opts = ExciteOptions {
+/// The optimizer's settings from the flags.
+fn options(args: &Args) -> Result<ExciteOptions> {
+    Ok(ExciteOptions {
         order: args.order,
         base_frequency_hz: args.f0,
-        criterion,
+        criterion: args.criterion,
         samples_per_harmonic: args.samples_per_harmonic,
         starts: args.starts,
         refine: args.refine,
@@ -228,13 +257,27 @@ pub fn run(args: Args) -> Result<()> {
         },
         check_rate_hz: args.check_rate,
         ..ExciteOptions::default()
-    };
+    })
+}
+
+/// The search for a new trajectory, its outputs and a one-line summary on stderr.
+fn search(args: &Args, model: &Model, base: &BaseParameters, limits: &LimitsOf) -> Result<()> {
+    if limits.limits.is_empty() {
+        eprintln!("dvrk-ident: warning: no limits (the motion is unconstrained)");
+    }
+    let opts = options(args)?;
     if args.rate <= 0.0 || !args.rate.is_finite() {
         bail!("--rate must be positive");
     }
     let started = std::time::Instant::now();
-    let result = optimize::optimize(&model, &base, &limits, &opts, &crate::progress::Bars::new())
-        .map_err(name_limits)?;
+    let result = optimize::optimize(
+        model,
+        base,
+        &limits.limits,
+        &opts,
+        &crate::progress::Bars::new(),
+    )
+    .map_err(|e| limits.name(e))?;
     let doc = serde_json::to_string_pretty(&result.to_json_value())?;
     // Every output built before the first is written.
     let mut outputs = Outputs::new();
@@ -243,22 +286,28 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(path) = &args.csv {
         let csv =
-            dvrk_ident::excite::setpoints::setpoints_csv(&model, &result.trajectory, args.rate)?;
+            dvrk_ident::excite::setpoints::setpoints_csv(model, &result.trajectory, args.rate)?;
         outputs.add(Path::new(path), csv)?;
     }
     if let Some(path) = &args.plot {
         outputs.add(
             Path::new(path),
-            plot(&model, &result.trajectory, &limits.joint, path)?,
+            plot(model, &result.trajectory, &limits.limits.joint, path)?,
         )?;
     }
     outputs.commit()?;
     if args.out.is_none() {
         emit(&doc)?;
     }
+    eprintln!("{}", summary(&result, started.elapsed().as_secs_f64()));
+    Ok(())
+}
+
+/// The one-line summary of a search that took `seconds`.
+fn summary(result: &optimize::Excitation, seconds: f64) -> String {
     let ev = &result.evaluation;
     let w = ev.feasibility.worst.as_ref();
-    eprintln!(
+    format!(
         "excite: {} = {:.6} ({} starts, refined: {}), feasible on {} samples at {} Hz{}, {:.1} s",
         ev.criterion.name,
         ev.criterion.value,
@@ -276,9 +325,8 @@ pub fn run(args: Args) -> Result<()> {
             "; tightest: {} {} inside by {:.3e}",
             w.limit, w.quantity, -w.excess
         )),
-        started.elapsed().as_secs_f64()
-    );
-    Ok(())
+        seconds
+    )
 }
 
 /// The preview figure of `traj` against `limits`, 500 samples per second, rendered for

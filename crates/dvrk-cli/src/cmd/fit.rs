@@ -274,6 +274,16 @@ fn flag_error(e: IdentError) -> anyhow::Error {
 /// The human summary: solver, consistency and per-joint errors.
 pub fn table(r: &FitResult) -> String {
     let mut s = String::new();
+    parameters(&mut s, r);
+    solver(&mut s, r);
+    delays_and_prior(&mut s, r);
+    errors(&mut s, r);
+    logs(&mut s, r);
+    s
+}
+
+/// The base parameters and each link's mass and centre of mass.
+fn parameters(s: &mut String, r: &FitResult) {
     let _ = writeln!(s, "base parameters (value ± std):");
     for b in &r.base_parameters {
         let _ = writeln!(s, "  {:>12.6} ± {:<10.2e} {}", b.value, b.std, b.expression);
@@ -286,6 +296,10 @@ pub fn table(r: &FitResult) -> String {
             l.frame, l.link, l.mass, l.com[0], l.com[1], l.com[2]
         );
     }
+}
+
+/// The problem's size, the solver's outcome and the links that are not consistent.
+fn solver(s: &mut String, r: &FitResult) {
     let _ = writeln!(
         s,
         "robot {}  method {}  rows {}  condition number {:.1}",
@@ -312,6 +326,10 @@ pub fn table(r: &FitResult) -> String {
             format!(" (not: {})", bad.join(", "))
         }
     );
+}
+
+/// The torque delays (given or estimated, ms) and the prior, when the fit has them.
+fn delays_and_prior(s: &mut String, r: &FitResult) {
     let delays = &r.settings.processing.delay_s;
     if !delays.is_empty() {
         let ms: Vec<String> = match &r.delay {
@@ -342,6 +360,10 @@ pub fn table(r: &FitResult) -> String {
             p.weight
         );
     }
+}
+
+/// Per joint, the training and test errors.
+fn errors(s: &mut String, r: &FitResult) {
     let _ = writeln!(
         s,
         "{:<8} {:>12} {:>12} {:>12} {:>12}",
@@ -358,8 +380,11 @@ pub fn table(r: &FitResult) -> String {
         };
         let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");
     }
-    // Each log with what was read of it (a recording's topics) and, when there are
-    // several, its own errors.
+}
+
+/// Each log with what was read of it (a recording's topics) and, when there are several,
+/// its own errors.
+fn logs(s: &mut String, r: &FitResult) {
     let _ = writeln!(s, "logs (samples after processing, sha256):");
     let logs: Vec<_> = r.inputs.iter().filter(|i| i.role != "prior").collect();
     for i in &logs {
@@ -380,5 +405,4 @@ pub fn table(r: &FitResult) -> String {
             let _ = writeln!(s, "        relative error {}", errors.join(" "));
         }
     }
-    s
 }
