@@ -71,10 +71,6 @@ pub fn simulate_args(robot: &str, trajectory: &str, out: &Path, extra: &[&str]) 
     args
 }
 
-// Not every test binary makes scratch folders.
-#[allow(unused_imports)]
-pub use dvrk_test_support::temp_dir;
-
 /// Runs `simulate psm` of the bundled example (its parameters along its trajectory,
 /// `examples/psm_trajectory.json`) into `out` with the flags `extra`, which must
 /// succeed: its stdout.
@@ -87,6 +83,10 @@ pub fn simulate_example(out: &Path, extra: &[&str]) -> String {
         extra,
     ))
 }
+
+// Not every test binary makes scratch folders.
+#[allow(unused_imports)]
+pub use dvrk_test_support::temp_dir;
 
 /// Path of a file in the repository's `examples/`, as a command-line argument.
 pub fn example(name: &str) -> String {
