@@ -4,31 +4,26 @@
 //! `validate` applies them from it.
 
 mod support;
-use support::{example, run, s, temp_dir};
+use dvrk_test_support::{f64s, read_json};
+use support::{fit_example_args, run, run_json, run_ok, s, simulate_example, temp_dir};
 
 const TRUTH_S: [f64; 7] = [0.0, 0.010, 0.050, 0.010, 0.050, 0.0, 0.010];
 
 fn simulate(out: &std::path::Path, seed: &str) {
     let delays: Vec<String> = TRUTH_S.iter().map(|d| d.to_string()).collect();
-    let (ok, _, err) = run(&[
-        "simulate",
-        "psm",
-        "--params",
-        &example("psm_params.json"),
-        "--trajectory",
-        &example("psm_trajectory.json"),
-        "--periods",
-        "3",
-        "--noise",
-        "0.002",
-        "--seed",
-        seed,
-        "--delay",
-        &delays.join(","),
-        "--out",
-        &s(out),
-    ]);
-    assert!(ok, "{err}");
+    simulate_example(
+        out,
+        &[
+            "--periods",
+            "3",
+            "--noise",
+            "0.002",
+            "--seed",
+            seed,
+            "--delay",
+            &delays.join(","),
+        ],
+    );
 }
 
 #[test]
@@ -37,37 +32,17 @@ fn fit_recovers_simulated_delays_and_validate_applies_them() {
     let (train, test) = (dir.join("train.mcap"), dir.join("test.mcap"));
     simulate(&train, "1");
     simulate(&test, "2");
+    let (train, test) = (s(&train), s(&test));
     let result = dir.join("result.json");
-    let (ok, out, err) = run(&[
-        "fit",
-        &s(&train),
-        "--robot",
-        "psm",
-        "--method",
-        "ols",
-        "--delay",
-        "auto",
-        "--test",
-        &s(&test),
-        "--out",
-        &s(&result),
-    ]);
-    assert!(ok, "{err}");
+    // An OLS fit of `train`, tested on `test`.
+    let fit = [
+        "fit", &train, "--robot", "psm", "--method", "ols", "--test", &test,
+    ];
+    let out = run_ok(&[&fit[..], &["--delay", "auto", "--out", &s(&result)]].concat());
     assert!(out.contains("torque delays (estimated, ms)"), "{out}");
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&result).unwrap()).unwrap();
-    let found: Vec<f64> = doc["delay"]["delay_s"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
-    let applied: Vec<f64> = doc["settings"]["processing"]["delay_s"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect();
+    let doc = read_json(&result);
+    let found = f64s(&doc["delay"]["delay_s"]);
+    let applied = f64s(&doc["settings"]["processing"]["delay_s"]);
     assert_eq!(found, applied);
     println!(
         "delays found (ms): {:?}",
@@ -81,9 +56,7 @@ fn fit_recovers_simulated_delays_and_validate_applies_them() {
         assert!(e > 0.0 && e < 1e-3, "std {e}");
     }
     // `validate` processes the test log with the result's delays: the fit's test metrics.
-    let (ok, out, err) = run(&["validate", &s(&result), &s(&test), "--json"]);
-    assert!(ok, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let v = run_json(&["validate", &s(&result), &test, "--json"]);
     let validated = &v["validations"][0]["metrics"]["relative_error"];
     let tested = &doc["metrics"]["test"]["relative_error"];
     for j in 0..7 {
@@ -95,19 +68,7 @@ fn fit_recovers_simulated_delays_and_validate_applies_them() {
         );
     }
     // Fitted without the delays, the same log is explained worse on the delayed joints.
-    let (ok, out, err) = run(&[
-        "fit",
-        &s(&train),
-        "--robot",
-        "psm",
-        "--method",
-        "ols",
-        "--test",
-        &s(&test),
-        "--json",
-    ]);
-    assert!(ok, "{err}");
-    let plain: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let plain = run_json(&[&fit[..], &["--json"]].concat());
     let plain = &plain["metrics"]["test"]["relative_error"];
     for j in [2, 4] {
         assert!(
@@ -123,21 +84,20 @@ fn fit_recovers_simulated_delays_and_validate_applies_them() {
 
 #[test]
 fn bad_delays_are_refused_with_the_flag_named() {
-    let log = example("psm_excitation.mcap");
     for (delay, wanted) in [
         ("-0.01", "within [0, 1] s"),
         ("0.01,0.02", "2 delays for 7 coordinates"),
         ("soon", "`soon` is not a delay"),
         ("2", "within [0, 1] s"),
     ] {
-        let (ok, out, err) = run(&["fit", &log, "--robot", "psm", "--delay", delay]);
+        let (ok, out, err) = run(&fit_example_args(&["--delay", delay]));
         assert!(!ok, "--delay {delay} accepted: {out}");
         assert!(
             err.contains("--delay") && err.contains(wanted),
             "--delay {delay}: {err}"
         );
     }
-    let (ok, _, err) = run(&["fit", &log, "--robot", "psm", "--delay", "auto", "--stream"]);
+    let (ok, _, err) = run(&fit_example_args(&["--delay", "auto", "--stream"]));
     assert!(!ok);
     assert!(err.contains("needs the logs in memory"), "{err}");
 }

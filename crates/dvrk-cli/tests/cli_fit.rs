@@ -3,9 +3,10 @@
 
 mod support;
 use std::path::Path;
-use support::{run, temp_dir, write_model_log};
+use support::{run, run_json, run_ok, temp_dir, write_model_log};
 
 use dvrk_model::Model;
+use dvrk_test_support::read_json;
 
 /// A noise-free MTM log in model coordinates (the 2019 CSV layout) from consistent
 /// parameters; `phase` changes the motion so train and test differ.
@@ -28,6 +29,23 @@ fn write_mtm_log(path: &Path, phase: f64) -> Vec<f64> {
     pi
 }
 
+/// The arguments of `fit` on a log of [`write_mtm_log`] (the 2019 CSV layout at
+/// 200 Hz), then `extra`.
+fn fit_mtm_args<'a>(log: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut args = vec![
+        "fit",
+        log.to_str().unwrap(),
+        "--robot",
+        "mtm",
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+    ];
+    args.extend_from_slice(extra);
+    args
+}
+
 #[test]
 fn fit_validate_and_exports() {
     let dir = temp_dir("fit");
@@ -36,34 +54,27 @@ fn fit_validate_and_exports() {
     write_mtm_log(&two, 1.0);
     let out = dir.join("result.json");
     let wpi = dir.join("params.json");
-    let (ok, stdout, err) = run(&[
-        "fit",
-        one.to_str().unwrap(),
-        "--robot",
-        "mtm",
-        "--format",
-        "wpi-csv",
-        "--rate",
-        "200",
-        "--method",
-        "wls",
-        "--test",
-        two.to_str().unwrap(),
-        "--test-window",
-        "1000",
-        "--trim",
-        "20",
-        "--cutoff",
-        "20",
-        "--out",
-        out.to_str().unwrap(),
-        "--wpi-json",
-        wpi.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    let stdout = run_ok(&fit_mtm_args(
+        &one,
+        &[
+            "--method",
+            "wls",
+            "--test",
+            two.to_str().unwrap(),
+            "--test-window",
+            "1000",
+            "--trim",
+            "20",
+            "--cutoff",
+            "20",
+            "--out",
+            out.to_str().unwrap(),
+            "--wpi-json",
+            wpi.to_str().unwrap(),
+        ],
+    ));
     assert!(stdout.contains("test rel"), "{stdout}");
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let doc = read_json(&out);
     for key in [
         "method",
         "parameters",
@@ -97,11 +108,9 @@ fn fit_validate_and_exports() {
             b["expression"]
         );
     }
-    let wpi_doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&wpi).unwrap()).unwrap();
-    assert_eq!(wpi_doc.as_object().unwrap().len(), 10);
+    assert_eq!(read_json(&wpi).as_object().unwrap().len(), 10);
     // validate reproduces the fit's test metrics.
-    let (ok, stdout, err) = run(&[
+    let v = run_json(&[
         "validate",
         out.to_str().unwrap(),
         two.to_str().unwrap(),
@@ -113,8 +122,6 @@ fn fit_validate_and_exports() {
         "1000",
         "--json",
     ]);
-    assert!(ok, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
     let a = &v["validations"][0]["metrics"]["relative_error"];
     let b = &doc["metrics"]["test"]["relative_error"];
     for j in 0..7 {
@@ -155,17 +162,13 @@ fn fit_errors_exit_non_zero_and_write_nothing() {
     ]);
     assert!(!ok);
     assert!(err.contains("bad.csv"), "{err}");
-    // A headered log that lacks one of the robot's joints.
+    // A headered log that lacks one of the robot's joints: the PSM's measured joints
+    // but the last, the jaw.
     let csv = dir.join("missing_joint.csv");
     let mut text = String::from("time");
-    let joints = [
-        "outer_yaw",
-        "outer_pitch",
-        "outer_insertion",
-        "outer_roll",
-        "outer_wrist_pitch",
-        "outer_wrist_yaw",
-    ];
+    let psm = Model::builtin("psm").unwrap();
+    let (jaw, joints) = psm.measured.joints.split_last().unwrap();
+    assert_eq!(jaw, "jaw");
     for j in joints {
         text += &format!(",position.{j},effort.{j}");
     }
@@ -194,20 +197,10 @@ fn fit_errors_exit_non_zero_and_write_nothing() {
     let text = std::fs::read_to_string(&short).unwrap();
     let few: String = text.lines().take(450).map(|l| format!("{l}\n")).collect();
     std::fs::write(&short, few).unwrap();
-    let (ok, _, err) = run(&[
-        "fit",
-        short.to_str().unwrap(),
-        "--robot",
-        "mtm",
-        "--format",
-        "wpi-csv",
-        "--rate",
-        "200",
-        "--method",
-        "ols",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (ok, _, err) = run(&fit_mtm_args(
+        &short,
+        &["--method", "ols", "--out", out.to_str().unwrap()],
+    ));
     assert!(!ok);
     assert!(
         err.contains("short.csv") && err.contains("do not determine"),
@@ -234,29 +227,19 @@ fn cable_fit_prints_a_description_line() {
         text += &format!("{x},{},{tau}\n", 0.1 * dir);
     }
     std::fs::write(&sweep, text).unwrap();
-    let (ok, stdout, err) = run(&[
+    let args = [
         "cable-fit",
         sweep.to_str().unwrap(),
         "--degree",
         "2",
         "--drop",
         "20",
-        "--json",
-    ]);
-    assert!(ok, "{err}");
-    let doc: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    ];
+    let doc = run_json(&[&args[..], &["--json"]].concat());
     for (c, p) in doc["polynomial"].as_array().unwrap().iter().zip(poly) {
         assert!((c.as_f64().unwrap() - p).abs() < 1e-9, "{doc}");
     }
-    let (ok, stdout, _) = run(&[
-        "cable-fit",
-        sweep.to_str().unwrap(),
-        "--degree",
-        "2",
-        "--drop",
-        "20",
-    ]);
-    assert!(ok);
+    let stdout = run_ok(&args);
     assert!(
         stdout.contains("known_force = { polynomial = ["),
         "{stdout}"

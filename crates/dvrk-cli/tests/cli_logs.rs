@@ -4,8 +4,12 @@
 //! naming the problem, a non-zero exit and no output file.
 
 mod support;
+use std::ffi::OsStr;
+use std::fmt::Debug;
 use std::path::Path;
-use support::{example, run, s, temp_dir};
+use support::{
+    example, fit_example_args, run, run_json, run_ok, s, simulate_args, simulate_example, temp_dir,
+};
 
 use dvrk_ident::log;
 use dvrk_model::Model;
@@ -15,31 +19,23 @@ const NOISE: f64 = 0.002;
 
 /// The generating parameters of the bundled log, projected on the base parameters.
 fn true_base_parameters(model: &Model) -> Vec<f64> {
-    let text = std::fs::read_to_string(example("psm_params.json")).unwrap();
-    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let map = doc["parameters"].as_object().unwrap();
-    let pi = model
-        .params_from_named(
-            map.iter().map(|(k, v)| (k.as_str(), v.as_f64().unwrap())),
-            "psm_params.json",
-        )
-        .unwrap();
+    let pi = dvrk_test_support::examples::psm_params(model);
     model.base_parameters().unwrap().project(&pi)
 }
 
-/// The README's main command (default processing), with a method and JSON output.
-fn fit_example(method: &str) -> serde_json::Value {
-    let log = example("psm_excitation.mcap");
-    let (ok, out, err) = run(&["fit", &log, "--robot", "psm", "--method", method, "--json"]);
-    assert!(ok, "{err}");
-    serde_json::from_str(&out).unwrap()
+/// The README's main command with the flags `extra` and JSON output: the result
+/// document.
+fn fit_example(extra: &[&str]) -> serde_json::Value {
+    let mut args = fit_example_args(extra);
+    args.push("--json".into());
+    run_json(&args)
 }
 
 #[test]
 fn ols_fit_of_the_example_recovers_the_generating_base_parameters() {
     let model = Model::builtin("psm").unwrap();
     let truth = true_base_parameters(&model);
-    let r = fit_example("ols");
+    let r = fit_example(&["--method", "ols"]);
     assert_eq!(r["solver"]["converged"], true);
     assert_eq!(r["rows"], 7 * (2222 - 2 * 200));
     let base = r["base_parameters"].as_array().unwrap();
@@ -76,19 +72,7 @@ fn filtering_the_torques_biases_the_example_fit() {
     // Coulomb friction steps in the measured torques but not in the regressor.
     let model = Model::builtin("psm").unwrap();
     let truth = true_base_parameters(&model);
-    let log = example("psm_excitation.mcap");
-    let (ok, out, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
-        "--method",
-        "ols",
-        "--filter-torque",
-        "--json",
-    ]);
-    assert!(ok, "{err}");
-    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let r = fit_example(&["--method", "ols", "--filter-torque"]);
     assert_eq!(r["settings"]["processing"]["filter_torque"], true);
     let worst = r["base_parameters"]
         .as_array()
@@ -107,7 +91,7 @@ fn filtering_the_torques_biases_the_example_fit() {
 fn sdp_fit_of_the_example_converges_and_is_physically_consistent() {
     let model = Model::builtin("psm").unwrap();
     let truth = true_base_parameters(&model);
-    let r = fit_example("sdp");
+    let r = fit_example(&["--method", "sdp"]);
     assert_eq!(r["solver"]["converged"], true, "{}", r["solver"]);
     assert_eq!(r["physically_consistent"], true);
     for c in r["consistency"].as_array().unwrap() {
@@ -135,27 +119,21 @@ fn sdp_fit_of_the_example_converges_and_is_physically_consistent() {
 fn the_example_log_is_what_its_readme_command_writes() {
     let dir = temp_dir("logs-regenerate");
     let out = dir.join("again.mcap");
-    let (ok, _, err) = run(&[
-        "simulate",
-        "psm",
-        "--params",
-        &example("psm_params.json"),
-        "--trajectory",
-        &example("psm_trajectory.json"),
-        "--periods",
-        "2",
-        "--rate",
-        "200",
-        "--noise",
-        "0.002",
-        "--seed",
-        "1",
-        "--topic",
-        "/PSM1/measured_js",
-        "--out",
-        &s(&out),
-    ]);
-    assert!(ok, "{err}");
+    simulate_example(
+        &out,
+        &[
+            "--periods",
+            "2",
+            "--rate",
+            "200",
+            "--noise",
+            "0.002",
+            "--seed",
+            "1",
+            "--topic",
+            "/PSM1/measured_js",
+        ],
+    );
     let a = log::read(example("psm_excitation.mcap"), None, None).unwrap();
     let b = log::read(&out, None, None).unwrap();
     assert_eq!(a.len(), 2222);
@@ -168,25 +146,21 @@ fn the_example_log_is_what_its_readme_command_writes() {
     if let Some(anchor) = dvrk_test_support::shared("anchors/wpi2019_excitation_trajectories.json")
     {
         let picked = dir.join("picked.mcap");
-        let (ok, _, err) = run(&[
-            "simulate",
+        run_ok(&simulate_args(
             "psm",
-            "--params",
-            &example("psm_params.json"),
-            "--trajectory",
             &s(&anchor),
-            "--pick",
-            "psm_one",
-            "--periods",
-            "2",
-            "--noise",
-            "0.002",
-            "--seed",
-            "1",
-            "--out",
-            &s(&picked),
-        ]);
-        assert!(ok, "{err}");
+            &picked,
+            &[
+                "--pick",
+                "psm_one",
+                "--periods",
+                "2",
+                "--noise",
+                "0.002",
+                "--seed",
+                "1",
+            ],
+        ));
         let c = log::read(&picked, None, None).unwrap();
         assert_eq!((&c.q, &c.tau), (&a.q, &a.tau));
     }
@@ -199,23 +173,10 @@ fn the_example_log_is_what_its_readme_command_writes() {
 fn simulate_then_convert_round_trips_values() {
     let dir = temp_dir("logs-roundtrip");
     let mcap = dir.join("sim.mcap");
-    let (ok, out, err) = run(&[
-        "simulate",
-        "psm",
-        "--params",
-        &example("psm_params.json"),
-        "--trajectory",
-        &example("psm_trajectory.json"),
-        "--duration",
-        "1.5",
-        "--noise",
-        "0.01",
-        "--seed",
-        "9",
-        "--out",
-        &s(&mcap),
-    ]);
-    assert!(ok, "{err}");
+    let out = simulate_example(
+        &mcap,
+        &["--duration", "1.5", "--noise", "0.01", "--seed", "9"],
+    );
     assert!(out.contains("300 samples"), "{out}");
     let original = log::read(&mcap, None, None).unwrap();
     assert_eq!(original.len(), 300);
@@ -300,12 +261,7 @@ fn simulate_then_convert_round_trips_values() {
 
 #[test]
 fn fit_reads_mcap_with_topic_time_and_resample_flags() {
-    let log = example("psm_excitation.mcap");
-    let (ok, out, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
+    let r = fit_example(&[
         "--method",
         "ols",
         "--cutoff",
@@ -318,26 +274,16 @@ fn fit_reads_mcap_with_topic_time_and_resample_flags() {
         "100",
         "--trim",
         "50",
-        "--json",
     ]);
-    assert!(ok, "{err}");
-    let r: serde_json::Value = serde_json::from_str(&out).unwrap();
     // 1111 samples at 100 Hz (11.105 s), 50 trimmed at each end.
     assert_eq!(r["rows"], 7 * (1111 - 100));
-    let (ok, _, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
-        "--topic",
-        "/PSM2/measured_js",
-    ]);
+    let (ok, _, err) = run(&fit_example_args(&["--topic", "/PSM2/measured_js"]));
     assert!(!ok);
     assert!(err.contains("/PSM2/measured_js"), "{err}");
 }
 
 /// Asserts a failure: non-zero exit, the message contains every word, no output file.
-fn assert_fails(args: &[&str], words: &[&str], output: Option<&Path>) {
+fn assert_fails<A: AsRef<OsStr> + Debug>(args: &[A], words: &[&str], output: Option<&Path>) {
     let (ok, _, err) = run(args);
     assert!(!ok, "{args:?} succeeded");
     for w in words {
@@ -357,19 +303,7 @@ fn assert_fails(args: &[&str], words: &[&str], output: Option<&Path>) {
 fn bad_logs_fail_naming_the_problem_and_write_nothing() {
     let dir = temp_dir("logs-errors");
     let mcap = dir.join("sim.mcap");
-    let (ok, _, err) = run(&[
-        "simulate",
-        "psm",
-        "--params",
-        &example("psm_params.json"),
-        "--trajectory",
-        &example("psm_trajectory.json"),
-        "--duration",
-        "1",
-        "--out",
-        &s(&mcap),
-    ]);
-    assert!(ok, "{err}");
+    simulate_example(&mcap, &["--duration", "1"]);
     let csv = dir.join("sim.csv");
     assert!(run(&["convert", &s(&mcap), &s(&csv)]).0);
     let text = std::fs::read_to_string(&csv).unwrap();
@@ -475,55 +409,25 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
 
     // Simulation inputs: NaN noise, a trajectory for another robot, bad parameters.
     let sim_out = dir.join("sim_out.mcap");
-    let sim = |extra: &[&str]| -> Vec<String> {
-        let mut a: Vec<String> = [
-            "simulate",
-            "psm",
-            "--params",
-            &example("psm_params.json"),
-            "--trajectory",
-            &example("psm_trajectory.json"),
-            "--out",
-            &s(&sim_out),
-        ]
-        .iter()
-        .map(|x| x.to_string())
-        .collect();
-        a.extend(extra.iter().map(|x| x.to_string()));
-        a
-    };
-    let args = sim(&["--noise", "nan"]);
-    assert_fails(
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-        &["noise"],
-        Some(&sim_out),
-    );
-    let args = sim(&["--rate", "0"]);
-    assert_fails(
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-        &["rate"],
-        Some(&sim_out),
-    );
-    let mut args = sim(&[]);
-    args[1] = "mtm".into();
-    assert_fails(
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-        &["psm_params.json"],
-        Some(&sim_out),
-    );
     let short = dir.join("traj6.json");
     std::fs::write(
         &short,
         r#"{"order": 1, "base_frequency_hz": 0.2, "q0": [0,0,0,0,0,0], "a": [[0],[0],[0],[0],[0],[0]], "b": [[0],[0],[0],[0],[0],[0]]}"#,
     )
     .unwrap();
-    let mut args = sim(&[]);
-    args[5] = s(&short);
-    assert_fails(
-        &args.iter().map(String::as_str).collect::<Vec<_>>(),
-        &["6 coordinates"],
-        Some(&sim_out),
-    );
+    let (trajectory, short) = (example("psm_trajectory.json"), s(&short));
+    for (robot, trajectory, extra, word) in [
+        ("psm", &trajectory, &["--noise", "nan"][..], "noise"),
+        ("psm", &trajectory, &["--rate", "0"], "rate"),
+        ("mtm", &trajectory, &[], "psm_params.json"),
+        ("psm", &short, &[], "6 coordinates"),
+    ] {
+        assert_fails(
+            &simulate_args(robot, trajectory, &sim_out, extra),
+            &[word],
+            Some(&sim_out),
+        );
+    }
     // Coordinates the target format cannot hold.
     assert_fails(
         &[
@@ -556,18 +460,17 @@ fn stream_gives_the_same_result_document_and_table() {
         &["--method", "wls", "--filter-torque", "--cutoff", "8"],
     ];
     for extra in variants {
-        let mut args = vec!["fit", log.as_str(), "--robot", "psm"];
-        args.extend_from_slice(extra);
+        let args = fit_example_args(extra);
         let outputs: Vec<(serde_json::Value, String)> = [false, true]
             .iter()
             .map(|&stream| {
                 let mut a = args.clone();
                 if stream {
-                    a.push("--stream");
+                    a.push("--stream".into());
                 }
                 let (ok, table, err) = run(&a);
                 assert!(ok, "{a:?}: {err}");
-                a.push("--json");
+                a.push("--json".into());
                 let (ok, out, err) = run(&a);
                 assert!(ok, "{a:?}: {err}");
                 let mut doc: serde_json::Value = serde_json::from_str(&out).unwrap();

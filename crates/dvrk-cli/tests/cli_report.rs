@@ -2,8 +2,9 @@
 //! the files a user opens, their content, and errors that leave nothing behind.
 
 mod support;
+use dvrk_test_support::read_json;
 use std::path::PathBuf;
-use support::{example, files, run, temp_dir};
+use support::{example, files, fit_example_args, run, run_json, run_ok, temp_dir};
 
 #[test]
 fn fit_report_then_report_command_show_the_result() {
@@ -11,11 +12,7 @@ fn fit_report_then_report_command_show_the_result() {
     let out = dir.join("result.json");
     let rep = dir.join("fit-report");
     let log = example("psm_excitation.mcap");
-    let (ok, _, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
+    run_ok(&fit_example_args(&[
         "--method",
         "wls",
         "--cutoff",
@@ -28,8 +25,7 @@ fn fit_report_then_report_command_show_the_result() {
         out.to_str().unwrap(),
         "--report",
         rep.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
+    ]));
     let names = files(&rep);
     for stem in [
         "torque_1_training",
@@ -42,8 +38,7 @@ fn fit_report_then_report_command_show_the_result() {
         assert!(names.contains(&format!("{stem}.png")), "{names:?}");
     }
     let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
-    let result: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let result = read_json(&out);
     for key in ["train", "test"] {
         for v in result["metrics"][key]["relative_error"].as_array().unwrap() {
             let cell = format!("<td>{:.4}</td>", v.as_f64().unwrap());
@@ -55,7 +50,7 @@ fn fit_report_then_report_command_show_the_result() {
     // `report` on the same result: its recorded logs by default, plus an excitation.
     let rep2 = dir.join("report");
     let traj = PathBuf::from(example("psm_trajectory.json"));
-    let (ok, stdout, err) = run(&[
+    let stdout = run_ok(&[
         "report",
         out.to_str().unwrap(),
         "--out",
@@ -63,7 +58,6 @@ fn fit_report_then_report_command_show_the_result() {
         "--excitation",
         traj.to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     assert_eq!(
         stdout.trim(),
         rep2.join("report.html").display().to_string()
@@ -146,13 +140,9 @@ fn bad_requests_fail_cleanly_and_write_nothing() {
 
 #[test]
 fn progress_bars_stay_off_pipes_and_quiet_is_global() {
-    let log = example("psm_excitation.mcap");
     for extra in [&[][..], &["--quiet"][..]] {
-        let mut args = vec![
-            "fit", &log, "--robot", "psm", "--cutoff", "none", "--method", "ols",
-        ];
-        args.extend_from_slice(extra);
-        let (ok, stdout, err) = run(&args);
+        let args = [&["--cutoff", "none", "--method", "ols"], extra].concat();
+        let (ok, stdout, err) = run(&fit_example_args(&args));
         assert!(ok, "{err}");
         assert!(stdout.contains("physically consistent"));
         // stderr is a pipe here: no bar, no spinner, nothing at all.
@@ -167,11 +157,7 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
     let dir = temp_dir("stribeck");
     let out = dir.join("r.json");
     let log = example("psm_excitation.mcap");
-    let (ok, _, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
+    run_ok(&fit_example_args(&[
         "--cutoff",
         "none",
         "--method",
@@ -180,23 +166,13 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
         "0.2",
         "--out",
         out.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
-    let result: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    ]));
+    let result = read_json(&out);
     assert_eq!(result["settings"]["stribeck_velocity"], 0.2);
     let params = result["parameters"].as_object().unwrap();
     assert!(params.contains_key("Fs1") && params.contains_key("Fs16"));
-    let (ok, stdout, err) = run(&[
-        "validate",
-        out.to_str().unwrap(),
-        &log,
-        "--cutoff",
-        "none",
-        "--json",
-    ]);
-    assert!(ok, "{err}");
-    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let validate = ["validate", out.to_str().unwrap(), &log, "--cutoff", "none"];
+    let v = run_json(&[&validate[..], &["--json"]].concat());
     let again = v["validations"][0]["metrics"]["relative_error"]
         .as_array()
         .unwrap();
@@ -209,8 +185,7 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
     // The fit's own metrics beside the log's: in the document and side by side in the
     // table.
     assert_eq!(v["fit"]["train"], result["metrics"]["train"]);
-    let (ok, table, err) = run(&["validate", out.to_str().unwrap(), &log, "--cutoff", "none"]);
-    assert!(ok, "{err}");
+    let table = run_ok(&validate);
     let header = table.lines().nth(1).unwrap();
     assert!(
         header.contains("fit train rel") && header.contains("this log rel"),
@@ -229,7 +204,7 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
         (q1[0] - q1[2]).abs() < 1e-4,
         "the same log: the same error, {table}"
     );
-    let (ok, _, err) = run(&[
+    run_ok(&[
         "report",
         out.to_str().unwrap(),
         &log,
@@ -238,7 +213,6 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
         "--out",
         dir.join("rep").to_str().unwrap(),
     ]);
-    assert!(ok, "{err}");
     let html = std::fs::read_to_string(dir.join("rep/report.html")).unwrap();
     assert!(html.contains("<td class=l>Fs16</td>"));
     // One metrics table: the fit's training errors and this log's side by side.
@@ -257,11 +231,8 @@ fn fit_with_excitation_uses_its_period_and_draws_it() {
     let log = example("psm_excitation.mcap");
     let traj = PathBuf::from(example("psm_trajectory.json"));
     let rep = dir.join("rep");
-    let (ok, stdout, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
+    // An OLS fit of the log tested on itself, with the excitation and JSON output.
+    let fit = [
         "--cutoff",
         "none",
         "--method",
@@ -271,34 +242,17 @@ fn fit_with_excitation_uses_its_period_and_draws_it() {
         "--excitation",
         traj.to_str().unwrap(),
         "--json",
-        "--report",
-        rep.to_str().unwrap(),
-    ]);
-    assert!(ok, "{err}");
-    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    ];
+    let r = run_json(&fit_example_args(
+        &[&fit[..], &["--report", rep.to_str().unwrap()]].concat(),
+    ));
     assert_eq!(r["settings"]["test_window"], 1111);
     assert_eq!(r["metrics"]["test"]["samples"], 1111);
     assert!(files(&rep).contains(&"excitation.svg".to_string()));
     // An explicit --test-window wins.
-    let (ok, stdout, err) = run(&[
-        "fit",
-        &log,
-        "--robot",
-        "psm",
-        "--cutoff",
-        "none",
-        "--method",
-        "ols",
-        "--test",
-        &log,
-        "--excitation",
-        traj.to_str().unwrap(),
-        "--test-window",
-        "300",
-        "--json",
-    ]);
-    assert!(ok, "{err}");
-    let r: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    let r = run_json(&fit_example_args(
+        &[&fit[..], &["--test-window", "300"]].concat(),
+    ));
     assert_eq!(r["metrics"]["test"]["samples"], 300);
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -5,12 +5,15 @@
 
 mod support;
 
+use std::path::Path;
+
 use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::{FitSettings, JointLog, Method};
 use dvrk_model::Model;
-use support::{example, files, run, s, temp_dir};
+use dvrk_test_support::read_json;
+use support::{example, files, run, run_ok, s, temp_dir};
 
 fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
     t.select_rows(&(lo..hi).collect::<Vec<_>>())
@@ -40,29 +43,33 @@ fn several_logs_of_mixed_formats() {
     log::write(&c, &part(&whole, 1700, whole.len()), LogFormat::Csv).unwrap();
 
     let out = dir.join("r.json");
-    let (ok, stdout, err) = run(&[
-        "fit",
-        &s(&a),
-        &s(&bag),
-        "--robot",
-        "psm",
-        "--method",
-        "wls",
-        "--test",
-        &s(&c),
-        "--test-window",
-        "100",
-        "--out",
-        &s(&out),
-    ]);
-    assert!(ok, "{err}");
+    // The WLS fit of a and b tested on c, into `out`, with the flags `extra`.
+    let fit = |out: &Path, extra: &[&str]| {
+        let (a, bag, c, out) = (s(&a), s(&bag), s(&c), s(out));
+        let args = [
+            "fit",
+            &a,
+            &bag,
+            "--robot",
+            "psm",
+            "--method",
+            "wls",
+            "--test",
+            &c,
+            "--test-window",
+            "100",
+            "--out",
+            &out,
+        ];
+        run_ok(&[&args[..], extra].concat())
+    };
+    let stdout = fit(&out, &[]);
     assert!(
         stdout.contains("logs (samples after processing, sha256)"),
         "{stdout}"
     );
     assert!(stdout.contains("b_bag (/measured_js)"), "{stdout}");
-    let doc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    let doc = read_json(&out);
     let inputs = doc["inputs"].as_array().unwrap();
     let roles: Vec<&str> = inputs.iter().map(|i| i["role"].as_str().unwrap()).collect();
     assert_eq!(roles, ["train", "train", "test"]);
@@ -104,25 +111,8 @@ fn several_logs_of_mixed_formats() {
 
     // Streamed: the same document but for the solver's time.
     let streamed = dir.join("s.json");
-    let (ok, _, err) = run(&[
-        "fit",
-        &s(&a),
-        &s(&bag),
-        "--robot",
-        "psm",
-        "--method",
-        "wls",
-        "--test",
-        &s(&c),
-        "--test-window",
-        "100",
-        "--out",
-        &s(&streamed),
-        "--stream",
-    ]);
-    assert!(ok, "{err}");
-    let sdoc: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&streamed).unwrap()).unwrap();
+    fit(&streamed, &["--stream"]);
+    let sdoc = read_json(&streamed);
     for key in [
         "parameters",
         "metrics",

@@ -19,6 +19,8 @@ use std::path::{Path, PathBuf};
 use dvrk_model::{inertia, Model, ParamKind, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector4};
 
+pub mod examples;
+
 /// The repository's root folder.
 pub fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")

@@ -2,6 +2,8 @@
 // Each test binary compiles this module and uses only part of it.
 #![allow(dead_code)]
 
+use std::ffi::OsStr;
+use std::fmt::Debug;
 use std::path::Path;
 use std::process::Command;
 
@@ -10,7 +12,7 @@ use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
 
 /// Runs `dvrk-ident ARGS` with stdout and stderr piped: (success, stdout, stderr).
-pub fn run(args: &[&str]) -> (bool, String, String) {
+pub fn run<A: AsRef<OsStr>>(args: &[A]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
         .args(args)
         .output()
@@ -20,6 +22,66 @@ pub fn run(args: &[&str]) -> (bool, String, String) {
         String::from_utf8(out.stdout).unwrap(),
         String::from_utf8(out.stderr).unwrap(),
     )
+}
+
+/// Runs `dvrk-ident ARGS`, which must succeed (the failure shows the arguments and
+/// stderr): its stdout.
+#[track_caller]
+pub fn run_ok<A: AsRef<OsStr> + Debug>(args: &[A]) -> String {
+    let (ok, out, err) = run(args);
+    assert!(ok, "{args:?}: {err}");
+    out
+}
+
+/// [`run_ok`] of a command that prints a JSON document (`--json`): the document.
+#[track_caller]
+pub fn run_json<A: AsRef<OsStr> + Debug>(args: &[A]) -> serde_json::Value {
+    let out = run_ok(args);
+    serde_json::from_str(&out).unwrap_or_else(|e| panic!("{args:?}: stdout is not JSON: {e}"))
+}
+
+/// The arguments of the README's main command, `fit examples/psm_excitation.mcap --robot
+/// psm` (the bundled simulated PSM log), then `extra`.
+pub fn fit_example_args(extra: &[&str]) -> Vec<String> {
+    let mut args: Vec<String> = ["fit", &example("psm_excitation.mcap"), "--robot", "psm"]
+        .map(String::from)
+        .into();
+    args.extend(extra.iter().map(|x| x.to_string()));
+    args
+}
+
+/// The arguments of `simulate ROBOT` with the bundled example's parameters
+/// (`examples/psm_params.json`) along the trajectory file `trajectory`, into `out`, then
+/// `extra`: the simulations the tests make their logs with.
+pub fn simulate_args(robot: &str, trajectory: &str, out: &Path, extra: &[&str]) -> Vec<String> {
+    let params = example("psm_params.json");
+    let mut args: Vec<String> = [
+        "simulate",
+        robot,
+        "--params",
+        &params,
+        "--trajectory",
+        trajectory,
+        "--out",
+        &s(out),
+    ]
+    .map(String::from)
+    .into();
+    args.extend(extra.iter().map(|x| x.to_string()));
+    args
+}
+
+/// Runs `simulate psm` of the bundled example (its parameters along its trajectory,
+/// `examples/psm_trajectory.json`) into `out` with the flags `extra`, which must
+/// succeed: its stdout.
+#[track_caller]
+pub fn simulate_example(out: &Path, extra: &[&str]) -> String {
+    run_ok(&simulate_args(
+        "psm",
+        &example("psm_trajectory.json"),
+        out,
+        extra,
+    ))
 }
 
 // Not every test binary makes scratch folders.
@@ -46,55 +108,11 @@ pub fn files(dir: &Path) -> Vec<String> {
     v
 }
 
-pub const ARM: &str = r#"<?xml version="1.0"?>
-<!-- a three-joint arm for the export test -->
-<robot name="arm">
-  <link name="world"/>
-  <link name="l1">
-    <inertial>
-      <origin xyz="0 0 0.1" rpy="0 0 0"/>
-      <mass value="2"/>
-      <inertia ixx="0.02" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.01"/>
-    </inertial>
-    <visual><geometry><cylinder radius="0.05" length="0.2"/></geometry></visual>
-  </link>
-  <joint name="j1" type="revolute">
-    <origin xyz="0 0 0.1" rpy="0 0 0"/>
-    <parent link="world"/>
-    <child link="l1"/>
-    <axis xyz="0 0 1"/>
-    <limit lower="-2" upper="2" effort="20" velocity="2"/>
-  </joint>
-  <link name="l2">
-    <inertial>
-      <origin xyz="0.15 0 0" rpy="0 0 0"/>
-      <mass value="1.5"/>
-      <inertia ixx="0.002" ixy="0" ixz="0" iyy="0.012" iyz="0" izz="0.012"/>
-    </inertial>
-  </link>
-  <joint name="j2" type="revolute">
-    <origin xyz="0 0 0.2" rpy="1.5707963267948966 0 0"/>
-    <parent link="l1"/>
-    <child link="l2"/>
-    <axis xyz="0 0 1"/>
-    <limit lower="-2" upper="2" effort="20" velocity="2"/>
-  </joint>
-  <link name="l3">
-    <inertial>
-      <origin xyz="0.1 0.01 0" rpy="0.2 0 0"/>
-      <mass value="0.8"/>
-      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.004" iyz="0" izz="0.004"/>
-    </inertial>
-  </link>
-  <joint name="j3" type="revolute">
-    <origin xyz="0.3 0 0" rpy="0 0 0"/>
-    <parent link="l2"/>
-    <child link="l3"/>
-    <axis xyz="0 0 1"/>
-    <limit lower="-2" upper="2" effort="20" velocity="2"/>
-  </joint>
-</robot>
-"#;
+/// The three-joint arm of the export and prior tests (a URDF with nominal inertials).
+pub const ARM: &str = include_str!(concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../../tests/fixtures/three_joint_arm.urdf"
+));
 
 /// A noise-free 200 Hz log of `count` samples in the 2019 CSV layout (model
 /// coordinates): `motion(j, t)` is coordinate `j`'s `(q, q̇, q̈)` at `t` (s), the torques
