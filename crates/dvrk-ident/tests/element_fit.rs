@@ -9,22 +9,14 @@ use dvrk_test_support as support;
 use dvrk_ident::estimate::sdp::{solve_sdp, SdpOptions};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::{DMatrix, DVector};
+use support::models::one_link_with;
 use support::Rng;
 
-const PENDULUM: &str = r#"
-name = "drag_pendulum"
-convention = "modified"
-coordinates = ["q1"]
-
-[[frames]]
-name = "link"
-parent = "base"
-alpha = "pi/2"
-theta = "q1"
-inertia = true
-friction = true
-quadratic_viscous = { max = 1.0 }
-"#;
+/// The pendulum: one link with friction and quadratic viscous friction of at most 1.
+fn pendulum() -> Model {
+    let text = one_link_with("friction = true\nquadratic_viscous = { max = 1.0 }\n");
+    Model::from_toml_str(&text, "pendulum.toml").unwrap()
+}
 
 /// Column of `Fq1` (after the ten link parameters and `Fc1 Fv1 Fo1`).
 const FQ: usize = 13;
@@ -72,7 +64,7 @@ fn truth(model: &Model, fq: f64) -> Vec<f64> {
 
 #[test]
 fn sdp_recovers_quadratic_viscous_friction() {
-    let model = Model::from_toml_str(PENDULUM, "pendulum.toml").unwrap();
+    let model = pendulum();
     assert_eq!(model.param_names()[FQ], "Fq1");
     let pi = truth(&model, 0.05);
     let (h, tau) = observe(&model, &pi, 400);
@@ -99,7 +91,7 @@ fn sdp_recovers_quadratic_viscous_friction() {
 
 #[test]
 fn sdp_holds_quadratic_viscous_friction_at_its_bounds() {
-    let model = Model::from_toml_str(PENDULUM, "pendulum.toml").unwrap();
+    let model = pendulum();
     for (fq, bound) in [(-0.05, 0.0), (1.5, 1.0)] {
         let (h, tau) = observe(&model, &truth(&model, fq), 400);
         let r = r_factor(&h, &tau);

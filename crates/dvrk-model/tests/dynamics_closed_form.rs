@@ -8,7 +8,8 @@
 use dvrk_test_support as support;
 
 use dvrk_model::{inertia, sign0, Model, Workspace};
-use dvrk_test_support::regressor_times;
+use dvrk_test_support::{regressor_times, PlanarTwoLink};
+use support::models::one_link_with;
 use support::{assert_close, id, Rng};
 
 const G: f64 = 9.81;
@@ -26,24 +27,13 @@ fn load(text: &str) -> Model {
 /// at (cx, cy, cz) is at height cx·sin q + cy·cos q and
 /// `tau = Lzz·q̈ + m g (cx cos q − cy sin q) + Fc sign(q̇) + Fv q̇ + Fo`, where
 /// `Lzz = Izz_c + m (cx² + cy²)` is the inertia about the joint axis.
-const PENDULUM: &str = r#"
-name = "pendulum"
-convention = "modified"
-coordinates = ["q1"]
-gravity = [0.0, 0.0, -9.81]
-
-[[frames]]
-name = "link"
-parent = "base"
-alpha = "pi/2"
-theta = "q1"
-inertia = true
-friction = true
-"#;
+fn pendulum() -> Model {
+    load(&one_link_with("friction = true\n"))
+}
 
 #[test]
 fn pendulum_closed_form() {
-    let model = load(PENDULUM);
+    let model = pendulum();
     assert_eq!(model.n_params(), 13);
     assert_eq!(
         model.param_names(),
@@ -121,80 +111,28 @@ theta = "q2"
 inertia = true
 "#;
 
-struct TwoLink {
-    l1: f64,
-    m1: f64,
-    m2: f64,
-    lc1: f64,
-    lc2: f64,
-    i1: f64,
-    i2: f64,
-}
-
-impl TwoLink {
-    fn mass(&self, q: &[f64]) -> [[f64; 2]; 2] {
-        let TwoLink {
-            l1,
-            m1,
-            m2,
-            lc1,
-            lc2,
-            i1,
-            i2,
-        } = *self;
-        let c2 = q[1].cos();
-        let m11 = m1 * lc1 * lc1 + m2 * (l1 * l1 + lc2 * lc2 + 2.0 * l1 * lc2 * c2) + i1 + i2;
-        let m12 = m2 * (lc2 * lc2 + l1 * lc2 * c2) + i2;
-        let m22 = m2 * lc2 * lc2 + i2;
-        [[m11, m12], [m12, m22]]
-    }
-
-    fn coriolis(&self, q: &[f64], dq: &[f64]) -> [f64; 2] {
-        let h = -self.m2 * self.l1 * self.lc2 * q[1].sin();
-        [
-            h * (2.0 * dq[0] * dq[1] + dq[1] * dq[1]),
-            -h * dq[0] * dq[0],
-        ]
-    }
-
-    fn gravity(&self, q: &[f64]) -> [f64; 2] {
-        let TwoLink {
-            l1,
-            m1,
-            m2,
-            lc1,
-            lc2,
-            ..
-        } = *self;
-        let g2 = m2 * lc2 * G * (q[0] + q[1]).cos();
-        [(m1 * lc1 + m2 * l1) * G * q[0].cos() + g2, g2]
-    }
-}
-
 #[test]
 fn two_link_arm_matches_spong() {
     let model = load(TWO_LINK);
     let mut ws = Workspace::new(&model);
-    let arm = TwoLink {
-        l1: 0.55,
-        m1: 2.1,
-        m2: 1.4,
-        lc1: 0.3,
-        lc2: 0.22,
-        i1: 0.04,
-        i2: 0.025,
+    let arm = PlanarTwoLink {
+        mass: [2.1, 1.4],
+        com: [0.3, 0.22],
+        inertia: [0.04, 0.025],
+        length: 0.55,
+        gravity: G,
     };
     // The centre of mass may sit off the plane (z) and the inertia may have products and
     // other moments: with parallel joint axes along z only Izz about the com matters.
     let p1 = inertia::barycentric_from_standard(
-        arm.m1,
-        [arm.lc1, 0.0, 0.05],
-        [0.02, 0.001, 0.003, 0.03, -0.002, arm.i1],
+        arm.mass[0],
+        [arm.com[0], 0.0, 0.05],
+        [0.02, 0.001, 0.003, 0.03, -0.002, arm.inertia[0]],
     );
     let p2 = inertia::barycentric_from_standard(
-        arm.m2,
-        [arm.lc2, 0.0, -0.04],
-        [0.01, -0.002, 0.001, 0.015, 0.004, arm.i2],
+        arm.mass[1],
+        [arm.com[1], 0.0, -0.04],
+        [0.01, -0.002, 0.001, 0.015, 0.004, arm.inertia[1]],
     );
     let pi: Vec<f64> = p1.iter().chain(&p2).copied().collect();
 
@@ -203,12 +141,11 @@ fn two_link_arm_matches_spong() {
         let q = rng.vec(2, -3.0, 3.0);
         let dq = rng.vec(2, -2.0, 2.0);
         let ddq = rng.vec(2, -4.0, 4.0);
-        let mm = arm.mass(&q);
-        let c = arm.coriolis(&q, &dq);
-        let g = arm.gravity(&q);
-        let expect: Vec<f64> = (0..2)
-            .map(|r| mm[r][0] * ddq[0] + mm[r][1] * ddq[1] + c[r] + g[r])
-            .collect();
+        let (q2, dq2) = ([q[0], q[1]], [dq[0], dq[1]]);
+        let mm = arm.mass_matrix(q2);
+        let c = arm.coriolis(q2, dq2);
+        let g = arm.gravity_torque(q2);
+        let expect = arm.torque(q2, dq2, [ddq[0], ddq[1]]);
         let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("two-link tau", &tau, &expect, 1e-12);
         let hp = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
@@ -248,24 +185,7 @@ fn two_link_arm_matches_spong() {
 /// 0.2 m off the axis. The slider's vertical force is `m (q̈2 + g)` whatever the rotation,
 /// and the rotation sees a constant inertia `Izz_c + m ρ²` (ρ = horizontal distance of the
 /// com from the axis) and no Coriolis term (the slide does not change ρ).
-const VERTICAL_SLIDER: &str = r#"
-name = "vertical slider"
-convention = "modified"
-coordinates = ["q1", "q2"]
-
-[[frames]]
-name = "turntable"
-parent = "base"
-theta = "q1"
-
-[[frames]]
-name = "slider"
-parent = "turntable"
-a = 0.2
-theta = 0.3
-d = "q2 + 0.1"
-inertia = true
-"#;
+const VERTICAL_SLIDER: &str = include_str!("fixtures/vertical_slider.toml");
 
 #[test]
 fn prismatic_along_gravity() {
@@ -488,88 +408,12 @@ motor_inertia = true
 // ------------------------------------------------------------------------------------
 
 /// Standard DH: frame i = RotZ(θi)·TransZ(di)·TransX(ai)·RotX(αi) from frame i−1.
-const STANDARD_RPR: &str = r#"
-name = "rpr standard"
-convention = "standard"
-coordinates = ["q1", "q2", "q3"]
-gravity = [1.0, -2.0, -9.0]
-
-[[frames]]
-name = "j1"
-parent = "base"
-theta = "q1 + 0.1"
-d = 0.3
-a = 0.2
-alpha = "pi/2"
-inertia = true
-
-[[frames]]
-name = "j2"
-parent = "j1"
-theta = 0.4
-d = "q2 + 0.05"
-a = 0.1
-alpha = "-pi/2"
-inertia = true
-
-[[frames]]
-name = "j3"
-parent = "j2"
-theta = "q3 - 0.2"
-d = 0.07
-a = 0.15
-alpha = "pi/3"
-inertia = true
-"#;
+const STANDARD_RPR: &str = include_str!("fixtures/rpr_standard.toml");
 
 /// The same chain in modified DH (RotX(α)·TransX(a)·RotZ(θ)·TransZ(d)): each standard
 /// frame is a moving frame (θ, d) followed by a fixed frame (α, a) that carries the link,
 /// since TransX(a)·RotX(α) = RotX(α)·TransX(a).
-const MODIFIED_RPR: &str = r#"
-name = "rpr modified"
-convention = "modified"
-coordinates = ["q1", "q2", "q3"]
-gravity = [1.0, -2.0, -9.0]
-
-[[frames]]
-name = "j1"
-parent = "base"
-theta = "q1 + 0.1"
-d = 0.3
-
-[[frames]]
-name = "l1"
-parent = "j1"
-a = 0.2
-alpha = "pi/2"
-inertia = true
-
-[[frames]]
-name = "j2"
-parent = "l1"
-theta = 0.4
-d = "q2 + 0.05"
-
-[[frames]]
-name = "l2"
-parent = "j2"
-a = 0.1
-alpha = "-pi/2"
-inertia = true
-
-[[frames]]
-name = "j3"
-parent = "l2"
-theta = "q3 - 0.2"
-d = 0.07
-
-[[frames]]
-name = "l3"
-parent = "j3"
-a = 0.15
-alpha = "pi/3"
-inertia = true
-"#;
+const MODIFIED_RPR: &str = include_str!("fixtures/rpr_modified.toml");
 
 /// Hand-written standard DH transform, for the poses.
 fn dh_standard(theta: f64, d: f64, a: f64, alpha: f64) -> nalgebra::Matrix4<f64> {
@@ -650,36 +494,15 @@ fn standard_dh_equals_modified_equivalent() {
 // Known forces
 // ------------------------------------------------------------------------------------
 
-const KNOWN: &str = r#"
-name = "known"
-convention = "modified"
-coordinates = ["q1", "q2"]
-
-[[frames]]
-name = "a"
-parent = "base"
-theta = "q1"
-friction = true
-
-# along defaults to the joint value q2: tau2 += p(q2), p = 0.5 s³ − s² + 2 s + 0.25
-[[frames]]
-name = "b"
-parent = "base"
-theta = "q2"
-known_force = { polynomial = [0.5, -1.0, 2.0, 0.25] }
-
-# on a fixed frame with an explicit direction s = q1 − 3 q2 + 0.2, p = 3 s + 1
-[[frames]]
-name = "c"
-parent = "base"
-known_force = { polynomial = [3.0, 1.0], along = "q1 - 3*q2 + 0.2" }
-"#;
+/// Friction on q1; known polynomial forces along q2 (`p = 0.5 s³ − s² + 2 s + 0.25`) and,
+/// on a fixed frame, along `s = q1 − 3 q2 + 0.2` (`p = 3 s + 1`).
+const KNOWN: &str = include_str!("fixtures/known_forces.toml");
 
 #[test]
 fn known_force_polynomial() {
     let model = load(KNOWN);
     assert!(model.has_known_forces());
-    assert!(!load(PENDULUM).has_known_forces());
+    assert!(!pendulum().has_known_forces());
     let mut rng = Rng::new(5);
     for _ in 0..10 {
         let q = rng.vec(2, -2.0, 2.0);

@@ -23,34 +23,7 @@ fn load(text: &str) -> Model {
 /// A link on q1 with friction and quadratic viscous friction (nominal 0.02, at most
 /// 0.5), quadratic viscous friction alone on the coupled value `s = 2·q1 − q2`, and a
 /// sliding link on q2 so that the mass matrix is positive definite.
-const DRAG: &str = r#"
-name = "drag"
-convention = "modified"
-coordinates = ["q1", "q2"]
-
-[[frames]]
-name = "link"
-parent = "base"
-alpha = "pi/2"
-theta = "q1"
-inertia = true
-friction = true
-quadratic_viscous = { nominal = 0.02, max = 0.5 }
-nominal = { mass = 1.0, com = [0.1, 0.0, 0.0], inertia = [0.01, 0.0, 0.0, 0.01, 0.0, 0.01] }
-
-[[frames]]
-name = "coupled"
-parent = "base"
-theta = "2*q1 - q2"
-quadratic_viscous = true
-
-[[frames]]
-name = "slide"
-parent = "base"
-d = "q2"
-inertia = true
-nominal = { mass = 2.0, com = [0.0, 0.0, 0.0], inertia = [0.02, 0.0, 0.0, 0.02, 0.0, 0.02] }
-"#;
+const DRAG: &str = include_str!("fixtures/drag.toml");
 
 /// Columns of `Fq1`, `Fq2`.
 const FQ1: usize = 13;

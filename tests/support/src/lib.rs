@@ -10,7 +10,8 @@
 //! - [`repo`], [`example`]: the repository and its bundled examples;
 //! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
 //!   parameters, physically consistent ones included;
-//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics.
+//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
+//! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`).
 #![allow(clippy::missing_panics_doc)]
 
 use std::io::Write;
@@ -154,6 +155,8 @@ pub fn random_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
 }
 
 pub use dvrk_model::inertia::sym6;
+
+pub mod models;
 
 /// A random positive-definite inertia about the centre of mass that a real mass
 /// distribution realizes (principal moments from positive second moments, so the

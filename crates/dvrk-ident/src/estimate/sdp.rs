@@ -970,6 +970,7 @@ mod tests {
     use dvrk_model::inertia::{
         barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue,
     };
+    use dvrk_test_support::models::{one_link_with, ONE_LINK};
     use nalgebra::{DVector, Matrix3, Matrix4, Rotation3, Vector3};
 
     /// Small deterministic generator (xorshift64*), uniform in [lo, hi).
@@ -994,21 +995,13 @@ mod tests {
         ht.qr().r()
     }
 
-    const ONE_LINK: &str = r#"
-name = "one_link"
-convention = "modified"
-coordinates = ["q1"]
-gravity = [0.0, 0.0, -9.81]
+    /// Friction bounds of [`one_link`]'s frame.
+    const FRICTION_BOUNDS: &str = "bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }";
 
-[[frames]]
-name = "link"
-parent = "base"
-alpha = "pi/2"
-theta = "q1"
-inertia = true
-friction = true
-bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
-"#;
+    /// One link with friction within [`FRICTION_BOUNDS`].
+    fn one_link() -> String {
+        one_link_with(&format!("friction = true\n{FRICTION_BOUNDS}\n"))
+    }
 
     /// Any symmetric-matrix vectorization that preserves the Frobenius norm
     /// (independent of the solver's triangle order): diagonal then √2·(strict upper),
@@ -1031,7 +1024,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
     /// friction parameters into their bounds.
     #[test]
     fn sdp_tiny_projection_has_closed_form() {
-        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
+        let model = Model::from_toml_str(&one_link(), "one_link.toml").unwrap();
         assert_eq!(model.n_params(), 13);
         let eps = model.bounds.pseudo_inertia_eps;
         // Target: a "link" whose inertia violates the triangle inequality and whose
@@ -1103,7 +1096,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
     /// beyond 1e-9, and a converged fit once failed it at −3e-9).
     #[test]
     fn sdp_stribeck_sum_holds_exactly() {
-        let model = Model::from_toml_str(ONE_LINK, "one_link.toml")
+        let model = Model::from_toml_str(&one_link(), "one_link.toml")
             .unwrap()
             .with_stribeck(0.3)
             .unwrap();
@@ -1464,8 +1457,8 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
     #[test]
     fn sdp_infeasible_bounds_are_not_converged() {
         // Needs the LMI: J ⪰ eps·I forces m ≥ eps = 1 kg, but the bounds say m ≤ 0.5 kg.
-        let text = ONE_LINK.replace(
-            "bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }",
+        let text = one_link().replace(
+            FRICTION_BOUNDS,
             "bounds = { mass = [0.1, 0.5] }\n\n[bounds]\npseudo_inertia_eps = 1.0",
         );
         let model = Model::from_toml_str(&text, "infeasible.toml").unwrap();
@@ -1500,7 +1493,7 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
 
     #[test]
     fn sdp_rejects_bad_input() {
-        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
+        let model = Model::from_toml_str(&one_link(), "one_link.toml").unwrap();
         let mut r = DMatrix::identity(14, 14);
         r[(2, 5)] = f64::NAN;
         assert!(matches!(
@@ -1530,21 +1523,6 @@ bounds = { fc_max = 0.3, fv_max = 2.0, fo_max = 0.3 }
             Err(SdpError::Option { .. })
         ));
     }
-
-    /// One link, nothing else: the prior tests' model (no friction bounds to hit).
-    const BARE_LINK: &str = r#"
-name = "bare_link"
-convention = "modified"
-coordinates = ["q1"]
-gravity = [0.0, 0.0, -9.81]
-
-[[frames]]
-name = "link"
-parent = "base"
-alpha = "pi/2"
-theta = "q1"
-inertia = true
-"#;
 
     /// A well-conditioned random upper-triangular (n+1)×(n+1) R whose torque column
     /// is `R11·truth` plus a little noise.
@@ -1578,7 +1556,7 @@ inertia = true
     /// tolerance shrinks.
     #[test]
     fn sdp_euclidean_prior_is_ridge_regression() {
-        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
+        let model = Model::from_toml_str(&one_link(), "one_link.toml").unwrap();
         let p = model.n_params();
         let mut rng = Rng(0x0dd_ba11);
         let mut truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
@@ -1692,7 +1670,8 @@ inertia = true
     /// divergence is `tr(J₀⁻¹J) − log det(J₀⁻¹J) − 4` (by determinants).
     #[test]
     fn sdp_entropic_prior_matches_newton() {
-        let model = Model::from_toml_str(BARE_LINK, "bare_link.toml").unwrap();
+        // The link alone: no friction bounds to hit.
+        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
         assert_eq!(model.n_params(), 10);
         let mut rng = Rng(0xe1e1_0123);
         let truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
@@ -1746,7 +1725,7 @@ inertia = true
     /// link; the Euclidean metric takes it; a weight without values is refused.
     #[test]
     fn sdp_prior_errors() {
-        let model = Model::from_toml_str(BARE_LINK, "bare_link.toml").unwrap();
+        let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
         let truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
         let r = random_r(&truth, &mut Rng(7));
         let mut bad = truth.clone();
