@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 import dvrk_ident as di
-from conftest import shared_file
+from conftest import REPO, shared_file
 
 G = 9.81
 # The keys robGravityCompensationMTM::Create reads for version 2, and their lengths.
@@ -232,47 +232,9 @@ def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
 
 
 # A standard-DH robot with gravity along -y (the URDF gets a rotated root), a reversed
-# coordinate, a prismatic joint, a joint turning by 2w and one by u + w.
-DH = """
-name = "dh_test"
-convention = "standard"
-coordinates = ["u", "v", "w"]
-gravity = [0.0, -9.81, 0.0]
-
-[[frames]]
-name = "one"
-parent = "base"
-a = 0.2
-alpha = 0.5
-d = 0.1
-theta = "-u + 0.3"
-inertia = true
-friction = true
-
-[[frames]]
-name = "two"
-parent = "one"
-a = 0.15
-alpha = -0.7
-theta = 0.4
-d = "v + 0.05"
-inertia = true
-
-[[frames]]
-name = "three"
-parent = "two"
-d = 0.1
-alpha = 1.2
-theta = "THREE"
-inertia = true
-
-[[frames]]
-name = "four"
-parent = "three"
-a = 0.05
-theta = "u + w - 0.2"
-inertia = true
-"""
+# coordinate, a prismatic joint, a joint turning by 2w and one by u + w; the Rust export
+# test reads the same file.
+DH = (REPO / "tests" / "fixtures" / "dh_odd.toml").read_text()
 
 
 def physical_params(robot, rng):
@@ -302,8 +264,9 @@ def physical_params(robot, rng):
 ROBOTS = {
     "psm": lambda: di.Model.load("psm"),
     "mtm": lambda: di.Model.load("mtm"),
-    "dh_2w": lambda: di.Model.from_toml(DH.replace("THREE", "2*w"), "dh.toml"),
-    "dh_chain": lambda: di.Model.from_toml(DH.replace("THREE", "w"), "dh.toml"),
+    "dh_2w": lambda: di.Model.from_toml(DH, "dh_odd.toml"),
+    "dh_chain": lambda: di.Model.from_toml(DH.replace('theta = "2*w"', 'theta = "w"'),
+                                           "dh_odd.toml"),
 }
 
 

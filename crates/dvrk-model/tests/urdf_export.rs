@@ -23,106 +23,9 @@ use support::*;
 
 const TOL: f64 = 1e-9;
 
-const ARM: &str = r#"<?xml version="1.0"?>
-<!-- A test arm: every joint type, a mimic, skew axes, rotated inertials. -->
-<robot name="test_arm">
-  <material name="grey"><color rgba="0.5 0.5 0.5 1"/></material>
-  <link name="world"/>
-  <link name="base_link">
-    <inertial>
-      <origin xyz="0 0 0.05" rpy="0 0 0"/>
-      <mass value="5"/>
-      <inertia ixx="0.1" ixy="0" ixz="0" iyy="0.1" iyz="0" izz="0.05"/>
-    </inertial>
-    <visual>
-      <geometry><cylinder radius="0.1" length="0.2"/></geometry>
-      <material name="grey"/>
-    </visual>
-  </link>
-  <joint name="mount" type="fixed">
-    <origin xyz="0 0 0.1" rpy="0 0 0.3"/>
-    <parent link="world"/>
-    <child link="base_link"/>
-  </joint>
-  <link name="shoulder">
-    <inertial>
-      <origin xyz="0.01 0.02 0.1" rpy="0.3 -0.2 1.1"/>
-      <mass value="2.5"/>
-      <inertia ixx="0.02" ixy="0.001" ixz="0" iyy="0.03" iyz="0.002" izz="0.015"/>
-    </inertial>
-    <visual><geometry><mesh filename="package://arm/meshes/shoulder.stl"/></geometry></visual>
-    <collision><geometry><box size="0.1 0.1 0.2"/></geometry></collision>
-  </link>
-  <joint name="j1" type="revolute">
-    <origin xyz="0 0 0.2" rpy="0 0 0"/>
-    <parent link="base_link"/>
-    <child link="shoulder"/>
-    <axis xyz="0 0 1"/>
-    <limit lower="-2.9" upper="2.9" effort="80" velocity="2.1"/>
-    <dynamics damping="0.5" friction="0.1"/>
-  </joint>
-  <!-- no inertial: the export adds one -->
-  <link name="upper">
-    <visual><geometry><box size="0.05 0.05 0.4"/></geometry></visual>
-  </link>
-  <joint name="j2" type="revolute">
-    <origin xyz="0.05 0 0.15" rpy="1.5707963267948966 0 -1.5707963267948966"/>
-    <parent link="shoulder"/>
-    <child link="upper"/>
-    <axis xyz="0 1 0"/>
-    <limit lower="-1.5" upper="1.5" effort="60" velocity="2"/>
-  </joint>
-  <link name="slider"/>
-  <joint name="j3" type="prismatic">
-    <origin xyz="0 0 0.4" rpy="0.2 0.1 0"/>
-    <parent link="upper"/>
-    <child link="slider"/>
-    <axis xyz="1 0 0"/>
-    <limit lower="0" upper="0.3" effort="100" velocity="0.5"/>
-  </joint>
-  <link name="wrist">
-    <inertial>
-      <mass value="0.7"/>
-      <inertia ixx="0.001" ixy="0" ixz="0" iyy="0.001" iyz="0" izz="0.001"/>
-    </inertial>
-  </link>
-  <joint name="j4" type="continuous">
-    <origin xyz="0.1 0 0" rpy="0 1.2 0"/>
-    <parent link="slider"/>
-    <child link="wrist"/>
-    <axis xyz="1 1 0"/>
-  </joint>
-  <link name="finger_l"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
-  <joint name="j5" type="revolute">
-    <origin xyz="0 0.02 0.05" rpy="0 0 0"/>
-    <parent link="wrist"/>
-    <child link="finger_l"/>
-    <axis xyz="0 0 -1"/>
-    <limit lower="0" upper="0.8" effort="5" velocity="1"/>
-  </joint>
-  <link name="finger_r"><inertial><mass value="0.1"/><inertia ixx="1e-5" ixy="0" ixz="0" iyy="1e-5" iyz="0" izz="1e-5"/></inertial></link>
-  <joint name="j6" type="revolute">
-    <origin xyz="0 -0.02 0.05" rpy="0 0 3.14159"/>
-    <parent link="wrist"/>
-    <child link="finger_r"/>
-    <axis xyz="0 0 1"/>
-    <limit lower="-0.8" upper="0" effort="5" velocity="1"/>
-    <mimic joint="j5" multiplier="-1" offset="0.1"/>
-  </joint>
-  <link name="tool"/>
-  <joint name="tool_joint" type="fixed">
-    <origin xyz="0 0 0.12" rpy="0 0.5 0"/>
-    <parent link="wrist"/>
-    <child link="tool"/>
-  </joint>
-  <transmission name="t1">
-    <type>transmission_interface/SimpleTransmission</type>
-    <joint name="j1"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
-    <actuator name="m1"><mechanicalReduction>50</mechanicalReduction></actuator>
-  </transmission>
-  <gazebo reference="wrist"><material>Gazebo/Grey</material></gazebo>
-</robot>
-"#;
+/// A test arm: every joint type, a mimic, skew axes, rotated inertials, and elements the
+/// importer does not read (materials, visuals, transmission, gazebo, comments).
+const ARM: &str = include_str!("fixtures/test_arm.urdf");
 
 /// The lines of a document outside its `<inertial>` elements, trimmed, with empty
 /// `<link .../>` elements written as start and end tag (the export opens them).
@@ -522,57 +425,7 @@ fn generate_mode_mtm() {
     }
 }
 
-const ODD: &str = r#"
-name = "odd"
-convention = "standard"
-coordinates = ["u", "v", "w"]
-gravity = [0.0, -9.81, 0.0]
-
-[[frames]]
-name = "one"
-parent = "base"
-a = 0.2
-alpha = 0.5
-d = 0.1
-theta = "-u + 0.3"
-inertia = true
-friction = true
-
-[[frames]]
-name = "two"
-parent = "one"
-a = 0.15
-alpha = -0.7
-theta = 0.4
-d = "v + 0.05"
-inertia = true
-friction = true
-
-[[frames]]
-name = "three"
-parent = "two"
-d = 0.1
-alpha = 1.2
-theta = "2*w"
-inertia = true
-
-[[frames]]
-name = "four"
-parent = "three"
-a = 0.05
-theta = "u + w - 0.2"
-inertia = true
-friction = true
-
-[[limits]]
-expr = "u"
-position = [-1.0, 1.0]
-velocity = [-2.0, 2.0]
-
-[[limits]]
-expr = "2*w"
-position = [-1.0, 1.5]
-"#;
+const ODD: &str = models::DH_ODD;
 
 #[test]
 fn generate_mode_fallbacks_are_exact() {

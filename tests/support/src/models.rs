@@ -10,3 +10,8 @@ pub const ONE_LINK: &str = include_str!("../../fixtures/one_link.toml");
 pub fn one_link_with(lines: &str) -> String {
     format!("{ONE_LINK}{lines}")
 }
+
+/// `tests/fixtures/dh_odd.toml`: a standard-DH robot of three coordinates whose URDF
+/// export needs every fallback (a rotated root, reversed and doubled coordinates, no
+/// frame turning by `w` alone), shared with the Python export test.
+pub const DH_ODD: &str = include_str!("../../fixtures/dh_odd.toml");
