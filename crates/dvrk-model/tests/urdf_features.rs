@@ -60,6 +60,57 @@ fn link(name: &str, mass: f64, xyz: [f64; 3], rpy: [f64; 3], i: [f64; 6]) -> Str
     )
 }
 
+/// A `<joint>` of `kind` from `parent` to `child` at the origin `xyz` (m) and `rpy`
+/// (rad), about `axis` (`None`: URDF's default, x), with the `inner` elements (`<limit>`,
+/// `<mimic>`).
+fn joint(
+    name: &str,
+    kind: &str,
+    (parent, child): (&str, &str),
+    (xyz, rpy): ([f64; 3], [f64; 3]),
+    axis: Option<[f64; 3]>,
+    inner: &str,
+) -> String {
+    let axis = axis.map_or(String::new(), |a| {
+        format!(r#"<axis xyz="{} {} {}"/>"#, a[0], a[1], a[2])
+    });
+    format!(
+        r#"<joint name="{name}" type="{kind}">
+             <origin xyz="{} {} {}" rpy="{} {} {}"/>
+             <parent link="{parent}"/><child link="{child}"/>{axis}{inner}
+           </joint>"#,
+        xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2]
+    )
+}
+
+/// A `<robot>` document: a root link `base`, then `parts` (links and joints).
+fn robot(name: &str, parts: &[String]) -> String {
+    format!(
+        r#"<robot name="{name}"><link name="base"/>{}</robot>"#,
+        parts.concat()
+    )
+}
+
+/// The `<limit>` of position [-1, 1] and velocity and effort 1 of the chains' joints.
+const UNIT_LIMIT: &str = r#"<limit lower="-1" upper="1" velocity="1" effort="1"/>"#;
+
+/// Asserts a pose's rotation and translation (m), each to `tol`.
+fn close_pose(
+    pose: &Transform,
+    rotation: &Matrix3<f64>,
+    translation: &Vector3<f64>,
+    tol: f64,
+    what: &str,
+) {
+    close_m(&pose.rotation, rotation, tol, &format!("{what} rotation"));
+    close_v(
+        &pose.translation,
+        translation,
+        tol,
+        &format!("{what} translation"),
+    );
+}
+
 fn frame(model: &Model, name: &str) -> usize {
     model
         .frame_names()
@@ -84,24 +135,25 @@ fn torque(model: &Model, q: &[f64], dq: &[f64], ddq: &[f64]) -> Vec<f64> {
 
 #[test]
 fn prismatic_joint() {
-    let text = format!(
-        r#"<robot name="slider">
-             <link name="base"/>
-             {}
-             <joint name="slide" type="prismatic">
-               <origin xyz="0.5 0 0.2" rpy="0 0 0.3"/>
-               <parent link="base"/><child link="carriage"/>
-               <axis xyz="0 3 4"/>
-               <limit lower="-0.1" upper="0.25" velocity="0.5" effort="100"/>
-             </joint>
-           </robot>"#,
-        link(
-            "carriage",
-            2.5,
-            [0.1, -0.2, 0.05],
-            [0.3, 0.2, 0.1],
-            [0.1, 0.01, 0.02, 0.2, 0.03, 0.25]
-        )
+    let text = robot(
+        "slider",
+        &[
+            link(
+                "carriage",
+                2.5,
+                [0.1, -0.2, 0.05],
+                [0.3, 0.2, 0.1],
+                [0.1, 0.01, 0.02, 0.2, 0.03, 0.25],
+            ),
+            joint(
+                "slide",
+                "prismatic",
+                ("base", "carriage"),
+                ([0.5, 0.0, 0.2], [0.0, 0.0, 0.3]),
+                Some([0.0, 3.0, 4.0]),
+                r#"<limit lower="-0.1" upper="0.25" velocity="0.5" effort="100"/>"#,
+            ),
+        ],
     );
     let model = Model::from_urdf_str(&text, "slider.urdf").unwrap();
     assert_eq!(model.coordinates, ["slide"]);
@@ -111,17 +163,12 @@ fn prismatic_joint() {
     let axis = rpy(0.0, 0.0, 0.3) * Vector3::new(0.0, 0.6, 0.8);
     for q in [-0.1, 0.0, 0.17] {
         let poses = model.frame_poses(&[q]);
-        close_v(
-            &poses[1].translation,
+        close_pose(
+            &poses[1],
+            &rpy(0.0, 0.0, 0.3),
             &(Vector3::new(0.5, 0.0, 0.2) + q * axis),
             1e-15,
-            "slide origin",
-        );
-        close_m(
-            &poses[1].rotation,
-            &rpy(0.0, 0.0, 0.3),
-            1e-15,
-            "slide rotation",
+            "slide",
         );
     }
     // Pure translation: tau = m (ddq − g·axis), g = −9.81 z; nothing else matters.
@@ -140,30 +187,34 @@ fn prismatic_joint() {
 
 #[test]
 fn continuous_joint() {
-    let text = format!(
-        r#"<robot name="wheel">
-             <link name="base"/>
-             {}
-             {}
-             <joint name="spin" type="continuous">
-               <origin xyz="0 0 1"/>
-               <parent link="base"/><child link="wheel"/>
-               <axis xyz="1 0 0"/>
-               <limit velocity="6" effort="1"/>
-             </joint>
-             <joint name="free" type="continuous">
-               <parent link="wheel"/><child link="wheel2"/>
-               <axis xyz="0 0 1"/>
-             </joint>
-           </robot>"#,
-        link(
-            "wheel",
-            1.0,
-            [0.0, 0.0, -0.5],
-            [0.0; 3],
-            [0.01, 0.0, 0.0, 0.01, 0.0, 0.01]
-        ),
-        link("wheel2", 0.0, [0.0; 3], [0.0; 3], [0.0; 6]),
+    let text = robot(
+        "wheel",
+        &[
+            link(
+                "wheel",
+                1.0,
+                [0.0, 0.0, -0.5],
+                [0.0; 3],
+                [0.01, 0.0, 0.0, 0.01, 0.0, 0.01],
+            ),
+            link("wheel2", 0.0, [0.0; 3], [0.0; 3], [0.0; 6]),
+            joint(
+                "spin",
+                "continuous",
+                ("base", "wheel"),
+                ([0.0, 0.0, 1.0], [0.0; 3]),
+                Some([1.0, 0.0, 0.0]),
+                r#"<limit velocity="6" effort="1"/>"#,
+            ),
+            joint(
+                "free",
+                "continuous",
+                ("wheel", "wheel2"),
+                ([0.0; 3], [0.0; 3]),
+                Some([0.0, 0.0, 1.0]),
+                "",
+            ),
+        ],
     );
     let model = Model::from_urdf_str(&text, "wheel.urdf").unwrap();
     assert_eq!(model.coordinates, ["spin", "free"]);
@@ -213,41 +264,36 @@ fn fixed_joint() {
     let (mc, cc, ic) = (0.4, [0.0, 0.1, 0.02], [0.004, 0.0, 0.0, 0.003, 0.0, 0.005]);
     let (p, r) = ([0.3, 0.05, -0.1], [0.3, -0.5, 0.7]);
     let j2 = [0.02, 0.1, 0.0];
-    let with_fixed = format!(
-        r#"<robot name="chain">
-             <link name="base"/>
-             {}
-             {}
-             {}
-             <joint name="j1" type="revolute">
-               <origin xyz="0 0 0.4"/>
-               <parent link="base"/><child link="a"/>
-               <axis xyz="0 1 0"/>
-               <limit lower="-1" upper="1" velocity="1" effort="1"/>
-             </joint>
-             <joint name="bolt" type="fixed">
-               <origin xyz="{} {} {}" rpy="{} {} {}"/>
-               <parent link="a"/><child link="b"/>
-             </joint>
-             <joint name="j2" type="revolute">
-               <origin xyz="{} {} {}"/>
-               <parent link="b"/><child link="c"/>
-               <axis xyz="1 0 0"/>
-               <limit lower="-1" upper="1" velocity="1" effort="1"/>
-             </joint>
-           </robot>"#,
-        link("a", ma, ca, [0.0; 3], ia),
-        link("b", mb, cb, [0.0; 3], ib),
-        link("c", mc, cc, [0.0; 3], ic),
-        p[0],
-        p[1],
-        p[2],
-        r[0],
-        r[1],
-        r[2],
-        j2[0],
-        j2[1],
-        j2[2],
+    // j1 about y at 0.4 m above the base, j2 about x: the chain with and without b.
+    let j1 = joint(
+        "j1",
+        "revolute",
+        ("base", "a"),
+        ([0.0, 0.0, 0.4], [0.0; 3]),
+        Some([0.0, 1.0, 0.0]),
+        UNIT_LIMIT,
+    );
+    let j2_from = |parent: &str, origin: ([f64; 3], [f64; 3])| {
+        joint(
+            "j2",
+            "revolute",
+            (parent, "c"),
+            origin,
+            Some([1.0, 0.0, 0.0]),
+            UNIT_LIMIT,
+        )
+    };
+    let link_c = link("c", mc, cc, [0.0; 3], ic);
+    let with_fixed = robot(
+        "chain",
+        &[
+            link("a", ma, ca, [0.0; 3], ia),
+            link("b", mb, cb, [0.0; 3], ib),
+            link_c.clone(),
+            j1.clone(),
+            joint("bolt", "fixed", ("a", "b"), (p, r), None, ""),
+            j2_from("b", (j2, [0.0; 3])),
+        ],
     );
     let model = Model::from_urdf_str(&with_fixed, "chain.urdf").unwrap();
     assert_eq!(model.coordinates, ["j1", "j2"]);
@@ -268,17 +314,12 @@ fn fixed_joint() {
         translation: Vector3::from(p),
     };
     let expected = poses[frame(&model, "a")].compose(&origin);
-    close_m(
-        &poses[b].rotation,
+    close_pose(
+        &poses[b],
         &expected.rotation,
-        1e-15,
-        "fixed rotation",
-    );
-    close_v(
-        &poses[b].translation,
         &expected.translation,
         1e-15,
-        "fixed translation",
+        "fixed",
     );
 
     // The same robot with b merged into a: mass, centre of mass, inertia about it.
@@ -296,45 +337,27 @@ fn fixed_joint() {
         + rb * sym(ib) * rb.transpose()
         + mb * db.transpose() * db;
     let j2_a = Vector3::from(p) + rb * Vector3::from(j2);
-    let merged = format!(
-        r#"<robot name="merged">
-             <link name="base"/>
-             {}
-             {}
-             <joint name="j1" type="revolute">
-               <origin xyz="0 0 0.4"/>
-               <parent link="base"/><child link="a"/>
-               <axis xyz="0 1 0"/>
-               <limit lower="-1" upper="1" velocity="1" effort="1"/>
-             </joint>
-             <joint name="j2" type="revolute">
-               <origin xyz="{:e} {:e} {:e}" rpy="{:e} {:e} {:e}"/>
-               <parent link="a"/><child link="c"/>
-               <axis xyz="1 0 0"/>
-               <limit lower="-1" upper="1" velocity="1" effort="1"/>
-             </joint>
-           </robot>"#,
-        link(
-            "a",
-            m,
-            [c[0], c[1], c[2]],
-            [0.0; 3],
-            [
-                i[(0, 0)],
-                i[(0, 1)],
-                i[(0, 2)],
-                i[(1, 1)],
-                i[(1, 2)],
-                i[(2, 2)]
-            ]
-        ),
-        link("c", mc, cc, [0.0; 3], ic),
-        j2_a[0],
-        j2_a[1],
-        j2_a[2],
-        r[0],
-        r[1],
-        r[2],
+    let merged = robot(
+        "merged",
+        &[
+            link(
+                "a",
+                m,
+                [c[0], c[1], c[2]],
+                [0.0; 3],
+                [
+                    i[(0, 0)],
+                    i[(0, 1)],
+                    i[(0, 2)],
+                    i[(1, 1)],
+                    i[(1, 2)],
+                    i[(2, 2)],
+                ],
+            ),
+            link_c,
+            j1,
+            j2_from("a", ([j2_a[0], j2_a[1], j2_a[2]], r)),
+        ],
     );
     let merged = Model::from_urdf_str(&merged, "merged.urdf").unwrap();
     for (q, dq, ddq) in [
@@ -351,38 +374,30 @@ fn fixed_joint() {
 }
 
 fn two_link(mimic: &str) -> String {
-    format!(
-        r#"<robot name="two_link">
-             <link name="base"/>
-             {}
-             {}
-             <joint name="shoulder" type="revolute">
-               <parent link="base"/><child link="upper"/>
-               <axis xyz="0 -1 0"/>
-               <limit lower="-2" upper="2" velocity="3" effort="10"/>
-             </joint>
-             <joint name="elbow" type="revolute">
-               <origin xyz="0.4 0 0"/>
-               <parent link="upper"/><child link="fore"/>
-               <axis xyz="0 -1 0"/>
-               <limit lower="-1" upper="1.5" velocity="2" effort="10"/>
-               {mimic}
-             </joint>
-           </robot>"#,
-        link(
-            "upper",
-            2.0,
-            [0.15, 0.0, 0.0],
-            [0.0; 3],
-            [0.02, 0.0, 0.0, 0.03, 0.0, 0.025]
-        ),
-        link(
-            "fore",
-            1.5,
-            [0.2, 0.0, 0.0],
-            [0.0; 3],
-            [0.01, 0.0, 0.0, 0.02, 0.0, 0.015]
-        ),
+    let upper = [0.02, 0.0, 0.0, 0.03, 0.0, 0.025];
+    let fore = [0.01, 0.0, 0.0, 0.02, 0.0, 0.015];
+    robot(
+        "two_link",
+        &[
+            link("upper", 2.0, [0.15, 0.0, 0.0], [0.0; 3], upper),
+            link("fore", 1.5, [0.2, 0.0, 0.0], [0.0; 3], fore),
+            joint(
+                "shoulder",
+                "revolute",
+                ("base", "upper"),
+                ([0.0; 3], [0.0; 3]),
+                Some([0.0, -1.0, 0.0]),
+                r#"<limit lower="-2" upper="2" velocity="3" effort="10"/>"#,
+            ),
+            joint(
+                "elbow",
+                "revolute",
+                ("upper", "fore"),
+                ([0.4, 0.0, 0.0], [0.0; 3]),
+                Some([0.0, -1.0, 0.0]),
+                &format!(r#"<limit lower="-1" upper="1.5" velocity="2" effort="10"/>{mimic}"#),
+            ),
+        ],
     )
 }
 
@@ -524,17 +539,12 @@ fn axes_not_along_z() {
             rotation: rot(axes[k], q[k]),
             translation: Vector3::zeros(),
         });
-        close_m(
-            &poses[k + 1].rotation,
+        close_pose(
+            &poses[k + 1],
             &pose.rotation,
-            1e-14,
-            &format!("rotation of frame {}", k + 1),
-        );
-        close_v(
-            &poses[k + 1].translation,
             &pose.translation,
             1e-14,
-            &format!("origin of frame {}", k + 1),
+            &format!("frame {}", k + 1),
         );
     }
     // Jacobian of the last frame: angular columns are the world axes, linear ones
@@ -557,17 +567,12 @@ fn axes_not_along_z() {
     );
     let model = Model::from_urdf_str(&text, "p.urdf").unwrap();
     let poses = model.frame_poses(&[0.3]);
-    close_v(
-        &poses[1].translation,
+    close_pose(
+        &poses[1],
+        &rpy(0.0, 0.0, 0.5),
         &(rpy(0.0, 0.0, 0.5) * Vector3::new(-0.3, 0.0, 0.0)),
         1e-15,
         "prismatic along -x",
-    );
-    close_m(
-        &poses[1].rotation,
-        &rpy(0.0, 0.0, 0.5),
-        1e-15,
-        "prismatic rotation",
     );
 }
 
@@ -585,17 +590,12 @@ fn rpy_convention_of_joint_origins() {
     );
     let model = Model::from_urdf_str(&text, "r.urdf").unwrap();
     let poses = model.frame_poses(&[0.5]);
-    close_m(
-        &poses[1].rotation,
+    close_pose(
+        &poses[1],
         &rpy(r, p, y),
-        1e-15,
-        "rpy is Rz(yaw)·Ry(pitch)·Rx(roll)",
-    );
-    close_v(
-        &poses[1].translation,
         &Vector3::new(1.0, 2.0, 3.0),
         1e-15,
-        "origin",
+        "rpy is Rz(yaw)·Ry(pitch)·Rx(roll), origin",
     );
     // The default axis is x (URDF).
     close_m(
@@ -849,55 +849,52 @@ fn namespaces() {
 
 #[test]
 fn error_structure() {
-    let joint = |name: &str, parent: &str, child: &str| {
-        format!(
-            r#"<joint name="{name}" type="continuous"><parent link="{parent}"/><child link="{child}"/></joint>"#
-        )
-    };
-    // A child link that is not defined.
-    let text = format!(
-        r#"<robot name="x">{TWO_LINKS}{}{}</robot>"#,
-        joint("j", "a", "b"),
-        joint("k", "b", "ghost")
-    );
-    assert_names(
-        &error(&text, "s.urdf"),
-        &["s.urdf", "joint `k`", "child link `ghost` is not defined"],
-    );
-    // A link with two parents (a closed loop).
-    let text = format!(
-        r#"<robot name="x">{TWO_LINKS}<link name="c"/>{}{}{}</robot>"#,
-        joint("j", "a", "b"),
-        joint("k", "a", "c"),
-        joint("l", "c", "b")
-    );
-    assert_names(
-        &error(&text, "s.urdf"),
-        &["s.urdf", "link `b` has two parents", "`l`"],
-    );
-    // A joint hanging from an undefined link.
-    let text = format!(
-        r#"<robot name="x">{TWO_LINKS}<link name="c"/>{}{}</robot>"#,
-        joint("j", "a", "b"),
-        joint("k", "nowhere", "c")
-    );
-    assert_names(
-        &error(&text, "s.urdf"),
-        &[
-            "s.urdf",
-            "not connected to the root link `a`",
-            "`k` (parent link `nowhere`)",
-        ],
-    );
-    // Duplicate names.
-    let text = format!(
-        r#"<robot name="x">{TWO_LINKS}<link name="b"/>{}</robot>"#,
-        joint("j", "a", "b")
-    );
-    assert_names(
-        &error(&text, "s.urdf"),
-        &["s.urdf", "link `b` is defined twice"],
-    );
+    // Continuous joints (name, parent link, child link) after TWO_LINKS and `more` links,
+    // and what the error names.
+    type Joints<'a> = &'a [(&'a str, &'a str, &'a str)];
+    let cases: [(&str, Joints, &[&str]); 4] = [
+        // A child link that is not defined.
+        (
+            "",
+            &[("j", "a", "b"), ("k", "b", "ghost")],
+            &["joint `k`", "child link `ghost` is not defined"],
+        ),
+        // A link with two parents (a closed loop).
+        (
+            r#"<link name="c"/>"#,
+            &[("j", "a", "b"), ("k", "a", "c"), ("l", "c", "b")],
+            &["link `b` has two parents", "`l`"],
+        ),
+        // A joint hanging from an undefined link.
+        (
+            r#"<link name="c"/>"#,
+            &[("j", "a", "b"), ("k", "nowhere", "c")],
+            &[
+                "not connected to the root link `a`",
+                "`k` (parent link `nowhere`)",
+            ],
+        ),
+        // Duplicate names.
+        (
+            r#"<link name="b"/>"#,
+            &[("j", "a", "b")],
+            &["link `b` is defined twice"],
+        ),
+    ];
+    for (more, joints, names) in cases {
+        let joints: String = joints
+            .iter()
+            .map(|(name, parent, child)| {
+                format!(
+                    r#"<joint name="{name}" type="continuous"><parent link="{parent}"/><child link="{child}"/></joint>"#
+                )
+            })
+            .collect();
+        let text = format!(r#"<robot name="x">{TWO_LINKS}{more}{joints}</robot>"#);
+        let msg = error(&text, "s.urdf");
+        assert_names(&msg, &["s.urdf"]);
+        assert_names(&msg, names);
+    }
     // A zero axis.
     let text = format!(
         r#"<robot name="x">{TWO_LINKS}<joint name="j" type="continuous"><parent link="a"/>
