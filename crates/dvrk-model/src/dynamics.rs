@@ -40,6 +40,24 @@ pub(crate) struct Motion {
     pub acceleration: bool,
 }
 
+impl Motion {
+    /// Rates and accelerations: the inverse dynamics.
+    pub(crate) const FULL: Motion = Motion {
+        velocity: true,
+        acceleration: true,
+    };
+    /// Rates at zero acceleration: the nonlinear effects.
+    pub(crate) const COASTING: Motion = Motion {
+        velocity: true,
+        acceleration: false,
+    };
+    /// At rest: gravity alone.
+    pub(crate) const STILL: Motion = Motion {
+        velocity: false,
+        acceleration: false,
+    };
+}
+
 impl Model {
     /// The bodies' inertias for `params` (fixed links merged), recomputed only when the
     /// parameters differ from the last call's.
@@ -72,6 +90,14 @@ impl Model {
             }
             b.inertia[k + 1] = sum;
         }
+    }
+
+    /// What every body pass starts from: the bodies' inertias for `params` and their
+    /// transforms at `q`.
+    #[inline(always)]
+    fn bodies_at(&self, ws: &mut Workspace, params: &[f64], q: &[f64]) {
+        self.body_inertias(ws, params);
+        self.body_positions(ws, q);
     }
 
     /// Parent body → body transforms at `q`, into `ws.body.x`.
@@ -263,13 +289,8 @@ impl Model {
         tau: &mut [f64],
     ) {
         self.check_state(ws, params, &[q, dq, ddq, tau]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
-        let motion = Motion {
-            velocity: true,
-            acceleration: true,
-        };
-        self.body_rnea(ws, dq, ddq, motion, true, tau);
+        self.bodies_at(ws, params, q);
+        self.body_rnea(ws, dq, ddq, Motion::FULL, true, tau);
         self.add_elements(params, q, dq, ddq, ALL, tau);
     }
 
@@ -277,13 +298,8 @@ impl Model {
     /// `computeGeneralizedGravity`: no friction, spring or known force. Allocates nothing.
     pub fn gravity_torque(&self, ws: &mut Workspace, params: &[f64], q: &[f64], tau: &mut [f64]) {
         self.check_state(ws, params, &[q, tau]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
-        let still = Motion {
-            velocity: false,
-            acceleration: false,
-        };
-        self.body_rnea(ws, q, q, still, true, tau);
+        self.bodies_at(ws, params, q);
+        self.body_rnea(ws, q, q, Motion::STILL, true, tau);
     }
 
     /// Static torque (N·m or N): what holds the robot still at `q` against gravity,
@@ -348,13 +364,8 @@ impl Model {
         tau: &mut [f64],
     ) {
         self.check_state(ws, params, &[q, dq, tau]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
-        let coasting = Motion {
-            velocity: true,
-            acceleration: false,
-        };
-        self.body_rnea(ws, dq, dq, coasting, true, tau);
+        self.bodies_at(ws, params, q);
+        self.body_rnea(ws, dq, dq, Motion::COASTING, true, tau);
     }
 
     /// Mass matrix `M(q)` (n×n, kg·m², kg), motor inertias included, into `out`
@@ -366,8 +377,7 @@ impl Model {
         let n = self.dof();
         self.check_state(ws, params, &[q]);
         assert_eq!(out.len(), n * n, "mass matrix buffer must have n*n entries");
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
+        self.bodies_at(ws, params, q);
         self.mass_from_positions(ws, params, out);
     }
 
@@ -540,14 +550,9 @@ impl Model {
     ) -> Result<(), NotPositiveDefinite> {
         let n = self.dof();
         self.check_state(ws, params, &[q, dq, tau, ddq]);
-        self.body_inertias(ws, params);
-        self.body_positions(ws, q);
+        self.bodies_at(ws, params, q);
         // h(q, q̇): everything at zero acceleration, into ddq.
-        let coasting = Motion {
-            velocity: true,
-            acceleration: false,
-        };
-        self.body_rnea(ws, dq, dq, coasting, true, ddq);
+        self.body_rnea(ws, dq, dq, Motion::COASTING, true, ddq);
         let terms = Terms { inertial: false };
         self.add_elements(params, q, dq, dq, terms, ddq);
         self.add_known_forces(q, ddq);

@@ -68,13 +68,9 @@ impl Model {
         b.v[0] = zero;
         b.dw[0] = zero;
         b.a[0] = -self.gravity;
-        let full = Motion {
-            velocity: true,
-            acceleration: true,
-        };
         for (k, body) in self.bodies.iter().enumerate() {
             let i = k + 1;
-            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, full);
+            let [w, v, dw, a] = self.body_velocity(b, body, i, dq, ddq, Motion::FULL);
             b.w[i] = w;
             b.v[i] = v;
             b.dw[i] = dw;
