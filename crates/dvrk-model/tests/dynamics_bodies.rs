@@ -119,11 +119,11 @@ fn mass_matrix_columns_are_unit_acceleration_torques() {
                 random_params(model, &mut rng)
             };
             model.mass_matrix_into(&mut ws, &pi, &q, &mut m);
-            let rest = regressor_times(model, &mut ws, &pi, &q, &zeros, &zeros);
+            let rest = regressor_times(model, &mut ws, &q, &zeros, &zeros, &pi);
             for k in 0..n {
                 let mut e = zeros.clone();
                 e[k] = 1.0;
-                let col: Vec<f64> = regressor_times(model, &mut ws, &pi, &q, &zeros, &e)
+                let col: Vec<f64> = regressor_times(model, &mut ws, &q, &zeros, &e, &pi)
                     .iter()
                     .zip(&rest)
                     .map(|(a, b)| a - b)
@@ -152,10 +152,10 @@ fn gravity_and_nonlinear_effects_are_the_links_regressor() {
             let pi = random_params(model, &mut rng);
             let links = rigid_only(model, &pi);
             model.gravity_torque(&mut ws, &pi, &q, &mut g);
-            let expect = regressor_times(model, &mut ws, &links, &q, &zeros, &zeros);
+            let expect = regressor_times(model, &mut ws, &q, &zeros, &zeros, &links);
             assert_close(&format!("{}: gravity", model.name), &g, &expect, 1e-12);
             model.nonlinear_effects(&mut ws, &pi, &q, &dq, &mut nle);
-            let expect = regressor_times(model, &mut ws, &links, &q, &dq, &zeros);
+            let expect = regressor_times(model, &mut ws, &q, &dq, &zeros, &links);
             assert_close(
                 &format!("{}: nonlinear effects", model.name),
                 &nle,
@@ -177,7 +177,7 @@ fn inverse_dynamics_is_the_regressor_on_fixed_links() {
         let (q, dq, ddq) = random_state(&model, &mut rng);
         let pi = random_params(&model, &mut rng);
         model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let expect = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
+        let expect = regressor_times(&model, &mut ws, &q, &dq, &ddq, &pi);
         assert_close("fixed links: inverse dynamics", &tau, &expect, 1e-12);
     }
 }
@@ -192,7 +192,7 @@ fn forward_dynamics_into_inverts_the_regressor() {
         for _ in 0..SAMPLES {
             let (q, dq, ddq) = random_state(model, &mut rng);
             let pi = physical_params(model, &mut rng);
-            let mut tau = regressor_times(model, &mut ws, &pi, &q, &dq, &ddq);
+            let mut tau = regressor_times(model, &mut ws, &q, &dq, &ddq, &pi);
             model.add_known_forces(&q, &mut tau);
             model
                 .forward_dynamics_into(&mut ws, &pi, &q, &dq, &tau, &mut acc)

@@ -64,7 +64,7 @@ fn pendulum_closed_form() {
             lzz * ddq + m * G * (c[0] * q.cos() - c[1] * q.sin()) + fc * sign0(dq) + fv * dq + fo;
         let tau = id(&model, &mut ws, &pi, &[q], &[dq], &[ddq]);
         assert_close("pendulum tau", &tau, &[expect], 1e-12);
-        let hp = regressor_times(&model, &mut ws, &pi, &[q], &[dq], &[ddq]);
+        let hp = regressor_times(&model, &mut ws, &[q], &[dq], &[ddq], &pi);
         assert_close("pendulum H·pi", &hp, &[expect], 1e-12);
 
         let mut g = [0.0];
@@ -148,7 +148,7 @@ fn two_link_arm_matches_spong() {
         let expect = arm.torque(q2, dq2, [ddq[0], ddq[1]]);
         let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("two-link tau", &tau, &expect, 1e-12);
-        let hp = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
+        let hp = regressor_times(&model, &mut ws, &q, &dq, &ddq, &pi);
         assert_close("two-link H·pi", &hp, &expect, 1e-12);
 
         let m = model.mass_matrix(&mut ws, &pi, &q);
@@ -340,7 +340,7 @@ fn springs_friction_motor_inertia() {
         let expect = elements_expected(&q, &dq, &ddq);
         let tau = id(&model, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("elements tau", &tau, &expect, 1e-13);
-        let hp = regressor_times(&model, &mut ws, &pi, &q, &dq, &ddq);
+        let hp = regressor_times(&model, &mut ws, &q, &dq, &ddq, &pi);
         assert_close("elements H·pi", &hp, &expect, 1e-13);
     }
 
@@ -621,7 +621,7 @@ fn stribeck_friction_closed_form() {
         expect[1] += fs4 * sign0(dq[1]) * (-(dq[1] / vs).powi(2)).exp();
         let tau = id(&all, &mut ws, &pi, &q, &dq, &ddq);
         assert_close("stribeck tau", &tau, &expect, 1e-13);
-        let hp = regressor_times(&all, &mut ws, &pi, &q, &dq, &ddq);
+        let hp = regressor_times(&all, &mut ws, &q, &dq, &ddq, &pi);
         assert_close("stribeck H·pi", &hp, &expect, 1e-13);
     }
 

@@ -332,21 +332,20 @@ pub fn id(
     tau
 }
 
-/// `H(q, q̇, q̈)·π` from the regressor (row-major `n × p`): the torque the identity
-/// `H·π = inverse dynamics` compares with.
+/// `H(q, q̇, q̈)·π` from the regressor, its arguments in the formula's order: the torque
+/// the identity `H·π = inverse dynamics` compares with.
 pub fn regressor_times(
     model: &Model,
     ws: &mut Workspace,
-    params: &[f64],
     q: &[f64],
     dq: &[f64],
     ddq: &[f64],
+    params: &[f64],
 ) -> Vec<f64> {
-    let (n, p) = (model.dof(), model.n_params());
-    let mut h = vec![0.0; n * p];
-    model.regressor_into(ws, q, dq, ddq, &mut h);
-    (0..n)
-        .map(|r| (0..p).map(|c| h[r * p + c] * params[c]).sum())
+    let h = model.regressor(ws, q, dq, ddq);
+    (h * nalgebra::DVector::from_column_slice(params))
+        .iter()
+        .copied()
         .collect()
 }
 
