@@ -165,46 +165,6 @@ pub struct ModelBuilder {
     stribeck: Vec<(usize, f64)>,
 }
 
-/// The parts of a [`Model`] its loaders produce; [`assemble`] derives the rest.
-pub(crate) struct ModelParts {
-    pub name: String,
-    pub source: String,
-    pub coordinates: Vec<String>,
-    pub coordinate_is_length: Vec<bool>,
-    pub frames: Vec<Frame>,
-    pub gravity: Vector3<f64>,
-    pub measured: Measured,
-    pub limits: Limits,
-    pub bounds: GlobalBounds,
-    pub params: Vec<Param>,
-}
-
-/// The model of `parts`, with the per-sample tables derived.
-pub(crate) fn assemble(parts: ModelParts) -> Model {
-    Model {
-        name: parts.name,
-        source: parts.source,
-        coordinates: parts.coordinates,
-        coordinate_is_length: parts.coordinate_is_length,
-        frames: parts.frames,
-        gravity: parts.gravity,
-        measured: parts.measured,
-        limits: parts.limits.joint,
-        cartesian_limits: parts.limits.cartesian,
-        bounds: parts.bounds,
-        params: parts.params,
-        links: Vec::new(),
-        active: Vec::new(),
-        motion: Vec::new(),
-        fixed: Vec::new(),
-        post_identity: Vec::new(),
-        bodies: Vec::new(),
-        regressor_plan: Default::default(),
-        element_plan: Default::default(),
-    }
-    .finish()
-}
-
 impl ModelBuilder {
     /// A model named `name` with these generalized coordinates (at least one, distinct),
     /// gravity −9.81 m/s² along z, measured joints the coordinates themselves.
@@ -524,7 +484,7 @@ impl ModelBuilder {
                 })
             })
             .collect();
-        let mut model = assemble(ModelParts {
+        let mut model = Model {
             name: self.name,
             source: self.source,
             coordinates: self.coordinates,
@@ -532,10 +492,13 @@ impl ModelBuilder {
             frames: self.frames,
             gravity: self.gravity,
             measured,
-            limits: self.limits,
+            limits: self.limits.joint,
+            cartesian_limits: self.limits.cartesian,
             bounds: self.bounds,
             params: self.params,
-        });
+            ..Model::unassembled()
+        }
+        .finish();
         for (frame, v) in self.stribeck {
             model.add_stribeck(frame, v)?;
         }

@@ -606,6 +606,37 @@ impl Model {
         self.measured.coupling.clone().try_inverse()
     }
 
+    /// A model with nothing in it, for the loaders to fill the description's fields of
+    /// (`Model { name, frames, .., ..Model::unassembled() }`) before [`Model::finish`]
+    /// derives the rest. Gravity −9.81 m/s² along z and no limits or bounds, as a
+    /// description that does not set them.
+    pub(crate) fn unassembled() -> Model {
+        Model {
+            name: String::new(),
+            source: String::new(),
+            coordinates: Vec::new(),
+            coordinate_is_length: Vec::new(),
+            frames: Vec::new(),
+            gravity: Vector3::new(0.0, 0.0, -9.81),
+            measured: Measured {
+                joints: Vec::new(),
+                coupling: DMatrix::zeros(0, 0),
+            },
+            limits: Vec::new(),
+            cartesian_limits: Vec::new(),
+            bounds: GlobalBounds::default(),
+            params: Vec::new(),
+            links: Vec::new(),
+            active: Vec::new(),
+            motion: Vec::new(),
+            fixed: Vec::new(),
+            post_identity: Vec::new(),
+            bodies: Vec::new(),
+            regressor_plan: RegressorPlan::default(),
+            element_plan: ElementPlan::default(),
+        }
+    }
+
     /// Derives the per-sample lookup tables; called by every constructor.
     pub(crate) fn finish(mut self) -> Self {
         let n_frames = self.frames.len();

@@ -15,11 +15,9 @@ use std::collections::HashMap;
 
 use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
-use crate::builder::{assemble, ModelParts};
 use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::input;
-use crate::limits::Limits;
 use crate::model::*;
 
 fn rpy(r: &[f64; 3]) -> Matrix3<f64> {
@@ -149,7 +147,7 @@ impl Model {
             return Err(err("no moving joint".into()));
         }
         let n = coordinates.len();
-        Ok(assemble(ModelParts {
+        Ok(Model {
             name: robot.name.clone(),
             source: file.to_string(),
             measured: Measured {
@@ -160,13 +158,11 @@ impl Model {
             coordinate_is_length,
             frames,
             gravity: Vector3::new(0.0, 0.0, -9.81),
-            limits: Limits {
-                joint: limits,
-                cartesian: Vec::new(),
-            },
-            bounds: GlobalBounds::default(),
+            limits,
             params,
-        }))
+            ..Model::unassembled()
+        }
+        .finish())
     }
 }
 
