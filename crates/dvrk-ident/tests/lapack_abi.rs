@@ -18,170 +18,24 @@ use dvrk_ident::simulate::Gaussian;
 /// What a routine must leave alone where it writes around it.
 const SENTINEL: f64 = 7777.0;
 
-/// The precision-specific entry points, each forwarding to the `blas`/`lapack` crate
-/// function of that name (`s…` or `d…`).
-trait Scalar: Copy + PartialOrd + std::fmt::Debug {
-    /// Tolerance of a result relative to its scale (a few hundred ulps at these sizes).
-    const TOL: f64;
-    fn of(x: f64) -> Self;
-    fn f(self) -> f64;
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gemm(
-        ta: u8,
-        tb: u8,
-        m: i32,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        b: &[Self],
-        ldb: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gemv(
-        t: u8,
-        m: i32,
-        n: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        x: &[Self],
-        incx: i32,
-        be: Self,
-        y: &mut [Self],
-        incy: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn symv(
-        uplo: u8,
-        n: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        x: &[Self],
-        incx: i32,
-        be: Self,
-        y: &mut [Self],
-        incy: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syrk(
-        uplo: u8,
-        t: u8,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syr2k(
-        uplo: u8,
-        t: u8,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        b: &[Self],
-        ldb: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    unsafe fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32);
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn potrs(
-        uplo: u8,
-        n: i32,
-        nrhs: i32,
-        a: &[Self],
-        lda: i32,
-        b: &mut [Self],
-        ldb: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesv(
-        n: i32,
-        nrhs: i32,
-        a: &mut [Self],
-        lda: i32,
-        ipiv: &mut [i32],
-        b: &mut [Self],
-        ldb: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syevr(
-        jobz: u8,
-        range: u8,
-        uplo: u8,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        vl: Self,
-        vu: Self,
-        il: i32,
-        iu: i32,
-        abstol: Self,
-        m: &mut i32,
-        w: &mut [Self],
-        z: &mut [Self],
-        ldz: i32,
-        isuppz: &mut [i32],
-        work: &mut [Self],
-        lwork: i32,
-        iwork: &mut [i32],
-        liwork: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesdd(
-        jobz: u8,
-        m: i32,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        s: &mut [Self],
-        u: &mut [Self],
-        ldu: i32,
-        vt: &mut [Self],
-        ldvt: i32,
-        work: &mut [Self],
-        lwork: i32,
-        iwork: &mut [i32],
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesvd(
-        jobu: u8,
-        jobvt: u8,
-        m: i32,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        s: &mut [Self],
-        u: &mut [Self],
-        ldu: i32,
-        vt: &mut [Self],
-        ldvt: i32,
-        work: &mut [Self],
-        lwork: i32,
-        info: &mut i32,
-    );
-}
-
-macro_rules! scalar {
-    ($T:ty, $tol:expr, $gemm:ident, $gemv:ident, $symv:ident, $syrk:ident, $syr2k:ident,
-     $potrf:ident, $potrs:ident, $gesv:ident, $syevr:ident, $gesdd:ident, $gesvd:ident) => {
+/// The routines under test, one line each: the signature of the `blas`/`lapack` crate
+/// wrapper (the Fortran argument list), from which the macro declares `Scalar`'s entry
+/// point and forwards it to the `s…` or `d…` function of each precision.
+macro_rules! routines {
+    ($(fn $name:ident($($arg:ident: $ty:ty),* $(,)?) = $module:ident::[$s:ident, $d:ident];)*) => {
+        /// The precision-specific entry points.
+        trait Scalar: Copy + PartialOrd + std::fmt::Debug {
+            /// Tolerance of a result relative to its scale (a few hundred ulps at these
+            /// sizes).
+            const TOL: f64;
+            fn of(x: f64) -> Self;
+            fn f(self) -> f64;
+            $(#[allow(clippy::too_many_arguments)] unsafe fn $name($($arg: $ty),*);)*
+        }
+        routines!(@impl f32, 2e-4, $($name($($arg: $ty),*) = $module::$s;)*);
+        routines!(@impl f64, 1e-11, $($name($($arg: $ty),*) = $module::$d;)*);
+    };
+    (@impl $T:ty, $tol:expr, $($name:ident($($arg:ident: $ty:ty),*) = $module:ident::$f:ident;)*) => {
         impl Scalar for $T {
             const TOL: f64 = $tol;
             fn of(x: f64) -> Self {
@@ -190,193 +44,41 @@ macro_rules! scalar {
             fn f(self) -> f64 {
                 self as f64
             }
-            unsafe fn gemm(
-                ta: u8,
-                tb: u8,
-                m: i32,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                b: &[Self],
-                ldb: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$gemm(ta, tb, m, n, k, al, a, lda, b, ldb, be, c, ldc) }
-            }
-            unsafe fn gemv(
-                t: u8,
-                m: i32,
-                n: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                x: &[Self],
-                incx: i32,
-                be: Self,
-                y: &mut [Self],
-                incy: i32,
-            ) {
-                unsafe { blas::$gemv(t, m, n, al, a, lda, x, incx, be, y, incy) }
-            }
-            unsafe fn symv(
-                uplo: u8,
-                n: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                x: &[Self],
-                incx: i32,
-                be: Self,
-                y: &mut [Self],
-                incy: i32,
-            ) {
-                unsafe { blas::$symv(uplo, n, al, a, lda, x, incx, be, y, incy) }
-            }
-            unsafe fn syrk(
-                uplo: u8,
-                t: u8,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$syrk(uplo, t, n, k, al, a, lda, be, c, ldc) }
-            }
-            unsafe fn syr2k(
-                uplo: u8,
-                t: u8,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                b: &[Self],
-                ldb: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$syr2k(uplo, t, n, k, al, a, lda, b, ldb, be, c, ldc) }
-            }
-            unsafe fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32) {
-                unsafe { lapack::$potrf(uplo, n, a, lda, info) }
-            }
-            unsafe fn potrs(
-                uplo: u8,
-                n: i32,
-                nrhs: i32,
-                a: &[Self],
-                lda: i32,
-                b: &mut [Self],
-                ldb: i32,
-                info: &mut i32,
-            ) {
-                unsafe { lapack::$potrs(uplo, n, nrhs, a, lda, b, ldb, info) }
-            }
-            unsafe fn gesv(
-                n: i32,
-                nrhs: i32,
-                a: &mut [Self],
-                lda: i32,
-                ipiv: &mut [i32],
-                b: &mut [Self],
-                ldb: i32,
-                info: &mut i32,
-            ) {
-                unsafe { lapack::$gesv(n, nrhs, a, lda, ipiv, b, ldb, info) }
-            }
-            unsafe fn syevr(
-                jobz: u8,
-                range: u8,
-                uplo: u8,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                vl: Self,
-                vu: Self,
-                il: i32,
-                iu: i32,
-                abstol: Self,
-                m: &mut i32,
-                w: &mut [Self],
-                z: &mut [Self],
-                ldz: i32,
-                isuppz: &mut [i32],
-                work: &mut [Self],
-                lwork: i32,
-                iwork: &mut [i32],
-                liwork: i32,
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$syevr(
-                        jobz, range, uplo, n, a, lda, vl, vu, il, iu, abstol, m, w, z, ldz, isuppz,
-                        work, lwork, iwork, liwork, info,
-                    )
-                }
-            }
-            unsafe fn gesdd(
-                jobz: u8,
-                m: i32,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                s: &mut [Self],
-                u: &mut [Self],
-                ldu: i32,
-                vt: &mut [Self],
-                ldvt: i32,
-                work: &mut [Self],
-                lwork: i32,
-                iwork: &mut [i32],
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$gesdd(
-                        jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork, info,
-                    )
-                }
-            }
-            unsafe fn gesvd(
-                jobu: u8,
-                jobvt: u8,
-                m: i32,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                s: &mut [Self],
-                u: &mut [Self],
-                ldu: i32,
-                vt: &mut [Self],
-                ldvt: i32,
-                work: &mut [Self],
-                lwork: i32,
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$gesvd(
-                        jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, info,
-                    )
-                }
-            }
+            $(unsafe fn $name($($arg: $ty),*) {
+                unsafe { $module::$f($($arg),*) }
+            })*
         }
     };
 }
 
-scalar!(
-    f32, 2e-4, sgemm, sgemv, ssymv, ssyrk, ssyr2k, spotrf, spotrs, sgesv, ssyevr, sgesdd, sgesvd
-);
-scalar!(
-    f64, 1e-11, dgemm, dgemv, dsymv, dsyrk, dsyr2k, dpotrf, dpotrs, dgesv, dsyevr, dgesdd, dgesvd
-);
+routines! {
+    fn gemm(ta: u8, tb: u8, m: i32, n: i32, k: i32, al: Self, a: &[Self], lda: i32, b: &[Self],
+        ldb: i32, be: Self, c: &mut [Self], ldc: i32) = blas::[sgemm, dgemm];
+    fn gemv(t: u8, m: i32, n: i32, al: Self, a: &[Self], lda: i32, x: &[Self], incx: i32,
+        be: Self, y: &mut [Self], incy: i32) = blas::[sgemv, dgemv];
+    fn symv(uplo: u8, n: i32, al: Self, a: &[Self], lda: i32, x: &[Self], incx: i32, be: Self,
+        y: &mut [Self], incy: i32) = blas::[ssymv, dsymv];
+    fn syrk(uplo: u8, t: u8, n: i32, k: i32, al: Self, a: &[Self], lda: i32, be: Self,
+        c: &mut [Self], ldc: i32) = blas::[ssyrk, dsyrk];
+    fn syr2k(uplo: u8, t: u8, n: i32, k: i32, al: Self, a: &[Self], lda: i32, b: &[Self],
+        ldb: i32, be: Self, c: &mut [Self], ldc: i32) = blas::[ssyr2k, dsyr2k];
+    fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32)
+        = lapack::[spotrf, dpotrf];
+    fn potrs(uplo: u8, n: i32, nrhs: i32, a: &[Self], lda: i32, b: &mut [Self], ldb: i32,
+        info: &mut i32) = lapack::[spotrs, dpotrs];
+    fn gesv(n: i32, nrhs: i32, a: &mut [Self], lda: i32, ipiv: &mut [i32], b: &mut [Self],
+        ldb: i32, info: &mut i32) = lapack::[sgesv, dgesv];
+    fn syevr(jobz: u8, range: u8, uplo: u8, n: i32, a: &mut [Self], lda: i32, vl: Self,
+        vu: Self, il: i32, iu: i32, abstol: Self, m: &mut i32, w: &mut [Self], z: &mut [Self],
+        ldz: i32, isuppz: &mut [i32], work: &mut [Self], lwork: i32, iwork: &mut [i32],
+        liwork: i32, info: &mut i32) = lapack::[ssyevr, dsyevr];
+    fn gesdd(jobz: u8, m: i32, n: i32, a: &mut [Self], lda: i32, s: &mut [Self], u: &mut [Self],
+        ldu: i32, vt: &mut [Self], ldvt: i32, work: &mut [Self], lwork: i32, iwork: &mut [i32],
+        info: &mut i32) = lapack::[sgesdd, dgesdd];
+    fn gesvd(jobu: u8, jobvt: u8, m: i32, n: i32, a: &mut [Self], lda: i32, s: &mut [Self],
+        u: &mut [Self], ldu: i32, vt: &mut [Self], ldvt: i32, work: &mut [Self], lwork: i32,
+        info: &mut i32) = lapack::[sgesvd, dgesvd];
+}
 
 /// A column-major Fortran array: `rows × cols` with leading dimension `ld`, the
 /// `ld − rows` padding rows of each column (and anything a test marks) set apart.
