@@ -8,7 +8,7 @@ use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::reborrow::ReborrowMut;
 use faer::{Accum, Par};
 
-use super::{accumulate, blas_done, dim, increment, leading, mat_ref, scalar, scale};
+use super::{accumulate, dim, increment, leading, mat_ref, scalar, scale};
 use super::{transposed, upper, vec_mut, vec_ref, Illegal, Part, Real};
 
 /// `y ← alpha·op(A)·x + beta·y`, `A` m×n. Quick returns as the reference: nothing when
@@ -125,64 +125,19 @@ unsafe fn symv<T: Real>(
     }
 }
 
-macro_rules! export_gemv {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: general matrix-vector product (see `gemv`).")]
-        ///
-        /// # Safety
-        /// Fortran BLAS contract: valid arguments, arrays of the extents the dimensions
-        /// and increments imply, `y` not overlapping the inputs.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            trans: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            alpha: *const $T,
-            a: *const $T,
-            lda: *const c_int,
-            x: *const $T,
-            incx: *const c_int,
-            beta: *const $T,
-            y: *mut $T,
-            incy: *const c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            let result = unsafe { gemv::<$T>(trans, m, n, alpha, a, lda, x, incx, beta, y, incy) };
-            blas_done($routine, result);
-        }
-    };
+export! {
+    /// general matrix-vector product (see `gemv`).
+    blas sgemv_ "SGEMV", dgemv_ "DGEMV"
+    (trans: *const c_char, m: *const c_int, n: *const c_int, alpha: *const T, a: *const T,
+     lda: *const c_int, x: *const T, incx: *const c_int, beta: *const T, y: *mut T,
+     incy: *const c_int)
+    => gemv::<T>(trans, m, n, alpha, a, lda, x, incx, beta, y, incy)
 }
 
-export_gemv!(sgemv_, f32, "SGEMV");
-export_gemv!(dgemv_, f64, "DGEMV");
-
-macro_rules! export_symv {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric matrix-vector product (see `symv`).")]
-        ///
-        /// # Safety
-        /// As [`dgemv_`].
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            uplo: *const c_char,
-            n: *const c_int,
-            alpha: *const $T,
-            a: *const $T,
-            lda: *const c_int,
-            x: *const $T,
-            incx: *const c_int,
-            beta: *const $T,
-            y: *mut $T,
-            incy: *const c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            let result = unsafe { symv::<$T>(uplo, n, alpha, a, lda, x, incx, beta, y, incy) };
-            blas_done($routine, result);
-        }
-    };
+export! {
+    /// symmetric matrix-vector product (see `symv`).
+    blas ssymv_ "SSYMV", dsymv_ "DSYMV"
+    (uplo: *const c_char, n: *const c_int, alpha: *const T, a: *const T, lda: *const c_int,
+     x: *const T, incx: *const c_int, beta: *const T, y: *mut T, incy: *const c_int)
+    => symv::<T>(uplo, n, alpha, a, lda, x, incx, beta, y, incy)
 }
-
-export_symv!(ssymv_, f32, "SSYMV");
-export_symv!(dsymv_, f64, "DSYMV");

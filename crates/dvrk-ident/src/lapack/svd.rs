@@ -12,7 +12,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::traits::ext::ComplexFieldExt;
 use faer::{MatMut, MatRef, Par};
 
-use super::{dim, lapack_done, leading, mat_mut, option, scalar, slice_mut};
+use super::{dim, leading, mat_mut, option, scalar, slice_mut};
 use super::{with_scratch, Illegal, Real};
 
 /// Where a driver puts one side's singular vectors (`jobu`/`jobvt` of `?gesvd`).
@@ -328,77 +328,20 @@ unsafe fn gesvd<T: Real>(
     }
 }
 
-macro_rules! export_gesdd {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: SVD, divide and conquer in LAPACK (see `gesdd`).")]
-        ///
-        /// # Safety
-        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
-        /// dimensions imply, no output overlapping another argument.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            jobz: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            s: *mut $T,
-            u: *mut $T,
-            ldu: *const c_int,
-            vt: *mut $T,
-            ldvt: *const c_int,
-            work: *mut $T,
-            lwork: *const c_int,
-            iwork: *mut c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe {
-                let result =
-                    gesdd::<$T>(jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork);
-                lapack_done($routine, info, result);
-            }
-        }
-    };
+export! {
+    /// SVD, divide and conquer in LAPACK (see `gesdd`).
+    lapack sgesdd_ "SGESDD", dgesdd_ "DGESDD"
+    (jobz: *const c_char, m: *const c_int, n: *const c_int, a: *mut T, lda: *const c_int,
+     s: *mut T, u: *mut T, ldu: *const c_int, vt: *mut T, ldvt: *const c_int, work: *mut T,
+     lwork: *const c_int, iwork: *mut c_int)
+    => gesdd::<T>(jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork)
 }
 
-export_gesdd!(sgesdd_, f32, "SGESDD");
-export_gesdd!(dgesdd_, f64, "DGESDD");
-
-macro_rules! export_gesvd {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: SVD, QR iteration in LAPACK (see `gesvd`).")]
-        ///
-        /// # Safety
-        /// As [`dgesdd_`].
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            jobu: *const c_char,
-            jobvt: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            s: *mut $T,
-            u: *mut $T,
-            ldu: *const c_int,
-            vt: *mut $T,
-            ldvt: *const c_int,
-            work: *mut $T,
-            lwork: *const c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe {
-                let result =
-                    gesvd::<$T>(jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork);
-                lapack_done($routine, info, result);
-            }
-        }
-    };
+export! {
+    /// SVD, QR iteration in LAPACK (see `gesvd`).
+    lapack sgesvd_ "SGESVD", dgesvd_ "DGESVD"
+    (jobu: *const c_char, jobvt: *const c_char, m: *const c_int, n: *const c_int, a: *mut T,
+     lda: *const c_int, s: *mut T, u: *mut T, ldu: *const c_int, vt: *mut T,
+     ldvt: *const c_int, work: *mut T, lwork: *const c_int)
+    => gesvd::<T>(jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork)
 }
-
-export_gesvd!(sgesvd_, f32, "SGESVD");
-export_gesvd!(dgesvd_, f64, "DGESVD");
