@@ -337,10 +337,10 @@ impl ModelPy {
     /// (kept regressor columns), ``combination`` (``K``, with ``beta = K @ params``).
     /// Computed once per robot.
     fn base(&self, py: Python<'_>) -> PyResult<BaseParametersPy> {
-        Ok(BaseParametersPy {
-            model: self.model.clone(),
-            base: self.base_parameters(py)?,
-        })
+        Ok(BaseParametersPy::new(
+            self.model.clone(),
+            self.base_parameters(py)?,
+        ))
     }
 
     /// The regressor ``H(q, dq, ddq)`` with ``tau = H @ params``: for ``N`` samples,
@@ -562,28 +562,32 @@ impl ModelPy {
 pub struct BaseParametersPy {
     model: Arc<Model>,
     base: Arc<BaseParameters>,
+    /// Name of the leading (kept) parameter of each base parameter.
+    #[pyo3(get)]
+    names: Vec<String>,
+    /// Each base parameter as a readable combination of parameters.
+    #[pyo3(get)]
+    expressions: Vec<String>,
+    /// Columns of the full regressor kept as the base regressor (increasing).
+    #[pyo3(get)]
+    independent: Vec<usize>,
+}
+
+impl BaseParametersPy {
+    /// The lists Python reads as attributes are copied once here (the class is frozen).
+    fn new(model: Arc<Model>, base: Arc<BaseParameters>) -> Self {
+        BaseParametersPy {
+            names: base.names.clone(),
+            expressions: base.expressions.clone(),
+            independent: base.independent.clone(),
+            model,
+            base,
+        }
+    }
 }
 
 #[pymethods]
 impl BaseParametersPy {
-    /// Name of the leading (kept) parameter of each base parameter.
-    #[getter]
-    fn names(&self) -> Vec<String> {
-        self.base.names.clone()
-    }
-
-    /// Each base parameter as a readable combination of parameters.
-    #[getter]
-    fn expressions(&self) -> Vec<String> {
-        self.base.expressions.clone()
-    }
-
-    /// Columns of the full regressor kept as the base regressor (increasing).
-    #[getter]
-    fn independent(&self) -> Vec<usize> {
-        self.base.independent.clone()
-    }
-
     /// ``K``, shape ``(rank, n_parameters)``: ``beta = K @ params``.
     #[getter]
     fn combination<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
