@@ -102,7 +102,7 @@ pub struct FitResultPy {
     pub inner: FitResult,
     /// The robot it was fitted with (`None` when read from JSON without one).
     pub robot: Option<Py<ModelPy>>,
-    /// ``inner``'s numbers Python reads as attributes, copied once (the class is frozen).
+    // `inner`'s numbers Python reads as attributes, copied once (the class is frozen).
     #[pyo3(get)]
     rows: usize,
     #[pyo3(get)]
