@@ -195,24 +195,8 @@ def test_forward_kinematics():
     assert mtm.forward_kinematics(np.zeros(7)).shape == (frames, 4, 4)
 
 
-PENDULUM = """<?xml version="1.0"?>
-<robot name="pendulum">
-  <link name="base"/>
-  <link name="arm">
-    <inertial>
-      <origin xyz="0.5 0 0"/>
-      <mass value="2.0"/>
-      <inertia ixx="0.01" ixy="0" ixz="0" iyy="0.02" iyz="0" izz="0.03"/>
-    </inertial>
-  </link>
-  <joint name="hinge" type="revolute">
-    <parent link="base"/>
-    <child link="arm"/>
-    <axis xyz="0 1 0"/>
-    <limit lower="-3" upper="3" effort="10" velocity="1"/>
-  </joint>
-</robot>
-"""
+# One link of 2 kg, its centre of mass 0.5 m from a hinge about y (I_yy = 0.02 kg·m²).
+PENDULUM = (REPO / "tests" / "fixtures" / "pendulum.urdf").read_text()
 
 
 def test_urdf_pendulum_nominal_dynamics():

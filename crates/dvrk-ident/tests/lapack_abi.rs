@@ -18,170 +18,24 @@ use dvrk_ident::simulate::Gaussian;
 /// What a routine must leave alone where it writes around it.
 const SENTINEL: f64 = 7777.0;
 
-/// The precision-specific entry points, each forwarding to the `blas`/`lapack` crate
-/// function of that name (`s…` or `d…`).
-trait Scalar: Copy + PartialOrd + std::fmt::Debug {
-    /// Tolerance of a result relative to its scale (a few hundred ulps at these sizes).
-    const TOL: f64;
-    fn of(x: f64) -> Self;
-    fn f(self) -> f64;
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gemm(
-        ta: u8,
-        tb: u8,
-        m: i32,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        b: &[Self],
-        ldb: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gemv(
-        t: u8,
-        m: i32,
-        n: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        x: &[Self],
-        incx: i32,
-        be: Self,
-        y: &mut [Self],
-        incy: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn symv(
-        uplo: u8,
-        n: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        x: &[Self],
-        incx: i32,
-        be: Self,
-        y: &mut [Self],
-        incy: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syrk(
-        uplo: u8,
-        t: u8,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syr2k(
-        uplo: u8,
-        t: u8,
-        n: i32,
-        k: i32,
-        al: Self,
-        a: &[Self],
-        lda: i32,
-        b: &[Self],
-        ldb: i32,
-        be: Self,
-        c: &mut [Self],
-        ldc: i32,
-    );
-    unsafe fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32);
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn potrs(
-        uplo: u8,
-        n: i32,
-        nrhs: i32,
-        a: &[Self],
-        lda: i32,
-        b: &mut [Self],
-        ldb: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesv(
-        n: i32,
-        nrhs: i32,
-        a: &mut [Self],
-        lda: i32,
-        ipiv: &mut [i32],
-        b: &mut [Self],
-        ldb: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn syevr(
-        jobz: u8,
-        range: u8,
-        uplo: u8,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        vl: Self,
-        vu: Self,
-        il: i32,
-        iu: i32,
-        abstol: Self,
-        m: &mut i32,
-        w: &mut [Self],
-        z: &mut [Self],
-        ldz: i32,
-        isuppz: &mut [i32],
-        work: &mut [Self],
-        lwork: i32,
-        iwork: &mut [i32],
-        liwork: i32,
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesdd(
-        jobz: u8,
-        m: i32,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        s: &mut [Self],
-        u: &mut [Self],
-        ldu: i32,
-        vt: &mut [Self],
-        ldvt: i32,
-        work: &mut [Self],
-        lwork: i32,
-        iwork: &mut [i32],
-        info: &mut i32,
-    );
-    #[allow(clippy::too_many_arguments)]
-    unsafe fn gesvd(
-        jobu: u8,
-        jobvt: u8,
-        m: i32,
-        n: i32,
-        a: &mut [Self],
-        lda: i32,
-        s: &mut [Self],
-        u: &mut [Self],
-        ldu: i32,
-        vt: &mut [Self],
-        ldvt: i32,
-        work: &mut [Self],
-        lwork: i32,
-        info: &mut i32,
-    );
-}
-
-macro_rules! scalar {
-    ($T:ty, $tol:expr, $gemm:ident, $gemv:ident, $symv:ident, $syrk:ident, $syr2k:ident,
-     $potrf:ident, $potrs:ident, $gesv:ident, $syevr:ident, $gesdd:ident, $gesvd:ident) => {
+/// The routines under test, one line each: the signature of the `blas`/`lapack` crate
+/// wrapper (the Fortran argument list), from which the macro declares `Scalar`'s entry
+/// point and forwards it to the `s…` or `d…` function of each precision.
+macro_rules! routines {
+    ($(fn $name:ident($($arg:ident: $ty:ty),* $(,)?) = $module:ident::[$s:ident, $d:ident];)*) => {
+        /// The precision-specific entry points.
+        trait Scalar: Copy + PartialOrd + std::fmt::Debug {
+            /// Tolerance of a result relative to its scale (a few hundred ulps at these
+            /// sizes).
+            const TOL: f64;
+            fn of(x: f64) -> Self;
+            fn f(self) -> f64;
+            $(#[allow(clippy::too_many_arguments)] unsafe fn $name($($arg: $ty),*);)*
+        }
+        routines!(@impl f32, 2e-4, $($name($($arg: $ty),*) = $module::$s;)*);
+        routines!(@impl f64, 1e-11, $($name($($arg: $ty),*) = $module::$d;)*);
+    };
+    (@impl $T:ty, $tol:expr, $($name:ident($($arg:ident: $ty:ty),*) = $module:ident::$f:ident;)*) => {
         impl Scalar for $T {
             const TOL: f64 = $tol;
             fn of(x: f64) -> Self {
@@ -190,193 +44,41 @@ macro_rules! scalar {
             fn f(self) -> f64 {
                 self as f64
             }
-            unsafe fn gemm(
-                ta: u8,
-                tb: u8,
-                m: i32,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                b: &[Self],
-                ldb: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$gemm(ta, tb, m, n, k, al, a, lda, b, ldb, be, c, ldc) }
-            }
-            unsafe fn gemv(
-                t: u8,
-                m: i32,
-                n: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                x: &[Self],
-                incx: i32,
-                be: Self,
-                y: &mut [Self],
-                incy: i32,
-            ) {
-                unsafe { blas::$gemv(t, m, n, al, a, lda, x, incx, be, y, incy) }
-            }
-            unsafe fn symv(
-                uplo: u8,
-                n: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                x: &[Self],
-                incx: i32,
-                be: Self,
-                y: &mut [Self],
-                incy: i32,
-            ) {
-                unsafe { blas::$symv(uplo, n, al, a, lda, x, incx, be, y, incy) }
-            }
-            unsafe fn syrk(
-                uplo: u8,
-                t: u8,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$syrk(uplo, t, n, k, al, a, lda, be, c, ldc) }
-            }
-            unsafe fn syr2k(
-                uplo: u8,
-                t: u8,
-                n: i32,
-                k: i32,
-                al: Self,
-                a: &[Self],
-                lda: i32,
-                b: &[Self],
-                ldb: i32,
-                be: Self,
-                c: &mut [Self],
-                ldc: i32,
-            ) {
-                unsafe { blas::$syr2k(uplo, t, n, k, al, a, lda, b, ldb, be, c, ldc) }
-            }
-            unsafe fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32) {
-                unsafe { lapack::$potrf(uplo, n, a, lda, info) }
-            }
-            unsafe fn potrs(
-                uplo: u8,
-                n: i32,
-                nrhs: i32,
-                a: &[Self],
-                lda: i32,
-                b: &mut [Self],
-                ldb: i32,
-                info: &mut i32,
-            ) {
-                unsafe { lapack::$potrs(uplo, n, nrhs, a, lda, b, ldb, info) }
-            }
-            unsafe fn gesv(
-                n: i32,
-                nrhs: i32,
-                a: &mut [Self],
-                lda: i32,
-                ipiv: &mut [i32],
-                b: &mut [Self],
-                ldb: i32,
-                info: &mut i32,
-            ) {
-                unsafe { lapack::$gesv(n, nrhs, a, lda, ipiv, b, ldb, info) }
-            }
-            unsafe fn syevr(
-                jobz: u8,
-                range: u8,
-                uplo: u8,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                vl: Self,
-                vu: Self,
-                il: i32,
-                iu: i32,
-                abstol: Self,
-                m: &mut i32,
-                w: &mut [Self],
-                z: &mut [Self],
-                ldz: i32,
-                isuppz: &mut [i32],
-                work: &mut [Self],
-                lwork: i32,
-                iwork: &mut [i32],
-                liwork: i32,
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$syevr(
-                        jobz, range, uplo, n, a, lda, vl, vu, il, iu, abstol, m, w, z, ldz, isuppz,
-                        work, lwork, iwork, liwork, info,
-                    )
-                }
-            }
-            unsafe fn gesdd(
-                jobz: u8,
-                m: i32,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                s: &mut [Self],
-                u: &mut [Self],
-                ldu: i32,
-                vt: &mut [Self],
-                ldvt: i32,
-                work: &mut [Self],
-                lwork: i32,
-                iwork: &mut [i32],
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$gesdd(
-                        jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork, info,
-                    )
-                }
-            }
-            unsafe fn gesvd(
-                jobu: u8,
-                jobvt: u8,
-                m: i32,
-                n: i32,
-                a: &mut [Self],
-                lda: i32,
-                s: &mut [Self],
-                u: &mut [Self],
-                ldu: i32,
-                vt: &mut [Self],
-                ldvt: i32,
-                work: &mut [Self],
-                lwork: i32,
-                info: &mut i32,
-            ) {
-                unsafe {
-                    lapack::$gesvd(
-                        jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, info,
-                    )
-                }
-            }
+            $(unsafe fn $name($($arg: $ty),*) {
+                unsafe { $module::$f($($arg),*) }
+            })*
         }
     };
 }
 
-scalar!(
-    f32, 2e-4, sgemm, sgemv, ssymv, ssyrk, ssyr2k, spotrf, spotrs, sgesv, ssyevr, sgesdd, sgesvd
-);
-scalar!(
-    f64, 1e-11, dgemm, dgemv, dsymv, dsyrk, dsyr2k, dpotrf, dpotrs, dgesv, dsyevr, dgesdd, dgesvd
-);
+routines! {
+    fn gemm(ta: u8, tb: u8, m: i32, n: i32, k: i32, al: Self, a: &[Self], lda: i32, b: &[Self],
+        ldb: i32, be: Self, c: &mut [Self], ldc: i32) = blas::[sgemm, dgemm];
+    fn gemv(t: u8, m: i32, n: i32, al: Self, a: &[Self], lda: i32, x: &[Self], incx: i32,
+        be: Self, y: &mut [Self], incy: i32) = blas::[sgemv, dgemv];
+    fn symv(uplo: u8, n: i32, al: Self, a: &[Self], lda: i32, x: &[Self], incx: i32, be: Self,
+        y: &mut [Self], incy: i32) = blas::[ssymv, dsymv];
+    fn syrk(uplo: u8, t: u8, n: i32, k: i32, al: Self, a: &[Self], lda: i32, be: Self,
+        c: &mut [Self], ldc: i32) = blas::[ssyrk, dsyrk];
+    fn syr2k(uplo: u8, t: u8, n: i32, k: i32, al: Self, a: &[Self], lda: i32, b: &[Self],
+        ldb: i32, be: Self, c: &mut [Self], ldc: i32) = blas::[ssyr2k, dsyr2k];
+    fn potrf(uplo: u8, n: i32, a: &mut [Self], lda: i32, info: &mut i32)
+        = lapack::[spotrf, dpotrf];
+    fn potrs(uplo: u8, n: i32, nrhs: i32, a: &[Self], lda: i32, b: &mut [Self], ldb: i32,
+        info: &mut i32) = lapack::[spotrs, dpotrs];
+    fn gesv(n: i32, nrhs: i32, a: &mut [Self], lda: i32, ipiv: &mut [i32], b: &mut [Self],
+        ldb: i32, info: &mut i32) = lapack::[sgesv, dgesv];
+    fn syevr(jobz: u8, range: u8, uplo: u8, n: i32, a: &mut [Self], lda: i32, vl: Self,
+        vu: Self, il: i32, iu: i32, abstol: Self, m: &mut i32, w: &mut [Self], z: &mut [Self],
+        ldz: i32, isuppz: &mut [i32], work: &mut [Self], lwork: i32, iwork: &mut [i32],
+        liwork: i32, info: &mut i32) = lapack::[ssyevr, dsyevr];
+    fn gesdd(jobz: u8, m: i32, n: i32, a: &mut [Self], lda: i32, s: &mut [Self], u: &mut [Self],
+        ldu: i32, vt: &mut [Self], ldvt: i32, work: &mut [Self], lwork: i32, iwork: &mut [i32],
+        info: &mut i32) = lapack::[sgesdd, dgesdd];
+    fn gesvd(jobu: u8, jobvt: u8, m: i32, n: i32, a: &mut [Self], lda: i32, s: &mut [Self],
+        u: &mut [Self], ldu: i32, vt: &mut [Self], ldvt: i32, work: &mut [Self], lwork: i32,
+        info: &mut i32) = lapack::[sgesvd, dgesvd];
+}
 
 /// A column-major Fortran array: `rows × cols` with leading dimension `ld`, the
 /// `ld − rows` padding rows of each column (and anything a test marks) set apart.
@@ -428,8 +130,13 @@ impl<T: Scalar> Array<T> {
 
     /// The matrix in f64, row by row.
     fn dense(&self) -> Vec<Vec<f64>> {
-        (0..self.rows)
-            .map(|i| (0..self.cols).map(|j| self.get(i, j)).collect())
+        self.block(self.rows, self.cols)
+    }
+
+    /// The leading `rows × cols` block in f64, row by row.
+    fn block(&self, rows: usize, cols: usize) -> Vec<Vec<f64>> {
+        (0..rows)
+            .map(|i| (0..cols).map(|j| self.get(i, j)).collect())
             .collect()
     }
 
@@ -554,8 +261,50 @@ fn unstrided<T: Scalar>(data: &[T], len: usize, inc: i32) -> Vec<f64> {
         .collect()
 }
 
+/// The logical elements of `y` (stored `inc` apart) against the column `expected`, each
+/// a sum of `terms` products: within `TOL·terms·max|expected|`.
+fn assert_strided<T: Scalar>(y: &[T], inc: i32, expected: &[Vec<f64>], terms: usize, what: &str) {
+    let got: Vec<Vec<f64>> = unstrided(y, expected.len(), inc)
+        .into_iter()
+        .map(|v| vec![v])
+        .collect();
+    assert_close::<T>(&got, expected, max_abs(expected) * terms as f64, what);
+}
+
 // ---------------------------------------------------------------------------------
 // BLAS
+
+/// `C ← alpha·op(A)·op(B) + beta·C` on the arrays, `op(A)` m×k and `op(B)` k×n.
+fn gemm<T: Scalar>(
+    (ta, tb): (u8, u8),
+    (m, n, k): (usize, usize, usize),
+    alpha: f64,
+    a: &Array<T>,
+    b: &Array<T>,
+    beta: f64,
+    c: &mut Array<T>,
+) {
+    let (m, n, k) = (m as i32, n as i32, k as i32);
+    let (lda, ldb, ldc) = (a.ld as i32, b.ld as i32, c.ld as i32);
+    let (alpha, beta) = (T::of(alpha), T::of(beta));
+    unsafe {
+        T::gemm(
+            ta,
+            tb,
+            m,
+            n,
+            k,
+            alpha,
+            &a.data,
+            lda,
+            &b.data,
+            ldb,
+            beta,
+            &mut c.data,
+            ldc,
+        )
+    }
+}
 
 fn gemm_cases<T: Scalar>() {
     let mut g = Gaussian::new(1);
@@ -599,23 +348,7 @@ fn gemm_cases<T: Scalar>() {
                             .collect()
                     })
                     .collect();
-                unsafe {
-                    T::gemm(
-                        ta,
-                        tb,
-                        m as i32,
-                        n as i32,
-                        k as i32,
-                        T::of(alpha),
-                        &a.data,
-                        a.ld as i32,
-                        &b.data,
-                        b.ld as i32,
-                        T::of(beta),
-                        &mut c.data,
-                        c.ld as i32,
-                    );
-                }
+                gemm((ta, tb), (m, n, k), alpha, &a, &b, beta, &mut c);
                 let scale = max_abs(&expected) * k as f64;
                 assert_close::<T>(
                     &c.dense(),
@@ -632,23 +365,7 @@ fn gemm_cases<T: Scalar>() {
         let a = Array::<T>::new(2, k, 1, f64::NAN, |_, _| f64::NAN);
         let b = Array::<T>::new(k, 3, 1, f64::NAN, |_, _| f64::NAN);
         let mut c = Array::<T>::new(2, 3, 1, SENTINEL, |i, j| (i + 2 * j) as f64);
-        unsafe {
-            T::gemm(
-                b'N',
-                b'N',
-                2,
-                3,
-                k as i32,
-                T::of(alpha),
-                &a.data,
-                a.ld as i32,
-                &b.data,
-                b.ld as i32,
-                T::of(-2.0),
-                &mut c.data,
-                c.ld as i32,
-            );
-        }
+        gemm((b'N', b'N'), (2, 3, k), alpha, &a, &b, -2.0, &mut c);
         let expected: Vec<Vec<f64>> = (0..2)
             .map(|i| (0..3).map(|j| -2.0 * (i + 2 * j) as f64).collect())
             .collect();
@@ -657,38 +374,9 @@ fn gemm_cases<T: Scalar>() {
     }
     // m = 0 / n = 0: nothing happens (not even to a NaN-free C with beta = 0).
     let mut c = vec![T::of(SENTINEL); 4];
-    let a = [T::of(1.0); 4];
-    unsafe {
-        T::gemm(
-            b'N',
-            b'N',
-            0,
-            2,
-            2,
-            T::of(1.0),
-            &a,
-            1,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            1,
-        );
-        T::gemm(
-            b'N',
-            b'N',
-            2,
-            0,
-            2,
-            T::of(1.0),
-            &a,
-            2,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            2,
-        );
+    let (a, one, zero) = ([T::of(1.0); 4], T::of(1.0), T::of(0.0));
+    for (m, n, ld) in [(0, 2, 1), (2, 0, 2)] {
+        unsafe { T::gemm(b'N', b'N', m, n, 2, one, &a, ld, &a, 2, zero, &mut c, ld) };
     }
     assert!(c.iter().all(|x| x.f() == SENTINEL));
 }
@@ -718,31 +406,11 @@ fn gemv_cases<T: Scalar>() {
                             vec![alpha * ax + if beta == 0.0 { 0.0 } else { beta * yv[i] }]
                         })
                         .collect();
-                    unsafe {
-                        T::gemv(
-                            t,
-                            m as i32,
-                            n as i32,
-                            T::of(alpha),
-                            &a.data,
-                            a.ld as i32,
-                            &x,
-                            incx,
-                            T::of(beta),
-                            &mut y,
-                            incy,
-                        );
-                    }
-                    let got: Vec<Vec<f64>> = unstrided(&y, ly, incy)
-                        .into_iter()
-                        .map(|v| vec![v])
-                        .collect();
-                    assert_close::<T>(
-                        &got,
-                        &expected,
-                        max_abs(&expected) * lx as f64,
-                        &format!("gemv {} {m}x{n} inc {incx} {incy}", t as char),
-                    );
+                    let (mi, ni, lda) = (m as i32, n as i32, a.ld as i32);
+                    let (al, be) = (T::of(alpha), T::of(beta));
+                    unsafe { T::gemv(t, mi, ni, al, &a.data, lda, &x, incx, be, &mut y, incy) };
+                    let what = format!("gemv {} {m}x{n} inc {incx} {incy}", t as char);
+                    assert_strided(&y, incy, &expected, lx, &what);
                     let logical: Vec<usize> = (0..ly)
                         .map(|i| {
                             (if incy > 0 { i } else { ly - 1 - i }) * incy.unsigned_abs() as usize
@@ -786,43 +454,27 @@ fn symv_cases<T: Scalar>() {
                         vec![alpha * (0..n).map(|j| sym[i][j] * xv[j]).sum::<f64>() + beta * yv[i]]
                     })
                     .collect();
-                unsafe {
-                    T::symv(
-                        uplo,
-                        n as i32,
-                        T::of(alpha),
-                        &a.data,
-                        a.ld as i32,
-                        &x,
-                        incx,
-                        T::of(beta),
-                        &mut y,
-                        incy,
-                    );
-                }
-                let got: Vec<Vec<f64>> = unstrided(&y, n, incy)
-                    .into_iter()
-                    .map(|v| vec![v])
-                    .collect();
-                assert_close::<T>(
-                    &got,
-                    &expected,
-                    max_abs(&expected) * n as f64,
-                    &format!("symv {} n={n}", uplo as char),
-                );
+                let (ni, lda, al, be) = (n as i32, a.ld as i32, T::of(alpha), T::of(beta));
+                unsafe { T::symv(uplo, ni, al, &a.data, lda, &x, incx, be, &mut y, incy) };
+                let what = format!("symv {} n={n}", uplo as char);
+                assert_strided(&y, incy, &expected, n, &what);
             }
         }
     }
 }
 
-/// `C`'s `uplo` triangle against `expected`, the other triangle still the sentinel.
+/// `C`'s `uplo` triangle after `routine` (`trans` `t`, `k` terms a sum) against
+/// `expected` within `TOL·k·max|expected|`, the other triangle still the sentinel.
 fn assert_triangle<T: Scalar>(
     c: &Array<T>,
     expected: &[Vec<f64>],
-    upper: bool,
-    scale: f64,
-    what: &str,
+    (uplo, t, k): (u8, u8, usize),
+    routine: &str,
 ) {
+    let upper = uplo == b'U';
+    let scale = max_abs(expected) * k as f64;
+    let n = expected.len();
+    let what = &format!("{routine} {} {} n={n} k={k}", uplo as char, t as char);
     for (i, row) in expected.iter().enumerate() {
         for (j, e) in row.iter().enumerate() {
             let v = c.get(i, j);
@@ -873,27 +525,10 @@ fn syrk_cases<T: Scalar>() {
                                 .collect()
                         })
                         .collect();
-                    unsafe {
-                        T::syrk(
-                            uplo,
-                            t,
-                            n as i32,
-                            k as i32,
-                            T::of(alpha),
-                            &a.data,
-                            a.ld as i32,
-                            T::of(beta),
-                            &mut c.data,
-                            c.ld as i32,
-                        );
-                    }
-                    assert_triangle(
-                        &c,
-                        &expected,
-                        up,
-                        max_abs(&expected) * k as f64,
-                        &format!("syrk {} {} n={n} k={k}", uplo as char, t as char),
-                    );
+                    let (ni, ki, lda, ldc) = (n as i32, k as i32, a.ld as i32, c.ld as i32);
+                    let (al, be) = (T::of(alpha), T::of(beta));
+                    unsafe { T::syrk(uplo, t, ni, ki, al, &a.data, lda, be, &mut c.data, ldc) };
+                    assert_triangle(&c, &expected, (uplo, t, k), "syrk");
                 }
             }
         }
@@ -931,29 +566,11 @@ fn syr2k_cases<T: Scalar>() {
                             .collect()
                     })
                     .collect();
-                unsafe {
-                    T::syr2k(
-                        uplo,
-                        t,
-                        n as i32,
-                        k as i32,
-                        T::of(alpha),
-                        &a.data,
-                        a.ld as i32,
-                        &b.data,
-                        b.ld as i32,
-                        T::of(beta),
-                        &mut c.data,
-                        c.ld as i32,
-                    );
-                }
-                assert_triangle(
-                    &c,
-                    &expected,
-                    up,
-                    max_abs(&expected) * k as f64,
-                    &format!("syr2k {} {} n={n} k={k}", uplo as char, t as char),
-                );
+                let (ni, ki, al, be) = (n as i32, k as i32, T::of(alpha), T::of(beta));
+                let (lda, ldb, ldc) = (a.ld as i32, b.ld as i32, c.ld as i32);
+                let (a, b) = (&a.data, &b.data);
+                unsafe { T::syr2k(uplo, t, ni, ki, al, a, lda, b, ldb, be, &mut c.data, ldc) };
+                assert_triangle(&c, &expected, (uplo, t, k), "syr2k");
             }
         }
     }
@@ -1067,6 +684,15 @@ fn potrf_potrs_cases<T: Scalar>() {
     assert_eq!((info, a[0].f()), (0, SENTINEL));
 }
 
+/// `?gesv` on the arrays (`A` n×n, `B` n×nrhs): `X` over `B`, `P·A = L·U` over `A`
+/// and `ipiv`; the `info` it returns.
+fn gesv<T: Scalar>(a: &mut Array<T>, ipiv: &mut [i32], b: &mut Array<T>) -> i32 {
+    let (n, nrhs, lda, ldb) = (a.rows as i32, b.cols as i32, a.ld as i32, b.ld as i32);
+    let mut info = -99;
+    unsafe { T::gesv(n, nrhs, &mut a.data, lda, ipiv, &mut b.data, ldb, &mut info) };
+    info
+}
+
 fn gesv_cases<T: Scalar>() {
     let mut g = Gaussian::new(7);
     for n in [1, 3, 8] {
@@ -1077,20 +703,7 @@ fn gesv_cases<T: Scalar>() {
             let rhs = matmul(&a0, &x_true);
             let mut b = Array::<T>::from(&rhs, 1, SENTINEL);
             let mut ipiv = vec![0; n];
-            let mut info = 99;
-            unsafe {
-                T::gesv(
-                    n as i32,
-                    nrhs as i32,
-                    &mut a.data,
-                    a.ld as i32,
-                    &mut ipiv,
-                    &mut b.data,
-                    b.ld as i32,
-                    &mut info,
-                )
-            };
-            assert_eq!(info, 0);
+            assert_eq!(gesv(&mut a, &mut ipiv, &mut b), 0);
             assert_close::<T>(
                 &matmul(&a0, &b.dense()),
                 &rhs,
@@ -1148,26 +761,11 @@ fn gesv_cases<T: Scalar>() {
         0.0,
         |i, j| if j == 0 { 0.0 } else { (i * 3 + j) as f64 },
     );
-    let mut b = vec![T::of(1.0), T::of(2.0), T::of(3.0)];
+    let rhs = vec![vec![1.0], vec![2.0], vec![3.0]];
+    let mut b = Array::<T>::from(&rhs, 0, 0.0);
     let mut ipiv = vec![0; 3];
-    let mut info = 0;
-    unsafe {
-        T::gesv(
-            3,
-            1,
-            &mut a.data,
-            a.ld as i32,
-            &mut ipiv,
-            &mut b,
-            3,
-            &mut info,
-        )
-    };
-    assert_eq!(info, 1);
-    assert_eq!(
-        b.iter().map(|x| x.f()).collect::<Vec<_>>(),
-        vec![1.0, 2.0, 3.0]
-    );
+    assert_eq!(gesv(&mut a, &mut ipiv, &mut b), 1);
+    assert_eq!(b.dense(), rhs);
 }
 
 /// `?syevr` on a symmetric matrix of known spectrum (Householder similarity of a
@@ -1213,31 +811,41 @@ fn syevr_cases<T: Scalar>() {
                     let mut isuppz = vec![0; 2 * n];
                     let mut work = vec![T::of(0.0); 1];
                     let mut iwork = vec![0; 1];
-                    unsafe {
+                    let (ni, lda, vl, vu, abstol) =
+                        (n as i32, a.ld as i32, T::of(vl), T::of(vu), T::of(-1.0));
+                    let a_data = &mut a.data;
+                    let mut syevr = |z: &mut [T],
+                                     ldz: i32,
+                                     work: &mut [T],
+                                     lwork: i32,
+                                     iwork: &mut [i32],
+                                     liwork: i32,
+                                     info: &mut i32| unsafe {
                         T::syevr(
                             jobz,
                             range,
                             uplo,
-                            n as i32,
-                            &mut a.data,
-                            a.ld as i32,
-                            T::of(vl),
-                            T::of(vu),
+                            ni,
+                            a_data,
+                            lda,
+                            vl,
+                            vu,
                             il,
                             iu,
-                            T::of(-1.0),
+                            abstol,
                             &mut m,
                             &mut w,
-                            &mut z_dummy,
-                            n as i32,
+                            z,
+                            ldz,
                             &mut isuppz,
-                            &mut work,
-                            -1,
-                            &mut iwork,
-                            -1,
-                            &mut info,
-                        );
-                    }
+                            work,
+                            lwork,
+                            iwork,
+                            liwork,
+                            info,
+                        )
+                    };
+                    syevr(&mut z_dummy, ni, &mut work, -1, &mut iwork, -1, &mut info);
                     assert_eq!(info, 0);
                     let lwork = work[0].f() as usize;
                     let liwork = iwork[0] as usize;
@@ -1254,31 +862,15 @@ fn syevr_cases<T: Scalar>() {
                     } else {
                         &mut z_dummy
                     };
-                    unsafe {
-                        T::syevr(
-                            jobz,
-                            range,
-                            uplo,
-                            n as i32,
-                            &mut a.data,
-                            a.ld as i32,
-                            T::of(vl),
-                            T::of(vu),
-                            il,
-                            iu,
-                            T::of(-1.0),
-                            &mut m,
-                            &mut w,
-                            z_data,
-                            n as i32 + 1,
-                            &mut isuppz,
-                            &mut work,
-                            lwork as i32,
-                            &mut iwork,
-                            liwork as i32,
-                            &mut info,
-                        );
-                    }
+                    syevr(
+                        z_data,
+                        ni + 1,
+                        &mut work,
+                        lwork as i32,
+                        &mut iwork,
+                        liwork as i32,
+                        &mut info,
+                    );
                     let what = format!(
                         "syevr {} {} {} n={n}",
                         jobz as char, range as char, uplo as char
@@ -1296,9 +888,7 @@ fn syevr_cases<T: Scalar>() {
                         "{what}: ascending"
                     );
                     if jobz == b'V' {
-                        let v: Vec<Vec<f64>> = (0..n)
-                            .map(|i| (0..m as usize).map(|j| z.get(i, j)).collect())
-                            .collect();
+                        let v = z.block(n, m as usize);
                         assert_orthonormal_columns::<T>(&v, &format!("{what}: VᵀV"));
                         let av = matmul(&s, &v);
                         let vl: Vec<Vec<f64>> = (0..n)
@@ -1336,6 +926,7 @@ fn syevr_cases<T: Scalar>() {
     let (mut m, mut info) = (7, 7);
     let mut work = vec![T::of(0.0); 1];
     let mut iwork = vec![0; 1];
+    let zero = T::of(0.0);
     unsafe {
         T::syevr(
             b'V',
@@ -1344,11 +935,11 @@ fn syevr_cases<T: Scalar>() {
             0,
             &mut [],
             1,
-            T::of(0.0),
-            T::of(0.0),
+            zero,
+            zero,
             0,
             0,
-            T::of(0.0),
+            zero,
             &mut m,
             &mut [],
             &mut [],
@@ -1385,7 +976,6 @@ fn svd_cases<T: Scalar>() {
                 let mut s = vec![T::of(0.0); k];
                 let mut work = vec![T::of(0.0); 1];
                 let mut iwork = vec![0; 8 * k];
-                let mut info = -1;
                 let what = format!("{driver} {} {m}x{n}", job as char);
                 // gesvd with 'O' on one side only (LAPACK forbids both): U over A.
                 let (jobu, jobvt) = if job == b'O' {
@@ -1393,75 +983,32 @@ fn svd_cases<T: Scalar>() {
                 } else {
                     (job, job)
                 };
-                let call = |a: &mut Array<T>,
-                            u: &mut Array<T>,
-                            vt: &mut Array<T>,
-                            s: &mut [T],
-                            work: &mut [T],
-                            lwork: i32,
-                            iwork: &mut [i32],
-                            info: &mut i32| unsafe {
-                    if driver == "gesdd" {
-                        T::gesdd(
-                            job,
-                            m as i32,
-                            n as i32,
-                            &mut a.data,
-                            a.ld as i32,
-                            s,
-                            &mut u.data,
-                            u.ld as i32,
-                            &mut vt.data,
-                            vt.ld as i32,
-                            work,
-                            lwork,
-                            iwork,
-                            info,
-                        );
-                    } else {
-                        T::gesvd(
-                            jobu,
-                            jobvt,
-                            m as i32,
-                            n as i32,
-                            &mut a.data,
-                            a.ld as i32,
-                            s,
-                            &mut u.data,
-                            u.ld as i32,
-                            &mut vt.data,
-                            vt.ld as i32,
-                            work,
-                            lwork,
-                            info,
-                        );
+                // The workspace query, then the call: `info` of each.
+                let mut call = |work: &mut [T], lwork: i32| {
+                    let mut info = -1;
+                    let (mi, ni, lda, ldu, ldvt) =
+                        (m as i32, n as i32, a.ld as i32, u.ld as i32, vt.ld as i32);
+                    let (a, u, vt, s) = (&mut a.data, &mut u.data, &mut vt.data, &mut s);
+                    unsafe {
+                        if driver == "gesdd" {
+                            T::gesdd(
+                                job, mi, ni, a, lda, s, u, ldu, vt, ldvt, work, lwork, &mut iwork,
+                                &mut info,
+                            );
+                        } else {
+                            T::gesvd(
+                                jobu, jobvt, mi, ni, a, lda, s, u, ldu, vt, ldvt, work, lwork,
+                                &mut info,
+                            );
+                        }
                     }
+                    info
                 };
-                call(
-                    &mut a,
-                    &mut u,
-                    &mut vt,
-                    &mut s[..],
-                    &mut work[..],
-                    -1,
-                    &mut iwork[..],
-                    &mut info,
-                );
-                assert_eq!(info, 0, "{what}: query");
+                assert_eq!(call(&mut work, -1), 0, "{what}: query");
                 let lwork = work[0].f() as usize;
                 assert!(lwork >= 1, "{what}: lwork {lwork}");
                 work.resize(lwork, T::of(0.0));
-                call(
-                    &mut a,
-                    &mut u,
-                    &mut vt,
-                    &mut s[..],
-                    &mut work[..],
-                    lwork as i32,
-                    &mut iwork[..],
-                    &mut info,
-                );
-                assert_eq!(info, 0, "{what}");
+                assert_eq!(call(&mut work, lwork as i32), 0, "{what}");
                 let got: Vec<Vec<f64>> = s.iter().map(|x| vec![x.f()]).collect();
                 let expected: Vec<Vec<f64>> = sigma.iter().map(|x| vec![*x]).collect();
                 assert_close::<T>(&got, &expected, 10.0, &format!("{what}: singular values"));
@@ -1476,20 +1023,8 @@ fn svd_cases<T: Scalar>() {
                 // gesvd call puts U over A).
                 let u_over_a = job == b'O' && (driver == "gesvd" || m >= n);
                 let vt_over_a = job == b'O' && driver == "gesdd" && m < n;
-                let uu: Vec<Vec<f64>> = (0..m)
-                    .map(|i| {
-                        (0..k)
-                            .map(|j| if u_over_a { a.get(i, j) } else { u.get(i, j) })
-                            .collect()
-                    })
-                    .collect();
-                let vv: Vec<Vec<f64>> = (0..k)
-                    .map(|i| {
-                        (0..n)
-                            .map(|j| if vt_over_a { a.get(i, j) } else { vt.get(i, j) })
-                            .collect()
-                    })
-                    .collect();
+                let uu = if u_over_a { &a } else { &u }.block(m, k);
+                let vv = if vt_over_a { &a } else { &vt }.block(k, n);
                 assert_orthonormal_columns::<T>(&uu, &format!("{what}: UᵀU"));
                 assert_orthonormal_columns::<T>(&transpose(&vv), &format!("{what}: VᵀV"));
                 let usv = matmul(
@@ -1501,13 +1036,8 @@ fn svd_cases<T: Scalar>() {
                 );
                 assert_close::<T>(&usv, &a0, 10.0, &format!("{what}: U·Σ·Vᵀ = A"));
                 if job == b'A' {
-                    let full_u: Vec<Vec<f64>> = (0..m)
-                        .map(|i| (0..m).map(|j| u.get(i, j)).collect())
-                        .collect();
-                    let full_v: Vec<Vec<f64>> = (0..n)
-                        .map(|i| (0..n).map(|j| vt.get(j, i)).collect())
-                        .collect();
-                    assert_orthonormal_columns::<T>(&full_u, &format!("{what}: full U"));
+                    let full_v = transpose(&vt.block(n, n));
+                    assert_orthonormal_columns::<T>(&u.block(m, m), &format!("{what}: full U"));
                     assert_orthonormal_columns::<T>(&full_v, &format!("{what}: full V"));
                 }
                 if !u_over_a && !vt_over_a {
@@ -1543,82 +1073,33 @@ fn illegal_argument_cases<T: Scalar>() {
     let one = T::of(1.0);
     let a = vec![one; 16];
     let mut c = vec![T::of(SENTINEL); 16];
+    // gemm: (transa, transb, m, k, lda, ldb, ldc), n = 2.
+    for (ta, tb, m, k, lda, ldb, ldc) in [
+        (b'X', b'N', 2, 2, 2, 2, 2),
+        (b'N', b'N', -1, 2, 2, 2, 2),
+        (b'N', b'N', 3, 2, 2, 2, 3), // lda < m
+        (b'T', b'N', 2, 3, 2, 3, 2), // lda < k
+        (b'N', b'N', 2, 2, 2, 2, 1), // ldc < m
+    ] {
+        unsafe {
+            T::gemm(
+                ta,
+                tb,
+                m,
+                2,
+                k,
+                one,
+                &a,
+                lda,
+                &a,
+                ldb,
+                T::of(0.0),
+                &mut c,
+                ldc,
+            )
+        };
+    }
     unsafe {
-        T::gemm(
-            b'X',
-            b'N',
-            2,
-            2,
-            2,
-            one,
-            &a,
-            2,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            2,
-        );
-        T::gemm(
-            b'N',
-            b'N',
-            -1,
-            2,
-            2,
-            one,
-            &a,
-            2,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            2,
-        );
-        T::gemm(
-            b'N',
-            b'N',
-            3,
-            2,
-            2,
-            one,
-            &a,
-            2,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            3,
-        ); // lda < m
-        T::gemm(
-            b'T',
-            b'N',
-            2,
-            2,
-            3,
-            one,
-            &a,
-            2,
-            &a,
-            3,
-            T::of(0.0),
-            &mut c,
-            2,
-        ); // lda < k
-        T::gemm(
-            b'N',
-            b'N',
-            2,
-            2,
-            2,
-            one,
-            &a,
-            2,
-            &a,
-            2,
-            T::of(0.0),
-            &mut c,
-            1,
-        ); // ldc < m
         T::gemv(b'N', 2, 2, one, &a, 2, &a, 0, T::of(0.0), &mut c, 1); // incx = 0
         T::gemv(b'Q', 2, 2, one, &a, 2, &a, 1, T::of(0.0), &mut c, 1);
         T::symv(b'X', 2, one, &a, 2, &a, 1, T::of(0.0), &mut c, 1);
@@ -1663,16 +1144,66 @@ fn illegal_argument_cases<T: Scalar>() {
         let mut work = vec![T::of(0.0); 200];
         let mut iwork = vec![0; 100];
         let z1 = T::of(0.0);
-        let mut syevr = |jobz: u8,
-                         range: u8,
-                         vl: f64,
-                         vu: f64,
-                         il: i32,
-                         iu: i32,
-                         ldz: i32,
-                         lwork: i32,
-                         liwork: i32,
-                         info: &mut i32| {
+        // syevr: (jobz, range, vl, vu, il, iu, ldz, lwork, liwork), uplo 'U', n = lda = 4.
+        for (jobz, range, vl, vu, il, iu, ldz, lwork, liwork, expected, what) in [
+            (b'X', b'A', 0.0, 0.0, 0, 0, 4, 200, 100, -1, "syevr jobz"),
+            (b'V', b'X', 0.0, 0.0, 0, 0, 4, 200, 100, -2, "syevr range"),
+            (
+                b'V',
+                b'V',
+                1.0,
+                1.0,
+                0,
+                0,
+                4,
+                200,
+                100,
+                -8,
+                "syevr vu <= vl",
+            ),
+            (b'V', b'I', 0.0, 0.0, 0, 2, 4, 200, 100, -9, "syevr il"),
+            (
+                b'V',
+                b'I',
+                0.0,
+                0.0,
+                3,
+                2,
+                4,
+                200,
+                100,
+                -10,
+                "syevr iu < il",
+            ),
+            (b'V', b'A', 0.0, 0.0, 0, 0, 3, 200, 100, -15, "syevr ldz"),
+            (
+                b'V',
+                b'A',
+                0.0,
+                0.0,
+                0,
+                0,
+                4,
+                103,
+                100,
+                -18,
+                "syevr lwork < 26n",
+            ),
+            (
+                b'V',
+                b'A',
+                0.0,
+                0.0,
+                0,
+                0,
+                4,
+                200,
+                39,
+                -20,
+                "syevr liwork < 10n",
+            ),
+        ] {
+            let (vl, vu) = (T::of(vl), T::of(vu));
             T::syevr(
                 jobz,
                 range,
@@ -1680,8 +1211,8 @@ fn illegal_argument_cases<T: Scalar>() {
                 4,
                 &mut a,
                 4,
-                T::of(vl),
-                T::of(vu),
+                vl,
+                vu,
                 il,
                 iu,
                 z1,
@@ -1694,62 +1225,40 @@ fn illegal_argument_cases<T: Scalar>() {
                 lwork,
                 &mut iwork,
                 liwork,
-                info,
+                &mut info,
             );
-        };
-        syevr(b'X', b'A', 0.0, 0.0, 0, 0, 4, 200, 100, &mut info);
-        check(-1, "syevr jobz", &mut info);
-        syevr(b'V', b'X', 0.0, 0.0, 0, 0, 4, 200, 100, &mut info);
-        check(-2, "syevr range", &mut info);
-        syevr(b'V', b'V', 1.0, 1.0, 0, 0, 4, 200, 100, &mut info);
-        check(-8, "syevr vu <= vl", &mut info);
-        syevr(b'V', b'I', 0.0, 0.0, 0, 2, 4, 200, 100, &mut info);
-        check(-9, "syevr il", &mut info);
-        syevr(b'V', b'I', 0.0, 0.0, 3, 2, 4, 200, 100, &mut info);
-        check(-10, "syevr iu < il", &mut info);
-        syevr(b'V', b'A', 0.0, 0.0, 0, 0, 3, 200, 100, &mut info);
-        check(-15, "syevr ldz", &mut info);
-        syevr(b'V', b'A', 0.0, 0.0, 0, 0, 4, 103, 100, &mut info);
-        check(-18, "syevr lwork < 26n", &mut info);
-        syevr(b'V', b'A', 0.0, 0.0, 0, 0, 4, 200, 39, &mut info);
-        check(-20, "syevr liwork < 10n", &mut info);
+            check(expected, what, &mut info);
+        }
         let (mut s, mut u, mut vt) = (
             vec![T::of(0.0); 4],
             vec![T::of(0.0); 16],
             vec![T::of(0.0); 16],
         );
-        T::gesdd(
-            b'X', 4, 4, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, 200, &mut iwork,
-            &mut info,
-        );
-        check(-1, "gesdd jobz", &mut info);
-        T::gesdd(
-            b'S', 4, 3, &mut a, 4, &mut s, &mut u, 3, &mut vt, 4, &mut work, 200, &mut iwork,
-            &mut info,
-        );
-        check(-8, "gesdd ldu", &mut info);
-        T::gesdd(
-            b'A', 3, 4, &mut a, 3, &mut s, &mut u, 3, &mut vt, 3, &mut work, 200, &mut iwork,
-            &mut info,
-        );
-        check(-10, "gesdd ldvt", &mut info);
-        T::gesdd(
-            b'S', 4, 4, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, 10, &mut iwork,
-            &mut info,
-        );
-        check(-12, "gesdd lwork", &mut info);
-        T::gesvd(
-            b'O', b'O', 4, 4, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, 200, &mut info,
-        );
-        check(-2, "gesvd both O", &mut info);
-        T::gesvd(
-            b'S', b'S', 4, -4, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, 200, &mut info,
-        );
-        check(-4, "gesvd n", &mut info);
-        T::gesvd(
-            b'N', b'N', 4, 4, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, 19, &mut info,
-        );
-        check(-13, "gesvd lwork", &mut info);
+        // gesdd: (jobz, m, n, lda, ldu, ldvt, lwork).
+        for (jobz, m, n, lda, ldu, ldvt, lwork, expected, what) in [
+            (b'X', 4, 4, 4, 4, 4, 200, -1, "gesdd jobz"),
+            (b'S', 4, 3, 4, 3, 4, 200, -8, "gesdd ldu"),
+            (b'A', 3, 4, 3, 3, 3, 200, -10, "gesdd ldvt"),
+            (b'S', 4, 4, 4, 4, 4, 10, -12, "gesdd lwork"),
+        ] {
+            T::gesdd(
+                jobz, m, n, &mut a, lda, &mut s, &mut u, ldu, &mut vt, ldvt, &mut work, lwork,
+                &mut iwork, &mut info,
+            );
+            check(expected, what, &mut info);
+        }
+        // gesvd: (jobu, jobvt, n, lwork), m = lda = ldu = ldvt = 4.
+        for (jobu, jobvt, n, lwork, expected, what) in [
+            (b'O', b'O', 4, 200, -2, "gesvd both O"),
+            (b'S', b'S', -4, 200, -4, "gesvd n"),
+            (b'N', b'N', 4, 19, -13, "gesvd lwork"),
+        ] {
+            T::gesvd(
+                jobu, jobvt, 4, n, &mut a, 4, &mut s, &mut u, 4, &mut vt, 4, &mut work, lwork,
+                &mut info,
+            );
+            check(expected, what, &mut info);
+        }
     }
     assert!(
         b.iter().all(|x| x.f() == 1.0),
@@ -1788,21 +1297,10 @@ fn empty_cases<T: Scalar>() {
             let mut work = vec![T::of(0.0); 1];
             let mut iwork = vec![-5; 1];
             let mut sv: Vec<T> = Vec::new();
+            let (ldm, ldn) = (m.max(1), n.max(1));
             T::gesdd(
-                b'S',
-                m,
-                n,
-                &mut out,
-                m.max(1),
-                &mut sv,
-                &mut u,
-                m.max(1),
-                &mut vt,
-                1,
-                &mut work,
-                -1,
-                &mut iwork,
-                &mut info,
+                b'S', m, n, &mut out, ldm, &mut sv, &mut u, ldm, &mut vt, 1, &mut work, -1,
+                &mut iwork, &mut info,
             );
             assert_eq!(
                 (info, work[0].f(), iwork[0]),
@@ -1810,36 +1308,12 @@ fn empty_cases<T: Scalar>() {
                 "gesdd {m}x{n} query"
             );
             T::gesdd(
-                b'S',
-                m,
-                n,
-                &mut out,
-                m.max(1),
-                &mut sv,
-                &mut u,
-                m.max(1),
-                &mut vt,
-                1,
-                &mut work,
-                1,
-                &mut iwork,
-                &mut info,
+                b'S', m, n, &mut out, ldm, &mut sv, &mut u, ldm, &mut vt, 1, &mut work, 1,
+                &mut iwork, &mut info,
             );
             assert_eq!(info, 0);
             T::gesvd(
-                b'A',
-                b'A',
-                m,
-                n,
-                &mut out,
-                m.max(1),
-                &mut sv,
-                &mut u,
-                m.max(1),
-                &mut vt,
-                n.max(1),
-                &mut work,
-                1,
+                b'A', b'A', m, n, &mut out, ldm, &mut sv, &mut u, ldm, &mut vt, ldn, &mut work, 1,
                 &mut info,
             );
             assert_eq!(info, 0);

@@ -102,4 +102,23 @@ pub struct FitResultPy {
     pub inner: FitResult,
     /// The robot it was fitted with (`None` when read from JSON without one).
     pub robot: Option<Py<ModelPy>>,
+    // `inner`'s numbers Python reads as attributes, copied once (the class is frozen).
+    #[pyo3(get)]
+    rows: usize,
+    #[pyo3(get)]
+    condition_number: f64,
+    #[pyo3(get)]
+    sigma2: f64,
+}
+
+impl FitResultPy {
+    pub fn new(inner: FitResult, robot: Option<Py<ModelPy>>) -> Self {
+        FitResultPy {
+            rows: inner.rows,
+            condition_number: inner.condition_number,
+            sigma2: inner.sigma2,
+            inner,
+            robot,
+        }
+    }
 }

@@ -6,14 +6,13 @@ use std::path::PathBuf;
 use dvrk_ident::excite::optimize::{self, Criterion, Excitation, ExciteError, ExciteOptions};
 use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::result::write_atomic;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 
 use crate::classes::ModelPy;
 use crate::convert::{array, background, matrix, rows, vector, Failure};
-use crate::errors::{error, excite_kind, fourier_kind, from_ident, input};
-use crate::json::to_python;
+use crate::errors::{error, excite_kind, fourier_kind, input};
+use crate::json::{to_python, write_document};
 use crate::limits::limits_of;
 
 /// A float64 numpy array.
@@ -242,9 +241,7 @@ impl FourierTrajectoryPy {
 
     /// Writes :meth:`to_json` to ``path`` atomically (temporary file and rename).
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let text = self.inner.to_json();
-        py.detach(move || write_atomic(&path, &text))
-            .map_err(from_ident)
+        write_document(py, &path, self.inner.to_json())
     }
 
     fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
@@ -317,9 +314,7 @@ impl ExcitationPy {
 
     /// Writes :meth:`to_json` to ``path`` atomically.
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let text = self.to_json();
-        py.detach(move || write_atomic(&path, &text))
-            .map_err(from_ident)
+        write_document(py, &path, self.to_json())
     }
 
     fn __repr__(&self) -> String {

@@ -7,7 +7,7 @@ use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
-use dvrk_ident::result::{wpi_params_json, write_atomic};
+use dvrk_ident::result::wpi_params_json;
 use dvrk_ident::JointLog;
 use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
@@ -20,7 +20,7 @@ use crate::convert::{array, background, matrix, py_bool, py_str};
 use crate::data::{fail_ident, JointLogPy, PreparedPy};
 use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input, Kind};
 use crate::excite::FourierTrajectoryPy;
-use crate::json::to_python;
+use crate::json::{to_python, write_document};
 use crate::observe::observations_arg;
 use crate::overrides::Overrides;
 
@@ -203,10 +203,7 @@ pub fn fit(
     })?;
     let converged = inner.solver.converged;
     let status = inner.solver.status;
-    let result = FitResultPy {
-        inner,
-        robot: Some(robot.clone().unbind()),
-    };
+    let result = FitResultPy::new(inner, Some(robot.clone().unbind()));
     if !converged && !allow_unconverged {
         let err = error(
             Kind::NotConverged,
@@ -292,10 +289,7 @@ impl FitResultPy {
 }
 
 fn with_robot(inner: FitResult, robot: Option<&Bound<'_, ModelPy>>) -> FitResultPy {
-    FitResultPy {
-        inner,
-        robot: robot.map(|r| r.clone().unbind()),
-    }
+    FitResultPy::new(inner, robot.map(|r| r.clone().unbind()))
 }
 
 #[pymethods]
@@ -349,9 +343,7 @@ impl FitResultPy {
 
     /// Writes :meth:`to_json` to ``path`` atomically (temporary file and rename).
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        let text = self.inner.to_json();
-        py.detach(move || write_atomic(&path, &text))
-            .map_err(from_ident)
+        write_document(py, &path, self.inner.to_json())
     }
 
     /// Every parameter by name, in the model's order (barycentric: inertia about the
@@ -472,21 +464,6 @@ impl FitResultPy {
     fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
         let n = self.inner.weights.len();
         array(py, self.inner.weights.clone(), &[n])
-    }
-
-    #[getter]
-    fn rows(&self) -> usize {
-        self.inner.rows
-    }
-
-    #[getter]
-    fn condition_number(&self) -> f64 {
-        self.inner.condition_number
-    }
-
-    #[getter]
-    fn sigma2(&self) -> f64 {
-        self.inner.sigma2
     }
 
     /// The :class:`Model` of this result: the one it was fitted (or read) with, else

@@ -1,12 +1,15 @@
 //! Documents (results, summaries, settings) cross the boundary as JSON, so that Python
 //! sees exactly the structure of the CLI's JSON output.
 
+use std::path::Path;
+
+use dvrk_ident::result::write_atomic;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use crate::errors::input;
+use crate::errors::{from_ident, input};
 
 /// `json.loads(serde_json::to_string(value))`: dicts, lists, floats (exact), `None`
 /// for non-finite numbers (as in the CLI's output).
@@ -32,4 +35,11 @@ pub fn from_python<T: DeserializeOwned>(
         .map_err(|e| input(format!("{what}: not JSON-compatible: {e}")))?
         .extract()?;
     serde_json::from_str(&text).map_err(|e| input(format!("{what}: {e}")))
+}
+
+/// The `write` of every class with a JSON document: `text` written to `path` atomically
+/// (temporary file and rename), without the GIL.
+pub fn write_document(py: Python<'_>, path: &Path, text: String) -> PyResult<()> {
+    py.detach(move || write_atomic(path, &text))
+        .map_err(from_ident)
 }

@@ -24,6 +24,17 @@ impl ModelPy {
         }
     }
 
+    /// The model `origin` describes, with Stribeck terms of velocity `stribeck` if given
+    /// (built without the GIL).
+    fn build(py: Python<'_>, origin: Origin, stribeck: Option<f64>) -> PyResult<ModelPy> {
+        let o = origin.clone();
+        let model = py.detach(move || o.build(stribeck)).map_err(from_model)?;
+        Ok(ModelPy {
+            stribeck,
+            ..ModelPy::new(model, origin)
+        })
+    }
+
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
     /// Stribeck terms.
     pub fn of_result(
@@ -62,6 +73,27 @@ impl ModelPy {
 
     pub fn params(&self, py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
         params_of(py, &self.model, obj)
+    }
+
+    /// `f(workspace, q_k, out_k)` for each sample `q_k` of the positions `q` (rad or m),
+    /// the results shaped `(N, *shape)`, or `shape` for one 1-D sample: the body of every
+    /// method of the positions alone (gravity, mass matrix, known forces, kinematics).
+    fn map_positions<'py, F>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        shape: &[usize],
+        mut f: F,
+    ) -> PyResult<Bound<'py, PyArrayDyn<f64>>>
+    where
+        F: FnMut(&mut Workspace, &[f64], &mut [f64]) + Send,
+    {
+        let model = &self.model;
+        let q = rows(py, q, model.dof(), "q", &model.coordinates)?;
+        let mut ws = Workspace::new(model);
+        let width = shape.iter().product();
+        let out = per_sample(py, q.rows, width, |k, out| f(&mut ws, q.row(k), out))?;
+        Ok(array(py, out, &q.shape(shape)))
     }
 
     fn state(
@@ -175,27 +207,17 @@ impl ModelPy {
     /// A robot from the text of a ``.toml`` description; ``source`` names it in messages.
     #[staticmethod]
     #[pyo3(signature = (text, source = "<string>"))]
-    fn from_toml(text: &str, source: &str) -> PyResult<Self> {
-        Ok(ModelPy::new(
-            Model::from_toml_str(text, source).map_err(from_model)?,
-            Origin::Toml {
-                text: text.to_string(),
-                source: source.to_string(),
-            },
-        ))
+    fn from_toml(py: Python<'_>, text: &str, source: &str) -> PyResult<Self> {
+        let (text, source) = (text.to_string(), source.to_string());
+        ModelPy::build(py, Origin::Toml { text, source }, None)
     }
 
     /// A robot from the text of a URDF file; ``source`` names it in messages.
     #[staticmethod]
     #[pyo3(signature = (text, source = "<string>"))]
-    fn from_urdf(text: &str, source: &str) -> PyResult<Self> {
-        Ok(ModelPy::new(
-            Model::from_urdf_str(text, source).map_err(from_model)?,
-            Origin::Urdf {
-                text: text.to_string(),
-                source: source.to_string(),
-            },
-        ))
+    fn from_urdf(py: Python<'_>, text: &str, source: &str) -> PyResult<Self> {
+        let (text, source) = (text.to_string(), source.to_string());
+        ModelPy::build(py, Origin::Urdf { text, source }, None)
     }
 
     /// Pickling (and ``copy.deepcopy``): a built-in robot by name, a description by its
@@ -228,12 +250,7 @@ impl ModelPy {
             "urdf" => Origin::Urdf { text, source },
             other => return Err(input(format!("Model: unknown pickled kind {other:?}"))),
         };
-        let o = origin.clone();
-        let model = py.detach(move || o.build(stribeck)).map_err(from_model)?;
-        Ok(ModelPy {
-            stribeck,
-            ..ModelPy::new(model, origin)
-        })
+        ModelPy::build(py, origin, stribeck)
     }
 
     /// Names of the built-in robots.
@@ -337,10 +354,10 @@ impl ModelPy {
     /// (kept regressor columns), ``combination`` (``K``, with ``beta = K @ params``).
     /// Computed once per robot.
     fn base(&self, py: Python<'_>) -> PyResult<BaseParametersPy> {
-        Ok(BaseParametersPy {
-            model: self.model.clone(),
-            base: self.base_parameters(py)?,
-        })
+        Ok(BaseParametersPy::new(
+            self.model.clone(),
+            self.base_parameters(py)?,
+        ))
     }
 
     /// The regressor ``H(q, dq, ddq)`` with ``tau = H @ params``: for ``N`` samples,
@@ -417,13 +434,9 @@ impl ModelPy {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let params = self.params(py, params)?;
         let model = &self.model;
-        let n = model.dof();
-        let q = rows(py, q, n, "q", &model.coordinates)?;
-        let mut ws = Workspace::new(model);
-        let out = per_sample(py, q.rows, n, |k, out| {
-            model.gravity_torque(&mut ws, &params, q.row(k), out)
-        })?;
-        Ok(array(py, out, &q.shape(&[n])))
+        self.map_positions(py, q, &[model.dof()], |ws, q, out| {
+            model.gravity_torque(ws, &params, q, out)
+        })
     }
 
     /// A URDF of the whole robot with the inertials of ``params`` (an array, a
@@ -447,20 +460,16 @@ impl ModelPy {
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let params = self.params(py, params)?;
-        let model = &self.model;
-        let n = model.dof();
-        let q = rows(py, q, n, "q", &model.coordinates)?;
-        let mut ws = Workspace::new(model);
+        let n = self.model.dof();
         let mut col_major = vec![0.0; n * n];
-        let out = per_sample(py, q.rows, n * n, |k, out| {
-            model.mass_matrix_into(&mut ws, &params, q.row(k), &mut col_major);
+        self.map_positions(py, q, &[n, n], |ws, q, out| {
+            self.model.mass_matrix_into(ws, &params, q, &mut col_major);
             for r in 0..n {
                 for c in 0..n {
                     out[r * n + c] = col_major[c * n + r];
                 }
             }
-        })?;
-        Ok(array(py, out, &q.shape(&[n, n])))
+        })
     }
 
     /// Forward dynamics: accelerations under torques ``tau`` (as measured: known forces
@@ -506,13 +515,10 @@ impl ModelPy {
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let model = &self.model;
-        let n = model.dof();
-        let q = rows(py, q, n, "q", &model.coordinates)?;
-        let out = per_sample(py, q.rows, n, |k, out| {
+        self.map_positions(py, q, &[model.dof()], |_, q, out| {
             out.fill(0.0);
-            model.add_known_forces(q.row(k), out)
-        })?;
-        Ok(array(py, out, &q.shape(&[n])))
+            model.add_known_forces(q, out)
+        })
     }
 
     /// Poses of every frame in the base frame, base included (index 0, the identity),
@@ -524,20 +530,16 @@ impl ModelPy {
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let model = &self.model;
-        let n = model.dof();
         let frames = model.frames.len() + 1;
-        let q = rows(py, q, n, "q", &model.coordinates)?;
-        let mut ws = Workspace::new(model);
-        let out = per_sample(py, q.rows, frames * 16, |k, out| {
-            model.forward_kinematics(&mut ws, q.row(k));
+        self.map_positions(py, q, &[frames, 4, 4], |ws, q, out| {
+            model.forward_kinematics(ws, q);
             for (i, block) in out.chunks_mut(16).enumerate() {
                 let h = ws.pose(i).to_homogeneous();
                 for (r, row) in h.iter().enumerate() {
                     block[4 * r..4 * r + 4].copy_from_slice(row);
                 }
             }
-        })?;
-        Ok(array(py, out, &q.shape(&[frames, 4, 4])))
+        })
     }
 
     fn __repr__(&self) -> String {
@@ -562,28 +564,32 @@ impl ModelPy {
 pub struct BaseParametersPy {
     model: Arc<Model>,
     base: Arc<BaseParameters>,
+    /// Name of the leading (kept) parameter of each base parameter.
+    #[pyo3(get)]
+    names: Vec<String>,
+    /// Each base parameter as a readable combination of parameters.
+    #[pyo3(get)]
+    expressions: Vec<String>,
+    /// Columns of the full regressor kept as the base regressor (increasing).
+    #[pyo3(get)]
+    independent: Vec<usize>,
+}
+
+impl BaseParametersPy {
+    /// The lists Python reads as attributes are copied once here (the class is frozen).
+    fn new(model: Arc<Model>, base: Arc<BaseParameters>) -> Self {
+        BaseParametersPy {
+            names: base.names.clone(),
+            expressions: base.expressions.clone(),
+            independent: base.independent.clone(),
+            model,
+            base,
+        }
+    }
 }
 
 #[pymethods]
 impl BaseParametersPy {
-    /// Name of the leading (kept) parameter of each base parameter.
-    #[getter]
-    fn names(&self) -> Vec<String> {
-        self.base.names.clone()
-    }
-
-    /// Each base parameter as a readable combination of parameters.
-    #[getter]
-    fn expressions(&self) -> Vec<String> {
-        self.base.expressions.clone()
-    }
-
-    /// Columns of the full regressor kept as the base regressor (increasing).
-    #[getter]
-    fn independent(&self) -> Vec<usize> {
-        self.base.independent.clone()
-    }
-
     /// ``K``, shape ``(rank, n_parameters)``: ``beta = K @ params``.
     #[getter]
     fn combination<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {

@@ -8,7 +8,7 @@ use faer::linalg::matmul::triangular::{self, BlockStructure};
 use faer::reborrow::ReborrowMut;
 use faer::{Accum, MatRef, Par};
 
-use super::{accumulate, blas_done, dim, leading, mat_mut, mat_ref, scalar, scale, transposed};
+use super::{accumulate, dim, leading, mat_mut, mat_ref, scalar, scale, transposed};
 use super::{upper, Illegal, Part, Real};
 
 /// `C ← alpha·op(A)·op(B) + beta·C`, `C` m×n. Quick returns as the reference: nothing
@@ -154,114 +154,29 @@ fn op<T>(a: MatRef<'_, T>, transposed: bool) -> MatRef<'_, T> {
     }
 }
 
-macro_rules! export_gemm {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: general matrix product (see `gemm`).")]
-        ///
-        /// # Safety
-        /// Fortran BLAS contract: valid arguments, arrays of the extents the dimensions
-        /// imply, `c` not overlapping the inputs.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            transa: *const c_char,
-            transb: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            k: *const c_int,
-            alpha: *const $T,
-            a: *const $T,
-            lda: *const c_int,
-            b: *const $T,
-            ldb: *const c_int,
-            beta: *const $T,
-            c: *mut $T,
-            ldc: *const c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            let result =
-                unsafe { gemm::<$T>(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc) };
-            blas_done($routine, result);
-        }
-    };
+export! {
+    /// general matrix product (see `gemm`).
+    blas sgemm_ "SGEMM", dgemm_ "DGEMM"
+    (transa: *const c_char, transb: *const c_char, m: *const c_int, n: *const c_int,
+     k: *const c_int, alpha: *const T, a: *const T, lda: *const c_int, b: *const T,
+     ldb: *const c_int, beta: *const T, c: *mut T, ldc: *const c_int)
+    => gemm::<T>(transa, transb, m, n, k, alpha, a, lda, b, ldb, beta, c, ldc)
 }
 
-export_gemm!(sgemm_, f32, "SGEMM");
-export_gemm!(dgemm_, f64, "DGEMM");
-
-macro_rules! export_syrk {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric rank-k update (see `rank_update`).")]
-        ///
-        /// # Safety
-        /// As [`dgemm_`].
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            uplo: *const c_char,
-            trans: *const c_char,
-            n: *const c_int,
-            k: *const c_int,
-            alpha: *const $T,
-            a: *const $T,
-            lda: *const c_int,
-            beta: *const $T,
-            c: *mut $T,
-            ldc: *const c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            let result =
-                unsafe { rank_update::<$T>(uplo, trans, n, k, alpha, a, lda, None, beta, c, ldc) };
-            blas_done($routine, result);
-        }
-    };
+export! {
+    /// symmetric rank-k update (see `rank_update`).
+    blas ssyrk_ "SSYRK", dsyrk_ "DSYRK"
+    (uplo: *const c_char, trans: *const c_char, n: *const c_int, k: *const c_int,
+     alpha: *const T, a: *const T, lda: *const c_int, beta: *const T, c: *mut T,
+     ldc: *const c_int)
+    => rank_update::<T>(uplo, trans, n, k, alpha, a, lda, None, beta, c, ldc)
 }
 
-export_syrk!(ssyrk_, f32, "SSYRK");
-export_syrk!(dsyrk_, f64, "DSYRK");
-
-macro_rules! export_syr2k {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric rank-2k update (see `rank_update`).")]
-        ///
-        /// # Safety
-        /// As [`dgemm_`].
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            uplo: *const c_char,
-            trans: *const c_char,
-            n: *const c_int,
-            k: *const c_int,
-            alpha: *const $T,
-            a: *const $T,
-            lda: *const c_int,
-            b: *const $T,
-            ldb: *const c_int,
-            beta: *const $T,
-            c: *mut $T,
-            ldc: *const c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            let result = unsafe {
-                rank_update::<$T>(
-                    uplo,
-                    trans,
-                    n,
-                    k,
-                    alpha,
-                    a,
-                    lda,
-                    Some((b, ldb)),
-                    beta,
-                    c,
-                    ldc,
-                )
-            };
-            blas_done($routine, result);
-        }
-    };
+export! {
+    /// symmetric rank-2k update (see `rank_update`).
+    blas ssyr2k_ "SSYR2K", dsyr2k_ "DSYR2K"
+    (uplo: *const c_char, trans: *const c_char, n: *const c_int, k: *const c_int,
+     alpha: *const T, a: *const T, lda: *const c_int, b: *const T, ldb: *const c_int,
+     beta: *const T, c: *mut T, ldc: *const c_int)
+    => rank_update::<T>(uplo, trans, n, k, alpha, a, lda, Some((b, ldb)), beta, c, ldc)
 }
-
-export_syr2k!(ssyr2k_, f32, "SSYR2K");
-export_syr2k!(dsyr2k_, f64, "DSYR2K");

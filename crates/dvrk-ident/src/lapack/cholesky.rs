@@ -10,7 +10,7 @@ use faer::mat::AsMatMut;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{MatMut, MatRef, Par};
 
-use super::{dim, lapack_done, leading, mat_mut, mat_ref, upper, with_scratch, Illegal, Real};
+use super::{dim, leading, mat_mut, mat_ref, upper, with_scratch, Illegal, Real};
 
 /// Factors the symmetric `A` (n×n, the `uplo` triangle) in place: `A = Uᵀ·U` ('U') or
 /// `L·Lᵀ` ('L') in that triangle, the other triangle untouched. `info = i > 0` when the
@@ -105,53 +105,17 @@ unsafe fn potrs<T: Real>(
     }
 }
 
-macro_rules! export_potrf {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: Cholesky factorization (see `potrf`).")]
-        ///
-        /// # Safety
-        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
-        /// dimensions imply.
-        #[unsafe(no_mangle)]
-        pub unsafe extern "C" fn $name(
-            uplo: *const c_char,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe { lapack_done($routine, info, potrf::<$T>(uplo, n, a, lda)) };
-        }
-    };
+export! {
+    /// Cholesky factorization (see `potrf`).
+    lapack spotrf_ "SPOTRF", dpotrf_ "DPOTRF"
+    (uplo: *const c_char, n: *const c_int, a: *mut T, lda: *const c_int)
+    => potrf::<T>(uplo, n, a, lda)
 }
 
-export_potrf!(spotrf_, f32, "SPOTRF");
-export_potrf!(dpotrf_, f64, "DPOTRF");
-
-macro_rules! export_potrs {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: solve from a Cholesky factor (see `potrs`).")]
-        ///
-        /// # Safety
-        /// As [`dpotrf_`], `b` not overlapping `a`.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            uplo: *const c_char,
-            n: *const c_int,
-            nrhs: *const c_int,
-            a: *const $T,
-            lda: *const c_int,
-            b: *mut $T,
-            ldb: *const c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe { lapack_done($routine, info, potrs::<$T>(uplo, n, nrhs, a, lda, b, ldb)) };
-        }
-    };
+export! {
+    /// solve from a Cholesky factor (see `potrs`).
+    lapack spotrs_ "SPOTRS", dpotrs_ "DPOTRS"
+    (uplo: *const c_char, n: *const c_int, nrhs: *const c_int, a: *const T,
+     lda: *const c_int, b: *mut T, ldb: *const c_int)
+    => potrs::<T>(uplo, n, nrhs, a, lda, b, ldb)
 }
-
-export_potrs!(spotrs_, f32, "SPOTRS");
-export_potrs!(dpotrs_, f64, "DPOTRS");

@@ -10,7 +10,7 @@ use faer::mat::AsMatMut;
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::Par;
 
-use super::{dim, lapack_done, leading, mat_mut, mat_ref, option, scalar, slice_mut};
+use super::{dim, leading, mat_mut, mat_ref, option, scalar, slice_mut};
 use super::{upper, with_scratch, Illegal, Real};
 
 /// Eigenvalues (ascending in `w[..m]`) and optionally eigenvectors (columns of `z`,
@@ -165,50 +165,19 @@ unsafe fn syevr<T: Real>(
     }
 }
 
-macro_rules! export_syevr {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: symmetric eigendecomposition (see `syevr`).")]
-        ///
-        /// # Safety
-        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
-        /// dimensions imply, no output overlapping another argument.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            jobz: *const c_char,
-            range: *const c_char,
-            uplo: *const c_char,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            vl: *const $T,
-            vu: *const $T,
-            il: *const c_int,
-            iu: *const c_int,
-            abstol: *const $T,
-            m: *mut c_int,
-            w: *mut $T,
-            z: *mut $T,
-            ldz: *const c_int,
-            isuppz: *mut c_int,
-            work: *mut $T,
-            lwork: *const c_int,
-            iwork: *mut c_int,
-            liwork: *const c_int,
-            info: *mut c_int,
-        ) {
-            let _ = abstol;
-            // SAFETY: forwarded contract.
-            unsafe {
-                let result = syevr::<$T>(
-                    jobz, range, uplo, n, a, lda, vl, vu, il, iu, m, w, z, ldz, isuppz, work,
-                    lwork, iwork, liwork,
-                );
-                lapack_done($routine, info, result);
-            }
-        }
-    };
+export! {
+    /// symmetric eigendecomposition (see `syevr`); `abstol` is not read.
+    lapack ssyevr_ "SSYEVR", dsyevr_ "DSYEVR"
+    (jobz: *const c_char, range: *const c_char, uplo: *const c_char, n: *const c_int,
+     a: *mut T, lda: *const c_int, vl: *const T, vu: *const T, il: *const c_int,
+     iu: *const c_int, abstol: *const T, m: *mut c_int, w: *mut T, z: *mut T,
+     ldz: *const c_int, isuppz: *mut c_int, work: *mut T, lwork: *const c_int,
+     iwork: *mut c_int, liwork: *const c_int)
+    => {
+        let _ = abstol;
+        syevr::<T>(
+            jobz, range, uplo, n, a, lda, vl, vu, il, iu, m, w, z, ldz, isuppz, work, lwork,
+            iwork, liwork,
+        )
+    }
 }
-
-export_syevr!(ssyevr_, f32, "SSYEVR");
-export_syevr!(dsyevr_, f64, "DSYEVR");

@@ -6,7 +6,7 @@ use faer::linalg::lu::partial_pivoting::{factor, solve};
 use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::{Par, Spec};
 
-use super::{dim, lapack_done, leading, mat_mut, slice_mut, with_scratch, Illegal, Real};
+use super::{dim, leading, mat_mut, slice_mut, with_scratch, Illegal, Real};
 
 /// Solves `A·X = B` (A n×n, B n×nrhs): `A` is overwritten by `L` (unit, below the
 /// diagonal) and `U` of `P·A = L·U`, `ipiv` receives LAPACK's row interchanges (row i
@@ -79,33 +79,13 @@ fn interchanges(perm: &[usize], ipiv: &mut [c_int]) {
     }
 }
 
-macro_rules! export_gesv {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: general linear solve (see `gesv`).")]
-        ///
-        /// # Safety
-        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
-        /// dimensions imply, no two overlapping.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            n: *const c_int,
-            nrhs: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            ipiv: *mut c_int,
-            b: *mut $T,
-            ldb: *const c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe { lapack_done($routine, info, gesv::<$T>(n, nrhs, a, lda, ipiv, b, ldb)) };
-        }
-    };
+export! {
+    /// general linear solve (see `gesv`).
+    lapack sgesv_ "SGESV", dgesv_ "DGESV"
+    (n: *const c_int, nrhs: *const c_int, a: *mut T, lda: *const c_int, ipiv: *mut c_int,
+     b: *mut T, ldb: *const c_int)
+    => gesv::<T>(n, nrhs, a, lda, ipiv, b, ldb)
 }
-
-export_gesv!(sgesv_, f32, "SGESV");
-export_gesv!(dgesv_, f64, "DGESV");
 
 #[cfg(test)]
 mod tests {

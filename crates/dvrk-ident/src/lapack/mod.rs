@@ -40,6 +40,64 @@
 //!   singular vector signs may differ, as between any two LAPACK builds). `abstol` of
 //!   `?syevr` is ignored (faer always computes to full accuracy).
 
+/// Exports a routine under its Fortran names, single precision then double: for each, a
+/// module `T` is `f32` (`f64`) in, holding the `#[no_mangle] extern "C"` function of the
+/// signature given once (every argument by pointer, `T` for the REAL arguments), whose
+/// body is `$call`, the generic implementation's result. A `blas` routine reports an
+/// illegal argument with the `xerbla` message only; a `lapack` routine also through the
+/// trailing `info` argument the macro appends.
+macro_rules! export {
+    (
+        $(#[$doc:meta])*
+        $kind:ident $s:ident $s_name:literal, $d:ident $d_name:literal
+        ($($arg:ident: $ty:ty),* $(,)?) => $call:expr
+    ) => {
+        export!(@one $kind f32, $s $s_name [$(#[$doc])*] ($($arg: $ty),*) $call);
+        export!(@one $kind f64, $d $d_name [$(#[$doc])*] ($($arg: $ty),*) $call);
+    };
+    (
+        @one $kind:ident $T:ty, $sym:ident $name:literal [$(#[$doc:meta])*]
+        ($($arg:ident: $ty:ty),*) $call:expr
+    ) => {
+        pub use self::$sym::$sym;
+        mod $sym {
+            #[allow(clippy::wildcard_imports)]
+            use super::*;
+            type T = $T;
+            export!(@fn $kind $sym $name [$(#[$doc])*] ($($arg: $ty),*) $call);
+        }
+    };
+    (@fn blas $sym:ident $name:literal [$(#[$doc:meta])*] ($($arg:ident: $ty:ty),*) $call:expr) => {
+        #[doc = concat!("`", $name, "`: ")]
+        $(#[$doc])*
+        ///
+        /// # Safety
+        /// Fortran BLAS contract: valid arguments, arrays of the extents the dimensions
+        /// and increments imply, the output not overlapping the inputs.
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $sym($($arg: $ty),*) {
+            // SAFETY: forwarded contract.
+            let result = unsafe { $call };
+            $crate::lapack::blas_done($name, result);
+        }
+    };
+    (@fn lapack $sym:ident $name:literal [$(#[$doc:meta])*] ($($arg:ident: $ty:ty),*) $call:expr) => {
+        #[doc = concat!("`", $name, "`: ")]
+        $(#[$doc])*
+        ///
+        /// # Safety
+        /// Fortran LAPACK contract: valid arguments, arrays of the extents the dimensions
+        /// imply, no output overlapping another argument.
+        #[unsafe(no_mangle)]
+        #[allow(clippy::too_many_arguments)]
+        pub unsafe extern "C" fn $sym($($arg: $ty,)* info: *mut std::ffi::c_int) {
+            // SAFETY: forwarded contract.
+            unsafe { $crate::lapack::lapack_done($name, info, $call) };
+        }
+    };
+}
+
 mod blas2;
 mod blas3;
 mod cholesky;

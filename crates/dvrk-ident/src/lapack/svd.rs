@@ -12,7 +12,7 @@ use faer::reborrow::{Reborrow, ReborrowMut};
 use faer::traits::ext::ComplexFieldExt;
 use faer::{MatMut, MatRef, Par};
 
-use super::{dim, lapack_done, leading, mat_mut, option, scalar, slice_mut};
+use super::{dim, leading, mat_mut, option, scalar, slice_mut};
 use super::{with_scratch, Illegal, Real};
 
 /// Where a driver puts one side's singular vectors (`jobu`/`jobvt` of `?gesvd`).
@@ -192,90 +192,72 @@ fn gesvd_min_work(ju: Job, jv: Job, m: usize, n: usize) -> usize {
     }
 }
 
-/// `?gesdd`: `jobz` 'A' (all of U and Vᵀ), 'S' (the first min(m, n)), 'O' (those over
-/// `A`: U's when m ≥ n, with all of Vᵀ in `vt`; else Vᵀ's, with all of U in `u`), 'N'
-/// (values only). `info = -4` for a non-finite `A` (as LAPACK), `1` when the iteration
-/// did not converge.
-#[allow(clippy::too_many_arguments)]
-unsafe fn gesdd<T: Real>(
-    jobz: *const c_char,
-    m: *const c_int,
-    n: *const c_int,
-    a: *mut T,
-    lda: *const c_int,
-    s: *mut T,
-    u: *mut T,
-    ldu: *const c_int,
-    vt: *mut T,
-    ldvt: *const c_int,
-    work: *mut T,
-    lwork: *const c_int,
-    iwork: *mut c_int,
-) -> Result<i32, Illegal> {
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
-    // read or viewed through the checked helpers with the extent its dimensions imply.
-    unsafe {
-        let job = option(jobz, 1)?;
+/// Which driver, with its job arguments parsed.
+#[derive(Clone, Copy)]
+enum Driver {
+    /// `?gesdd`: `jobz` 'A' (all of U and Vᵀ), 'S' (the first min(m, n)), 'O' (those
+    /// over `A`: U's when m ≥ n, with all of Vᵀ in `vt`; else Vᵀ's, with all of U in
+    /// `u`), 'N' (values only); and its `iwork`. `info = -4` for a non-finite `A` (as
+    /// LAPACK).
+    Gesdd { job: u8, iwork: *mut c_int },
+    /// `?gesvd`: `jobu`/`jobvt` each 'A', 'S', 'O', 'N' as [`Job`] (not both 'O').
+    /// `info = 1` for a non-finite `A` (LAPACK: the number of superdiagonals that did
+    /// not converge).
+    Gesvd(Job, Job),
+}
+
+impl Driver {
+    /// `?gesdd`'s `jobz` (argument 1).
+    ///
+    /// # Safety
+    /// As [`scalar`].
+    unsafe fn gesdd(jobz: *const c_char, iwork: *mut c_int) -> Result<Self, Illegal> {
+        // SAFETY: forwarded contract.
+        let job = unsafe { option(jobz, 1) }?;
         if !matches!(job, b'A' | b'S' | b'O' | b'N') {
             return Err(Illegal(1));
         }
-        let m = dim(m, 2)?;
-        let n = dim(n, 3)?;
-        let k = m.min(n);
-        let lda = leading(lda, 5, m)?;
-        let ldu = dim(ldu, 8)?;
-        let u_in_u = matches!(job, b'A' | b'S') || (job == b'O' && m < n);
-        if ldu < 1 || (u_in_u && ldu < m) {
-            return Err(Illegal(8));
-        }
-        let ldvt = dim(ldvt, 10)?;
-        if ldvt < 1
-            || (job == b'A' && ldvt < n)
-            || (job == b'S' && ldvt < k)
-            || (job == b'O' && m >= n && ldvt < n)
-        {
-            return Err(Illegal(10));
-        }
-        let lwork = scalar(lwork, 12)?;
-        let min_work = gesdd_min_work(job, m, n);
-        slice_mut(work, 1, 11)?[0] = T::from_size(min_work);
-        if lwork == -1 {
-            // `iwork` holds 8·min(m, n) integers; LAPACK has no query for it, Clarabel
-            // reads it back anyway.
-            if k > 0 {
-                slice_mut(iwork, 1, 13)?[0] = (8 * k) as c_int;
+        Ok(Driver::Gesdd { job, iwork })
+    }
+
+    /// `?gesvd`'s `jobu` and `jobvt` (arguments 1 and 2).
+    ///
+    /// # Safety
+    /// As [`scalar`].
+    unsafe fn gesvd(jobu: *const c_char, jobvt: *const c_char) -> Result<Self, Illegal> {
+        // SAFETY: forwarded contract.
+        unsafe {
+            let ju = Job::parse(option(jobu, 1)?).ok_or(Illegal(1))?;
+            let jv = Job::parse(option(jobvt, 2)?).ok_or(Illegal(2))?;
+            if ju == Job::Overwrite && jv == Job::Overwrite {
+                return Err(Illegal(2));
             }
-            return Ok(0);
+            Ok(Driver::Gesvd(ju, jv))
         }
-        if lwork < 0 || (lwork as usize) < min_work {
-            return Err(Illegal(12));
+    }
+
+    /// Where U and Vᵀ go for an m×n `A` (`?gesdd`'s 'O' overwrites the long side's).
+    fn jobs(self, m: usize, n: usize) -> (Job, Job) {
+        match self {
+            Driver::Gesdd { job, .. } => match (job, m >= n) {
+                (b'A', _) => (Job::All, Job::All),
+                (b'S', _) => (Job::Thin, Job::Thin),
+                (b'O', true) => (Job::Overwrite, Job::Thin),
+                (b'O', false) => (Job::Thin, Job::Overwrite),
+                _ => (Job::None, Job::None),
+            },
+            Driver::Gesvd(ju, jv) => (ju, jv),
         }
-        if k == 0 {
-            return Ok(0);
-        }
-        let a = mat_mut(a, m, n, lda, 4)?;
-        if !finite(a.rb()) {
-            return Err(Illegal(4));
-        }
-        let jobs = match (job, m >= n) {
-            (b'A', _) => (Job::All, Job::All),
-            (b'S', _) => (Job::Thin, Job::Thin),
-            (b'O', true) => (Job::Overwrite, Job::Thin),
-            (b'O', false) => (Job::Thin, Job::Overwrite),
-            _ => (Job::None, Job::None),
-        };
-        let solved = decompose(jobs, (m, n), [6, 7, 9], a, s, (u, ldu), (vt, ldvt))?;
-        Ok(if solved { 0 } else { 1 })
     }
 }
 
-/// `?gesvd`: `jobu`/`jobvt` each 'A', 'S', 'O', 'N' as [`Job`] (not both 'O').
-/// `info = 1` when the iteration did not converge or `A` is not finite (LAPACK: the
-/// number of superdiagonals that did not converge).
+/// `?gesdd` and `?gesvd` after their job arguments: the same arguments from `m` on
+/// (argument 2 of `?gesdd`, 3 of `?gesvd`), the same checks (LAPACK's `ldu`/`ldvt`
+/// rules are those of the jobs [`Driver::jobs`] gives), `info = 1` when the iteration
+/// did not converge.
 #[allow(clippy::too_many_arguments)]
-unsafe fn gesvd<T: Real>(
-    jobu: *const c_char,
-    jobvt: *const c_char,
+unsafe fn svd<T: Real>(
+    driver: Driver,
     m: *const c_int,
     n: *const c_int,
     a: *mut T,
@@ -288,117 +270,75 @@ unsafe fn gesvd<T: Real>(
     work: *mut T,
     lwork: *const c_int,
 ) -> Result<i32, Illegal> {
-    // SAFETY: as in `gesdd`.
+    let first = match driver {
+        Driver::Gesdd { .. } => 2,
+        Driver::Gesvd(..) => 3,
+    };
+    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
-        let ju = Job::parse(option(jobu, 1)?).ok_or(Illegal(1))?;
-        let jv = Job::parse(option(jobvt, 2)?).ok_or(Illegal(2))?;
-        if ju == Job::Overwrite && jv == Job::Overwrite {
-            return Err(Illegal(2));
-        }
-        let m = dim(m, 3)?;
-        let n = dim(n, 4)?;
+        let m = dim(m, first)?;
+        let n = dim(n, first + 1)?;
         let k = m.min(n);
-        let lda = leading(lda, 6, m)?;
-        let ldu = dim(ldu, 9)?;
+        let lda = leading(lda, first + 3, m)?;
+        let (ju, jv) = driver.jobs(m, n);
+        let ldu = dim(ldu, first + 6)?;
         if ldu < 1 || (matches!(ju, Job::All | Job::Thin) && ldu < m) {
-            return Err(Illegal(9));
+            return Err(Illegal(first + 6));
         }
-        let ldvt = dim(ldvt, 11)?;
+        let ldvt = dim(ldvt, first + 8)?;
         if ldvt < 1 || (jv == Job::All && ldvt < n) || (jv == Job::Thin && ldvt < k) {
-            return Err(Illegal(11));
+            return Err(Illegal(first + 8));
         }
-        let lwork = scalar(lwork, 13)?;
-        let min_work = gesvd_min_work(ju, jv, m, n);
-        slice_mut(work, 1, 12)?[0] = T::from_size(min_work);
+        let lwork = scalar(lwork, first + 10)?;
+        let min_work = match driver {
+            Driver::Gesdd { job, .. } => gesdd_min_work(job, m, n),
+            Driver::Gesvd(ju, jv) => gesvd_min_work(ju, jv, m, n),
+        };
+        slice_mut(work, 1, first + 9)?[0] = T::from_size(min_work);
         if lwork == -1 {
+            // `?gesdd`'s `iwork` holds 8·min(m, n) integers; LAPACK has no query for it,
+            // Clarabel reads it back anyway.
+            if let (Driver::Gesdd { iwork, .. }, true) = (driver, k > 0) {
+                slice_mut(iwork, 1, first + 11)?[0] = (8 * k) as c_int;
+            }
             return Ok(0);
         }
         if lwork < 0 || (lwork as usize) < min_work {
-            return Err(Illegal(13));
+            return Err(Illegal(first + 10));
         }
         if k == 0 {
             return Ok(0);
         }
-        let a = mat_mut(a, m, n, lda, 5)?;
+        let a = mat_mut(a, m, n, lda, first + 2)?;
         if !finite(a.rb()) {
-            return Ok(1);
+            return match driver {
+                Driver::Gesdd { .. } => Err(Illegal(first + 2)),
+                Driver::Gesvd(..) => Ok(1),
+            };
         }
-        let solved = decompose((ju, jv), (m, n), [7, 8, 10], a, s, (u, ldu), (vt, ldvt))?;
+        let args = [first + 4, first + 5, first + 7];
+        let solved = decompose((ju, jv), (m, n), args, a, s, (u, ldu), (vt, ldvt))?;
         Ok(if solved { 0 } else { 1 })
     }
 }
 
-macro_rules! export_gesdd {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: SVD, divide and conquer in LAPACK (see `gesdd`).")]
-        ///
-        /// # Safety
-        /// Fortran LAPACK contract: valid arguments, arrays of the extents the
-        /// dimensions imply, no output overlapping another argument.
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            jobz: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            s: *mut $T,
-            u: *mut $T,
-            ldu: *const c_int,
-            vt: *mut $T,
-            ldvt: *const c_int,
-            work: *mut $T,
-            lwork: *const c_int,
-            iwork: *mut c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe {
-                let result =
-                    gesdd::<$T>(jobz, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork, iwork);
-                lapack_done($routine, info, result);
-            }
-        }
-    };
+export! {
+    /// SVD, divide and conquer in LAPACK (see `Driver::Gesdd`).
+    lapack sgesdd_ "SGESDD", dgesdd_ "DGESDD"
+    (jobz: *const c_char, m: *const c_int, n: *const c_int, a: *mut T, lda: *const c_int,
+     s: *mut T, u: *mut T, ldu: *const c_int, vt: *mut T, ldvt: *const c_int, work: *mut T,
+     lwork: *const c_int, iwork: *mut c_int)
+    => Driver::gesdd(jobz, iwork)
+        .and_then(|d| svd::<T>(d, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork))
 }
 
-export_gesdd!(sgesdd_, f32, "SGESDD");
-export_gesdd!(dgesdd_, f64, "DGESDD");
-
-macro_rules! export_gesvd {
-    ($name:ident, $T:ty, $routine:literal) => {
-        #[doc = concat!("`", $routine, "`: SVD, QR iteration in LAPACK (see `gesvd`).")]
-        ///
-        /// # Safety
-        /// As [`dgesdd_`].
-        #[unsafe(no_mangle)]
-        #[allow(clippy::too_many_arguments)]
-        pub unsafe extern "C" fn $name(
-            jobu: *const c_char,
-            jobvt: *const c_char,
-            m: *const c_int,
-            n: *const c_int,
-            a: *mut $T,
-            lda: *const c_int,
-            s: *mut $T,
-            u: *mut $T,
-            ldu: *const c_int,
-            vt: *mut $T,
-            ldvt: *const c_int,
-            work: *mut $T,
-            lwork: *const c_int,
-            info: *mut c_int,
-        ) {
-            // SAFETY: forwarded contract.
-            unsafe {
-                let result =
-                    gesvd::<$T>(jobu, jobvt, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork);
-                lapack_done($routine, info, result);
-            }
-        }
-    };
+export! {
+    /// SVD, QR iteration in LAPACK (see `Driver::Gesvd`).
+    lapack sgesvd_ "SGESVD", dgesvd_ "DGESVD"
+    (jobu: *const c_char, jobvt: *const c_char, m: *const c_int, n: *const c_int, a: *mut T,
+     lda: *const c_int, s: *mut T, u: *mut T, ldu: *const c_int, vt: *mut T,
+     ldvt: *const c_int, work: *mut T, lwork: *const c_int)
+    => Driver::gesvd(jobu, jobvt)
+        .and_then(|d| svd::<T>(d, m, n, a, lda, s, u, ldu, vt, ldvt, work, lwork))
 }
-
-export_gesvd!(sgesvd_, f32, "SGESVD");
-export_gesvd!(dgesvd_, f64, "DGESVD");
