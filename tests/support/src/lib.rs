@@ -10,8 +10,12 @@
 //! - [`repo`], [`example`]: the repository and its bundled examples;
 //! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
 //!   parameters, physically consistent ones included;
-//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics.
+//! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
+//! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
+//!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
+
+pub mod fixtures;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
