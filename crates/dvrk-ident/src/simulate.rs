@@ -191,34 +191,14 @@ fn check_simulation(
             ));
         }
     }
-    let noise: Vec<f64> = match sim.noise_std.len() {
-        0 => vec![0.0; n],
-        1 => vec![sim.noise_std[0]; n],
-        m if m == n => sim.noise_std.clone(),
-        m => {
-            return Err(setting(
-                "noise",
-                format!("expected one value or {n} (one per coordinate), got {m}"),
-            ))
-        }
-    };
+    let noise = per_coordinate("noise", &sim.noise_std, n)?;
     if let Some(v) = noise.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
         return Err(setting(
             "noise",
             format!("standard deviations must be finite and non-negative, got {v}"),
         ));
     }
-    let delay: Vec<f64> = match sim.delay_s.len() {
-        0 => vec![0.0; n],
-        1 => vec![sim.delay_s[0]; n],
-        m if m == n => sim.delay_s.clone(),
-        m => {
-            return Err(setting(
-                "delay",
-                format!("expected one value or {n} (one per coordinate), got {m}"),
-            ))
-        }
-    };
+    let delay = per_coordinate("delay", &sim.delay_s, n)?;
     let max_delay = crate::signal::advance::MAX_DELAY_S;
     if let Some(v) = delay
         .iter()
@@ -243,6 +223,23 @@ fn check_simulation(
         ));
     }
     Ok((noise, delay, count))
+}
+
+/// One value per coordinate of `n` from the setting `name`'s `values`: none gives 0 to
+/// every coordinate, one value gives it to every coordinate, `n` values one each.
+fn per_coordinate(name: &str, values: &[f64], n: usize) -> Result<Vec<f64>, IdentError> {
+    match values {
+        [] => Ok(vec![0.0; n]),
+        [v] => Ok(vec![*v; n]),
+        all if all.len() == n => Ok(all.to_vec()),
+        all => Err(setting(
+            name,
+            format!(
+                "expected one value or {n} (one per coordinate), got {}",
+                all.len()
+            ),
+        )),
+    }
 }
 
 /// The torques `τ = H(q, q̇, q̈)·π + known forces(q)` at the samples `motion` = `(q, q̇,

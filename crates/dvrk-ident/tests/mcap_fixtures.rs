@@ -225,7 +225,7 @@ fn mcap_round_trip_is_exact() {
     {
         for with_dq in [true, false] {
             let traj = trajectory(1500, with_dq);
-            let path = dir.path(&format!("rt-{k}-{with_dq}.mcap"));
+            let path = dir.path(format!("rt-{k}-{with_dq}.mcap"));
             let opts = McapWriteOptions {
                 start_time_ns: T0,
                 frame_id: "PSM1_base".into(),
