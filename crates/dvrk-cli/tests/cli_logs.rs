@@ -19,7 +19,7 @@ const NOISE: f64 = 0.002;
 
 /// The generating parameters of the bundled log, projected on the base parameters.
 fn true_base_parameters(model: &Model) -> Vec<f64> {
-    let pi = dvrk_test_support::examples::psm_params(model);
+    let pi = dvrk_test_support::fixtures::example_params(model);
     model.base_parameters().unwrap().project(&pi)
 }
 

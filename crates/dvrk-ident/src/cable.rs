@@ -121,6 +121,16 @@ pub fn polyval(coef: &[f64], x: f64) -> f64 {
     coef.iter().fold(0.0, |acc, &c| acc * x + c)
 }
 
+/// Root mean square of `tau − polynomial(q)` over the samples `kept` (N·m).
+fn rms_residual(polynomial: &[f64], q: &[f64], tau: &[f64], kept: &[usize]) -> f64 {
+    (kept
+        .iter()
+        .map(|&i| (polyval(polynomial, q[i]) - tau[i]).powi(2))
+        .sum::<f64>()
+        / kept.len() as f64)
+        .sqrt()
+}
+
 /// Share of a half's velocities that must have the half's direction: the sweep goes
 /// one way in its first half and back in its second (what cancels the friction).
 const ONE_WAY_SHARE: f64 = 0.9;
@@ -219,12 +229,7 @@ pub fn fit_cable(
             settings.degree
         )));
     }
-    let rms = (kept
-        .iter()
-        .map(|&i| (polyval(&polynomial, q[i]) - tau[i]).powi(2))
-        .sum::<f64>()
-        / kept.len() as f64)
-        .sqrt();
+    let rms = rms_residual(&polynomial, q, tau, &kept);
     let lo = q.iter().cloned().fold(f64::INFINITY, f64::min);
     let hi = q.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     Ok(CableFit {
@@ -251,13 +256,18 @@ mod tests {
         }
     }
 
+    /// The cable fit of a sweep `[q, dq, tau]` at `degree`, 50 samples dropped at the
+    /// ends of each half.
+    fn fit_sweep(sweep: &[Vec<f64>; 3], degree: usize) -> Result<CableFit, IdentError> {
+        let [q, dq, tau] = sweep;
+        fit_cable(q, dq, tau, &CableSettings { degree, drop: 50 }, "sweep")
+    }
+
     #[test]
     fn friction_cancels_between_directions() {
         let cable = [0.01, -0.02, 0.05, 0.1];
         let n = 2000;
-        let mut q = Vec::new();
-        let mut dq = Vec::new();
-        let mut tau = Vec::new();
+        let (mut q, mut dq, mut tau) = (Vec::new(), Vec::new(), Vec::new());
         for i in 0..n {
             let (x, dir) = if i < n / 2 {
                 (-1.0 + 3.0 * i as f64 / (n / 2) as f64, 1.0)
@@ -268,17 +278,7 @@ mod tests {
             dq.push(0.3 * dir);
             tau.push(polyval(&cable, x) + 0.07 * dir);
         }
-        let fit = fit_cable(
-            &q,
-            &dq,
-            &tau,
-            &CableSettings {
-                degree: 3,
-                drop: 50,
-            },
-            "sweep",
-        )
-        .unwrap();
+        let fit = fit_sweep(&[q, dq, tau], 3).unwrap();
         for (a, b) in fit.polynomial.iter().zip(cable) {
             assert!((a - b).abs() < 1e-3, "{:?}", fit.polynomial);
         }
@@ -306,33 +306,12 @@ mod tests {
         // opposite ways: the friction (0.03) stayed in the curve, constant term 0.05
         // instead of 0.02.
         let cable = [0.1, 0.02];
-        let [q, dq, tau] = sweep(&cable, |t| -1.0 + 2.0 * t, 2000);
-        let e = fit_cable(
-            &q,
-            &dq,
-            &tau,
-            &CableSettings {
-                degree: 1,
-                drop: 50,
-            },
-            "s",
-        )
-        .unwrap_err()
-        .to_string();
+        let one_way = sweep(&cable, |t| -1.0 + 2.0 * t, 2000);
+        let e = fit_sweep(&one_way, 1).unwrap_err().to_string();
         assert!(e.contains("not a sweep one way and back"), "{e}");
         // The same curve swept out and back gives it.
-        let [q, dq, tau] = sweep(&cable, |t| 1.0 - 2.0 * (2.0 * t - 1.0).abs(), 2000);
-        let fit = fit_cable(
-            &q,
-            &dq,
-            &tau,
-            &CableSettings {
-                degree: 1,
-                drop: 50,
-            },
-            "s",
-        )
-        .unwrap();
+        let out_and_back = sweep(&cable, |t| 1.0 - 2.0 * (2.0 * t - 1.0).abs(), 2000);
+        let fit = fit_sweep(&out_and_back, 1).unwrap();
         assert!(
             (fit.polynomial[1] - 0.02).abs() < 1e-3,
             "{:?}",
@@ -345,8 +324,8 @@ mod tests {
         // Degree 15 on a sweep over [10, 12] rad: expanded into powers of q the curve was
         // off by thousands of N·m (rms 7548 N·m before the check).
         let cable = [0.01, -0.02, 0.05, 0.1];
-        let [q, dq, tau] = sweep(&cable, |t| 11.0 - (2.0 * t - 1.0).abs() + 0.0, 4000);
-        let fit = |degree| fit_cable(&q, &dq, &tau, &CableSettings { degree, drop: 50 }, "s");
+        let far = sweep(&cable, |t| 11.0 - (2.0 * t - 1.0).abs() + 0.0, 4000);
+        let fit = |degree| fit_sweep(&far, degree);
         let e = fit(15).unwrap_err().to_string();
         assert!(e.contains("above 12"), "{e}");
         let e = fit(9).unwrap_err().to_string();
@@ -388,12 +367,7 @@ mod tests {
         // few mN·m; both explain the sweep equally well (same residual to 1e-4 N·m).
         let half = q.len() / 2;
         let kept: Vec<usize> = (100..half - 100).chain(half + 100..q.len() - 100).collect();
-        let rms2019 = (kept
-            .iter()
-            .map(|&i| (polyval(&p2019, q[i]) - tau[i]).powi(2))
-            .sum::<f64>()
-            / kept.len() as f64)
-            .sqrt();
+        let rms2019 = rms_residual(&p2019, &q, &tau, &kept);
         eprintln!(
             "cable curve vs 2019: worst {worst:.2e} N·m; rms residual ours {:.5}, 2019 {rms2019:.5}",
             fit.rms

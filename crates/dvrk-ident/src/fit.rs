@@ -169,9 +169,11 @@ pub fn prepare(
 ) -> Result<Prepared, IdentError> {
     let mut t = to_model_coordinates(model, traj)?;
     subtract_known_forces(model, &mut t);
-    let p = process_in_blocks(&t, processing).map_err(|error| IdentError::Signal {
-        source_name: t.source.clone(),
-        error,
+    let p = process_in_blocks(std::slice::from_ref(&t), processing).map_err(|error| {
+        IdentError::Signal {
+            source_name: t.source.clone(),
+            error,
+        }
     })?;
     if p.is_empty() {
         return Err(IdentError::Mismatch {

@@ -494,6 +494,7 @@ impl Observation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::signal::stack_rows;
 
     fn random_samples(model: &Model, count: usize, seed: u64) -> [DMatrix<f64>; 4] {
         let n = model.dof();
@@ -508,36 +509,28 @@ mod tests {
         [m(), m(), m(), m()]
     }
 
+    /// The samples of the matrices `[q, q̇, q̈, τ]`.
+    fn samples(m: &[DMatrix<f64>; 4]) -> Samples<'_> {
+        let [q, dq, ddq, tau] = m;
+        Samples { q, dq, ddq, tau }
+    }
+
+    /// Rows `lo..hi` of each of `[q, q̇, q̈, τ]`.
+    fn rows(m: &[DMatrix<f64>; 4], lo: usize, hi: usize) -> [DMatrix<f64>; 4] {
+        m.clone().map(|x| x.rows(lo, hi - lo).into_owned())
+    }
+
     #[test]
     fn chunked_factor_equals_one_shot_qr() {
         let model = Model::builtin("psm").unwrap();
         let (n, p) = (model.dof(), model.n_params());
         let count = 3 * CHUNK_SAMPLES + 17;
-        let [q, dq, ddq, tau] = random_samples(&model, count, 7);
+        let m = random_samples(&model, count, 7);
         let weights: Vec<f64> = (0..n).map(|j| 1.0 + 0.1 * j as f64).collect();
-        let s = Samples {
-            q: &q,
-            dq: &dq,
-            ddq: &ddq,
-            tau: &tau,
-        };
-        let obs = Observation::assemble(&model, s, &weights);
+        let obs = Observation::assemble(&model, samples(&m), &weights);
         assert_eq!(obs.rows(), count * n);
         // One-shot: the whole weighted matrix at once.
-        let mut ws = Workspace::new(&model);
-        let mut full = DMatrix::zeros(count * n, p + 1);
-        let (mut a, mut b, mut c) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut h = vec![0.0; n * p];
-        for k in 0..count {
-            s.read(k, &mut a, &mut b, &mut c);
-            model.regressor_into(&mut ws, &a, &b, &c, &mut h);
-            for j in 0..n {
-                for col in 0..p {
-                    full[(k * n + j, col)] = weights[j] * h[j * p + col];
-                }
-                full[(k * n + j, p)] = weights[j] * tau[(k, j)];
-            }
-        }
+        let full = weighted_rows(&model, samples(&m), &weights);
         // The Gram matrices agree (R is unique only up to the rank-deficient block).
         let g1 = obs.r().transpose() * obs.r();
         let g2 = full.transpose() * &full;
@@ -571,6 +564,15 @@ mod tests {
         rows
     }
 
+    /// The rows `[H | τ]` of every coordinate, coordinate `j`'s weighted by `weights[j]`,
+    /// one block of rows a coordinate.
+    fn weighted_rows(model: &Model, s: Samples<'_>, weights: &[f64]) -> DMatrix<f64> {
+        let blocks: Vec<DMatrix<f64>> = (0..model.dof())
+            .map(|j| coordinate_rows(model, s, j) * weights[j])
+            .collect();
+        stack_rows(&blocks.iter().collect::<Vec<_>>())
+    }
+
     fn assert_same_gram(what: &str, r: &DMatrix<f64>, rows: &DMatrix<f64>) {
         let g1 = r.transpose() * r;
         let g2 = rows.transpose() * rows;
@@ -585,25 +587,20 @@ mod tests {
     fn per_coordinate_parts_hold_their_coordinates_rows() {
         let model = Model::builtin("mtm").unwrap();
         let n = model.dof();
-        let [q, mut dq, mut ddq, tau] = random_samples(&model, 2 * CHUNK_SAMPLES + 700, 11);
+        let mut m = random_samples(&model, 2 * CHUNK_SAMPLES + 700, 11);
         // At rest for a chunk and a half: the Coulomb, viscous and motor-inertia columns
         // are zero until the arm moves, then join the factors.
         for k in 0..CHUNK_SAMPLES * 3 / 2 {
             for j in 0..n {
-                dq[(k, j)] = 0.0;
-                ddq[(k, j)] = 0.0;
+                m[1][(k, j)] = 0.0;
+                m[2][(k, j)] = 0.0;
             }
         }
-        let s = Samples {
-            q: &q,
-            dq: &dq,
-            ddq: &ddq,
-            tau: &tau,
-        };
+        let s = samples(&m);
         let parts = Observation::assemble_per_coordinate(&model, s, &Silent);
         assert_eq!(parts.len(), n);
         for (j, part) in parts.iter().enumerate() {
-            assert_eq!(part.rows(), q.nrows());
+            assert_eq!(part.rows(), s.len());
             let r = part.r();
             for i in 0..r.nrows() {
                 assert!(r[(i, i)] >= 0.0, "non-negative diagonal");
@@ -620,44 +617,22 @@ mod tests {
         // Weighted: the factor of the weighted rows of all coordinates.
         let weights: Vec<f64> = (0..n).map(|j| 0.5 + 0.3 * j as f64).collect();
         let combined = Observation::weighted(&parts, &weights);
-        let p1 = model.n_params() + 1;
-        let mut all = DMatrix::zeros(n * q.nrows(), p1);
-        for (j, w) in weights.iter().enumerate() {
-            let rows = coordinate_rows(&model, s, j) * *w;
-            all.rows_mut(j * q.nrows(), q.nrows()).copy_from(&rows);
-        }
-        assert_same_gram("weighted", combined.r(), &all);
+        assert_same_gram(
+            "weighted",
+            combined.r(),
+            &weighted_rows(&model, s, &weights),
+        );
     }
 
     #[test]
     fn batches_of_whole_chunks_give_the_same_factors_to_the_bit() {
         let model = Model::builtin("psm").unwrap();
-        let [q, dq, ddq, tau] = random_samples(&model, 4 * CHUNK_SAMPLES + 123, 5);
-        let all = |lo: usize, hi: usize| {
-            let cut = |m: &DMatrix<f64>| m.rows(lo, hi - lo).into_owned();
-            [cut(&q), cut(&dq), cut(&ddq), cut(&tau)]
-        };
-        let once = Observation::assemble_per_coordinate(
-            &model,
-            Samples {
-                q: &q,
-                dq: &dq,
-                ddq: &ddq,
-                tau: &tau,
-            },
-            &Silent,
-        );
+        let m = random_samples(&model, 4 * CHUNK_SAMPLES + 123, 5);
+        let once = Observation::assemble_per_coordinate(&model, samples(&m), &Silent);
         let mut reduction = PerCoordinate::new(&model);
-        let cuts = [0, CHUNK_SAMPLES, 3 * CHUNK_SAMPLES, q.nrows()];
+        let cuts = [0, CHUNK_SAMPLES, 3 * CHUNK_SAMPLES, m[0].nrows()];
         for w in cuts.windows(2) {
-            let [a, b, c, d] = all(w[0], w[1]);
-            let s = Samples {
-                q: &a,
-                dq: &b,
-                ddq: &c,
-                tau: &d,
-            };
-            reduction.add(&model, s, &Silent);
+            reduction.add(&model, samples(&rows(&m, w[0], w[1])), &Silent);
         }
         let batched = reduction.finish();
         for (x, y) in once.iter().zip(&batched) {
@@ -670,51 +645,11 @@ mod tests {
     fn merge_and_select_are_exact() {
         let model = Model::builtin("mtm").unwrap();
         let n = model.dof();
-        let [q, dq, ddq, tau] = random_samples(&model, 300, 3);
+        let m = random_samples(&model, 300, 3);
         let w = vec![1.0; n];
-        let half = |a: &DMatrix<f64>, lo: usize, hi: usize| a.rows(lo, hi - lo).into_owned();
-        let all = Observation::assemble(
-            &model,
-            Samples {
-                q: &q,
-                dq: &dq,
-                ddq: &ddq,
-                tau: &tau,
-            },
-            &w,
-        );
-        let (q1, dq1, ddq1, t1) = (
-            half(&q, 0, 100),
-            half(&dq, 0, 100),
-            half(&ddq, 0, 100),
-            half(&tau, 0, 100),
-        );
-        let (q2, dq2, ddq2, t2) = (
-            half(&q, 100, 300),
-            half(&dq, 100, 300),
-            half(&ddq, 100, 300),
-            half(&tau, 100, 300),
-        );
-        let mut a = Observation::assemble(
-            &model,
-            Samples {
-                q: &q1,
-                dq: &dq1,
-                ddq: &ddq1,
-                tau: &t1,
-            },
-            &w,
-        );
-        let b = Observation::assemble(
-            &model,
-            Samples {
-                q: &q2,
-                dq: &dq2,
-                ddq: &ddq2,
-                tau: &t2,
-            },
-            &w,
-        );
+        let all = Observation::assemble(&model, samples(&m), &w);
+        let mut a = Observation::assemble(&model, samples(&rows(&m, 0, 100)), &w);
+        let b = Observation::assemble(&model, samples(&rows(&m, 100, 300)), &w);
         a.merge(&b);
         assert_eq!(a.rows(), all.rows());
         let g1 = a.r().transpose() * a.r();

@@ -471,7 +471,7 @@ impl FitRequest {
         if train.is_empty() {
             return Err(crate::fit::no_training_log());
         }
-        let mut settings = self.overrides.settings_for(self.settings.clone(), robot)?;
+        let settings = self.overrides.settings_for(self.settings.clone(), robot)?;
         let model = settings.model(robot)?.into_owned();
         let read = self.read.for_model(&model);
         if self.streams() {
@@ -501,20 +501,15 @@ impl FitRequest {
             });
         }
         let train_data = read_all(&read, train, progress)?;
-        let test_data = self.read_test(&read, &mut settings, progress)?;
-        let result = fit_logs(
-            &model,
-            &log_data(&train_data, train),
-            &log_data(&test_data, &self.test),
-            &settings,
-            progress,
-        )?;
-        Ok(FitOutcome {
+        let train_logs = log_data(&train_data, train);
+        self.fit_with_test(
             model,
             settings,
-            result,
-            logs: Some((train_data, test_data)),
-        })
+            &read,
+            Some(&train_data),
+            progress,
+            |m, s, test| fit_logs(m, &train_logs, test, s, progress),
+        )
     }
 
     fn run_observations(
@@ -552,18 +547,31 @@ impl FitRequest {
         let model = state.model(&base)?;
         let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
         self.overrides.set_prior(&mut settings, &model)?;
-        let test_data = self.read_test(&self.read.for_model(&model), &mut settings, progress)?;
-        let result = state.fit(
-            &base,
-            &settings,
-            &log_data(&test_data, &self.test),
-            progress,
-        )?;
+        let read = self.read.for_model(&model);
+        self.fit_with_test(model, settings, &read, None, progress, |_, s, test| {
+            state.fit(&base, s, test, progress)
+        })
+    }
+
+    /// The outcome of `fit` (of the model, the settings and the test logs), the test logs
+    /// read in memory and `settings.test_window` derived from them; with the training
+    /// logs `train` held in memory, the outcome keeps them and the test logs.
+    fn fit_with_test(
+        &self,
+        model: Model,
+        mut settings: FitSettings,
+        read: &ReadOptions,
+        train: Option<&[Arc<JointLog>]>,
+        progress: &dyn Progress,
+        fit: impl FnOnce(&Model, &FitSettings, &[LogData<'_>]) -> Result<FitResult, IdentError>,
+    ) -> Result<FitOutcome, IdentError> {
+        let test_data = self.read_test(read, &mut settings, progress)?;
+        let result = fit(&model, &settings, &log_data(&test_data, &self.test))?;
         Ok(FitOutcome {
             model,
             settings,
             result,
-            logs: None,
+            logs: train.map(|t| (t.to_vec(), test_data)),
         })
     }
 

@@ -30,7 +30,7 @@ pub use butter::{
 pub use filter::{filtfilt, lfilter, lfilter_zi, odd_ext, sosfilt, sosfilt_zi, sosfiltfilt};
 pub use ops::{
     central_difference, decimate_rows, differentiate, moving_samples, resample_linear, select_rows,
-    trim_rows, Stencil,
+    stack_rows, trim_rows, Stencil,
 };
 
 use crate::joint_log::{Coordinates, JointLog, JointLogError};

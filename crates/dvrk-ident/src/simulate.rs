@@ -122,15 +122,7 @@ pub fn simulate(
     let (q, dq, ddq) = traj.sample(&time);
     let mut tau = torques(model, params, traj, &time, (&q, &dq, &ddq), &delay);
     add_noise(&mut tau, &noise, sim.seed);
-    let in_model = JointLog {
-        time,
-        q,
-        dq: Some(dq),
-        tau,
-        joint_names: model.coordinates.clone(),
-        coordinates: Coordinates::Model,
-        source: format!("simulated {}", model.name),
-    };
+    let in_model = model_log(model, time, q, dq, tau);
     let measured = to_measured_coordinates(model, &in_model)?;
     measured.validate()?;
     Ok(measured)
@@ -199,34 +191,14 @@ fn check_simulation(
             ));
         }
     }
-    let noise: Vec<f64> = match sim.noise_std.len() {
-        0 => vec![0.0; n],
-        1 => vec![sim.noise_std[0]; n],
-        m if m == n => sim.noise_std.clone(),
-        m => {
-            return Err(setting(
-                "noise",
-                format!("expected one value or {n} (one per coordinate), got {m}"),
-            ))
-        }
-    };
+    let noise = per_coordinate("noise", &sim.noise_std, n)?;
     if let Some(v) = noise.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
         return Err(setting(
             "noise",
             format!("standard deviations must be finite and non-negative, got {v}"),
         ));
     }
-    let delay: Vec<f64> = match sim.delay_s.len() {
-        0 => vec![0.0; n],
-        1 => vec![sim.delay_s[0]; n],
-        m if m == n => sim.delay_s.clone(),
-        m => {
-            return Err(setting(
-                "delay",
-                format!("expected one value or {n} (one per coordinate), got {m}"),
-            ))
-        }
-    };
+    let delay = per_coordinate("delay", &sim.delay_s, n)?;
     let max_delay = crate::signal::advance::MAX_DELAY_S;
     if let Some(v) = delay
         .iter()
@@ -253,6 +225,23 @@ fn check_simulation(
     Ok((noise, delay, count))
 }
 
+/// One value per coordinate of `n` from the setting `name`'s `values`: none gives 0 to
+/// every coordinate, one value gives it to every coordinate, `n` values one each.
+fn per_coordinate(name: &str, values: &[f64], n: usize) -> Result<Vec<f64>, IdentError> {
+    match values {
+        [] => Ok(vec![0.0; n]),
+        [v] => Ok(vec![*v; n]),
+        all if all.len() == n => Ok(all.to_vec()),
+        all => Err(setting(
+            name,
+            format!(
+                "expected one value or {n} (one per coordinate), got {}",
+                all.len()
+            ),
+        )),
+    }
+}
+
 /// The torques `τ = H(q, q̇, q̈)·π + known forces(q)` at the samples `motion` = `(q, q̇,
 /// q̈)` of `traj` at `time`, each coordinate's from the motion `delay[j]` s earlier.
 fn torques(
@@ -264,37 +253,73 @@ fn torques(
     delay: &[f64],
 ) -> DMatrix<f64> {
     let (q, dq, ddq) = motion;
-    let (count, n) = (time.len(), model.dof());
-    let mut ws = Workspace::new(model);
-    let mut tau = DMatrix::zeros(count, n);
-    let (mut qk, mut dqk, mut ddqk, mut tk) =
-        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut tau = DMatrix::zeros(time.len(), model.dof());
     // The torques of each distinct delay from the motion that much earlier (the
     // trajectory is periodic, so before its start too).
     let mut distinct = delay.to_vec();
     distinct.sort_by(f64::total_cmp);
     distinct.dedup();
     for &d in &distinct {
-        let shifted: Vec<f64> = time.iter().map(|t| t - d).collect();
-        let (sq, sdq, sddq) = if d == 0.0 {
-            (q.clone(), dq.clone(), ddq.clone())
+        let t = if d == 0.0 {
+            motion_torques(model, params, q, dq, ddq)
         } else {
-            traj.sample(&shifted)
+            let shifted: Vec<f64> = time.iter().map(|t| t - d).collect();
+            let (sq, sdq, sddq) = traj.sample(&shifted);
+            motion_torques(model, params, &sq, &sdq, &sddq)
         };
-        for k in 0..count {
-            for j in 0..n {
-                qk[j] = sq[(k, j)];
-                dqk[j] = sdq[(k, j)];
-                ddqk[j] = sddq[(k, j)];
-            }
-            model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
-            model.add_known_forces(&qk, &mut tk);
-            for j in (0..n).filter(|&j| delay[j] == d) {
-                tau[(k, j)] = tk[j];
-            }
+        for j in (0..model.dof()).filter(|&j| delay[j] == d) {
+            tau.set_column(j, &t.column(j));
         }
     }
     tau
+}
+
+/// The torques `τ = H(q, q̇, q̈)·π + known forces(q)` (N·m or N) of `model` with
+/// parameters `params` at each sample (row) of the motion `q`, `q̇`, `q̈` (model
+/// coordinates: rad or m, per s, per s²): what the joints feel, without noise.
+pub fn motion_torques(
+    model: &Model,
+    params: &[f64],
+    q: &DMatrix<f64>,
+    dq: &DMatrix<f64>,
+    ddq: &DMatrix<f64>,
+) -> DMatrix<f64> {
+    let (count, n) = (q.nrows(), model.dof());
+    let mut ws = Workspace::new(model);
+    let mut tau = DMatrix::zeros(count, n);
+    let (mut qk, mut dqk, mut ddqk, mut tk) =
+        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    for k in 0..count {
+        for j in 0..n {
+            qk[j] = q[(k, j)];
+            dqk[j] = dq[(k, j)];
+            ddqk[j] = ddq[(k, j)];
+        }
+        model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
+        model.add_known_forces(&qk, &mut tk);
+        tau.row_mut(k).copy_from_slice(&tk);
+    }
+    tau
+}
+
+/// A simulated log of `model` in its own coordinates (exact velocities), before
+/// [`to_measured_coordinates`]: samples at `time` (s), `q`, `q̇`, `τ` one row a sample.
+pub fn model_log(
+    model: &Model,
+    time: Vec<f64>,
+    q: DMatrix<f64>,
+    dq: DMatrix<f64>,
+    tau: DMatrix<f64>,
+) -> JointLog {
+    JointLog {
+        time,
+        q,
+        dq: Some(dq),
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: format!("simulated {}", model.name),
+    }
 }
 
 /// Independent Gaussian noise of standard deviation `noise[j]` added to coordinate `j`

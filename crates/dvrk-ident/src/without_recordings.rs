@@ -14,12 +14,7 @@ use dvrk_model::Model;
 fn without_recordings_csv_fits_and_a_recording_is_refused() {
     let model = Model::builtin("psm").unwrap();
     let examples = dvrk_test_support::repo().join("examples");
-    let json = dvrk_test_support::read_json(&examples.join("psm_params.json"));
-    let truth: Vec<f64> = model
-        .param_names()
-        .iter()
-        .map(|name| json["parameters"][name].as_f64().unwrap())
-        .collect();
+    let truth = dvrk_test_support::fixtures::example_params(&model);
     let excitation =
         FourierTrajectory::from_json_file(examples.join("psm_trajectory.json")).unwrap();
     let noise = 0.005; // N·m
@@ -46,15 +41,14 @@ fn without_recordings_csv_fits_and_a_recording_is_refused() {
     settings.processing.trim = 10;
     let result = fit(&model, &read, None, &settings).unwrap();
     let beta_true = model.base_parameters().unwrap().project(&truth);
-    for (b, t) in result.base_parameters.iter().zip(&beta_true) {
-        assert!(
-            (b.value - t).abs() <= 6.0 * b.std + 1e-6,
-            "{}: {} vs {t} (std {})",
-            b.expression,
-            b.value,
-            b.std
-        );
-    }
+    dvrk_test_support::fixtures::assert_recovered(
+        "psm OLS",
+        result
+            .base_parameters
+            .iter()
+            .map(|b| (b.expression.as_str(), b.value, b.std)),
+        &beta_true,
+    );
 
     let mcap = examples.join("psm_excitation.mcap");
     assert_eq!(detect_format(&mcap).unwrap(), LogFormat::Mcap);

@@ -11,11 +11,21 @@ mod protocol_2019;
 use dvrk_ident::{fit, FitResult, JointLog, Method};
 use dvrk_model::Model;
 use protocol_2019::{settings, stribeck_settings, Protocol};
+use serde::Deserialize;
+use std::collections::HashMap;
 
+/// One robot's protocol and figures.
 struct Case {
     protocol: Protocol,
+    figures: Figures,
+}
+
+/// One robot's figures in `fixtures/acceptance_2019.toml`: test relative errors per
+/// joint.
+#[derive(Deserialize)]
+struct Figures {
     /// Published 2019 test errors (MTM OLS: the 2019 code rerun).
-    published: [(Method, [f64; 7]); 3],
+    published: Published,
     /// Our SDP test errors with the 2019 bounds (regression guard, see `run`).
     sdp_guard: [f64; 7],
     /// What helped beyond 2019 (regression guards, see `beyond_2019`): WLS with a
@@ -25,47 +35,32 @@ struct Case {
     stribeck_sdp_guard: [f64; 7],
 }
 
-const PSM: Case = Case {
-    protocol: protocol_2019::PSM,
-    published: [
-        (
-            Method::Ols,
-            [0.1027, 0.1839, 0.1983, 0.1344, 0.2402, 0.2119, 0.2638],
-        ),
-        (
-            Method::Wls,
-            [0.1028, 0.1828, 0.1976, 0.1344, 0.2399, 0.2111, 0.2662],
-        ),
-        (
-            Method::Sdp,
-            [0.0929, 0.1783, 0.1907, 0.1345, 0.2394, 0.2125, 0.2642],
-        ),
-    ],
-    sdp_guard: [0.0912, 0.1788, 0.1907, 1.0620, 0.3759, 0.4641, 0.5251],
-    stribeck_wls_guard: [0.0992, 0.1615, 0.2008, 0.1258, 0.2326, 0.2085, 0.2580],
-    stribeck_sdp_guard: [0.0856, 0.1588, 0.1853, 0.1263, 0.2494, 0.2336, 0.2802],
-};
+#[derive(Deserialize)]
+struct Published {
+    ols: [f64; 7],
+    wls: [f64; 7],
+    sdp: [f64; 7],
+}
 
-const MTM: Case = Case {
-    protocol: protocol_2019::MTM,
-    published: [
-        (
-            Method::Ols,
-            [0.0800, 0.1647, 0.1975, 0.2207, 0.4749, 0.3446, 1.1114],
-        ),
-        (
-            Method::Wls,
-            [0.0818, 0.1631, 0.1906, 0.2090, 0.2630, 0.2348, 0.3396],
-        ),
-        (
-            Method::Sdp,
-            [0.0769, 0.1485, 0.1695, 0.2232, 0.2800, 0.2342, 0.3395],
-        ),
-    ],
-    sdp_guard: [0.0771, 0.1554, 0.1870, 0.2589, 0.3643, 0.4039, 2.8255],
-    stribeck_wls_guard: [0.0794, 0.1535, 0.1845, 0.1866, 0.2439, 0.2437, 0.3196],
-    stribeck_sdp_guard: [0.0738, 0.1461, 0.1626, 0.2010, 0.2413, 0.2218, 0.3093],
-};
+impl Published {
+    fn by_method(&self) -> [(Method, [f64; 7]); 3] {
+        [
+            (Method::Ols, self.ols),
+            (Method::Wls, self.wls),
+            (Method::Sdp, self.sdp),
+        ]
+    }
+}
+
+/// The case of `protocol`'s robot, its figures from the fixture.
+fn case(protocol: Protocol) -> Case {
+    let text = include_str!("fixtures/acceptance_2019.toml");
+    let mut all: HashMap<String, Figures> = toml::from_str(text).expect("the figures' TOML");
+    let figures = all
+        .remove(protocol.robot)
+        .unwrap_or_else(|| panic!("no figures for {}", protocol.robot));
+    Case { protocol, figures }
+}
 
 fn check_sdp(model: &Model, r: &FitResult) {
     assert!(r.solver.converged, "SDP status {}", r.solver.status);
@@ -114,7 +109,7 @@ fn run(case: &Case) {
         "{} test errors (first period), ours vs 2019:",
         case.protocol.robot
     );
-    for (method, published) in &case.published {
+    for (method, published) in &case.figures.published.by_method() {
         let s = settings(&case.protocol, *method);
         let r = fit(&model, &train, Some(&test), &s).unwrap();
         let ours = &r.metrics.test.as_ref().unwrap().relative_error;
@@ -137,7 +132,7 @@ fn run(case: &Case) {
         // infeasible point. For the SDP the bound is therefore our own current result
         // (a regression guard), and the comparison with 2019 is printed above.
         let limit: [f64; 7] = if *method == Method::Sdp {
-            case.sdp_guard
+            case.figures.sdp_guard
         } else {
             *published
         };
@@ -162,19 +157,19 @@ fn run(case: &Case) {
 /// for the physically consistent fit also zero lower bounds on Fc, Fv and Ia (the 2019
 /// bounds of 0.001 exceed what the wrist data support, see `run`).
 fn beyond_2019(case: &Case, model: &Model, train: &JointLog, test: &JointLog) {
-    let sdp_published = case.published[2].1;
+    let sdp_published = case.figures.published.sdp;
     for (label, m, method, guard) in [
         (
             "WLS + Stribeck",
             model,
             Method::Wls,
-            case.stribeck_wls_guard,
+            case.figures.stribeck_wls_guard,
         ),
         (
             "SDP + Stribeck, physical bounds",
             model,
             Method::Sdp,
-            case.stribeck_sdp_guard,
+            case.figures.stribeck_sdp_guard,
         ),
     ] {
         let s = stribeck_settings(&case.protocol, method);
@@ -239,7 +234,7 @@ fn delays_beat_2019(case: &Case, mean_gain: f64) {
     );
     assert_eq!(r.settings.processing.delay_s, d.delay_s);
     let ours = &r.metrics.test.as_ref().unwrap().relative_error;
-    let published = case.published[2].1;
+    let published = case.figures.published.sdp;
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let gain = 1.0 - mean(ours) / mean(&published);
     println!(
@@ -272,22 +267,22 @@ fn delays_beat_2019(case: &Case, mean_gain: f64) {
 
 #[test]
 fn psm_delays_beat_2019() {
-    delays_beat_2019(&PSM, 0.20);
+    delays_beat_2019(&case(protocol_2019::PSM), 0.20);
 }
 
 #[test]
 fn mtm_delays_beat_2019() {
-    delays_beat_2019(&MTM, 0.10);
+    delays_beat_2019(&case(protocol_2019::MTM), 0.10);
 }
 
 #[test]
 fn psm_2019_protocol() {
-    run(&PSM);
+    run(&case(protocol_2019::PSM));
 }
 
 #[test]
 fn mtm_2019_protocol() {
-    run(&MTM);
+    run(&case(protocol_2019::MTM));
 }
 
 /// Rows `a..b` of a log.
@@ -374,10 +369,10 @@ fn priors_on_a_short_log(case: &Case) {
 
 #[test]
 fn psm_priors_on_a_short_log() {
-    priors_on_a_short_log(&PSM);
+    priors_on_a_short_log(&case(protocol_2019::PSM));
 }
 
 #[test]
 fn mtm_priors_on_a_short_log() {
-    priors_on_a_short_log(&MTM);
+    priors_on_a_short_log(&case(protocol_2019::MTM));
 }

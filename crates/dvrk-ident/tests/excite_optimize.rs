@@ -122,28 +122,21 @@ fn criterion_gradient_matches_finite_differences() {
     // The optimizer's version: Coulomb columns through tanh(ṡ/ε), which moves the
     // criterion (the sign's jump is gone) and stays exact in its gradient.
     check_gradient(&model, &traj, Criterion::Condition, 10.0, 0.05);
-    let exact = objective_and_gradient(
-        &model,
-        &model.base_parameters().unwrap(),
-        &traj,
-        Criterion::Condition,
-        12,
-        10.0,
-        0.0,
-    )
-    .unwrap()
-    .0;
-    let smooth = objective_and_gradient(
-        &model,
-        &model.base_parameters().unwrap(),
-        &traj,
-        Criterion::Condition,
-        12,
-        10.0,
-        0.05,
-    )
-    .unwrap()
-    .0;
+    let base = model.base_parameters().unwrap();
+    let objective = |coulomb: f64| {
+        objective_and_gradient(
+            &model,
+            &base,
+            &traj,
+            Criterion::Condition,
+            12,
+            10.0,
+            coulomb,
+        )
+        .unwrap()
+        .0
+    };
+    let (exact, smooth) = (objective(0.0), objective(0.05));
     assert!(
         exact != smooth,
         "the smoothing must change the Coulomb columns"
@@ -249,10 +242,16 @@ fn rest_option_gives_zero_rates_at_the_ends() {
     assert_arm_limits_hold(&res.trajectory);
 }
 
+/// The optimizer's refusal of the limits file `text` (named `file`) on `model`.
+fn refusal(model: &Model, text: &str, file: &str) -> ExciteError {
+    let base = model.base_parameters().unwrap();
+    let limits = Limits::from_toml_str(model, text, file).unwrap();
+    optimize::optimize(model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err()
+}
+
 #[test]
 fn impossible_limits_are_errors() {
     let model = arm();
-    let base = model.base_parameters().unwrap();
     // q1 in [-1, 1.2] and q1 in [1.5, 2]: no pose at all.
     let text = r#"
 [[limits]]
@@ -262,8 +261,7 @@ position = [-1.0, 1.2]
 expr = "q1"
 position = [1.5, 2.0]
 "#;
-    let limits = Limits::from_toml_str(&model, text, "bad.toml").unwrap();
-    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
+    let e = refusal(&model, text, "bad.toml");
     assert!(matches!(e, ExciteError::ImpossibleLimits(_)), "{e}");
     // A velocity range excluding 0: a periodic motion cannot satisfy it.
     let text = r#"
@@ -273,7 +271,7 @@ velocity = ["10*deg", "30*deg"]
 "#;
     let limits = Limits::from_toml_str(&model, text, "bad.toml").unwrap();
     assert!((limits.joint[0].velocity.unwrap()[0] - 10f64.to_radians()).abs() < 1e-12);
-    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
+    let e = refusal(&model, text, "bad.toml");
     assert!(e.to_string().contains("excludes 0"), "{e}");
     // Malformed files name the file.
     let e = Limits::from_toml_str(&model, "[[limits]]\nexpr = \"q9\"\n", "x.toml").unwrap_err();
@@ -352,10 +350,14 @@ fn setpoints_are_in_measured_space() {
 /// reaches y = 0.53 within its joint limits, and the centre of the joint ranges already
 /// puts the tip at y = 0.24).
 fn arm_with_tip() -> Model {
-    let text = format!(
-        "{ARM}\n[[cartesian_limits]]\nframe = \"tip\"\nmin = [-1.0, -1.0, -1.0]\nmax = [1.0, 0.2, 1.0]\n"
-    );
+    let text = format!("{ARM}\n{}", tip_box([-1.0, -1.0, -1.0], [1.0, 0.2, 1.0]));
     Model::from_toml_str(&text, "two_link_tip.toml").expect("valid arm")
+}
+
+/// A box `min`..`max` (m, in the base frame; infinite for no bound) on the arm's tip, in
+/// the layout of limits files and descriptions.
+fn tip_box(min: [f64; 3], max: [f64; 3]) -> String {
+    format!("[[cartesian_limits]]\nframe = \"tip\"\nmin = {min:?}\nmax = {max:?}\n")
 }
 
 /// Tip position (x, y) of the arm at `q`, from the model's own kinematics.
@@ -446,16 +448,9 @@ fn limit_penalty_gradient_matches_finite_differences() {
 #[test]
 fn impossible_box_is_a_clear_error() {
     let model = arm_with_tip();
-    let base = model.base_parameters().unwrap();
     // The arm reaches 0.55 m at most: x in [2, 3] m excludes every pose.
-    let text = r#"
-[[cartesian_limits]]
-frame = "tip"
-min = [2.0, -1.0, -1.0]
-max = [3.0, 1.0, 1.0]
-"#;
-    let limits = Limits::from_toml_str(&model, text, "far.toml").unwrap();
-    let e = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap_err();
+    let far = tip_box([2.0, -1.0, -1.0], [3.0, 1.0, 1.0]);
+    let e = refusal(&model, &far, "far.toml");
     assert!(matches!(e, ExciteError::ImpossibleLimits(_)), "{e}");
     let msg = e.to_string();
     assert!(
@@ -465,18 +460,14 @@ max = [3.0, 1.0, 1.0]
     // Reachable, though not from the centre of the joint ranges (tip at x = 0.43,
     // y = 0.24): the static pose is searched through the frame Jacobian (e.g. q1 = -0.5,
     // q2 - q1 = 1.0 put the tip at x = 0.48, y = -0.02).
-    let text = r#"
-[[cartesian_limits]]
-frame = "tip"
-min = [0.4, -0.2, -1.0]
-max = [0.5, 0.0, 1.0]
-"#;
+    let near = tip_box([0.4, -0.2, -1.0], [0.5, 0.0, 1.0]);
     let limits = Limits {
         joint: model.limits.clone(),
-        cartesian: Limits::from_toml_str(&model, text, "near.toml")
+        cartesian: Limits::from_toml_str(&model, &near, "near.toml")
             .unwrap()
             .cartesian,
     };
+    let base = model.base_parameters().unwrap();
     let res = optimize::optimize(&model, &base, &limits, &opts(2, 0.25), &Silent).unwrap();
     assert!(res.evaluation.feasibility.feasible);
     let t = &res.trajectory;
@@ -508,9 +499,9 @@ fn evaluate_reports_a_trajectory_leaving_the_box() {
     t.eval(v.time_s, &mut q, &mut dq, &mut ddq);
     assert!((tip(&model, &q).1 - v.value).abs() < 1e-12);
     // One-sided boxes (TOML's inf) and the file's errors.
-    let text =
-        "[[cartesian_limits]]\nframe = \"tip\"\nmin = [-inf, -inf, -inf]\nmax = [inf, 0.2, inf]\n";
-    let one_sided = Limits::from_toml_str(&model, text, "box.toml").unwrap();
+    let inf = f64::INFINITY;
+    let text = tip_box([-inf, -inf, -inf], [inf, 0.2, inf]);
+    let one_sided = Limits::from_toml_str(&model, &text, "box.toml").unwrap();
     let g = check_feasibility(&model, &t, &one_sided, 1000.0).unwrap();
     assert_eq!(g.violated.len(), 1);
     assert_eq!(g.violated[0].limit, "frame tip y");

@@ -3,7 +3,8 @@
 //! processed samples (nalgebra SVD, no R factor), against each log's own metrics, and
 //! the streamed fit of the same logs from files of different formats.
 
-use std::path::PathBuf;
+#[path = "support/logs.rs"]
+mod logs;
 
 use dvrk_ident::fit::stream::fit_stream_logs;
 use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, LogData};
@@ -11,20 +12,8 @@ use dvrk_ident::log::{self, LogFormat, LogReader, ReadOptions};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::{FitSettings, JointLog, Method};
 use dvrk_model::{Model, Workspace};
+use logs::{example, part};
 use nalgebra::{DMatrix, DVector};
-
-fn example() -> JointLog {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
-    log::read(path, None, None).unwrap()
-}
-
-/// Rows `lo..hi` of a log, times kept.
-fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
-    JointLog {
-        source: format!("{} [{lo}..{hi}]", t.source),
-        ..t.select_rows(&(lo..hi).collect::<Vec<_>>())
-    }
-}
 
 fn rel(a: f64, b: f64, scale: f64) -> f64 {
     (a - b).abs() / b.abs().max(scale)

@@ -7,18 +7,11 @@ use std::path::{Path, PathBuf};
 
 use dvrk_ident::log::mcap::{list_topics, read_mcap_log, McapOptions, McapProblem, McapReader};
 use dvrk_ident::log::{detect_format, LogError, LogFormat, ReadOptions};
+use dvrk_model::Model;
+use dvrk_test_support::fixtures::TempDir;
 
 const N: usize = 16;
 const T0_NS: i64 = 1_700_000_000 * 1_000_000_000;
-const NAMES: [&str; 7] = [
-    "outer_yaw",
-    "outer_pitch",
-    "outer_insertion",
-    "outer_roll",
-    "outer_wrist_pitch",
-    "outer_wrist_yaw",
-    "jaw",
-];
 
 fn fixture(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -26,8 +19,9 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// The PSM's measured joints (`robots/psm.toml`): the names the generator writes.
 fn psm_joints() -> Vec<String> {
-    NAMES.iter().map(|s| s.to_string()).collect()
+    Model::builtin("psm").unwrap().measured.joints
 }
 
 fn position(k: usize, j: usize) -> f64 {
@@ -88,7 +82,7 @@ fn every_format_reads_the_same_samples_exactly() {
         );
         assert_eq!(log.start_time_ns, T0_NS, "{name}");
         let t = &log.trajectory;
-        assert_eq!(t.joint_names, NAMES, "{name}");
+        assert_eq!(t.joint_names, psm_joints(), "{name}");
         assert_eq!(t.len(), N, "{name}");
         let dq = t.dq.as_ref().expect("velocities");
         for k in 0..N {
@@ -177,24 +171,6 @@ fn without_the_robot_the_single_measured_topic_is_read() {
     assert_eq!(log.trajectory.joint_names, ["jaw"]);
 }
 
-/// A temporary folder removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let p = std::env::temp_dir().join(format!("dvrk-bags-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        TempDir(p)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
-
 fn copy_dir(from: &Path, to: &Path) {
     std::fs::create_dir_all(to).unwrap();
     for e in std::fs::read_dir(from).unwrap() {
@@ -212,8 +188,8 @@ fn problem(e: &LogError) -> &McapProblem {
 
 #[test]
 fn split_folder_without_metadata_and_bad_metadata() {
-    let dir = TempDir::new("split");
-    let bag = dir.0.join("rec");
+    let dir = TempDir::new("bags-split");
+    let bag = dir.path("rec");
     copy_dir(&fixture("split"), &bag);
     let options = McapOptions {
         joints: psm_joints(),
@@ -255,7 +231,7 @@ fn split_folder_without_metadata_and_bad_metadata() {
 
 #[test]
 fn what_is_not_a_log_says_what_it_looks_like() {
-    let dir = TempDir::new("foreign");
+    let dir = TempDir::new("bags-foreign");
     let cases: [(&str, &[u8], &str); 5] = [
         (
             "a.mcap",
@@ -276,7 +252,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
         ),
     ];
     for (name, bytes, expect) in cases {
-        let p = dir.0.join(name);
+        let p = dir.path(name);
         std::fs::write(&p, bytes).unwrap();
         let e = ReadOptions::default().read(&p).unwrap_err();
         let msg = e.to_string();
@@ -288,7 +264,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
         }
     }
     // A zstd-compressed CSV is no recording.
-    let csv = dir.0.join("log.csv.zst");
+    let csv = dir.path("log.csv.zst");
     std::fs::write(&csv, zstd_of(b"time,position.a,effort.a\n0,1,2\n")).unwrap();
     let e = detect_format(&csv).unwrap_err();
     assert!(
@@ -297,7 +273,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
         "{e}"
     );
     // A text file is a CSV whatever its name.
-    let named = dir.0.join("log.mcap");
+    let named = dir.path("log.mcap");
     std::fs::write(&named, "time,position.q1,effort.q1\n0,1,2\n0.005,1,2\n").unwrap();
     assert_eq!(detect_format(&named).unwrap(), LogFormat::Csv);
     // Asked to read it as a recording: it says so.
@@ -307,7 +283,7 @@ fn what_is_not_a_log_says_what_it_looks_like() {
         "{e}"
     );
     // An empty folder.
-    let empty = dir.0.join("empty");
+    let empty = dir.path("empty");
     std::fs::create_dir(&empty).unwrap();
     let e = ReadOptions::default().read(&empty).unwrap_err();
     assert!(
@@ -323,7 +299,7 @@ fn zstd_of(bytes: &[u8]) -> Vec<u8> {
 
 #[test]
 fn cut_or_corrupted_bags_are_errors_not_panics() {
-    let dir = TempDir::new("cut");
+    let dir = TempDir::new("bags-cut");
     let options = McapOptions {
         joints: psm_joints(),
         ..Default::default()
@@ -337,7 +313,7 @@ fn cut_or_corrupted_bags_are_errors_not_panics() {
         "file_zstd/file_zstd_0.mcap.zstd",
     ] {
         let bytes = std::fs::read(fixture(name)).unwrap();
-        let cut = dir.0.join(Path::new(name).file_name().unwrap());
+        let cut = dir.path(Path::new(name).file_name().unwrap());
         for len in [20, bytes.len() / 3, bytes.len() / 2, bytes.len() - 7] {
             std::fs::write(&cut, &bytes[..len]).unwrap();
             let e = read_mcap_log(&cut, &options)

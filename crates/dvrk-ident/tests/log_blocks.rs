@@ -2,8 +2,12 @@
 //! for the CSV layouts (with and without `--resample`), and name bad rows by their line
 //! in the file wherever the block boundaries fall.
 
+#[path = "support/logs.rs"]
+mod logs;
+
 use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::log::{write, LogError, LogFormat, LogReader, ReadOptions};
+use logs::concatenate;
 use nalgebra::DMatrix;
 use std::path::PathBuf;
 
@@ -30,28 +34,10 @@ fn log(n: usize, with_dq: bool, coordinates: Coordinates) -> JointLog {
     }
 }
 
+/// The log read by `reader` in blocks of `size`, joined back.
 fn read_blocks(reader: &LogReader, size: usize) -> JointLog {
     let blocks: Vec<JointLog> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
-    let rows: usize = blocks.iter().map(JointLog::len).sum();
-    let cat = |f: &dyn Fn(&JointLog) -> Option<&DMatrix<f64>>| {
-        f(&blocks[0]).map(|_| {
-            let mut m = DMatrix::zeros(rows, 3);
-            let mut r = 0;
-            for b in &blocks {
-                let x = f(b).unwrap();
-                m.rows_mut(r, x.nrows()).copy_from(x);
-                r += x.nrows();
-            }
-            m
-        })
-    };
-    JointLog {
-        time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
-        q: cat(&|b| Some(&b.q)).unwrap(),
-        dq: cat(&|b| b.dq.as_ref()),
-        tau: cat(&|b| Some(&b.tau)).unwrap(),
-        ..blocks[0].clone()
-    }
+    concatenate(&blocks)
 }
 
 #[test]

@@ -2,6 +2,9 @@
 //! `write_mcap`, and hand-made files (several topics, odd stamps, broken messages)
 //! written with the `mcap` and `cdr` crates directly, independently of the code tested.
 
+#[path = "support/logs.rs"]
+mod logs;
+
 use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::log::mcap::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, write_mcap, McapCompression,
@@ -9,34 +12,17 @@ use dvrk_ident::log::mcap::{
     JOINT_STATE_TYPE,
 };
 use dvrk_ident::log::{detect_format, read, write, LogError, LogFormat};
+use dvrk_model::Model;
+use dvrk_test_support::fixtures::TempDir;
+use logs::concatenate;
 use nalgebra::DMatrix;
 use serde::Serialize;
 use std::collections::{BTreeMap, HashMap};
-use std::path::{Path, PathBuf};
+use std::path::Path;
+use std::sync::LazyLock;
 
 const T0: i64 = 1_700_000_000_000_000_000;
 const STEP: i64 = 5_000_000; // 200 Hz
-
-/// A fresh directory under the system temp dir, removed on drop.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> TempDir {
-        let p = std::env::temp_dir().join(format!("dvrk-ident-mcap-{}-{name}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&p);
-        std::fs::create_dir_all(&p).unwrap();
-        TempDir(p)
-    }
-    fn path(&self, file: &str) -> PathBuf {
-        self.0.join(file)
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
-}
 
 #[derive(Serialize)]
 struct RosTime {
@@ -151,14 +137,12 @@ impl Fixture {
     }
 }
 
-const ARM: [&str; 6] = [
-    "outer_yaw",
-    "outer_pitch",
-    "outer_insertion",
-    "outer_roll",
-    "outer_wrist_pitch",
-    "outer_wrist_yaw",
-];
+/// The PSM's measured joints as its logs name them (`robots/psm.toml`), the jaw last.
+static PSM_JOINTS: LazyLock<Vec<String>> =
+    LazyLock::new(|| Model::builtin("psm").unwrap().measured.joints);
+/// The PSM's arm joints: all but the jaw.
+static ARM: LazyLock<Vec<&str>> =
+    LazyLock::new(|| PSM_JOINTS[..6].iter().map(String::as_str).collect());
 
 fn arm_values(t: f64) -> ([f64; 6], [f64; 6], [f64; 6]) {
     let mut p = [0.0; 6];
@@ -181,6 +165,22 @@ fn arm_file(path: &Path, topic: &str, stamps: &[i64]) {
         f.js(topic, &joint_state(s, &ARM, &p, &v, &e));
     }
     f.finish();
+}
+
+/// The error of reading `path` with the default options, and its message (printed: what
+/// the user would read).
+fn refusal(path: &Path) -> (LogError, String) {
+    let e = read_mcap(path, &McapOptions::default()).unwrap_err();
+    let msg = e.to_string();
+    println!("{msg}");
+    (e, msg)
+}
+
+/// The file `path` written from the 7-joint trajectory of `samples` samples on
+/// `/PSM1/measured_js` with `opts`, and its bytes.
+fn written(path: &Path, samples: usize, opts: &McapWriteOptions) -> Vec<u8> {
+    write_mcap(path, &trajectory(samples, true), "/PSM1/measured_js", opts).unwrap();
+    std::fs::read(path).unwrap()
 }
 
 fn problem(e: &LogError) -> &McapProblem {
@@ -206,17 +206,7 @@ fn trajectory(n: usize, with_dq: bool) -> JointLog {
             (3, 0) => f64::MIN_POSITIVE / 2.0, // subnormal
             _ => (i as f64 - 3.0 * j as f64) / 7.0,
         }),
-        joint_names: [
-            "outer_yaw",
-            "outer_pitch",
-            "outer_insertion",
-            "outer_roll",
-            "outer_wrist_pitch",
-            "outer_wrist_yaw",
-            "jaw",
-        ]
-        .map(String::from)
-        .to_vec(),
+        joint_names: PSM_JOINTS.clone(),
         coordinates: Coordinates::Measured,
         source: "test".into(),
     }
@@ -224,7 +214,7 @@ fn trajectory(n: usize, with_dq: bool) -> JointLog {
 
 #[test]
 fn mcap_round_trip_is_exact() {
-    let dir = TempDir::new("round-trip");
+    let dir = TempDir::new("mcap-round-trip");
     for (k, compression) in [
         McapCompression::Zstd,
         McapCompression::Lz4,
@@ -235,7 +225,7 @@ fn mcap_round_trip_is_exact() {
     {
         for with_dq in [true, false] {
             let traj = trajectory(1500, with_dq);
-            let path = dir.path(&format!("rt-{k}-{with_dq}.mcap"));
+            let path = dir.path(format!("rt-{k}-{with_dq}.mcap"));
             let opts = McapWriteOptions {
                 start_time_ns: T0,
                 frame_id: "PSM1_base".into(),
@@ -282,7 +272,7 @@ fn mcap_round_trip_is_exact() {
     let back = read(&path, None, None).unwrap();
     assert_eq!((back.q, back.dq, back.tau), (traj.q, traj.dq, traj.tau));
     // Only the finished files are left (the temporary files were renamed).
-    let names: Vec<String> = std::fs::read_dir(&dir.0)
+    let names: Vec<String> = std::fs::read_dir(dir.dir())
         .unwrap()
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
@@ -296,16 +286,9 @@ fn mcap_round_trip_is_exact() {
 
 #[test]
 fn mcap_written_file_is_a_ros2_mcap() {
-    let dir = TempDir::new("ros2");
+    let dir = TempDir::new("mcap-ros2");
     let path = dir.path("ros2.mcap");
-    write_mcap(
-        &path,
-        &trajectory(20, true),
-        "/PSM1/measured_js",
-        &McapWriteOptions::default(),
-    )
-    .unwrap();
-    let bytes = std::fs::read(&path).unwrap();
+    let bytes = written(&path, 20, &McapWriteOptions::default());
     let summary = mcap::Summary::read(&bytes).unwrap().expect("a summary");
     let schemas: Vec<_> = summary.schemas.values().collect();
     assert_eq!(schemas.len(), 1);
@@ -346,7 +329,7 @@ fn mcap_written_file_is_a_ros2_mcap() {
 
 #[test]
 fn mcap_writer_refuses_bad_input_and_leaves_nothing() {
-    let dir = TempDir::new("write-errors");
+    let dir = TempDir::new("mcap-write-errors");
     let path = dir.path("bad.mcap");
     let mut model = trajectory(5, true);
     model.coordinates = Coordinates::Model;
@@ -373,7 +356,7 @@ fn mcap_writer_refuses_bad_input_and_leaves_nothing() {
     )
     .unwrap_err();
     assert!(matches!(problem(&e), McapProblem::BadTopic(_)), "{e}");
-    assert_eq!(std::fs::read_dir(&dir.0).unwrap().count(), 0);
+    assert_eq!(std::fs::read_dir(dir.dir()).unwrap().count(), 0);
     // A directory that does not exist: an I/O error naming the file.
     let e = write_mcap(
         dir.path("missing/x.mcap"),
@@ -390,7 +373,7 @@ fn mcap_writer_refuses_bad_input_and_leaves_nothing() {
 
 #[test]
 fn mcap_two_topics_are_merged_on_the_first_clock() {
-    let dir = TempDir::new("merge");
+    let dir = TempDir::new("mcap-merge");
     let path = dir.path("merge.mcap");
     let n = 400;
     let jaw = |t: f64| (0.3 + 0.2 * t, -0.1 + 0.05 * t); // linear: interpolation is exact
@@ -524,7 +507,7 @@ fn mcap_two_topics_are_merged_on_the_first_clock() {
 
 #[test]
 fn mcap_automatic_topic_choice() {
-    let dir = TempDir::new("auto");
+    let dir = TempDir::new("mcap-auto");
     let stamps: Vec<i64> = (0..20).map(|k| T0 + k * STEP).collect();
     let write = |path: &Path, topics: &[(&str, bool)]| {
         let mut f = Fixture::new(path);
@@ -561,9 +544,7 @@ fn mcap_automatic_topic_choice() {
         &p3,
         &[("/PSM1/measured_js", true), ("/PSM2/measured_js", true)],
     );
-    let e = read_mcap(&p3, &McapOptions::default()).unwrap_err();
-    let msg = e.to_string();
-    println!("{msg}");
+    let (e, msg) = refusal(&p3);
     assert!(matches!(problem(&e), McapProblem::Ambiguous { candidates } if candidates.len() == 2));
     assert!(
         msg.contains("/PSM1/measured_js") && msg.contains("/PSM2/measured_js"),
@@ -576,9 +557,7 @@ fn mcap_automatic_topic_choice() {
     // No candidate: says why the JointState topics were not.
     let p4 = dir.path("four.mcap");
     write(&p4, &[("/PSM1/setpoint_js", false)]);
-    let e = read_mcap(&p4, &McapOptions::default()).unwrap_err();
-    let msg = e.to_string();
-    println!("{msg}");
+    let (e, msg) = refusal(&p4);
     assert!(
         matches!(problem(&e), McapProblem::NoJointStates { .. }),
         "{msg}"
@@ -588,16 +567,9 @@ fn mcap_automatic_topic_choice() {
 
 #[test]
 fn mcap_truncated_and_foreign_files_are_errors() {
-    let dir = TempDir::new("truncated");
+    let dir = TempDir::new("mcap-truncated");
     let path = dir.path("full.mcap");
-    write_mcap(
-        &path,
-        &trajectory(3000, true),
-        "/PSM1/measured_js",
-        &McapWriteOptions::default(),
-    )
-    .unwrap();
-    let bytes = std::fs::read(&path).unwrap();
+    let bytes = written(&path, 3000, &McapWriteOptions::default());
     let cut = dir.path("cut.mcap");
     for len in [
         0,
@@ -610,9 +582,7 @@ fn mcap_truncated_and_foreign_files_are_errors() {
         bytes.len() - 1,
     ] {
         std::fs::write(&cut, &bytes[..len]).unwrap();
-        let e = read_mcap(&cut, &McapOptions::default()).unwrap_err();
-        let msg = e.to_string();
-        println!("{msg}");
+        let (e, msg) = refusal(&cut);
         assert!(msg.contains("cut.mcap"), "{len}: {msg}");
         assert!(
             matches!(problem(&e), McapProblem::Truncated { .. }),
@@ -624,14 +594,14 @@ fn mcap_truncated_and_foreign_files_are_errors() {
     let mid = bytes.len() / 2;
     corrupt[mid] ^= 0x55;
     std::fs::write(&cut, &corrupt).unwrap();
-    let e = read_mcap(&cut, &McapOptions::default()).unwrap_err();
+    let (e, _) = refusal(&cut);
     assert!(matches!(problem(&e), McapProblem::Container { .. }), "{e}");
     // Not an MCAP at all: by content a CSV, whatever its name; read as a recording, an
     // error saying what it is.
     let csv = dir.path("log.mcap");
     std::fs::write(&csv, "time,position.q1,effort.q1\n0,1,2\n").unwrap();
     assert_eq!(read(&csv, None, None).unwrap().len(), 1);
-    let e = read_mcap(&csv, &McapOptions::default()).unwrap_err();
+    let (e, _) = refusal(&csv);
     assert!(
         matches!(problem(&e), McapProblem::NotARecording { .. }),
         "{e}"
@@ -642,13 +612,13 @@ fn mcap_truncated_and_foreign_files_are_errors() {
         "{e}"
     );
     // Missing file.
-    let e = read_mcap(dir.path("nope.mcap"), &McapOptions::default()).unwrap_err();
+    let (e, _) = refusal(&dir.path("nope.mcap"));
     assert!(matches!(e, LogError::Io { .. }), "{e}");
 }
 
 #[test]
 fn mcap_wrong_type_missing_and_empty_topics() {
-    let dir = TempDir::new("types");
+    let dir = TempDir::new("mcap-types");
     let path = dir.path("types.mcap");
     let mut f = Fixture::new(&path);
     for k in 0..10 {
@@ -696,16 +666,14 @@ fn mcap_wrong_type_missing_and_empty_topics() {
 
 #[test]
 fn mcap_gaps_are_refused_or_resampled() {
-    let dir = TempDir::new("gap");
+    let dir = TempDir::new("mcap-gap");
     let path = dir.path("gap.mcap");
     // 200 Hz with a 4-sample hole after sample 99 (the next stamp is 25 ms later).
     let stamps: Vec<i64> = (0..300)
         .map(|k| T0 + k * STEP + if k >= 100 { 4 * STEP } else { 0 })
         .collect();
     arm_file(&path, "/PSM1/measured_js", &stamps);
-    let e = read_mcap(&path, &McapOptions::default()).unwrap_err();
-    let msg = e.to_string();
-    println!("{msg}");
+    let (e, msg) = refusal(&path);
     assert!(
         matches!(
             problem(&e),
@@ -753,7 +721,7 @@ fn mcap_gaps_are_refused_or_resampled() {
     let mut stamps: Vec<i64> = (0..100).map(|k| T0 + k * STEP).collect();
     stamps[40] += 1_000_000;
     arm_file(&jitter, "/PSM1/measured_js", &stamps);
-    let e = read_mcap(&jitter, &McapOptions::default()).unwrap_err();
+    let (e, _) = refusal(&jitter);
     assert!(
         matches!(
             problem(&e),
@@ -781,14 +749,12 @@ fn mcap_gaps_are_refused_or_resampled() {
 
 #[test]
 fn mcap_stamps_that_go_back_or_repeat() {
-    let dir = TempDir::new("order");
+    let dir = TempDir::new("mcap-order");
     let path = dir.path("back.mcap");
     let mut stamps: Vec<i64> = (0..50).map(|k| T0 + k * STEP).collect();
     stamps.swap(20, 21);
     arm_file(&path, "/PSM1/measured_js", &stamps);
-    let e = read_mcap(&path, &McapOptions::default()).unwrap_err();
-    let msg = e.to_string();
-    println!("{msg}");
+    let (e, msg) = refusal(&path);
     assert!(
         matches!(
             problem(&e),
@@ -815,7 +781,7 @@ fn mcap_stamps_that_go_back_or_repeat() {
     let mut stamps: Vec<i64> = (0..50).map(|k| T0 + k * STEP).collect();
     stamps[31] = stamps[30];
     arm_file(&path, "/PSM1/measured_js", &stamps);
-    let e = read_mcap(&path, &McapOptions::default()).unwrap_err();
+    let (e, _) = refusal(&path);
     assert!(
         matches!(
             problem(&e),
@@ -833,7 +799,7 @@ fn mcap_stamps_that_go_back_or_repeat() {
 
 #[test]
 fn mcap_message_contents_are_checked() {
-    let dir = TempDir::new("contents");
+    let dir = TempDir::new("mcap-contents");
     let topic = "/PSM1/measured_js";
     let opts = McapOptions::default();
     // Builds a 30-message file where message 12 is made by `odd`.
@@ -881,7 +847,7 @@ fn mcap_message_contents_are_checked() {
         joint_state(s, &names, &pick(&p), &pick(&v), &pick(&e))
     });
     let tr = read_mcap(&path, &opts).unwrap();
-    assert_eq!(tr.joint_names, ARM);
+    assert_eq!(tr.joint_names, *ARM);
     for j in 0..6 {
         assert_eq!(tr.q[(12, j)], p[j]);
         assert_eq!(tr.dq.as_ref().unwrap()[(12, j)], v[j]);
@@ -889,7 +855,7 @@ fn mcap_message_contents_are_checked() {
     }
     // A joint replaced by another: an error.
     let path = file("changed.mcap", &|s| {
-        let mut names = ARM;
+        let mut names = ARM.clone();
         names[5] = "jaw";
         joint_state(s, &names, &p, &v, &e)
     });
@@ -930,7 +896,7 @@ fn mcap_message_contents_are_checked() {
     );
     // Duplicate joint names.
     let path = file("dup.mcap", &|s| {
-        let mut names = ARM;
+        let mut names = ARM.clone();
         names[1] = "outer_yaw";
         joint_state(s, &names, &p, &v, &e)
     });
@@ -953,7 +919,7 @@ fn mcap_message_contents_are_checked() {
 
 #[test]
 fn mcap_big_endian_and_json_messages() {
-    let dir = TempDir::new("encodings");
+    let dir = TempDir::new("mcap-encodings");
     let path = dir.path("enc.mcap");
     let mut f = Fixture::new(&path);
     for k in 0..20 {
@@ -965,7 +931,7 @@ fn mcap_big_endian_and_json_messages() {
         f.raw("/be/measured_js", JOINT_STATE_TYPE, "cdr", s, &be);
         let json = serde_json::json!({
             "header": {"stamp": {"sec": s / 1_000_000_000, "nanosec": s % 1_000_000_000}, "frame_id": ""},
-            "name": ARM, "position": p, "velocity": [], "effort": e,
+            "name": *ARM, "position": p, "velocity": [], "effort": e,
         });
         f.raw(
             "/json/js",
@@ -999,15 +965,14 @@ fn mcap_big_endian_and_json_messages() {
 
 #[test]
 fn mcap_cut_or_corrupted_files_never_panic() {
-    let dir = TempDir::new("fuzz");
+    let dir = TempDir::new("mcap-fuzz");
     let path = dir.path("full.mcap");
     let opts = McapWriteOptions {
         start_time_ns: T0,
         compression: McapCompression::None, // flips reach the records, not only zstd
         ..Default::default()
     };
-    write_mcap(&path, &trajectory(400, true), "/PSM1/measured_js", &opts).unwrap();
-    let bytes = std::fs::read(&path).unwrap();
+    let bytes = written(&path, 400, &opts);
     let bad = dir.path("bad.mcap");
     // Every cut is an error.
     let cuts = (0..bytes.len())
@@ -1042,26 +1007,7 @@ fn mcap_cut_or_corrupted_files_never_panic() {
 fn concatenated(reader: &McapReader, size: usize) -> JointLog {
     let blocks: Vec<JointLog> = reader.blocks(size).unwrap().map(|b| b.unwrap()).collect();
     assert!(blocks.iter().all(|b| b.len() <= size));
-    let rows: usize = blocks.iter().map(JointLog::len).sum();
-    let cat = |f: fn(&JointLog) -> Option<&DMatrix<f64>>| {
-        f(&blocks[0]).map(|m0| {
-            let mut m = DMatrix::zeros(rows, m0.ncols());
-            let mut r = 0;
-            for b in &blocks {
-                let x = f(b).unwrap();
-                m.rows_mut(r, x.nrows()).copy_from(x);
-                r += x.nrows();
-            }
-            m
-        })
-    };
-    JointLog {
-        time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
-        q: cat(|b| Some(&b.q)).unwrap(),
-        dq: cat(|b| b.dq.as_ref()),
-        tau: cat(|b| Some(&b.tau)).unwrap(),
-        ..blocks[0].clone()
-    }
+    concatenate(&blocks)
 }
 
 #[test]
@@ -1069,7 +1015,7 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
     // A long jittered clock (more distinct steps than the median's exact first pass
     // counts) and a jaw topic that starts late, stops early and is written behind the
     // arm in the file: the blocks, merged on the fly, must give the whole log.
-    let dir = TempDir::new("blocks");
+    let dir = TempDir::new("mcap-blocks");
     let path = dir.path("blocks.mcap");
     let n: i64 = 20_000;
     let mut state: u64 = 12345;

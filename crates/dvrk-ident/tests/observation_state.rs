@@ -3,28 +3,16 @@
 //! rounding (Gram matrices to 1e-12, fits to 1e-10); states of other robots or
 //! settings, other format versions and damaged files are refused with the file named.
 
-use std::path::PathBuf;
+#[path = "support/logs.rs"]
+mod logs;
 
 use dvrk_ident::fit::{fit_logs, LogData};
-use dvrk_ident::log;
 use dvrk_ident::progress::Silent;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::state::{ObservationState, MAGIC};
 use dvrk_ident::{FitResult, FitSettings, JointLog, Method};
 use dvrk_model::Model;
-
-fn example() -> JointLog {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
-    log::read(path, None, None).unwrap()
-}
-
-/// Rows `lo..hi` of a log.
-fn part(t: &JointLog, lo: usize, hi: usize) -> JointLog {
-    JointLog {
-        source: format!("{} [{lo}..{hi}]", t.source),
-        ..t.select_rows(&(lo..hi).collect::<Vec<_>>())
-    }
-}
+use logs::{example, part};
 
 /// Three consecutive pieces of the bundled log, each long enough for the trimming.
 fn pieces() -> [JointLog; 3] {

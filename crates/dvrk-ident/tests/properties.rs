@@ -9,11 +9,15 @@
 //! The seeds are fixed, so a run is reproducible. (That a streamed fit equals the
 //! in-memory fit for any block size is in `stream_fit.rs`.)
 
+#[path = "support/logs.rs"]
+mod logs;
+
 use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_ident::observation::{Observation, Samples};
 use dvrk_ident::signal::stream::process_in_blocks;
-use dvrk_ident::signal::{process, Cutoff, LowPass, Processed, Processing};
+use dvrk_ident::signal::{process, Cutoff, LowPass, Processing};
 use dvrk_model::Model;
+use logs::worst_relative;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed};
@@ -67,19 +71,6 @@ fn trajectory(n: usize, waves: &[(f64, f64, f64)], step: f64, with_dq: bool) -> 
     }
 }
 
-/// Largest difference relative to the signal's largest magnitude, over q, dq, ddq, tau.
-fn worst_relative(a: &Processed, b: &Processed) -> f64 {
-    let rel = |x: &DMatrix<f64>, y: &DMatrix<f64>| (x - y).amax() / y.amax().max(1e-300);
-    [
-        rel(&a.q, &b.q),
-        rel(&a.dq, &b.dq),
-        rel(&a.ddq, &b.ddq),
-        rel(&a.tau, &b.tau),
-    ]
-    .into_iter()
-    .fold(0.0, f64::max)
-}
-
 proptest! {
     #![proptest_config(config(48))]
 
@@ -101,7 +92,7 @@ proptest! {
             ..Processing::default()
         };
         // Both refuse, or both give the same samples.
-        match (process(&traj, &settings), process_in_blocks(&traj, &settings)) {
+        match (process(&traj, &settings), process_in_blocks(std::slice::from_ref(&traj), &settings)) {
             (Ok(whole), Ok(blocks)) => {
                 prop_assert_eq!(whole.len(), blocks.len());
                 prop_assert_eq!(&whole.time, &blocks.time);

@@ -3,7 +3,7 @@
 //! simulated MCAP logs of N and 10·N samples from their files, streamed and in memory.
 
 use std::alloc::{GlobalAlloc, Layout, System};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dvrk_ident::excite::FourierTrajectory;
@@ -65,22 +65,11 @@ fn peak_during<T>(f: impl FnOnce() -> T) -> (usize, T) {
     (PEAK.load(Ordering::Relaxed) - base, out)
 }
 
-fn examples() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples")
-}
-
 /// The bundled example's robot, parameters and trajectory, `samples` long, with noise.
 fn write_log(model: &Model, samples: usize, path: &Path) {
-    let text = std::fs::read_to_string(examples().join("psm_params.json")).unwrap();
-    let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let map = doc["parameters"].as_object().unwrap();
-    let pi = model
-        .params_from_named(
-            map.iter().map(|(k, v)| (k.as_str(), v.as_f64().unwrap())),
-            "psm_params.json",
-        )
+    let pi = dvrk_test_support::fixtures::example_params(model);
+    let traj = FourierTrajectory::from_json_file(dvrk_test_support::example("psm_trajectory.json"))
         .unwrap();
-    let traj = FourierTrajectory::from_json_file(examples().join("psm_trajectory.json")).unwrap();
     let sim = Simulation {
         duration_s: Some(samples as f64 / 200.0),
         noise_std: vec![0.002],

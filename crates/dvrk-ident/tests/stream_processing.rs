@@ -2,11 +2,15 @@
 //! settings, blocks from one sample to more than the log, a long synthetic signal with
 //! friction-like steps, noise and several frequencies.
 
+#[path = "support/logs.rs"]
+mod logs;
+
 use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog, JointLogError};
-use dvrk_ident::signal::stream::{BlockProcessor, TimingSurvey};
+use dvrk_ident::signal::stream::process_in_blocks;
 use dvrk_ident::signal::{
     process, AccelerationSource, Cutoff, LowPass, Processed, Processing, SignalError, Stencil,
 };
+use logs::worst_relative;
 use nalgebra::DMatrix;
 
 /// 3 joints, `n` samples at 200 Hz: slow and fast sines, a square wave and noise.
@@ -60,60 +64,7 @@ fn blocks(traj: &JointLog, size: usize) -> Vec<JointLog> {
 
 /// The streamed processing of `traj` in blocks of `size`, concatenated.
 fn streamed(traj: &JointLog, settings: &Processing, size: usize) -> Result<Processed, SignalError> {
-    let parts = blocks(traj, size);
-    let mut survey = TimingSurvey::new();
-    let timing = loop {
-        for b in &parts {
-            survey.observe(b)?;
-        }
-        if let Some(t) = survey.end_pass()? {
-            break t;
-        }
-    };
-    let mut p = BlockProcessor::new(
-        settings,
-        &traj.joint_names,
-        traj.coordinates,
-        traj.dq.is_some(),
-        &traj.source,
-        &timing,
-    )?;
-    let mut out = Vec::new();
-    for b in &parts {
-        out.push(p.push(b)?);
-    }
-    out.push(p.finish()?);
-    let rows: usize = out.iter().map(Processed::len).sum();
-    let cat = |f: fn(&Processed) -> &DMatrix<f64>| {
-        let mut m = DMatrix::zeros(rows, traj.dof());
-        let mut r = 0;
-        for o in &out {
-            m.rows_mut(r, o.len()).copy_from(f(o));
-            r += o.len();
-        }
-        m
-    };
-    Ok(Processed {
-        time: out.iter().flat_map(|o| o.time.iter().copied()).collect(),
-        q: cat(|o| &o.q),
-        dq: cat(|o| &o.dq),
-        ddq: cat(|o| &o.ddq),
-        tau: cat(|o| &o.tau),
-        ..out[0].clone()
-    })
-}
-
-/// Largest difference relative to the signal's largest magnitude, over q, dq, ddq, tau.
-fn worst_relative(a: &Processed, b: &Processed) -> f64 {
-    let rel = |x: &DMatrix<f64>, y: &DMatrix<f64>| (x - y).amax() / y.amax().max(1e-300);
-    [
-        rel(&a.q, &b.q),
-        rel(&a.dq, &b.dq),
-        rel(&a.ddq, &b.ddq),
-        rel(&a.tau, &b.tau),
-    ]
-    .into_iter()
-    .fold(0.0, f64::max)
+    process_in_blocks(&blocks(traj, size), settings)
 }
 
 fn variants() -> Vec<(&'static str, Processing, bool)> {

@@ -3,9 +3,11 @@
 //! that the base parameters come back within what the noise allows, and that the
 //! semidefinite fit is consistent.
 
-use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
+use dvrk_ident::joint_log::{uniform_time, JointLog};
+use dvrk_ident::simulate::{model_log, motion_torques};
 use dvrk_ident::{fit, FitSettings, Method};
-use dvrk_model::{inertia, Model, Workspace};
+use dvrk_model::{inertia, Model};
+use dvrk_test_support::fixtures::assert_recovered;
 use nalgebra::DMatrix;
 
 /// Parameters inside the description's bounds: mid-range masses and centres of mass,
@@ -77,31 +79,13 @@ fn simulate(
             q[(k, j)] += centre[j];
         }
     }
-    let mut ws = Workspace::new(model);
-    let mut tau = DMatrix::zeros(count, n);
-    let (mut qk, mut dqk, mut ddqk, mut tk) =
-        (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut tau = motion_torques(model, params, &q, &dq, &ddq);
     for k in 0..count {
         for j in 0..n {
-            qk[j] = q[(k, j)];
-            dqk[j] = dq[(k, j)];
-            ddqk[j] = ddq[(k, j)];
-        }
-        model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
-        model.add_known_forces(&qk, &mut tk);
-        for j in 0..n {
-            tau[(k, j)] = tk[j] + noise * gauss.sample();
+            tau[(k, j)] += noise * gauss.sample();
         }
     }
-    JointLog {
-        time,
-        q,
-        dq: Some(dq),
-        tau,
-        joint_names: model.coordinates.clone(),
-        coordinates: Coordinates::Model,
-        source: format!("simulated {}", model.name),
-    }
+    model_log(model, time, q, dq, tau)
 }
 
 fn settings(method: Method) -> FitSettings {
@@ -134,20 +118,15 @@ fn check(robot: &str) {
             "{robot} {method:?}: {}",
             r.solver.status
         );
-        let mut worst: f64 = 0.0;
-        for (b, t) in r.base_parameters.iter().zip(&beta_true) {
-            // OLS: within 6 standard deviations (the std comes from the noise level);
-            // SDP (true parameters inside the feasible set): the same bound, plus 1e-6.
-            let z = (b.value - t).abs() / (b.std + 1e-12);
-            worst = worst.max(z);
-            assert!(
-                (b.value - t).abs() <= 6.0 * b.std + 1e-6,
-                "{robot} {method:?} {}: {} vs {t} (std {})",
-                b.expression,
-                b.value,
-                b.std
-            );
-        }
+        // OLS: within 6 standard deviations (the std comes from the noise level); SDP
+        // (true parameters inside the feasible set): the same bound, plus 1e-6.
+        let worst = assert_recovered(
+            &format!("{robot} {method:?}"),
+            r.base_parameters
+                .iter()
+                .map(|b| (b.expression.as_str(), b.value, b.std)),
+            &beta_true,
+        );
         let rel = &r.metrics.test.as_ref().unwrap().relative_error;
         println!(
             "{robot} {method:?}: worst |error|/std {worst:.2}, test relative errors {rel:.4?}"

@@ -11,16 +11,18 @@
 //! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
 //!   parameters, physically consistent ones included;
 //! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
-//! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`).
+//! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`);
+//! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
+//!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
+
+pub mod fixtures;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use dvrk_model::{inertia, Model, ParamKind, Workspace};
 use nalgebra::{Matrix3, UnitQuaternion, Vector4};
-
-pub mod examples;
 
 /// The repository's root folder.
 pub fn repo() -> PathBuf {

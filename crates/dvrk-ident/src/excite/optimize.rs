@@ -322,15 +322,7 @@ pub fn criterion_value(
         samples_per_harmonic,
         1000.0,
     )?;
-    let samples = samples_per_harmonic.max(1) * traj.order;
-    let mut ev = CriterionEval::new(
-        model,
-        base,
-        criterion,
-        samples,
-        traj.order,
-        traj.base_frequency_hz,
-    );
+    let mut ev = trajectory_criterion(model, base, traj, criterion, samples_per_harmonic);
     let value = match ev.objective(&to_x(traj), None) {
         Some(obj) => criterion.report(obj),
         None => match criterion {
@@ -342,6 +334,25 @@ pub fn criterion_value(
         name: criterion.name().into(),
         value,
     })
+}
+
+/// The criterion on the grid of `traj`'s shape (order, base frequency) with
+/// `samples_per_harmonic · order` equally spaced instants of one period.
+fn trajectory_criterion<'a>(
+    model: &'a Model,
+    base: &'a BaseParameters,
+    traj: &FourierTrajectory,
+    criterion: Criterion,
+    samples_per_harmonic: usize,
+) -> CriterionEval<'a> {
+    CriterionEval::new(
+        model,
+        base,
+        criterion,
+        samples_per_harmonic.max(1) * traj.order,
+        traj.order,
+        traj.base_frequency_hz,
+    )
 }
 
 /// Criterion and dense feasibility of any trajectory.
@@ -374,15 +385,7 @@ pub fn objective_and_gradient(
     soft_p: f64,
     coulomb_smoothing: f64,
 ) -> Option<(f64, Vec<f64>)> {
-    let samples = samples_per_harmonic.max(1) * traj.order;
-    let mut ev = CriterionEval::new(
-        model,
-        base,
-        criterion,
-        samples,
-        traj.order,
-        traj.base_frequency_hz,
-    );
+    let mut ev = trajectory_criterion(model, base, traj, criterion, samples_per_harmonic);
     ev.soft_p = soft_p;
     ev.coulomb_eps = coulomb_smoothing;
     let x = to_x(traj);

@@ -187,9 +187,11 @@ fn shifted_logs(
                 delay_s: vec![delay; n],
                 ..settings.processing.clone()
             };
-            process_in_blocks(&t, &processing).map_err(|error| IdentError::Signal {
-                source_name: t.source.clone(),
-                error,
+            process_in_blocks(std::slice::from_ref(&t), &processing).map_err(|error| {
+                IdentError::Signal {
+                    source_name: t.source.clone(),
+                    error,
+                }
             })
         };
         let first = process(0.0)?;

@@ -138,6 +138,20 @@ pub fn select_rows(m: &DMatrix<f64>, rows: &[usize]) -> DMatrix<f64> {
     DMatrix::from_fn(rows.len(), m.ncols(), |i, j| m[(rows[i], j)])
 }
 
+/// The rows of `parts` one after the other: a signal's blocks joined back. Parts without
+/// rows add none (whatever their width); the others must all be as wide as the widest.
+pub fn stack_rows(parts: &[&DMatrix<f64>]) -> DMatrix<f64> {
+    let rows = parts.iter().map(|m| m.nrows()).sum();
+    let cols = parts.iter().map(|m| m.ncols()).max().unwrap_or(0);
+    let mut out = DMatrix::zeros(rows, cols);
+    let mut r = 0;
+    for m in parts.iter().filter(|m| m.nrows() > 0) {
+        out.rows_mut(r, m.nrows()).copy_from(m);
+        r += m.nrows();
+    }
+    out
+}
+
 /// Indices of the samples where every joint moves at least `min_speed` (|dq| >=
 /// `min_speed`, rad/s or m/s). Near zero velocity the sign of Coulomb friction is
 /// determined by noise, so such samples can only hurt a fit that models it.
@@ -283,6 +297,13 @@ mod tests {
         assert!(decimate_rows(&m, 0).is_err());
         let s = select_rows(&m, &[9, 0]);
         assert_eq!(s[(0, 1)], 91.0);
+        // Cut and joined back, an empty block between: the same matrix.
+        let (head, tail) = (
+            select_rows(&m, &[0, 1, 2, 3]),
+            select_rows(&m, &[4, 5, 6, 7, 8, 9]),
+        );
+        assert_eq!(stack_rows(&[&head, &DMatrix::zeros(0, 0), &tail]), m);
+        assert_eq!(stack_rows(&[]).shape(), (0, 0));
         assert_eq!(s[(1, 0)], 0.0);
     }
 

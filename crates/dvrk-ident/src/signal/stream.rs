@@ -15,42 +15,50 @@ pub(crate) use super::resample::Resampler;
 pub use processor::{BlockProcessor, SETTLE_TOLERANCE};
 pub use timing::{LogTiming, TimingSurvey};
 
-use super::{Processed, Processing, SignalError};
+use super::{stack_rows, Processed, Processing, SignalError};
 use crate::joint_log::JointLog;
+use nalgebra::DMatrix;
 
-/// The processing of a whole trajectory by a [`BlockProcessor`] (a timing survey, then
-/// one block): what a log streamed from disk gets, to the last bit, for a log in
-/// memory. It equals [`super::process`] to [`SETTLE_TOLERANCE`] relative.
-pub fn process_in_blocks(traj: &JointLog, settings: &Processing) -> Result<Processed, SignalError> {
+/// The processing of a trajectory held in memory as consecutive `blocks` (one or more)
+/// by a [`BlockProcessor`] (a timing survey, then the blocks in order): what a log
+/// streamed from disk gets, to the last bit, for a log in memory. It equals
+/// [`super::process`] of the whole to [`SETTLE_TOLERANCE`] relative.
+pub fn process_in_blocks(
+    blocks: &[JointLog],
+    settings: &Processing,
+) -> Result<Processed, SignalError> {
     let mut survey = TimingSurvey::new();
     let timing = loop {
-        survey.observe(traj)?;
+        for b in blocks {
+            survey.observe(b)?;
+        }
         if let Some(t) = survey.end_pass()? {
             break t;
         }
     };
+    // The survey refused an empty list: there is a first block.
+    let first = &blocks[0];
     let mut p = BlockProcessor::new(
         settings,
-        &traj.joint_names,
-        traj.coordinates,
-        traj.dq.is_some(),
-        &traj.source,
+        &first.joint_names,
+        first.coordinates,
+        first.dq.is_some(),
+        &first.source,
         &timing,
     )?;
-    let head = p.push(traj)?;
-    let tail = p.finish()?;
-    let join = |a: &nalgebra::DMatrix<f64>, b: &nalgebra::DMatrix<f64>| {
-        let mut m = nalgebra::DMatrix::zeros(a.nrows() + b.nrows(), a.ncols());
-        m.rows_mut(0, a.nrows()).copy_from(a);
-        m.rows_mut(a.nrows(), b.nrows()).copy_from(b);
-        m
-    };
+    let mut out = Vec::with_capacity(blocks.len() + 1);
+    for b in blocks {
+        out.push(p.push(b)?);
+    }
+    out.push(p.finish()?);
+    let stack =
+        |f: fn(&Processed) -> &DMatrix<f64>| stack_rows(&out.iter().map(f).collect::<Vec<_>>());
     Ok(Processed {
-        time: head.time.iter().chain(&tail.time).copied().collect(),
-        q: join(&head.q, &tail.q),
-        dq: join(&head.dq, &tail.dq),
-        ddq: join(&head.ddq, &tail.ddq),
-        tau: join(&head.tau, &tail.tau),
-        ..tail
+        time: out.iter().flat_map(|o| o.time.iter().copied()).collect(),
+        q: stack(|o| &o.q),
+        dq: stack(|o| &o.dq),
+        ddq: stack(|o| &o.ddq),
+        tau: stack(|o| &o.tau),
+        ..out[out.len() - 1].clone()
     })
 }
