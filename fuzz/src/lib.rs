@@ -7,6 +7,67 @@
 
 use std::path::PathBuf;
 
+/// The largest single allocation an input may ask for, the fuzz runs' memory limit
+/// (`-rss_limit_mb=2048`). libFuzzer refuses larger ones itself (`-malloc_limit_mb`) only
+/// through a sanitizer's malloc hooks; CI's smoke run builds without a sanitizer
+/// (`-s none`, 1.6× less compile time), so the harness refuses them: a corrupted length
+/// field claiming gigabytes is a finding with or without AddressSanitizer. (Memory that
+/// grows in smaller pieces is `-rss_limit_mb`'s, which needs no sanitizer.)
+#[cfg(fuzzing)]
+const MAX_ALLOCATION_BYTES: usize = 2048 << 20;
+
+/// The system allocator, aborting (a finding, with its input saved) on an allocation
+/// over [`MAX_ALLOCATION_BYTES`].
+#[cfg(fuzzing)]
+struct Capped;
+
+#[cfg(fuzzing)]
+impl Capped {
+    fn check(layout: std::alloc::Layout) {
+        if layout.size() > MAX_ALLOCATION_BYTES {
+            eprintln!(
+                "==dvrk-fuzz== an allocation of {} bytes, over the {MAX_ALLOCATION_BYTES}-byte limit",
+                layout.size()
+            );
+            std::process::abort();
+        }
+    }
+}
+
+// SAFETY: forwards every call to `System` unchanged after the size check.
+#[cfg(fuzzing)]
+unsafe impl std::alloc::GlobalAlloc for Capped {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        Capped::check(layout);
+        unsafe { std::alloc::System.alloc(layout) }
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        Capped::check(layout);
+        unsafe { std::alloc::System.alloc_zeroed(layout) }
+    }
+
+    unsafe fn realloc(
+        &self,
+        ptr: *mut u8,
+        layout: std::alloc::Layout,
+        new_size: usize,
+    ) -> *mut u8 {
+        if let Ok(grown) = std::alloc::Layout::from_size_align(new_size, layout.align()) {
+            Capped::check(grown);
+        }
+        unsafe { std::alloc::System.realloc(ptr, layout, new_size) }
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+}
+
+#[cfg(fuzzing)]
+#[global_allocator]
+static CAPPED: Capped = Capped;
+
 /// Writes `data` to this process's scratch file (in /dev/shm when there is one, so
 /// every run stays in memory) named with `extension`, and returns its path.
 pub fn scratch(data: &[u8], extension: &str) -> PathBuf {
