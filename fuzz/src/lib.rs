@@ -47,12 +47,7 @@ unsafe impl std::alloc::GlobalAlloc for Capped {
         unsafe { std::alloc::System.alloc_zeroed(layout) }
     }
 
-    unsafe fn realloc(
-        &self,
-        ptr: *mut u8,
-        layout: std::alloc::Layout,
-        new_size: usize,
-    ) -> *mut u8 {
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, new_size: usize) -> *mut u8 {
         if let Ok(grown) = std::alloc::Layout::from_size_align(new_size, layout.align()) {
             Capped::check(grown);
         }
