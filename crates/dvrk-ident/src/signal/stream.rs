@@ -53,12 +53,21 @@ pub fn process_in_blocks(
     out.push(p.finish()?);
     let stack =
         |f: fn(&Processed) -> &DMatrix<f64>| stack_rows(&out.iter().map(f).collect::<Vec<_>>());
+    let (time, q, dq, ddq, tau) = (
+        out.iter().flat_map(|o| o.time.iter().copied()).collect(),
+        stack(|o| &o.q),
+        stack(|o| &o.dq),
+        stack(|o| &o.ddq),
+        stack(|o| &o.tau),
+    );
+    // The rest (joint names...) is the last block's, moved rather than copied.
+    let last = out.pop().expect("finish() pushed a block");
     Ok(Processed {
-        time: out.iter().flat_map(|o| o.time.iter().copied()).collect(),
-        q: stack(|o| &o.q),
-        dq: stack(|o| &o.dq),
-        ddq: stack(|o| &o.ddq),
-        tau: stack(|o| &o.tau),
-        ..out[out.len() - 1].clone()
+        time,
+        q,
+        dq,
+        ddq,
+        tau,
+        ..last
     })
 }

@@ -4,16 +4,18 @@
 //! `Processed`, which the workspace's `dvrk-test-support` crate does not).
 #![allow(dead_code)] // each includer uses its own part
 
-use std::path::PathBuf;
-
 use dvrk_ident::signal::{stack_rows, Processed};
 use dvrk_ident::{log, JointLog};
 use nalgebra::DMatrix;
 
 /// The bundled simulated PSM log (`examples/psm_excitation.mcap`).
 pub fn example() -> JointLog {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap");
-    log::read(path, None, None).unwrap()
+    log::read(
+        dvrk_test_support::example("psm_excitation.mcap"),
+        None,
+        None,
+    )
+    .unwrap()
 }
 
 /// Rows `lo..hi` of a log, times kept, the source naming the range.
