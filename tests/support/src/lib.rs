@@ -17,6 +17,7 @@
 #![allow(clippy::missing_panics_doc)]
 
 pub mod fixtures;
+pub mod models;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -157,8 +158,6 @@ pub fn random_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
 }
 
 pub use dvrk_model::inertia::sym6;
-
-pub mod models;
 
 /// A random positive-definite inertia about the centre of mass that a real mass
 /// distribution realizes (principal moments from positive second moments, so the
