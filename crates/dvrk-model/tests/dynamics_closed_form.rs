@@ -95,7 +95,7 @@ coordinates = ["q1", "q2"]
 gravity = [0.0, -9.81, 0.0]
 
 [constants]
-l1 = 0.55
+l1 = 0.7 # PlanarTwoLink::EXAMPLE's
 
 [[frames]]
 name = "link1"
@@ -115,13 +115,7 @@ inertia = true
 fn two_link_arm_matches_spong() {
     let model = load(TWO_LINK);
     let mut ws = Workspace::new(&model);
-    let arm = PlanarTwoLink {
-        mass: [2.1, 1.4],
-        com: [0.3, 0.22],
-        inertia: [0.04, 0.025],
-        length: 0.55,
-        gravity: G,
-    };
+    let arm = PlanarTwoLink::EXAMPLE;
     // The centre of mass may sit off the plane (z) and the inertia may have products and
     // other moments: with parallel joint axes along z only Izz about the com matters.
     let p1 = inertia::barycentric_from_standard(

@@ -12,11 +12,9 @@ use dvrk_model::{
 };
 use dvrk_test_support::PlanarTwoLink;
 
-const G: f64 = 9.81;
-const L1: f64 = 0.7; // m
-const M: [f64; 2] = [2.5, 1.5]; // kg
-const LC: [f64; 2] = [0.3, 0.25]; // m, centre of mass along each link's x
-const IZZ: [f64; 2] = [0.08, 0.05]; // kg·m², about the centre of mass
+/// The links' closed form (the motor inertia and the friction are added by the tests):
+/// masses, centres of mass along each link's x, moments about z at the centres of mass.
+const ARM: PlanarTwoLink = PlanarTwoLink::EXAMPLE;
 const FRICTION: [f64; 3] = [0.4, 0.15, -0.05]; // Fc (N·m), Fv (N·m·s/rad), Fo (N·m) of joint 1
 const IA: f64 = 0.02; // kg·m², motor inertia of joint 2
 
@@ -41,7 +39,7 @@ fn dh(a: f64, theta: Affine) -> Joint {
 /// `q1` about z at the base, with friction.
 fn first_link(name: &str, coordinates: &[&str]) -> ModelBuilder {
     let mut b = ModelBuilder::new(name, coordinates).unwrap();
-    b.set_gravity([0.0, -G, 0.0]).unwrap();
+    b.set_gravity([0.0, -ARM.gravity, 0.0]).unwrap();
     let friction = ElementSpec::Friction {
         stribeck_velocity: None,
     };
@@ -56,14 +54,14 @@ fn first_link(name: &str, coordinates: &[&str]) -> ModelBuilder {
 }
 
 /// The arm in the x-y plane, gravity along −y, joints about z: `q1` at the base, `q2`
-/// at `L1` along link 1.
+/// at `ARM.length` along link 1.
 fn planar_arm() -> Model {
     let mut b = first_link("planar", &["q1", "q2"]);
     let motor = ElementSpec::MotorInertia;
     b.add_frame(link(
         "link2",
         "link1",
-        dh(L1, Affine::coordinate(1)),
+        dh(ARM.length, Affine::coordinate(1)),
         vec![motor],
     ))
     .unwrap();
@@ -76,10 +74,11 @@ fn params(model: &Model) -> Vec<f64> {
     let mut p = vec![0.0; model.n_params()];
     for (i, &j) in model.link_frames().iter().enumerate() {
         let p0 = model.frame(j).inertia.unwrap();
-        let inertia = [0.6 * IZZ[i], 0.0, 0.0, 0.5 * IZZ[i], 0.0, IZZ[i]];
+        let izz = ARM.inertia[i];
+        let inertia = [0.6 * izz, 0.0, 0.0, 0.5 * izz, 0.0, izz];
         p[p0..p0 + 10].copy_from_slice(&barycentric_from_standard(
-            M[i],
-            [LC[i], 0.0, 0.0],
+            ARM.mass[i],
+            [ARM.com[i], 0.0, 0.0],
             inertia,
         ));
     }
@@ -93,15 +92,6 @@ fn params(model: &Model) -> Vec<f64> {
     }
     p
 }
-
-/// The links' closed form (the motor inertia and the friction are added by the tests).
-const ARM: PlanarTwoLink = PlanarTwoLink {
-    mass: M,
-    com: LC,
-    inertia: IZZ,
-    length: L1,
-    gravity: G,
-};
 
 const STATES: [([f64; 2], [f64; 2], [f64; 2]); 4] = [
     ([0.4, -0.8], [1.0, -0.5], [2.0, 0.3]),
@@ -183,7 +173,7 @@ fn a_coupled_joint_follows_the_chain_rule() {
             terms: vec![(0, -1.0), (1, 1.0)],
             offset: 0.0,
         },
-        pre: Transform::trans(L1, 0.0, 0.0),
+        pre: Transform::trans(ARM.length, 0.0, 0.0),
         post: Transform::identity(),
     };
     b.add_frame(link("link2", "link1", coupled, vec![]))

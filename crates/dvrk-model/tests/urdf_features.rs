@@ -373,14 +373,20 @@ fn fixed_joint() {
     }
 }
 
+/// [`PlanarTwoLink::EXAMPLE`] with both joint axes along −y (the moments that count are
+/// `iyy`); `mimic` goes inside the elbow joint.
 fn two_link(mimic: &str) -> String {
-    let upper = [0.02, 0.0, 0.0, 0.03, 0.0, 0.025];
-    let fore = [0.01, 0.0, 0.0, 0.02, 0.0, 0.015];
+    let arm = PlanarTwoLink::EXAMPLE;
+    let inertia = |k: usize| {
+        let i = arm.inertia[k];
+        [0.4 * i, 0.0, 0.0, i, 0.0, 0.8 * i]
+    };
+    let com = |k: usize| [arm.com[k], 0.0, 0.0];
     robot(
         "two_link",
         &[
-            link("upper", 2.0, [0.15, 0.0, 0.0], [0.0; 3], upper),
-            link("fore", 1.5, [0.2, 0.0, 0.0], [0.0; 3], fore),
+            link("upper", arm.mass[0], com(0), [0.0; 3], inertia(0)),
+            link("fore", arm.mass[1], com(1), [0.0; 3], inertia(1)),
             joint(
                 "shoulder",
                 "revolute",
@@ -393,7 +399,7 @@ fn two_link(mimic: &str) -> String {
                 "elbow",
                 "revolute",
                 ("upper", "fore"),
-                ([0.4, 0.0, 0.0], [0.0; 3]),
+                ([arm.length, 0.0, 0.0], [0.0; 3]),
                 Some([0.0, -1.0, 0.0]),
                 &format!(r#"<limit lower="-1" upper="1.5" velocity="2" effort="10"/>{mimic}"#),
             ),
@@ -438,13 +444,7 @@ fn mimic_joint() {
     assert_eq!(lim.velocity, Some([-2.0, 2.0]));
 
     // Both axes along −y, so the angles lift the links from +x towards +z.
-    let arm = PlanarTwoLink {
-        mass: [2.0, 1.5],
-        com: [0.15, 0.2],
-        inertia: [0.03, 0.02],
-        length: 0.4,
-        gravity: G,
-    };
+    let arm = PlanarTwoLink::EXAMPLE;
     for (q, dq, ddq) in [
         (0.9, 1.3, -2.1),
         (-0.5, -2.0, 0.7),

@@ -422,6 +422,16 @@ pub struct PlanarTwoLink {
 }
 
 impl PlanarTwoLink {
+    /// The arm the closed-form tests of several files share: links of unequal mass, each
+    /// centre of mass off its link's middle, so no term of the closed form vanishes.
+    pub const EXAMPLE: PlanarTwoLink = PlanarTwoLink {
+        mass: [2.5, 1.5],
+        com: [0.3, 0.25],
+        inertia: [0.08, 0.05],
+        length: 0.7,
+        gravity: 9.81,
+    };
+
     /// The mass matrix (kg·m²).
     pub fn mass_matrix(&self, q: [f64; 2]) -> [[f64; 2]; 2] {
         let (m, lc, i, l1) = (self.mass, self.com, self.inertia, self.length);
