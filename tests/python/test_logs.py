@@ -142,6 +142,17 @@ def test_prepare(psm, psm_excitation):
     assert len(di.prepare(psm, data, cutoff=5.0, trim=10, decimate=2)) == (len(e["t"]) - 20 + 1) // 2
     unfiltered = di.prepare(psm, data, settings={"processing": {"filter": None}}, trim=0)
     np.testing.assert_array_equal(unfiltered.q, e["q"])
+    # filter_torque is fit's keyword too: the torques get the motion's low-pass, as with
+    # the settings' processing.filter_torque; unfiltered, they are the logged ones.
+    np.testing.assert_array_equal(p.tau, e["noisy"][200:-200])
+    smooth = di.prepare(psm, data, cutoff=5.0, filter_torque=True)
+    same = di.prepare(psm, data, cutoff=5.0, settings={"processing": {"filter_torque": True}})
+    np.testing.assert_array_equal(smooth.tau, same.tau)
+    np.testing.assert_array_equal(smooth.q, p.q)
+    # The low-pass takes out part of the white noise added to the simulated torques (the
+    # error's spread drops to 0.65 of the logged torques'; the Coulomb steps it smooths
+    # keep it from dropping further).
+    assert np.std(smooth.tau - e["tau"][200:-200]) < 0.75 * np.std(p.tau - e["tau"][200:-200])
 
 
 def test_shared_mcap_anchor(psm):

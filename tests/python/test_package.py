@@ -54,6 +54,64 @@ def test_stubs_match_the_module():
         assert not extra, f"{cls}: in the module, not in the stubs: {extra}"
 
 
+def stub_parameters(fn):
+    """A stub's parameter names in order, ``*`` before keyword-only ones."""
+    a = fn.args
+    names = [p.arg for p in a.posonlyargs + a.args]
+    if a.vararg:
+        names.append("*" + a.vararg.arg)
+    elif a.kwonlyargs:
+        names.append("*")
+    names += [p.arg for p in a.kwonlyargs]
+    if a.kwarg:
+        names.append("**" + a.kwarg.arg)
+    return [n for n in names if n not in ("self", "cls")]
+
+
+def module_parameters(obj):
+    """The same list from the compiled signature (pyo3's ``__text_signature__``)."""
+    names, star = [], False
+    for p in inspect.signature(obj).parameters.values():
+        if p.kind == p.VAR_POSITIONAL:
+            names.append("*" + p.name)
+            star = True
+        elif p.kind == p.KEYWORD_ONLY:
+            if not star:
+                names.append("*")
+                star = True
+            names.append(p.name)
+        elif p.kind == p.VAR_KEYWORD:
+            names.append("**" + p.name)
+        else:
+            names.append(p.name)
+    return [n for n in names if n not in ("self", "cls", "$self", "$cls")]
+
+
+def test_stub_signatures_match_the_module():
+    """Every function and method takes the stub's parameters, in its order, positional and
+    keyword-only alike, so an editor's completion is the module's truth (properties and
+    operators aside)."""
+    checked = 0
+    for node in ast.parse((PACKAGE / "__init__.pyi").read_text()).body:
+        if isinstance(node, ast.FunctionDef):
+            pairs = [(node.name, node, getattr(di, node.name))]
+        elif isinstance(node, ast.ClassDef) and not issubclass(getattr(di, node.name), BaseException):
+            cls = getattr(di, node.name)
+            pairs = [
+                (f"{node.name}.{n.name}", n, cls if n.name == "__init__" else getattr(cls, n.name))
+                for n in node.body
+                if isinstance(n, ast.FunctionDef)
+                and not any(getattr(d, "id", None) == "property" for d in n.decorator_list)
+                and not (n.name.startswith("__") and n.name != "__init__")
+            ]
+        else:
+            continue
+        for name, stub, obj in pairs:
+            assert module_parameters(obj) == stub_parameters(stub), name
+            checked += 1
+    assert checked > 60, checked
+
+
 def test_docstrings():
     for name in ("Model", "JointLog", "FitResult", "BaseParameters", "Prepared", "fit",
                  "read_log", "prepare", "list_topics", "FourierTrajectory", "Excitation", "excite",

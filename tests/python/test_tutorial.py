@@ -40,3 +40,41 @@ def test_tutorial(tmp_path, monkeypatch, capsys):
     assert Path("psm_ols.json").exists() and Path("excitation.mcap").exists()
     if (SHARED / "data" / "dvrk" / "psm" / "one_results.csv").exists():
         assert "[0.1027 0.1839 0.1983 0.1344 0.2402 0.2119 0.2638]" in out
+
+
+# The entry points whose whole signature the README's API list writes out.
+DOCUMENTED = ("read_log", "list_topics", "fit", "prepare", "observe", "excite",
+              "evaluate_trajectory", "JointLog", "JointLog.from_dataframe",
+              "FourierTrajectory")
+
+
+def test_readme_signatures_match_the_module():
+    """The API list gives every parameter of these entry points, in the module's order,
+    with its default: a keyword the module adds shows up here before a user misses it."""
+    import inspect
+    import re
+
+    import dvrk_ident as di
+
+    if not README.exists():
+        pytest.skip(f"{README} not found (installed without the sources)")
+    text = " ".join(README.read_text().split())
+    for name in DOCUMENTED:
+        obj = di
+        for part in name.split("."):
+            obj = getattr(obj, part)
+        written = re.search(r"`" + re.escape(name) + r"(\([^`]*\))`", text)
+        assert written, f"{name}: no `{name}(...)` in the README"
+        params = [p for p in inspect.signature(obj).parameters.values() if p.name != "self"]
+        expected = []
+        for p in params:
+            if p.kind == p.KEYWORD_ONLY and "*" not in expected:
+                expected.append("*")
+            if p.default is p.empty:
+                expected.append(p.name)
+            else:
+                default = p.default
+                if isinstance(default, float) and default.is_integer():
+                    default = int(default)
+                expected.append(f"{p.name}={default!r}".replace("'", '"'))
+        assert written.group(1) == "(" + ", ".join(expected) + ")", name

@@ -221,13 +221,14 @@ pub fn fit(
 /// ``robot``'s model coordinates, known forces subtracted, filtered, differentiated
 /// and trimmed, with the settings of :func:`fit` (same keywords and defaults).
 #[pyfunction]
-#[pyo3(signature = (robot, data, *, cutoff = None, trim = None, decimate = None, min_speed = None, resample = None, settings = None))]
+#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, settings = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn prepare(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, JointLogPy>,
     cutoff: Option<&Bound<'_, PyAny>>,
+    filter_torque: Option<bool>,
     trim: Option<usize>,
     decimate: Option<usize>,
     min_speed: Option<f64>,
@@ -237,6 +238,7 @@ pub fn prepare(
     let settings = Overrides {
         settings,
         cutoff,
+        filter_torque,
         trim,
         decimate,
         min_speed,

@@ -404,6 +404,7 @@ def prepare(
     data: JointLog,
     *,
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    filter_torque: Optional[bool] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
     min_speed: Optional[float] = None,
