@@ -88,6 +88,11 @@ OPTIONS = [
      ["--method", "irls", "--irls-iterations", "2"]),
     ({"method": "sdp", "sdp_regularization": 1e-6},
      ["--method", "sdp", "--sdp-regularization", "1e-6"]),
+    ({"method": "sdp", "bounds": "2019"}, ["--method", "sdp", "--bounds", "2019"]),
+    ({"method": "ols", "delay": 0.01}, ["--method", "ols", "--delay", "0.01"]),
+    ({"method": "ols", "delay": [0.01, 0.02, 0.0, 0.0, 0.0, 0.0, 0.005]},
+     ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
+    ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
 ]
 
 
@@ -205,12 +210,20 @@ def test_resampled_csv_matches_cli(psm, psm_excitation, run_cli, tmp_path):
     di.JointLog(t, e["q"], e["noisy"], dq=e["dq"]).write(path)
     with pytest.raises(di.InputError, match="resample"):
         di.fit(psm, di.read_log(path), method="ols", cutoff=5.0)
-    data = di.read_log(path, resample=200.0)
-    assert abs(data.rate - 200.0) < 1e-9
-    result = di.fit(psm, data, method="ols", cutoff=5.0)
+    # `--resample` is fit's keyword: a processing setting the result records.
+    result = di.fit(psm, di.read_log(path), method="ols", cutoff=5.0, resample=200.0)
+    assert result.settings["processing"]["resample_hz"] == 200.0
     cli = run_cli("fit", path, "--robot", "psm", "--method", "ols", "--cutoff", "5",
                   "--resample", "200", "--json")
     same_document(result.to_dict(), cli)
+    # Resampled while reading instead: the same samples to rounding, so the same base
+    # parameters, but the result does not know the log was resampled.
+    data = di.read_log(path, resample=200.0)
+    assert abs(data.rate - 200.0) < 1e-9
+    read_resampled = di.fit(psm, data, method="ols", cutoff=5.0)
+    close([b["value"] for b in read_resampled.base_parameters],
+          [b["value"] for b in result.base_parameters], 1e-9)
+    assert read_resampled.settings["processing"]["resample_hz"] is None
 
 
 def test_result_files_interoperate_with_cli(psm, psm_logs, run_cli, tmp_path):

@@ -103,6 +103,7 @@ OBSERVE_OPTIONS = [
     ({"decimate": 3}, ["--decimate", "3"]),
     ({"min_speed": 0.01}, ["--min-speed", "0.01"]),
     ({"stribeck": 0.05}, ["--stribeck", "0.05"]),
+    ({"resample": 250.0}, ["--resample", "250"]),
 ]
 
 

@@ -114,6 +114,13 @@ def test_mcap_without_velocities_and_resampling(psm, tmp_path):
     r = di.read_log(tmp_path / "j.mcap", resample=200.0)
     assert r.dq is None
     assert abs(r.rate - 200.0) < 1e-6
+    # observe reads the file itself: its resample keyword, a processing setting, reads
+    # the recording at that rate too (as `dvrk-ident observe --resample` does).
+    with pytest.raises(di.InputError, match="resample"):
+        di.observe(psm, tmp_path / "j.mcap", cutoff="none", trim=0)
+    obs = di.observe(psm, tmp_path / "j.mcap", resample=200.0, cutoff="none", trim=0)
+    assert obs.samples == len(r)
+    assert obs.processing["resample_hz"] == 200.0
 
 
 def test_wpi_write_needs_model_coordinates(psm, tmp_path):

@@ -277,6 +277,8 @@ fn fit_reads_mcap_with_topic_time_and_resample_flags() {
     ]);
     // 1111 samples at 100 Hz (11.105 s), 50 trimmed at each end.
     assert_eq!(r["rows"], 7 * (1111 - 100));
+    // A processing setting, recorded as Python's `fit(resample=)` records it.
+    assert_eq!(r["settings"]["processing"]["resample_hz"], 100.0);
     let (ok, _, err) = run(&fit_example_args(&["--topic", "/PSM2/measured_js"]));
     assert!(!ok);
     assert!(err.contains("/PSM2/measured_js"), "{err}");

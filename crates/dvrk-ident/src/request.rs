@@ -61,9 +61,9 @@ pub struct Overrides {
     pub decimate: Option<usize>,
     /// Drop samples where some joint moves slower than this, rad/s or m/s.
     pub min_speed: Option<f64>,
-    /// Resample to this uniform rate, Hz, before the processing (samples already read;
-    /// [`ReadOptions::resample_hz`] resamples while reading, which recordings with gaps
-    /// need).
+    /// Resample to this uniform rate, Hz, first thing in the processing (recorded in the
+    /// settings); the request's files are read at that rate too
+    /// ([`ReadOptions::for_processing`]), so recordings with gaps can be read.
     pub resample_hz: Option<f64>,
     /// Metrics on the first N processed samples of each test log.
     pub test_window: Option<usize>,
@@ -473,7 +473,10 @@ impl FitRequest {
         }
         let settings = self.overrides.settings_for(self.settings.clone(), robot)?;
         let model = settings.model(robot)?.into_owned();
-        let read = self.read.for_model(&model);
+        let read = self
+            .read
+            .for_model(&model)
+            .for_processing(&settings.processing);
         if self.streams() {
             if self.excitation.is_some() && !self.test.is_empty() && settings.test_window.is_none()
             {
@@ -547,7 +550,10 @@ impl FitRequest {
         let model = state.model(&base)?;
         let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
         self.overrides.set_prior(&mut settings, &model)?;
-        let read = self.read.for_model(&model);
+        let read = self
+            .read
+            .for_model(&model)
+            .for_processing(&settings.processing);
         self.fit_with_test(model, settings, &read, None, progress, |_, s, test| {
             state.fit(&base, s, test, progress)
         })
@@ -683,7 +689,10 @@ impl ObserveRequest {
         }
         let settings = self.overrides.settings_for(self.settings.clone(), robot)?;
         crate::fit::no_delay_search(&settings, "an observation state")?;
-        let read = self.read.for_model(settings.model(robot)?.as_ref());
+        let read = self
+            .read
+            .for_model(settings.model(robot)?.as_ref())
+            .for_processing(&settings.processing);
         if self.streams() {
             let readers = open_all(&read, &self.logs)?;
             return ObservationState::observe_stream(

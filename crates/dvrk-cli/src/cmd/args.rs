@@ -82,9 +82,14 @@ pub struct LogArgs {
 
 impl LogArgs {
     /// How these flags read logs (the robot's joints added by
-    /// [`ReadOptions::for_model`]).
+    /// [`ReadOptions::for_model`]). `--resample` is a processing setting here (see
+    /// [`LogArgs::overrides`]): the library reads at its rate
+    /// ([`ReadOptions::for_processing`]).
     pub fn read_options(&self) -> ReadOptions {
-        read_options(self.format, self.rate, &self.mcap)
+        ReadOptions {
+            resample_hz: None,
+            ..read_options(self.format, self.rate, &self.mcap)
+        }
     }
 
     /// The processing flags as settings overrides.
@@ -99,6 +104,7 @@ impl LogArgs {
             filter_torque: self.filter_torque.then_some(true),
             decimate: self.decimate,
             min_speed: self.min_speed,
+            resample_hz: self.mcap.resample,
             ..Overrides::default()
         })
     }

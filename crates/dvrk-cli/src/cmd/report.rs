@@ -104,7 +104,11 @@ pub fn run(args: Args) -> Result<()> {
             .map(|(k, p)| (format!("log {}", k + 1), p.clone()))
             .collect()
     };
-    let read = args.log_args.read_options().for_model(&model);
+    let read = args
+        .log_args
+        .read_options()
+        .for_model(&model)
+        .for_processing(&result.settings.processing);
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
         trajectories.push((role.clone(), super::args::read(&read, path)?));

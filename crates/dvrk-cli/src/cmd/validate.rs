@@ -43,7 +43,11 @@ pub fn run(args: Args) -> Result<()> {
     let settings = args.log_args.settings(result.settings.clone())?;
     let mut reports = Vec::new();
     let mut text = String::new();
-    let read = args.log_args.read_options().for_model(&model);
+    let read = args
+        .log_args
+        .read_options()
+        .for_model(&model)
+        .for_processing(&settings.processing);
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;

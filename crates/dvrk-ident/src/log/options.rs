@@ -10,6 +10,7 @@ use dvrk_model::Model;
 #[allow(unused_imports)] // McapOptions: the docs' link without `recordings`
 use super::mcap::{McapOptions, TimeSource};
 use super::{LogError, LogFormat};
+use crate::signal::Processing;
 
 /// How to read a log, whatever its format.
 ///
@@ -72,6 +73,30 @@ impl ReadOptions {
         ReadOptions {
             joints: model.measured.joints.clone(),
             dof: Some(model.dof()),
+            ..self.clone()
+        }
+    }
+
+    /// These options for the logs of a processing: a processing that resamples
+    /// (`resample_hz`) reads at that rate, unless these options resample already. A
+    /// recording with gaps, which the readers refuse unless they resample, then reads
+    /// as it will be processed; resampling it again at the same rate changes nothing,
+    /// the grid's times being the samples' own. So `fit --resample` (a processing
+    /// setting, recorded in the result) reads the recordings that need it, as Python's
+    /// `fit(resample=)` does.
+    ///
+    /// ```rust
+    /// use dvrk_ident::log::ReadOptions;
+    /// use dvrk_ident::signal::Processing;
+    ///
+    /// let processing = Processing { resample_hz: Some(250.0), ..Processing::default() };
+    /// assert_eq!(ReadOptions::default().for_processing(&processing).resample_hz, Some(250.0));
+    /// let read_at_200 = ReadOptions { resample_hz: Some(200.0), ..ReadOptions::default() };
+    /// assert_eq!(read_at_200.for_processing(&processing).resample_hz, Some(200.0));
+    /// ```
+    pub fn for_processing(&self, processing: &Processing) -> ReadOptions {
+        ReadOptions {
+            resample_hz: self.resample_hz.or(processing.resample_hz),
             ..self.clone()
         }
     }
