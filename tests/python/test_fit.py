@@ -344,12 +344,17 @@ def test_allow_unconverged_flag_is_accepted(psm, psm_logs):
 @pytest.fixture
 def held():
     """Long computations held (they cannot finish) until the test ends: whether the
-    interrupt lands does not depend on how fast the machine is."""
+    interrupt lands does not depend on how fast the machine is. Python's own SIGINT
+    handler is installed for the test: a process that starts with SIGINT ignored (a
+    background job of a shell without job control, `nohup`) has none, and the held call
+    would wait for an interrupt that never comes (a CI run started that way hung here)."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     di._hold_computations(True)
     try:
         yield
     finally:
         di._hold_computations(False)
+        signal.signal(signal.SIGINT, previous)
 
 
 def interrupt_when_held():
