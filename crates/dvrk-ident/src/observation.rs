@@ -517,7 +517,7 @@ mod tests {
 
     /// Rows `lo..hi` of each of `[q, q̇, q̈, τ]`.
     fn rows(m: &[DMatrix<f64>; 4], lo: usize, hi: usize) -> [DMatrix<f64>; 4] {
-        m.clone().map(|x| x.rows(lo, hi - lo).into_owned())
+        m.each_ref().map(|x| x.rows(lo, hi - lo).into_owned())
     }
 
     #[test]

@@ -5,6 +5,7 @@
 // Reads descriptions (TOML, URDF): needs the default `description` feature.
 #![cfg(feature = "description")]
 
+use dvrk_model::inertia::{sym3, sym6};
 use dvrk_model::{JointKind, Model, Transform, Workspace};
 use dvrk_test_support::PlanarTwoLink;
 use nalgebra::{Matrix3, Vector3};
@@ -325,35 +326,21 @@ fn fixed_joint() {
     // The same robot with b merged into a: mass, centre of mass, inertia about it.
     let skew =
         |v: &Vector3<f64>| Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0);
-    let sym = |i: [f64; 6]| Matrix3::new(i[0], i[1], i[2], i[1], i[3], i[4], i[2], i[4], i[5]);
     let rb = rpy(r[0], r[1], r[2]);
     let cb_a = Vector3::from(p) + rb * Vector3::from(cb);
     let m = ma + mb;
     let c = (ma * Vector3::from(ca) + mb * cb_a) / m;
     let da = skew(&(Vector3::from(ca) - c));
     let db = skew(&(cb_a - c));
-    let i = sym(ia)
+    let i = sym3(&ia)
         + ma * da.transpose() * da
-        + rb * sym(ib) * rb.transpose()
+        + rb * sym3(&ib) * rb.transpose()
         + mb * db.transpose() * db;
     let j2_a = Vector3::from(p) + rb * Vector3::from(j2);
     let merged = robot(
         "merged",
         &[
-            link(
-                "a",
-                m,
-                [c[0], c[1], c[2]],
-                [0.0; 3],
-                [
-                    i[(0, 0)],
-                    i[(0, 1)],
-                    i[(0, 2)],
-                    i[(1, 1)],
-                    i[(1, 2)],
-                    i[(2, 2)],
-                ],
-            ),
+            link("a", m, [c[0], c[1], c[2]], [0.0; 3], sym6(&i)),
             link_c,
             j1,
             j2_from("a", ([j2_a[0], j2_a[1], j2_a[2]], r)),

@@ -13,6 +13,7 @@
 // Reads descriptions (TOML, URDF): needs the default `description` feature.
 #![cfg(feature = "description")]
 
+use dvrk_model::inertia::{sym3, sym6};
 use dvrk_model::{Model, Transform, Workspace};
 use dvrk_test_support::*;
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -193,7 +194,7 @@ fn panda_dynamics_match_pinocchio() {
 fn move_to_parent(x: &Transform, b: &[f64]) -> [f64; 10] {
     let skew =
         |v: &Vector3<f64>| Matrix3::new(0.0, -v[2], v[1], v[2], 0.0, -v[0], -v[1], v[0], 0.0);
-    let l_in = Matrix3::new(b[0], b[1], b[2], b[1], b[3], b[4], b[2], b[4], b[5]);
+    let l_in = sym3(&b[..6]);
     let l = Vector3::new(b[6], b[7], b[8]);
     let m = b[9];
     let (r, p) = (&x.rotation, &x.translation);
@@ -205,18 +206,8 @@ fn move_to_parent(x: &Transform, b: &[f64]) -> [f64; 10] {
         + sp.transpose() * srl
         + srl.transpose() * sp;
     let l2 = m * p + rl;
-    [
-        big[(0, 0)],
-        big[(0, 1)],
-        big[(0, 2)],
-        big[(1, 1)],
-        big[(1, 2)],
-        big[(2, 2)],
-        l2[0],
-        l2[1],
-        l2[2],
-        m,
-    ]
+    let s = sym6(&big);
+    [s[0], s[1], s[2], s[3], s[4], s[5], l2[0], l2[1], l2[2], m]
 }
 
 /// For each moving joint of the reference (1..7), our frame of its child link, and the

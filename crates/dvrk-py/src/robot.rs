@@ -27,8 +27,7 @@ impl ModelPy {
     /// The model `origin` describes, with Stribeck terms of velocity `stribeck` if given
     /// (built without the GIL).
     fn build(py: Python<'_>, origin: Origin, stribeck: Option<f64>) -> PyResult<ModelPy> {
-        let o = origin.clone();
-        let model = py.detach(move || o.build(stribeck)).map_err(from_model)?;
+        let model = py.detach(|| origin.build(stribeck)).map_err(from_model)?;
         Ok(ModelPy {
             stribeck,
             ..ModelPy::new(model, origin)

@@ -968,7 +968,7 @@ fn residual_sum_of_squares(r: &DMatrix<f64>, params: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use dvrk_model::inertia::{
-        barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue,
+        barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue, sym6,
     };
     use dvrk_test_support::models::{one_link_with, ONE_LINK};
     use nalgebra::{DVector, Matrix3, Matrix4, Rotation3, Vector3};
@@ -1208,15 +1208,7 @@ mod tests {
                         rng.uniform(-3.0, 3.0),
                     );
                     let ic = rot.matrix() * d * rot.matrix().transpose();
-                    let ic6 = [
-                        ic[(0, 0)],
-                        ic[(0, 1)],
-                        ic[(0, 2)],
-                        ic[(1, 1)],
-                        ic[(1, 2)],
-                        ic[(2, 2)],
-                    ];
-                    let bary = barycentric_from_standard(m, c, ic6);
+                    let bary = barycentric_from_standard(m, c, sym6(&ic));
                     if pseudo_inertia_min_eigenvalue(&bary) > 20.0 * g.pseudo_inertia_eps {
                         break bary;
                     }

@@ -32,7 +32,7 @@ pub fn concatenate(blocks: &[JointLog]) -> JointLog {
     let stack =
         |f: fn(&JointLog) -> &DMatrix<f64>| stack_rows(&blocks.iter().map(f).collect::<Vec<_>>());
     JointLog {
-        time: blocks.iter().flat_map(|b| b.time.clone()).collect(),
+        time: blocks.iter().flat_map(|b| b.time.iter().copied()).collect(),
         q: stack(|b| &b.q),
         dq: blocks[0].dq.as_ref().map(|_| {
             stack_rows(
