@@ -202,6 +202,17 @@ impl CutoffConvention {
     }
 }
 
+/// `values` for `n` coordinates: one value for every coordinate, or one per coordinate;
+/// `None` for any other count (the caller's message names the setting). The one rule of
+/// the settings given that way (delays, simulated noise).
+pub(crate) fn per_coordinate(values: &[f64], n: usize) -> Option<Vec<f64>> {
+    match values {
+        [v] => Some(vec![*v; n]),
+        all if all.len() == n => Some(all.to_vec()),
+        _ => None,
+    }
+}
+
 /// A cut-off frequency, Hz: one for all joints or one per joint.
 ///
 /// Serialized untagged: `cutoff_hz = 5.4` or `cutoff_hz = [5.4, 5.4, 3.0, ...]`.

@@ -226,20 +226,20 @@ fn check_simulation(
 }
 
 /// One value per coordinate of `n` from the setting `name`'s `values`: none gives 0 to
-/// every coordinate, one value gives it to every coordinate, `n` values one each.
+/// every coordinate, else [`crate::signal::per_coordinate`]'s rule.
 fn per_coordinate(name: &str, values: &[f64], n: usize) -> Result<Vec<f64>, IdentError> {
-    match values {
-        [] => Ok(vec![0.0; n]),
-        [v] => Ok(vec![*v; n]),
-        all if all.len() == n => Ok(all.to_vec()),
-        all => Err(setting(
+    if values.is_empty() {
+        return Ok(vec![0.0; n]);
+    }
+    crate::signal::per_coordinate(values, n).ok_or_else(|| {
+        setting(
             name,
             format!(
                 "expected one value or {n} (one per coordinate), got {}",
-                all.len()
+                values.len()
             ),
-        )),
-    }
+        )
+    })
 }
 
 /// The torques `τ = H(q, q̇, q̈)·π + known forces(q)` at the samples `motion` = `(q, q̇,

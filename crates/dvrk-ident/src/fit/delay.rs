@@ -77,16 +77,13 @@ impl DelayOption {
                 settings.processing.delay_s.clear();
             }
             DelayOption::Fixed(d) => {
-                let all = match d.len() {
-                    1 => vec![d[0]; dof],
-                    m if m == dof => d.clone(),
-                    m => {
-                        return Err(format!(
-                            "{m} delays for {dof} coordinates: give one for all or one per \
-                             coordinate"
-                        ))
-                    }
-                };
+                let all = crate::signal::per_coordinate(d, dof).ok_or_else(|| {
+                    format!(
+                        "{} delays for {dof} coordinates: give one for all or one per \
+                         coordinate",
+                        d.len()
+                    )
+                })?;
                 crate::signal::advance::check_delays(&all, dof).map_err(|e| match e {
                     crate::signal::SignalError::InvalidSetting { reason, .. } => reason,
                     e => e.to_string(),
