@@ -96,6 +96,10 @@ pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, 
                 model.name
             )));
         }
+        let coupling = &model.measured.coupling;
+        check_ranges(model, traj, |i, k| {
+            (0..n).fold(0.0, |acc, j| acc + coupling[(k, j)] * traj.q[(i, j)])
+        })?;
         return Ok(traj.clone());
     }
     let mut cols = Vec::with_capacity(n);
@@ -111,6 +115,7 @@ pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, 
             }
         }
     }
+    check_ranges(model, traj, |i, k| traj.q[(i, cols[k])])?;
     let minv = model
         .measured_to_model_matrix()
         .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
@@ -135,6 +140,52 @@ pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, 
         coordinates: Coordinates::Model,
         source: traj.source.clone(),
     })
+}
+
+/// How far beyond a joint's physical range a log may go, as a fraction of the range's
+/// width. The check is for the gross mistakes (another arm's log, degrees for radians),
+/// not for joint limits: simulated and excitation logs go beyond the physical stops
+/// (the 2019 PSM excitation limits let the jaw open to 3 rad, and the bundled example
+/// reaches 1.79 rad against the instruments' 1.40), while another arm's log leaves
+/// the range by far more than its width (the MTM's 2019 log read as a PSM's:
+/// insertion −0.15 to 0.59 m against 0 to 0.24 m, wrist yaw to 5.2 rad, jaw ±10 rad).
+pub const RANGE_MARGIN: f64 = 1.0;
+
+/// Refuses a log whose measured joint `k` (positions `q_measured(i, k)` of sample `i`)
+/// leaves the robot's physical range ([`dvrk_model::Measured::ranges`]) by more than
+/// [`RANGE_MARGIN`], naming the joint, the range seen and the robot's.
+fn check_ranges(
+    model: &Model,
+    traj: &JointLog,
+    q_measured: impl Fn(usize, usize) -> f64,
+) -> Result<(), IdentError> {
+    for (k, range) in model.measured.ranges.iter().enumerate() {
+        let Some([lo, hi]) = *range else { continue };
+        let margin = RANGE_MARGIN * (hi - lo);
+        let (seen_lo, seen_hi) = (0..traj.len())
+            .map(|i| q_measured(i, k))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+        if seen_lo < lo - margin || seen_hi > hi + margin {
+            let unit = if model.measured.is_length(k, &model.coordinate_is_length) {
+                "m"
+            } else {
+                "rad"
+            };
+            return Err(IdentError::Mismatch {
+                source_name: traj.source.clone(),
+                message: format!(
+                    "joint {} runs from {seen_lo:.3} to {seen_hi:.3} {unit}, outside robot {}'s \
+                     range {} to {} {unit}: is this a log of another arm, or in \
+                     other units?",
+                    model.measured.joints[k],
+                    model.name,
+                    dvrk_model::input::show(lo),
+                    dvrk_model::input::show(hi)
+                ),
+            });
+        }
+    }
+    Ok(())
 }
 
 /// Subtracts the known forces (e.g. the MTM cable) from the torques of `t` (model

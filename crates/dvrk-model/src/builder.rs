@@ -240,6 +240,7 @@ impl ModelBuilder {
             Measured {
                 joints: self.coordinates.clone(),
                 coupling: DMatrix::identity(n, n),
+                ranges: vec![None; n],
             }
         })
     }
@@ -260,12 +261,14 @@ impl ModelBuilder {
         self.bounds = bounds;
     }
 
-    /// The measured (e.g. ROS) joint names, one per coordinate, and the coupling rows
-    /// `q_measured = M·q` (`None`: the identity); `M` must be invertible.
+    /// The measured (e.g. ROS) joint names, one per coordinate, the coupling rows
+    /// `q_measured = M·q` (`None`: the identity; `M` must be invertible) and the joints'
+    /// physical ranges `[min, max]` (rad or m; `None`: unknown).
     pub fn set_measured(
         &mut self,
         joints: Vec<String>,
         coupling: Option<Vec<Vec<f64>>>,
+        ranges: Option<Vec<[f64; 2]>>,
     ) -> Result<(), ModelError> {
         let n = self.coordinates.len();
         let err = |field: &str, m: String| ModelError::field(&self.source, "measured", field, m);
@@ -294,7 +297,35 @@ impl ModelBuilder {
         if coupling.clone().try_inverse().is_none() {
             return Err(err("coupling", "the matrix is singular".into()));
         }
-        self.measured = Some(Measured { joints, coupling });
+        let ranges = match ranges {
+            None => vec![None; n],
+            Some(ranges) => {
+                if ranges.len() != n {
+                    return Err(err(
+                        "ranges",
+                        format!("{} ranges for {n} joints", ranges.len()),
+                    ));
+                }
+                for (k, &[lo, hi]) in ranges.iter().enumerate() {
+                    for x in [lo, hi] {
+                        input::check_magnitude(x, input::MAX_VALUE, "")
+                            .map_err(|m| err("ranges", format!("joint {}: {m}", joints[k])))?;
+                    }
+                    if lo >= hi {
+                        return Err(err(
+                            "ranges",
+                            format!("joint {}: the minimum {lo} is not below the maximum {hi}", joints[k]),
+                        ));
+                    }
+                }
+                ranges.into_iter().map(Some).collect()
+            }
+        };
+        self.measured = Some(Measured {
+            joints,
+            coupling,
+            ranges,
+        });
         Ok(())
     }
 

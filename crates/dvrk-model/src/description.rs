@@ -39,6 +39,8 @@ struct FileDesc {
 struct MeasuredDesc {
     joints: Vec<String>,
     coupling: Option<Vec<Vec<f64>>>,
+    /// `[min, max]` per joint (rad or m).
+    ranges: Option<Vec<[f64; 2]>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -188,7 +190,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     }
     b.check_parameters()?;
     if let Some(m) = &desc.measured {
-        b.set_measured(m.joints.clone(), m.coupling.clone())?;
+        b.set_measured(m.joints.clone(), m.coupling.clone(), m.ranges.clone())?;
     }
     let spec = LimitsSpec {
         limits: desc.limits,

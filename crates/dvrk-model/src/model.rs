@@ -181,9 +181,22 @@ pub struct Measured {
     pub joints: Vec<String>,
     /// `q_measured = M · q_model`, n×n.
     pub coupling: DMatrix<f64>,
+    /// The physical range of each measured joint, `[min, max]` (rad or m), where the
+    /// description gives one (the dVRK's `qmin`/`qmax`, a URDF's `<limit>`): a log that
+    /// leaves it clearly is of another arm, or given with the wrong robot.
+    pub ranges: Vec<Option<[f64; 2]>>,
 }
 
 impl Measured {
+    /// Whether measured joint `k` is a length (m): its coupling row combines only
+    /// coordinates that are lengths (`coordinate_is_length`, per model coordinate).
+    pub fn is_length(&self, k: usize, coordinate_is_length: &[bool]) -> bool {
+        let row = self.coupling.row(k);
+        row.iter()
+            .zip(coordinate_is_length)
+            .all(|(&c, &is_length)| c == 0.0 || is_length)
+    }
+
     /// An affine function of the model coordinates from `text`, which may name model
     /// coordinates and measured joints: a measured joint stands for its row of the
     /// coupling (`q_measured,i = Σ_j M_ij q_j`), so that a limit on the dVRK jaw reads
@@ -621,6 +634,7 @@ impl Model {
             measured: Measured {
                 joints: Vec::new(),
                 coupling: DMatrix::zeros(0, 0),
+                ranges: Vec::new(),
             },
             limits: Vec::new(),
             cartesian_limits: Vec::new(),

@@ -118,12 +118,20 @@ impl Model {
         let mut frames = Vec::new();
         let mut params = Vec::new();
         let mut limits = Vec::new();
+        let mut ranges = vec![None; coordinates.len()];
         for (fi, &ji) in tree.order.iter().enumerate() {
             let j = &robot.joints[ji];
             let (kind, pre, post) = joint_pose(j).map_err(err)?;
             let value = joint_value(&robot, j, kind, &coordinates).map_err(err)?;
             if kind != JointKind::Fixed {
-                limits.extend(joint_limit(j, &value).map_err(err)?);
+                let limit = joint_limit(j, &value).map_err(err)?;
+                // A coordinate's own joint (not a mimic) gives its measured range.
+                if let (Some(l), &[(k, c)]) = (&limit, value.terms.as_slice()) {
+                    if c == 1.0 && value.offset == 0.0 {
+                        ranges[k] = l.position;
+                    }
+                }
+                limits.extend(limit);
             }
             let link = child_link(&robot, j).map_err(err)?;
             let nominal = link_nominal(link).map_err(err)?;
@@ -153,6 +161,7 @@ impl Model {
             measured: Measured {
                 joints: coordinates.clone(),
                 coupling: nalgebra::DMatrix::identity(n, n),
+                ranges,
             },
             coordinates,
             coordinate_is_length,

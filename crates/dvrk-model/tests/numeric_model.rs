@@ -261,7 +261,7 @@ fn the_numeric_constructor_checks_its_input() {
     );
     let singular = Some(vec![vec![1.0, 1.0], vec![2.0, 2.0]]);
     assert_eq!(
-        b.set_measured(vec!["a".into(), "b".into()], singular)
+        b.set_measured(vec!["a".into(), "b".into()], singular, None)
             .unwrap_err()
             .to_string(),
         "numeric:planar: measured: field `coupling`: the matrix is singular"
