@@ -61,6 +61,15 @@ mod dvrk_ident_module {
     #[pymodule_export]
     use crate::deprecated::module_getattr;
 
+    /// Runs the ``dvrk-ident`` command line with ``argv`` (the program name first)
+    /// in this process and returns its exit status; what the command prints goes to
+    /// the process's stdout and stderr. The ``dvrk-ident`` console command and
+    /// ``python -m dvrk_ident`` call it.
+    #[pyfunction]
+    fn _cli_main(py: Python<'_>, argv: Vec<String>) -> u8 {
+        py.detach(move || dvrk_cli::run(argv))
+    }
+
     #[pymodule_init]
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         crate::errors::register(m)?;
