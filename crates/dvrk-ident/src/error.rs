@@ -49,6 +49,16 @@ pub enum IdentError {
         /// Which parameters or why.
         message: String,
     },
+    /// A result used with a robot it was not fitted for.
+    #[error("{result} was fitted for {fitted}, not {given}")]
+    WrongRobot {
+        /// The result (its file, or what stands for it).
+        result: String,
+        /// The robot the result records.
+        fitted: String,
+        /// The robot it was given with.
+        given: String,
+    },
     /// A setting is out of range.
     #[error("invalid setting {name}: {message}")]
     Setting {

@@ -247,6 +247,32 @@ impl FitResult {
         )?)
     }
 
+    /// Refuses `model` when it is not the robot this result was fitted for, in one line
+    /// (`fit.json was fitted for mtm, not psm`) rather than through the list of
+    /// parameters the two do not share; `source` names the result.
+    pub fn check_robot(&self, model: &dvrk_model::Model, source: &str) -> Result<(), IdentError> {
+        if self.robot == model.name {
+            return Ok(());
+        }
+        Err(IdentError::WrongRobot {
+            result: source.to_string(),
+            fitted: self.robot.clone(),
+            given: model.name.clone(),
+        })
+    }
+
+    /// The model that evaluates this result's parameters, given the robot it is used
+    /// with: `model` itself, or a copy with the fit's model options (Stribeck terms,
+    /// bounds). Refuses another robot ([`FitResult::check_robot`]).
+    pub fn model_for<'m>(
+        &self,
+        model: &'m dvrk_model::Model,
+        source: &str,
+    ) -> Result<std::borrow::Cow<'m, dvrk_model::Model>, IdentError> {
+        self.check_robot(model, source)?;
+        self.settings.model(model)
+    }
+
     /// The robot the result records, as [`dvrk_model::Model::load`] takes it: a
     /// built-in name or a description path.
     pub fn robot(&self) -> &str {

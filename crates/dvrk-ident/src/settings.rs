@@ -200,7 +200,14 @@ impl FitSettings {
     /// so the parameters line up.
     pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
         let mut m = match self.stribeck_velocity {
-            Some(v) => std::borrow::Cow::Owned(model.with_stribeck(v)?),
+            // A model that has its Stribeck terms already (e.g. a result's own model) is
+            // used as it is.
+            Some(v) => match model.with_stribeck(v)? {
+                extended if extended.n_params() != model.n_params() => {
+                    std::borrow::Cow::Owned(extended)
+                }
+                _ => std::borrow::Cow::Borrowed(model),
+            },
             None => std::borrow::Cow::Borrowed(model),
         };
         if let Some(set) = self.bounds {
@@ -214,6 +221,89 @@ impl FitSettings {
             }
         }
         Ok(m)
+    }
+}
+
+/// One setting that differs between two [`FitSettings`]: its path in the result
+/// document's `settings` (e.g. `processing.filter.cutoff_hz`) and both values as JSON.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SettingDifference {
+    /// Dot-separated path in the `settings` document; list items as `[k]`.
+    pub path: String,
+    /// The value in the settings compared (`null` where it has none).
+    pub value: serde_json::Value,
+    /// The value in the settings compared with.
+    pub base: serde_json::Value,
+}
+
+impl std::fmt::Display for SettingDifference {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{} {} (fit: {})", self.path, self.value, self.base)
+    }
+}
+
+impl FitSettings {
+    /// Every setting of `self` that differs from `base`, in document order: walked over
+    /// the serialized documents, so a setting added later is compared without code
+    /// here. What `validate` and `report` print when their flags change the fit's
+    /// processing, and what `compare` lists.
+    ///
+    /// ```rust
+    /// use dvrk_ident::FitSettings;
+    /// let fit = FitSettings::default();
+    /// let mut other = fit.clone();
+    /// other.processing.trim = 20;
+    /// let d = other.differences(&fit);
+    /// assert_eq!(d.len(), 1);
+    /// assert_eq!(d[0].to_string(), "processing.trim 20 (fit: 200)");
+    /// assert!(fit.differences(&fit).is_empty());
+    /// ```
+    pub fn differences(&self, base: &FitSettings) -> Vec<SettingDifference> {
+        let mut out = Vec::new();
+        let (a, b) = (
+            serde_json::to_value(self).unwrap_or_default(),
+            serde_json::to_value(base).unwrap_or_default(),
+        );
+        json_differences("", &a, &b, &mut out);
+        out
+    }
+}
+
+/// The leaves where `a` and `b` differ, under `path`.
+fn json_differences(
+    path: &str,
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    out: &mut Vec<SettingDifference>,
+) {
+    use serde_json::Value;
+    let join = |key: &str| {
+        if path.is_empty() {
+            key.to_string()
+        } else {
+            format!("{path}.{key}")
+        }
+    };
+    match (a, b) {
+        (Value::Object(x), Value::Object(y)) => {
+            for (k, v) in x {
+                json_differences(&join(k), v, y.get(k).unwrap_or(&Value::Null), out);
+            }
+            for (k, v) in y.iter().filter(|(k, _)| !x.contains_key(*k)) {
+                json_differences(&join(k), &Value::Null, v, out);
+            }
+        }
+        (Value::Array(x), Value::Array(y)) if x.len() == y.len() => {
+            for (k, (v, w)) in x.iter().zip(y).enumerate() {
+                json_differences(&format!("{path}[{k}]"), v, w, out);
+            }
+        }
+        _ if a != b => out.push(SettingDifference {
+            path: path.to_string(),
+            value: a.clone(),
+            base: b.clone(),
+        }),
+        _ => {}
     }
 }
 

@@ -278,16 +278,35 @@ where
     while start < rows {
         let end = (start + CHUNK).min(rows);
         let chunk = &mut out[start * width..end * width];
+        // The last line of defence: a panic of the library becomes a `SolverError`
+        // naming it, not pyo3's `PanicException` (a `BaseException`).
         py.detach(|| {
-            for (k, o) in (start..end).zip(chunk.chunks_mut(width)) {
-                f(k, o);
-            }
-        });
+            std::panic::catch_unwind(AssertUnwindSafe(|| {
+                for (k, o) in (start..end).zip(chunk.chunks_mut(width)) {
+                    f(k, o);
+                }
+            }))
+        })
+        .map_err(internal_error)?;
         py.check_signals()?;
         wait_while_held(py)?;
         start = end;
     }
     Ok(out)
+}
+
+/// A caught panic as a `SolverError`: the library has a bug, and Python code catching
+/// `DvrkError` (or `Exception`) still sees it.
+fn internal_error(panic: Box<dyn std::any::Any + Send>) -> PyErr {
+    let what = panic
+        .downcast_ref::<String>()
+        .cloned()
+        .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
+        .unwrap_or_else(|| "unknown panic".into());
+    error(
+        Kind::Solver,
+        format!("internal error (a bug of dvrk-ident, please report it): {what}"),
+    )
 }
 
 /// A failure computed without the GIL, turned into an exception by the caller.
@@ -319,14 +338,7 @@ where
         match received {
             Ok(Ok(Ok(v))) => return Ok(v),
             Ok(Ok(Err((kind, message)))) => return Err(error(kind, message)),
-            Ok(Err(panic)) => {
-                let what = panic
-                    .downcast_ref::<String>()
-                    .cloned()
-                    .or_else(|| panic.downcast_ref::<&str>().map(|s| s.to_string()))
-                    .unwrap_or_else(|| "unknown panic".into());
-                return Err(error(Kind::Solver, format!("internal error: {what}")));
-            }
+            Ok(Err(panic)) => return Err(internal_error(panic)),
             Err(mpsc::RecvTimeoutError::Timeout) => py.check_signals()?,
             Err(mpsc::RecvTimeoutError::Disconnected) => {
                 return Err(error(

@@ -96,6 +96,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   of each link's pseudo-inertia from the prior's, or ``"euclidean"``), as
 ///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
 ///   ``result.settings["prior"]``;
+/// - ``preset``: ``"dvrk"``, the settings recommended for the dVRK arms for every
+///   keyword not given (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3``, as
+///   ``--preset dvrk``); the result records what it expanded to;
 /// - ``settings``: a dict in the layout of ``FitResult.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
@@ -117,7 +120,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -141,6 +144,7 @@ pub fn fit(
     prior: Option<&Bound<'_, PyAny>>,
     prior_weight: Option<f64>,
     prior_metric: Option<&str>,
+    preset: Option<&str>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
@@ -162,6 +166,7 @@ pub fn fit(
         prior,
         prior_weight,
         prior_metric,
+        preset,
     };
     let train = match observations_arg(data)? {
         Some(states) => Training::Observations(states.into_iter().map(|s| (s, None)).collect()),
@@ -278,11 +283,11 @@ impl FitResultPy {
             let name = self.inner.robot().to_string();
             Arc::new(py.detach(move || Model::load(&name)).map_err(from_model)?)
         };
-        let extended = match self.inner.settings.model(&base).map_err(from_ident)? {
-            std::borrow::Cow::Borrowed(_) => None,
-            std::borrow::Cow::Owned(m) => Some(Arc::new(m)),
-        };
-        Ok(extended.unwrap_or(base))
+        let fitted = self
+            .inner
+            .model_for(&base, "FitResult")
+            .map_err(from_ident)?;
+        Ok(crate::robot::shared(&base, fitted))
     }
 
     fn params(&self, model: &Model) -> PyResult<Vec<f64>> {

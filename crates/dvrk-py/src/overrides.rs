@@ -69,6 +69,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub prior: Option<&'a Bound<'py, PyAny>>,
     pub prior_weight: Option<f64>,
     pub prior_metric: Option<&'a str>,
+    pub preset: Option<&'a str>,
 }
 
 impl Overrides<'_, '_> {
@@ -137,6 +138,10 @@ impl Overrides<'_, '_> {
             prior_metric: self
                 .prior_metric
                 .map(|m| crate::convert::named("prior_metric", m))
+                .transpose()?,
+            preset: self
+                .preset
+                .map(|p| crate::convert::named("preset", p))
                 .transpose()?,
         })
     }

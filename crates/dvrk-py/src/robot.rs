@@ -70,16 +70,18 @@ impl ModelPy {
         Ok(self.base.get_or_init(|| Arc::new(b)).clone())
     }
 
-    pub fn params(&self, py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+    pub fn params(&self, py: Python<'_>, obj: &Bound<'_, PyAny>) -> PyResult<Params> {
         params_of(py, &self.model, obj)
     }
 
-    /// `f(workspace, q_k, out_k)` for each sample `q_k` of the positions `q` (rad or m),
+    /// `f(workspace, q_k, out_k)` for each sample `q_k` of the positions `q` (rad or m)
+    /// with a workspace of `model` (the robot's, or a fit result's),
     /// the results shaped `(N, *shape)`, or `shape` for one 1-D sample: the body of every
     /// method of the positions alone (gravity, mass matrix, known forces, kinematics).
     fn map_positions<'py, F>(
         &self,
         py: Python<'py>,
+        model: &Model,
         q: &Bound<'py, PyAny>,
         shape: &[usize],
         mut f: F,
@@ -87,7 +89,6 @@ impl ModelPy {
     where
         F: FnMut(&mut Workspace, &[f64], &mut [f64]) + Send,
     {
-        let model = &self.model;
         let q = rows(py, q, model.dof(), "q", &model.coordinates)?;
         let mut ws = Workspace::new(model);
         let width = shape.iter().product();
@@ -106,14 +107,28 @@ impl ModelPy {
     }
 }
 
-/// A parameter vector from an array, a `{name: value}` mapping or a fit `FitResult`.
-pub fn params_of(py: Python<'_>, model: &Model, obj: &Bound<'_, PyAny>) -> PyResult<Vec<f64>> {
+/// Parameter values with the model that evaluates them.
+pub struct Params {
+    /// The robot's own model, or for a fit `FitResult` the model it was fitted with
+    /// (its Stribeck terms add parameters), so a result is always evaluated with as many
+    /// parameters as it has.
+    pub model: Arc<Model>,
+    pub values: Vec<f64>,
+}
+
+/// The parameters of an array, a `{name: value}` mapping or a fit `FitResult` (refused,
+/// in one line, when it was fitted for another robot).
+pub fn params_of(py: Python<'_>, model: &Arc<Model>, obj: &Bound<'_, PyAny>) -> PyResult<Params> {
     if let Ok(r) = obj.cast::<crate::classes::FitResultPy>() {
         let inner = &r.get().inner;
-        let model = inner.settings.model(model).map_err(from_ident)?;
-        return inner.params_for(&model).map_err(from_ident);
+        let fitted = shared(model, inner.model_for(model, "FitResult").map_err(from_ident)?);
+        let values = inner.params_for(&fitted).map_err(from_ident)?;
+        return Ok(Params {
+            model: fitted,
+            values,
+        });
     }
-    if obj.cast::<PyDict>().is_ok() || obj.hasattr("keys")? {
+    let values = if obj.cast::<PyDict>().is_ok() || obj.hasattr("keys")? {
         let items = obj.call_method0("items")?;
         let mut values: Vec<(String, f64)> = Vec::new();
         for item in items.try_iter()? {
@@ -127,17 +142,31 @@ pub fn params_of(py: Python<'_>, model: &Model, obj: &Bound<'_, PyAny>) -> PyRes
                 .map_err(|_| input(format!("params: parameter {k} is not a number")))?;
             values.push((k, v));
         }
-        return model
+        model
             .params_from_named(values.iter().map(|(k, v)| (k.as_str(), *v)), "params")
-            .map_err(from_model);
+            .map_err(from_model)?
+    } else {
+        vector(
+            py,
+            obj,
+            Some(model.n_params()),
+            "params",
+            &model.param_names(),
+        )?
+    };
+    Ok(Params {
+        model: model.clone(),
+        values,
+    })
+}
+
+/// `model` itself when `cow` borrows it, else the copy `cow` made (with a fit's model
+/// options), shared.
+pub fn shared(model: &Arc<Model>, cow: std::borrow::Cow<'_, Model>) -> Arc<Model> {
+    match cow {
+        std::borrow::Cow::Borrowed(_) => model.clone(),
+        std::borrow::Cow::Owned(m) => Arc::new(m),
     }
-    vector(
-        py,
-        obj,
-        Some(model.n_params()),
-        "params",
-        &model.param_names(),
-    )
 }
 
 /// `q`, `dq`, `ddq` (zeros when `None`) as batches of the same shape.
@@ -412,13 +441,12 @@ impl ModelPy {
         dq: Option<&Bound<'py, PyAny>>,
         ddq: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let params = self.params(py, params)?;
+        let Params { model, values } = self.params(py, params)?;
         let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
-        let model = &self.model;
         let n = model.dof();
-        let mut ws = Workspace::new(model);
+        let mut ws = Workspace::new(&model);
         let out = per_sample(py, q.rows, n, |k, out| {
-            model.inverse_dynamics(&mut ws, &params, q.row(k), dq.row(k), ddq.row(k), out)
+            model.inverse_dynamics(&mut ws, &values, q.row(k), dq.row(k), ddq.row(k), out)
         })?;
         Ok(array(py, out, &q.shape(&[n])))
     }
@@ -431,10 +459,9 @@ impl ModelPy {
         params: &Bound<'py, PyAny>,
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let params = self.params(py, params)?;
-        let model = &self.model;
-        self.map_positions(py, q, &[model.dof()], |ws, q, out| {
-            model.gravity_torque(ws, &params, q, out)
+        let Params { model, values } = self.params(py, params)?;
+        self.map_positions(py, &model, q, &[model.dof()], |ws, q, out| {
+            model.gravity_torque(ws, &values, q, out)
         })
     }
 
@@ -444,9 +471,8 @@ impl ModelPy {
     /// cannot hold listed in its header. Raises ``ModelError`` for parameters that are
     /// not rigid bodies.
     fn to_urdf(&self, py: Python<'_>, params: &Bound<'_, PyAny>) -> PyResult<String> {
-        let params = self.params(py, params)?;
-        let model = self.model.clone();
-        py.detach(move || model.to_urdf(&params))
+        let Params { model, values } = self.params(py, params)?;
+        py.detach(move || model.to_urdf(&values))
             .map_err(from_model)
     }
 
@@ -458,11 +484,11 @@ impl ModelPy {
         params: &Bound<'py, PyAny>,
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let params = self.params(py, params)?;
-        let n = self.model.dof();
+        let Params { model, values } = self.params(py, params)?;
+        let n = model.dof();
         let mut col_major = vec![0.0; n * n];
-        self.map_positions(py, q, &[n, n], |ws, q, out| {
-            self.model.mass_matrix_into(ws, &params, q, &mut col_major);
+        self.map_positions(py, &model, q, &[n, n], |ws, q, out| {
+            model.mass_matrix_into(ws, &values, q, &mut col_major);
             for r in 0..n {
                 for c in 0..n {
                     out[r * n + c] = col_major[c * n + r];
@@ -482,14 +508,13 @@ impl ModelPy {
         dq: &Bound<'py, PyAny>,
         tau: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let params = self.params(py, params)?;
+        let Params { model, values } = self.params(py, params)?;
         let (q, dq, tau) = self.state(py, q, Some(dq), Some(tau))?;
-        let model = &self.model;
         let n = model.dof();
-        let mut ws = Workspace::new(model);
+        let mut ws = Workspace::new(&model);
         let mut singular = None;
         let out = per_sample(py, q.rows, n, |k, out| {
-            match model.forward_dynamics(&mut ws, &params, q.row(k), dq.row(k), tau.row(k)) {
+            match model.forward_dynamics(&mut ws, &values, q.row(k), dq.row(k), tau.row(k)) {
                 Some(a) => out.copy_from_slice(a.as_slice()),
                 None => {
                     singular.get_or_insert(k);
@@ -514,7 +539,7 @@ impl ModelPy {
         q: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let model = &self.model;
-        self.map_positions(py, q, &[model.dof()], |_, q, out| {
+        self.map_positions(py, model, q, &[model.dof()], |_, q, out| {
             out.fill(0.0);
             model.add_known_forces(q, out)
         })
@@ -530,7 +555,7 @@ impl ModelPy {
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let model = &self.model;
         let frames = model.frames.len() + 1;
-        self.map_positions(py, q, &[frames, 4, 4], |ws, q, out| {
+        self.map_positions(py, model, q, &[frames, 4, 4], |ws, q, out| {
             model.forward_kinematics(ws, q);
             for (i, block) in out.chunks_mut(16).enumerate() {
                 let h = ws.pose(i).to_homogeneous();
@@ -612,8 +637,17 @@ impl BaseParametersPy {
         py: Python<'py>,
         params: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let pi = params_of(py, &self.model, params)?;
-        let beta = self.base.project(&pi);
+        let p = params_of(py, &self.model, params)?;
+        if !Arc::ptr_eq(&p.model, &self.model) {
+            return Err(input(format!(
+                "params: this FitResult's model has {} parameters (its fit added Stribeck \
+                 terms), not the {} of these base parameters: project it with \
+                 result.load_robot().base()",
+                p.model.n_params(),
+                self.model.n_params()
+            )));
+        }
+        let beta = self.base.project(&p.values);
         let r = beta.len();
         Ok(array(py, beta, &[r]))
     }

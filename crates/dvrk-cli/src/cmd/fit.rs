@@ -8,7 +8,9 @@ use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
+use dvrk_ident::request::{
+    FitOutcome, FitRequest, LogSource, Preset, PriorSource, Streaming, Training,
+};
 use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
@@ -38,9 +40,14 @@ pub struct Args {
     pub robot: Option<String>,
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Estimator
-    #[arg(long, value_parser = super::named::<Method>(), default_value = "sdp")]
-    pub method: Method,
+    /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
+    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
+    /// settings it expanded to
+    #[arg(long, value_parser = super::named::<Preset>(), value_name = "PRESET")]
+    pub preset: Option<Preset>,
+    /// Estimator [default: sdp]
+    #[arg(long, value_parser = super::named::<Method>())]
+    pub method: Option<Method>,
     /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
     /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019` (≥ 0.001, to reproduce the
     /// 2019 fit). Default: the description's (the built-in robots: physical)
@@ -130,7 +137,8 @@ fn request(args: &Args) -> Result<FitRequest> {
         None => None,
     };
     let mut overrides = args.log_args.overrides()?;
-    overrides.method = Some(args.method);
+    overrides.method = args.method;
+    overrides.preset = args.preset;
     overrides.test_window = args.test_window;
     overrides.stribeck_velocity = args.stribeck;
     overrides.irls_iterations = args.irls_iterations;

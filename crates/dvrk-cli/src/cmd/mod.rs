@@ -175,13 +175,26 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     Ok(v)
 }
 
-/// Reads a parameter file: a JSON object `{"parameters": {name: value, ...}}` (a result
-/// file) or a plain `{name: value}` object.
-pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
+/// The parameters of a `--params` file for `model`, with the model that evaluates them:
+/// a result document (`dvrk-ident fit --out`) is evaluated with the model it was fitted
+/// with (its Stribeck terms, its bounds) and refused for another robot in one line; a
+/// plain `{name: value}` object (or `{"parameters": {...}}`) must name exactly `model`'s
+/// parameters.
+pub fn read_params<'m>(
+    model: &'m dvrk_model::Model,
+    path: &str,
+) -> Result<(std::borrow::Cow<'m, dvrk_model::Model>, Vec<f64>)> {
     let text = dvrk_model::input::read_text(std::path::Path::new(path))
         .with_context(|| format!("{path}: cannot read"))?;
     let doc: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("{path}: not valid JSON"))?;
+    // A result document records its robot and settings beside its parameters.
+    if doc.get("robot").is_some() && doc.get("settings").is_some() {
+        let result = FitResult::from_json(&text, path)?;
+        let fitted = result.model_for(model, path)?;
+        let params = result.params_for(&fitted)?;
+        return Ok((fitted, params));
+    }
     let map = doc
         .get("parameters")
         .unwrap_or(&doc)
@@ -196,7 +209,8 @@ pub fn read_params(model: &dvrk_model::Model, path: &str) -> Result<Vec<f64>> {
             .map_err(|m| anyhow::anyhow!("{path}: parameter {k}: {m}"))?;
         values.push((k.as_str(), x));
     }
-    Ok(model.params_from_named(values, path)?)
+    let params = model.params_from_named(values, path)?;
+    Ok((std::borrow::Cow::Borrowed(model), params))
 }
 
 /// A fit result with the model it was fitted for and its parameter vector.
@@ -213,10 +227,9 @@ pub struct LoadedResult {
 pub fn load_result(path: &str, robot: Option<&str>) -> Result<LoadedResult> {
     let result = FitResult::read(std::path::Path::new(path))?;
     let robot = robot.unwrap_or_else(|| result.robot()).to_string();
+    let given = Model::load(&robot).with_context(|| format!("{path}: robot of the result"))?;
     // Through the result, so the fit's model options (Stribeck terms) are applied.
-    let model = result
-        .model(Some(&robot))
-        .with_context(|| format!("{path}: robot of the result"))?;
+    let model = result.model_for(&given, path)?.into_owned();
     let params = result
         .params_for(&model)
         .with_context(|| format!("{path}: parameters for robot `{robot}`"))?;

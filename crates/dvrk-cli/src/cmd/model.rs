@@ -128,9 +128,8 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
     };
     let dq = optional(&args.dq, "--dq")?;
     let ddq = optional(&args.ddq, "--ddq")?;
-    let mut ws = Workspace::new(model);
     if args.regressor {
-        let h = model.regressor(&mut ws, &q, &dq, &ddq);
+        let h = model.regressor(&mut Workspace::new(model), &q, &dq, &ddq);
         let (names, h) = if args.base {
             let base = model.base_parameters()?;
             (
@@ -148,15 +147,20 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
             .collect();
         return emit(&json!({"parameters": names, "rows": rows}).to_string());
     }
-    let params = match &args.params {
+    let (model, params) = match &args.params {
         Some(path) => read_params(model, path)?,
-        None => model.nominal_parameters().with_context(|| {
-            format!(
-                "{}: the description has no nominal value for every parameter; give --params FILE",
-                args.robot
-            )
-        })?,
+        None => {
+            let nominal = model.nominal_parameters().with_context(|| {
+                format!(
+                    "{}: the description has no nominal value for every parameter; give --params FILE",
+                    args.robot
+                )
+            })?;
+            (std::borrow::Cow::Borrowed(model), nominal)
+        }
     };
+    // A result with Stribeck terms has more parameters, and its own workspace.
+    let mut ws = Workspace::new(&model);
     let mut tau = vec![0.0; n];
     model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
     if let Some(t) = tau.iter().find(|t| !t.is_finite()) {

@@ -102,8 +102,10 @@ pub fn write_log(
 
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[])?;
-    let model = Model::load(&args.robot)?;
-    let params = read_params(&model, &args.params)?;
+    let robot = Model::load(&args.robot)?;
+    // A result is simulated with the model it was fitted with (e.g. its Stribeck terms).
+    let (model, params) = read_params(&robot, &args.params)?;
+    let model: &Model = &model;
     let traj = match &args.pick {
         Some(name) => FourierTrajectory::from_wpi_file(&args.trajectory, name)?,
         None => FourierTrajectory::from_json_file(&args.trajectory)?,
@@ -138,8 +140,8 @@ pub fn run(args: Args) -> Result<()> {
         delay_s,
     };
     let format = output_format(&args.out, args.format)?;
-    let log = simulate(&model, &params, &traj, &sim)?;
-    write_log(Some(&model), &log, &args.out, format, &args.topic)?;
+    let log = simulate(model, &params, &traj, &sim)?;
+    write_log(Some(model), &log, &args.out, format, &args.topic)?;
     let bytes = match dvrk_ident::output::Destination::of(Path::new(&args.out)) {
         Ok(dvrk_ident::output::Destination::File(p)) => std::fs::metadata(p)
             .map(|m| format!(", {} bytes", m.len()))

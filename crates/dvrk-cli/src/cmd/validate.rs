@@ -22,6 +22,8 @@ pub struct Args {
     /// Robot (default: the one the result was fitted for)
     #[arg(long)]
     pub robot: Option<String>,
+    // The processing flags (--cutoff, --trim, ...) default to the result's own settings;
+    // given, they replace them, and the output says which differ from the fit's.
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Metrics on the first N processed samples only (N ≥ 1)
@@ -41,8 +43,20 @@ pub fn run(args: Args) -> Result<()> {
     } = load_result(&args.result, args.robot.as_deref())?;
     // The processing the result was fitted with, unless overridden on the command line.
     let settings = args.log_args.settings(result.settings.clone())?;
+    // Flags that change the processing make this log's column differ from the fit's
+    // columns beside it for a reason other than the model: said first.
+    let changed = settings.differences(&result.settings);
     let mut reports = Vec::new();
     let mut text = String::new();
+    if !changed.is_empty() {
+        let list: Vec<String> = changed.iter().map(|d| d.to_string()).collect();
+        let _ = writeln!(
+            text,
+            "note: these logs are processed with settings that differ from the fit's, \
+             so their errors compare with the fit's only in part: {}",
+            list.join("; ")
+        );
+    }
     let read = args
         .log_args
         .read_options()
@@ -79,6 +93,7 @@ pub fn run(args: Args) -> Result<()> {
         emit(&serde_json::to_string_pretty(&json!({
             "result": args.result,
             "fit": result.metrics,
+            "settings_differences": changed,
             "validations": reports,
         }))?)
     } else {

@@ -388,6 +388,7 @@ def fit(
     prior: Optional[Union[str, PathLike, FitResult]] = None,
     prior_weight: Optional[float] = None,
     prior_metric: Optional[str] = None,
+    preset: Optional[str] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
 ) -> FitResult:
@@ -395,7 +396,8 @@ def fit(
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
     ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
-    ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
+    ``preset``: ``"dvrk"`` (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3`` for
+    the keywords not given); ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
     ``"entropic"`` (default) or ``"euclidean"``."""
 
