@@ -289,6 +289,12 @@ def test_readme_is_a_front_page():
     lines = readme.read_text().splitlines()
     assert len(lines) <= 300, f"README.md has {len(lines)} lines (at most 300)"
     first_screen = "\n".join(lines[:50])
+    # The command lines the snippets run, continued lines joined.
+    runs = [" ".join(line.split()) for b in fenced_blocks(readme) if runnable(b)
+            for line in b.code.replace("\\\n", " ").splitlines()]
+    recommended = "--method sdp --delay auto --stribeck 0.3"
     for arm in ("psm", "mtm"):
-        command = f"dvrk-ident fit LOG --robot {arm} --method sdp --delay auto --stribeck 0.3"
+        command = f"dvrk-ident fit LOG --robot {arm} {recommended}"
         assert command in first_screen, f"README.md's first screen lacks `{command}`"
+        assert any(r.startswith("dvrk-ident fit ") and f"--robot {arm} " in r and recommended in r
+                   for r in runs), f"no snippet of README.md runs `{command}` on a log"
