@@ -43,22 +43,28 @@ fn help(path: &[String]) -> String {
     String::from_utf8(out.stdout).expect("--help prints UTF-8")
 }
 
-/// The subcommands listed in the "Commands:" section of a help text (clap's layout: the
-/// header, then one indented `name  description` line each, up to a blank line), without
-/// clap's own `help`.
+/// The subcommands a help text lists, without clap's own `help`: in clap's layout, the
+/// lines indented by exactly two spaces whose first word is a lower-case name (options
+/// start with `-`, arguments with `<` or `[`), under "Commands:" or under the headings
+/// of grouped subcommands alike; none when the usage line names no `<COMMAND>`.
 fn subcommands(text: &str) -> Vec<String> {
     let mut names = Vec::new();
-    let mut inside = false;
+    // Only a command with subcommands (`<COMMAND>` in its usage) lists any.
+    let usage = text.lines().find(|l| l.starts_with("Usage:"));
+    if !usage.is_some_and(|u| u.contains("COMMAND")) {
+        return names;
+    }
     for line in text.lines() {
-        if line == "Commands:" {
-            inside = true;
-        } else if inside && line.trim().is_empty() {
-            break;
-        } else if inside && line.starts_with("  ") && !line.starts_with("   ") {
-            let name = line.split_whitespace().next().unwrap_or_default();
-            if name != "help" {
-                names.push(name.to_string());
-            }
+        let Some(entry) = line.strip_prefix("  ") else {
+            continue;
+        };
+        let name = entry.split_whitespace().next().unwrap_or_default();
+        let is_name = name.starts_with(|c: char| c.is_ascii_lowercase())
+            && name
+                .chars()
+                .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '-');
+        if !entry.starts_with(' ') && is_name && name != "help" {
+            names.push(name.to_string());
         }
     }
     names
@@ -145,4 +151,17 @@ fn the_book_s_command_line_reference_is_the_binary_s_help() {
             got.get(line).copied().unwrap_or("(end of file)"),
         );
     }
+}
+
+#[test]
+fn subcommands_are_found_under_any_heading() {
+    let grouped = "Identify robot arms\n\nUsage: dvrk-ident [OPTIONS] <COMMAND>\n\n\
+                   Models:\n  model      Summarize a robot model\n\n\
+                   Identification:\n  fit        Identify the parameters\n  \
+                   cable-fit  Fit a known-force polynomial\n  help       Print this message\n\n\
+                   Options:\n      --quiet    No progress bars\n  -h, --help     Print help\n";
+    assert_eq!(subcommands(grouped), ["model", "fit", "cable-fit"]);
+    let leaf = "Identify\n\nUsage: dvrk-ident fit [OPTIONS] [LOG]...\n\n\
+                Arguments:\n  [LOG]...  Training logs\n\nOptions:\n      --robot <ROBOT>  Robot\n";
+    assert!(subcommands(leaf).is_empty());
 }
