@@ -144,8 +144,14 @@ def test_includes_are_known():
                 f"{page}: includes {rel}, whose blocks nothing runs: add it to "
                 "INCLUDED_ELSEWHERE with the test that runs them, or run them here")
             if rel == "README.md" and m.group(2):
-                assert f"ANCHOR: {m.group(2)}" in target.read_text(), (
+                text = target.read_text()
+                assert f"ANCHOR: {m.group(2)}" in text, (
                     f"{page}: README.md has no anchor {m.group(2)!r}")
+                # A relative link would resolve from the README in one place and from
+                # the book's page in the other: the shared part has none.
+                part = text.split(f"ANCHOR: {m.group(2)}", 1)[1].split("ANCHOR_END", 1)[0]
+                links = [t for t in LINK.findall(part) if not re.match(r"[a-z][a-z0-9+.-]*:", t)]
+                assert not links, f"README.md's part {m.group(2)!r}, in {page.name}, links {links}"
 
 
 @pytest.fixture(scope="module")
