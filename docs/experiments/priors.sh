@@ -1,5 +1,5 @@
 #!/bin/bash
-# The README's prior experiment on the real dVRK data (../shared/data/dvrk): the prior is
+# The prior experiment of docs/book/src/fit.md on the real dVRK data (../shared/data/dvrk): the prior is
 # the fit of one whole trajectory (SDP, delays, Stribeck); the fit is periods 2-3 of the
 # other; the test is that one's first period. Prints the mean test relative error per
 # prior metric and weight. Needs the release binary (cargo build --release).

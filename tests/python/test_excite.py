@@ -33,7 +33,7 @@ def arm(arm_file):
 
 
 def series(order, f0, q0, a, b, t):
-    """The Fourier series of docs/identification.md §7.1, written out with numpy."""
+    """The Fourier series of docs/book/src/identification.md §7.1, written out with numpy."""
     w = 2 * np.pi * f0 * np.arange(1, order + 1)
     s, c = np.sin(np.outer(t, w)), np.cos(np.outer(t, w))
     q = q0 + (s / w) @ a.T - (c / w) @ b.T

@@ -26,7 +26,7 @@ def test_psm_ols_reproduces_2019(psm, psm_logs, run_cli):
     train = di.read_log(one, psm, format="wpi-csv", rate=200)
     test = di.read_log(two, psm, format="wpi-csv", rate=200)
     assert train.coordinates == "model" and train.q.shape == (5999, 7)
-    # The 2019 protocol filters the torques too (not the default, see the README).
+    # The 2019 protocol filters the torques too (not the default, see docs/book/src/fit.md).
     result = di.fit(psm, train, method="ols", cutoff=16.965, test=test, test_window=1111,
                     settings={"processing": {"filter_torque": True}})
     errors = result.metrics["test"]["relative_error"]

@@ -351,7 +351,7 @@ mod tests {
         let dq: Vec<f64> = rows.iter().map(|r| r[1]).collect();
         let tau: Vec<f64> = rows.iter().map(|r| r[2]).collect();
         let fit = fit_cable(&q, &dq, &tau, &CableSettings::default(), "sweep").unwrap();
-        // The 2019 curve (docs/dvrk.md §3.5), compared as a function over the swept range
+        // The 2019 curve (docs/book/src/dvrk.md §3.5), compared as a function over the swept range
         // less 5% at each end, where the dropped turnaround samples leave both fits
         // extrapolating.
         let p2019 = [

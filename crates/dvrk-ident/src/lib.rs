@@ -57,3 +57,9 @@ pub use fit::{fit, BoundsSet, FitSettings, Method};
 pub use result::FitResult;
 pub mod cable;
 pub mod dvrk_gc;
+
+// The book's Rust chapter (docs/book/src/rust.md): its Rust blocks are this crate's doc
+// tests, so the chapter's examples compile and pass with the API they show.
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/book/src/rust.md")]
+pub struct BookRustChapter;

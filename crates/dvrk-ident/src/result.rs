@@ -1,4 +1,4 @@
-//! The result document of a fit (JSON, schema in the README) and its exports.
+//! The result document of a fit (JSON, schema in docs/book/src/fit.md) and its exports.
 //!
 //! Scripts rely on at least: `method`, `parameters` {name: value}, `base_parameters`,
 //! `consistency` [{`link`, `min_eigenvalue`}], `solver` {`status`, `converged`,

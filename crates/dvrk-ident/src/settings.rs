@@ -111,7 +111,7 @@ pub struct Prior {
 }
 
 impl Prior {
-    /// The weight when none is given: see the README's fit section for the
+    /// The weight when none is given: see docs/book/src/fit.md (priors) for the
     /// measurements behind it.
     pub const DEFAULT_WEIGHT: f64 = 1e-3;
 

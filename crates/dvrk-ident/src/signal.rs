@@ -12,7 +12,7 @@
 //! The 2019 code called `butter(6, Wn)` with `Wn = 2*pi*fc/fs`, while scipy expects
 //! `Wn = fc / (fs/2)`: the filters it applied cut off at `pi*fc`, not `fc` (16.965 Hz
 //! instead of the stated 5.4 Hz for the PSM, 5.655 Hz instead of 1.8 Hz for the MTM; see
-//! `docs/dvrk.md` §5 and `docs/identification.md` §5.1). That is available
+//! `docs/book/src/dvrk.md` §5 and `docs/book/src/identification.md` §5.1). That is available
 //! explicitly as [`CutoffConvention::Wpi`] (and [`LowPass::wpi`],
 //! [`Processing::wpi`]) for reproducing the published numbers, never as a default.
 

@@ -1,5 +1,5 @@
 //! Acceptance on the real dVRK measurements, following the 2019 protocol
-//! (docs/dvrk.md §5, `support/protocol_2019.rs`): fit on trajectory "one", test on "two"
+//! (docs/book/src/dvrk.md §5, `support/protocol_2019.rs`): fit on trajectory "one", test on "two"
 //! over the first period, 6th-order zero-phase Butterworth at the cut-offs the 2019 code
 //! effectively applied (π·fc: 16.965 Hz PSM, 5.655 Hz MTM) on the motion and the
 //! torques, 200 samples trimmed. Prints the table; skips with a reason when ../shared
@@ -297,9 +297,9 @@ fn rows(t: &JointLog, a: usize, b: usize) -> JointLog {
     }
 }
 
-/// Issue 14's priors on real data (the README's table, in part): the prior is the fit of
-/// trajectory "one" (SDP, delays, Stribeck); the fit is periods 2–3 of "two" with those
-/// delays; the test is the first period of "two", which neither saw. Every fit converges
+/// Issue 14's priors on real data (the table of docs/book/src/fit.md, in part): the prior
+/// is the fit of trajectory "one" (SDP, delays, Stribeck); the fit is periods 2–3 of "two"
+/// with those delays; the test is the first period of "two", which neither saw. Every fit converges
 /// and is physically consistent; a heavier weight stays closer to the prior; at the
 /// default weight the held-out error is within 3 % of the fit without a prior (measured:
 /// +0.6/−0.0 % PSM, +2.0/+0.1 % MTM, entropic/Euclidean).

@@ -1,5 +1,6 @@
 //! Per-sample cost of the real-time algorithms, single thread:
-//! `cargo bench -p dvrk-model --bench dynamics`. The README quotes these numbers
+//! `cargo bench -p dvrk-model --bench dynamics`. The book's Benchmarks
+//! (docs/book/src/benchmarks.md) quotes these numbers
 //! (`<robot> inverse dynamics`, `full regressor`, `mass matrix`, `forward dynamics`,
 //! `gravity`, `nonlinear effects`, for psm, mtm and the Panda of `../shared/anchors`).
 

@@ -1,7 +1,7 @@
 //! What the program accepts as input: sizes and physical ranges, checked where a number
 //! or a file enters (descriptions, URDF, result and parameter files, limits files), so
 //! that nothing downstream meets a NaN, an overflow or an allocation it cannot make.
-//! The README's "Bad input" section lists the same limits.
+//! The book's "Bad input" (docs/book/src/bad-input.md) lists the same limits.
 
 use std::io::Read;
 use std::path::Path;

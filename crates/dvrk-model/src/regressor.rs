@@ -9,7 +9,7 @@
 //! coefficients are formed once per link, then the joints of the link's path go two at
 //! a time through SIMD lanes; links of a body at the same pose share their rows. The
 //! link blocks are written in place (the first one of a row) and only the rest of a
-//! row is zeroed. Element columns follow `docs/identification.md` §3.2.
+//! row is zeroed. Element columns follow `docs/book/src/identification.md` §3.2.
 
 use nalgebra::Vector3;
 use wide::f64x2;

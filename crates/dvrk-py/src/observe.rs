@@ -25,8 +25,9 @@ use crate::overrides::Overrides;
 /// logs themselves. They pickle (as :meth:`__bytes__`), so Dask, Ray or
 /// ``multiprocessing`` can carry them between processes.
 ///
-/// ``bytes(obs)`` is the file of ``dvrk-ident observe --out`` (layout in the README),
-/// :meth:`from_bytes` reads it back, :meth:`write` / :meth:`read` use files.
+/// ``bytes(obs)`` is the file of ``dvrk-ident observe --out`` (layout in
+/// docs/book/src/distributed.md), :meth:`from_bytes` reads it back, :meth:`write` /
+/// :meth:`read` use files.
 #[pyclass(name = "Observation", module = "dvrk_ident", frozen)]
 pub struct ObservationPy {
     pub inner: Arc<ObservationState>,

@@ -1,4 +1,4 @@
-//! The excitation criterion (`docs/identification.md` §7) and its gradient: the
+//! The excitation criterion (`docs/book/src/identification.md` §7) and its gradient: the
 //! condition number or log-determinant of the column-normalized base regressor over a
 //! grid of one period, with the optimizer's smooth surrogates (soft-max/soft-min of the
 //! eigenvalues, `tanh` for the Coulomb columns' signs). [`super::optimize`] searches

@@ -1,4 +1,4 @@
-//! Finite Fourier series excitation trajectories (`docs/identification.md` §7.1).
+//! Finite Fourier series excitation trajectories (`docs/book/src/identification.md` §7.1).
 //!
 //! Per coordinate `j`, with `w_f = 2π f0` (`f0` = [`FourierTrajectory::base_frequency_hz`])
 //! and `L` = [`FourierTrajectory::order`]:

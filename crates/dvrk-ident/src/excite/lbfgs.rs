@@ -2,8 +2,8 @@
 //!
 //! Our own although the project prefers crates: argmin's L-BFGS (backtracking Armijo or
 //! More–Thuente line search) ended at MTM condition 223.6 / 222.7, above the 2019
-//! trajectory, where this one reaches 216.4 (measured 2026-11-22; numbers in the
-//! README, "Excitation trajectories").
+//! trajectory, where this one reaches 216.4 (measured 2026-11-22; numbers in
+//! docs/book/src/excitation.md).
 
 // `!(x < 0.0)`-style tests are deliberate: they also catch NaN.
 #![allow(

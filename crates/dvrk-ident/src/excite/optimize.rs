@@ -1,4 +1,4 @@
-//! Optimal excitation trajectories (`docs/identification.md` §7): choose the Fourier
+//! Optimal excitation trajectories (`docs/book/src/identification.md` §7): choose the Fourier
 //! coefficients (per coordinate `q0`, `a_l`, `b_l`, `l = 1..L`) that minimize the
 //! condition number of the column-normalized base regressor stacked over one period
 //! (or maximize its log-determinant, D-optimality), subject to position, velocity and
@@ -49,7 +49,7 @@
 //! one or none ends below the 2019 trajectory's 219.3. With one draw per start and no
 //! hops (the defaults until 2026-11-24) seeds 0 to 5 ended between 213.2 and 231.5
 //! depending on the build; with 4 draws per start and 4 hops they end between 209.9 and
-//! 216.9 with both builds (README, "Excitation trajectories").
+//! 216.9 with both builds (`docs/book/src/excitation.md`).
 //!
 //! The L-BFGS (`excite/lbfgs.rs`) and the random numbers (`excite/rng.rs`) are our own
 //! although the project prefers crates; their modules say what the crates measured.

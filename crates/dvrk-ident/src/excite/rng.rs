@@ -2,8 +2,8 @@
 //! for a seed, so an excitation is reproducible from its seed.
 //!
 //! Our own although the project prefers crates: ChaCha8 with rand_distr's normal samples
-//! gave worse MTM excitations on 5 of 6 seeds (measured 2026-11-22; README, "Excitation
-//! trajectories").
+//! gave worse MTM excitations on 5 of 6 seeds (measured 2026-11-22;
+//! docs/book/src/excitation.md).
 
 use std::f64::consts::PI;
 

@@ -1,4 +1,4 @@
-//! The 2019 protocol on the real dVRK measurements (docs/dvrk.md §5), shared by the
+//! The 2019 protocol on the real dVRK measurements (docs/book/src/dvrk.md §5), shared by the
 //! acceptance test, the OpenBLAS-reference test of the semidefinite fit and the SDP
 //! timing bench, so all three fit exactly the same problems: fit on trajectory "one",
 //! test on "two" over the first period, 6th-order zero-phase Butterworth at the cut-offs

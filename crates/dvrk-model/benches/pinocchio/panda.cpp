@@ -1,4 +1,5 @@
-// Pinocchio reference timings on the Panda, for the "Benchmarks" table of the README
+// Pinocchio reference timings on the Panda, for the table of the book's Benchmarks
+// (docs/book/src/benchmarks.md)
 // (issue 16). Built and run by run.sh beside this file; see README.md there.
 //
 //   panda <panda_arm_7dof.urdf> [samples=64] [rounds=15]
