@@ -298,7 +298,7 @@ def test_readme_is_a_front_page():
     # The command lines the snippets run, continued lines joined.
     runs = [" ".join(line.split()) for b in fenced_blocks(readme) if runnable(b)
             for line in b.code.replace("\\\n", " ").splitlines()]
-    recommended = "--method sdp --delay auto --stribeck 0.3"
+    recommended = "--preset dvrk"
     for arm in ("psm", "mtm"):
         command = f"dvrk-ident fit LOG --robot {arm} {recommended}"
         assert command in first_screen, f"README.md's first screen lacks `{command}`"

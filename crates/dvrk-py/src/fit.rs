@@ -473,13 +473,19 @@ impl FitResultPy {
         array(py, self.inner.weights.clone(), &[n])
     }
 
-    /// The :class:`Model` of this result: the one it was fitted (or read) with, else
-    /// loaded from ``robot_source``.
+    /// The :class:`Model` of this result, whose parameters are this result's: the one it
+    /// was fitted (or read) with, else loaded from ``robot_source``, with the Stribeck
+    /// terms of its fit.
     fn load_robot(&self, py: Python<'_>) -> PyResult<Py<ModelPy>> {
-        if let Some(r) = &self.robot {
-            return Ok(r.clone_ref(py));
-        }
         let stribeck = self.inner.settings.stribeck_velocity;
+        if let Some(r) = &self.robot {
+            let given = r.get();
+            // The robot given to the fit, with the Stribeck terms the fit added to it.
+            if self.model(py, None)?.n_params() == given.model.n_params() {
+                return Ok(r.clone_ref(py));
+            }
+            return Py::new(py, ModelPy::build(py, given.origin.clone(), stribeck)?);
+        }
         Py::new(
             py,
             ModelPy::of_result(py, &self.inner.robot_source, stribeck)?,

@@ -26,7 +26,7 @@ impl ModelPy {
 
     /// The model `origin` describes, with Stribeck terms of velocity `stribeck` if given
     /// (built without the GIL).
-    fn build(py: Python<'_>, origin: Origin, stribeck: Option<f64>) -> PyResult<ModelPy> {
+    pub(crate) fn build(py: Python<'_>, origin: Origin, stribeck: Option<f64>) -> PyResult<ModelPy> {
         let model = py.detach(|| origin.build(stribeck)).map_err(from_model)?;
         Ok(ModelPy {
             stribeck,
