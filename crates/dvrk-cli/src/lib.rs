@@ -40,6 +40,9 @@ enum Command {
     /// Errors of an identified model on other logs, processed with the result's own
     /// settings (processing flags replace them; the output names what differs).
     Validate(cmd::validate::Args),
+    /// Two results side by side: the settings that differ, the parameters with their
+    /// uncertainty, and each one's errors on test logs.
+    Compare(cmd::compare::Args),
     /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
     CableFit(cmd::cable_fit::Args),
     /// Simulate a log of a robot with known parameters along a Fourier trajectory.
@@ -77,6 +80,7 @@ where
         Command::Fit(args) => cmd::fit::run(args),
         Command::Observe(args) => cmd::observe::run(args),
         Command::Validate(args) => cmd::validate::run(args),
+        Command::Compare(args) => cmd::compare::run(args),
         Command::CableFit(args) => cmd::cable_fit::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),

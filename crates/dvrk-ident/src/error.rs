@@ -86,6 +86,18 @@ pub enum IdentError {
         /// What is wrong and where.
         message: String,
     },
+    /// Two results compared that were fitted for different robots.
+    #[error("{a} was fitted for {a_robot}, {b} for {b_robot}: results of different robots do not compare")]
+    DifferentRobots {
+        /// The first result (its file, or what stands for it).
+        a: String,
+        /// The robot it records.
+        a_robot: String,
+        /// The second result.
+        b: String,
+        /// The robot it records.
+        b_robot: String,
+    },
     /// An observation state file that is not one, or not of this format version.
     #[error("{file}: {message}")]
     State {

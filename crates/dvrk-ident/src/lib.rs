@@ -26,6 +26,7 @@
 
 #![warn(missing_docs)]
 
+pub mod compare;
 pub mod error;
 pub mod estimate;
 pub mod excite;

@@ -224,29 +224,23 @@ impl FitSettings {
     }
 }
 
-/// One setting that differs between two [`FitSettings`]: its path in the result
-/// document's `settings` (e.g. `processing.filter.cutoff_hz`) and both values as JSON.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct SettingDifference {
-    /// Dot-separated path in the `settings` document; list items as `[k]`.
+/// A leaf of two documents (two results' settings) whose values differ: its place,
+/// e.g. `processing.filter.cutoff_hz`, and both values (`null` where one has none).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Difference {
+    /// The leaf's place: object keys joined by `.`, array positions as `[i]`.
     pub path: String,
-    /// The value in the settings compared (`null` where it has none).
-    pub value: serde_json::Value,
-    /// The value in the settings compared with.
-    pub base: serde_json::Value,
-}
-
-impl std::fmt::Display for SettingDifference {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{} {} (fit: {})", self.path, self.value, self.base)
-    }
+    /// Its value in the first document.
+    pub a: serde_json::Value,
+    /// Its value in the second.
+    pub b: serde_json::Value,
 }
 
 impl FitSettings {
-    /// Every setting of `self` that differs from `base`, in document order: walked over
-    /// the serialized documents, so a setting added later is compared without code
-    /// here. What `validate` and `report` print when their flags change the fit's
-    /// processing, and what `compare` lists.
+    /// Every setting of `self` (`a`) that differs from `other` (`b`): walked over the
+    /// serialized documents, so a setting added later is compared without code here.
+    /// What `validate` prints when its flags change the fit's processing, and what
+    /// `compare` lists.
     ///
     /// ```rust
     /// use dvrk_ident::FitSettings;
@@ -255,27 +249,25 @@ impl FitSettings {
     /// other.processing.trim = 20;
     /// let d = other.differences(&fit);
     /// assert_eq!(d.len(), 1);
-    /// assert_eq!(d[0].to_string(), "processing.trim 20 (fit: 200)");
+    /// assert_eq!((d[0].path.as_str(), d[0].a.as_u64(), d[0].b.as_u64()), ("processing.trim", Some(20), Some(200)));
     /// assert!(fit.differences(&fit).is_empty());
     /// ```
-    pub fn differences(&self, base: &FitSettings) -> Vec<SettingDifference> {
-        let mut out = Vec::new();
-        let (a, b) = (
-            serde_json::to_value(self).unwrap_or_default(),
-            serde_json::to_value(base).unwrap_or_default(),
-        );
-        json_differences("", &a, &b, &mut out);
-        out
+    pub fn differences(&self, other: &FitSettings) -> Vec<Difference> {
+        let value = |s: &FitSettings| serde_json::to_value(s).unwrap_or_default();
+        json_differences(&value(self), &value(other))
     }
 }
 
-/// The leaves where `a` and `b` differ, under `path`.
-fn json_differences(
-    path: &str,
-    a: &serde_json::Value,
-    b: &serde_json::Value,
-    out: &mut Vec<SettingDifference>,
-) {
+/// Every leaf where `a` and `b` differ, walked together: objects key by key (a missing
+/// key is `null`, as an unset optional setting), arrays of the same length element by
+/// element; anything else that differs is one leaf.
+pub fn json_differences(a: &serde_json::Value, b: &serde_json::Value) -> Vec<Difference> {
+    let mut out = Vec::new();
+    walk("", a, b, &mut out);
+    out
+}
+
+fn walk(path: &str, a: &serde_json::Value, b: &serde_json::Value, out: &mut Vec<Difference>) {
     use serde_json::Value;
     let join = |key: &str| {
         if path.is_empty() {
@@ -286,22 +278,24 @@ fn json_differences(
     };
     match (a, b) {
         (Value::Object(x), Value::Object(y)) => {
-            for (k, v) in x {
-                json_differences(&join(k), v, y.get(k).unwrap_or(&Value::Null), out);
-            }
-            for (k, v) in y.iter().filter(|(k, _)| !x.contains_key(*k)) {
-                json_differences(&join(k), &Value::Null, v, out);
+            let keys = x.keys().chain(y.keys().filter(|k| !x.contains_key(*k)));
+            for k in keys {
+                let (va, vb) = (
+                    x.get(k).unwrap_or(&Value::Null),
+                    y.get(k).unwrap_or(&Value::Null),
+                );
+                walk(&join(k), va, vb, out);
             }
         }
         (Value::Array(x), Value::Array(y)) if x.len() == y.len() => {
-            for (k, (v, w)) in x.iter().zip(y).enumerate() {
-                json_differences(&format!("{path}[{k}]"), v, w, out);
+            for (i, (va, vb)) in x.iter().zip(y).enumerate() {
+                walk(&format!("{path}[{i}]"), va, vb, out);
             }
         }
-        _ if a != b => out.push(SettingDifference {
+        _ if a != b => out.push(Difference {
             path: path.to_string(),
-            value: a.clone(),
-            base: b.clone(),
+            a: a.clone(),
+            b: b.clone(),
         }),
         _ => {}
     }

@@ -25,7 +25,10 @@ use crate::observe::observations_arg;
 use crate::overrides::Overrides;
 
 /// A :class:`JointLog` or a list of them: the samples and the files they were read from.
-fn logs_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec<(Arc<JointLog>, Option<PathBuf>)>> {
+pub(crate) fn logs_arg(
+    obj: &Bound<'_, PyAny>,
+    name: &str,
+) -> PyResult<Vec<(Arc<JointLog>, Option<PathBuf>)>> {
     let one = |d: &Bound<'_, PyAny>| -> PyResult<(Arc<JointLog>, Option<PathBuf>)> {
         let d = d.cast::<JointLogPy>().map_err(|_| {
             input(format!(
@@ -274,7 +277,11 @@ fn prepared(
 impl FitResultPy {
     /// The model: `robot`, else the one fitted with, else loaded from `robot_source`;
     /// with the fit's model options (Stribeck terms) applied.
-    fn model(&self, py: Python<'_>, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Arc<Model>> {
+    pub(crate) fn model(
+        &self,
+        py: Python<'_>,
+        robot: Option<&Bound<'_, ModelPy>>,
+    ) -> PyResult<Arc<Model>> {
         let base = if let Some(r) = robot {
             r.get().model.clone()
         } else if let Some(r) = &self.robot {

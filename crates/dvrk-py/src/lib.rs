@@ -7,6 +7,7 @@
 //! and log reading on a worker thread polled for Ctrl-C).
 
 mod classes;
+mod compare;
 mod convert;
 mod data;
 mod deprecated;
@@ -48,6 +49,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::fit::{fit, prepare};
+
+    #[pymodule_export]
+    use crate::compare::compare;
 
     #[pymodule_export]
     use crate::observe::{observe, ObservationPy};

@@ -2,6 +2,7 @@
 
 pub mod args;
 pub mod cable_fit;
+pub mod compare;
 pub mod convert;
 pub mod excite;
 pub mod export;

@@ -49,7 +49,10 @@ pub fn run(args: Args) -> Result<()> {
     let mut reports = Vec::new();
     let mut text = String::new();
     if !changed.is_empty() {
-        let list: Vec<String> = changed.iter().map(|d| d.to_string()).collect();
+        let list: Vec<String> = changed
+            .iter()
+            .map(|d| format!("{} {} (fit: {})", d.path, d.a, d.b))
+            .collect();
         let _ = writeln!(
             text,
             "note: these logs are processed with settings that differ from the fit's, \

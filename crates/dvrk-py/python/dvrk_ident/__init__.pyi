@@ -7,7 +7,7 @@ a leading sample axis, which a single 1-D sample drops.
 
 import os
 import pathlib
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -414,6 +414,19 @@ def prepare(
     settings: Optional[Mapping[str, Any]] = None,
 ) -> Prepared:
     """The processed samples the estimators see."""
+
+def compare(
+    a: FitResult,
+    b: FitResult,
+    test: Optional[Union[JointLog, Sequence[JointLog]]] = None,
+    *,
+    test_window: Optional[int] = None,
+    names: Optional[Tuple[str, str]] = None,
+) -> Dict[str, Any]:
+    """Two results side by side (``dvrk-ident compare --json``): the settings that
+    differ, the base parameters with their standard deviations and the difference in
+    combined standard deviations, every parameter and link mass, and each result's
+    per-joint errors on the ``test`` logs with its own model and processing."""
 
 #: Limits of an excitation: None (the robot description's), a limits file (TOML with
 #: ``[[limits]]`` and ``[[cartesian_limits]]`` tables) or a dict in that layout.
