@@ -75,7 +75,8 @@ fn py_str(text: &str) -> String {
     serde_json::to_string(text).unwrap_or_else(|_| format!("{text:?}"))
 }
 
-/// A JSON value as a Python literal (`true` → `True`, `null` → `None`).
+/// A JSON value as a Python literal (`true` → `True`, `null` → `None`), dictionary keys
+/// in sorted order.
 fn py_value(v: &serde_json::Value) -> String {
     use serde_json::Value;
     match v {
@@ -87,13 +88,20 @@ fn py_value(v: &serde_json::Value) -> String {
             "[{}]",
             a.iter().map(py_value).collect::<Vec<_>>().join(", ")
         ),
-        Value::Object(o) => format!(
-            "{{{}}}",
-            o.iter()
-                .map(|(k, v)| format!("{}: {}", py_str(k), py_value(v)))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
+        Value::Object(o) => {
+            // Keys sorted, whatever order the map keeps (serde_json's depends on its
+            // features, which the workspace's crates unify differently per build).
+            let mut entries: Vec<(&String, &serde_json::Value)> = o.iter().collect();
+            entries.sort_by(|a, b| a.0.cmp(b.0));
+            format!(
+                "{{{}}}",
+                entries
+                    .iter()
+                    .map(|(k, v)| format!("{}: {}", py_str(k), py_value(v)))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        }
     }
 }
 
@@ -575,8 +583,8 @@ mod tests {
         assert!(
             py.text.contains(
                 "result = di.fit(robot, train, method=\"sdp\", test=test, settings={\"delay_search_s\": 0.05, \
-                 \"processing\": {\"filter\": {\"order\": 6, \"cutoff_hz\": 5.4, \"form\": \"ba\", \
-                 \"convention\": \"wpi\", \"padlen\": 20}, \"velocity_stencil\": \"three_point\"}})"
+                 \"processing\": {\"filter\": {\"convention\": \"wpi\", \"cutoff_hz\": 5.4, \"form\": \"ba\", \
+                 \"order\": 6, \"padlen\": 20}, \"velocity_stencil\": \"three_point\"}})"
             ),
             "{}",
             py.text
