@@ -234,6 +234,25 @@ pub fn envelope(x: &[f64], y: &[f64], max_points: usize) -> Vec<(f64, f64)> {
     out
 }
 
+/// An axis label for the tick at `v` on an axis spanning `span`: the digits the tick
+/// spacing (about a sixth of the span) needs, trailing zeros dropped, never `-0`.
+pub fn tick_label(v: f64, span: f64) -> String {
+    let step = span / 6.0;
+    let digits = if step > 0.0 && step.is_finite() {
+        (2 - step.log10().floor() as i32).clamp(0, 12) as usize
+    } else {
+        3
+    };
+    let mut text = format!("{v:.digits$}");
+    if text.contains('.') {
+        text = text.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    if text == "-0" {
+        text = "0".into();
+    }
+    text
+}
+
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
@@ -303,6 +322,8 @@ impl Panel {
             .configure_mesh()
             .light_line_style(TRANSPARENT)
             .bold_line_style(RGBColor(225, 225, 225))
+            .x_label_formatter(&|v| tick_label(*v, x1 - x0))
+            .y_label_formatter(&|v| tick_label(*v, y1 - y0))
             .x_desc(self.x_label.as_str())
             .y_desc(self.y_label.as_str())
             .label_style(("sans-serif", 12))
@@ -551,6 +572,16 @@ mod tests {
         assert!(e.iter().any(|p| p == &(8000.0, -5.0)));
         assert!(e.windows(2).all(|w| w[0].0 < w[1].0));
         assert_eq!(envelope(&x[..10], &y[..10], 500).len(), 10);
+    }
+
+    #[test]
+    fn tick_labels_have_the_spacings_digits_and_no_negative_zero() {
+        assert_eq!(tick_label(-0.0, 0.6), "0");
+        assert_eq!(tick_label(-1e-17, 0.6), "0");
+        assert_eq!(tick_label(0.25, 1.5), "0.25");
+        assert_eq!(tick_label(0.30000000000000004, 1.5), "0.3");
+        assert_eq!(tick_label(25.0, 28.0), "25");
+        assert_eq!(tick_label(-0.002, 0.012), "-0.002");
     }
 
     #[test]
