@@ -240,7 +240,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
             "base_parameters",
             &format!(
                 "Base parameters by name (a long expression shows its leading name and its \
-                 number of terms; the table below has every expression): value ± 2σ on a \
+                 number of terms; the Base parameters table has every expression): value ± 2σ on a \
                  symmetric logarithmic axis, linear within ±{:e}, and the relative standard \
                  deviation on a logarithmic axis.",
                 base_chart::BaseParameterChart::new(result).linear_threshold()
