@@ -215,11 +215,13 @@ fn stribeck_fit_is_read_back_by_validate_and_report() {
     ]);
     let html = std::fs::read_to_string(dir.join("rep/report.html")).unwrap();
     assert!(html.contains("<td class=l>Fs16</td>"));
-    // One metrics table: the fit's training errors and this log's side by side.
+    // One metrics table, each column once: this log's errors are the fit's training
+    // errors (same log, same settings), so the fit's column names it instead of a copy.
     assert!(
-        html.contains("<th colspan=2>fit: training (") && html.contains("<th colspan=2>log 1 ("),
-        "side by side"
+        html.contains("<th colspan=2>fit: training, shown as log 1 ("),
+        "one column"
     );
+    assert_eq!(html.matches("<th colspan=2>").count(), 1);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -254,5 +256,155 @@ fn fit_with_excitation_uses_its_period_and_draws_it() {
         &[&fit[..], &["--test-window", "300"]].concat(),
     ));
     assert_eq!(r["metrics"]["test"]["samples"], 300);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The words of a command line as a POSIX shell splits it: blanks separate words, single
+/// quotes keep everything up to the next one (the quoting `reproduce::shell_quote` uses).
+fn shell_words(text: &str) -> Vec<String> {
+    let mut words = Vec::new();
+    let mut word: Option<String> = None;
+    let mut quoted = false;
+    for c in text.chars() {
+        match (quoted, c) {
+            (true, '\'') => quoted = false,
+            (true, c) => word.get_or_insert_with(String::new).push(c),
+            (false, '\'') => {
+                quoted = true;
+                word.get_or_insert_with(String::new);
+            }
+            (false, c) if c.is_whitespace() => words.extend(word.take()),
+            (false, '\\') => panic!("no backslash outside quotes expected: {text}"),
+            (false, c) => word.get_or_insert_with(String::new).push(c),
+        }
+    }
+    assert!(!quoted, "unbalanced quote: {text}");
+    words.extend(word);
+    words
+}
+
+/// The command line a report shows is the fit's: run as the shell would split it, the
+/// real command line writes a document with the same settings and inputs (so the
+/// rendering cannot drift from the flags). Non-default settings of several kinds: a
+/// per-coordinate cut-off, trimming, decimation, a minimum speed, fixed delays, a
+/// Stribeck term, a test window; a log path with a space.
+#[test]
+fn the_reports_command_line_repeats_the_fit() {
+    use dvrk_ident::log::ReadOptions;
+    use dvrk_ident::reproduce::cli_command;
+
+    let dir = temp_dir("reproduce");
+    let log = dir.join("psm excitation.mcap");
+    std::fs::copy(example("psm_excitation.mcap"), &log).unwrap();
+    let first = dir.join("first.json");
+    let rep = dir.join("rep");
+    run_ok(&[
+        "fit",
+        log.to_str().unwrap(),
+        "--robot",
+        "psm",
+        "--method",
+        "ols",
+        "--cutoff",
+        "4,4,4,3.5,3.5,3.5,3.5",
+        "--trim",
+        "150",
+        "--decimate",
+        "2",
+        "--min-speed",
+        "0.001",
+        "--delay",
+        "0.005,0,0,0.01,0,0,0",
+        "--stribeck",
+        "0.2",
+        "--test",
+        &example("psm_excitation.mcap"),
+        "--test-window",
+        "300",
+        "--out",
+        first.to_str().unwrap(),
+        "--report",
+        rep.to_str().unwrap(),
+    ]);
+    let result = dvrk_ident::FitResult::read(&first).unwrap();
+    let rendered = cli_command(
+        &result.robot_source,
+        &result.settings,
+        &result.inputs,
+        Some(&ReadOptions::default()),
+    );
+    assert!(rendered.unrendered.is_empty(), "{:?}", rendered.unrendered);
+    let words = shell_words(&rendered.text);
+    assert_eq!(words, rendered.args);
+    assert_eq!(words[..2], ["dvrk-ident", "fit"]);
+    assert!(
+        rendered.text.contains("'"),
+        "the path with a space is quoted"
+    );
+
+    let again = dir.join("again.json");
+    let mut args = words[1..].to_vec();
+    args.extend(["--out".to_string(), again.display().to_string()]);
+    run_ok(&args);
+    let (a, b) = (read_json(&first), read_json(&again));
+    assert_eq!(a["settings"], b["settings"]);
+    assert_eq!(a["inputs"], b["inputs"]);
+    assert_eq!(a["parameters"], b["parameters"]);
+
+    // The report shows that command line (HTML-escaped), and the Python call.
+    let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    let escaped = dvrk_ident::report::html::escape(&rendered.text);
+    assert!(
+        html.contains(&format!("<pre id=command-line>{escaped}</pre>")),
+        "{escaped}"
+    );
+    assert!(html.contains("result = di.fit(robot, train, method=&quot;ols&quot;"));
+    assert!(!html.contains("id=not-reproduced"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A setting without a flag is named in the page, not rendered as an invented flag: a
+/// result whose filter is the 2019 one (transfer-function form, the 2019 cut-off
+/// convention) reported again.
+#[test]
+fn a_setting_without_a_flag_is_named_in_the_report() {
+    let dir = temp_dir("noflag");
+    let out = dir.join("result.json");
+    run_ok(&fit_example_args(&[
+        "--method",
+        "ols",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let mut doc = read_json(&out);
+    doc["settings"]["processing"]["filter"]["form"] = "ba".into();
+    doc["settings"]["processing"]["filter"]["convention"] = "wpi".into();
+    doc["settings"]["processing"]["filter"]["padlen"] = 20.into();
+    std::fs::write(&out, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+    let rep = dir.join("rep");
+    run_ok(&[
+        "report",
+        out.to_str().unwrap(),
+        "--out",
+        rep.to_str().unwrap(),
+    ]);
+    let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    let start = html
+        .find("<ul id=not-reproduced>")
+        .expect("the list of what is not repeated");
+    let list = &html[start..start + html[start..].find("</ul>").unwrap()];
+    assert!(list.contains("the low-pass filter"), "{list}");
+    assert!(
+        list.contains("&quot;convention&quot;:&quot;wpi&quot;"),
+        "{list}"
+    );
+    let command = &html[html.find("<pre id=command-line>").unwrap()..];
+    let command = &command[..command.find("</pre>").unwrap()];
+    assert!(
+        !command.contains("wpi") && !command.contains("--cutoff"),
+        "{command}"
+    );
+    // Python carries it in settings=.
+    assert!(html.contains("settings={&quot;processing&quot;: {&quot;filter&quot;:"));
     std::fs::remove_dir_all(&dir).unwrap();
 }

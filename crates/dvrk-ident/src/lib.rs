@@ -41,6 +41,7 @@ pub mod output;
 pub mod progress;
 #[cfg(feature = "report")]
 pub mod report;
+pub mod reproduce;
 pub mod request;
 pub mod settings;
 pub mod signal;

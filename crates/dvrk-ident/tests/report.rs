@@ -88,14 +88,19 @@ fn torque_figure_has_one_panel_per_joint_with_three_series_and_units() {
     let data = prepare(&model, &log, &result.settings.processing).unwrap();
     let predicted = predict(&model, &params, &data);
     let metrics = joint_metrics(&model, &params, &data, None);
-    let fig = figures::torque_figure(&model, "training", &data, &predicted, &metrics);
-    assert_eq!(fig.panels.len(), 7);
+    let zoom = figures::zoom_window(&data.time, &data.tau);
+    let fig = figures::torque_figure(&model, "training", &data, &predicted, &metrics, zoom);
+    // Per coordinate the whole log, then its zoomed window.
+    assert_eq!(fig.panels.len(), 14);
     // q3 is the PSM insertion (prismatic): newtons; the others newton-metres.
-    assert_eq!(fig.panels[2].y_label, "torque (N)");
+    assert_eq!(fig.panels[4].y_label, "torque (N)");
     assert_eq!(fig.panels[0].y_label, "torque (N·m)");
-    for (j, p) in fig.panels.iter().enumerate() {
+    let (a, b) = zoom;
+    assert!(b > a && b <= data.len());
+    for j in 0..7 {
+        let (p, z) = (&fig.panels[2 * j], &fig.panels[2 * j + 1]);
         let labels: Vec<&str> = p.series.iter().map(|s| s.label.as_str()).collect();
-        assert_eq!(labels, ["measured", "predicted", "error"]);
+        assert_eq!(labels, ["measured", "predicted", "measured − predicted"]);
         // The error series is measured minus predicted, sample by sample.
         for k in [0, data.len() / 2, data.len() - 1] {
             assert_eq!(p.series[2].y[k], data.tau[(k, j)] - predicted[(k, j)]);
@@ -103,13 +108,16 @@ fn torque_figure_has_one_panel_per_joint_with_three_series_and_units() {
         assert!(p
             .title
             .contains(&format!("{:.4}", metrics.relative_error[j])));
+        // The zoom is the window's samples, and the whole-log panel shades it.
+        assert_eq!(z.series[0].y, p.series[0].y[a..b].to_vec());
+        assert_eq!(p.vspans, [(p.series[0].x[a], p.series[0].x[b - 1])]);
     }
 
     let svg = String::from_utf8(render(&fig, ImageFormat::Svg).unwrap()).unwrap();
     assert_eq!(svg_size(&svg), fig.size());
     assert!(svg.trim_end().ends_with("</svg>"));
-    // Per panel: the predicted curve with every sample (fewer than MAX_POINTS here),
-    // plus its legend sample.
+    // Per coordinate: the predicted curve with every sample (fewer than the panel keeps
+    // here) and its zoom, plus one legend sample for the figure.
     let red = polylines(&svg, "#D62728");
     assert!(data.len() < MAX_POINTS);
     assert_eq!(
@@ -117,8 +125,10 @@ fn torque_figure_has_one_panel_per_joint_with_three_series_and_units() {
         7,
         "{red:?}"
     );
-    assert_eq!(red.len(), 14);
-    assert_eq!(svg.matches(">\nmeasured\n</text>").count(), 7);
+    assert_eq!(red.iter().filter(|&&n| n == b - a).count(), 7, "{red:?}");
+    assert_eq!(red.len(), 15);
+    // One legend, above the panels (outside every chart).
+    assert_eq!(svg.matches(">\nmeasured\n</text>").count(), 1);
 
     let png = render(&fig, ImageFormat::Png).unwrap();
     let (w, h, pixels) = png_size(&png);
@@ -145,7 +155,8 @@ fn long_series_are_reduced_to_their_envelope() {
     long.time = (0..rows.len()).map(|k| k as f64 * 0.005).collect();
     let predicted = predict(&model, &params, &long);
     let metrics = joint_metrics(&model, &params, &long, None);
-    let fig = figures::torque_figure(&model, "long", &long, &predicted, &metrics);
+    let zoom = figures::zoom_window(&long.time, &long.tau);
+    let fig = figures::torque_figure(&model, "long", &long, &predicted, &metrics, zoom);
     let svg = String::from_utf8(render(&fig, ImageFormat::Svg).unwrap()).unwrap();
     let red = polylines(&svg, "#D62728");
     let longest = *red.iter().max().unwrap();
@@ -175,6 +186,7 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
             },
         ],
         excitation: Some(&traj),
+        read: None,
     };
     let report = build(&input).unwrap();
     let stems: Vec<&str> = report.figures.iter().map(|f| f.stem.as_str()).collect();
@@ -183,8 +195,12 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
         [
             "torque_1_training",
             "processing_1_training",
+            "friction_1_training",
+            "residuals_1_training",
             "torque_2_test",
             "processing_2_test",
+            "friction_2_test",
+            "residuals_2_test",
             "base_parameters",
             "excitation",
             "kinematics"
@@ -209,6 +225,20 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
         assert!((a - b).abs() <= 1e-12 * b.abs(), "{again:?} vs {fitted:?}");
     }
     assert_eq!(report.logs[1].metrics.samples, 100);
+    // Each metrics column once: the report's training log is the fit's training column,
+    // its windowed test log a column of its own (the fit tested on the whole log).
+    assert_eq!(html.matches("<th colspan=2>").count(), 3, "{html}");
+    assert!(html.contains("fit: training, shown as training"));
+    // The sections at the top, and the figures by id.
+    let top = html.find("id=reproduce").unwrap();
+    assert!(top < html.find("id=metrics").unwrap());
+    assert!(html.contains("<pre id=command-line>dvrk-ident fit "));
+    assert!(html.contains("<pre id=python-call>import dvrk_ident as di"));
+    // The logs of this fit were samples, and how they were read is not known: said.
+    assert!(html.contains("<ul id=not-reproduced>"));
+    for stem in &stems {
+        assert!(html.contains(&format!("<figure id=\"{stem}\">")), "{stem}");
+    }
     for b in &result.base_parameters {
         assert!(html.contains(&dvrk_ident::report::html::escape(&b.expression)));
     }
@@ -312,4 +342,102 @@ fn kinematic_drawing_flags_closed_chain_frames_and_draws_every_frame() {
     assert_eq!(svg.matches("<circle").count(), 2 * d.frames.len());
     assert!(kinematic_drawing(&model, &[0.0; 3]).is_err());
     assert!(kinematic_drawing(&model, &[f64::NAN; 7]).is_err());
+}
+
+/// The friction curve of a simulated log whose friction is known: for every coordinate
+/// moved by one friction element alone (the PSM's yaw, pitch, insertion and roll), each
+/// bin's median of the measured torque minus the model without friction lies on the
+/// true law `Fc·sign(v) + Fv·v + Fo` at the bin's median velocity within what the
+/// torque noise allows, and so does the model's friction curve. The log: the bundled
+/// example's parameters and trajectory, four periods at 200 Hz with white torque noise.
+#[test]
+fn friction_curve_of_a_simulated_log_lies_on_the_true_friction_law() {
+    use dvrk_ident::report::curves::{friction_curves, MIN_BIN_SAMPLES};
+    use dvrk_ident::simulate::{simulate, Simulation};
+
+    let model = Model::builtin("psm").unwrap();
+    let truth = dvrk_test_support::fixtures::example_params(&model);
+    let traj = FourierTrajectory::from_json_file(examples().join("psm_trajectory.json")).unwrap();
+    let sigma = 0.002;
+    let sim = Simulation {
+        duration_s: Some(4.0 * traj.period_s()),
+        noise_std: vec![sigma],
+        seed: 11,
+        ..Simulation::default()
+    };
+    let log = simulate(&model, &truth, &traj, &sim).unwrap();
+    let mut processing = settings().processing;
+    processing.filter = None;
+    let data = prepare(&model, &log, &processing).unwrap();
+    let curves = friction_curves(&model, &truth, &data);
+    assert_eq!(curves.len(), model.dof());
+
+    // Coordinates whose friction is one frame's, on `s = c·q_j`.
+    let value = |name: &str| truth[model.param_index(name).unwrap()];
+    let mut checked = Vec::new();
+    for (j, curve) in curves.iter().enumerate() {
+        let frames: Vec<(usize, f64)> = model
+            .frames
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.friction().is_some())
+            .filter_map(|(i, f)| {
+                f.value
+                    .terms
+                    .iter()
+                    .find(|&&(c, _)| c == j)
+                    .map(|&(_, a)| (i + 1, a * f64::from(u8::from(f.value.terms.len() == 1))))
+            })
+            .collect();
+        let [(frame, c)] = frames[..] else { continue };
+        if c == 0.0 {
+            continue;
+        }
+        let (fc, fv, fo) = (
+            value(&format!("Fc{frame}")),
+            value(&format!("Fv{frame}")),
+            value(&format!("Fo{frame}")),
+        );
+        let law = |v: f64| {
+            let s = c * v;
+            c * (fc * s.signum() * f64::from(u8::from(s != 0.0)) + fv * s + fo)
+        };
+        assert!(
+            curve.bins.len() >= 15,
+            "{}: {} bins",
+            curve.coordinate,
+            curve.bins.len()
+        );
+        let mut worst: f64 = 0.0;
+        for b in &curve.bins {
+            assert!(b.count >= MIN_BIN_SAMPLES);
+            // Standard error of a median of n samples of spread s: 1.2533 s / √n, where
+            // s is the noise's σ and the law's own spread across the bin (it varies by
+            // Fv·c²·width there, a uniform spread of that width has σ = width / √12).
+            let slope = (fv * c * c).abs() * (b.edges.1 - b.edges.0);
+            let spread = (sigma * sigma + slope * slope / 12.0).sqrt();
+            let noise = 1.2533 * spread / (b.count as f64).sqrt();
+            let error = (b.measured.median - law(b.x)).abs();
+            assert!(
+                error <= 5.0 * noise,
+                "{} bin at {:.4}: median {:.5}, law {:.5}, {} samples",
+                curve.coordinate,
+                b.x,
+                b.measured.median,
+                law(b.x),
+                b.count
+            );
+            worst = worst.max(error / noise);
+            // The model's friction is the law itself, monotone within the bin: its median
+            // is the law at the median velocity.
+            let model_error = (b.model.unwrap() - law(b.x)).abs();
+            assert!(model_error <= 1e-12, "{}: {model_error}", curve.coordinate);
+            // The spread is the noise's: quartiles about 0.674 σ either side.
+            assert!(b.measured.upper - b.measured.lower < 4.0 * sigma + slope);
+        }
+        checked.push((curve.coordinate.clone(), worst));
+    }
+    let names: Vec<&str> = checked.iter().map(|(n, _)| n.as_str()).collect();
+    assert_eq!(names, ["q1", "q2", "q3", "q4"], "{checked:?}");
+    eprintln!("largest |median − law| / its standard error: {checked:?}");
 }

@@ -237,7 +237,13 @@ pub fn run(args: Args) -> Result<()> {
             for (role, t) in test_roles.iter().zip(test) {
                 drawn.push((role, &**t, settings.test_window));
             }
-            let built = super::report::build(&model, &result, &drawn, request.excitation.as_ref())?;
+            let built = super::report::build(
+                &model,
+                &result,
+                &drawn,
+                request.excitation.as_ref(),
+                &request.read,
+            )?;
             let written = built.stage(&mut outputs, Path::new(dir))?;
             report_note = Some(format!(
                 "report: {} ({} files)",

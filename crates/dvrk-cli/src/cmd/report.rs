@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::fourier::FourierTrajectory;
+use dvrk_ident::log::ReadOptions;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
 use dvrk_ident::result::InputInfo;
@@ -37,12 +38,14 @@ pub struct Args {
 }
 
 /// Builds the report of `result` on `logs` (role, trajectory, metric window) in memory,
-/// under a spinner; nothing is written.
+/// under a spinner; nothing is written. `read`: how the result's logs were read, for the
+/// page's command line.
 pub fn build(
     model: &Model,
     result: &FitResult,
     logs: &[(&str, &JointLog, Option<usize>)],
     excitation: Option<&FourierTrajectory>,
+    read: &ReadOptions,
 ) -> Result<report::Report> {
     let input = ReportInput {
         model,
@@ -56,6 +59,7 @@ pub fn build(
             })
             .collect(),
         excitation,
+        read: Some(read),
     };
     Ok(crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?)
 }
@@ -130,7 +134,13 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    let built = build(&model, &result, &logs, excitation.as_ref())?;
+    let built = build(
+        &model,
+        &result,
+        &logs,
+        excitation.as_ref(),
+        &args.log_args.read_options(),
+    )?;
     let mut outputs = Outputs::new();
     let written = built.stage(&mut outputs, Path::new(&args.out))?;
     outputs.commit()?;

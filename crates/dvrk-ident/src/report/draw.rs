@@ -257,13 +257,37 @@ impl KinematicDrawing {
                 None => labels.push((o, vec![f.index.to_string()])),
             }
         }
+        // Labels of nearby origins are moved apart on screen: each takes the first place
+        // around its origin that no earlier label covers (a leader line joins a moved
+        // label to its origin).
+        let mut placed: Vec<(i32, i32, i32, i32)> = Vec::new();
         for (o, names) in labels {
             let (x, y) = project(o);
+            let anchor = chart.backend_coord(&(x, y));
+            let text = names.join(",");
+            let (w, h) = (label_width(&text), 12);
+            let offset = label_offset(anchor, (w, h), &placed);
+            placed.push((
+                anchor.0 + offset.0,
+                anchor.1 + offset.1,
+                anchor.0 + offset.0 + w,
+                anchor.1 + offset.1 + h,
+            ));
+            if offset != LABEL_OFFSETS[0] {
+                let end = (
+                    offset.0 + if offset.0 < 0 { w } else { 0 },
+                    offset.1 + h / 2,
+                );
+                chart.draw_series(std::iter::once(
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), end], RGBColor(170, 170, 170)),
+                ))?;
+            }
             chart.draw_series(std::iter::once(
                 EmptyElement::at((x, y))
                     + Text::new(
-                        names.join(","),
-                        (5, -14),
+                        text,
+                        offset,
                         ("sans-serif", 11).into_font().color(&RGBColor(60, 60, 60)),
                     ),
             ))?;
@@ -310,12 +334,72 @@ impl Figure for KinematicDrawing {
     }
 }
 
+/// Where a frame label may go relative to its origin (pixels, text's top-left corner),
+/// in order of preference: up right, then further up or down, then to the left.
+const LABEL_OFFSETS: [(i32, i32); 11] = [
+    (5, -14),
+    (5, 2),
+    (5, -28),
+    (5, 16),
+    (5, -42),
+    (5, 30),
+    (-5, -14),
+    (5, -56),
+    (5, 44),
+    (5, -70),
+    (5, 58),
+];
+
+/// Width of a label in the drawing's 11 px font (DejaVu Sans, about 6.5 px a character).
+fn label_width(text: &str) -> i32 {
+    (text.chars().count() as f64 * 6.5).ceil() as i32
+}
+
+/// The first of [`LABEL_OFFSETS`] where a `size` label at `anchor` overlaps none of
+/// `placed` (boxes `x0, y0, x1, y1`); the first one when all overlap. A negative x
+/// offset puts the label's right end there.
+fn label_offset(
+    anchor: (i32, i32),
+    size: (i32, i32),
+    placed: &[(i32, i32, i32, i32)],
+) -> (i32, i32) {
+    let (w, h) = size;
+    LABEL_OFFSETS
+        .iter()
+        .map(|&(dx, dy)| if dx < 0 { (dx - w, dy) } else { (dx, dy) })
+        .find(|&(dx, dy)| {
+            let (x0, y0) = (anchor.0 + dx, anchor.1 + dy);
+            placed
+                .iter()
+                .all(|&(a0, b0, a1, b1)| x0 + w <= a0 || x0 >= a1 || y0 + h <= b0 || y0 >= b1)
+        })
+        .unwrap_or(LABEL_OFFSETS[0])
+}
+
 /// Height of the legend strip under the views, px.
 const LEGEND_HEIGHT: u32 = 52;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn labels_of_one_spot_are_placed_apart() {
+        let mut placed = Vec::new();
+        for _ in 0..4 {
+            let o = label_offset((100, 100), (40, 12), &placed);
+            placed.push((100 + o.0, 100 + o.1, 140 + o.0, 112 + o.1));
+        }
+        for (i, a) in placed.iter().enumerate() {
+            for b in &placed[..i] {
+                assert!(
+                    a.2 <= b.0 || a.0 >= b.2 || a.3 <= b.1 || a.1 >= b.3,
+                    "{placed:?}"
+                );
+            }
+        }
+        assert_eq!(placed[0], (105, 86, 145, 98));
+    }
 
     #[test]
     fn view_bases_are_orthonormal_and_front_view_is_x_z() {

@@ -6,6 +6,8 @@ use std::fmt::Write as _;
 use dvrk_model::{Model, ParamKind};
 
 use super::{LogSummary, RenderedFigure};
+use crate::log::ReadOptions;
+use crate::reproduce::{cli_command, python_call};
 use crate::result::{FitResult, JointMetrics};
 
 /// Escapes text for HTML element content and attribute values.
@@ -104,6 +106,7 @@ pub fn page(
     result: &FitResult,
     logs: &[LogSummary],
     figures: &[RenderedFigure],
+    read: Option<&ReadOptions>,
 ) -> String {
     let unit = |j: usize| super::figures::units(model, j)[3];
     let mut o = String::new();
@@ -116,6 +119,8 @@ pub fn page(
         method = escape(&result.method)
     );
 
+    reproduce(&mut o, result, read);
+    contents(&mut o, figures);
     summary(&mut o, result);
     metrics(&mut o, result, logs, &unit);
     links(&mut o, result);
@@ -194,20 +199,97 @@ fn summary(o: &mut String, result: &FitResult) {
     o.push_str("</table>");
 }
 
-/// Metrics of the result, then of every log drawn here.
+/// The command line and the Python call that repeat the fit, and what they cannot
+/// repeat.
+fn reproduce(o: &mut String, result: &FitResult, read: Option<&ReadOptions>) {
+    let cli = cli_command(&result.robot_source, &result.settings, &result.inputs, read);
+    let py = python_call(&result.robot_source, &result.settings, &result.inputs, read);
+    let _ = write!(
+        o,
+        "<section id=reproduce><h2>Reproduce</h2><p>The command line that repeats this fit \
+         (add <code>--out result.json --report DIR</code> for the files):</p>\
+         <pre id=command-line>{}</pre><p>The same fit from Python:</p>\
+         <pre id=python-call>{}</pre>",
+        escape(&cli.text),
+        escape(py.text.trim_end())
+    );
+    let mut notes: Vec<(&str, &String)> = Vec::new();
+    for n in &cli.unrendered {
+        let front = if py.unrendered.contains(n) {
+            "command line and Python"
+        } else {
+            "command line (Python passes it in settings=)"
+        };
+        notes.push((front, n));
+    }
+    for n in py.unrendered.iter().filter(|n| !cli.unrendered.contains(n)) {
+        notes.push(("Python", n));
+    }
+    if !notes.is_empty() {
+        o.push_str("<p>Not repeated by the text above:</p><ul id=not-reproduced>");
+        for (front, n) in notes {
+            let _ = write!(o, "<li>{}: {}</li>", front, escape(n));
+        }
+        o.push_str("</ul>");
+    }
+    o.push_str("</section>");
+}
+
+/// Links to the sections and figures of the page.
+fn contents(o: &mut String, figures: &[RenderedFigure]) {
+    o.push_str(
+        "<nav id=contents><b>Contents</b>: <a href=\"#reproduce\">reproduce</a> · \
+         <a href=\"#metrics\">metrics</a> · <a href=\"#links\">links</a> · \
+         <a href=\"#joint-elements\">joint elements</a> · \
+         <a href=\"#base-parameters\">base parameters</a> · figures:",
+    );
+    for f in figures {
+        let _ = write!(o, " <a href=\"#{stem}\">{stem}</a>", stem = escape(&f.stem));
+    }
+    o.push_str(" · <a href=\"#settings\">settings</a></nav>");
+}
+
+/// Whether two metric sets are the same numbers (same samples; every error equal to
+/// rounding): the report's recomputation of a log the fit already measured.
+fn same_metrics(a: &JointMetrics, b: &JointMetrics) -> bool {
+    let close = |x: &[f64], y: &[f64]| {
+        x.len() == y.len()
+            && x.iter()
+                .zip(y)
+                .all(|(p, q)| (p - q).abs() <= 1e-9 * p.abs().max(q.abs()) || p == q)
+    };
+    a.samples == b.samples
+        && a.joints == b.joints
+        && close(&a.relative_error, &b.relative_error)
+        && close(&a.rms, &b.rms)
+}
+
+/// Metrics of the result, then of every log drawn here whose numbers are not already a
+/// column (each column once: a log the fit measured names the fit's column instead).
 fn metrics(
     o: &mut String,
     result: &FitResult,
     logs: &[LogSummary],
     unit: &dyn Fn(usize) -> &'static str,
 ) {
-    o.push_str("<h2>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
-    let mut sets = vec![("fit: training".to_string(), &result.metrics.train)];
+    o.push_str("<h2 id=metrics>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
+    let mut sets: Vec<(String, &JointMetrics)> =
+        vec![("fit: training".to_string(), &result.metrics.train)];
     if let Some(test) = &result.metrics.test {
         sets.push(("fit: test".to_string(), test));
     }
+    let fitted = sets.len();
     for log in logs {
-        sets.push((format!("{} ({})", log.role, log.source), &log.metrics));
+        let name = format!("{} ({})", log.role, log.source);
+        match sets[..fitted]
+            .iter_mut()
+            .find(|(_, m)| same_metrics(m, &log.metrics))
+        {
+            Some((caption, _)) => {
+                let _ = write!(caption, ", shown as {name}");
+            }
+            None => sets.push((name, &log.metrics)),
+        }
     }
     metrics_table(o, &sets, unit);
 }
@@ -215,7 +297,7 @@ fn metrics(
 /// Parameters by link.
 fn links(o: &mut String, result: &FitResult) {
     o.push_str(
-        "<h2>Links</h2><p>Standard parameters in each link's frame: mass (kg), centre of mass (m), \
+        "<h2 id=links>Links</h2><p>Standard parameters in each link's frame: mass (kg), centre of mass (m), \
          inertia about the centre of mass (kg·m²); consistency is the smallest eigenvalue of the \
          4×4 pseudo-inertia (kg·m², positive: realizable by a positive mass density).</p>\
          <table><tr><th>frame</th><th class=l>link</th><th>mass</th><th>cx</th><th>cy</th><th>cz</th>\
@@ -256,7 +338,7 @@ fn links(o: &mut String, result: &FitResult) {
 /// Joint elements (friction, motor inertia, spring) by frame.
 fn joint_elements(o: &mut String, model: &Model, result: &FitResult) {
     o.push_str(
-        "<h2>Joint elements</h2><p>Coulomb Fc, viscous Fv and offset Fo friction (N·m, N·m·s/rad; N, N·s/m), \
+        "<h2 id=joint-elements>Joint elements</h2><p>Coulomb Fc, viscous Fv and offset Fo friction (N·m, N·m·s/rad; N, N·s/m), \
          motor inertia Im (kg·m²), spring K, by frame.</p>\
          <table><tr><th>frame</th><th class=l>name</th><th class=l>parameter</th><th>value</th></tr>",
     );
@@ -281,8 +363,9 @@ fn joint_elements(o: &mut String, model: &Model, result: &FitResult) {
 fn base_parameters(o: &mut String, result: &FitResult) {
     let _ = write!(
         o,
-        "<h2>Base parameters</h2><p>{} independent combinations the data determine; std is the \
-         standard deviation of the least-squares fit of the same weighted data.</p>\
+        "<h2 id=base-parameters>Base parameters</h2><p>{} independent combinations the data \
+         determine; std is the standard deviation of the least-squares fit of the same \
+         weighted data; the expression is given when it is more than the name.</p>\
          <table><tr><th>#</th><th class=l>name</th><th class=l>expression</th><th>value</th>\
          <th>std</th><th>relative std (%)</th></tr>",
         result.base_parameters.len()
@@ -293,7 +376,11 @@ fn base_parameters(o: &mut String, result: &FitResult) {
             "<tr><td>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td><td>{}</td><td>{:.2}</td></tr>",
             i + 1,
             escape(&b.name),
-            escape(&b.expression),
+            if b.expression == b.name {
+                String::new()
+            } else {
+                escape(&b.expression)
+            },
             number(b.value),
             number(b.std),
             100.0 * b.std / b.value.abs()
@@ -323,7 +410,7 @@ fn settings_and_provenance(o: &mut String, result: &FitResult) {
     let settings = serde_json::to_string_pretty(&result.settings).unwrap_or_default();
     let _ = write!(
         o,
-        "<h2>Settings</h2><pre>{}</pre><p>Row weights per coordinate: {}</p>",
+        "<h2 id=settings>Settings</h2><pre>{}</pre><p>Row weights per coordinate: {}</p>",
         escape(&settings),
         result
             .weights

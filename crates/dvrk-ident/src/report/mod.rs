@@ -4,6 +4,8 @@
 //! HTML page with the SVGs inlined) and [`Report::write`] writes the files atomically
 //! afterwards, so a failure half-way never leaves a half-written report.
 
+pub mod base_chart;
+pub mod curves;
 pub mod draw;
 pub mod figures;
 pub mod html;
@@ -18,6 +20,7 @@ use crate::error::IdentError;
 use crate::excite::fourier::FourierTrajectory;
 use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, Prepared};
 use crate::joint_log::JointLog;
+use crate::log::ReadOptions;
 use crate::result::{FitResult, JointMetrics};
 use plot::{render, Figure, ImageFormat};
 
@@ -65,6 +68,9 @@ pub struct ReportInput<'a> {
     pub logs: Vec<ReportLog<'a>>,
     /// Excitation trajectory to plot against the model's limits.
     pub excitation: Option<&'a FourierTrajectory>,
+    /// How the result's logs were read (`--format`, `--rate`, ...), which the result does
+    /// not record: the page's command line includes them; `None` says they are unknown.
+    pub read: Option<&'a ReadOptions>,
 }
 
 /// A figure of the report, rendered in both formats.
@@ -176,15 +182,51 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         let metrics = joint_metrics(model, &params, &data, log.window);
         let label = format!("{} ({})", log.role, data.source);
         let stem = format!("{}_{}", k + 1, slug(log.role));
+        let zoom = figures::zoom_window(&data.time, &data.tau);
+        let zoom_words = figures::zoom_caption(&data.time, zoom);
         figures.push(render_both(
-            &figures::torque_figure(model, &label, &data, &predicted, &metrics),
+            &figures::torque_figure(model, &label, &data, &predicted, &metrics, zoom),
             &format!("torque_{stem}"),
-            &format!("Measured vs predicted torque and error, {label}."),
+            &format!("Measured vs predicted torque and their difference, {label}. {zoom_words}"),
         )?);
         figures.push(render_both(
-            &figures::processing_figure(model, &label, &raw, &data),
+            &figures::processing_figure(model, &label, &raw, &data, zoom),
             &format!("processing_{stem}"),
-            &format!("Raw vs processed q, dq, ddq and tau, {label}."),
+            &format!("Raw vs processed q, dq, ddq and tau, {label}. {zoom_words}"),
+        )?);
+        figures.push(render_both(
+            &figures::friction_figure(
+                model,
+                &label,
+                &curves::friction_curves(model, &params, &data),
+            ),
+            &format!("friction_{stem}"),
+            &format!(
+                "Friction against velocity, {label}: the measured torque minus the fitted \
+                 model without its friction terms (links, motor inertias, springs), median \
+                 and quartiles over {} velocity bins (0 is a bin edge; bins with fewer than \
+                 {} samples left out), and the fitted friction terms' torque on the same \
+                 samples (median per bin).",
+                curves::BINS,
+                curves::MIN_BIN_SAMPLES
+            ),
+        )?);
+        figures.push(render_both(
+            &figures::residual_figure(
+                model,
+                &label,
+                &curves::residual_curves(model, &data, &predicted, curves::Against::Velocity),
+                &curves::residual_curves(model, &data, &predicted, curves::Against::Position),
+            ),
+            &format!("residuals_{stem}"),
+            &format!(
+                "Prediction error τ − τ̂ against each coordinate's velocity and position, \
+                 {label}: median and quartiles over {} bins (bins with fewer than {} samples \
+                 left out). A trend is what the model misses: friction shapes against \
+                 velocity, gravity or cable terms against position.",
+                curves::BINS,
+                curves::MIN_BIN_SAMPLES
+            ),
         )?);
         logs.push(LogSummary {
             role: log.role.into(),
@@ -196,7 +238,13 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         figures.push(render_both(
             &figures::base_parameter_figure(result),
             "base_parameters",
-            "Base parameters with two standard deviations, and relative standard deviations.",
+            &format!(
+                "Base parameters by name (a long expression shows its leading name and its \
+                 number of terms; the Base parameters table has every expression): value ± 2σ on a \
+                 symmetric logarithmic axis, linear within ±{:e}, and the relative standard \
+                 deviation on a logarithmic axis.",
+                base_chart::BaseParameterChart::new(result).linear_threshold()
+            ),
         )?);
     }
     if let Some(traj) = input.excitation {
@@ -232,7 +280,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         "kinematics",
         "Kinematic tree at the first sample of the first log.",
     )?);
-    let html = html::page(model, result, &logs, &figures);
+    let html = html::page(model, result, &logs, &figures, input.read);
     Ok(Report {
         figures,
         logs,

@@ -178,6 +178,8 @@ pub struct Panel {
     pub series: Vec<Series>,
     /// Horizontal reference lines (value, colour), e.g. limits; drawn dashed.
     pub hlines: Vec<(f64, RGBColor)>,
+    /// Shaded x intervals `(from, to)`, e.g. the part of a log a zoomed panel shows.
+    pub vspans: Vec<(f64, f64)>,
 }
 
 /// Panels on a grid under a common title.
@@ -187,8 +189,11 @@ pub struct PanelGrid {
     pub title: String,
     /// Panels per row; the rows follow from the number of panels.
     pub columns: usize,
-    /// Size of one panel in pixels.
+    /// Size of one panel in pixels (the mean width, with [`PanelGrid::column_weights`]).
     pub panel_size: (u32, u32),
+    /// Relative widths of the columns (e.g. `[2, 1]`: a whole log and its zoomed
+    /// window); empty: equal widths.
+    pub column_weights: Vec<u32>,
     /// The charts, row by row.
     pub panels: Vec<Panel>,
 }
@@ -227,6 +232,25 @@ pub fn envelope(x: &[f64], y: &[f64], max_points: usize) -> Vec<(f64, f64)> {
         }
     }
     out
+}
+
+/// An axis label for the tick at `v` on an axis spanning `span`: the digits the tick
+/// spacing (about a sixth of the span) needs, trailing zeros dropped, never `-0`.
+pub fn tick_label(v: f64, span: f64) -> String {
+    let step = span / 6.0;
+    let digits = if step > 0.0 && step.is_finite() {
+        (2 - step.log10().floor() as i32).clamp(0, 12) as usize
+    } else {
+        3
+    };
+    let mut text = format!("{v:.digits$}");
+    if text.contains('.') {
+        text = text.trim_end_matches('0').trim_end_matches('.').to_string();
+    }
+    if text == "-0" {
+        text = "0".into();
+    }
+    text
 }
 
 fn finite_range(values: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
@@ -286,6 +310,8 @@ impl Panel {
     {
         let (x0, x1) = self.x_range();
         let (y0, y1) = self.y_range();
+        // Two points (a minimum and a maximum) per pixel column keep every peak.
+        let max_points = MAX_POINTS.min(2 * area.dim_in_pixel().0 as usize).max(100);
         let mut chart = ChartBuilder::on(area)
             .caption(&self.title, ("sans-serif", 15))
             .margin(8)
@@ -296,6 +322,8 @@ impl Panel {
             .configure_mesh()
             .light_line_style(TRANSPARENT)
             .bold_line_style(RGBColor(225, 225, 225))
+            .x_label_formatter(&|v| tick_label(*v, x1 - x0))
+            .y_label_formatter(&|v| tick_label(*v, y1 - y0))
             .x_desc(self.x_label.as_str())
             .y_desc(self.y_label.as_str())
             .label_style(("sans-serif", 12))
@@ -303,6 +331,12 @@ impl Panel {
             .x_labels(6)
             .y_labels(6)
             .draw()?;
+        for &(a, b) in &self.vspans {
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(a.max(x0), y0), (b.min(x1), y1)],
+                RGBColor(255, 244, 214).filled(),
+            )))?;
+        }
         for &(v, color) in &self.hlines {
             chart.draw_series(DashedLineSeries::new(
                 vec![(x0, v), (x1, v)],
@@ -311,54 +345,141 @@ impl Panel {
                 color.stroke_width(1),
             ))?;
         }
-        let mut legend = false;
         for s in &self.series {
             let color = s.color;
-            let drawn =
-                match &s.style {
-                    SeriesStyle::Line => chart.draw_series(LineSeries::new(
-                        envelope(&s.x, &s.y, MAX_POINTS),
+            match &s.style {
+                SeriesStyle::Line => {
+                    chart.draw_series(LineSeries::new(
+                        envelope(&s.x, &s.y, max_points),
                         color.stroke_width(1),
-                    ))?,
-                    SeriesStyle::Dashed => chart.draw_series(DashedLineSeries::new(
-                        envelope(&s.x, &s.y, MAX_POINTS),
+                    ))?;
+                }
+                SeriesStyle::Dashed => {
+                    chart.draw_series(DashedLineSeries::new(
+                        envelope(&s.x, &s.y, max_points),
                         6,
                         4,
                         color.stroke_width(1),
-                    ))?,
-                    SeriesStyle::Points => chart.draw_series(
+                    ))?;
+                }
+                SeriesStyle::Points => {
+                    chart.draw_series(
                         s.x.iter()
                             .zip(&s.y)
                             .map(|(&x, &y)| Circle::new((x, y), 3, color.filled())),
-                    )?,
-                    SeriesStyle::ErrorBars { lower, upper } => {
-                        chart.draw_series(s.x.iter().zip(lower.iter().zip(upper)).map(
-                            |(&x, (&lo, &hi))| PathElement::new(vec![(x, lo), (x, hi)], color),
-                        ))?;
-                        chart.draw_series(
-                            s.x.iter()
-                                .zip(&s.y)
-                                .map(|(&x, &y)| Circle::new((x, y), 3, color.filled())),
-                        )?
-                    }
-                };
-            if !s.label.is_empty() {
-                legend = true;
-                drawn.label(s.label.as_str()).legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-                });
+                    )?;
+                }
+                SeriesStyle::ErrorBars { lower, upper } => {
+                    chart.draw_series(
+                        s.x.iter()
+                            .zip(lower.iter().zip(upper))
+                            .map(|(&x, (&lo, &hi))| {
+                                PathElement::new(vec![(x, lo), (x, hi)], color)
+                            }),
+                    )?;
+                    chart.draw_series(
+                        s.x.iter()
+                            .zip(&s.y)
+                            .map(|(&x, &y)| Circle::new((x, y), 3, color.filled())),
+                    )?;
+                }
             }
         }
-        if legend {
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .label_font(("sans-serif", 12))
-                .background_style(WHITE.mix(0.8))
-                .border_style(RGBColor(180, 180, 180))
-                .draw()?;
-        }
         Ok(())
+    }
+}
+
+/// One entry of a figure's legend: a series' label, colour and style.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LegendEntry {
+    /// The text.
+    pub label: String,
+    /// The series' colour.
+    pub color: RGBColor,
+    /// Drawn as a marker with a bar (points, error bars) rather than a line.
+    pub marker: bool,
+}
+
+/// Every labelled series of `panels` once (by label and colour), in order of first
+/// appearance: the legend drawn above the panels, outside the data.
+pub fn legend_entries(panels: &[Panel]) -> Vec<LegendEntry> {
+    let mut out: Vec<LegendEntry> = Vec::new();
+    for s in panels.iter().flat_map(|p| &p.series) {
+        if s.label.is_empty() || out.iter().any(|e| e.label == s.label && e.color == s.color) {
+            continue;
+        }
+        out.push(LegendEntry {
+            label: s.label.clone(),
+            color: s.color,
+            marker: !matches!(s.style, SeriesStyle::Line | SeriesStyle::Dashed),
+        });
+    }
+    out
+}
+
+/// Draws `entries` in one row on `area` (a strip above the panels), from the left.
+pub fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[LegendEntry],
+) -> DrawResult
+where
+    DB::ErrorType: 'static,
+{
+    let mut x = 64;
+    let y = (LEGEND_HEIGHT / 2) as i32;
+    for e in entries {
+        if e.marker {
+            area.draw(&Circle::new((x + 10, y), 3, e.color.filled()))?;
+            area.draw(&PathElement::new(
+                vec![(x + 10, y - 7), (x + 10, y + 7)],
+                e.color,
+            ))?;
+        } else {
+            area.draw(&PathElement::new(
+                vec![(x, y), (x + 20, y)],
+                e.color.stroke_width(2),
+            ))?;
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (x + 26, y - 7),
+            ("sans-serif", 13).into_font(),
+        ))?;
+        // DejaVu Sans at 13 px: about 7.5 px per character.
+        x += 26 + (e.label.chars().count() as f64 * 7.5) as i32 + 24;
+    }
+    Ok(())
+}
+
+/// Height of the legend strip above a figure's panels, px.
+pub const LEGEND_HEIGHT: u32 = 26;
+
+impl PanelGrid {
+    fn legend_height(&self) -> u32 {
+        if legend_entries(&self.panels).is_empty() {
+            0
+        } else {
+            LEGEND_HEIGHT
+        }
+    }
+
+    /// The pixel x of each boundary between columns, from the weights.
+    fn column_breaks(&self, width: u32) -> Vec<i32> {
+        let cols = self.columns.max(1);
+        let weights: Vec<u32> = if self.column_weights.len() == cols {
+            self.column_weights.iter().map(|w| (*w).max(1)).collect()
+        } else {
+            vec![1; cols]
+        };
+        let total: u32 = weights.iter().sum();
+        let mut acc = 0;
+        weights[..cols - 1]
+            .iter()
+            .map(|w| {
+                acc += w;
+                (u64::from(width) * u64::from(acc) / u64::from(total)) as i32
+            })
+            .collect()
     }
 }
 
@@ -368,7 +489,7 @@ impl Figure for PanelGrid {
         let rows = self.panels.len().div_ceil(cols).max(1);
         (
             self.panel_size.0 * cols as u32,
-            self.panel_size.1 * rows as u32 + TITLE_HEIGHT,
+            self.panel_size.1 * rows as u32 + TITLE_HEIGHT + self.legend_height(),
         )
     }
 
@@ -378,9 +499,16 @@ impl Figure for PanelGrid {
     {
         let (title, body) = root.split_vertically(TITLE_HEIGHT);
         title.titled(&self.title, ("sans-serif", 20))?;
+        let (legend, body) = body.split_vertically(self.legend_height());
+        draw_legend(&legend, &legend_entries(&self.panels))?;
         let cols = self.columns.max(1);
         let rows = self.panels.len().div_ceil(cols).max(1);
-        let areas = body.split_evenly((rows, cols));
+        let breaks = self.column_breaks(self.panel_size.0 * cols as u32);
+        let areas: Vec<_> = body
+            .split_evenly((rows, 1))
+            .iter()
+            .flat_map(|row| row.split_by_breakpoints(&breaks[..], &[] as &[i32]))
+            .collect();
         for (panel, area) in self.panels.iter().zip(areas.iter()) {
             panel.draw(area)?;
         }
@@ -444,6 +572,16 @@ mod tests {
         assert!(e.iter().any(|p| p == &(8000.0, -5.0)));
         assert!(e.windows(2).all(|w| w[0].0 < w[1].0));
         assert_eq!(envelope(&x[..10], &y[..10], 500).len(), 10);
+    }
+
+    #[test]
+    fn tick_labels_have_the_spacings_digits_and_no_negative_zero() {
+        assert_eq!(tick_label(-0.0, 0.6), "0");
+        assert_eq!(tick_label(-1e-17, 0.6), "0");
+        assert_eq!(tick_label(0.25, 1.5), "0.25");
+        assert_eq!(tick_label(0.30000000000000004, 1.5), "0.3");
+        assert_eq!(tick_label(25.0, 28.0), "25");
+        assert_eq!(tick_label(-0.002, 0.012), "-0.002");
     }
 
     #[test]
