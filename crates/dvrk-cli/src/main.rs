@@ -4,7 +4,7 @@
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 mod cmd;
 mod progress;
@@ -31,7 +31,7 @@ enum Command {
     /// physically consistent SDP).
     Fit(cmd::fit::Args),
     /// Reduce logs to an observation state file, the map of a fit over many machines
-    /// (`fit --from` merges and fits the states).
+    /// (`fit --states` merges and fits the states).
     Observe(cmd::observe::Args),
     /// Errors of an identified model on other logs.
     Validate(cmd::validate::Args),
@@ -47,6 +47,10 @@ enum Command {
     Report(cmd::report::Args),
     /// Write an identified model as URDF (and/or the 2019 params.json layout).
     Export(cmd::export::Args),
+    /// Print the completion script of a shell (bash, zsh, fish, powershell, elvish).
+    Completions(cmd::shell::CompletionsArgs),
+    /// Print a manual page (roff), or write them all into a folder.
+    Man(cmd::shell::ManArgs),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +67,8 @@ fn main() -> ExitCode {
         Command::Excite(args) => cmd::excite::run(args),
         Command::Report(args) => cmd::report::run(args),
         Command::Export(args) => cmd::export::run(args),
+        Command::Completions(args) => cmd::shell::completions(args, Cli::command()),
+        Command::Man(args) => cmd::shell::man(args, Cli::command()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
