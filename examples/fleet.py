@@ -35,7 +35,7 @@ def simulate(folder, count, periods):
         path = Path(folder) / f"arm_{k:03d}.mcap"
         subprocess.run(
             [exe, "simulate", "psm", "--params", REPO / "examples" / "psm_params.json",
-             "--trajectory", REPO / "examples" / "psm_trajectory.json",
+             "--excitation", REPO / "examples" / "psm_trajectory.json",
              "--periods", str(periods), "--noise", "0.002", "--seed", str(k),
              "--out", path, "--quiet"],
             check=True,

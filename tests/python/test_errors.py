@@ -101,8 +101,15 @@ def test_missing_files(psm, tmp_path):
 def test_log_errors(psm, tmp_path):
     p = tmp_path / "wpi.csv"
     p.write_text("0.1,0.2,0.3\n0.1,x,0.3\n")
-    with pytest.raises(di.InputError, match="rate"):
+    with pytest.raises(di.InputError, match="rate") as e:
         di.read_log(p, format="wpi")
+    # The command line's flag, named as the keyword.
+    msg = str(e.value)
+    assert "give the sampling rate with rate=HZ" in msg and "--rate" not in msg, msg
+    with pytest.raises(di.InputError) as e:
+        di.read_log(p, format="wpi", rate=-200)
+    msg = str(e.value)
+    assert "the sampling rate (rate=) must be positive" in msg and "--rate" not in msg, msg
     with pytest.raises(di.InputError, match=r"wpi.csv:2: column 2 \(dq1\): malformed number"):
         di.read_log(p, format="wpi", rate=200)
     with pytest.raises(di.InputError, match="unknown log format"):

@@ -409,7 +409,7 @@ def test_delay_auto_matches_cli(psm, cli, run_cli, tmp_path):
     log = tmp_path / "delayed.mcap"
     subprocess.run(
         [cli, "simulate", "psm", "--params", REPO / "examples" / "psm_params.json",
-         "--trajectory", REPO / "examples" / "psm_trajectory.json", "--periods", "3",
+         "--excitation", REPO / "examples" / "psm_trajectory.json", "--periods", "3",
          "--noise", "0.002", "--seed", "1", "--delay", ",".join(map(str, truth)),
          "--out", log],
         check=True,

@@ -30,7 +30,7 @@ def fleet(cli, tmp_path_factory):
         path = d / f"arm_{k}.mcap"
         subprocess.run(
             [cli, "simulate", "psm", "--params", EXAMPLES / "psm_params.json",
-             "--trajectory", EXAMPLES / "psm_trajectory.json", "--periods", "2",
+             "--excitation", EXAMPLES / "psm_trajectory.json", "--periods", "2",
              "--noise", "0.002", "--seed", str(10 + k), "--out", path, "--quiet"],
             check=True,
             capture_output=True,
@@ -134,7 +134,7 @@ def test_observations_of_other_settings_or_robots_are_refused(psm, fleet, tmp_pa
         raw = bytearray(bytes(a))
         raw[8] = 9
         di.Observation.from_bytes(bytes(raw))
-    # A state file written from Python fits with the command line's `fit --from`.
+    # A state file written from Python fits with the command line's `fit --states`.
     a.write(tmp_path / "a.obs")
     assert bytes(di.Observation.read(tmp_path / "a.obs")) == bytes(a)
 
@@ -144,7 +144,7 @@ def test_observation_file_fits_on_the_command_line(psm, fleet, run_cli, tmp_path
     for k, p in enumerate(fleet[:2]):
         paths.append(tmp_path / f"{k}.obs")
         di.observe(psm, p).write(paths[-1])
-    doc = run_cli("fit", "--from", *paths, "--method", "wls", "--json")
+    doc = run_cli("fit", "--states", *paths, "--method", "wls", "--json")
     direct = run_cli("fit", *fleet[:2], "--robot", "psm", "--method", "wls", "--json")
     for d in (doc, direct):
         d["solver"]["seconds"] = None

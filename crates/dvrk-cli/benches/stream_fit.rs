@@ -90,7 +90,7 @@ fn main() {
             "psm".into(),
             "--params".into(),
             s(&examples.join("psm_params.json")),
-            "--trajectory".into(),
+            "--excitation".into(),
             s(&examples.join("psm_trajectory.json")),
             "--rate".into(),
             "1000".into(),

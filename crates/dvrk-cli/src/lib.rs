@@ -8,7 +8,7 @@
 
 use std::ffi::OsString;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, Parser, Subcommand};
 
 mod cmd;
 mod progress;
@@ -35,7 +35,7 @@ enum Command {
     /// physically consistent SDP).
     Fit(cmd::fit::Args),
     /// Reduce logs to an observation state file, the map of a fit over many machines
-    /// (`fit --from` merges and fits the states).
+    /// (`fit --states` merges and fits the states).
     Observe(cmd::observe::Args),
     /// Errors of an identified model on other logs, processed with the result's own
     /// settings (processing flags replace them; the output names what differs).
@@ -55,6 +55,10 @@ enum Command {
     Report(cmd::report::Args),
     /// Write an identified model as URDF (and/or the 2019 params.json layout).
     Export(cmd::export::Args),
+    /// Print the completion script of a shell (bash, zsh, fish, powershell, elvish).
+    Completions(cmd::shell::CompletionsArgs),
+    /// Print a manual page (roff), or write them all into a folder.
+    Man(cmd::shell::ManArgs),
 }
 
 /// Runs the command line `args` (the program name first, as `std::env::args_os`
@@ -87,6 +91,8 @@ where
         Command::Excite(args) => cmd::excite::run(args),
         Command::Report(args) => cmd::report::run(args),
         Command::Export(args) => cmd::export::run(args),
+        Command::Completions(args) => cmd::shell::completions(args, Cli::command()),
+        Command::Man(args) => cmd::shell::man(args, Cli::command()),
     };
     match result {
         Ok(()) => 0,

@@ -106,14 +106,14 @@ fn urdf_robot_fit_exports_into_its_own_urdf() {
     let model = Model::load(&s(&urdf)).unwrap();
     let fit = FitResult::read(&result).unwrap();
     let params = fit.params_for(&model).unwrap();
-    // Without --from: the robot's own URDF; with --from: a copy elsewhere.
+    // Without --template: the robot's own URDF; with --template: a copy elsewhere.
     let copy = dir.join("copy_of_arm.urdf");
     std::fs::copy(&urdf, &copy).unwrap();
     for (out, from) in [("own.urdf", None), ("from.urdf", Some(&copy))] {
         let out = dir.join(out);
         let mut args = vec!["export".to_string(), s(&result), "--urdf".into(), s(&out)];
         if let Some(f) = from {
-            args.extend(["--from".to_string(), s(f)]);
+            args.extend(["--template".to_string(), s(f)]);
         }
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let (ok, stdout, err) = run(&args);
@@ -246,7 +246,8 @@ fn export_errors_name_the_file_and_write_nothing() {
         &dir,
         &[],
     );
-    // --from a URDF that is not the robot.
+    // --from (the old spelling of --template, still accepted) a URDF that is not the
+    // robot.
     let other = inputs.join("other.urdf");
     std::fs::write(&other, ARM).unwrap();
     assert_fails(
@@ -255,19 +256,26 @@ fn export_errors_name_the_file_and_write_nothing() {
         &dir,
         &[],
     );
-    // --from a file that does not exist.
+    // --template a file that does not exist.
     let absent = s(&inputs.join("absent.urdf"));
     assert_fails(
-        &["export", &s(&sdp), "--urdf", &urdf, "--from", &absent],
+        &["export", &s(&sdp), "--urdf", &urdf, "--template", &absent],
         &[&absent, "cannot read"],
         &dir,
         &[],
     );
     // No output asked for: a usage error.
     assert_fails(&["export", &s(&sdp)], &["--urdf", "--wpi-json"], &dir, &[]);
-    // --from without --urdf.
+    // --template without --urdf.
     assert_fails(
-        &["export", &s(&sdp), "--wpi-json", &wpi, "--from", &s(&other)],
+        &[
+            "export",
+            &s(&sdp),
+            "--wpi-json",
+            &wpi,
+            "--template",
+            &s(&other),
+        ],
         &["--urdf"],
         &dir,
         &[],

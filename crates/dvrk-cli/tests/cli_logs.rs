@@ -130,7 +130,7 @@ fn the_example_log_is_what_its_readme_command_writes() {
             "0.002",
             "--seed",
             "1",
-            "--topic",
+            "--out-topic",
             "/PSM1/measured_js",
         ],
     );
@@ -200,7 +200,7 @@ fn simulate_then_convert_round_trips_values() {
         &s(&wpi),
         "--robot",
         "psm",
-        "--format",
+        "--out-format",
         "wpi-csv",
     ]);
     assert!(ok, "{err}");
@@ -445,6 +445,7 @@ fn bad_logs_fail_naming_the_problem_and_write_nothing() {
         Some(&mcap_out),
     );
     let wpi_out = dir.join("w.csv");
+    // (`--format`: the old spelling of `--out-format`, still accepted.)
     assert_fails(
         &["convert", &s(&mcap), &s(&wpi_out), "--format", "wpi-csv"],
         &["--robot"],

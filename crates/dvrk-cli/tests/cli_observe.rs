@@ -1,4 +1,4 @@
-//! `dvrk-ident observe` (the map) and `fit --from` (the reduce): states of the logs,
+//! `dvrk-ident observe` (the map) and `fit --states` (the reduce): states of the logs,
 //! merged and fitted, give the document of `fit` of the logs themselves; a streamed
 //! observation writes the same state to the byte; states processed differently are
 //! refused with the file named and nothing written.
@@ -71,7 +71,7 @@ fn states_fit_as_their_logs() {
         .concat());
         assert!(ok, "{err}");
         let (ok, stdout, err) = run(&[
-            &["fit", "--from", &s(&pa), &s(&pb), "--out", &s(&reduced)][..],
+            &["fit", "--states", &s(&pa), &s(&pb), "--out", &s(&reduced)][..],
             &common[..],
         ]
         .concat());
@@ -87,6 +87,7 @@ fn states_fit_as_their_logs() {
     // A state processed with another cut-off: refused, naming it; nothing written.
     let other = observe(&b, "b_cut8.obs", &["--cutoff", "8"]);
     let before = files(&dir);
+    // (`--from`: the flag's old spelling, still accepted.)
     let (ok, _, err) = run(&[
         "fit",
         "--from",

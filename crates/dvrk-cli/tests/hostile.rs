@@ -230,6 +230,8 @@ fn hostile_corpus() {
     let text = std::fs::read_to_string(&manifest_path).unwrap();
     let manifest: Manifest = toml::from_str(&text).unwrap();
     let only = std::env::var("HOSTILE_CASE").ok();
+    // HOSTILE_SHOW=1 prints every case's message, to re-read them all.
+    let show = std::env::var_os("HOSTILE_SHOW").is_some();
     let root = support::temp_dir("hostile");
     // A result file the result cases edit: an OLS fit of the bundled example.
     let work = root.join("work");
@@ -308,6 +310,9 @@ fn hostile_corpus() {
                     problems.push(format!("exit {code}, expected {}", case.exit));
                 }
                 let where_ = if case.exit == 0 { &stdout } else { &stderr };
+                if show {
+                    eprintln!("--- {}: {}", case.name, where_.trim_end());
+                }
                 if !where_.contains(&expand(&case.message, &tmp, &work)) {
                     problems.push(format!("message {:?} not in the output", case.message));
                 }

@@ -194,7 +194,7 @@ pub struct FitResult {
     pub robot_source: String,
     /// The estimator: `ols`, `wls`, `irls` or `sdp`.
     pub method: String,
-    /// Every setting of the fit (processing, bounds, prior...): what `fit --from` and a re-run
+    /// Every setting of the fit (processing, bounds, prior...): what `fit --states` and a re-run
     /// repeat, and what `validate`, `report` and `export` apply.
     pub settings: FitSettings,
     /// Provenance and own metrics of every log read (train, test) and of a prior's file.

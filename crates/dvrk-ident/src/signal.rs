@@ -34,10 +34,25 @@ pub use ops::{
 };
 
 use crate::joint_log::{Coordinates, JointLog, JointLogError};
+use dvrk_model::input::show_approx;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use thiserror::Error;
+
+/// A fraction of the Nyquist frequency for [`SignalError::InvalidCutoff`]: rounded, but
+/// never to one of the range's bounds it is outside of (0.9500001 is not shown as 0.95).
+fn show_fraction(wn: f64) -> String {
+    let rounded = show_approx(wn);
+    if butter::CUTOFF_RANGE_WN
+        .iter()
+        .any(|b| rounded == show_approx(*b) && wn != *b)
+    {
+        dvrk_model::input::show(wn)
+    } else {
+        rounded
+    }
+}
 
 /// Errors of filter design, filtering and processing.
 #[derive(Debug, Error, Clone, PartialEq)]
@@ -55,7 +70,9 @@ pub enum SignalError {
         wn: f64,
     },
     /// A cut-off in Hz outside 0.001 to 0.95 of the Nyquist frequency (`CUTOFF_RANGE_WN`).
-    #[error("cut-off {cutoff_hz} Hz at a {rate_hz} Hz sampling rate is {wn} of the Nyquist frequency: it must be between {} and {} of it ({} to {} Hz)", butter::CUTOFF_RANGE_WN[0], butter::CUTOFF_RANGE_WN[1], butter::CUTOFF_RANGE_WN[0] * rate_hz / 2.0, butter::CUTOFF_RANGE_WN[1] * rate_hz / 2.0)]
+    /// The rate (measured from time stamps) and the ratios are shown rounded
+    /// ([`dvrk_model::input::show_approx`]), the cut-off as given.
+    #[error("cut-off {cutoff_hz} Hz at a {} Hz sampling rate is {} of the Nyquist frequency: it must be between {} and {} of it ({} to {} Hz): choose a --cutoff in that range", show_approx(*rate_hz), show_fraction(*wn), butter::CUTOFF_RANGE_WN[0], butter::CUTOFF_RANGE_WN[1], show_approx(butter::CUTOFF_RANGE_WN[0] * rate_hz / 2.0), show_approx(butter::CUTOFF_RANGE_WN[1] * rate_hz / 2.0))]
     InvalidCutoff {
         /// Requested cut-off, Hz.
         cutoff_hz: f64,
@@ -235,6 +252,8 @@ impl Cutoff {
     /// assert_eq!(Cutoff::parse_flag("5.4"), Ok(Some(Cutoff::All(5.4))));
     /// assert_eq!(Cutoff::parse_flag("5, 3"), Ok(Some(Cutoff::PerJoint(vec![5.0, 3.0]))));
     /// assert!(Cutoff::parse_flag("fast").is_err());
+    /// assert!(Cutoff::parse_flag("nan").is_err());
+    /// assert!(Cutoff::parse_flag("5,-1").is_err());
     /// ```
     pub fn parse_flag(text: &str) -> Result<Option<Cutoff>, String> {
         if text.trim().eq_ignore_ascii_case("none") {
@@ -245,6 +264,11 @@ impl Cutoff {
             .map(|v| v.trim().parse::<f64>())
             .collect::<Result<_, _>>()
             .map_err(|_| format!("`{text}` is not a cut-off (Hz), a list of them or `none`"))?;
+        if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
+            return Err(format!(
+                "cut-off {v} Hz: must be positive and finite (or `none`: no filter)"
+            ));
+        }
         Ok(Some(match values[..] {
             [one] => Cutoff::All(one),
             _ => Cutoff::PerJoint(values),

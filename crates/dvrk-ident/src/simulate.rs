@@ -219,7 +219,12 @@ fn check_simulation(
     if count > MAX_SAMPLES {
         return Err(setting(
             "duration",
-            format!("the log would have {count} samples (more than {MAX_SAMPLES})"),
+            format!(
+                "the log would have {count} samples, {} s at {} Hz (more than {MAX_SAMPLES}): \
+                 lower the rate or the duration",
+                dvrk_model::input::show_approx(sim.duration_s.unwrap_or_else(|| traj.period_s())),
+                dvrk_model::input::show(sim.rate_hz)
+            ),
         ));
     }
     Ok((noise, delay, count))

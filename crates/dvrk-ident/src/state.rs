@@ -2,7 +2,7 @@
 //! file, so that engines outside this process (a shell loop, `xargs -P`, a Slurm array,
 //! Dask, Ray, Spark) can run the map (`dvrk-ident observe`, one state per log) and the
 //! reduce (merging states) of a fit, and a fit of the merged state gives the document
-//! of the fit of the logs themselves (`dvrk-ident fit --from`).
+//! of the fit of the logs themselves (`dvrk-ident fit --states`).
 //!
 //! A state holds what the merge and the later fit need: the robot (name, source and a
 //! hash of the model as built, [`model_hash`]), the processing settings and the

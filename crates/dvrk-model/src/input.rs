@@ -110,6 +110,42 @@ pub fn show(value: f64) -> String {
     }
 }
 
+/// A measured or derived number for a message: [`show`] of the value rounded to 6
+/// significant digits, so that the round-off of a computation does not reach the
+/// reader (a rate measured from time stamps as `200.00000000000426` Hz reads `200`; a
+/// ratio of `1.499999999999968` reads `1.5`). A value the user gave is echoed with
+/// [`show`], every digit as given.
+///
+/// ```
+/// use dvrk_model::input::show_approx;
+/// assert_eq!(show_approx(200.00000000000426), "200");
+/// assert_eq!(show_approx(1.499999999999968), "1.5");
+/// assert_eq!(show_approx(0.0011), "0.0011");
+/// assert_eq!(show_approx(123456789.0), "123457000");
+/// assert_eq!(show_approx(-2.5e-7), "-2.5e-7");
+/// assert_eq!(show_approx(f64::NAN), "NaN");
+/// ```
+pub fn show_approx(value: f64) -> String {
+    show_significant(value, 6)
+}
+
+/// [`show`] of `value` rounded to `digits` significant digits (at least 1): for a
+/// message that compares numbers within a relative tolerance, enough digits to show
+/// the difference.
+///
+/// ```
+/// use dvrk_model::input::show_significant;
+/// assert_eq!(show_significant(0.020000100000000003, 9), "0.0200001");
+/// assert_eq!(show_significant(0.020000100000000003, 3), "0.02");
+/// ```
+pub fn show_significant(value: f64, digits: usize) -> String {
+    let decimals = digits.max(1) - 1;
+    match format!("{value:.decimals$e}").parse::<f64>() {
+        Ok(rounded) if value.is_finite() => show(rounded),
+        _ => show(value),
+    }
+}
+
 /// Checks that mass (kg), centre of mass (m) and inertia about the centre of mass
 /// `[xx, xy, xz, yy, yz, zz]` (kg·m²) describe a rigid body: finite and within range,
 /// mass ≥ 0, principal moments ≥ 0 and each at most the sum of the other two (the
@@ -137,15 +173,20 @@ pub fn check_rigid_body(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> Resu
     if moments[0] < -tol {
         return Err(format!(
             "inertia about the centre of mass has a negative principal moment \
-             ({:e}, {:e}, {:e} kg·m²): no rigid body has it",
-            moments[0], moments[1], moments[2]
+             ({}, {}, {} kg·m²): no rigid body has it",
+            show_approx(moments[0]),
+            show_approx(moments[1]),
+            show_approx(moments[2])
         ));
     }
     if moments[2] > moments[0] + moments[1] + tol {
         return Err(format!(
-            "principal moments {:e}, {:e}, {:e} kg·m² break the triangle inequality \
+            "principal moments {}, {}, {} kg·m² break the triangle inequality \
              (the largest exceeds the sum of the other two): no rigid body has them",
-            moments[0], moments[1], moments[2]
+            // Enough digits to show a breach just beyond the 1e-6 tolerance.
+            show_significant(moments[0], 9),
+            show_significant(moments[1], 9),
+            show_significant(moments[2], 9)
         ));
     }
     Ok(())

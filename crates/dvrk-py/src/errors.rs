@@ -132,15 +132,19 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
 /// The library's messages are written for the command line; from Python, the flags
 /// they suggest are the keyword arguments of the same name.
 fn keywords(message: String) -> String {
-    const PHRASES: [(&str, &str); 2] = [
+    const PHRASES: [(&str, &str); 6] = [
         (
             "choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)",
             "choose one with topic=\"...\" (a list of topics merges their joints, e.g. an arm and its jaw)",
         ),
         (
-            "resample with --resample HZ (McapOptions::resample_hz), e.g. --resample ",
+            "resample with --resample HZ, e.g. --resample ",
             "resample with resample=HZ, e.g. resample=",
         ),
+        ("with --rate HZ", "with rate=HZ"),
+        ("choose a --cutoff in that range", "choose a cutoff= in that range"),
+        ("(--time log)", "(time_source=\"log\")"),
+        ("with --resample HZ", "with resample=HZ"),
     ];
     const FLAGS: [(&str, &str); 7] = [
         ("--topic", "topic="),

@@ -74,7 +74,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   their observations merged; ``result.inputs`` lists every log with its hash (of
 ///   the file it was read from, else of its samples) and its own metrics. Or an
 ///   :class:`Observation` or a list of them (:func:`observe`, ``dvrk-ident fit
-///   --from``): merged in order and fitted with their own processing settings, the
+///   --states``): merged in order and fitted with their own processing settings, the
 ///   result of the fit of their logs;
 /// - ``test``: a :class:`JointLog` or a list to validate on, ``test_window``: metrics on
 ///   the first N processed samples of each only; ``excitation``: the

@@ -58,7 +58,7 @@ impl ObservationPy {
         Ok(wrap(state))
     }
 
-    /// Writes the state file (atomically), for ``dvrk-ident fit --from``.
+    /// Writes the state file (atomically), for ``dvrk-ident fit --states``.
     fn write(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
         let inner = self.inner.clone();
         py.detach(move || inner.write(&path)).map_err(from_ident)

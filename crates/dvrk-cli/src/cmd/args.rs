@@ -1,31 +1,47 @@
 //! The flag groups every command that reads logs shares (reading options, processing
 //! overrides), mapped onto the library's [`ReadOptions`] and
-//! [`dvrk_ident::request::Overrides`]. A leaf of the command modules.
+//! [`dvrk_ident::request::Overrides`], and the help's headings and shown defaults. A
+//! leaf of the command modules.
 
 use anyhow::Result;
+use clap::builder::StyledStr;
 use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::{LogFormat, ReadOptions};
+use dvrk_ident::names::Named;
 use dvrk_ident::request::Overrides;
+use dvrk_ident::settings::{FitSettings, Prior, PriorMetric};
 use dvrk_ident::signal::Cutoff;
-use dvrk_ident::{FitSettings, JointLog};
+use dvrk_ident::JointLog;
+
+/// Help headings: every subcommand groups its options under these (those it has).
+pub const INPUT: &str = "Input";
+/// Filtering, trimming and resampling of the logs.
+pub const PROCESSING: &str = "Processing";
+/// The robot and what is added to its model.
+pub const MODEL: &str = "Model";
+/// The estimator and its settings.
+pub const ESTIMATOR: &str = "Estimator";
+/// Files written and what is printed.
+pub const OUTPUT: &str = "Output";
 
 /// Recording options, and resampling for every format (mapped onto
 /// [`ReadOptions`]).
 #[derive(clap::Args, Clone, Default)]
 pub struct McapArgs {
-    /// MCAP: sensor_msgs/msg/JointState topic to read; repeat to merge topics (the first
-    /// is the clock, e.g. --topic /PSM1/measured_js --topic /PSM1/jaw/measured_js).
-    /// Default: the topic with positions and efforts (ending in measured_js if several)
-    #[arg(long = "topic", value_name = "TOPIC")]
+    /// Recordings (MCAP, rosbag2 folders and .db3 files, ROS 1 .bag): the
+    /// sensor_msgs/JointState topic to read; repeat to merge topics (the first is the
+    /// clock, e.g. --topic /PSM1/measured_js --topic /PSM1/jaw/measured_js). Refused for
+    /// CSV logs. [default: the topic with positions and efforts, the one ending in
+    /// measured_js if several, or a dVRK arm and its jaw]
+    #[arg(long = "topic", value_name = "TOPIC", help_heading = INPUT)]
     pub topics: Vec<String>,
     /// Recordings: sample times from the JointState header stamps (when the controller
-    /// measured the joints), or the recorder's log times or the publish times. Default:
-    /// header
-    #[arg(long, value_parser = super::named::<TimeSource>())]
+    /// measured the joints), the recorder's log times or the publish times
+    #[arg(long, value_parser = super::named::<TimeSource>(), help_heading = INPUT)]
     pub time: Option<TimeSource>,
     /// Resample to this uniform rate (Hz) by linear interpolation before anything else
     /// (bridges gaps and jitter; without it such logs are refused)
-    #[arg(long, value_name = "HZ")]
+    #[arg(long, value_name = "HZ", help_heading = PROCESSING)]
     pub resample: Option<f64>,
 }
 
@@ -51,30 +67,31 @@ pub fn read(options: &ReadOptions, path: &str) -> Result<JointLog> {
 /// Options shared by every command that reads logs.
 #[derive(clap::Args, Clone)]
 pub struct LogArgs {
-    /// Log format (default: from the file's content); wpi is the 2019 headerless CSV
-    #[arg(long, value_parser = super::named::<LogFormat>())]
+    /// Log format; wpi is the 2019 headerless CSV [default: recognized from the file's
+    /// content]
+    #[arg(long, value_parser = super::named::<LogFormat>(), help_heading = INPUT)]
     pub format: Option<LogFormat>,
-    /// Sampling rate of logs without time stamps (Hz)
-    #[arg(long)]
+    /// Sampling rate of logs without time stamps (the 2019 layout), Hz
+    #[arg(long, value_name = "HZ", help_heading = INPUT)]
     pub rate: Option<f64>,
     /// Low-pass cut-off (Hz) of the positions, velocities and accelerations, zero-phase
     /// 6th-order Butterworth; one value or one per coordinate, comma-separated, or
-    /// `none` (no filter). The 2019 PSM/MTM fits effectively used 16.965/5.655.
-    #[arg(long)]
+    /// `none` (no filter). The 2019 PSM/MTM fits effectively used 16.965/5.655
+    #[arg(long, value_name = "HZ|HZ1,HZ2,...|none", help_heading = PROCESSING)]
     pub cutoff: Option<String>,
     /// Also low-pass the torques, as the 2019 protocol did (it smooths the Coulomb
     /// friction steps on the measured side only, which biases the friction estimates)
-    #[arg(long)]
+    #[arg(long, help_heading = PROCESSING)]
     pub filter_torque: bool,
     /// Samples trimmed at each end after filtering
-    #[arg(long)]
+    #[arg(long, value_name = "N", help_heading = PROCESSING)]
     pub trim: Option<usize>,
     /// Keep every N-th processed sample (after filtering; N ≥ 1)
-    #[arg(long, value_parser = super::at_least_one, value_name = "N")]
+    #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = PROCESSING)]
     pub decimate: Option<usize>,
     /// Drop processed samples where some joint moves slower than this (rad/s or m/s):
     /// the sign of its Coulomb friction is noise there
-    #[arg(long, value_name = "SPEED")]
+    #[arg(long, value_name = "SPEED", help_heading = PROCESSING)]
     pub min_speed: Option<f64>,
     #[command(flatten)]
     pub mcap: McapArgs,
@@ -112,5 +129,83 @@ impl LogArgs {
     /// `base` with the processing flags applied.
     pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
         Ok(self.overrides()?.apply(base))
+    }
+}
+
+/// The default of each optional flag whose default is the library's
+/// ([`FitSettings::default`], [`TimeSource::default`], [`Prior::DEFAULT_WEIGHT`]),
+/// by the flag's id: what the help shows, taken from the library so it cannot drift.
+fn library_default(id: &str) -> Option<String> {
+    let fit = FitSettings::default();
+    let p = &fit.processing;
+    Some(match id {
+        "cutoff" => match &p.filter {
+            Some(f) => cutoff_text(&f.cutoff_hz),
+            None => "none".into(),
+        },
+        "trim" => p.trim.to_string(),
+        "decimate" => p.decimate.to_string(),
+        "min_speed" => match p.min_speed {
+            Some(v) => v.to_string(),
+            None => "none, every sample kept".into(),
+        },
+        "resample" => match p.resample_hz {
+            Some(v) => v.to_string(),
+            None => "none, the log's own rate".into(),
+        },
+        "time" => TimeSource::default().name().into(),
+        "irls_iterations" => fit.irls_iterations.to_string(),
+        "sdp_regularization" => format!("{:e}", fit.sdp_regularization),
+        "prior_weight" => format!("{:e}", Prior::DEFAULT_WEIGHT),
+        "prior_metric" => PriorMetric::default().name().into(),
+        _ => return None,
+    })
+}
+
+/// A cut-off as `--cutoff` takes it.
+fn cutoff_text(c: &Cutoff) -> String {
+    match c {
+        Cutoff::All(hz) => hz.to_string(),
+        Cutoff::PerJoint(hz) => hz.iter().map(f64::to_string).collect::<Vec<_>>().join(","),
+    }
+}
+
+/// The processing flags that refine a result's own settings (`validate`, `report`).
+const RESULT_SETTINGS: [&str; 4] = ["cutoff", "trim", "decimate", "min_speed"];
+
+/// Appends `[default: text]` to an argument's help (and long help), as clap does for a
+/// `default_value`.
+fn with_default(arg: clap::Arg, text: &str) -> clap::Arg {
+    let add = |h: &StyledStr| StyledStr::from(format!("{h} [default: {text}]"));
+    let help = arg.get_help().map(add);
+    let long = arg.get_long_help().map(add);
+    let arg = match help {
+        Some(h) => arg.help(h),
+        None => arg,
+    };
+    match long {
+        Some(h) => arg.long_help(h),
+        None => arg,
+    }
+}
+
+/// `#[command(mut_args = args::library_defaults)]`: the help of the flags whose
+/// default is the library's shows it (`fit`, `observe`).
+pub fn library_defaults(arg: clap::Arg) -> clap::Arg {
+    match library_default(arg.get_id().as_str()) {
+        Some(text) => with_default(arg, &text),
+        None => arg,
+    }
+}
+
+/// `#[command(mut_args = args::result_defaults)]`: the processing flags of a command
+/// that reads a result (`validate`, `report`) default to the result's settings; the
+/// others show the library's default.
+pub fn result_defaults(arg: clap::Arg) -> clap::Arg {
+    let id = arg.get_id().as_str().to_string();
+    if RESULT_SETTINGS.contains(&id.as_str()) || id == "resample" {
+        with_default(arg, "the result's")
+    } else {
+        library_defaults(arg)
     }
 }

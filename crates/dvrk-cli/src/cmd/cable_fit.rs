@@ -5,6 +5,7 @@ use anyhow::{Context, Result};
 use dvrk_ident::cable::{fit_cable, CableSettings};
 use dvrk_ident::joint_log::Signal;
 
+use super::args::{MODEL, OUTPUT, PROCESSING};
 use super::emit;
 
 #[derive(clap::Args)]
@@ -15,13 +16,13 @@ pub struct Args {
     /// Sweep file: rows of `position, velocity, effort` (no header), one way then back
     pub sweep: String,
     /// Polynomial degree
-    #[arg(long, default_value_t = 7)]
+    #[arg(long, default_value_t = 7, help_heading = MODEL)]
     pub degree: usize,
     /// Samples dropped at the start and end of each half
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = 100, help_heading = PROCESSING)]
     pub drop: usize,
     /// Print JSON
-    #[arg(long)]
+    #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
 }
 

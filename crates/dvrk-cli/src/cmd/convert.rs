@@ -7,48 +7,53 @@ use dvrk_ident::simulate::to_measured_coordinates;
 use dvrk_ident::Coordinates;
 use dvrk_model::Model;
 
-use super::args::{read, read_options, McapArgs};
+use super::args::{read, read_options, McapArgs, INPUT, MODEL, OUTPUT};
 use super::emit_summary;
 use super::simulate::{output_format, write_log};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, mut_args = super::args::library_defaults)]
 pub struct Args {
-    /// Input log
+    /// Input log (any format `fit` reads)
+    #[arg(value_name = "IN")]
     pub input: String,
-    /// Output log (written atomically)
+    /// Output log (written atomically; `-` for stdout)
+    #[arg(value_name = "OUT")]
     pub output: String,
-    /// Robot (built-in name or description path): needed to change coordinates
-    #[arg(long)]
-    pub robot: Option<String>,
-    /// Input format (default: from the extension and content)
-    #[arg(long, value_parser = super::named::<LogFormat>())]
-    pub from: Option<LogFormat>,
-    /// Output format (default: mcap for a .mcap file, otherwise headered csv)
-    #[arg(long, value_parser = super::named::<LogFormat>())]
-    pub format: Option<LogFormat>,
-    /// Sampling rate of an input without time stamps (2019 layout), Hz
-    #[arg(long, value_name = "HZ")]
+    /// Input format [default: recognized from the file's content]
+    #[arg(long, alias = "from", value_parser = super::named::<LogFormat>(), value_name = "FORMAT", help_heading = INPUT)]
+    pub in_format: Option<LogFormat>,
+    /// Sampling rate of an input without time stamps (the 2019 layout), Hz
+    #[arg(long, value_name = "HZ", help_heading = INPUT)]
     pub rate: Option<f64>,
     #[command(flatten)]
     pub mcap: McapArgs,
-    /// Output coordinates (default: model for wpi-csv, measured for mcap, the input's for
-    /// csv). Changing them needs --robot
-    #[arg(long, value_parser = super::named::<Coordinates>())]
+    /// Robot (built-in name or description path): needed to change coordinates
+    #[arg(long, help_heading = MODEL)]
+    pub robot: Option<String>,
+    /// Output format [default: mcap for a .mcap file, otherwise csv (headered)]
+    #[arg(long, alias = "format", value_parser = super::writable(), value_name = "FORMAT", help_heading = OUTPUT)]
+    pub out_format: Option<LogFormat>,
+    /// Output coordinates; changing them needs --robot [default: model for wpi, measured
+    /// for mcap, the input's for csv]
+    #[arg(long, value_parser = super::named::<Coordinates>(), help_heading = OUTPUT)]
     pub coordinates: Option<Coordinates>,
     /// Topic of the written MCAP
-    #[arg(long, default_value = mcap::DEFAULT_TOPIC, value_name = "TOPIC")]
+    #[arg(long, default_value = mcap::DEFAULT_TOPIC, value_name = "TOPIC", help_heading = OUTPUT)]
     pub out_topic: String,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[])?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
-    let traj = read(&read_options(args.from, args.rate, &args.mcap), &args.input)?;
+    let traj = read(
+        &read_options(args.in_format, args.rate, &args.mcap),
+        &args.input,
+    )?;
     traj.validate()?;
-    let format = output_format(&args.output, args.format)?;
+    let format = output_format(&args.output, args.out_format);
     let target = match (args.coordinates, format) {
         (Some(Coordinates::Measured), LogFormat::Wpi) => {
             bail!("the 2019 (wpi-csv) layout holds model coordinates, not measured joints")
@@ -74,17 +79,18 @@ pub fn run(args: Args) -> Result<()> {
     };
     if format == LogFormat::Wpi {
         if let Err(e) = out.check_uniform(mcap::JITTER_TOLERANCE) {
-            bail!("the 2019 (wpi-csv) layout has no time stamps: {e} (or use --resample HZ)");
+            bail!("the 2019 (wpi) layout has no time stamps: {e}");
         }
     }
     write_log(model.as_ref(), &out, &args.output, format, &args.out_topic)?;
     let rate = out.rate_hz().unwrap_or(f64::NAN);
     emit_summary(
         &format!(
-            "wrote {} ({format}, {} coordinates, {} samples at {rate:.6} Hz, joints {})",
+            "wrote {} ({format}, {} coordinates, {} samples at {} Hz, joints {})",
             args.output,
             out.coordinates,
             out.len(),
+            dvrk_model::input::show_approx(rate),
             out.joint_names.join(" ")
         ),
         stdout_taken,

@@ -14,7 +14,14 @@ use dvrk_ident::report::figures::excitation_figure;
 use dvrk_model::{BaseParameters, Limit, Model};
 use std::path::Path;
 
+use super::args::{MODEL, OUTPUT};
 use super::{emit, emit_summary};
+use dvrk_ident::names::Named;
+
+/// Help headings of `excite`'s own groups.
+const TRAJECTORY: &str = "Trajectory";
+const OPTIMIZER: &str = "Optimizer";
+const EVALUATION: &str = "Evaluation";
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -22,77 +29,77 @@ use super::{emit, emit_summary};
 #[command(allow_negative_numbers = true)]
 pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
-    #[arg(long)]
+    #[arg(long, help_heading = MODEL)]
     pub robot: String,
     /// Number of harmonics L
-    #[arg(long, default_value_t = 6)]
+    #[arg(long, value_name = "L", default_value_t = ExciteOptions::default().order, help_heading = TRAJECTORY)]
     pub order: usize,
     /// Base frequency f0 (Hz)
-    #[arg(long, default_value_t = 0.18)]
+    #[arg(long, value_name = "HZ", default_value_t = ExciteOptions::default().base_frequency_hz, help_heading = TRAJECTORY)]
     pub f0: f64,
     /// Limits file, replacing the description's ([[limits]] tables: expr of model
     /// coordinates or measured joints, position, velocity, acceleration;
     /// [[cartesian_limits]] tables: frame, min = [x, y, z], max = [x, y, z] in metres, base
-    /// frame); default: the description's
-    #[arg(long, value_name = "FILE")]
+    /// frame) [default: the description's]
+    #[arg(long, value_name = "FILE", help_heading = MODEL)]
     pub limits: Option<String>,
     /// Optimality criterion
-    #[arg(long, value_parser = super::named::<Criterion>(), default_value = "condition")]
+    #[arg(long, value_parser = super::named::<Criterion>(), default_value = ExciteOptions::default().criterion.name(), help_heading = OPTIMIZER)]
     pub criterion: Criterion,
     /// Seed of the random starts
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, value_name = "SEED", default_value_t = ExciteOptions::default().seed, help_heading = OPTIMIZER)]
     pub seed: u64,
     /// Number of random starts (each explored with a weak limit penalty)
-    #[arg(long, default_value_t = 8)]
+    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().starts, help_heading = OPTIMIZER)]
     pub starts: usize,
     /// Number of explored starts (the best) refined to a feasible trajectory
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().refine, help_heading = OPTIMIZER)]
     pub refine: usize,
     /// L-BFGS iterations of each of the 2 exploring stages
-    #[arg(long, default_value_t = 110)]
+    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().iterations_per_stage, help_heading = OPTIMIZER)]
     pub iterations: usize,
     /// L-BFGS iterations of each of the 5 refining stages
-    #[arg(long, default_value_t = 180)]
+    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().refine_iterations_per_stage, help_heading = OPTIMIZER)]
     pub refine_iterations: usize,
     /// Regressor samples per period per harmonic for the criterion
-    #[arg(long, default_value_t = 15)]
+    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().samples_per_harmonic, help_heading = OPTIMIZER)]
     pub samples_per_harmonic: usize,
     /// Zero velocity and acceleration at the start and end of the period
-    #[arg(long)]
+    #[arg(long, help_heading = TRAJECTORY)]
     pub rest: bool,
     /// Optimize the exact condition number from the start (no smooth surrogate stages)
-    #[arg(long)]
+    #[arg(long, help_heading = OPTIMIZER)]
     pub no_smooth: bool,
-    /// Output trajectory JSON (default: stdout)
-    #[arg(long, value_name = "FILE")]
+    /// Output trajectory JSON [default: stdout]
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<String>,
     /// Setpoint CSV (time,<measured joints>; one period at --rate, measured joint space)
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub csv: Option<String>,
     /// Setpoint rate (Hz)
-    #[arg(long, default_value_t = 200.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 200.0, value_name = "HZ", help_heading = OUTPUT)]
     pub rate: f64,
     /// Rate of the dense feasibility check (Hz; at least 1000)
-    #[arg(long, default_value_t = 1000.0, value_name = "HZ")]
+    #[arg(long, default_value_t = ExciteOptions::default().check_rate_hz, value_name = "HZ", help_heading = OPTIMIZER)]
     pub check_rate: f64,
     /// Warm start: refine this trajectory (Fourier JSON; with --init-pick, a 2019 file)
-    #[arg(long, value_name = "TRAJ.json")]
+    #[arg(long, value_name = "TRAJ.json", help_heading = OPTIMIZER)]
     pub init: Option<String>,
     /// Take the warm start (e.g. mtm_one) from a 2019-layout coefficient file
-    #[arg(long, value_name = "NAME", requires = "init")]
+    #[arg(long, value_name = "NAME", requires = "init", help_heading = OPTIMIZER)]
     pub init_pick: Option<String>,
     /// Evaluate this trajectory file instead of optimizing
-    #[arg(long, value_name = "TRAJ.json")]
+    #[arg(long, value_name = "TRAJ.json", help_heading = EVALUATION)]
     pub evaluate: Option<String>,
     /// Write a preview plot of the trajectory (one period, with the position limits):
     /// .svg or .png
-    #[arg(long, value_name = "FILE")]
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub plot: Option<String>,
     /// With --evaluate: take this trajectory (e.g. psm_one) from a 2019 coefficient file
-    #[arg(long, value_name = "NAME", requires = "evaluate")]
+    #[arg(long, value_name = "NAME", requires = "evaluate", help_heading = EVALUATION)]
     pub pick: Option<String>,
     /// With --evaluate: print JSON
-    #[arg(long)]
+    #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
 }
 

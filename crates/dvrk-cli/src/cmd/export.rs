@@ -1,4 +1,4 @@
-//! `dvrk-ident export RESULT --urdf OUT.urdf [--from ROBOT.urdf] [--wpi-json OUT.json]
+//! `dvrk-ident export RESULT --urdf OUT.urdf [--template ROBOT.urdf] [--wpi-json OUT.json]
 //! [--dvrk-gc gc-MTML.json]`: an identified model for the tools that read URDF, the 2019
 //! params.json, or the dVRK controller's MTM gravity compensation.
 
@@ -10,6 +10,7 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
 
+use super::args::{INPUT, MODEL, OUTPUT};
 use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -25,26 +26,26 @@ use super::{emit_summary, load_result, LoadedResult};
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,
+    /// URDF whose <inertial> elements are replaced, everything else kept [default: the
+    /// robot's own file when the robot is a URDF; for a description, a URDF is generated]
+    #[arg(long, alias = "from", value_name = "ROBOT.urdf", requires = "urdf", help_heading = INPUT)]
+    pub template: Option<String>,
+    /// Robot [default: the one the result was fitted for]
+    #[arg(long, help_heading = MODEL)]
+    pub robot: Option<String>,
     /// Write a URDF with the identified inertials here (atomically)
-    #[arg(long, value_name = "OUT.urdf")]
+    #[arg(long, value_name = "OUT.urdf", help_heading = OUTPUT)]
     pub urdf: Option<String>,
-    /// URDF whose <inertial> elements are replaced, everything else kept (default: the
-    /// robot's own file when the robot is a URDF; for a description, a URDF is generated)
-    #[arg(long, value_name = "ROBOT.urdf", requires = "urdf")]
-    pub from: Option<String>,
     /// Write the parameters in the 2019 package's params.json layout here (atomically)
-    #[arg(long, value_name = "OUT.json")]
+    #[arg(long, value_name = "OUT.json", help_heading = OUTPUT)]
     pub wpi_json: Option<String>,
     /// Write the dVRK controller's MTM gravity-compensation file (version 2.0, as
     /// sawIntuitiveResearchKit's robGravityCompensationMTM reads it) here (atomically)
-    #[arg(long, value_name = "gc-MTML.json")]
+    #[arg(long, value_name = "gc-MTML.json", help_heading = OUTPUT)]
     pub dvrk_gc: Option<String>,
     /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
-    #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc")]
+    #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
     pub gc_points: usize,
-    /// Robot (default: the one the result was fitted for)
-    #[arg(long)]
-    pub robot: Option<String>,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -71,7 +72,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     // Everything is built before anything is written: an error leaves no output.
     let urdf = match &args.urdf {
-        Some(out) => Some((out, urdf_text(&loaded, args.from.as_deref(), &args.result)?)),
+        Some(out) => Some((
+            out,
+            urdf_text(&loaded, args.template.as_deref(), &args.result)?,
+        )),
         None => None,
     };
     let wpi = match &args.wpi_json {

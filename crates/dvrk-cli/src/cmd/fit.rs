@@ -16,104 +16,109 @@ use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
 use dvrk_model::Model;
 
-use super::args::LogArgs;
+use super::args::{LogArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::emit;
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, mut_args = super::args::library_defaults)]
 pub struct Args {
     /// Training logs: files (2019 CSV, headered CSV, MCAP, sqlite3 .db3, ROS 1 .bag) or
     /// rosbag2 folders, recognized by content. Each is processed on its own (filters
     /// and trimming never cross from one to the next), their observations merged
-    #[arg(required_unless_present = "from", num_args = 1.., value_name = "LOG")]
+    #[arg(required_unless_present = "states", num_args = 1.., value_name = "LOG")]
     pub logs: Vec<String>,
-    /// Observation states of `dvrk-ident observe` (the reduce): merged in order and
+    /// Observation states of `dvrk-ident observe` instead of logs: merged in order and
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
-    #[arg(long, num_args = 1.., value_name = "STATE", conflicts_with_all = ["logs", "stream", "report", "stribeck", "delay"])]
-    pub from: Vec<String>,
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
-    /// --from: default the states' robot, and it must be the robot they were observed with)
-    #[arg(long, required_unless_present = "from")]
-    pub robot: Option<String>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
-    /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
-    /// settings it expanded to
-    #[arg(long, value_parser = super::named::<Preset>(), value_name = "PRESET")]
-    pub preset: Option<Preset>,
-    /// Estimator [default: sdp]
-    #[arg(long, value_parser = super::named::<Method>())]
-    pub method: Option<Method>,
-    /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
-    /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019` (≥ 0.001, to reproduce the
-    /// 2019 fit). Default: the description's (the built-in robots: physical)
-    #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET")]
-    pub bounds: Option<BoundsSet>,
-    /// Measurement delay of the torques: `auto` (estimated per coordinate within
-    /// 0–0.150 s with the parameters, recorded in the result), `0` (none, the default)
-    /// or seconds, one for all coordinates or one per coordinate `d1,d2,...`
-    #[arg(long, value_name = "auto|D|D1,D2,...")]
-    pub delay: Option<String>,
+    #[arg(long, alias = "from", num_args = 1.., value_name = "STATE", help_heading = INPUT,
+          conflicts_with_all = ["logs", "stream", "report", "stribeck", "delay"])]
+    pub states: Vec<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
-    #[arg(long, num_args = 1.., value_name = "LOG")]
+    #[arg(long, num_args = 1.., value_name = "LOG", help_heading = INPUT)]
     pub test: Vec<String>,
-    /// Metrics on the first N processed samples of each test log only (N ≥ 1)
-    #[arg(long, value_parser = super::at_least_one)]
+    /// Metrics on the first N processed samples of each test log only (N ≥ 1) [default:
+    /// the excitation's first period with --excitation, else every sample]
+    #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = INPUT)]
     pub test_window: Option<usize>,
     /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
     /// --report, and with --test but no --test-window the test metrics cover its first
     /// period (the 2019 protocol)
-    #[arg(long, value_name = "TRAJ.json")]
+    #[arg(long, value_name = "TRAJ.json", help_heading = INPUT)]
     pub excitation: Option<String>,
-    /// Write the result document here (atomically)
-    #[arg(long)]
-    pub out: Option<String>,
-    /// Also write the parameters in the 2019 package's params.json layout (atomically)
-    #[arg(long)]
-    pub wpi_json: Option<String>,
-    /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
-    /// or m/s) to every friction element (parameters Fs<frame>)
-    #[arg(long, value_name = "VS")]
-    pub stribeck: Option<f64>,
-    /// Re-weighting passes of --method irls
-    #[arg(long, value_name = "N")]
-    pub irls_iterations: Option<usize>,
-    /// Tikhonov weight of the semidefinite fit toward zero (toward the prior with
-    /// --prior), relative
-    #[arg(long, value_name = "W")]
-    pub sdp_regularization: Option<f64>,
-    /// Regularize the semidefinite fit toward a prior: `nominal` (the description's
-    /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
-    /// values are recorded in the result's settings)
-    #[arg(long, value_name = "FILE|nominal")]
-    pub prior: Option<String>,
-    /// Weight of the prior, relative to the data term scaled to at most 1 (default 0.001)
-    #[arg(long, value_name = "W")]
-    pub prior_weight: Option<f64>,
-    /// How the prior's distance is measured: `entropic` (the log-det divergence of each
-    /// link's pseudo-inertia from the prior's, the default) or `euclidean`
-    #[arg(long, value_parser = super::named::<PriorMetric>(), value_name = "METRIC")]
-    pub prior_metric: Option<PriorMetric>,
-    /// Also write figures and report.html into this folder (see `dvrk-ident report`)
-    #[arg(long, value_name = "DIR")]
-    pub report: Option<String>,
-    /// Print the result document to stdout instead of the table
-    #[arg(long)]
-    pub json: bool,
     /// Read the logs from disk block by block, in memory independent of their length,
     /// instead of loading them (several passes over the files; the same result).
     /// Automatic for a log larger than 256 MiB
-    #[arg(long)]
+    #[arg(long, help_heading = INPUT)]
     pub stream: bool,
+    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
+    /// --states: default the states' robot, and it must be the robot they were observed
+    /// with)
+    #[arg(long, required_unless_present = "states", help_heading = MODEL)]
+    pub robot: Option<String>,
+    /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
+    /// or m/s) to every friction element (parameters Fs<frame>) [default: none]
+    #[arg(long, value_name = "VS", help_heading = MODEL)]
+    pub stribeck: Option<f64>,
+    /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
+    /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019`
+    /// (≥ 0.001, to reproduce the 2019 fit) [default: the description's; the built-in
+    /// robots': physical]
+    #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET", help_heading = MODEL)]
+    pub bounds: Option<BoundsSet>,
+    #[command(flatten)]
+    pub log_args: LogArgs,
+    /// Measurement delay of the torques: `auto` (estimated per coordinate within
+    /// 0–0.150 s with the parameters, recorded in the result), `0` (none) or seconds, one
+    /// for all coordinates or one per coordinate `d1,d2,...` [default: 0]
+    #[arg(long, value_name = "auto|D|D1,D2,...", help_heading = PROCESSING)]
+    pub delay: Option<String>,
+    /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
+    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
+    /// settings it expanded to [default: none]
+    #[arg(long, value_parser = super::named::<Preset>(), value_name = "PRESET", help_heading = ESTIMATOR)]
+    pub preset: Option<Preset>,
+    /// Estimator: ordinary, weighted or iteratively re-weighted least squares on the
+    /// base parameters, or the physically consistent semidefinite fit [default: sdp]
+    #[arg(long, value_parser = super::named::<Method>(), help_heading = ESTIMATOR)]
+    pub method: Option<Method>,
+    /// Re-weighting passes of --method irls
+    #[arg(long, value_name = "N", help_heading = ESTIMATOR)]
+    pub irls_iterations: Option<usize>,
+    /// Tikhonov weight of the semidefinite fit toward zero (toward the prior with
+    /// --prior), relative
+    #[arg(long, value_name = "W", help_heading = ESTIMATOR)]
+    pub sdp_regularization: Option<f64>,
+    /// Regularize the semidefinite fit toward a prior: `nominal` (the description's
+    /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
+    /// values are recorded in the result's settings) [default: none]
+    #[arg(long, value_name = "FILE|nominal", help_heading = ESTIMATOR)]
+    pub prior: Option<String>,
+    /// Weight of the prior, relative to the data term scaled to at most 1
+    #[arg(long, value_name = "W", help_heading = ESTIMATOR)]
+    pub prior_weight: Option<f64>,
+    /// How the prior's distance is measured: `entropic` (the log-det divergence of each
+    /// link's pseudo-inertia from the prior's) or `euclidean`
+    #[arg(long, value_parser = super::named::<PriorMetric>(), value_name = "METRIC", help_heading = ESTIMATOR)]
+    pub prior_metric: Option<PriorMetric>,
+    /// Write the result document here (atomically; `-` for stdout)
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
+    pub out: Option<String>,
+    /// Also write the parameters in the 2019 package's params.json layout (atomically)
+    #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
+    pub wpi_json: Option<String>,
+    /// Also write figures and report.html into this folder (see `dvrk-ident report`)
+    #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
+    pub report: Option<String>,
+    /// Print the result document to stdout instead of the table
+    #[arg(long, help_heading = OUTPUT)]
+    pub json: bool,
 }
 
 /// The request of these flags: everything but the outputs.
 fn request(args: &Args) -> Result<FitRequest> {
-    let train = if args.from.is_empty() {
+    let train = if args.states.is_empty() {
         Training::Logs(
             args.logs
                 .iter()
@@ -122,7 +127,7 @@ fn request(args: &Args) -> Result<FitRequest> {
         )
     } else {
         let mut states = Vec::new();
-        for path in &args.from {
+        for path in &args.states {
             states.push((
                 Arc::new(ObservationState::read(Path::new(path))?),
                 Some(path.into()),

@@ -10,6 +10,7 @@ pub mod fit;
 pub mod model;
 pub mod observe;
 pub mod report;
+pub mod shell;
 pub mod simulate;
 pub mod validate;
 
@@ -21,11 +22,31 @@ use dvrk_model::Model;
 /// The clap parser of a flag whose values are a library option enum's names
 /// ([`Named`]): the command line lists and parses exactly what Python accepts.
 #[derive(Clone)]
-pub struct NamedParser<T>(std::marker::PhantomData<T>);
+pub struct NamedParser<T> {
+    /// The values the flag takes (others are refused with the message), and the
+    /// only ones its help lists.
+    keep: fn(T) -> Result<(), String>,
+}
 
 /// [`NamedParser`] for `T`, in `#[arg(value_parser = named::<T>())]`.
 pub fn named<T>() -> NamedParser<T> {
-    NamedParser(std::marker::PhantomData)
+    NamedParser { keep: |_| Ok(()) }
+}
+
+/// [`NamedParser`] of an output's log format: only the formats that are written, so
+/// the help offers no format that is then refused.
+pub fn writable() -> NamedParser<dvrk_ident::log::LogFormat> {
+    NamedParser {
+        keep: |f| {
+            if f.is_writable() {
+                Ok(())
+            } else {
+                Err(format!(
+                    "logs are written as wpi, csv or mcap ({f} is read only)"
+                ))
+            }
+        },
+    }
 }
 
 impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for NamedParser<T> {
@@ -39,7 +60,7 @@ impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for Nam
     ) -> Result<T, clap::Error> {
         let flag = arg.map(|a| format!("{a}: ")).unwrap_or_default();
         let message = match value.to_str() {
-            Some(text) => match T::parse_name(text) {
+            Some(text) => match T::parse_name(text).and_then(|v| (self.keep)(v).map(|()| v)) {
                 Ok(v) => return Ok(v),
                 Err(m) => m,
             },
@@ -55,7 +76,12 @@ impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for Nam
     fn possible_values(
         &self,
     ) -> Option<Box<dyn Iterator<Item = clap::builder::PossibleValue> + '_>> {
-        Some(Box::new(T::names().map(clap::builder::PossibleValue::new)))
+        Some(Box::new(
+            T::NAMES[..T::CANONICAL]
+                .iter()
+                .filter(|(_, v)| (self.keep)(*v).is_ok())
+                .map(|(n, _)| clap::builder::PossibleValue::new(*n)),
+        ))
     }
 }
 

@@ -8,7 +8,11 @@ use serde_json::json;
 
 use std::fmt::Write as _;
 
+use super::args::OUTPUT;
 use super::{emit, parse_vector, read_params};
+
+/// The heading of the regressor and torque evaluation's flags.
+const EVALUATION: &str = "Evaluation";
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -18,35 +22,35 @@ pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a path to a .toml description or .urdf
     pub robot: String,
     /// Print JSON instead of text
-    #[arg(long)]
+    #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
     /// Print the regressor at --q/--dq/--ddq as JSON {"parameters": [...], "rows": [...]}
-    #[arg(long, conflicts_with = "torque")]
+    #[arg(long, conflicts_with = "torque", help_heading = EVALUATION)]
     pub regressor: bool,
     /// With --regressor: the base regressor (columns = base parameters)
-    #[arg(long, requires = "regressor")]
+    #[arg(long, requires = "regressor", help_heading = EVALUATION)]
     pub base: bool,
     /// Print the inverse-dynamics torque at --q/--dq/--ddq as JSON {"tau": [...]}
-    #[arg(long)]
+    #[arg(long, help_heading = EVALUATION)]
     pub torque: bool,
     /// Coordinates (rad, m), comma-separated, model order
-    #[arg(long, allow_hyphen_values = true)]
+    #[arg(long, allow_hyphen_values = true, help_heading = EVALUATION)]
     pub q: Option<String>,
-    /// Velocities (rad/s, m/s); zeros if omitted
-    #[arg(long, allow_hyphen_values = true)]
+    /// Velocities (rad/s, m/s), comma-separated, model order [default: zeros]
+    #[arg(long, allow_hyphen_values = true, help_heading = EVALUATION)]
     pub dq: Option<String>,
-    /// Accelerations (rad/s², m/s²); zeros if omitted
-    #[arg(long, allow_hyphen_values = true)]
+    /// Accelerations (rad/s², m/s²), comma-separated, model order [default: zeros]
+    #[arg(long, allow_hyphen_values = true, help_heading = EVALUATION)]
     pub ddq: Option<String>,
-    /// Draw the kinematic tree at --q (zeros if omitted) into --out (.svg or .png)
-    #[arg(long, requires = "out", conflicts_with_all = ["regressor", "torque", "json"])]
+    /// Draw the kinematic tree at --q (at zeros without it) into --out (.svg or .png)
+    #[arg(long, requires = "out", conflicts_with_all = ["regressor", "torque", "json"], help_heading = OUTPUT)]
     pub draw: bool,
     /// Output figure of --draw
-    #[arg(long, requires = "draw")]
+    #[arg(long, requires = "draw", help_heading = OUTPUT)]
     pub out: Option<String>,
-    /// Parameter file for --torque (JSON {name: value} or a result file); default: the
-    /// description's nominal parameters
-    #[arg(long)]
+    /// Parameter file for --torque (JSON {name: value} or a result file) [default: the
+    /// description's nominal parameters]
+    #[arg(long, help_heading = EVALUATION)]
     pub params: Option<String>,
 }
 

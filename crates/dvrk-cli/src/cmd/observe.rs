@@ -1,6 +1,6 @@
 //! `dvrk-ident observe LOG... --robot ROBOT --out part.obs`: the map of a distributed fit.
 //! The logs are processed and reduced as `fit` does before its estimator, and the state
-//! ([`dvrk_ident::state`]) is written; `fit --from` merges states and fits them.
+//! ([`dvrk_ident::state`]) is written; `fit --states` merges states and fits them.
 
 use std::path::Path;
 
@@ -9,29 +9,30 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
 use dvrk_model::Model;
 
-use super::args::LogArgs;
+use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
 
 #[derive(clap::Args)]
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, mut_args = super::args::library_defaults)]
 pub struct Args {
     /// Training logs (any format `fit` reads), each processed on its own; one state
     /// holds them all
     #[arg(required = true, num_args = 1.., value_name = "LOG")]
     pub logs: Vec<String>,
+    /// Read the logs block by block, as `fit --stream` (automatic above 256 MiB)
+    #[arg(long, help_heading = INPUT)]
+    pub stream: bool,
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
-    #[arg(long)]
+    #[arg(long, help_heading = MODEL)]
     pub robot: String,
+    /// Add a Stribeck friction term with this velocity (rad/s or m/s), as `fit
+    /// --stribeck` [default: none]
+    #[arg(long, value_name = "VS", help_heading = MODEL)]
+    pub stribeck: Option<f64>,
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Add a Stribeck friction term with this velocity (rad/s or m/s), as `fit --stribeck`
-    #[arg(long, value_name = "VS")]
-    pub stribeck: Option<f64>,
     /// The observation state file (written atomically; `-` for stdout)
-    #[arg(long)]
+    #[arg(long, value_name = "STATE", help_heading = OUTPUT)]
     pub out: String,
-    /// Read the logs block by block, as `fit --stream` (automatic above 256 MiB)
-    #[arg(long)]
-    pub stream: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {

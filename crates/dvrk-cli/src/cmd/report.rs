@@ -12,29 +12,31 @@ use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, JointLog};
 use dvrk_model::Model;
 
-use super::args::LogArgs;
+use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
 use super::emit;
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,
-    /// Logs to show (default: the result's own training and test logs, if they exist)
+    /// Logs to show [default: the result's own training and test logs, if they exist
+    /// unchanged]
+    #[arg(value_name = "LOG")]
     pub logs: Vec<String>,
-    /// Folder to write report.html and the figures (SVG and PNG) into
-    #[arg(long)]
-    pub out: String,
-    /// Robot (default: the one the result was fitted for)
-    #[arg(long)]
-    pub robot: Option<String>,
     /// Excitation trajectory (JSON of `dvrk-ident excite`) to plot against the limits
-    #[arg(long)]
+    #[arg(long, value_name = "TRAJ.json", help_heading = INPUT)]
     pub excitation: Option<String>,
+    /// Robot [default: the one the result was fitted for]
+    #[arg(long, help_heading = MODEL)]
+    pub robot: Option<String>,
     #[command(flatten)]
     pub log_args: LogArgs,
+    /// Folder to write report.html and the figures (SVG and PNG) into
+    #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
+    pub out: String,
 }
 
 /// Builds the report of `result` on `logs` (role, trajectory, metric window) in memory,

@@ -1,4 +1,4 @@
-//! `dvrk-ident simulate ROBOT --params P --trajectory T --out LOG ...`: a simulated log
+//! `dvrk-ident simulate ROBOT --params P --excitation T --out LOG ...`: a simulated log
 //! of a robot with known parameters running a Fourier excitation trajectory.
 
 use std::path::Path;
@@ -10,6 +10,7 @@ use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_model::Model;
 
+use super::args::{INPUT, MODEL, OUTPUT};
 use super::{emit_summary, read_params};
 
 #[derive(clap::Args)]
@@ -20,53 +21,54 @@ pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
     pub robot: String,
     /// Parameters: a result file ({"parameters": {name: value}}) or a {name: value} object
-    #[arg(long)]
+    #[arg(long, value_name = "FILE", help_heading = MODEL)]
     pub params: String,
     /// Excitation trajectory: Fourier JSON (order, base_frequency_hz, q0, a, b in model
-    /// coordinates), or the 2019 coefficient file with --pick
-    #[arg(long)]
-    pub trajectory: String,
+    /// coordinates; `dvrk-ident excite`), or the 2019 coefficient file with --pick
+    #[arg(long, alias = "trajectory", value_name = "TRAJ.json", help_heading = INPUT)]
+    pub excitation: String,
     /// Take this trajectory (e.g. psm_one) from a 2019-layout coefficient file
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", help_heading = INPUT)]
     pub pick: Option<String>,
-    /// Output log (written atomically)
-    #[arg(long)]
-    pub out: String,
-    /// Output format (default: mcap for a .mcap file, otherwise headered csv; wpi-csv is
-    /// in model coordinates)
-    #[arg(long, value_parser = super::named::<LogFormat>())]
-    pub format: Option<LogFormat>,
-    /// Torque noise standard deviation (N·m or N), added in model coordinates: one value
-    /// or one per coordinate, comma-separated
-    #[arg(long, default_value = "0", value_name = "STD")]
-    pub noise: String,
-    /// Measurement delay of the torques (s): the torque logged at t is the one of the
-    /// motion at t − d. One value or one per coordinate, comma-separated
-    #[arg(long, value_name = "D")]
-    pub delay: Option<String>,
     /// Sampling rate (Hz)
-    #[arg(long, default_value_t = 200.0, value_name = "HZ")]
+    #[arg(long, default_value_t = 200.0, value_name = "HZ", help_heading = INPUT)]
     pub rate: f64,
-    /// Duration (s); default: one period of the trajectory
-    #[arg(long, value_name = "S", conflicts_with = "periods")]
+    /// Duration (s) [default: one period of the trajectory]
+    #[arg(long, value_name = "S", conflicts_with = "periods", help_heading = INPUT)]
     pub duration: Option<f64>,
     /// Duration as a number of periods of the trajectory
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", help_heading = INPUT)]
     pub periods: Option<f64>,
+    /// Torque noise standard deviation (N·m or N), added in model coordinates: one value
+    /// or one per coordinate, comma-separated
+    #[arg(long, default_value = "0", value_name = "STD", help_heading = MEASUREMENT)]
+    pub noise: String,
     /// Seed of the noise generator
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, help_heading = MEASUREMENT)]
     pub seed: u64,
-    /// MCAP topic of the sensor_msgs/msg/JointState messages
-    #[arg(long, default_value = mcap::DEFAULT_TOPIC)]
-    pub topic: String,
+    /// Measurement delay of the torques (s): the torque logged at t is the one of the
+    /// motion at t − d. One value or one per coordinate, comma-separated [default: 0]
+    #[arg(long, value_name = "D", help_heading = MEASUREMENT)]
+    pub delay: Option<String>,
+    /// Output log (written atomically; `-` for stdout)
+    #[arg(long, value_name = "LOG", help_heading = OUTPUT)]
+    pub out: String,
+    /// Output format; wpi is in model coordinates [default: mcap for a .mcap file,
+    /// otherwise csv (headered)]
+    #[arg(long, alias = "format", value_parser = super::writable(), value_name = "FORMAT", help_heading = OUTPUT)]
+    pub out_format: Option<LogFormat>,
+    /// Topic of the written MCAP
+    #[arg(long, alias = "topic", default_value = mcap::DEFAULT_TOPIC, value_name = "TOPIC", help_heading = OUTPUT)]
+    pub out_topic: String,
 }
 
-/// The output format: `--format`, else `.mcap` is MCAP and anything else headered CSV.
-pub fn output_format(path: &str, format: Option<LogFormat>) -> Result<LogFormat> {
-    Ok(match format {
-        Some(f) if !f.is_writable() => {
-            bail!("--format {f}: logs are written as wpi, csv or mcap ({f} is read only)")
-        }
+/// The heading of `simulate`'s noise, seed and delay: what the simulated sensor adds.
+const MEASUREMENT: &str = "Measurement";
+
+/// The output format: `--out-format` (a writable one, see [`super::writable`]), else
+/// `.mcap` is MCAP and anything else headered CSV.
+pub fn output_format(path: &str, format: Option<LogFormat>) -> LogFormat {
+    match format {
         Some(f) => f,
         None if Path::new(path)
             .extension()
@@ -75,7 +77,7 @@ pub fn output_format(path: &str, format: Option<LogFormat>) -> Result<LogFormat>
             LogFormat::Mcap
         }
         None => LogFormat::Csv,
-    })
+    }
 }
 
 /// Writes `traj` in `format`: MCAP on `topic`, the 2019 layout in model coordinates.
@@ -107,8 +109,8 @@ pub fn run(args: Args) -> Result<()> {
     let (model, params) = read_params(&robot, &args.params)?;
     let model: &Model = &model;
     let traj = match &args.pick {
-        Some(name) => FourierTrajectory::from_wpi_file(&args.trajectory, name)?,
-        None => FourierTrajectory::from_json_file(&args.trajectory)?,
+        Some(name) => FourierTrajectory::from_wpi_file(&args.excitation, name)?,
+        None => FourierTrajectory::from_json_file(&args.excitation)?,
     };
     let noise: Vec<f64> = args
         .noise
@@ -139,9 +141,9 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         delay_s,
     };
-    let format = output_format(&args.out, args.format)?;
+    let format = output_format(&args.out, args.out_format);
     let log = simulate(model, &params, &traj, &sim)?;
-    write_log(Some(model), &log, &args.out, format, &args.topic)?;
+    write_log(Some(model), &log, &args.out, format, &args.out_topic)?;
     let bytes = match dvrk_ident::output::Destination::of(Path::new(&args.out)) {
         Ok(dvrk_ident::output::Destination::File(p)) => std::fs::metadata(p)
             .map(|m| format!(", {} bytes", m.len()))

@@ -6,31 +6,31 @@ use anyhow::Result;
 use dvrk_ident::fit::{joint_metrics, prepare};
 use serde_json::json;
 
-use super::args::LogArgs;
+use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
 use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true)]
+#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
 pub struct Args {
     /// Result file written by `dvrk-ident fit --out`
     pub result: String,
     /// Logs to validate on
-    #[arg(required = true)]
+    #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<String>,
-    /// Robot (default: the one the result was fitted for)
-    #[arg(long)]
+    /// Metrics on the first N processed samples only (N ≥ 1) [default: every sample]
+    #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = INPUT)]
+    pub test_window: Option<usize>,
+    /// Robot [default: the one the result was fitted for]
+    #[arg(long, help_heading = MODEL)]
     pub robot: Option<String>,
     // The processing flags (--cutoff, --trim, ...) default to the result's own settings;
     // given, they replace them, and the output says which differ from the fit's.
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Metrics on the first N processed samples only (N ≥ 1)
-    #[arg(long, value_parser = super::at_least_one)]
-    pub test_window: Option<usize>,
     /// Print JSON
-    #[arg(long)]
+    #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
 }
 

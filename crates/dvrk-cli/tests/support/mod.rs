@@ -60,7 +60,7 @@ pub fn simulate_args(robot: &str, trajectory: &str, out: &Path, extra: &[&str]) 
         robot,
         "--params",
         &params,
-        "--trajectory",
+        "--excitation",
         trajectory,
         "--out",
         &s(out),

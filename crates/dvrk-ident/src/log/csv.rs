@@ -136,6 +136,7 @@ impl WpiBlocks {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(LogError::InvalidRate {
                 path: path.to_path_buf(),
+                flag: "the sampling rate (--rate)",
                 rate_hz,
             });
         }

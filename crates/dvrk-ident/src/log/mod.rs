@@ -272,16 +272,19 @@ pub enum LogError {
         option: &'static str,
     },
     /// The 2019 layout has no time stamps and no rate was given.
-    #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate in Hz (the 2019 dVRK logs are 200 Hz)", path.display())]
+    #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate with --rate HZ (the 2019 dVRK logs are 200 Hz)", path.display())]
     MissingRate {
         /// The file.
         path: PathBuf,
     },
     /// A rate that is not positive and finite.
-    #[error("{}: sampling rate must be positive and finite, got {rate_hz} Hz", path.display())]
+    #[error("{}: {flag} must be positive and finite, got {rate_hz} Hz", path.display())]
     InvalidRate {
         /// The file.
         path: PathBuf,
+        /// The setting, named as the command line's flag: `the sampling rate (--rate)`
+        /// or `the resampling rate (--resample)`.
+        flag: &'static str,
         /// The rate, Hz.
         rate_hz: f64,
     },

@@ -465,6 +465,21 @@ mod tests {
         }
         assert!(butter_lowpass_sos(6, 95.0, 200.0).is_ok());
         assert!(butter_lowpass_sos(6, 0.1, 200.0).is_ok());
+        // The message rounds the measured rate and the ratios, not the cut-off given,
+        // and never rounds a ratio onto the bound it is outside of.
+        let message = |fc: f64, rate: f64| butter_lowpass_sos(6, fc, rate).unwrap_err().to_string();
+        assert_eq!(
+            message(150.0, 200.00000000000426),
+            "cut-off 150 Hz at a 200 Hz sampling rate is 1.5 of the Nyquist frequency: it \
+             must be between 0.001 and 0.95 of it (0.1 to 95 Hz): choose a --cutoff in that \
+             range"
+        );
+        let above = message(95.0000001, 200.0);
+        assert!(
+            above.contains("is 0.9500000") && !above.contains("is 0.95 of"),
+            "{above}"
+        );
+        assert!(message(0.09, 200.0).contains("is 0.0009 of the Nyquist"));
         assert!(matches!(
             butter_lowpass_sos(2, 5.0, -1.0),
             Err(SignalError::InvalidRate { .. })

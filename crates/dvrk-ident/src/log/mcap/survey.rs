@@ -606,6 +606,7 @@ pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogErr
         if !(rate.is_finite() && rate > 0.0) {
             return Err(LogError::InvalidRate {
                 path: path.to_path_buf(),
+                flag: "the resampling rate (--resample)",
                 rate_hz: rate,
             });
         }
