@@ -45,7 +45,12 @@ fn a_stribeck_result_is_evaluated_with_its_own_model() {
         [0.2, 0.1, -0.05, -0.3, 0.5, 0.1, -0.2],
         [1.0, -0.5, 0.1, 0.0, 0.3, -0.7, 0.2],
     );
-    let list = |v: &[f64]| v.iter().map(|x| format!("{x:?}")).collect::<Vec<_>>().join(",");
+    let list = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:?}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
     let doc = run_json(&[
         "model",
         "psm",
@@ -71,7 +76,14 @@ fn a_stribeck_result_is_evaluated_with_its_own_model() {
     // The Stribeck terms matter at this velocity: without them the torque differs.
     let mut plain = vec![0.0; 7];
     let base = Model::builtin("psm").unwrap();
-    base.inverse_dynamics(&mut Workspace::new(&base), &params[..115], &q, &dq, &ddq, &mut plain);
+    base.inverse_dynamics(
+        &mut Workspace::new(&base),
+        &params[..115],
+        &q,
+        &dq,
+        &ddq,
+        &mut plain,
+    );
     assert!(tau.iter().zip(&plain).any(|(a, b)| (a - b).abs() > 1e-6));
 }
 
@@ -83,9 +95,30 @@ fn a_result_of_another_robot_is_refused_in_one_line() {
     fit_example_to(&psm_out, &["--method", "ols"]);
     let expected = format!("dvrk-ident: error: {} was fitted for mtm, not psm", s(&mtm));
     let cases: Vec<Vec<String>> = vec![
-        vec!["validate".into(), s(&mtm), example("psm_excitation.mcap"), "--robot".into(), "psm".into()],
-        vec!["export".into(), s(&mtm), "--robot".into(), "psm".into(), "--urdf".into(), s(&dir.join("x.urdf"))],
-        vec!["model".into(), "psm".into(), "--torque".into(), "--params".into(), s(&mtm), "--q".into(), "0,0,0.1,0,0,0,0.3".into()],
+        vec![
+            "validate".into(),
+            s(&mtm),
+            example("psm_excitation.mcap"),
+            "--robot".into(),
+            "psm".into(),
+        ],
+        vec![
+            "export".into(),
+            s(&mtm),
+            "--robot".into(),
+            "psm".into(),
+            "--urdf".into(),
+            s(&dir.join("x.urdf")),
+        ],
+        vec![
+            "model".into(),
+            "psm".into(),
+            "--torque".into(),
+            "--params".into(),
+            s(&mtm),
+            "--q".into(),
+            "0,0,0.1,0,0,0,0.3".into(),
+        ],
         vec![
             "fit".into(),
             example("psm_excitation.mcap"),
@@ -134,7 +167,15 @@ fn a_log_of_another_arm_is_refused_naming_the_joint_and_the_ranges() {
     assert!(!out.exists());
     // The same log with its own robot is within every range.
     run_ok(&[
-        "fit", &s(&mtm_log), "--robot", "mtm", "--format", "wpi-csv", "--rate", "200", "--method",
+        "fit",
+        &s(&mtm_log),
+        "--robot",
+        "mtm",
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--method",
         "ols",
     ]);
 }
@@ -145,7 +186,10 @@ fn preset_dvrk_records_what_it_expands_to() {
     let preset = dir.join("preset.json");
     let spelled = dir.join("spelled.json");
     fit_example_to(&preset, &["--preset", "dvrk"]);
-    fit_example_to(&spelled, &["--method", "sdp", "--delay", "auto", "--stribeck", "0.3"]);
+    fit_example_to(
+        &spelled,
+        &["--method", "sdp", "--delay", "auto", "--stribeck", "0.3"],
+    );
     let a = dvrk_test_support::read_json(&preset);
     let b = dvrk_test_support::read_json(&spelled);
     assert_eq!(a["settings"], b["settings"]);
@@ -159,7 +203,17 @@ fn preset_dvrk_records_what_it_expands_to() {
     let c = dvrk_test_support::read_json(&ols);
     assert_eq!(c["settings"]["method"], "ols");
     assert_eq!(c["settings"]["stribeck_velocity"], 0.3);
-    let (ok, _, err) = run(&["fit", &example("psm_excitation.mcap"), "--robot", "psm", "--preset", "ur5"]);
+    let (ok, _, err) = run(&[
+        "fit",
+        &example("psm_excitation.mcap"),
+        "--robot",
+        "psm",
+        "--preset",
+        "ur5",
+    ]);
     assert!(!ok);
-    assert!(err.contains("unknown preset \"ur5\": expected dvrk"), "{err}");
+    assert!(
+        err.contains("unknown preset \"ur5\": expected dvrk"),
+        "{err}"
+    );
 }

@@ -164,7 +164,9 @@ fn check_ranges(
         let margin = RANGE_MARGIN * (hi - lo);
         let (seen_lo, seen_hi) = (0..traj.len())
             .map(|i| q_measured(i, k))
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| (a.min(x), b.max(x)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
         if seen_lo < lo - margin || seen_hi > hi + margin {
             let unit = if model.measured.is_length(k, &model.coordinate_is_length) {
                 "m"

@@ -314,7 +314,10 @@ impl ModelBuilder {
                     if lo >= hi {
                         return Err(err(
                             "ranges",
-                            format!("joint {}: the minimum {lo} is not below the maximum {hi}", joints[k]),
+                            format!(
+                                "joint {}: the minimum {lo} is not below the maximum {hi}",
+                                joints[k]
+                            ),
                         ));
                     }
                 }

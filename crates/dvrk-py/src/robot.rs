@@ -26,7 +26,11 @@ impl ModelPy {
 
     /// The model `origin` describes, with Stribeck terms of velocity `stribeck` if given
     /// (built without the GIL).
-    pub(crate) fn build(py: Python<'_>, origin: Origin, stribeck: Option<f64>) -> PyResult<ModelPy> {
+    pub(crate) fn build(
+        py: Python<'_>,
+        origin: Origin,
+        stribeck: Option<f64>,
+    ) -> PyResult<ModelPy> {
         let model = py.detach(|| origin.build(stribeck)).map_err(from_model)?;
         Ok(ModelPy {
             stribeck,
@@ -121,7 +125,10 @@ pub struct Params {
 pub fn params_of(py: Python<'_>, model: &Arc<Model>, obj: &Bound<'_, PyAny>) -> PyResult<Params> {
     if let Ok(r) = obj.cast::<crate::classes::FitResultPy>() {
         let inner = &r.get().inner;
-        let fitted = shared(model, inner.model_for(model, "FitResult").map_err(from_ident)?);
+        let fitted = shared(
+            model,
+            inner.model_for(model, "FitResult").map_err(from_ident)?,
+        );
         let values = inner.params_for(&fitted).map_err(from_ident)?;
         return Ok(Params {
             model: fitted,
