@@ -15,6 +15,8 @@ def small(psm, n=50, velocities=True):
     t = np.arange(n) / 200.0
     rng = np.random.default_rng(4)
     q = rng.uniform(-1, 1, (n, 7))
+    # Within the PSM's insertion range (0 to 0.24 m), so that the logs read as a PSM's.
+    q[:, 2] = rng.uniform(0.05, 0.2, n)
     dq = rng.uniform(-1, 1, (n, 7)) if velocities else None
     tau = rng.uniform(-1, 1, (n, 7))
     return t, q, dq, tau
