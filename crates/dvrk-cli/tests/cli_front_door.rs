@@ -217,3 +217,41 @@ fn preset_dvrk_records_what_it_expands_to() {
         "{err}"
     );
 }
+
+#[test]
+fn validate_and_report_name_the_settings_their_flags_change() {
+    let dir = temp_dir("front-door-settings");
+    let out = dir.join("ols.json");
+    fit_example_to(&out, &["--method", "ols"]);
+    let log = example("psm_excitation.mcap");
+    // With the result's own settings: no note.
+    let same = run_ok(&["validate", &s(&out), &log]);
+    assert!(!same.contains("note:"), "{same}");
+    let changed = run_ok(&["validate", &s(&out), &log, "--trim", "20", "--cutoff", "8"]);
+    let first = changed.lines().next().unwrap();
+    assert_eq!(
+        first,
+        "note: these logs are processed with settings that differ from the fit's, so their \
+         errors compare with the fit's only in part: processing.filter.cutoff_hz 8.0 (fit: \
+         5.4); processing.trim 20 (fit: 200)"
+    );
+    let doc = run_json(&["validate", &s(&out), &log, "--trim", "20", "--json"]);
+    assert_eq!(
+        doc["settings_differences"],
+        serde_json::json!([{"path": "processing.trim", "a": 20, "b": 200}])
+    );
+    let (ok, _, err) = run(&[
+        "report",
+        &s(&out),
+        &log,
+        "--out",
+        &s(&dir.join("rep")),
+        "--trim",
+        "20",
+    ]);
+    assert!(ok, "{err}");
+    assert!(
+        err.contains("differ from the fit's, so their errors compare with the fit's only in part: processing.trim 20 (fit: 200)"),
+        "{err}"
+    );
+}

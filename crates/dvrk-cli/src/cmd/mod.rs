@@ -240,6 +240,24 @@ pub fn read_params<'m>(
     Ok((std::borrow::Cow::Borrowed(model), params))
 }
 
+/// The note `validate` and `report` print when their processing flags change the fit's
+/// settings (`changed`: [`dvrk_ident::FitSettings::differences`] from the fit's), so a
+/// log's numbers are not read as the fit's; `None` when nothing changed.
+pub fn settings_note(changed: &[dvrk_ident::settings::Difference]) -> Option<String> {
+    if changed.is_empty() {
+        return None;
+    }
+    let list: Vec<String> = changed
+        .iter()
+        .map(|d| format!("{} {} (fit: {})", d.path, d.a, d.b))
+        .collect();
+    Some(format!(
+        "note: these logs are processed with settings that differ from the fit's, so \
+         their errors compare with the fit's only in part: {}",
+        list.join("; ")
+    ))
+}
+
 /// A fit result with the model it was fitted for and its parameter vector.
 pub struct LoadedResult {
     pub result: FitResult,

@@ -72,6 +72,9 @@ pub fn run(args: Args) -> Result<()> {
         super::load_result(&args.result, args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
     settings.test_window = result.settings.test_window;
+    if let Some(note) = super::settings_note(&settings.differences(&result.settings)) {
+        eprintln!("{note}");
+    }
     let mut result = result;
     result.settings = settings;
     let sources: Vec<(String, String)> = if args.logs.is_empty() {

@@ -48,17 +48,8 @@ pub fn run(args: Args) -> Result<()> {
     let changed = settings.differences(&result.settings);
     let mut reports = Vec::new();
     let mut text = String::new();
-    if !changed.is_empty() {
-        let list: Vec<String> = changed
-            .iter()
-            .map(|d| format!("{} {} (fit: {})", d.path, d.a, d.b))
-            .collect();
-        let _ = writeln!(
-            text,
-            "note: these logs are processed with settings that differ from the fit's, \
-             so their errors compare with the fit's only in part: {}",
-            list.join("; ")
-        );
+    if let Some(note) = super::settings_note(&changed) {
+        let _ = writeln!(text, "{note}");
     }
     let read = args
         .log_args
