@@ -6,7 +6,9 @@ use std::path::Path;
 use std::process::Command;
 
 use serde_json::Value;
-use support::{example, fit_example_args, run_json, run_ok, s, simulate_example, temp_dir};
+use support::{
+    example, fit_example_args, fit_wpi_args, run_json, run_ok, s, simulate_example, temp_dir,
+};
 
 use dvrk_model::Model;
 use dvrk_test_support::read_json;
@@ -270,20 +272,11 @@ fn results_of_two_robots_are_refused_in_one_line() {
         dir.join("psm.json"),
     );
     write_mtm_log(&mtm_log);
-    run_ok(&[
-        "fit",
-        &s(&mtm_log),
-        "--robot",
+    run_ok(&fit_wpi_args(
+        &mtm_log,
         "mtm",
-        "--format",
-        "wpi-csv",
-        "--rate",
-        "200",
-        "--method",
-        "ols",
-        "--out",
-        &s(&mtm),
-    ]);
+        &["--method", "ols", "--out", &s(&mtm)],
+    ));
     run_ok(&fit_example_args(&["--method", "ols", "--out", &s(&psm)]));
     // Refused before any log is read: the missing test log is not what is reported.
     let missing = dir.join("missing.mcap");

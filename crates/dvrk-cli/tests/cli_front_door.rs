@@ -4,7 +4,7 @@
 //! `--preset dvrk` recorded as the settings it expands to.
 
 mod support;
-use support::{example, run, run_json, run_ok, s, temp_dir};
+use support::{example, fit_wpi_args, run, run_json, run_ok, s, temp_dir};
 
 use dvrk_model::{Model, Workspace};
 
@@ -143,18 +143,7 @@ fn a_log_of_another_arm_is_refused_naming_the_joint_and_the_ranges() {
     };
     let dir = temp_dir("front-door-range");
     let out = dir.join("r.json");
-    let (ok, stdout, err) = run(&[
-        "fit",
-        &s(&mtm_log),
-        "--robot",
-        "psm",
-        "--format",
-        "wpi-csv",
-        "--rate",
-        "200",
-        "--out",
-        &s(&out),
-    ]);
+    let (ok, stdout, err) = run(&fit_wpi_args(&mtm_log, "psm", &["--out", &s(&out)]));
     assert!(!ok && stdout.is_empty());
     assert_eq!(
         err.trim(),
@@ -166,18 +155,7 @@ fn a_log_of_another_arm_is_refused_naming_the_joint_and_the_ranges() {
     );
     assert!(!out.exists());
     // The same log with its own robot is within every range.
-    run_ok(&[
-        "fit",
-        &s(&mtm_log),
-        "--robot",
-        "mtm",
-        "--format",
-        "wpi-csv",
-        "--rate",
-        "200",
-        "--method",
-        "ols",
-    ]);
+    run_ok(&fit_wpi_args(&mtm_log, "mtm", &["--method", "ols"]));
 }
 
 #[test]

@@ -50,6 +50,19 @@ pub fn fit_example_args(extra: &[&str]) -> Vec<String> {
     args
 }
 
+/// The arguments of `fit LOG --robot ROBOT` for a log in the 2019 layout (`--format
+/// wpi-csv --rate 200`, the dVRK's rate), then `extra`.
+pub fn fit_wpi_args(log: &Path, robot: &str, extra: &[&str]) -> Vec<String> {
+    let log = s(log);
+    let mut args: Vec<String> = [
+        "fit", &log, "--robot", robot, "--format", "wpi-csv", "--rate", "200",
+    ]
+    .map(String::from)
+    .into();
+    args.extend(extra.iter().map(|x| x.to_string()));
+    args
+}
+
 /// The arguments of `simulate ROBOT` with the bundled example's parameters
 /// (`examples/psm_params.json`) along the trajectory file `trajectory`, into `out`, then
 /// `extra`: the simulations the tests make their logs with.
