@@ -48,7 +48,9 @@ def test_round_trip(psm, tmp_path, fmt, suffix):
         d = di.JointLog(t, q, tau, dq=dq)
     path = tmp_path / f"log{suffix}"
     d.write(path, format=fmt)
-    back = di.read_log(path, psm, format=fmt if fmt != "wpi" else "wpi-csv", rate=200)
+    # The rate only for the layout without time stamps: the others refuse it.
+    rate = 200 if fmt == "wpi" else None
+    back = di.read_log(path, psm, format=fmt if fmt != "wpi" else "wpi-csv", rate=rate)
     assert back.path == path.resolve()
     assert len(back) == 50
     np.testing.assert_array_equal(back.q, q)
@@ -58,7 +60,10 @@ def test_round_trip(psm, tmp_path, fmt, suffix):
     assert back.coordinates == d.coordinates
     assert back.joint_names == d.joint_names
     # Detected from the file when format is None.
-    np.testing.assert_array_equal(di.read_log(path, rate=200).q, q)
+    np.testing.assert_array_equal(di.read_log(path, rate=rate).q, q)
+    if fmt != "wpi":
+        with pytest.raises(di.InputError, match=r"the sampling rate \(rate=\) applies to the 2019 layout only"):
+            di.read_log(path, rate=200)
 
 
 def test_measured_to_model(psm, tmp_path):

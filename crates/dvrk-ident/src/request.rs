@@ -581,7 +581,8 @@ impl FitRequest {
         let read = self
             .read
             .for_model(&model)
-            .for_processing(&settings.processing);
+            .for_processing(&settings.processing)
+            .for_logs(train.iter().chain(&self.test).filter_map(LogSource::path));
         if self.streams() {
             if self.excitation.is_some() && !self.test.is_empty() && settings.test_window.is_none()
             {
@@ -658,7 +659,8 @@ impl FitRequest {
         let read = self
             .read
             .for_model(&model)
-            .for_processing(&settings.processing);
+            .for_processing(&settings.processing)
+            .for_logs(self.test.iter().filter_map(LogSource::path));
         self.fit_with_test(model, settings, &read, None, progress, |_, s, test| {
             state.fit(&base, s, test, progress)
         })
@@ -797,7 +799,8 @@ impl ObserveRequest {
         let read = self
             .read
             .for_model(settings.model(robot)?.as_ref())
-            .for_processing(&settings.processing);
+            .for_processing(&settings.processing)
+            .for_logs(self.logs.iter().filter_map(LogSource::path));
         if self.streams() {
             let readers = open_all(&read, &self.logs)?;
             return ObservationState::observe_stream(

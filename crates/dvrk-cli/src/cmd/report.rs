@@ -117,7 +117,8 @@ pub fn run(args: Args) -> Result<()> {
         .log_args
         .read_options()
         .for_model(&model)
-        .for_processing(&result.settings.processing);
+        .for_processing(&result.settings.processing)
+        .for_logs(sources.iter().map(|(_, p)| std::path::Path::new(p)));
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
         trajectories.push((role.clone(), super::args::read(&read, path)?));

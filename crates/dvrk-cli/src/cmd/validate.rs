@@ -55,7 +55,8 @@ pub fn run(args: Args) -> Result<()> {
         .log_args
         .read_options()
         .for_model(&model)
-        .for_processing(&settings.processing);
+        .for_processing(&settings.processing)
+        .for_logs(args.logs.iter().map(std::path::Path::new));
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;

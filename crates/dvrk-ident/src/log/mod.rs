@@ -271,6 +271,15 @@ pub enum LogError {
         /// The option, as the reader calls it (`topics`, `time source`).
         option: &'static str,
     },
+    /// A sampling rate given for a log that carries its own time stamps: it would change
+    /// nothing, so it is refused rather than ignored.
+    #[error("{}: the sampling rate (--rate) applies to the 2019 layout only, which has no time stamps; this {format} log carries its own (leave --rate out, or resample with --resample HZ)", path.display())]
+    RateNotApplicable {
+        /// The file.
+        path: PathBuf,
+        /// Its format.
+        format: LogFormat,
+    },
     /// The 2019 layout has no time stamps and no rate was given.
     #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate with --rate HZ (the 2019 dVRK logs are 200 Hz)", path.display())]
     MissingRate {

@@ -64,6 +64,10 @@ pub struct ReadOptions {
     /// The 2019 layout: the number of joints its rows must hold (3 columns each);
     /// `None`: columns / 3. Set by [`ReadOptions::for_model`].
     pub dof: Option<usize>,
+    /// [`ReadOptions::rate_hz`] is for the 2019-layout logs among several read together,
+    /// so the others (with time stamps) do not refuse it. Set by
+    /// [`ReadOptions::for_logs`].
+    pub rate_for_some_logs: bool,
 }
 
 impl ReadOptions {
@@ -101,6 +105,22 @@ impl ReadOptions {
         }
     }
 
+    /// These options for reading `paths` together (a fit's training and test logs):
+    /// a rate given for the 2019-layout logs among them is not refused for the others,
+    /// which carry their own time stamps; with no such log it is (it would change
+    /// nothing).
+    pub fn for_logs<'a>(&self, paths: impl IntoIterator<Item = &'a Path>) -> ReadOptions {
+        let some_wpi = self.rate_hz.is_some()
+            && self.format.is_none()
+            && paths
+                .into_iter()
+                .any(|p| matches!(super::detect_format(p), Ok(LogFormat::Wpi)));
+        ReadOptions {
+            rate_for_some_logs: some_wpi,
+            ..self.clone()
+        }
+    }
+
     /// The recording reader's options.
     #[cfg(feature = "recordings")]
     pub(super) fn recording(&self) -> McapOptions {
@@ -112,8 +132,15 @@ impl ReadOptions {
         }
     }
 
-    /// Refuses a recording's option for a log of another format.
+    /// Refuses a recording's option for a log of another format, and a sampling rate for
+    /// a log with time stamps (both would change nothing the user asked for).
     pub(super) fn check_format(&self, path: &Path, format: LogFormat) -> Result<(), LogError> {
+        if self.rate_hz.is_some() && format != LogFormat::Wpi && !self.rate_for_some_logs {
+            return Err(LogError::RateNotApplicable {
+                path: path.to_path_buf(),
+                format,
+            });
+        }
         let option = if !self.topics.is_empty() {
             "a topic"
         } else if self.time_source.is_some() {
