@@ -286,20 +286,7 @@ fn errors(
     let data = prepare(side.model, log, &side.result.settings.processing)
         .map_err(|e| fail(e.to_string()))?;
     let m = joint_metrics(side.model, &params, &data, window);
-    if m.samples == 0 {
-        return Err(fail(format!(
-            "{name}: no processed sample is left for the metrics"
-        )));
-    }
-    for (j, joint) in m.joints.iter().enumerate() {
-        if !m.relative_error[j].is_finite() || !m.rms[j].is_finite() {
-            return Err(fail(format!(
-                "{name}: joint {joint}: relative error {} and RMS {} are not finite (the \
-                 torques of the joint are all zero, so an error relative to them is undefined)",
-                m.relative_error[j], m.rms[j]
-            )));
-        }
-    }
+    m.check_finite(name).map_err(fail)?;
     Ok(m)
 }
 

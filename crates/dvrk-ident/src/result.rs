@@ -90,6 +90,30 @@ pub struct JointMetrics {
     pub rms: Vec<f64>,
 }
 
+impl JointMetrics {
+    /// Refuses metrics that are not numbers (no sample in the window, a joint whose
+    /// torques are all zero) rather than printing NaN: the message names `log`, and the
+    /// joint and why.
+    pub fn check_finite(&self, log: &str) -> Result<(), String> {
+        if self.samples == 0 {
+            return Err(format!(
+                "{log}: no processed sample is left for the metrics"
+            ));
+        }
+        for (j, name) in self.joints.iter().enumerate() {
+            if !self.relative_error[j].is_finite() || !self.rms[j].is_finite() {
+                return Err(format!(
+                    "{log}: joint {name}: relative error {} and RMS {} are not finite (the \
+                     torques of the joint are all zero, so an error relative to them is \
+                     undefined)",
+                    self.relative_error[j], self.rms[j]
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Train and test errors of a fit, per joint (the result's `metrics`).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Metrics {

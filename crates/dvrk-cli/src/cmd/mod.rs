@@ -153,25 +153,6 @@ pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
     }
 }
 
-/// Refuses metrics with a non-finite number (no sample in the window, a joint whose
-/// torques are all zero) rather than printing NaN.
-pub fn check_metrics(m: &dvrk_ident::result::JointMetrics, log: &str) -> Result<()> {
-    if m.samples == 0 {
-        bail!("{log}: no processed sample is left for the metrics");
-    }
-    for (j, name) in m.joints.iter().enumerate() {
-        if !m.relative_error[j].is_finite() || !m.rms[j].is_finite() {
-            bail!(
-                "{log}: joint {name}: relative error {} and RMS {} are not finite (the \
-                 torques of the joint are all zero, so an error relative to them is undefined)",
-                m.relative_error[j],
-                m.rms[j]
-            );
-        }
-    }
-    Ok(())
-}
-
 /// Parses a comma-separated list of numbers such as `0.1,-0.2,0.3` of length `n`.
 pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
     let v: Vec<f64> = text

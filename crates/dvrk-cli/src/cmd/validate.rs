@@ -61,7 +61,7 @@ pub fn run(args: Args) -> Result<()> {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window);
-        super::check_metrics(&m, path)?;
+        m.check_finite(path).map_err(anyhow::Error::msg)?;
         // Beside the fit's own training (and test) errors, so a held-out log reads
         // against them joint by joint.
         let mut sets = vec![("fit train", &result.metrics.train)];
