@@ -233,3 +233,174 @@ fn validate_and_report_name_the_settings_their_flags_change() {
         "{err}"
     );
 }
+
+/// The PSM's measured joints, as robots/psm.toml names them (the dVRK 2.x ROS names).
+const PSM_MEASURED: [&str; 7] = [
+    "outer_yaw",
+    "outer_pitch",
+    "outer_insertion",
+    "outer_roll",
+    "outer_wrist_pitch",
+    "outer_wrist_yaw",
+    "jaw",
+];
+
+fn numbers(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect()
+}
+
+fn assert_close_all(a: &[f64], b: &[f64], rel: f64, what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}");
+    for (j, (x, y)) in a.iter().zip(b).enumerate() {
+        assert!(
+            (x - y).abs() <= rel * x.abs().max(y.abs()),
+            "{what}[{j}]: {x} vs {y}"
+        );
+    }
+}
+
+/// `--joints measured` changes what is shown, not the fit: the same parameters; the
+/// metrics named by the arm's joints; the first four (uncoupled) joints' errors those of
+/// the model coordinates; the wrist's different (q5..q7 are motor angles). The fit in
+/// memory, the streamed fit and `validate` agree, and the result's setting is
+/// validate's and report's default.
+#[test]
+fn measured_joints_show_the_same_fit_by_the_arms_joint_names() {
+    let dir = temp_dir("front-door-joints");
+    let (model_doc, measured_doc) = (dir.join("model.json"), dir.join("measured.json"));
+    let test = [
+        "--test",
+        &example("psm_excitation.mcap"),
+        "--test-window",
+        "500",
+    ];
+    fit_example_to(&model_doc, &test);
+    fit_example_to(
+        &measured_doc,
+        &[&test[..], &["--joints", "measured"]].concat(),
+    );
+    let (a, b) = (
+        dvrk_test_support::read_json(&model_doc),
+        dvrk_test_support::read_json(&measured_doc),
+    );
+    assert_eq!(a["parameters"], b["parameters"]);
+    assert_eq!(b["settings"]["joints"], "measured");
+    assert!(
+        a["settings"].get("joints").is_none(),
+        "the default is left out"
+    );
+    for set in ["train", "test"] {
+        let (ma, mb) = (&a["metrics"][set], &b["metrics"][set]);
+        assert_eq!(mb["joints"], serde_json::json!(PSM_MEASURED));
+        assert_eq!(ma["samples"], mb["samples"]);
+        for key in ["relative_error", "rms"] {
+            let (x, y) = (numbers(&ma[key]), numbers(&mb[key]));
+            assert_close_all(&x[..4], &y[..4], 1e-9, &format!("{set} {key}"));
+            for j in 4..7 {
+                assert!(
+                    (x[j] - y[j]).abs() > 1e-3 * x[j],
+                    "{set} {key}[{j}]: the wrist's joints are not its coordinates"
+                );
+            }
+        }
+    }
+    // Streamed: the training metrics from one more pass, the same numbers.
+    let streamed = dir.join("streamed.json");
+    fit_example_to(
+        &streamed,
+        &[&test[..], &["--joints", "measured", "--stream"]].concat(),
+    );
+    let c = dvrk_test_support::read_json(&streamed);
+    for set in ["train", "test"] {
+        for key in ["relative_error", "rms"] {
+            assert_close_all(
+                &numbers(&b["metrics"][set][key]),
+                &numbers(&c["metrics"][set][key]),
+                1e-9,
+                &format!("streamed {set} {key}"),
+            );
+        }
+    }
+    // validate: in the result's joints by default, or as asked; the same numbers as
+    // the fit's training metrics on the training log.
+    let validated = |doc: &std::path::Path, extra: &[&str]| {
+        let mut args = vec![
+            "validate".to_string(),
+            s(doc),
+            example("psm_excitation.mcap"),
+            "--json".into(),
+        ];
+        args.extend(extra.iter().map(|x| x.to_string()));
+        run_json(&args)["validations"][0]["metrics"].clone()
+    };
+    for v in [
+        validated(&measured_doc, &[]),
+        validated(&model_doc, &["--joints", "measured"]),
+    ] {
+        assert_eq!(v["joints"], serde_json::json!(PSM_MEASURED));
+        for key in ["relative_error", "rms"] {
+            assert_close_all(
+                &numbers(&b["metrics"]["train"][key]),
+                &numbers(&v[key]),
+                1e-9,
+                &format!("validate {key}"),
+            );
+        }
+    }
+    let back = validated(&measured_doc, &["--joints", "model"]);
+    assert_eq!(back["joints"][4], "q5");
+    // The report draws the wrist by its names.
+    let rep = dir.join("report");
+    run_ok(&[
+        "report",
+        &s(&measured_doc),
+        &example("psm_excitation.mcap"),
+        "--out",
+        &s(&rep),
+    ]);
+    let name = support::files(&rep)
+        .into_iter()
+        .find(|f| f.starts_with("torque_") && f.ends_with(".svg"))
+        .unwrap();
+    let torque = std::fs::read_to_string(rep.join(name)).unwrap();
+    assert!(torque.contains("outer_wrist_pitch"), "names in the figure");
+    assert!(!torque.contains(">q5 "), "no model coordinate titles");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Observation states hold no samples, so a fit of states cannot show coupled measured
+/// joints' training errors: refused before anything is written, naming the setting.
+#[test]
+fn measured_joints_of_a_fit_of_states_are_refused() {
+    let dir = temp_dir("front-door-joints-states");
+    let state = dir.join("psm.obs");
+    run_ok(&[
+        "observe",
+        &example("psm_excitation.mcap"),
+        "--robot",
+        "psm",
+        "--out",
+        &s(&state),
+    ]);
+    let out = dir.join("fit.json");
+    let (ok, _, err) = run(&[
+        "fit",
+        "--states",
+        &s(&state),
+        "--joints",
+        "measured",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("joints") && err.contains("observation states"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -287,7 +287,7 @@ fn shell_words(text: &str) -> Vec<String> {
 /// real command line writes a document with the same settings and inputs (so the
 /// rendering cannot drift from the flags). Non-default settings of several kinds: a
 /// per-coordinate cut-off, trimming, decimation, a minimum speed, fixed delays, a
-/// Stribeck term, a test window; a log path with a space.
+/// Stribeck term, a test window, the measured joints; a log path with a space.
 #[test]
 fn the_reports_command_line_repeats_the_fit() {
     use dvrk_ident::log::ReadOptions;
@@ -321,6 +321,8 @@ fn the_reports_command_line_repeats_the_fit() {
         &example("psm_excitation.mcap"),
         "--test-window",
         "300",
+        "--joints",
+        "measured",
         "--out",
         first.to_str().unwrap(),
         "--report",

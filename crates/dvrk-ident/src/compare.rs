@@ -5,7 +5,8 @@
 //!
 //! Each result is evaluated on a test log exactly as `dvrk-ident validate` evaluates it:
 //! with its own model (the fit's model options applied) and its own processing
-//! settings ([`prepare`], then [`joint_metrics`]).
+//! settings ([`prepare`], then [`joint_metrics`]); both in the joints of the first
+//! result's settings ([`crate::settings::Joints`]), so that their columns line up.
 //!
 //! ```no_run
 //! use dvrk_ident::compare::{compare, Side};
@@ -33,9 +34,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::error::IdentError;
-use crate::fit::{joint_metrics, prepare};
+use crate::fit::{joint_metrics, prepare, JointMap};
 use crate::log::ReadOptions;
 use crate::result::JointMetrics;
+use crate::settings::Joints;
 use crate::{FitResult, JointLog};
 
 /// One of the two results: how it is named in the document and in errors (its file),
@@ -257,10 +259,12 @@ pub fn test_errors(
     window: Option<usize>,
 ) -> Result<TestComparison, IdentError> {
     check_robots(a, b)?;
+    // Both in the joints of the first result, so that the columns line up.
+    let joints = a.result.settings.joints;
     Ok(TestComparison {
         log: log.name.to_string(),
-        a: errors(a, log.name, log.samples[0], window)?,
-        b: errors(b, log.name, log.samples[1], window)?,
+        a: errors(a, log.name, log.samples[0], window, joints)?,
+        b: errors(b, log.name, log.samples[1], window, joints)?,
     })
 }
 
@@ -271,6 +275,7 @@ fn errors(
     name: &str,
     log: &JointLog,
     window: Option<usize>,
+    joints: Joints,
 ) -> Result<JointMetrics, IdentError> {
     let fail = |message: String| IdentError::Mismatch {
         source_name: side.name.to_string(),
@@ -285,7 +290,8 @@ fn errors(
         })?;
     let data = prepare(side.model, log, &side.result.settings.processing)
         .map_err(|e| fail(e.to_string()))?;
-    let m = joint_metrics(side.model, &params, &data, window);
+    let joints = JointMap::new(side.model, joints)?;
+    let m = joint_metrics(side.model, &params, &data, window, &joints)?;
     m.check_finite(name).map_err(fail)?;
     Ok(m)
 }

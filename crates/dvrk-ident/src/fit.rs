@@ -4,7 +4,10 @@
 //! disk block by block, for logs larger than memory, with the same result.
 
 pub mod delay;
+mod joints;
 pub mod stream;
+
+pub use joints::{units, JointMap};
 
 use dvrk_model::{inertia, BaseParameters, Model, Workspace};
 use nalgebra::DMatrix;
@@ -264,26 +267,34 @@ pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
 }
 
 /// Per-joint relative error `‖τ − τ̂‖ / ‖τ‖` and RMS error over the first `window`
-/// samples (all if `None`), computed like 2019 on torques without known forces.
+/// samples (all if `None`), computed like 2019 on torques without known forces, in the
+/// joints of `joints` ([`JointMap`]: the model coordinates or the measured joints).
 pub fn joint_metrics(
     model: &Model,
     params: &[f64],
     data: &Prepared,
     window: Option<usize>,
-) -> JointMetrics {
+    joints: &JointMap,
+) -> Result<JointMetrics, IdentError> {
     let mut sums = MetricSums::new(model);
     sums.add(model, params, data.samples(), window);
-    sums.metrics(model)
+    sums.metrics(joints)
 }
 
-/// Running per-joint sums of squares of the torques and of the prediction errors, fed
-/// sample block by sample block: the metrics of a log without holding it.
+/// Running sums of the torques' and the prediction errors' second moments, fed sample
+/// block by sample block: the metrics of a log without holding it. A pass over the
+/// samples ([`MetricSums::add`]) sums the whole matrices `Σ e·eᵀ`, `Σ τ·τᵀ` (coordinates
+/// × coordinates), from which the metrics in any joints follow
+/// ([`JointMap::torque_gram`]); sums from the observation's factors
+/// ([`MetricSums::from_factors`]) hold only their diagonals, the model coordinates'.
 #[derive(Clone, Debug)]
 pub struct MetricSums {
-    /// `Σ (τ − τ̂)²` per joint.
-    e2: Vec<f64>,
-    /// `Σ τ²` per joint.
-    t2: Vec<f64>,
+    /// `Σ (τ − τ̂)(τ − τ̂)ᵀ` over the samples (only the diagonal without `cross`).
+    e2: DMatrix<f64>,
+    /// `Σ τ·τᵀ` (only the diagonal without `cross`).
+    t2: DMatrix<f64>,
+    /// Whether the off-diagonal sums are there (every part came from a pass).
+    cross: bool,
     samples: usize,
 }
 
@@ -292,8 +303,9 @@ impl MetricSums {
     pub fn new(model: &Model) -> Self {
         let n = model.dof();
         MetricSums {
-            e2: vec![0.0; n],
-            t2: vec![0.0; n],
+            e2: DMatrix::zeros(n, n),
+            t2: DMatrix::zeros(n, n),
+            cross: true,
             samples: 0,
         }
     }
@@ -305,12 +317,9 @@ impl MetricSums {
 
     /// Adds the sums of other samples (another log): the sums of both.
     pub fn merge(&mut self, other: &MetricSums) {
-        for (a, b) in self.e2.iter_mut().zip(&other.e2) {
-            *a += b;
-        }
-        for (a, b) in self.t2.iter_mut().zip(&other.t2) {
-            *a += b;
-        }
+        self.e2 += &other.e2;
+        self.t2 += &other.t2;
+        self.cross &= other.cross;
         self.samples += other.samples;
     }
 
@@ -319,20 +328,23 @@ impl MetricSums {
     /// squared error of coordinate `j`'s rows and `‖R_j·e_τ‖²` their squared torque,
     /// exactly up to rounding, so the training metrics of a long log need no pass over
     /// it. (The prediction is `H·π`, which the inverse dynamics equals to rounding.)
+    /// The factors of separate coordinates hold no cross terms: these sums give the
+    /// metrics in model coordinates only.
     pub fn from_factors(parts: &[Observation], params: &[f64]) -> MetricSums {
         let mut x = params.to_vec();
         x.push(-1.0);
         let p = params.len();
-        let sum2 = |v: nalgebra::DVector<f64>| v.norm_squared();
+        let x = nalgebra::DVector::from_column_slice(&x);
         MetricSums {
-            e2: parts
-                .iter()
-                .map(|o| sum2(o.r() * nalgebra::DVector::from_column_slice(&x)))
-                .collect(),
-            t2: parts
-                .iter()
-                .map(|o| o.r().column(p).norm_squared())
-                .collect(),
+            e2: DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
+                parts.len(),
+                parts.iter().map(|o| (o.r() * &x).norm_squared()),
+            )),
+            t2: DMatrix::from_diagonal(&nalgebra::DVector::from_iterator(
+                parts.len(),
+                parts.iter().map(|o| o.r().column(p).norm_squared()),
+            )),
+            cross: false,
             samples: parts.first().map_or(0, Observation::rows),
         }
     }
@@ -352,35 +364,45 @@ impl MetricSums {
         let n = model.dof();
         let mut ws = Workspace::new(model);
         let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut pred = DMatrix::zeros(rows, n);
+        let mut err = DMatrix::zeros(rows, n);
         let mut tau = vec![0.0; n];
         for k in 0..rows {
             samples.read(k, &mut q, &mut dq, &mut ddq);
             model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
             for j in 0..n {
-                pred[(k, j)] = tau[j];
+                err[(k, j)] = samples.tau[(k, j)] - tau[j];
             }
         }
-        for j in 0..n {
-            for k in 0..rows {
-                let t = samples.tau[(k, j)];
-                let e = t - pred[(k, j)];
-                self.e2[j] += e * e;
-                self.t2[j] += t * t;
+        let measured = samples.tau.rows(0, rows);
+        // The upper triangle summed sample by sample into the running sums (the
+        // diagonal's bits those of a per-joint sum), then mirrored.
+        for a in 0..n {
+            for b in a..n {
+                for k in 0..rows {
+                    self.e2[(a, b)] += err[(k, a)] * err[(k, b)];
+                    self.t2[(a, b)] += measured[(k, a)] * measured[(k, b)];
+                }
+            }
+        }
+        for a in 0..n {
+            for b in 0..a {
+                self.e2[(a, b)] = self.e2[(b, a)];
+                self.t2[(a, b)] = self.t2[(b, a)];
             }
         }
         self.samples += rows;
     }
 
-    /// RMS error per joint, N·m or N.
+    /// RMS error per model coordinate, N·m or N.
     fn rms(&self) -> Vec<f64> {
         self.e2
+            .diagonal()
             .iter()
             .map(|e2| (e2 / self.samples.max(1) as f64).sqrt())
             .collect()
     }
 
-    /// IRLS weights: `1 / rms` per joint (1 where the error is zero).
+    /// IRLS weights: `1 / rms` per model coordinate (1 where the error is zero).
     pub fn inverse_rms(&self) -> Vec<f64> {
         self.rms()
             .into_iter()
@@ -388,16 +410,33 @@ impl MetricSums {
             .collect()
     }
 
-    /// The relative and RMS errors per coordinate of the samples summed so far (a joint
-    /// without torque gets a NaN relative error).
-    pub fn metrics(&self, model: &Model) -> JointMetrics {
-        JointMetrics {
-            joints: model.coordinates.clone(),
+    /// The relative and RMS errors per joint of `joints` of the samples summed so far
+    /// (a joint without torque gets a NaN relative error). Errors for coupled joints
+    /// from sums without cross terms ([`MetricSums::from_factors`]).
+    pub fn metrics(&self, joints: &JointMap) -> Result<JointMetrics, IdentError> {
+        let (e2, t2) = if joints.is_identity() {
+            (self.e2.diagonal(), self.t2.diagonal())
+        } else if self.cross {
+            (
+                joints.torque_gram(&self.e2).diagonal(),
+                joints.torque_gram(&self.t2).diagonal(),
+            )
+        } else {
+            return Err(IdentError::Setting {
+                name: "joints".into(),
+                message: format!(
+                    "the errors in {}'s measured joints need a pass over the samples, and                      these sums come from the observation's factors",
+                    joints.robot
+                ),
+            });
+        };
+        let samples = self.samples.max(1) as f64;
+        Ok(JointMetrics {
+            joints: joints.names.clone(),
             samples: self.samples,
-            relative_error: self
-                .e2
+            relative_error: e2
                 .iter()
-                .zip(&self.t2)
+                .zip(t2.iter())
                 .map(|(e2, t2)| {
                     if *t2 > 0.0 {
                         (e2 / t2).sqrt()
@@ -406,8 +445,8 @@ impl MetricSums {
                     }
                 })
                 .collect(),
-            rms: self.rms(),
-        }
+            rms: e2.iter().map(|e2| (e2 / samples).sqrt()).collect(),
+        })
     }
 }
 
@@ -578,11 +617,26 @@ pub fn fit_logs(
     let test_data = prepare_logs(model, test, &settings.processing)?;
     progress.finish();
     let observed = Observed::of_prepared(model, train, &data, progress)?;
+    let train_pass = |params: &[f64]| {
+        Ok(data
+            .iter()
+            .map(|d| {
+                let mut sums = MetricSums::new(model);
+                sums.add(model, params, d.samples(), None);
+                sums
+            })
+            .collect())
+    };
+    let test_pass =
+        |params: &[f64]| test_inputs(model, test, &test_data, params, settings.test_window);
     let mut result = fit_observed(
         model,
         &observed,
         settings,
-        |params| test_inputs(model, test, &test_data, params, settings.test_window),
+        MetricPasses {
+            train: Some(&train_pass),
+            test: &test_pass,
+        },
         progress,
     )?;
     result.delay = delays;
@@ -734,9 +788,10 @@ pub(crate) fn fit_observed(
     model: &Model,
     observed: &Observed,
     settings: &FitSettings,
-    test: impl FnOnce(&[f64]) -> Result<Vec<(InputInfo, MetricSums)>, IdentError>,
+    passes: MetricPasses<'_>,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {
+    let joints = JointMap::new(model, settings.joints)?;
     let base = model.base_parameters()?;
     let n = model.dof();
     let started = std::time::Instant::now();
@@ -751,38 +806,75 @@ pub(crate) fn fit_observed(
         progress,
     };
     let estimated = estimate(model, &base, &observed.parts, weights, settings, &run)?;
-    // Training metrics from each log's factors: no second pass over the samples.
-    let train_sums: Vec<MetricSums> = observed
-        .logs
-        .iter()
-        .map(|log| MetricSums::from_factors(&log.parts, &estimated.params))
-        .collect();
-    let tested = test(&estimated.params)?;
+    // Training metrics from each log's factors, no second pass over the samples; a
+    // pass where coupled measured joints need the cross terms the factors lack.
+    let train_sums: Vec<MetricSums> = if joints.is_identity() {
+        observed
+            .logs
+            .iter()
+            .map(|log| MetricSums::from_factors(&log.parts, &estimated.params))
+            .collect()
+    } else {
+        match passes.train {
+            Some(pass) => pass(&estimated.params)?,
+            None => {
+                return Err(IdentError::Setting {
+                    name: "joints".into(),
+                    message: format!(
+                        "the training errors in {}'s measured joints need the logs' \
+                         samples, which observation states do not hold: fit the states in \
+                         model coordinates, then validate on the logs in measured joints",
+                        model.name
+                    ),
+                })
+            }
+        }
+    };
+    let tested = (passes.test)(&estimated.params)?;
     let test_sums: Vec<MetricSums> = tested.iter().map(|(_, s)| s.clone()).collect();
     let mut inputs = Vec::with_capacity(observed.logs.len() + tested.len());
     for (log, sums) in observed.logs.iter().zip(&train_sums) {
         let mut info = log.info.clone();
-        info.metrics = Some(sums.metrics(model));
+        info.metrics = Some(sums.metrics(&joints)?);
         inputs.push(info);
     }
     for (mut info, sums) in tested {
-        info.metrics = Some(sums.metrics(model));
+        info.metrics = Some(sums.metrics(&joints)?);
         inputs.push(info);
     }
+    let test_metrics = match test_sums.is_empty() {
+        true => None,
+        false => Some(summed(model, &test_sums).metrics(&joints)?),
+    };
     let mut result = build_result(
         model,
         &base,
         settings,
         estimated,
         Metrics {
-            train: summed(model, &train_sums).metrics(model),
-            test: (!test_sums.is_empty()).then(|| summed(model, &test_sums).metrics(model)),
+            train: summed(model, &train_sums).metrics(&joints)?,
+            test: test_metrics,
         },
     )?;
     result.inputs = inputs;
     result.check_finite()?;
     Ok(result)
 }
+
+/// The passes over the samples a fit's metrics may need, given the parameters: the
+/// test logs' sums (with their provenance) always, the training logs' sums (one per
+/// log, in order) only for coupled measured joints ([`FitSettings::joints`]); `None`
+/// where the samples are not at hand (observation states).
+pub(crate) struct MetricPasses<'a> {
+    pub train: Option<TrainPass<'a>>,
+    pub test: TestPass<'a>,
+}
+
+/// The training logs' metric sums for the given parameters.
+pub(crate) type TrainPass<'a> = &'a dyn Fn(&[f64]) -> Result<Vec<MetricSums>, IdentError>;
+/// The test logs' provenance and metric sums for the given parameters.
+pub(crate) type TestPass<'a> =
+    &'a dyn Fn(&[f64]) -> Result<Vec<(InputInfo, MetricSums)>, IdentError>;
 
 pub(crate) fn no_training_log() -> IdentError {
     IdentError::Mismatch {

@@ -302,6 +302,9 @@ fn options(settings: &FitSettings) -> Options {
     if let Some(prior) = &settings.prior {
         prior_options(prior, &mut given, &mut without_flag);
     }
+    if !settings.joints.is_model() {
+        given.push(("joints", Value::Name(settings.joints.name().into())));
+    }
     if !processing_extra.is_empty() {
         without_option.insert(
             "processing".into(),

@@ -16,7 +16,7 @@ use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use crate::fit::{fit_logs, LogData};
 use crate::log::{self, LogReader, ReadOptions};
 use crate::progress::Progress;
-use crate::settings::{Prior, PriorMetric};
+use crate::settings::{Joints, Prior, PriorMetric};
 use crate::signal::Cutoff;
 use crate::state::ObservationState;
 use crate::{BoundsSet, FitResult, FitSettings, IdentError, JointLog, Method};
@@ -88,6 +88,8 @@ pub struct Overrides {
     /// A named set of settings ([`Preset`]) for the fields not given here; the result
     /// records the settings it expanded to.
     pub preset: Option<Preset>,
+    /// The joints the metrics are reported in ([`Joints`]).
+    pub joints: Option<Joints>,
 }
 
 /// Settings recommended for a kind of robot, by name (`--preset dvrk`, Python
@@ -268,6 +270,7 @@ impl Overrides {
         o.prior = o.prior.or(p.prior);
         o.prior_weight = o.prior_weight.or(p.prior_weight);
         o.prior_metric = o.prior_metric.or(p.prior_metric);
+        o.joints = o.joints.or(p.joints);
         if from_states {
             let given = self.observation_fields();
             if !given.contains(&"stribeck") {
@@ -318,6 +321,9 @@ impl Overrides {
         }
         if let Some(b) = self.bounds {
             s.bounds = Some(b);
+        }
+        if let Some(j) = self.joints {
+            s.joints = j;
         }
         s
     }

@@ -52,6 +52,49 @@ impl std::str::FromStr for Method {
     }
 }
 
+/// Which joints a fit's errors, figures and predictions are reported in: the model's
+/// coordinates (the math's, default) or the arm's measured joints by their names (the
+/// dVRK's `outer_wrist_pitch`… rather than the PSM's motor-side `q5..q7`). The
+/// estimator always works in model coordinates; this only chooses how its results are
+/// shown, through the coupling `q_measured = M·q`, `τ_measured = M⁻ᵀ·τ`
+/// ([`crate::fit::JointMap`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Joints {
+    /// The model coordinates `q1..qn`.
+    #[default]
+    Model,
+    /// The robot's measured joints (the description's `[measured] joints`).
+    Measured,
+}
+
+impl Joints {
+    /// The name the command line, Python and results use (see [`crate::names`]).
+    pub fn name(self) -> &'static str {
+        crate::names::Named::name(self)
+    }
+
+    /// Whether these are the model coordinates (the default, left out of documents).
+    pub fn is_model(&self) -> bool {
+        *self == Joints::Model
+    }
+}
+
+impl crate::names::Named for Joints {
+    const WHAT: &'static str = "joints";
+    const NAMES: &'static [(&'static str, Self)] =
+        &[("model", Joints::Model), ("measured", Joints::Measured)];
+    const CANONICAL: usize = 2;
+}
+
+impl std::str::FromStr for Joints {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        <Self as crate::names::Named>::parse_name(s)
+    }
+}
+
 /// A named set of the global lower bounds of the semidefinite fit
 /// ([`dvrk_model::GlobalBounds`]), replacing the description's `[bounds]`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -191,6 +234,10 @@ pub struct FitSettings {
     /// term of `sdp_regularization`, toward zero.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub prior: Option<Prior>,
+    /// The joints the metrics (and validate's, report's and predict's output) are in;
+    /// the fit itself is the same ([`Joints`]).
+    #[serde(skip_serializing_if = "Joints::is_model")]
+    pub joints: Joints,
 }
 
 impl FitSettings {
@@ -313,6 +360,7 @@ impl Default for FitSettings {
             bounds: None,
             delay_search_s: None,
             prior: None,
+            joints: Joints::Model,
         }
     }
 }

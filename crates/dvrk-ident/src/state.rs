@@ -362,7 +362,12 @@ impl ObservationState {
             model,
             &self.observed,
             &settings,
-            |params| test_inputs(model, test, &test_data, params, settings.test_window),
+            crate::fit::MetricPasses {
+                train: None,
+                test: &|params: &[f64]| {
+                    test_inputs(model, test, &test_data, params, settings.test_window)
+                },
+            },
             progress,
         )
     }

@@ -7,9 +7,10 @@
 mod logs;
 
 use dvrk_ident::fit::stream::fit_stream_logs;
-use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, LogData};
+use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, JointMap, LogData};
 use dvrk_ident::log::{self, LogFormat, LogReader, ReadOptions};
 use dvrk_ident::progress::Silent;
+use dvrk_ident::settings::Joints;
 use dvrk_ident::{FitSettings, JointLog, Method};
 use dvrk_model::{Model, Workspace};
 use logs::{example, part};
@@ -92,7 +93,14 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
         // The result's training metrics come from the log's R factors, these from a
         // pass over its samples: equal up to the rounding of the factorization
         // (‖R·[π; −1]‖ against ‖H·π − τ‖, measured 1e-13 relative).
-        let own = joint_metrics(&model, &params, d, None);
+        let own = joint_metrics(
+            &model,
+            &params,
+            d,
+            None,
+            &JointMap::new(&model, Joints::Model).unwrap(),
+        )
+        .unwrap();
         let got = info.metrics.as_ref().unwrap();
         assert_eq!((&got.joints, got.samples), (&own.joints, own.samples));
         for (a, b) in got

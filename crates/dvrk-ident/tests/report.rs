@@ -7,11 +7,12 @@
 use std::path::PathBuf;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::{joint_metrics, predict, prepare};
+use dvrk_ident::fit::{joint_metrics, predict, prepare, JointMap};
 use dvrk_ident::joint_log::JointLog;
 use dvrk_ident::report::draw::kinematic_drawing;
 use dvrk_ident::report::plot::{render, Figure, ImageFormat, MAX_POINTS};
 use dvrk_ident::report::{build, figures, ReportInput, ReportLog};
+use dvrk_ident::settings::Joints;
 use dvrk_ident::{fit, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
@@ -87,9 +88,10 @@ fn torque_figure_has_one_panel_per_joint_with_three_series_and_units() {
     let params = result.params_for(&model).unwrap();
     let data = prepare(&model, &log, &result.settings.processing).unwrap();
     let predicted = predict(&model, &params, &data);
-    let metrics = joint_metrics(&model, &params, &data, None);
+    let joints = JointMap::new(&model, Joints::Model).unwrap();
+    let metrics = joint_metrics(&model, &params, &data, None, &joints).unwrap();
     let zoom = figures::zoom_window(&data.time, &data.tau);
-    let fig = figures::torque_figure(&model, "training", &data, &predicted, &metrics, zoom);
+    let fig = figures::torque_figure(&joints, "training", &data, &predicted, &metrics, zoom);
     // Per coordinate the whole log, then its zoomed window.
     assert_eq!(fig.panels.len(), 14);
     // q3 is the PSM insertion (prismatic): newtons; the others newton-metres.
@@ -154,9 +156,10 @@ fn long_series_are_reduced_to_their_envelope() {
     long.tau = data.tau.select_rows(&rows);
     long.time = (0..rows.len()).map(|k| k as f64 * 0.005).collect();
     let predicted = predict(&model, &params, &long);
-    let metrics = joint_metrics(&model, &params, &long, None);
+    let joints = JointMap::new(&model, Joints::Model).unwrap();
+    let metrics = joint_metrics(&model, &params, &long, None, &joints).unwrap();
     let zoom = figures::zoom_window(&long.time, &long.tau);
-    let fig = figures::torque_figure(&model, "long", &long, &predicted, &metrics, zoom);
+    let fig = figures::torque_figure(&joints, "long", &long, &predicted, &metrics, zoom);
     let svg = String::from_utf8(render(&fig, ImageFormat::Svg).unwrap()).unwrap();
     let red = polylines(&svg, "#D62728");
     let longest = *red.iter().max().unwrap();
@@ -187,6 +190,7 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
         ],
         excitation: Some(&traj),
         read: None,
+        joints: None,
     };
     let report = build(&input).unwrap();
     let stems: Vec<&str> = report.figures.iter().map(|f| f.stem.as_str()).collect();
@@ -369,7 +373,12 @@ fn friction_curve_of_a_simulated_log_lies_on_the_true_friction_law() {
     let mut processing = settings().processing;
     processing.filter = None;
     let data = prepare(&model, &log, &processing).unwrap();
-    let curves = friction_curves(&model, &truth, &data);
+    let curves = friction_curves(
+        &model,
+        &truth,
+        &data,
+        &JointMap::new(&model, Joints::Model).unwrap(),
+    );
     assert_eq!(curves.len(), model.dof());
 
     // Coordinates whose friction is one frame's, on `s = c·q_j`.

@@ -494,15 +494,39 @@ impl JointLogPy {
     }
 }
 
-/// Processed samples in model coordinates, as the estimators see them: the log mapped
-/// to model coordinates, known forces (e.g. the MTM cable) subtracted from the
-/// torques, the motion low-pass filtered (the torques too with the ``filter_torque``
-/// setting), differentiated and trimmed. Attributes ``time`` (s,
-/// ``(N,)``), ``q``, ``dq``, ``ddq``, ``tau`` (``(N, dof)``), ``joint_names``.
+/// Processed samples as the estimators see them: the log mapped to model coordinates,
+/// known forces (e.g. the MTM cable) subtracted from the torques, the motion low-pass
+/// filtered (the torques too with the ``filter_torque`` setting), differentiated and
+/// trimmed. Attributes ``time`` (s, ``(N,)``), ``q``, ``dq``, ``ddq``, ``tau``
+/// (``(N, dof)``), ``joint_names``, ``joints``: shown in the model coordinates, or in
+/// the arm's measured joints (``joints="measured"``: ``q = M·q_model``,
+/// ``tau = M⁻ᵀ·tau_model``).
 #[pyclass(name = "Prepared", module = "dvrk_ident", frozen)]
 pub struct PreparedPy {
+    /// In model coordinates: what the inverse dynamics reads.
     pub inner: Arc<Prepared>,
+    /// In the joints shown (`inner` itself for the model coordinates).
+    pub shown: Arc<Prepared>,
     pub joint_names: Vec<String>,
+    pub joints: dvrk_ident::settings::Joints,
+}
+
+impl PreparedPy {
+    /// `p` (model coordinates) shown in the joints of `map`.
+    pub fn new(p: Prepared, map: &dvrk_ident::fit::JointMap) -> PreparedPy {
+        let inner = Arc::new(p);
+        let shown = if map.is_identity() {
+            inner.clone()
+        } else {
+            Arc::new(map.prepared(&inner))
+        };
+        PreparedPy {
+            inner,
+            shown,
+            joint_names: map.names.clone(),
+            joints: map.joints,
+        }
+    }
 }
 
 #[pymethods]
@@ -510,50 +534,56 @@ impl PreparedPy {
     /// Times of the kept samples, s, shape ``(N,)``.
     #[getter]
     fn time<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let n = self.inner.time.len();
-        array(py, self.inner.time.clone(), &[n])
+        let n = self.shown.time.len();
+        array(py, self.shown.time.clone(), &[n])
     }
 
     /// Filtered positions, rad or m, ``(N, dof)``.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.inner.q)
+        matrix(py, &self.shown.q)
     }
 
     /// Velocities, rad/s or m/s, ``(N, dof)``.
     #[getter]
     fn dq<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.inner.dq)
+        matrix(py, &self.shown.dq)
     }
 
     /// Accelerations, rad/s² or m/s², ``(N, dof)``.
     #[getter]
     fn ddq<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.inner.ddq)
+        matrix(py, &self.shown.ddq)
     }
 
     /// Filtered torques, N·m or N, known forces subtracted, ``(N, dof)``.
     #[getter]
     fn tau<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.inner.tau)
+        matrix(py, &self.shown.tau)
     }
 
-    /// The model's coordinate names (the columns).
+    /// The names of the columns: the model's coordinates, or the arm's measured joints.
     #[getter]
     fn joint_names(&self) -> Vec<String> {
         self.joint_names.clone()
     }
 
+    /// ``"model"`` or ``"measured"``: the joints the arrays are in.
+    #[getter]
+    fn joints(&self) -> &'static str {
+        self.joints.name()
+    }
+
     /// Where the data came from.
     #[getter]
     fn source(&self) -> String {
-        self.inner.source.clone()
+        self.shown.source.clone()
     }
 
     /// The samples as a pandas DataFrame: ``time`` (s), then ``position.<q>``,
-    /// ``velocity.<q>``, ``acceleration.<q>`` and ``effort.<q>`` per coordinate.
+    /// ``velocity.<q>``, ``acceleration.<q>`` and ``effort.<q>`` per joint.
     fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let p = &self.inner;
+        let p = &self.shown;
         let names = &self.joint_names;
         let mut cols = vec![("time".to_string(), p.time.clone())];
         cols.extend(frame::matrix_columns("position", names, &p.q));
@@ -564,15 +594,16 @@ impl PreparedPy {
     }
 
     fn __len__(&self) -> usize {
-        self.inner.len()
+        self.shown.len()
     }
 
     fn __repr__(&self) -> String {
         format!(
-            "Prepared({} samples, {} coordinates, source={})",
-            self.inner.len(),
+            "Prepared({} samples, {} {} joints, source={})",
+            self.shown.len(),
             self.joint_names.len(),
-            py_str(&self.inner.source)
+            self.joints.name(),
+            py_str(&self.shown.source)
         )
     }
 }

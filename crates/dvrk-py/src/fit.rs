@@ -4,10 +4,11 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
+use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data, JointMap};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::result::wpi_params_json;
+use dvrk_ident::settings::Joints;
 use dvrk_ident::JointLog;
 use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
@@ -102,6 +103,10 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 /// - ``preset``: ``"dvrk"``, the settings recommended for the dVRK arms for every
 ///   keyword not given (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3``, as
 ///   ``--preset dvrk``); the result records what it expanded to;
+/// - ``joints``: ``"model"`` (the default) or ``"measured"``: the metrics in the model
+///   coordinates or in the arm's measured joints by name (``--joints``); the fit is the
+///   same, and the result's ``validate``, ``prepare`` and ``predict`` show these joints
+///   by default;
 /// - ``settings``: a dict in the layout of ``FitResult.settings`` (missing fields take
 ///   the defaults), for everything else (e.g. the 2019 filter form); the keywords
 ///   above override it.
@@ -123,7 +128,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -148,10 +153,12 @@ pub fn fit(
     prior_weight: Option<f64>,
     prior_metric: Option<&str>,
     preset: Option<&str>,
+    joints: Option<&str>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
 ) -> PyResult<FitResultPy> {
     let kw = Overrides {
+        joints,
         settings,
         method,
         cutoff,
@@ -257,6 +264,7 @@ pub fn prepare(
     prepared(py, robot.get().model.clone(), data.get(), settings)
 }
 
+/// `data` prepared for `model` with `settings`' processing, shown in its joints.
 fn prepared(
     py: Python<'_>,
     model: Arc<Model>,
@@ -264,17 +272,22 @@ fn prepared(
     settings: FitSettings,
 ) -> PyResult<PreparedPy> {
     let traj = data.traj.clone();
-    let names = model.coordinates.clone();
+    let map = JointMap::new(&model, settings.joints).map_err(from_ident)?;
     let p = background(py, move || {
         prepare_data(&model, &traj, &settings.processing).map_err(fail_ident)
     })?;
-    Ok(PreparedPy {
-        inner: Arc::new(p),
-        joint_names: names,
-    })
+    Ok(PreparedPy::new(p, &map))
 }
 
 impl FitResultPy {
+    /// The joints of a `joints=` keyword, the fit's own without one.
+    fn joints(&self, joints: Option<&str>) -> PyResult<Joints> {
+        match joints {
+            Some(j) => crate::overrides::parse_joints(j),
+            None => Ok(self.inner.settings.joints),
+        }
+    }
+
     /// The model: `robot`, else the one fitted with, else loaded from `robot_source`;
     /// with the fit's model options (Stribeck terms) applied.
     pub(crate) fn model(
@@ -500,41 +513,48 @@ impl FitResultPy {
     }
 
     /// The processed samples of ``data`` with this result's processing settings (see
-    /// :class:`Prepared`); the rows :meth:`predict` returns torques for.
-    #[pyo3(signature = (data, robot = None))]
+    /// :class:`Prepared`); the rows :meth:`predict` returns torques for. ``joints``:
+    /// ``"model"`` or ``"measured"`` (default: the fit's ``joints``).
+    #[pyo3(signature = (data, robot = None, *, joints = None))]
     fn prepare(
         &self,
         py: Python<'_>,
         data: &Bound<'_, JointLogPy>,
         robot: Option<&Bound<'_, ModelPy>>,
+        joints: Option<&str>,
     ) -> PyResult<PreparedPy> {
         let model = self.model(py, robot)?;
-        prepared(py, model, data.get(), self.inner.settings.clone())
+        let mut settings = self.inner.settings.clone();
+        settings.joints = self.joints(joints)?;
+        prepared(py, model, data.get(), settings)
     }
 
     /// Torques predicted by the identified parameters, ``H(q, dq, ddq) @ params``
-    /// (N·m or N), shape ``(N, dof)``, in model coordinates and without known forces.
+    /// (N·m or N), shape ``(N, dof)``, without known forces, in the model coordinates
+    /// or the arm's measured joints (``joints``; default: a ``Prepared``'s own, else the
+    /// fit's ``joints``).
     ///
     /// ``data`` is a :class:`JointLog` (a log as read) or a :class:`Prepared`. A ``JointLog``
     /// is first processed with this result's settings, exactly as for the fit and its
     /// metrics: mapped to model coordinates, filtered, differentiated and trimmed, so
     /// row ``k`` is the sample at ``self.prepare(data).time[k]`` and compares with
-    /// ``self.prepare(data).tau`` (the measured torques in model coordinates, known
+    /// ``self.prepare(data).tau`` (the measured torques in the same joints, known
     /// forces such as the MTM cable subtracted). A ``Prepared`` is used as it is.
     ///
     /// ``as_dataframe=True``: a pandas DataFrame with the row's ``time`` (s) and one
-    /// ``effort.<q>`` column per coordinate instead of the array.
-    #[pyo3(signature = (data, robot = None, *, as_dataframe = false))]
+    /// ``effort.<joint>`` column per joint instead of the array.
+    #[pyo3(signature = (data, robot = None, *, as_dataframe = false, joints = None))]
     fn predict<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, PyAny>,
         robot: Option<&Bound<'py, ModelPy>>,
         as_dataframe: bool,
+        joints: Option<&str>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
-        let prepared = if let Ok(p) = data.cast::<PreparedPy>() {
+        let (prepared, shown) = if let Ok(p) = data.cast::<PreparedPy>() {
             if p.get().joint_names.len() != model.dof() {
                 return Err(input(format!(
                     "data: prepared for {} coordinates, the robot has {}",
@@ -542,15 +562,27 @@ impl FitResultPy {
                     model.dof()
                 )));
             }
-            p.get().inner.clone()
+            let own = p.get().joints;
+            let shown = match joints {
+                Some(j) => crate::overrides::parse_joints(j)?,
+                None => own,
+            };
+            (p.get().inner.clone(), shown)
         } else if let Ok(d) = data.cast::<JointLogPy>() {
-            prepared(py, model.clone(), d.get(), self.inner.settings.clone())?.inner
+            let settings = self.inner.settings.clone();
+            (
+                prepared(py, model.clone(), d.get(), settings)?.inner,
+                self.joints(joints)?,
+            )
         } else {
             return Err(input("data: expected a JointLog or a Prepared"));
         };
+        let map = JointMap::new(&model, shown).map_err(from_ident)?;
         let times = prepared.time.clone();
-        let names = model.coordinates.clone();
-        let pred = background(py, move || Ok(predict(&model, &params, &prepared)))?;
+        let names = map.names.clone();
+        let pred = background(py, move || {
+            Ok(map.torque(&predict(&model, &params, &prepared)))
+        })?;
         if as_dataframe {
             let mut cols = vec![("time".to_string(), times)];
             cols.extend(crate::frame::matrix_columns("effort", &names, &pred));
@@ -561,22 +593,25 @@ impl FitResultPy {
 
     /// Metrics of this result on another log, as ``dvrk-ident validate``: ``{joints,
     /// samples, relative_error, rms}`` over the first ``test_window`` processed samples
-    /// (all if ``None``), with this result's processing settings.
-    #[pyo3(signature = (data, test_window = None, robot = None))]
+    /// (all if ``None``), with this result's processing settings, in the model
+    /// coordinates or the arm's measured joints (``joints``; default: the fit's).
+    #[pyo3(signature = (data, test_window = None, robot = None, *, joints = None))]
     fn validate<'py>(
         &self,
         py: Python<'py>,
         data: &Bound<'py, JointLogPy>,
         test_window: Option<usize>,
         robot: Option<&Bound<'py, ModelPy>>,
+        joints: Option<&str>,
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
+        let map = JointMap::new(&model, self.joints(joints)?).map_err(from_ident)?;
         let traj = data.get().traj.clone();
         let processing = self.inner.settings.processing.clone();
         let m = background(py, move || {
             let p = prepare_data(&model, &traj, &processing).map_err(fail_ident)?;
-            Ok(joint_metrics(&model, &params, &p, test_window))
+            joint_metrics(&model, &params, &p, test_window, &map).map_err(fail_ident)
         })?;
         to_python(py, &m)
     }

@@ -6,6 +6,7 @@ use std::sync::Arc;
 
 use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::request::{self, PriorSource};
+use dvrk_ident::settings::Joints;
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::{FitSettings, Method};
 use pyo3::prelude::*;
@@ -16,6 +17,11 @@ use crate::json::from_python;
 
 pub(crate) fn parse_method(text: &str) -> PyResult<Method> {
     crate::convert::named("method", text)
+}
+
+/// `joints=`: ``"model"`` or ``"measured"``.
+pub(crate) fn parse_joints(text: &str) -> PyResult<Joints> {
+    crate::convert::named("joints", text)
 }
 
 /// `delay=`: ``"auto"``, seconds, or a list of seconds (one per coordinate).
@@ -70,6 +76,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub prior_weight: Option<f64>,
     pub prior_metric: Option<&'a str>,
     pub preset: Option<&'a str>,
+    pub joints: Option<&'a str>,
 }
 
 impl Overrides<'_, '_> {
@@ -143,6 +150,7 @@ impl Overrides<'_, '_> {
                 .preset
                 .map(|p| crate::convert::named("preset", p))
                 .transpose()?,
+            joints: self.joints.map(parse_joints).transpose()?,
         })
     }
 

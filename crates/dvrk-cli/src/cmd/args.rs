@@ -9,7 +9,7 @@ use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::{LogFormat, ReadOptions};
 use dvrk_ident::names::Named;
 use dvrk_ident::request::Overrides;
-use dvrk_ident::settings::{FitSettings, Prior, PriorMetric};
+use dvrk_ident::settings::{FitSettings, Joints, Prior, PriorMetric};
 use dvrk_ident::signal::Cutoff;
 use dvrk_ident::JointLog;
 
@@ -132,6 +132,16 @@ impl LogArgs {
     }
 }
 
+/// `--joints`, of the commands that show a result's errors (fit, validate, report).
+#[derive(clap::Args, Clone)]
+pub struct JointsArgs {
+    /// Show the errors and figures in the `model` coordinates (q1..qn, the estimator's)
+    /// or in the arm's `measured` joints by name (the PSM's outer_wrist_pitch,
+    /// outer_wrist_yaw and jaw rather than its motor-side q5..q7); the fit is the same
+    #[arg(long, value_parser = super::named::<Joints>(), value_name = "model|measured", help_heading = OUTPUT)]
+    pub joints: Option<Joints>,
+}
+
 /// The default of each optional flag whose default is the library's
 /// ([`FitSettings::default`], [`TimeSource::default`], [`Prior::DEFAULT_WEIGHT`]),
 /// by the flag's id: what the help shows, taken from the library so it cannot drift.
@@ -158,6 +168,7 @@ fn library_default(id: &str) -> Option<String> {
         "sdp_regularization" => format!("{:e}", fit.sdp_regularization),
         "prior_weight" => format!("{:e}", Prior::DEFAULT_WEIGHT),
         "prior_metric" => PriorMetric::default().name().into(),
+        "joints" => fit.joints.name().into(),
         _ => return None,
     })
 }
@@ -203,7 +214,7 @@ pub fn library_defaults(arg: clap::Arg) -> clap::Arg {
 /// others show the library's default.
 pub fn result_defaults(arg: clap::Arg) -> clap::Arg {
     let id = arg.get_id().as_str().to_string();
-    if RESULT_SETTINGS.contains(&id.as_str()) || id == "resample" {
+    if RESULT_SETTINGS.contains(&id.as_str()) || id == "resample" || id == "joints" {
         with_default(arg, "the result's")
     } else {
         library_defaults(arg)

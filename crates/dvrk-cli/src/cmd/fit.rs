@@ -16,7 +16,7 @@ use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
 use dvrk_model::Model;
 
-use super::args::{LogArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
+use super::args::{JointsArgs, LogArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::emit;
 
 #[derive(clap::Args)]
@@ -111,6 +111,8 @@ pub struct Args {
     /// Also write figures and report.html into this folder (see `dvrk-ident report`)
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub report: Option<String>,
+    #[command(flatten)]
+    pub joints: JointsArgs,
     /// Print the result document to stdout instead of the table
     #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
@@ -158,6 +160,7 @@ fn request(args: &Args) -> Result<FitRequest> {
     };
     overrides.prior_weight = args.prior_weight;
     overrides.prior_metric = args.prior_metric;
+    overrides.joints = args.joints.joints;
     overrides.delay = match &args.delay {
         Some(d) => Some(
             d.parse::<DelayOption>()
@@ -383,9 +386,16 @@ fn delays_and_prior(s: &mut String, r: &FitResult) {
 
 /// Per joint, the training and test errors.
 fn errors(s: &mut String, r: &FitResult) {
+    let names = &r.metrics.train.joints;
+    let width = names
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(8);
     let _ = writeln!(
         s,
-        "{:<8} {:>12} {:>12} {:>12} {:>12}",
+        "{:<width$} {:>12} {:>12} {:>12} {:>12}",
         "joint", "train rel", "train rms", "test rel", "test rms"
     );
     for (j, name) in r.metrics.train.joints.iter().enumerate() {
@@ -397,7 +407,10 @@ fn errors(s: &mut String, r: &FitResult) {
             ),
             None => ("-".into(), "-".into()),
         };
-        let _ = writeln!(s, "{name:<8} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}");
+        let _ = writeln!(
+            s,
+            "{name:<width$} {tr:>12.4} {trms:>12.4} {te:>12} {terms:>12}"
+        );
     }
 }
 

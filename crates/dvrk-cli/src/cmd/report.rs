@@ -12,7 +12,7 @@ use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, JointLog};
 use dvrk_model::Model;
 
-use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
+use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
 use super::emit;
 
 #[derive(clap::Args)]
@@ -37,6 +37,8 @@ pub struct Args {
     /// Folder to write report.html and the figures (SVG and PNG) into
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub out: String,
+    #[command(flatten)]
+    pub joints: JointsArgs,
 }
 
 /// Builds the report of `result` on `logs` (role, trajectory, metric window) in memory,
@@ -62,6 +64,7 @@ pub fn build(
             .collect(),
         excitation,
         read: Some(read),
+        joints: None,
     };
     Ok(crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?)
 }
@@ -74,6 +77,9 @@ pub fn run(args: Args) -> Result<()> {
     settings.test_window = result.settings.test_window;
     if let Some(note) = super::settings_note(&settings.differences(&result.settings)) {
         eprintln!("{note}");
+    }
+    if let Some(j) = args.joints.joints {
+        settings.joints = j;
     }
     let mut result = result;
     result.settings = settings;

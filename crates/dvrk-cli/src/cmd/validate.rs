@@ -3,10 +3,10 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use dvrk_ident::fit::{joint_metrics, prepare};
+use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
 use serde_json::json;
 
-use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
+use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
 use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -29,6 +29,8 @@ pub struct Args {
     // given, they replace them, and the output says which differ from the fit's.
     #[command(flatten)]
     pub log_args: LogArgs,
+    #[command(flatten)]
+    pub joints: JointsArgs,
     /// Print JSON
     #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
@@ -42,10 +44,15 @@ pub fn run(args: Args) -> Result<()> {
         ..
     } = load_result(&args.result, args.robot.as_deref())?;
     // The processing the result was fitted with, unless overridden on the command line.
-    let settings = args.log_args.settings(result.settings.clone())?;
+    let mut settings = args.log_args.settings(result.settings.clone())?;
     // Flags that change the processing make this log's column differ from the fit's
-    // columns beside it for a reason other than the model: said first.
+    // columns beside it for a reason other than the model: said first. (Other joints
+    // only leave the fit's columns out.)
     let changed = settings.differences(&result.settings);
+    if let Some(j) = args.joints.joints {
+        settings.joints = j;
+    }
+    let joints = JointMap::new(&model, settings.joints)?;
     let mut reports = Vec::new();
     let mut text = String::new();
     if let Some(note) = super::settings_note(&changed) {
@@ -60,23 +67,31 @@ pub fn run(args: Args) -> Result<()> {
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
-        let m = joint_metrics(&model, &params, &data, args.test_window);
+        let m = joint_metrics(&model, &params, &data, args.test_window, &joints)?;
         m.check_finite(path).map_err(anyhow::Error::msg)?;
         // Beside the fit's own training (and test) errors, so a held-out log reads
-        // against them joint by joint.
+        // against them joint by joint (when they are in the same joints).
         let mut sets = vec![("fit train", &result.metrics.train)];
         if let Some(t) = &result.metrics.test {
             sets.push(("fit test", t));
         }
+        sets.retain(|(_, s)| s.joints == m.joints);
         sets.push(("this log", &m));
+        let width = m
+            .joints
+            .iter()
+            .map(|n| n.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(8);
         let _ = writeln!(text, "{path} ({} samples)", m.samples);
-        let _ = write!(text, "{:<8}", "joint");
+        let _ = write!(text, "{:<width$}", "joint");
         for (name, _) in &sets {
             let _ = write!(text, " {:>14} {:>10}", format!("{name} rel"), "rms");
         }
         let _ = writeln!(text);
         for (j, name) in m.joints.iter().enumerate() {
-            let _ = write!(text, "{name:<8}");
+            let _ = write!(text, "{name:<width$}");
             for (_, s) in &sets {
                 let _ = write!(text, " {:>14.4} {:>10.4}", s.relative_error[j], s.rms[j]);
             }

@@ -15,8 +15,10 @@
 //!    per-coordinate factors ([`crate::observation::Observation::weighted`], exact);
 //! 3. IRLS only: one pass per re-weighting for the residuals (the weights are then
 //!    applied to the same factors, without assembling again);
-//! 4. the metrics (sums of squares per coordinate) on the training log, and on the
-//!    test log (stopping after the test window).
+//! 4. the metrics on the test log (sums of squares, stopping after the test window);
+//!    the training log's come from its factors, except in coupled measured joints
+//!    ([`crate::settings::Joints`]), whose cross terms the factors lack: one more pass
+//!    over the training log then.
 //!
 //! [`super::fit`] of the logs in memory processes them with the same block processor
 //! and reduces them with the same chunks, so the two give the same result to the last
@@ -31,7 +33,7 @@ use nalgebra::DMatrix;
 
 use super::{
     fit_observed, no_training_log, subtract_known_forces, to_model_coordinates, FitSettings,
-    MetricSums, Observed, ObservedLog, TorqueRange,
+    MetricPasses, MetricSums, Observed, ObservedLog, TorqueRange,
 };
 use crate::error::IdentError;
 use crate::joint_log::{Coordinates, JointLog};
@@ -296,28 +298,48 @@ pub fn fit_stream_logs(
         log.processor(settings, timing)?;
     }
     let observed = observe(&train_logs, &train_timing, settings, progress)?;
+    let train_pass = |params: &[f64]| {
+        train_logs
+            .iter()
+            .zip(&train_timing)
+            .map(|(log, timing)| {
+                log.metrics(
+                    settings,
+                    timing,
+                    params,
+                    None,
+                    "metrics (training)",
+                    progress,
+                )
+            })
+            .collect()
+    };
+    let test_pass = |params: &[f64]| {
+        test_logs
+            .iter()
+            .zip(&test_timing)
+            .map(|(log, timing)| {
+                let sums = log.metrics(
+                    settings,
+                    timing,
+                    params,
+                    settings.test_window,
+                    "metrics (test)",
+                    progress,
+                )?;
+                let mut info = InputInfo::from_file("test", log.reader.path())?;
+                info.source.clone_from(&timing.1);
+                Ok((info, sums))
+            })
+            .collect()
+    };
     fit_observed(
         model,
         &observed,
         settings,
-        |params| {
-            test_logs
-                .iter()
-                .zip(&test_timing)
-                .map(|(log, timing)| {
-                    let sums = log.metrics(
-                        settings,
-                        timing,
-                        params,
-                        settings.test_window,
-                        "metrics (test)",
-                        progress,
-                    )?;
-                    let mut info = InputInfo::from_file("test", log.reader.path())?;
-                    info.source.clone_from(&timing.1);
-                    Ok((info, sums))
-                })
-                .collect()
+        MetricPasses {
+            train: Some(&train_pass),
+            test: &test_pass,
         },
         progress,
     )

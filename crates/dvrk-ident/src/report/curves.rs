@@ -10,7 +10,7 @@
 use dvrk_model::{Model, ParamKind};
 use nalgebra::DMatrix;
 
-use crate::fit::{predict, Prepared};
+use crate::fit::{predict, JointMap, Prepared};
 
 /// Bins over each abscissa.
 pub const BINS: usize = 32;
@@ -187,17 +187,29 @@ fn column(m: &DMatrix<f64>, j: usize) -> Vec<f64> {
     m.column(j).iter().copied().collect()
 }
 
-/// Per coordinate, the friction the log shows (measured torque minus the model without
-/// friction) binned over the coordinate's velocity, with the fitted friction (the
-/// model's friction torque on the same samples) per bin.
-pub fn friction_curves(model: &Model, params: &[f64], data: &Prepared) -> Vec<Curve> {
+/// Per joint of `joints`, the friction the log shows (measured torque minus the model
+/// without friction) binned over the joint's velocity, with the fitted friction (the
+/// model's friction torque on the same samples) per bin. `data` in model coordinates;
+/// in coupled measured joints the fitted friction of a joint mixes its coordinates'
+/// friction laws, so its bins are those of the samples rather than one curve.
+pub fn friction_curves(
+    model: &Model,
+    params: &[f64],
+    data: &Prepared,
+    joints: &JointMap,
+) -> Vec<Curve> {
     let (seen, fitted) = friction_torques(model, params, data);
-    (0..model.dof())
+    let (seen, fitted, dq) = (
+        joints.torque(&seen),
+        joints.torque(&fitted),
+        joints.motion(&data.dq),
+    );
+    (0..joints.dof())
         .map(|j| {
             let fitted = column(&fitted, j);
             binned(
-                &model.coordinates[j],
-                &column(&data.dq, j),
+                &joints.names[j],
+                &column(&dq, j),
                 &column(&seen, j),
                 Some(&fitted),
                 true,
@@ -215,10 +227,11 @@ pub enum Against {
     Position,
 }
 
-/// Per coordinate, the prediction error `measured − predicted` binned over the
-/// coordinate's velocity or position.
+/// Per joint of `joints`, the prediction error `measured − predicted` binned over the
+/// joint's velocity or position; `data` and `predicted` already in those joints
+/// ([`JointMap::prepared`], [`JointMap::torque`]).
 pub fn residual_curves(
-    model: &Model,
+    joints: &JointMap,
     data: &Prepared,
     predicted: &DMatrix<f64>,
     against: Against,
@@ -228,10 +241,10 @@ pub fn residual_curves(
         Against::Velocity => &data.dq,
         Against::Position => &data.q,
     };
-    (0..model.dof())
+    (0..joints.dof())
         .map(|j| {
             binned(
-                &model.coordinates[j],
+                &joints.names[j],
                 &column(x, j),
                 &column(&error, j),
                 None,

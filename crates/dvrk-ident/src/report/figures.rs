@@ -8,16 +8,12 @@ use nalgebra::DMatrix;
 use super::curves::Curve;
 use super::plot::{colors, Panel, PanelGrid, Series, SeriesStyle};
 use crate::excite::fourier::FourierTrajectory;
-use crate::fit::Prepared;
+use crate::fit::{JointMap, Prepared};
 use crate::result::{FitResult, JointMetrics};
 
-/// Units of coordinate `j`: (position, velocity, acceleration, effort).
+/// Units of model coordinate `j`: (position, velocity, acceleration, effort).
 pub fn units(model: &Model, j: usize) -> [&'static str; 4] {
-    if model.coordinate_is_length.get(j).copied().unwrap_or(false) {
-        ["m", "m/s", "m/s²", "N"]
-    } else {
-        ["rad", "rad/s", "rad/s²", "N·m"]
-    }
+    crate::fit::units(model.coordinate_is_length.get(j).copied().unwrap_or(false))
 }
 
 /// Seconds since the first sample, so panels of different logs share an origin.
@@ -112,7 +108,7 @@ fn slice(v: &[f64], (a, b): (usize, usize)) -> Vec<f64> {
 /// the log (e.g. `training: one.csv`); `metrics` gives the per-joint relative error shown
 /// in the titles.
 pub fn torque_figure(
-    model: &Model,
+    joints: &JointMap,
     label: &str,
     data: &Prepared,
     predicted: &DMatrix<f64>,
@@ -122,12 +118,12 @@ pub fn torque_figure(
     let t = relative_time(&data.time);
     let span = zoom_span(&t, zoom);
     let mut panels = Vec::new();
-    for j in 0..model.dof() {
+    for j in 0..joints.dof() {
         let measured = column(&data.tau, j);
         let pred = column(predicted, j);
         let error: Vec<f64> = measured.iter().zip(&pred).map(|(m, p)| m - p).collect();
         let rel = metrics.relative_error.get(j).copied().unwrap_or(f64::NAN);
-        let y_label = format!("torque ({})", units(model, j)[3]);
+        let y_label = format!("torque ({})", joints.units(j)[3]);
         let series = |part: Option<(usize, usize)>| {
             let cut = |v: &Vec<f64>| part.map_or_else(|| v.clone(), |w| slice(v, w));
             vec![
@@ -137,7 +133,7 @@ pub fn torque_figure(
             ]
         };
         panels.push(Panel {
-            title: format!("{}  (relative error {rel:.4})", model.coordinates[j]),
+            title: format!("{}  (relative error {rel:.4})", joints.names[j]),
             x_label: "time (s)".into(),
             y_label: y_label.clone(),
             series: series(None),
@@ -145,7 +141,7 @@ pub fn torque_figure(
             vspans: span.into_iter().collect(),
         });
         panels.push(Panel {
-            title: format!("{}  zoom", model.coordinates[j]),
+            title: format!("{}  zoom", joints.names[j]),
             x_label: "time (s)".into(),
             y_label,
             series: series(Some(zoom)),
@@ -154,7 +150,7 @@ pub fn torque_figure(
         });
     }
     PanelGrid {
-        title: format!("{} — measured vs predicted torque, {label}", model.name),
+        title: format!("{} — measured vs predicted torque, {label}", joints.robot),
         columns: 2,
         panel_size: (600, 230),
         column_weights: vec![2, 1],
@@ -173,7 +169,7 @@ fn zoom_span(t: &[f64], (a, b): (usize, usize)) -> Option<(f64, f64)> {
 /// low-pass filter (same trimming and differentiation), so the two line up sample by
 /// sample.
 pub fn processing_figure(
-    model: &Model,
+    joints: &JointMap,
     label: &str,
     raw: &Prepared,
     processed: &Prepared,
@@ -194,13 +190,13 @@ pub fn processing_figure(
         ("tau", &raw.tau, &processed.tau, 3),
     ];
     let mut panels = Vec::new();
-    for j in 0..model.dof() {
-        let u = units(model, j);
+    for j in 0..joints.dof() {
+        let u = joints.units(j);
         for (name, r, p, unit) in signals {
             let (r, p) = (column(r, j), column(p, j));
             let y_label = format!("{name} ({})", u[unit]);
             panels.push(Panel {
-                title: format!("{} {name}", model.coordinates[j]),
+                title: format!("{} {name}", joints.names[j]),
                 x_label: "time (s)".into(),
                 y_label: y_label.clone(),
                 series: vec![
@@ -211,7 +207,7 @@ pub fn processing_figure(
                 vspans: span.into_iter().collect(),
             });
             panels.push(Panel {
-                title: format!("{} {name} zoom", model.coordinates[j]),
+                title: format!("{} {name} zoom", joints.names[j]),
                 x_label: "time (s)".into(),
                 y_label,
                 series: vec![
@@ -234,7 +230,7 @@ pub fn processing_figure(
         }
     }
     PanelGrid {
-        title: format!("{} — raw vs processed signals, {label}", model.name),
+        title: format!("{} — raw vs processed signals, {label}", joints.robot),
         columns: 4,
         panel_size: (400, 210),
         column_weights: vec![2, 1, 2, 1],
@@ -260,12 +256,12 @@ fn quartile_series(label: &str, color: plotters::style::RGBColor, curve: &Curve)
 /// the measured torque minus the model without friction, median and quartiles per
 /// velocity bin, and the fitted friction (the model's friction torque, median over the
 /// same samples) as a line. `curves` from [`super::curves::friction_curves`].
-pub fn friction_figure(model: &Model, label: &str, curves: &[Curve]) -> PanelGrid {
+pub fn friction_figure(joints: &JointMap, label: &str, curves: &[Curve]) -> PanelGrid {
     let panels = curves
         .iter()
         .enumerate()
         .map(|(j, c)| {
-            let u = units(model, j);
+            let u = joints.units(j);
             let fitted: Vec<f64> = c.bins.iter().filter_map(|b| b.model).collect();
             let mut series = vec![quartile_series(
                 "measured τ − model without friction (median and quartiles per bin)",
@@ -291,7 +287,7 @@ pub fn friction_figure(model: &Model, label: &str, curves: &[Curve]) -> PanelGri
         })
         .collect();
     PanelGrid {
-        title: format!("{} — friction against velocity, {label}", model.name),
+        title: format!("{} — friction against velocity, {label}", joints.robot),
         columns: 4,
         panel_size: (400, 280),
         column_weights: Vec::new(),
@@ -303,14 +299,14 @@ pub fn friction_figure(model: &Model, label: &str, curves: &[Curve]) -> PanelGri
 /// position (two panels per coordinate), median and quartiles per bin; curves from
 /// [`super::curves::residual_curves`].
 pub fn residual_figure(
-    model: &Model,
+    joints: &JointMap,
     label: &str,
     by_velocity: &[Curve],
     by_position: &[Curve],
 ) -> PanelGrid {
     let mut panels = Vec::new();
     for (j, (v, p)) in by_velocity.iter().zip(by_position).enumerate() {
-        let u = units(model, j);
+        let u = joints.units(j);
         for (c, what, unit) in [(v, "velocity", u[1]), (p, "position", u[0])] {
             panels.push(Panel {
                 title: format!("{} error vs {what}", c.coordinate),
@@ -329,7 +325,7 @@ pub fn residual_figure(
     PanelGrid {
         title: format!(
             "{} — prediction error against velocity and position, {label}",
-            model.name
+            joints.robot
         ),
         columns: 4,
         panel_size: (380, 240),

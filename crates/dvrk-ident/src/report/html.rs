@@ -6,9 +6,11 @@ use std::fmt::Write as _;
 use dvrk_model::{Model, ParamKind};
 
 use super::{LogSummary, RenderedFigure};
+use crate::fit::JointMap;
 use crate::log::ReadOptions;
 use crate::reproduce::{cli_command, python_call};
 use crate::result::{FitResult, JointMetrics};
+use crate::settings::Joints;
 
 /// Escapes text for HTML element content and attribute values.
 pub fn escape(text: &str) -> String {
@@ -104,11 +106,20 @@ fn inline_svg(svg: &str) -> &str {
 pub fn page(
     model: &Model,
     result: &FitResult,
+    joints: &JointMap,
     logs: &[LogSummary],
     figures: &[RenderedFigure],
     read: Option<&ReadOptions>,
 ) -> String {
-    let unit = |j: usize| super::figures::units(model, j)[3];
+    // The fit's own metrics are in the joints it was fitted with (which a report may
+    // show otherwise), known by their names; the logs' in `joints`.
+    let fit_joints = [Joints::Model, Joints::Measured]
+        .into_iter()
+        .filter_map(|j| JointMap::new(model, j).ok())
+        .find(|m| m.names == result.metrics.train.joints)
+        .unwrap_or_else(|| joints.clone());
+    let fit_unit = |j: usize| fit_joints.units(j)[3];
+    let log_unit = |j: usize| joints.units(j)[3];
     let mut o = String::new();
     let _ = write!(
         o,
@@ -122,7 +133,7 @@ pub fn page(
     reproduce(&mut o, result, read);
     contents(&mut o, figures);
     summary(&mut o, result);
-    metrics(&mut o, result, logs, &unit);
+    metrics(&mut o, result, logs, &fit_unit, &log_unit);
     links(&mut o, result);
     joint_elements(&mut o, model, result);
     base_parameters(&mut o, result);
@@ -266,21 +277,28 @@ fn same_metrics(a: &JointMetrics, b: &JointMetrics) -> bool {
 
 /// Metrics of the result, then of every log drawn here whose numbers are not already a
 /// column (each column once: a log the fit measured names the fit's column instead).
+/// Logs shown in other joints than the fit's metrics get a table of their own.
 fn metrics(
     o: &mut String,
     result: &FitResult,
     logs: &[LogSummary],
-    unit: &dyn Fn(usize) -> &'static str,
+    fit_unit: &dyn Fn(usize) -> &'static str,
+    log_unit: &dyn Fn(usize) -> &'static str,
 ) {
-    o.push_str("<h2 id=metrics>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (model coordinates, known forces subtracted).</p>");
+    o.push_str("<h2 id=metrics>Metrics</h2><p>Relative error ‖τ − τ̂‖/‖τ‖ and RMS of τ − τ̂ per joint (the model coordinates, or the arm's measured joints with joints measured; known forces subtracted).</p>");
     let mut sets: Vec<(String, &JointMetrics)> =
         vec![("fit: training".to_string(), &result.metrics.train)];
     if let Some(test) = &result.metrics.test {
         sets.push(("fit: test".to_string(), test));
     }
     let fitted = sets.len();
+    let mut other_joints: Vec<(String, &JointMetrics)> = Vec::new();
     for log in logs {
         let name = format!("{} ({})", log.role, log.source);
+        if log.metrics.joints != result.metrics.train.joints {
+            other_joints.push((name, &log.metrics));
+            continue;
+        }
         match sets[..fitted]
             .iter_mut()
             .find(|(_, m)| same_metrics(m, &log.metrics))
@@ -291,7 +309,11 @@ fn metrics(
             None => sets.push((name, &log.metrics)),
         }
     }
-    metrics_table(o, &sets, unit);
+    metrics_table(o, &sets, fit_unit);
+    if !other_joints.is_empty() {
+        o.push_str("<p>The logs drawn here, in the joints of the figures:</p>");
+        metrics_table(o, &other_joints, log_unit);
+    }
 }
 
 /// Parameters by link.

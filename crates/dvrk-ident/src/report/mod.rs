@@ -18,10 +18,11 @@ use thiserror::Error;
 
 use crate::error::IdentError;
 use crate::excite::fourier::FourierTrajectory;
-use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, Prepared};
+use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, JointMap, Prepared};
 use crate::joint_log::JointLog;
 use crate::log::ReadOptions;
 use crate::result::{FitResult, JointMetrics};
+use crate::settings::Joints;
 use plot::{render, Figure, ImageFormat};
 
 /// Errors of figure and report output.
@@ -71,6 +72,9 @@ pub struct ReportInput<'a> {
     /// How the result's logs were read (`--format`, `--rate`, ...), which the result does
     /// not record: the page's command line includes them; `None` says they are unknown.
     pub read: Option<&'a ReadOptions>,
+    /// The joints the logs' errors and figures are shown in; `None`: the result's
+    /// (`settings.joints`).
+    pub joints: Option<Joints>,
 }
 
 /// A figure of the report, rendered in both formats.
@@ -153,7 +157,7 @@ fn slug(text: &str) -> String {
 ///
 /// Each log is processed with the result's own settings, predicted with its parameters
 /// and drawn (torques, and raw vs processed signals: the same processing without the
-/// low-pass filter, so both line up). The tree is drawn at the first sample of the
+/// low-pass filter, so both line up), in the joints of [`ReportInput::joints`]. The tree is drawn at the first sample of the
 /// first log (at zero without logs).
 pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
     let result = input.result;
@@ -161,6 +165,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
     let model: &Model = &model_cow;
     let params = result.params_for(model)?;
     let processing = &result.settings.processing;
+    let joints = JointMap::new(model, input.joints.unwrap_or(result.settings.joints))?;
     let mut unfiltered = processing.clone();
     unfiltered.filter = None;
 
@@ -179,26 +184,31 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
             }
         }
         let predicted = predict(model, &params, &data);
-        let metrics = joint_metrics(model, &params, &data, log.window);
+        let metrics = joint_metrics(model, &params, &data, log.window, &joints)?;
         let label = format!("{} ({})", log.role, data.source);
         let stem = format!("{}_{}", k + 1, slug(log.role));
-        let zoom = figures::zoom_window(&data.time, &data.tau);
-        let zoom_words = figures::zoom_caption(&data.time, zoom);
+        let (shown, shown_raw, shown_predicted) = (
+            joints.prepared(&data),
+            joints.prepared(&raw),
+            joints.torque(&predicted),
+        );
+        let zoom = figures::zoom_window(&shown.time, &shown.tau);
+        let zoom_words = figures::zoom_caption(&shown.time, zoom);
         figures.push(render_both(
-            &figures::torque_figure(model, &label, &data, &predicted, &metrics, zoom),
+            &figures::torque_figure(&joints, &label, &shown, &shown_predicted, &metrics, zoom),
             &format!("torque_{stem}"),
             &format!("Measured vs predicted torque and their difference, {label}. {zoom_words}"),
         )?);
         figures.push(render_both(
-            &figures::processing_figure(model, &label, &raw, &data, zoom),
+            &figures::processing_figure(&joints, &label, &shown_raw, &shown, zoom),
             &format!("processing_{stem}"),
             &format!("Raw vs processed q, dq, ddq and tau, {label}. {zoom_words}"),
         )?);
         figures.push(render_both(
             &figures::friction_figure(
-                model,
+                &joints,
                 &label,
-                &curves::friction_curves(model, &params, &data),
+                &curves::friction_curves(model, &params, &data, &joints),
             ),
             &format!("friction_{stem}"),
             &format!(
@@ -213,10 +223,20 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         )?);
         figures.push(render_both(
             &figures::residual_figure(
-                model,
+                &joints,
                 &label,
-                &curves::residual_curves(model, &data, &predicted, curves::Against::Velocity),
-                &curves::residual_curves(model, &data, &predicted, curves::Against::Position),
+                &curves::residual_curves(
+                    &joints,
+                    &shown,
+                    &shown_predicted,
+                    curves::Against::Velocity,
+                ),
+                &curves::residual_curves(
+                    &joints,
+                    &shown,
+                    &shown_predicted,
+                    curves::Against::Position,
+                ),
             ),
             &format!("residuals_{stem}"),
             &format!(
@@ -280,7 +300,7 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         "kinematics",
         "Kinematic tree at the first sample of the first log.",
     )?);
-    let html = html::page(model, result, &logs, &figures, input.read);
+    let html = html::page(model, result, &joints, &logs, &figures, input.read);
     Ok(Report {
         figures,
         logs,

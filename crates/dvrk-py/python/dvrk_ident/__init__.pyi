@@ -216,7 +216,8 @@ class JointLog:
         """Writes a ``csv``, ``wpi`` or ``mcap`` log atomically."""
 
 class Prepared:
-    """Processed samples in model coordinates (known forces subtracted)."""
+    """Processed samples (known forces subtracted), in the model coordinates or the
+    arm's measured joints (``joints``)."""
 
     @property
     def time(self) -> FloatArray: ...
@@ -231,10 +232,13 @@ class Prepared:
     @property
     def joint_names(self) -> List[str]: ...
     @property
+    def joints(self) -> str:
+        """``"model"`` or ``"measured"``."""
+    @property
     def source(self) -> str: ...
     def to_dataframe(self) -> Any:
-        """``time``, ``position.<q>``, ``velocity.<q>``, ``acceleration.<q>``,
-        ``effort.<q>``."""
+        """``time``, ``position.<joint>``, ``velocity.<joint>``,
+        ``acceleration.<joint>``, ``effort.<joint>``."""
     def __len__(self) -> int: ...
 
 class FitResult:
@@ -297,16 +301,20 @@ class FitResult:
     @property
     def sigma2(self) -> float: ...
     def load_robot(self) -> Model: ...
-    def prepare(self, data: JointLog, robot: Optional[Model] = None) -> Prepared: ...
+    def prepare(
+        self, data: JointLog, robot: Optional[Model] = None, *, joints: Optional[str] = None
+    ) -> Prepared: ...
     def predict(
         self, data: Union[JointLog, Prepared], robot: Optional[Model] = None, *,
-        as_dataframe: bool = False,
+        as_dataframe: bool = False, joints: Optional[str] = None,
     ) -> Any:
         """Predicted torques ``(N, dof)`` at the processed samples of ``data``
-        (rows of ``self.prepare(data)``), known forces excluded; with
-        ``as_dataframe``, a DataFrame with ``time`` and ``effort.<q>`` columns."""
+        (rows of ``self.prepare(data)``), known forces excluded, in ``joints``
+        (``"model"`` or ``"measured"``; default a Prepared's own, else the fit's); with
+        ``as_dataframe``, a DataFrame with ``time`` and ``effort.<joint>`` columns."""
     def validate(
-        self, data: JointLog, test_window: Optional[int] = None, robot: Optional[Model] = None
+        self, data: JointLog, test_window: Optional[int] = None, robot: Optional[Model] = None,
+        *, joints: Optional[str] = None,
     ) -> Dict[str, Any]: ...
     def wpi_params(self, robot: Optional[Model] = None) -> Dict[str, Any]: ...
     def dvrk_gc(self, robot: Optional[Model] = None, points: int = 7) -> Dict[str, Any]:
@@ -389,6 +397,7 @@ def fit(
     prior_weight: Optional[float] = None,
     prior_metric: Optional[str] = None,
     preset: Optional[str] = None,
+    joints: Optional[str] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
 ) -> FitResult:
