@@ -410,3 +410,55 @@ fn a_setting_without_a_flag_is_named_in_the_report() {
     assert!(html.contains("settings={&quot;processing&quot;: {&quot;filter&quot;:"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A report whose flags change the logs' processing or joints keeps the result's own
+/// settings where they are the fit's (its command line, its metrics columns) and lists
+/// what differs for the logs drawn; nothing of the result document changes.
+#[test]
+fn a_reports_own_settings_are_listed_not_passed_off_as_the_fits() {
+    let dir = temp_dir("report-shown");
+    let out = dir.join("result.json");
+    run_ok(&fit_example_args(&[
+        "--method",
+        "ols",
+        "--out",
+        out.to_str().unwrap(),
+    ]));
+    let before = std::fs::read(&out).unwrap();
+    let rep = dir.join("rep");
+    let (ok, _, err) = run(&[
+        "report",
+        out.to_str().unwrap(),
+        &example("psm_excitation.mcap"),
+        "--cutoff",
+        "5",
+        "--joints",
+        "measured",
+        "--out",
+        rep.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    assert!(err.contains("cutoff"), "the terminal note: {err}");
+    let html = std::fs::read_to_string(rep.join("report.html")).unwrap();
+    let listed = html
+        .split("differ from the fit's")
+        .nth(1)
+        .expect("the differing settings are listed");
+    let table = &listed[..listed.find("</table>").unwrap()];
+    assert!(table.contains("processing.filter.cutoff_hz"), "{table}");
+    assert!(
+        table.contains("<td class=l>joints</td><td class=l>measured</td><td class=l>none</td>"),
+        "{table}"
+    );
+    // The fit's command line is the fit's: no cut-off of 5 Hz, no --joints.
+    let command = html.split("<pre id=command-line>").nth(1).unwrap();
+    let command = &command[..command.find("</pre>").unwrap()];
+    assert!(
+        !command.contains("--cutoff") && !command.contains("--joints"),
+        "{command}"
+    );
+    // The logs' metrics in the measured joints, in their own table beside the fit's.
+    assert!(html.contains("outer_wrist_pitch"));
+    assert_eq!(std::fs::read(&out).unwrap(), before);
+    std::fs::remove_dir_all(&dir).unwrap();
+}

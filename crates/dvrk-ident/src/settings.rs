@@ -283,6 +283,25 @@ pub struct Difference {
     pub b: serde_json::Value,
 }
 
+impl Difference {
+    /// Both values as a reader wants them: a name without JSON quotes, `none` for an
+    /// unset setting, numbers and lists as JSON writes them.
+    ///
+    /// ```
+    /// use dvrk_ident::settings::Difference;
+    /// let d = Difference { path: "joints".into(), a: "measured".into(), b: serde_json::Value::Null };
+    /// assert_eq!(d.shown(), ("measured".to_string(), "none".to_string()));
+    /// ```
+    pub fn shown(&self) -> (String, String) {
+        let show = |v: &serde_json::Value| match v {
+            serde_json::Value::String(s) => s.clone(),
+            serde_json::Value::Null => "none".into(),
+            other => other.to_string(),
+        };
+        (show(&self.a), show(&self.b))
+    }
+}
+
 impl FitSettings {
     /// Every setting of `self` (`a`) that differs from `other` (`b`): walked over the
     /// serialized documents, so a setting added later is compared without code here.

@@ -190,7 +190,7 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
         ],
         excitation: Some(&traj),
         read: None,
-        joints: None,
+        settings: None,
     };
     let report = build(&input).unwrap();
     let stems: Vec<&str> = report.figures.iter().map(|f| f.stem.as_str()).collect();

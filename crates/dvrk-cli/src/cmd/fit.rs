@@ -248,6 +248,7 @@ pub fn run(args: Args) -> Result<()> {
             let built = super::report::build(
                 &model,
                 &result,
+                &result.settings,
                 &drawn,
                 request.excitation.as_ref(),
                 &request.read,

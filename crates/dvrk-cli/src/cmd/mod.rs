@@ -230,7 +230,10 @@ pub fn settings_note(changed: &[dvrk_ident::settings::Difference]) -> Option<Str
     }
     let list: Vec<String> = changed
         .iter()
-        .map(|d| format!("{} {} (fit: {})", d.path, d.a, d.b))
+        .map(|d| {
+            let (here, fit) = d.shown();
+            format!("{} {here} (fit: {fit})", d.path)
+        })
         .collect();
     Some(format!(
         "note: these logs are processed with settings that differ from the fit's, so \

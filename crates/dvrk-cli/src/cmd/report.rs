@@ -9,7 +9,7 @@ use dvrk_ident::log::ReadOptions;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
 use dvrk_ident::result::InputInfo;
-use dvrk_ident::{FitResult, JointLog};
+use dvrk_ident::{FitResult, FitSettings, JointLog};
 use dvrk_model::Model;
 
 use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
@@ -47,6 +47,7 @@ pub struct Args {
 pub fn build(
     model: &Model,
     result: &FitResult,
+    settings: &FitSettings,
     logs: &[(&str, &JointLog, Option<usize>)],
     excitation: Option<&FourierTrajectory>,
     read: &ReadOptions,
@@ -64,7 +65,7 @@ pub fn build(
             .collect(),
         excitation,
         read: Some(read),
-        joints: None,
+        settings: Some(settings),
     };
     Ok(crate::progress::Bars::new().spin("rendering the report", || report::build(&input))?)
 }
@@ -81,8 +82,6 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(j) = args.joints.joints {
         settings.joints = j;
     }
-    let mut result = result;
-    result.settings = settings;
     let sources: Vec<(String, String)> = if args.logs.is_empty() {
         // The result's own logs, as they were when fitted: a missing one or one whose
         // content changed is an error, not a figure silently dropped or drawn from other
@@ -123,7 +122,7 @@ pub fn run(args: Args) -> Result<()> {
         .log_args
         .read_options()
         .for_model(&model)
-        .for_processing(&result.settings.processing)
+        .for_processing(&settings.processing)
         .for_logs(sources.iter().map(|(_, p)| std::path::Path::new(p)));
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
@@ -149,6 +148,7 @@ pub fn run(args: Args) -> Result<()> {
     let built = build(
         &model,
         &result,
+        &settings,
         &logs,
         excitation.as_ref(),
         &args.log_args.read_options(),

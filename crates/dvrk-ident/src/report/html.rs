@@ -10,7 +10,7 @@ use crate::fit::JointMap;
 use crate::log::ReadOptions;
 use crate::reproduce::{cli_command, python_call};
 use crate::result::{FitResult, JointMetrics};
-use crate::settings::Joints;
+use crate::settings::Difference;
 
 /// Escapes text for HTML element content and attribute values.
 pub fn escape(text: &str) -> String {
@@ -102,22 +102,52 @@ fn inline_svg(svg: &str) -> &str {
     }
 }
 
+/// How the logs of a page are shown: their joints, and the settings that differ from
+/// the result's.
+pub struct Shown<'a> {
+    /// The joints of the logs' metrics and figures.
+    pub joints: &'a JointMap,
+    /// The settings of the logs that differ from the fit's
+    /// ([`crate::FitSettings::differences`]).
+    pub differences: &'a [Difference],
+}
+
+/// Says which settings the logs drawn here are processed or shown with other than the
+/// fit's, so that a figure is not read as the fit's own processing.
+fn shown_settings(o: &mut String, differences: &[Difference]) {
+    if differences.is_empty() {
+        return;
+    }
+    o.push_str(
+        "<p>The logs drawn here are processed and shown with settings that differ from the \
+         fit's (the fit's columns, command line and settings are its own):</p><table>\
+         <tr><th class=l>setting</th><th class=l>here</th><th class=l>fit</th></tr>",
+    );
+    for d in differences {
+        let (here, fit) = d.shown();
+        let _ = write!(
+            o,
+            "<tr><td class=l>{}</td><td class=l>{}</td><td class=l>{}</td></tr>",
+            escape(&d.path),
+            escape(&here),
+            escape(&fit)
+        );
+    }
+    o.push_str("</table>");
+}
+
 /// The whole page.
 pub fn page(
     model: &Model,
     result: &FitResult,
-    joints: &JointMap,
+    shown: &Shown<'_>,
     logs: &[LogSummary],
     figures: &[RenderedFigure],
     read: Option<&ReadOptions>,
 ) -> String {
-    // The fit's own metrics are in the joints it was fitted with (which a report may
-    // show otherwise), known by their names; the logs' in `joints`.
-    let fit_joints = [Joints::Model, Joints::Measured]
-        .into_iter()
-        .filter_map(|j| JointMap::new(model, j).ok())
-        .find(|m| m.names == result.metrics.train.joints)
-        .unwrap_or_else(|| joints.clone());
+    // The fit's own metrics are in the joints of its settings; the logs' in those shown.
+    let joints = shown.joints;
+    let fit_joints = JointMap::new(model, result.settings.joints).unwrap_or(joints.clone());
     let fit_unit = |j: usize| fit_joints.units(j)[3];
     let log_unit = |j: usize| joints.units(j)[3];
     let mut o = String::new();
@@ -134,6 +164,7 @@ pub fn page(
     contents(&mut o, figures);
     summary(&mut o, result);
     metrics(&mut o, result, logs, &fit_unit, &log_unit);
+    shown_settings(&mut o, shown.differences);
     links(&mut o, result);
     joint_elements(&mut o, model, result);
     base_parameters(&mut o, result);

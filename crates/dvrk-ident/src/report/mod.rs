@@ -22,7 +22,7 @@ use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, JointMap
 use crate::joint_log::JointLog;
 use crate::log::ReadOptions;
 use crate::result::{FitResult, JointMetrics};
-use crate::settings::Joints;
+use crate::settings::FitSettings;
 use plot::{render, Figure, ImageFormat};
 
 /// Errors of figure and report output.
@@ -72,9 +72,11 @@ pub struct ReportInput<'a> {
     /// How the result's logs were read (`--format`, `--rate`, ...), which the result does
     /// not record: the page's command line includes them; `None` says they are unknown.
     pub read: Option<&'a ReadOptions>,
-    /// The joints the logs' errors and figures are shown in; `None`: the result's
-    /// (`settings.joints`).
-    pub joints: Option<Joints>,
+    /// The settings the logs are processed and shown with where they differ from the
+    /// result's (`report`'s processing flags, `--joints`): the page lists what differs,
+    /// and keeps the result's own for the fit's numbers and command line. `None`: the
+    /// result's.
+    pub settings: Option<&'a FitSettings>,
 }
 
 /// A figure of the report, rendered in both formats.
@@ -157,15 +159,16 @@ fn slug(text: &str) -> String {
 ///
 /// Each log is processed with the result's own settings, predicted with its parameters
 /// and drawn (torques, and raw vs processed signals: the same processing without the
-/// low-pass filter, so both line up), in the joints of [`ReportInput::joints`]. The tree is drawn at the first sample of the
+/// low-pass filter, so both line up), with [`ReportInput::settings`]. The tree is drawn at the first sample of the
 /// first log (at zero without logs).
 pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
     let result = input.result;
     let model_cow = result.settings.model(input.model)?;
     let model: &Model = &model_cow;
     let params = result.params_for(model)?;
-    let processing = &result.settings.processing;
-    let joints = JointMap::new(model, input.joints.unwrap_or(result.settings.joints))?;
+    let shown = input.settings.unwrap_or(&result.settings);
+    let processing = &shown.processing;
+    let joints = JointMap::new(model, shown.joints)?;
     let mut unfiltered = processing.clone();
     unfiltered.filter = None;
 
@@ -300,7 +303,18 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         "kinematics",
         "Kinematic tree at the first sample of the first log.",
     )?);
-    let html = html::page(model, result, &joints, &logs, &figures, input.read);
+    let differences = shown.differences(&result.settings);
+    let html = html::page(
+        model,
+        result,
+        &html::Shown {
+            joints: &joints,
+            differences: &differences,
+        },
+        &logs,
+        &figures,
+        input.read,
+    );
     Ok(Report {
         figures,
         logs,
