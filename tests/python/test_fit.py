@@ -431,5 +431,8 @@ def test_delay_auto_matches_cli(psm, cli, run_cli, tmp_path):
         di.fit(psm, di.read_log(log, psm), delay=[0.01, 0.02])
     with pytest.raises(di.InputError, match="bounds"):
         di.fit(psm, di.read_log(log, psm), bounds="2018")
-    assert di.fit(psm, di.read_log(log, psm), method="ols", bounds="2019").settings[
+    assert di.fit(psm, di.read_log(log, psm), method="sdp", bounds="2019").settings[
         "bounds"] == "2019"
+    # Bounds that a least-squares fit would not use are refused, as on the command line.
+    with pytest.raises(di.InputError, match="method ols has none"):
+        di.fit(psm, di.read_log(log, psm), method="ols", bounds="2019")

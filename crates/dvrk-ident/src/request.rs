@@ -555,6 +555,7 @@ impl FitRequest {
             };
             return request.run(robot, progress);
         }
+        self.check_applicable()?;
         let mut outcome = match &self.train {
             Training::Logs(train) => {
                 let robot = robot.ok_or_else(|| IdentError::Setting {
@@ -571,6 +572,67 @@ impl FitRequest {
             outcome.result.inputs.push(info);
         }
         Ok(outcome)
+    }
+
+    /// Refuses a setting given for this fit that would change nothing in it, as a
+    /// sampling rate for a log with its own time stamps is refused: the user asked for
+    /// something the fit would silently not do. (Settings from `settings`, the base,
+    /// are a whole document and are not checked.)
+    fn check_applicable(&self) -> Result<(), IdentError> {
+        let o = &self.overrides;
+        let method = o.method.unwrap_or(self.settings.method);
+        let refuse = |name: &str, message: String| {
+            Err(IdentError::Setting {
+                name: name.into(),
+                message,
+            })
+        };
+        if o.irls_iterations.is_some() && method != Method::Irls {
+            return refuse(
+                "irls_iterations",
+                format!(
+                    "only the irls method re-weights, and this fit's method is {}",
+                    method.name()
+                ),
+            );
+        }
+        if o.sdp_regularization.is_some() && method != Method::Sdp {
+            return refuse(
+                "sdp_regularization",
+                format!(
+                    "only the semidefinite fit (method sdp) is regularized, and this fit's \
+                     method is {}",
+                    method.name()
+                ),
+            );
+        }
+        if o.bounds.is_some() && method != Method::Sdp {
+            return refuse(
+                "bounds",
+                format!(
+                    "the bounds are the semidefinite fit's (method sdp); method {} has none",
+                    method.name()
+                ),
+            );
+        }
+        if o.test_window.is_some() && self.test.is_empty() {
+            return refuse(
+                "test_window",
+                "the test window is counted in the test logs, and none is given (test)".into(),
+            );
+        }
+        let filtered = match &o.cutoff {
+            Some(cutoff) => cutoff.is_some(),
+            None => self.settings.processing.filter.is_some(),
+        };
+        if o.filter_torque == Some(true) && !filtered {
+            return refuse(
+                "filter_torque",
+                "the torques get the motion's low-pass filter, and there is none (cutoff none)"
+                    .into(),
+            );
+        }
+        Ok(())
     }
 
     fn run_logs(
