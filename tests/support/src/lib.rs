@@ -121,6 +121,13 @@ impl Rng {
         lo + (hi - lo) * u
     }
 
+    /// A standard normal deviate (Box–Muller on two uniforms in (0, 1]).
+    pub fn normal(&mut self) -> f64 {
+        let mut open = || ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64;
+        let (u, v) = (open(), open());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+    }
+
     pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {
         (0..n).map(|_| self.uniform(lo, hi)).collect()
     }
