@@ -417,7 +417,7 @@ pub fn solve_sdp(
 ) -> Result<SdpSolution, SdpError> {
     let started = Instant::now();
     #[cfg(feature = "rust-lapack")]
-    crate::lapack::link();
+    lapack_faer::link();
     let prior = check_inputs(model, r, options)?;
     let p = model.n_params();
     let eps = model.bounds.pseudo_inertia_eps;
