@@ -15,6 +15,9 @@
 //! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
 //!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
+// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls).
+#![forbid(unsafe_code)]
 
 pub mod fixtures;
 pub mod models;
