@@ -8,19 +8,8 @@ use dvrk_model::inertia::{
     barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue, sym6,
 };
 use dvrk_test_support::models::{one_link_with, ONE_LINK};
+use dvrk_test_support::Rng;
 use nalgebra::{DVector, Matrix3, Matrix4, Rotation3, Vector3};
-
-/// Small deterministic generator (xorshift64*), uniform in [lo, hi).
-struct Rng(u64);
-impl Rng {
-    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        let x = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
-        lo + (hi - lo) * ((x >> 11) as f64 / (1u64 << 53) as f64)
-    }
-}
 
 /// Upper-triangular (p+1)×(p+1) R of `[h | tau]` by Householder QR (zero rows
 /// appended when there are fewer than p+1 rows).
@@ -141,7 +130,7 @@ fn sdp_stribeck_sum_holds_exactly() {
         model.frames[0].friction().unwrap().param,
         model.frames[0].stribeck().unwrap().param,
     );
-    let mut rng = Rng(0x5eed_1234);
+    let mut rng = Rng::new(0x5eed_1234);
     for _ in 0..12 {
         // A consistent link (identity rows: its target is feasible), Fc and Fs with
         // a negative sum of a few hundredths.
@@ -173,7 +162,7 @@ fn sdp_stribeck_sum_holds_exactly() {
 /// The LMI rows (A, b of `s = b − A·π`, triangle order, √2) unpack to `J(π) − eps·I`.
 #[test]
 fn sdp_lmi_rows_reproduce_pseudo_inertia() {
-    let mut rng = Rng(0x1234_5678_9abc_def1);
+    let mut rng = Rng::new(0x1234_5678_9abc_def1);
     for trial in 0..20 {
         let p0 = trial % 3;
         let pi: Vec<f64> = (0..p0 + 10).map(|_| rng.uniform(-2.0, 2.0)).collect();
@@ -341,7 +330,7 @@ struct Report {
 /// `noise`·max|τ|), solve, compare the base parameters.
 fn synthetic(name: &str, seed: u64, noise: f64, options: &SdpOptions) -> Report {
     let model = Model::builtin(name).unwrap();
-    let mut rng = Rng(seed);
+    let mut rng = Rng::new(seed);
     let truth = random_consistent(&model, &mut rng);
     assert_feasible(&model, &truth, 0.0);
     let h = model.random_regressor(300, seed ^ 0xabcdef);
@@ -576,7 +565,9 @@ fn consistent_link(m: f64, c: [f64; 3], i: [f64; 3]) -> Vec<f64> {
 fn sdp_euclidean_prior_is_ridge_regression() {
     let model = Model::from_toml_str(&one_link(), "one_link.toml").unwrap();
     let p = model.n_params();
-    let mut rng = Rng(0x0dd_ba11);
+    // A seed whose R leaves the closed form inside the constraints (checked below; 17 of
+    // seeds 1-60 do, 2 is the first).
+    let mut rng = Rng::new(2);
     let mut truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
     truth.extend([0.1, 0.5, 0.05]);
     let mut prior = consistent_link(0.9, [0.03, 0.0, -0.01], [0.015, 0.02, 0.02]);
@@ -690,7 +681,9 @@ fn sdp_entropic_prior_matches_newton() {
     // The link alone: no friction bounds to hit.
     let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
     assert_eq!(model.n_params(), 10);
-    let mut rng = Rng(0xe1e1_0123);
+    // A seed whose R leaves Newton's minimizer inside the constraints (checked below; 25
+    // of seeds 1-60 do, 2 is the first).
+    let mut rng = Rng::new(2);
     let truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
     let prior = consistent_link(0.8, [0.02, 0.0, -0.01], [0.01, 0.02, 0.015]);
     let j0 = pseudo_inertia(&prior);
@@ -744,7 +737,7 @@ fn sdp_entropic_prior_matches_newton() {
 fn sdp_prior_errors() {
     let model = Model::from_toml_str(ONE_LINK, "one_link.toml").unwrap();
     let truth = consistent_link(1.2, [0.05, 0.02, -0.03], [0.02, 0.03, 0.025]);
-    let r = random_r(&truth, &mut Rng(7));
+    let r = random_r(&truth, &mut Rng::new(7));
     let mut bad = truth.clone();
     bad[9] = -1.0; // negative mass
     let entropic = SdpOptions {
