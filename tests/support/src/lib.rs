@@ -8,8 +8,10 @@
 //!   are visible in the summary instead of passing silently;
 //! - [`temp_dir`]: a fresh scratch folder per test;
 //! - [`repo`], [`example`]: the repository and its bundled examples;
-//! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
-//!   parameters, physically consistent ones included;
+//! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine, and the one
+//!   generator of the workspace's tests (uniform and normal deviates, raw `u64`s; unit
+//!   tests use it too); random states and parameters, physically consistent ones
+//!   included;
 //! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
 //! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`);
 //! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
@@ -102,7 +104,10 @@ pub fn f64s(v: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
-/// SplitMix64: tiny, seeded, the same on every machine.
+/// SplitMix64: tiny, seeded, the same on every machine. The random inputs of every test
+/// of the workspace come from it (a test that needs them takes a seed, never a generator
+/// of its own); the generators that are part of the behaviour (excitation starts,
+/// simulation noise, base-parameter samples) are the libraries' own.
 pub struct Rng(u64);
 
 impl Rng {
