@@ -6,6 +6,10 @@
 //! (`dvrk-ident` and `python -m dvrk_ident` call [`run`] inside the extension module):
 //! one behaviour, whichever way it was installed.
 
+// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls).
+#![forbid(unsafe_code)]
+
 use std::ffi::OsString;
 
 use clap::{CommandFactory, Parser, Subcommand};

@@ -288,13 +288,14 @@ mod tests {
     /// A sweep `x(i)` with torque `cable(x) ± friction` by the sign of its velocity.
     fn sweep(cable: &[f64], x: impl Fn(f64) -> f64, n: usize) -> [Vec<f64>; 3] {
         let (mut q, mut dq, mut tau) = (Vec::new(), Vec::new(), Vec::new());
+        let mut rng = dvrk_test_support::Rng::new(12);
         for i in 0..n {
             let t = i as f64 / n as f64;
             let v = (x(t + 1e-6) - x(t)) / 1e-6;
             q.push(x(t));
             dq.push(v);
             // Friction by the direction, and a deterministic measurement noise.
-            let noise = 1e-3 * (i as f64 * 12.9898).sin();
+            let noise = rng.uniform(-1e-3, 1e-3);
             tau.push(polyval(cable, x(t)) + 0.03 * v.signum() + noise);
         }
         [q, dq, tau]

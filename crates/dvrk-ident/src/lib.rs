@@ -20,19 +20,21 @@
 //! bug of one of the mappings.
 //!
 //! Cargo features (all default): `rust-lapack` (Clarabel's BLAS/LAPACK in Rust over
-//! faer, so no system library is linked), `recordings` (the readers of ROS recordings and
-//! the MCAP writer, [`log::mcap`]) and `report` (figures and the HTML report, [`report`]);
-//! a program that only fits CSV logs can leave out the last two.
+//! faer, from the workspace's `lapack-faer` crate, so no system library is linked),
+//! `recordings` (the readers of ROS recordings and the MCAP writer, [`log::mcap`]) and
+//! `report` (figures and the HTML report, [`report`]); a program that only fits CSV logs
+//! can leave out the last two.
 
 #![warn(missing_docs)]
+// The Fortran-ABI routines Clarabel calls are the workspace's only unsafe code, in
+// crates/lapack-faer.
+#![forbid(unsafe_code)]
 
 pub mod compare;
 pub mod error;
 pub mod estimate;
 pub mod excite;
 pub mod joint_log;
-#[cfg(feature = "rust-lapack")]
-mod lapack;
 pub mod log;
 mod median;
 pub mod names;

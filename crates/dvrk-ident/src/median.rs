@@ -230,13 +230,8 @@ mod tests {
     fn many_distinct_values_are_narrowed_exactly() {
         // Jittered nanosecond steps, a few huge gaps, and f64 bit patterns: every case
         // needs the histograms, and the result must equal sorting.
-        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
-        let mut next = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
+        let mut rng = dvrk_test_support::Rng::new(0x2545_F491_4F6C_DD1D);
+        let mut next = move || rng.next_u64();
         let jitter: Vec<u64> = (0..50_001).map(|_| 4_900_000 + next() % 200_000).collect();
         let mut gaps = jitter.clone();
         gaps[10] = u64::MAX - 3;

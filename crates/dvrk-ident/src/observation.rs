@@ -498,13 +498,8 @@ mod tests {
 
     fn random_samples(model: &Model, count: usize, seed: u64) -> [DMatrix<f64>; 4] {
         let n = model.dof();
-        let mut state = seed;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((state >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut rng = dvrk_test_support::Rng::new(seed);
+        let mut next = move || rng.uniform(-1.0, 1.0);
         let mut m = || DMatrix::from_fn(count, n, |_, _| next());
         [m(), m(), m(), m()]
     }

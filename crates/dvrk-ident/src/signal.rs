@@ -1152,16 +1152,8 @@ mod tests {
     #[test]
     fn per_joint_cutoffs_differ() {
         let n = 400;
-        // Deterministic white noise (xorshift): the lower cut-off removes more of it.
-        let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-        let noise: Vec<f64> = (0..n)
-            .map(|_| {
-                state ^= state << 13;
-                state ^= state >> 7;
-                state ^= state << 17;
-                (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
+        // Deterministic white noise: the lower cut-off removes more of it.
+        let noise = dvrk_test_support::Rng::new(0x9E37_79B9_7F4A_7C15).vec(n, -0.5, 0.5);
         let m = DMatrix::from_fn(n, 2, |i, _| noise[i]);
         let lp = LowPass {
             cutoff_hz: Cutoff::PerJoint(vec![2.0, 40.0]),

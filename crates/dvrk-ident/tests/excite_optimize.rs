@@ -37,11 +37,8 @@ fn opts(order: usize, f0: f64) -> ExciteOptions {
 }
 
 fn some_trajectory(n: usize, order: usize, f0: f64) -> FourierTrajectory {
-    let mut s = 0.37f64;
-    let mut next = move || {
-        s = (s * 9301.0 + 0.4927).fract();
-        s - 0.5
-    };
+    let mut rng = dvrk_test_support::Rng::new(37);
+    let mut next = move || rng.uniform(-0.5, 0.5);
     FourierTrajectory {
         order,
         base_frequency_hz: f0,

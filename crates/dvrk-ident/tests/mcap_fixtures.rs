@@ -986,12 +986,10 @@ fn mcap_cut_or_corrupted_files_never_panic() {
         );
     }
     // Flipped bytes: an error or (where the byte does not matter) a result, never a panic.
-    let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+    let mut rng = dvrk_test_support::Rng::new(0x2545_f491_4f6c_dd1d);
     let mut errors = 0;
     for _ in 0..300 {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
+        let state = rng.next_u64();
         let mut b = bytes.clone();
         let at = (state % b.len() as u64) as usize;
         b[at] ^= 1 << (state >> 61);
@@ -1018,13 +1016,8 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
     let dir = TempDir::new("mcap-blocks");
     let path = dir.path("blocks.mcap");
     let n: i64 = 20_000;
-    let mut state: u64 = 12345;
-    let mut jitter = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((state >> 33) % 400_001) as i64 - 200_000
-    };
+    let mut rng = dvrk_test_support::Rng::new(12345);
+    let mut jitter = move || (rng.next_u64() % 400_001) as i64 - 200_000;
     let stamps: Vec<i64> = (0..n)
         .map(|k| T0 + k * STEP + if k == 0 { 0 } else { jitter() })
         .collect();

@@ -107,13 +107,8 @@ proptest! {
 
 /// `rows` random samples of `model` from `seed`: positions, rates and torques.
 fn samples(model: &Model, rows: usize, seed: u64) -> [DMatrix<f64>; 4] {
-    let mut state = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
-    let mut next = move |scale: f64| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        scale * ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5)
-    };
+    let mut rng = dvrk_test_support::Rng::new(seed);
+    let mut next = move |scale: f64| rng.uniform(-0.5 * scale, 0.5 * scale);
     let n = model.dof();
     [2.0, 4.0, 20.0, 10.0].map(|scale| DMatrix::from_fn(rows, n, |_, _| next(scale)))
 }
@@ -153,12 +148,9 @@ proptest! {
             })
             .collect();
         // Merged in a shuffled order (Fisher–Yates from `order_seed`).
-        let mut s = order_seed | 1;
+        let mut rng = dvrk_test_support::Rng::new(order_seed);
         for i in (1..chunks.len()).rev() {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            chunks.swap(i, (s % (i as u64 + 1)) as usize);
+            chunks.swap(i, (rng.next_u64() % (i as u64 + 1)) as usize);
         }
         let mut merged = Observation::new(model.n_params());
         for c in &chunks {

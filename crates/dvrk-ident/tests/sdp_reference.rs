@@ -1,8 +1,8 @@
 //! The semidefinite fits of the real PSM and MTM data (the 2019 protocol, both SDP
 //! variants of `support/protocol_2019.rs`) against the fixture
 //! `fixtures/sdp_openblas_reference.json`, recorded with Clarabel's dense linear algebra
-//! from the system OpenBLAS before it was replaced by the crate's own Fortran-ABI layer
-//! over faer (`dvrk_ident::lapack`). The interior point iterates differ by rounding
+//! from the system OpenBLAS before it was replaced by the workspace's own Fortran-ABI
+//! layer over faer (`crates/lapack-faer`). The interior point iterates differ by rounding
 //! only, so the fits must agree to the solver's tolerance: the same status, the base
 //! parameters within 1e-6 norm-wise relative (`‖β − β_ref‖₂ / ‖β_ref‖₂`, the base
 //! parameters in model units), every test relative error within 1e-4 (absolute).

@@ -16,13 +16,8 @@ use nalgebra::DMatrix;
 /// 3 joints, `n` samples at 200 Hz: slow and fast sines, a square wave and noise.
 fn synthetic(n: usize, with_dq: bool) -> JointLog {
     let time = uniform_time(n, 200.0);
-    let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-    let mut noise = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
+    let mut rng = dvrk_test_support::Rng::new(0x9E37_79B9_7F4A_7C15);
+    let mut noise = move || rng.uniform(-0.5, 0.5);
     let q = DMatrix::from_fn(n, 3, |i, j| {
         let t = time[i];
         (0.4 + 0.3 * j as f64) * (1.1 * t + j as f64).sin() + 0.05 * (13.0 * t).cos()

@@ -39,7 +39,7 @@ fn simulate(
     let count = (seconds * rate) as usize;
     let time = uniform_time(count, rate);
     let mut rng = dvrk_test_support::Rng::new(seed);
-    let mut gauss = dvrk_ident::simulate::Gaussian::new(seed);
+    let mut gauss = dvrk_test_support::Rng::new(seed);
     let mut centre = vec![0.0; n];
     let mut amp = vec![0.5; n];
     for l in &model.limits {
@@ -82,7 +82,7 @@ fn simulate(
     let mut tau = motion_torques(model, params, &q, &dq, &ddq);
     for k in 0..count {
         for j in 0..n {
-            tau[(k, j)] += noise * gauss.sample();
+            tau[(k, j)] += noise * gauss.normal();
         }
     }
     model_log(model, time, q, dq, tau)

@@ -29,6 +29,9 @@
 //! ```
 
 #![warn(missing_docs)]
+// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls).
+#![forbid(unsafe_code)]
 
 mod base;
 mod builder;

@@ -1237,12 +1237,9 @@ mod tests {
             from_rpy([-2.9, -h + 3e-13, 0.4]),
             from_rpy([std::f64::consts::PI, 0.0, 0.0]),
         ];
-        let mut x = 0.123f64;
+        let mut rng = dvrk_test_support::Rng::new(123);
         for _ in 0..200 {
-            let mut next = || {
-                x = (x * 9301.0 + 0.49297).fract();
-                (x - 0.5) * 7.0
-            };
+            let mut next = || rng.uniform(-3.5, 3.5);
             cases.push(from_rpy([next(), next() / 2.0, next()]));
         }
         for r in cases {

@@ -6,6 +6,10 @@
 //! without the GIL (per-sample loops in chunks with a signal check between them, fits
 //! and log reading on a worker thread polled for Ctrl-C).
 
+// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls).
+#![forbid(unsafe_code)]
+
 mod classes;
 mod compare;
 mod convert;

@@ -8,13 +8,18 @@
 //!   are visible in the summary instead of passing silently;
 //! - [`temp_dir`]: a fresh scratch folder per test;
 //! - [`repo`], [`example`]: the repository and its bundled examples;
-//! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine; random states and
-//!   parameters, physically consistent ones included;
+//! - [`Rng`]: a seeded SplitMix64, the same numbers on every machine, and the one
+//!   generator of the workspace's tests (uniform and normal deviates, raw `u64`s; unit
+//!   tests use it too); random states and parameters, physically consistent ones
+//!   included;
 //! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
 //! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`);
 //! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
 //!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
+// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls).
+#![forbid(unsafe_code)]
 
 pub mod fixtures;
 pub mod models;
@@ -99,7 +104,10 @@ pub fn f64s(v: &serde_json::Value) -> Vec<f64> {
         .collect()
 }
 
-/// SplitMix64: tiny, seeded, the same on every machine.
+/// SplitMix64: tiny, seeded, the same on every machine. The random inputs of every test
+/// of the workspace come from it (a test that needs them takes a seed, never a generator
+/// of its own); the generators that are part of the behaviour (excitation starts,
+/// simulation noise, base-parameter samples) are the libraries' own.
 pub struct Rng(u64);
 
 impl Rng {
@@ -119,6 +127,13 @@ impl Rng {
     pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
         let u = (self.next_u64() >> 11) as f64 / (1u64 << 53) as f64;
         lo + (hi - lo) * u
+    }
+
+    /// A standard normal deviate (Box–Muller on two uniforms in (0, 1]).
+    pub fn normal(&mut self) -> f64 {
+        let mut open = || ((self.next_u64() >> 11) + 1) as f64 / (1u64 << 53) as f64;
+        let (u, v) = (open(), open());
+        (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
     }
 
     pub fn vec(&mut self, n: usize, lo: f64, hi: f64) -> Vec<f64> {

@@ -24,7 +24,7 @@ unsafe fn gesv<T: Real>(
     b: *mut T,
     ldb: *const c_int,
 ) -> Result<i32, Illegal> {
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let n = dim(n, 1)?;

@@ -274,7 +274,7 @@ unsafe fn svd<T: Real>(
         Driver::Gesdd { .. } => 2,
         Driver::Gesvd(..) => 3,
     };
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let m = dim(m, first)?;

@@ -30,7 +30,7 @@ unsafe fn gemm<T: Real>(
     c: *mut T,
     ldc: *const c_int,
 ) -> Result<(), Illegal> {
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let ta = transposed(transa, 1)?;

@@ -42,7 +42,7 @@ unsafe fn syevr<T: Real>(
     iwork: *mut c_int,
     liwork: *const c_int,
 ) -> Result<i32, Illegal> {
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let wantz = match option(jobz, 1)? {

@@ -9,16 +9,29 @@
 //! link a library that defines them. Every provider is a system or downloaded C/Fortran
 //! library (OpenBLAS, Netlib, MKL, ...), so the tool failed to link on a machine without
 //! `libopenblas-dev` and the Python wheel needed `libopenblas`. With `blas-src` and
-//! `lapack-src` enabled without a provider feature they link nothing, and this module
-//! defines the symbols instead, on top of faer (already the crate's dense QR): no system
-//! library, nothing downloaded. It is behind the default cargo feature `rust-lapack`;
-//! turn that off to link a real BLAS/LAPACK (then enable e.g. `blas-src/openblas`).
+//! `lapack-src` enabled without a provider feature they link nothing, and this crate
+//! defines the symbols instead, on top of faer (already `dvrk-ident`'s dense QR): no
+//! system library, nothing downloaded. `dvrk-ident` depends on it through its default
+//! cargo feature `rust-lapack`; turn that off to link a real BLAS/LAPACK (then enable
+//! e.g. `blas-src/openblas`).
 //!
 //! Only what Clarabel 0.11 calls is provided: `?gemm ?gemv ?symv ?syrk ?syr2k` (BLAS)
 //! and `?potrf ?potrs ?syevr ?gesdd ?gesvd ?gesv` (LAPACK), single and double precision,
 //! for every argument combination those routines define (all `trans`/`uplo`, strides
 //! including negative increments, leading dimensions larger than the rows, every `job`
 //! of the SVDs and every `range` of `?syevr`).
+//!
+//! A crate of its own because it is the workspace's only `unsafe` code: a Fortran
+//! routine receives raw pointers and must turn them into arrays. Here that is isolated,
+//! every unsafe operation carries its justification, and the routines are tested at the
+//! ABI (`tests/abi.rs`, through the `blas`/`lapack` wrappers Clarabel calls); every
+//! other crate of the workspace declares `#![forbid(unsafe_code)]`.
+//!
+//! # Linking
+//!
+//! The routines are reached by symbol name only, so nothing in Rust refers to them and a
+//! linker may leave this crate's object files out. A crate that needs them calls
+//! [`link`] on the path to Clarabel (`dvrk-ident` does in its semidefinite solve).
 //!
 //! # Contract
 //!
@@ -29,16 +42,22 @@
 //!   the routine must read or write counts as an illegal value of that argument (the
 //!   reference would crash).
 //! - Arrays are only viewed with the extent their dimension arguments imply (see
-//!   [`mat_ref`]), after the quick returns for empty problems, so an argument the
+//!   `mat_ref`), after the quick returns for empty problems, so an argument the
 //!   routine does not reference (e.g. `z` of `?syevr` with `jobz = 'N'`) may be a dummy.
 //!   As in Fortran, an output array must not overlap another argument.
-//! - Workspaces: faer's scratch comes from a per-thread buffer (see [`with_scratch`]),
+//! - Workspaces: faer's scratch comes from a per-thread buffer (see `with_scratch`),
 //!   so `work`/`iwork` are only checked against LAPACK's minimum sizes; a query
 //!   (`lwork = -1`) returns that minimum, which is also all this implementation needs.
 //! - Results are those of faer's algorithms: the same factorizations and
 //!   decompositions, not the same rounding as a reference LAPACK (eigenvector and
 //!   singular vector signs may differ, as between any two LAPACK builds). `abstol` of
 //!   `?syevr` is ignored (faer always computes to full accuracy).
+
+#![warn(missing_docs)]
+// Every unsafe operation in its own block with its justification, also inside an
+// `unsafe fn` (the 2024 edition's default).
+#![deny(unsafe_op_in_unsafe_fn)]
+#![warn(clippy::undocumented_unsafe_blocks)]
 
 /// Exports a routine under its Fortran names, single precision then double: for each, a
 /// module `T` is `f32` (`f64`) in, holding the `#[no_mangle] extern "C"` function of the
@@ -79,7 +98,7 @@ macro_rules! export {
         pub unsafe extern "C" fn $sym($($arg: $ty),*) {
             // SAFETY: forwarded contract.
             let result = unsafe { $call };
-            $crate::lapack::blas_done($name, result);
+            $crate::blas_done($name, result);
         }
     };
     (@fn lapack $sym:ident $name:literal [$(#[$doc:meta])*] ($($arg:ident: $ty:ty),*) $call:expr) => {
@@ -93,7 +112,7 @@ macro_rules! export {
         #[allow(clippy::too_many_arguments)]
         pub unsafe extern "C" fn $sym($($arg: $ty,)* info: *mut std::ffi::c_int) {
             // SAFETY: forwarded contract.
-            unsafe { $crate::lapack::lapack_done($name, info, $call) };
+            unsafe { $crate::lapack_done($name, info, $call) };
         }
     };
 }
@@ -439,11 +458,14 @@ pub(crate) fn with_scratch<R>(req: StackReq, f: impl FnOnce(&mut MemStack) -> R)
     })
 }
 
-/// Makes the linker keep every exported routine. Clarabel's archive references the
-/// symbols after this crate's on the link line, which a single-pass linker (GNU ld)
-/// would not resolve backwards; referencing them all from [`crate::estimate::sdp`]
-/// (which any use of Clarabel here goes through) pulls them in whatever the linker.
-pub(crate) fn link() {
+/// Makes the linker keep every exported routine: call it (it does nothing else) from the
+/// code that leads to Clarabel. The routines are only ever named by symbol; Clarabel's
+/// archive references them after this crate's on the link line, which a single-pass
+/// linker (GNU ld) would not resolve backwards, and a linker keeps only the object files
+/// something refers to. Referencing them all from a function the program calls pulls
+/// them in, whatever the linker, into binaries, tests and shared libraries (the Python
+/// extension) alike.
+pub fn link() {
     let routines: [*const (); 22] = [
         blas3::sgemm_ as *const (),
         blas3::dgemm_ as *const (),

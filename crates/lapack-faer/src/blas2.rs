@@ -79,7 +79,7 @@ unsafe fn matvec<T: Real>(
         Operand::General { m, n, .. } => (m, n, 4),
         Operand::Symmetric { n, .. } => (n, n, 3),
     };
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let lda = leading(lda, first + 2, rows)?;

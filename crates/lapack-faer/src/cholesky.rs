@@ -22,7 +22,7 @@ unsafe fn potrf<T: Real>(
     a: *mut T,
     lda: *const c_int,
 ) -> Result<i32, Illegal> {
-    // SAFETY (whole body): the caller passes valid Fortran arguments; every pointer is
+    // SAFETY: (whole body) the caller passes valid Fortran arguments; every pointer is
     // read or viewed through the checked helpers with the extent its dimensions imply.
     unsafe {
         let up = upper(uplo, 1)?;

@@ -1,5 +1,5 @@
-//! The crate's BLAS/LAPACK routines (`dvrk_ident`'s Fortran-ABI layer over faer, which
-//! Clarabel's SDP cones call), called through the same `blas`/`lapack` crate wrappers
+//! The crate's BLAS/LAPACK routines (the Fortran-ABI layer over faer that Clarabel's SDP
+//! cones call), called through the same `blas`/`lapack` crate wrappers
 //! Clarabel uses, against their mathematical definitions: products against plain loops,
 //! `A·X = B` residuals, `L·Lᵀ = A`, `P·A = L·U`, eigenpairs `A·v = λ·v` with orthonormal
 //! `V` and a known spectrum, `A = U·Σ·Vᵀ` with orthonormal `U`, `V` and known singular
@@ -10,10 +10,7 @@
 //! definite and singular inputs, workspace queries and illegal arguments (`info = -i`,
 //! BLAS outputs untouched) too. Both precisions.
 
-// The routines are `#[no_mangle]` symbols of the dvrk_ident library: linking it is what
-// provides `dgemm_` & co. to the `blas`/`lapack` wrappers.
-use dvrk_ident as _;
-use dvrk_ident::simulate::Gaussian;
+use dvrk_test_support::Rng;
 
 /// What a routine must leave alone where it writes around it.
 const SENTINEL: f64 = 7777.0;
@@ -45,6 +42,9 @@ macro_rules! routines {
                 self as f64
             }
             $(unsafe fn $name($($arg: $ty),*) {
+                // The routines are `#[no_mangle]` symbols of lapack_faer, reached by the
+                // wrappers by name only: `link` makes the linker keep them.
+                lapack_faer::link();
                 unsafe { $module::$f($($arg),*) }
             })*
         }
@@ -114,8 +114,8 @@ impl<T: Scalar> Array<T> {
         }
     }
 
-    fn random(rows: usize, cols: usize, pad: usize, padding: f64, g: &mut Gaussian) -> Self {
-        let values: Vec<f64> = (0..rows * cols).map(|_| g.sample()).collect();
+    fn random(rows: usize, cols: usize, pad: usize, padding: f64, g: &mut Rng) -> Self {
+        let values: Vec<f64> = (0..rows * cols).map(|_| g.normal()).collect();
         Self::new(rows, cols, pad, padding, |i, j| values[i + j * rows])
     }
 
@@ -194,12 +194,12 @@ fn assert_close<T: Scalar>(x: &[Vec<f64>], y: &[Vec<f64>], scale: f64, what: &st
 
 /// A random orthogonal n×n matrix: a product of Householder reflections, so the test's
 /// known spectra do not depend on any routine under test.
-fn orthogonal(n: usize, g: &mut Gaussian) -> Vec<Vec<f64>> {
+fn orthogonal(n: usize, g: &mut Rng) -> Vec<Vec<f64>> {
     let mut q: Vec<Vec<f64>> = (0..n)
         .map(|i| (0..n).map(|j| f64::from(u8::from(i == j))).collect())
         .collect();
     for _ in 0..n.min(3) {
-        let v: Vec<f64> = (0..n).map(|_| g.sample()).collect();
+        let v: Vec<f64> = (0..n).map(|_| g.normal()).collect();
         let vv: f64 = v.iter().map(|x| x * x).sum();
         let h: Vec<Vec<f64>> = (0..n)
             .map(|i| {
@@ -307,7 +307,7 @@ fn gemm<T: Scalar>(
 }
 
 fn gemm_cases<T: Scalar>() {
-    let mut g = Gaussian::new(1);
+    let mut g = Rng::new(1);
     for (m, n, k) in [(4, 3, 5), (1, 1, 1), (6, 2, 1), (3, 7, 4)] {
         for (ta, tb) in [
             (b'N', b'N'),
@@ -382,16 +382,16 @@ fn gemm_cases<T: Scalar>() {
 }
 
 fn gemv_cases<T: Scalar>() {
-    let mut g = Gaussian::new(2);
+    let mut g = Rng::new(2);
     for (m, n) in [(5, 3), (1, 1), (2, 6)] {
         for t in [b'N', b'T', b'C'] {
             for (incx, incy) in [(1, 1), (2, 3), (-1, 1), (-2, -3), (1, -1)] {
                 for (alpha, beta) in [(1.0, 0.0), (0.5, -1.5)] {
                     let a = Array::<T>::random(m, n, 2, f64::NAN, &mut g);
                     let (lx, ly) = if t == b'N' { (n, m) } else { (m, n) };
-                    let xv: Vec<f64> = (0..lx).map(|_| g.sample()).collect();
+                    let xv: Vec<f64> = (0..lx).map(|_| g.normal()).collect();
                     let yv: Vec<f64> = (0..ly)
-                        .map(|_| if beta == 0.0 { f64::NAN } else { g.sample() })
+                        .map(|_| if beta == 0.0 { f64::NAN } else { g.normal() })
                         .collect();
                     let x = strided::<T>(&xv, incx, f64::NAN);
                     let mut y = strided::<T>(&yv, incy, SENTINEL);
@@ -428,7 +428,7 @@ fn gemv_cases<T: Scalar>() {
 }
 
 fn symv_cases<T: Scalar>() {
-    let mut g = Gaussian::new(3);
+    let mut g = Rng::new(3);
     for n in [1, 4, 7] {
         for uplo in [b'U', b'L'] {
             for (incx, incy) in [(1, 1), (-2, 3), (3, -1)] {
@@ -444,8 +444,8 @@ fn symv_cases<T: Scalar>() {
                         f64::NAN
                     }
                 });
-                let xv: Vec<f64> = (0..n).map(|_| g.sample()).collect();
-                let yv: Vec<f64> = (0..n).map(|_| g.sample()).collect();
+                let xv: Vec<f64> = (0..n).map(|_| g.normal()).collect();
+                let yv: Vec<f64> = (0..n).map(|_| g.normal()).collect();
                 let x = strided::<T>(&xv, incx, f64::NAN);
                 let mut y = strided::<T>(&yv, incy, SENTINEL);
                 let (alpha, beta) = (1.3, 0.4);
@@ -492,7 +492,7 @@ fn assert_triangle<T: Scalar>(
 }
 
 fn syrk_cases<T: Scalar>() {
-    let mut g = Gaussian::new(4);
+    let mut g = Rng::new(4);
     for (n, k) in [(4, 3), (1, 1), (3, 6)] {
         for uplo in [b'U', b'L'] {
             for t in [b'N', b'T', b'C'] {
@@ -536,7 +536,7 @@ fn syrk_cases<T: Scalar>() {
 }
 
 fn syr2k_cases<T: Scalar>() {
-    let mut g = Gaussian::new(5);
+    let mut g = Rng::new(5);
     for (n, k) in [(4, 3), (1, 2), (3, 5)] {
         for uplo in [b'U', b'L'] {
             for t in [b'N', b'T'] {
@@ -580,7 +580,7 @@ fn syr2k_cases<T: Scalar>() {
 // LAPACK
 
 /// A random symmetric positive definite n×n matrix, condition number about 10.
-fn spd(n: usize, g: &mut Gaussian) -> Vec<Vec<f64>> {
+fn spd(n: usize, g: &mut Rng) -> Vec<Vec<f64>> {
     let q = orthogonal(n, g);
     let values: Vec<f64> = (0..n)
         .map(|i| 1.0 + 9.0 * i as f64 / n.max(2) as f64)
@@ -589,7 +589,7 @@ fn spd(n: usize, g: &mut Gaussian) -> Vec<Vec<f64>> {
 }
 
 fn potrf_potrs_cases<T: Scalar>() {
-    let mut g = Gaussian::new(6);
+    let mut g = Rng::new(6);
     for n in [1, 2, 5, 9] {
         for uplo in [b'U', b'L'] {
             let up = uplo == b'U';
@@ -694,7 +694,7 @@ fn gesv<T: Scalar>(a: &mut Array<T>, ipiv: &mut [i32], b: &mut Array<T>) -> i32 
 }
 
 fn gesv_cases<T: Scalar>() {
-    let mut g = Gaussian::new(7);
+    let mut g = Rng::new(7);
     for n in [1, 3, 8] {
         for nrhs in [1, 4] {
             let a0 = Array::<T>::random(n, n, 0, 0.0, &mut g).dense();
@@ -771,7 +771,7 @@ fn gesv_cases<T: Scalar>() {
 /// `?syevr` on a symmetric matrix of known spectrum (Householder similarity of a
 /// diagonal), every `range`, both `uplo` and `jobz`.
 fn syevr_cases<T: Scalar>() {
-    let mut g = Gaussian::new(8);
+    let mut g = Rng::new(8);
     for n in [1, 2, 4, 7] {
         let q = orthogonal(n, &mut g);
         let spectrum: Vec<f64> = (0..n)
@@ -957,7 +957,7 @@ fn syevr_cases<T: Scalar>() {
 
 /// The SVD drivers on a matrix of known singular values, every job, both shapes.
 fn svd_cases<T: Scalar>() {
-    let mut g = Gaussian::new(9);
+    let mut g = Rng::new(9);
     for (m, n) in [(6, 4), (4, 6), (5, 5), (1, 3), (3, 1), (9, 2)] {
         let k = m.min(n);
         let sigma: Vec<f64> = (0..k).map(|i| 4.0 / (1.0 + i as f64)).collect();
