@@ -33,8 +33,6 @@
 mod base;
 mod builder;
 #[cfg(feature = "description")]
-mod builtin;
-#[cfg(feature = "description")]
 mod description;
 mod dynamics;
 mod element;
@@ -47,20 +45,14 @@ mod limits;
 mod model;
 mod param;
 mod regressor;
-#[cfg(feature = "description")]
-mod resolve;
 mod spatial;
 mod summary;
-#[cfg(feature = "description")]
-mod urdf;
-#[cfg(feature = "description")]
-mod urdf_export;
 mod workspace;
 
 pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
 #[cfg(feature = "description")]
-pub use builtin::is_urdf_document;
+pub use description::is_urdf_document;
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
     sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,

@@ -26,6 +26,8 @@
 use serde::{Deserialize, Serialize};
 
 #[cfg(feature = "description")]
+use crate::description::resolve::Ctx;
+#[cfg(feature = "description")]
 use crate::error::ModelError;
 #[cfg(feature = "description")]
 use crate::expr::NumOrExpr;
@@ -34,8 +36,6 @@ use crate::input;
 #[cfg(feature = "description")]
 use crate::model::Measured;
 use crate::model::{CartesianLimit, Limit, Model};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 #[cfg(feature = "description")]
 /// Limits as written: joint limits and Cartesian boxes (the tables of a limits file).

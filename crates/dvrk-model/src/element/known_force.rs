@@ -7,13 +7,13 @@
 use serde::Deserialize;
 
 use super::{FrameContext, Law, Note, Sample};
+#[cfg(feature = "description")]
+use crate::description::resolve::Ctx;
 use crate::error::ModelError;
 use crate::expr::Affine;
 #[cfg(feature = "description")]
 use crate::expr::ExprError;
 use crate::param::{Nominal, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A known force (see the module documentation).
 #[derive(Clone, Debug)]

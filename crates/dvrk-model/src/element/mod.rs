@@ -23,13 +23,13 @@ mod stribeck;
 #[cfg(feature = "description")]
 use serde::Deserialize;
 
+#[cfg(feature = "description")]
+use crate::description::resolve::Ctx;
 use crate::error::ModelError;
 use crate::expr::Affine;
 #[cfg(feature = "description")]
 use crate::expr::NumOrExpr;
 use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 pub use friction::Friction;
 pub use known_force::KnownForce;

@@ -2,11 +2,11 @@
 //! (the 2019 convention), its deflection `dl(q)` possibly nonlinear.
 
 use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law, Note, Sample};
+#[cfg(feature = "description")]
+use crate::description::resolve::Ctx;
 use crate::error::ModelError;
 use crate::expr::{Affine, Expr};
 use crate::param::{Nominal, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A spring (see the module documentation).
 #[derive(Clone, Debug)]

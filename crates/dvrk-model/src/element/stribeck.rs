@@ -6,13 +6,13 @@
 //! column.
 
 use super::{near, sign0, BoundOrigin, BoundRow, FrameContext, Note};
+#[cfg(feature = "description")]
+use crate::description::resolve::Ctx;
 use crate::error::ModelError;
 #[cfg(feature = "description")]
 use crate::expr::NumOrExpr;
 #[cfg(feature = "description")]
 use crate::input;
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A Stribeck term on a frame's friction (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -6,6 +6,7 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
+use super::resolve::Ctx;
 use crate::builder::{dh_geometry, Convention, FrameInput, Geometry, ModelBuilder};
 use crate::element::{ElementsDesc, FrameContext};
 use crate::error::ModelError;
@@ -13,7 +14,6 @@ use crate::expr::{Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
 use crate::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, LimitsSpec};
 use crate::model::*;
-use crate::resolve::Ctx;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -1,0 +1,17 @@
+//! What the `description` feature adds to the numeric core: models read from files
+//! rather than built from numbers ([`ModelBuilder`](crate::ModelBuilder)), and models
+//! written back as URDF. Off (`default-features = false`), none of this is compiled, and
+//! with it go TOML, URDF, XML and serde.
+//!
+//! - [`robot`]: the TOML robot description (`robots/README.md`) into a [`Model`](crate::Model);
+//! - [`resolve`]: numbers and expressions of a hand-written file against its constants and
+//!   coordinates, each error named by file, place and field;
+//! - [`builtin`]: the dVRK descriptions shipped with the crate, and loading by name or path;
+//! - [`urdf`]: URDF import, and the two URDF exports (into an existing URDF, or generated).
+
+mod builtin;
+pub(crate) mod resolve;
+mod robot;
+mod urdf;
+
+pub use builtin::is_urdf_document;
