@@ -10,6 +10,7 @@
 //! - [`urdf`]: URDF import, and the two URDF exports (into an existing URDF, or generated).
 
 mod builtin;
+mod elements;
 pub(crate) mod resolve;
 mod robot;
 mod urdf;

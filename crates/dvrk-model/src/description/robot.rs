@@ -6,9 +6,10 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
+use super::elements::ElementsDesc;
 use super::resolve::Ctx;
 use crate::builder::{dh_geometry, Convention, FrameInput, Geometry, ModelBuilder};
-use crate::element::{ElementsDesc, FrameContext};
+use crate::element::FrameContext;
 use crate::error::ModelError;
 use crate::expr::{Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
