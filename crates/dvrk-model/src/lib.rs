@@ -51,8 +51,6 @@ mod workspace;
 
 pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
-#[cfg(feature = "description")]
-pub use description::is_urdf_document;
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
     sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
@@ -61,8 +59,9 @@ pub use element::{
 pub use error::ModelError;
 pub use expr::{Affine, NumOrExpr};
 pub use limits::Limits;
-#[cfg(feature = "description")]
-pub use limits::{CartesianLimitSpec, JointLimitSpec, LimitsSpec};
 pub use model::*;
 pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use workspace::Workspace;
+
+#[cfg(feature = "description")]
+pub use description::{is_urdf_document, CartesianLimitSpec, JointLimitSpec, LimitsSpec};

@@ -11,8 +11,10 @@
 
 mod builtin;
 mod elements;
+mod limits;
 pub(crate) mod resolve;
 mod robot;
 mod urdf;
 
 pub use builtin::is_urdf_document;
+pub use limits::{CartesianLimitSpec, JointLimitSpec, LimitsSpec};
