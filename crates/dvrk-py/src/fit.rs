@@ -4,10 +4,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::export::wpi_params::wpi_params_json;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
-use dvrk_ident::result::wpi_params_json;
 use dvrk_ident::JointLog;
 use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
@@ -599,7 +599,7 @@ impl FitResultPy {
     /// sawIntuitiveResearchKit reads, and ``dvrk_ident`` with the grid and the residuals
     /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 10).
     /// Raises ``InputError`` for a robot that is not the MTM.
-    #[pyo3(signature = (robot = None, points = dvrk_ident::dvrk_gc::DEFAULT_POINTS))]
+    #[pyo3(signature = (robot = None, points = dvrk_ident::export::dvrk_gc::DEFAULT_POINTS))]
     fn dvrk_gc<'py>(
         &self,
         py: Python<'py>,
@@ -609,7 +609,7 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let gc = py
-            .detach(move || dvrk_ident::dvrk_gc::dvrk_gc(&model, &params, points))
+            .detach(move || dvrk_ident::export::dvrk_gc::dvrk_gc(&model, &params, points))
             .map_err(from_ident)?;
         to_python(py, &gc.to_json())
     }

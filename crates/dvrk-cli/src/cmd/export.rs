@@ -5,9 +5,9 @@
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dvrk_ident::dvrk_gc::dvrk_gc;
+use dvrk_ident::export::dvrk_gc::{self, dvrk_gc};
+use dvrk_ident::export::wpi_params::wpi_params_json;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
 
 use super::args::{INPUT, MODEL, OUTPUT};
@@ -44,7 +44,7 @@ pub struct Args {
     #[arg(long, value_name = "gc-MTML.json", help_heading = OUTPUT)]
     pub dvrk_gc: Option<String>,
     /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
-    #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
+    #[arg(long, value_name = "N", default_value_t = dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
     pub gc_points: usize,
 }
 

@@ -218,7 +218,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         if let Some(out) = &args.wpi_json {
             let params = result.params_for(&model)?;
-            let doc = dvrk_ident::result::wpi_params_json(&model, &params);
+            let doc = dvrk_ident::export::wpi_params::wpi_params_json(&model, &params);
             outputs.add(Path::new(out), serde_json::to_string_pretty(&doc)?)?;
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &logs) {
