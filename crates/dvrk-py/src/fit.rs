@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::export::wpi_params::wpi_params_json;
+use dvrk_ident::export::Export;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
@@ -591,7 +591,10 @@ impl FitResultPy {
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
-        to_python(py, &wpi_params_json(&model, &params))
+        let wpi = Export::WpiParams
+            .build(&model, &params)
+            .map_err(from_ident)?;
+        to_python(py, &wpi.document)
     }
 
     /// The dVRK controller's MTM gravity-compensation file (``dvrk-ident export
@@ -609,9 +612,9 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let gc = py
-            .detach(move || dvrk_ident::export::dvrk_gc::dvrk_gc(&model, &params, points))
+            .detach(move || Export::DvrkGc { points }.build(&model, &params))
             .map_err(from_ident)?;
-        to_python(py, &gc.to_json())
+        to_python(py, &gc.document)
     }
 
     fn __repr__(&self) -> String {
