@@ -244,7 +244,7 @@ pub fn result_json(data: &[u8]) {
     let psm = PSM.get_or_init(|| dvrk_model::Model::builtin("psm").unwrap());
     if let Ok(params) = result.params_for(psm) {
         assert!(params.iter().all(|p| p.is_finite()));
-        let doc = dvrk_ident::result::wpi_params_json(psm, &params);
+        let doc = dvrk_ident::export::wpi_params::wpi_params_json(psm, &params);
         assert!(!doc.to_string().contains("null"), "{doc}");
     }
 }

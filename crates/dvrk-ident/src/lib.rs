@@ -4,7 +4,9 @@
 //! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
 //! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
 //! the parameters (least squares or the physically consistent semidefinite program),
-//! and [`fit()`] runs the whole pipeline and builds the [`result`] document.
+//! and [`fit()`] runs the whole pipeline and builds the [`result`] document, which
+//! [`export`] writes as the files other tools read (URDF, the 2019 params.json, the dVRK
+//! controller's gravity compensation).
 //!
 //! Logs larger than memory go through the same steps block by block:
 //! [`log::LogReader`] reads any format in blocks, [`signal::stream`] processes them,
@@ -60,7 +62,7 @@ pub mod result;
 pub use fit::{fit, BoundsSet, FitSettings, Method};
 pub use result::FitResult;
 pub mod cable;
-pub mod dvrk_gc;
+pub mod export;
 
 // The book's Rust chapter (docs/book/src/rust.md): its Rust blocks are this crate's doc
 // tests, so the chapter's examples compile and pass with the API they show.

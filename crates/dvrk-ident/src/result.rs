@@ -1,4 +1,5 @@
-//! The result document of a fit (JSON, schema in docs/book/src/fit.md) and its exports.
+//! The result document of a fit (JSON, schema in docs/book/src/fit.md); what other tools
+//! read of it is written by [`crate::export`].
 //!
 //! Scripts rely on at least: `method`, `parameters` {name: value}, `base_parameters`,
 //! `consistency` [{`link`, `min_eigenvalue`}], `solver` {`status`, `converged`,
@@ -450,32 +451,6 @@ pub fn write_atomic(path: &Path, text: &str) -> Result<(), IdentError> {
     crate::log::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(IdentError::from)
 }
 
-/// The parameters in the 2019 package's `params.json` layout: one entry per frame
-/// (`"1"` … `"N"`, fixed and virtual frames included, zeros where a frame has no such
-/// element), each `{I, r, m, Fc, Fv, Fo, Im, K}` with `I` the inertia about the centre of
-/// mass `[xx, xy, xz, yy, yz, zz]` (kg·m²), `r` the centre of mass (m), `m` the mass (kg),
-/// `Im` the motor inertia and `K` the spring stiffness.
-pub fn wpi_params_json(model: &dvrk_model::Model, params: &[f64]) -> serde_json::Value {
-    let mut out = serde_json::Map::new();
-    for (i, f) in model.frames.iter().enumerate() {
-        let (mut inertia, mut com, mut mass) = ([0.0; 6], [0.0; 3], 0.0);
-        if let Some(p0) = f.inertia {
-            let s = dvrk_model::inertia::standard_from_barycentric(&params[p0..p0 + 10]);
-            inertia = s.inertia_com;
-            com = s.com;
-            mass = s.mass;
-        }
-        let mut entry = serde_json::json!({
-            "I": inertia, "r": com, "m": mass, "Fc": 0.0, "Fv": 0.0, "Fo": 0.0, "Im": 0.0, "K": 0.0
-        });
-        for (field, v) in f.elements.iter().flat_map(|e| e.wpi_fields(params)) {
-            entry[field] = v.into();
-        }
-        out.insert((i + 1).to_string(), entry);
-    }
-    serde_json::Value::Object(out)
-}
-
 /// The delays found, recorded in the result (`delay`) and applied through
 /// `settings.processing.delay_s`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -497,32 +472,6 @@ pub struct DelayEstimate {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn wpi_layout_has_every_frame_and_standard_values() {
-        let model = dvrk_model::Model::builtin("psm").unwrap();
-        let mut pi = vec![0.0; model.n_params()];
-        let p0 = model.frame(1).inertia.unwrap();
-        let bary = dvrk_model::inertia::barycentric_from_standard(
-            2.0,
-            [0.1, -0.2, 0.05],
-            [0.01, 0.001, 0.0, 0.02, 0.0, 0.03],
-        );
-        pi[p0..p0 + 10].copy_from_slice(&bary);
-        let fc = model.param_index("Fc10").unwrap();
-        pi[fc] = 0.25;
-        let ia = model.param_index("Ia11").unwrap();
-        pi[ia] = 0.003;
-        let doc = wpi_params_json(&model, &pi);
-        let obj = doc.as_object().unwrap();
-        assert_eq!(obj.len(), 16);
-        assert!((doc["1"]["m"].as_f64().unwrap() - 2.0).abs() < 1e-15);
-        assert!((doc["1"]["r"][1].as_f64().unwrap() + 0.2).abs() < 1e-15);
-        assert!((doc["1"]["I"][3].as_f64().unwrap() - 0.02).abs() < 1e-15);
-        assert_eq!(doc["10"]["Fc"].as_f64().unwrap(), 0.25);
-        assert_eq!(doc["11"]["Im"].as_f64().unwrap(), 0.003);
-        assert_eq!(doc["3"]["m"].as_f64().unwrap(), 0.0);
-    }
 
     #[test]
     fn input_hash_is_the_sha256_of_the_whole_file() {

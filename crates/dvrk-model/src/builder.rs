@@ -49,7 +49,7 @@ use crate::spatial::Transform;
 /// parent frame (the description's `convention` field).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(
-    feature = "description",
+    feature = "serde",
     derive(serde::Deserialize),
     serde(rename_all = "lowercase")
 )]
@@ -227,9 +227,9 @@ impl ModelBuilder {
         })
     }
 
-    /// Frame names, base first (as [`Model::frame_names`]).
-    #[cfg(feature = "description")]
-    pub(crate) fn frame_names(&self) -> &[String] {
+    /// The names of the frames added so far, base first (as [`Model::frame_names`] of the
+    /// built model), which the limits' Cartesian boxes refer to.
+    pub fn frame_names(&self) -> &[String] {
         &self.names
     }
 

@@ -36,8 +36,6 @@
 mod base;
 mod builder;
 #[cfg(feature = "description")]
-mod builtin;
-#[cfg(feature = "description")]
 mod description;
 mod dynamics;
 mod element;
@@ -50,20 +48,12 @@ mod limits;
 mod model;
 mod param;
 mod regressor;
-#[cfg(feature = "description")]
-mod resolve;
 mod spatial;
 mod summary;
-#[cfg(feature = "description")]
-mod urdf;
-#[cfg(feature = "description")]
-mod urdf_export;
 mod workspace;
 
 pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
-#[cfg(feature = "description")]
-pub use builtin::is_urdf_document;
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
     sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
@@ -72,8 +62,9 @@ pub use element::{
 pub use error::ModelError;
 pub use expr::{Affine, NumOrExpr};
 pub use limits::Limits;
-#[cfg(feature = "description")]
-pub use limits::{CartesianLimitSpec, JointLimitSpec, LimitsSpec};
 pub use model::*;
 pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use workspace::Workspace;
+
+#[cfg(feature = "description")]
+pub use description::{is_urdf_document, CartesianLimitSpec, JointLimitSpec, LimitsSpec};

@@ -4,10 +4,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::export::Export;
 use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data, JointMap};
 use dvrk_ident::progress::Silent;
 use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
-use dvrk_ident::result::wpi_params_json;
 use dvrk_ident::settings::Joints;
 use dvrk_ident::JointLog;
 use dvrk_ident::{FitResult, FitSettings};
@@ -626,7 +626,10 @@ impl FitResultPy {
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
-        to_python(py, &wpi_params_json(&model, &params))
+        let wpi = Export::WpiParams
+            .build(&model, &params)
+            .map_err(from_ident)?;
+        to_python(py, &wpi.document)
     }
 
     /// The dVRK controller's MTM gravity-compensation file (``dvrk-ident export
@@ -634,7 +637,7 @@ impl FitResultPy {
     /// sawIntuitiveResearchKit reads, and ``dvrk_ident`` with the grid and the residuals
     /// (N·m) of the fit against the model. ``points``: grid points per joint (6 to 10).
     /// Raises ``InputError`` for a robot that is not the MTM.
-    #[pyo3(signature = (robot = None, points = dvrk_ident::dvrk_gc::DEFAULT_POINTS))]
+    #[pyo3(signature = (robot = None, points = dvrk_ident::export::dvrk_gc::DEFAULT_POINTS))]
     fn dvrk_gc<'py>(
         &self,
         py: Python<'py>,
@@ -644,9 +647,9 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let gc = py
-            .detach(move || dvrk_ident::dvrk_gc::dvrk_gc(&model, &params, points))
+            .detach(move || Export::DvrkGc { points }.build(&model, &params))
             .map_err(from_ident)?;
-        to_python(py, &gc.to_json())
+        to_python(py, &gc.document)
     }
 
     fn __repr__(&self) -> String {

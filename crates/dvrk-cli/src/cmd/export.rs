@@ -1,13 +1,13 @@
 //! `dvrk-ident export RESULT --urdf OUT.urdf [--template ROBOT.urdf] [--wpi-json OUT.json]
 //! [--dvrk-gc gc-MTML.json]`: an identified model for the tools that read URDF, the 2019
-//! params.json, or the dVRK controller's MTM gravity compensation.
+//! params.json, or the dVRK controller's MTM gravity compensation. Each output flag is one
+//! variant of [`dvrk_ident::export::Export`], which Python's methods map onto too.
 
 use std::path::Path;
 
 use anyhow::{Context, Result};
-use dvrk_ident::dvrk_gc::dvrk_gc;
+use dvrk_ident::export::{dvrk_gc, Export, UrdfTemplate};
 use dvrk_ident::output::Outputs;
-use dvrk_ident::result::wpi_params_json;
 use dvrk_model::Model;
 
 use super::args::{INPUT, MODEL, OUTPUT};
@@ -44,7 +44,7 @@ pub struct Args {
     #[arg(long, value_name = "gc-MTML.json", help_heading = OUTPUT)]
     pub dvrk_gc: Option<String>,
     /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
-    #[arg(long, value_name = "N", default_value_t = dvrk_ident::dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
+    #[arg(long, value_name = "N", default_value_t = dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
     pub gc_points: usize,
 }
 
@@ -70,102 +70,75 @@ pub fn run(args: Args) -> Result<()> {
             ms.join(" ")
         );
     }
+    // The template first: an unreadable one is the first error, before any export is
+    // computed.
+    let template = match &args.urdf {
+        Some(_) => urdf_template(args.template.as_deref(), &loaded.robot)?,
+        None => None,
+    };
+    let mut wanted = Vec::new();
+    if let Some(out) = &args.urdf {
+        let template = template
+            .as_ref()
+            .map(|(file, text)| UrdfTemplate { text, file });
+        wanted.push((out, Export::Urdf { template }));
+    }
+    if let Some(out) = &args.wpi_json {
+        wanted.push((out, Export::WpiParams));
+    }
+    if let Some(out) = &args.dvrk_gc {
+        let points = args.gc_points;
+        wanted.push((out, Export::DvrkGc { points }));
+    }
     // Everything is built before anything is written: an error leaves no output.
-    let urdf = match &args.urdf {
-        Some(out) => Some((
-            out,
-            urdf_text(&loaded, args.template.as_deref(), &args.result)?,
-        )),
-        None => None,
-    };
-    let wpi = match &args.wpi_json {
-        Some(out) => {
-            let doc = wpi_params_json(&loaded.model, &loaded.params);
-            Some((out, serde_json::to_string_pretty(&doc)?))
-        }
-        None => None,
-    };
-    let gc = match &args.dvrk_gc {
-        Some(out) => {
-            let gc = dvrk_gc(&loaded.model, &loaded.params, args.gc_points).with_context(|| {
-                format!(
-                    "{}: cannot export the dVRK gravity compensation",
-                    args.result
-                )
-            })?;
-            Some((
-                out,
-                serde_json::to_string_pretty(&gc.to_json())?,
-                gc.summary(),
-            ))
-        }
-        None => None,
-    };
+    let mut built = Vec::new();
+    for (out, export) in wanted {
+        let exported = export
+            .build(&loaded.model, &loaded.params)
+            .with_context(|| failure(&export, &loaded, &args.result))?;
+        built.push((out, exported));
+    }
     let mut report = String::new();
     let mut outputs = Outputs::new();
-    if let Some((out, (text, how))) = &urdf {
-        outputs.add(Path::new(out), text)?;
-        report += &format!("wrote {out}: {how}\n");
-    }
-    if let Some((out, text)) = &wpi {
-        outputs.add(Path::new(out), text)?;
-        report += &format!("wrote {out}: 2019 params.json layout\n");
-    }
-    if let Some((out, text, summary)) = &gc {
-        outputs.add(Path::new(out), text)?;
-        report += &format!("wrote {out}: dVRK MTM gravity compensation\n{summary}");
+    for (out, e) in &built {
+        outputs.add(Path::new(out), e.document.to_text())?;
+        report += &format!("wrote {out}: {}\n{}", e.what, e.details);
     }
     outputs.commit()?;
     emit_summary(&report, stdout_taken)
 }
 
-/// The URDF text and how it was made: the inertials replaced in `from` (or the robot's own
-/// URDF), else generated from the description.
-fn urdf_text(loaded: &LoadedResult, from: Option<&str>, result: &str) -> Result<(String, String)> {
-    let LoadedResult {
-        result: fit,
-        robot,
-        model,
-        params,
-    } = loaded;
-    let hint = || {
-        if fit.method == "sdp" {
-            String::new()
-        } else {
-            format!(
-                " (this {} fit identifies the base parameters only, its link parameters \
-                 are a representative, not rigid bodies; `dvrk-ident fit --method sdp` \
-                 gives physically consistent ones)",
-                fit.method
-            )
-        }
+/// The template URDF and its text: `--template`, else the robot's own URDF when it was
+/// loaded from one; `None` to generate one.
+fn urdf_template(template: Option<&str>, robot: &str) -> Result<Option<(String, String)>> {
+    let Some(path) = template.map(str::to_string).or_else(|| robot_urdf(robot)) else {
+        return Ok(None);
     };
-    let context = || format!("{result}: cannot export to URDF{}", hint());
-    let source = from.map(str::to_string).or_else(|| robot_urdf(robot));
-    match source {
-        Some(path) => {
-            let text = dvrk_model::input::read_text(Path::new(&path))
-                .with_context(|| format!("{path}: cannot read"))?;
-            let out = model
-                .urdf_with_inertials(params, &text, &path)
-                .with_context(context)?;
-            Ok((
-                out,
+    let text = dvrk_model::input::read_text(Path::new(&path))
+        .with_context(|| format!("{path}: cannot read"))?;
+    Ok(Some((path, text)))
+}
+
+/// What a failed export says: the result file, the format, and for a URDF of a
+/// least-squares fit why its links are no rigid bodies and what would be.
+fn failure(export: &Export, loaded: &LoadedResult, result: &str) -> String {
+    match export {
+        Export::Urdf { .. } => {
+            let method = &loaded.result.method;
+            let hint = if method == "sdp" {
+                String::new()
+            } else {
                 format!(
-                    "{path} with the identified inertials of robot `{}`",
-                    model.name
-                ),
-            ))
+                    " (this {method} fit identifies the base parameters only, its link \
+                     parameters are a representative, not rigid bodies; `dvrk-ident fit \
+                     --method sdp` gives physically consistent ones)"
+                )
+            };
+            format!("{result}: cannot export to URDF{hint}")
         }
-        None => {
-            let out = model.to_urdf(params).with_context(context)?;
-            Ok((
-                out,
-                format!(
-                    "URDF generated from robot `{}` (what URDF cannot hold is listed in its header)",
-                    model.name
-                ),
-            ))
+        Export::WpiParams => format!("{result}: cannot export the 2019 params.json"),
+        Export::DvrkGc { .. } => {
+            format!("{result}: cannot export the dVRK gravity compensation")
         }
     }
 }

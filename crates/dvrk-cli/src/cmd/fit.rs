@@ -221,8 +221,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         if let Some(out) = &args.wpi_json {
             let params = result.params_for(&model)?;
-            let doc = dvrk_ident::result::wpi_params_json(&model, &params);
-            outputs.add(Path::new(out), serde_json::to_string_pretty(&doc)?)?;
+            let wpi = dvrk_ident::export::Export::WpiParams.build(&model, &params)?;
+            outputs.add(Path::new(out), wpi.document.to_text())?;
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &logs) {
             let roles = |role: &str, count: usize| -> Vec<String> {

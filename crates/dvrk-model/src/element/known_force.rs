@@ -3,17 +3,10 @@
 //! before a fit, and predictions (and the static torque) add it back with
 //! `Model::add_known_forces`.
 
-#[cfg(feature = "description")]
-use serde::Deserialize;
-
 use super::{FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
 use crate::expr::Affine;
-#[cfg(feature = "description")]
-use crate::expr::ExprError;
 use crate::param::{Nominal, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A known force (see the module documentation).
 #[derive(Clone, Debug)]
@@ -25,39 +18,12 @@ pub struct KnownForce {
     pub polynomial: Vec<f64>,
 }
 
-/// `known_force = { polynomial = [...], along = "..." }` (`along` defaults to the
-/// frame's joint value).
-#[cfg(feature = "description")]
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct KnownForceDesc {
-    polynomial: Vec<f64>,
-    along: Option<String>,
-}
-
 impl KnownForce {
     /// The polynomial at the current coordinates (N·m or N along `s`).
     #[inline(always)]
     pub fn value(&self, q: &[f64]) -> f64 {
         let s = self.along.eval(q);
         self.polynomial.iter().fold(0.0, |acc, &c| acc * s + c)
-    }
-
-    #[cfg(feature = "description")]
-    pub(super) fn from_desc(
-        ctx: &Ctx,
-        fx: &FrameContext,
-        kf: &KnownForceDesc,
-    ) -> Result<Self, ModelError> {
-        let along = match &kf.along {
-            Some(text) => Some(
-                ctx.expr(fx.place, "known_force.along", text)?
-                    .affine(fx.n_coordinates)
-                    .map_err(|e: ExprError| fx.error("known_force.along", e.to_string()))?,
-            ),
-            None => None,
-        };
-        KnownForce::on(fx, along, &kf.polynomial)
     }
 
     /// A known force along `along` (`None`: the frame's joint value, which must move).

@@ -3,15 +3,18 @@
 //! friction. Each is a value of [`Element`], and each variant's module holds everything
 //! about it: its parameters (names, kinds, unit classes), its regressor columns, its
 //! torque, its share of the mass matrix, its nominal values, its bounds for the
-//! physically consistent fit, its consistency test, its export notes and its description
-//! syntax. The model, the estimator, the result and the exports iterate over
-//! [`Frame::elements`](crate::Frame::elements) and call these, as Pinocchio's algorithms
-//! visit joint models; an enum rather than trait objects keeps the per-sample loops free
-//! of allocation and indirect calls (one `match` per element).
+//! physically consistent fit, its consistency test and its export notes. Its description
+//! syntax is read in `description/elements.rs`, with the rest of what the `description`
+//! feature compiles, into the [`ElementSpec`] a model built from numbers takes, so a
+//! controller without that feature builds the same elements. The model, the estimator,
+//! the result and the exports iterate over [`Frame::elements`](crate::Frame::elements)
+//! and call these, as Pinocchio's algorithms visit joint models; an enum rather than
+//! trait objects keeps the per-sample loops free of allocation and indirect calls (one
+//! `match` per element).
 //!
 //! A new element is one module implementing [`Law`], plus its variant in [`Element`]
-//! (and the `each!` dispatch below), its description field in `ElementsDesc` and its
-//! variant in [`ElementSpec`] (the numeric constructor's).
+//! (and the `each!` dispatch below), its variant in [`ElementSpec`] (the numeric
+//! constructor's) and its description field in `description/elements.rs`.
 
 mod friction;
 mod known_force;
@@ -20,16 +23,9 @@ mod quadratic_viscous;
 mod spring;
 mod stribeck;
 
-#[cfg(feature = "description")]
-use serde::Deserialize;
-
 use crate::error::ModelError;
 use crate::expr::Affine;
-#[cfg(feature = "description")]
-use crate::expr::NumOrExpr;
 use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 pub use friction::Friction;
 pub use known_force::KnownForce;
@@ -37,11 +33,6 @@ pub use motor_inertia::MotorInertia;
 pub use quadratic_viscous::QuadraticViscous;
 pub use spring::{Deflection, Spring};
 pub use stribeck::Stribeck;
-
-#[cfg(feature = "description")]
-use known_force::KnownForceDesc;
-#[cfg(feature = "description")]
-use quadratic_viscous::QuadraticViscousDesc;
 
 /// One sample as an element sees it: the joint value `s = a·q + b` of its frame and the
 /// coordinates' positions, rates and accelerations (rad or m, per s, per s²).
@@ -428,12 +419,12 @@ pub(crate) struct FrameContext<'a> {
 }
 
 impl FrameContext<'_> {
-    fn error(&self, field: &str, message: impl Into<String>) -> ModelError {
+    pub(crate) fn error(&self, field: &str, message: impl Into<String>) -> ModelError {
         ModelError::field(self.file, self.place, field, message)
     }
 
     /// Errors unless the frame moves: friction, springs... act along its joint value.
-    fn need_motion(&self, field: &str) -> Result<(), ModelError> {
+    pub(crate) fn need_motion(&self, field: &str) -> Result<(), ModelError> {
         if self.moving {
             Ok(())
         } else {
@@ -497,61 +488,5 @@ impl ElementSpec {
             }
         }
         Ok(())
-    }
-}
-
-/// A frame's element fields in a description file (`robots/README.md`), read by serde
-/// into the frame's table.
-#[cfg(feature = "description")]
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ElementsDesc {
-    #[serde(default)]
-    friction: bool,
-    /// Stribeck velocity (rad/s or m/s) of a Stribeck term on this frame's friction.
-    stribeck_velocity: Option<NumOrExpr>,
-    #[serde(default)]
-    motor_inertia: bool,
-    spring: Option<String>,
-    known_force: Option<KnownForceDesc>,
-    quadratic_viscous: Option<QuadraticViscousDesc>,
-}
-
-#[cfg(feature = "description")]
-impl ElementsDesc {
-    /// Reads the elements, pushing their parameters onto `params`, in the order of the
-    /// parameter vector: friction, motor inertia, spring, quadratic viscous friction.
-    pub(crate) fn build(
-        &self,
-        ctx: &Ctx,
-        fx: &FrameContext,
-        params: &mut Vec<Param>,
-    ) -> Result<FrameElements, ModelError> {
-        let mut out = FrameElements::default();
-        if self.friction {
-            let friction = Friction::on(fx, params.len())?;
-            out.push(fx, Element::Friction(friction), params);
-        }
-        if let Some(v) = &self.stribeck_velocity {
-            out.stribeck_velocity = Some(Stribeck::velocity_from_desc(ctx, fx, self.friction, v)?);
-        }
-        if self.motor_inertia {
-            let m = MotorInertia::on(fx, params.len())?;
-            out.push(fx, Element::MotorInertia(m), params);
-        }
-        if let Some(text) = &self.spring {
-            let s = Spring::from_desc(ctx, fx, text, params.len())?;
-            out.push(fx, Element::Spring(s), params);
-        }
-        if let Some(kf) = &self.known_force {
-            let k = KnownForce::from_desc(ctx, fx, kf)?;
-            out.push(fx, Element::KnownForce(k), params);
-        }
-        if let Some(d) = &self.quadratic_viscous {
-            if let Some(e) = QuadraticViscous::from_desc(fx, d, params.len())? {
-                out.push(fx, Element::QuadraticViscous(e), params);
-            }
-        }
-        Ok(out)
     }
 }

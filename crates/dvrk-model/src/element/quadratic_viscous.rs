@@ -8,11 +8,8 @@
 //! (N·m·s²/rad² or N·s²/m²).
 //!
 //! This element is the example of issue 13: everything about it is in this module, plus
-//! its variant in [`Element`](super::Element), its field in the description and its
-//! [`ParamKind`].
-
-#[cfg(feature = "description")]
-use serde::Deserialize;
+//! its variant in [`Element`](super::Element), its field in the description
+//! (`description/elements.rs`) and its [`ParamKind`].
 
 use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
@@ -30,39 +27,7 @@ pub struct QuadraticViscous {
     pub max: Option<f64>,
 }
 
-/// `quadratic_viscous = true | { nominal = x, max = y }`.
-#[cfg(feature = "description")]
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
-pub(super) enum QuadraticViscousDesc {
-    On(bool),
-    With(QuadraticViscousTable),
-}
-
-#[cfg(feature = "description")]
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct QuadraticViscousTable {
-    nominal: Option<f64>,
-    max: Option<f64>,
-}
-
 impl QuadraticViscous {
-    /// The element of a description's `quadratic_viscous` field (`None` for `false`).
-    #[cfg(feature = "description")]
-    pub(super) fn from_desc(
-        fx: &FrameContext,
-        desc: &QuadraticViscousDesc,
-        param: usize,
-    ) -> Result<Option<Self>, ModelError> {
-        let (nominal, max) = match desc {
-            QuadraticViscousDesc::On(false) => return Ok(None),
-            QuadraticViscousDesc::On(true) => (None, None),
-            QuadraticViscousDesc::With(t) => (t.nominal, t.max),
-        };
-        QuadraticViscous::on(fx, nominal, max, param).map(Some)
-    }
-
     /// Quadratic viscous friction on a moving frame, its `Fq` at column `param`.
     pub(super) fn on(
         fx: &FrameContext,

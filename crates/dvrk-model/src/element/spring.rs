@@ -5,8 +5,6 @@ use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law,
 use crate::error::ModelError;
 use crate::expr::{Affine, Expr};
 use crate::param::{Nominal, ParamKind};
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A spring (see the module documentation).
 #[derive(Clone, Debug)]
@@ -54,19 +52,6 @@ impl Deflection {
 }
 
 impl Spring {
-    /// `spring = "deflection"` on a moving frame.
-    #[cfg(feature = "description")]
-    pub(super) fn from_desc(
-        ctx: &Ctx,
-        fx: &FrameContext,
-        text: &str,
-        param: usize,
-    ) -> Result<Self, ModelError> {
-        fx.need_motion("spring")?;
-        let deflection = Deflection::new(ctx.expr(fx.place, "spring", text)?, fx.n_coordinates);
-        Spring::on(fx, deflection, param)
-    }
-
     /// A spring on a moving frame, its `K` at column `param`.
     pub(super) fn on(
         fx: &FrameContext,

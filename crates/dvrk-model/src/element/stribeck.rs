@@ -7,12 +7,6 @@
 
 use super::{near, sign0, BoundOrigin, BoundRow, FrameContext, Note};
 use crate::error::ModelError;
-#[cfg(feature = "description")]
-use crate::expr::NumOrExpr;
-#[cfg(feature = "description")]
-use crate::input;
-#[cfg(feature = "description")]
-use crate::resolve::Ctx;
 
 /// A Stribeck term on a frame's friction (see the module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -31,29 +25,8 @@ impl Stribeck {
         sign0(sd) * (-x * x).exp()
     }
 
-    /// The `stribeck_velocity` of a description, positive and finite, on a frame with
-    /// friction.
-    #[cfg(feature = "description")]
-    pub(super) fn velocity_from_desc(
-        ctx: &Ctx,
-        fx: &FrameContext,
-        friction: bool,
-        v: &NumOrExpr,
-    ) -> Result<f64, ModelError> {
-        if !friction {
-            return Err(fx.error("stribeck_velocity", "needs `friction = true` on the frame"));
-        }
-        let v = ctx.number(
-            fx.place,
-            "stribeck_velocity",
-            v,
-            (input::MAX_VALUE, "rad/s or m/s"),
-        )?;
-        Self::check_velocity(fx, v)
-    }
-
     /// A Stribeck velocity (rad/s or m/s): positive and finite.
-    pub(super) fn check_velocity(fx: &FrameContext, v: f64) -> Result<f64, ModelError> {
+    pub(crate) fn check_velocity(fx: &FrameContext, v: f64) -> Result<f64, ModelError> {
         if !(v > 0.0 && v.is_finite()) {
             return Err(fx.error(
                 "stribeck_velocity",

@@ -7,12 +7,12 @@ use crate::model::Model;
 
 /// Built-in robot descriptions: (name, TOML text).
 pub const BUILTIN: [(&str, &str); 3] = [
-    ("psm", include_str!("../robots/psm.toml")),
+    ("psm", include_str!("../../robots/psm.toml")),
     (
         "psm_simplified",
-        include_str!("../robots/psm_simplified.toml"),
+        include_str!("../../robots/psm_simplified.toml"),
     ),
-    ("mtm", include_str!("../robots/mtm.toml")),
+    ("mtm", include_str!("../../robots/mtm.toml")),
 ];
 
 impl Model {

@@ -6,14 +6,15 @@ use std::collections::BTreeMap;
 
 use serde::Deserialize;
 
+use super::elements::ElementsDesc;
+use super::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, LimitsSpec};
+use super::resolve::Ctx;
 use crate::builder::{dh_geometry, Convention, FrameInput, Geometry, ModelBuilder};
-use crate::element::{ElementsDesc, FrameContext};
+use crate::element::FrameContext;
 use crate::error::ModelError;
 use crate::expr::{Expr, ExprError, NumOrExpr, Scope};
 use crate::input;
-use crate::limits::{CartesianLimitSpec, JointLimitSpec, LimitScope, LimitsSpec};
 use crate::model::*;
-use crate::resolve::Ctx;
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
