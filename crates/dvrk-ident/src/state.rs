@@ -207,7 +207,7 @@ impl ObservationState {
         progress.stage("processing", None);
         let data = prepare_logs(&fitted, logs, &settings.processing)?;
         progress.finish();
-        let observed = Observed::of_prepared(&fitted, logs, &data, progress)?;
+        let observed = crate::fit::observe_prepared(&fitted, logs, &data, progress)?;
         ObservationState::new(model, settings, observed)
     }
 
