@@ -1,6 +1,6 @@
 //! Estimators, each a function of the observation's R factor: ordinary/weighted least
 //! squares on the base parameters ([`ols`]) and the physically consistent semidefinite
-//! fit over all parameters ([`sdp`]), and their dispatch by [`Method`] ([`estimate`]),
+//! fit over all parameters ([`sdp`]), and their dispatch by [`Method`] (`estimate`),
 //! shared by every fit driver so that all of them give the same document.
 
 pub mod ols;
@@ -168,7 +168,7 @@ fn inverse_rms(parts: &[Observation], params: &[f64]) -> Vec<f64> {
         .collect()
 }
 
-/// Why an [`estimate`] gave no parameters.
+/// Why an estimate gave no parameters.
 #[derive(Debug)]
 pub enum EstimateError {
     /// The data do not determine the base parameters.

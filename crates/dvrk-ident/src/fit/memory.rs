@@ -48,7 +48,7 @@ pub fn fit_with_progress(
 /// result's `inputs` lists every log (training first) with its hash and its own
 /// metrics; `metrics` holds those of all the training (test) logs together.
 ///
-/// [`stream::fit_stream_logs`] reads the same logs from disk with the same result.
+/// [`super::stream::fit_stream_logs`] reads the same logs from disk with the same result.
 pub fn fit_logs(
     model: &Model,
     train: &[LogData<'_>],

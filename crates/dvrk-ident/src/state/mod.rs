@@ -14,7 +14,7 @@
 //! commutative to rounding), joins the ranges and lists the logs in order.
 //!
 //!
-//! The file format is [`codec`]'s.
+//! The file format is `codec`'s (`state/codec.rs`).
 
 use dvrk_model::Model;
 use sha2::{Digest, Sha256};
