@@ -102,6 +102,7 @@ pub(crate) fn fit_observed(
     passes: MetricPasses<'_>,
     progress: &dyn Progress,
 ) -> Result<FitResult, IdentError> {
+    settings.check_estimator()?;
     let joints = JointMap::new(model, settings.joints)?;
     let base = model.base_parameters()?;
     let n = model.dof();
