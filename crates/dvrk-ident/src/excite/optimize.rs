@@ -257,6 +257,13 @@ fn check_grids(
             "the base frequency must be positive and finite, got {f0} Hz"
         )));
     }
+    if samples_per_harmonic == 0 {
+        return Err(ExciteError::Invalid(
+            "samples per harmonic must be at least 1 (the criterion's grid has samples per \
+             harmonic × order instants)"
+                .into(),
+        ));
+    }
     if !(check_rate_hz.is_finite() && check_rate_hz > 0.0) {
         return Err(ExciteError::Invalid(format!(
             "the check rate must be positive and finite, got {check_rate_hz} Hz"
