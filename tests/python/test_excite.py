@@ -229,3 +229,40 @@ def test_2019_trajectories_evaluated_as_by_the_command_line(run_cli):
     cli = run_cli("excite", "--robot", "psm_simplified", "--evaluate", path, "--pick",
                   "psm_one", "--json")
     assert ev == cli
+
+
+def test_excite_defaults_are_the_librarys(cli):
+    """Python's ``excite``/``evaluate_trajectory`` defaults are written in their
+    signatures; the command line takes its defaults from the library
+    (``ExciteOptions::default()``) and prints them in ``--help``: each keyword's default
+    must be the flag's, so that the library's defaults are changed in one place."""
+    import inspect
+    import re
+    import subprocess
+
+    text = subprocess.run([cli, "excite", "--help"], capture_output=True, text=True,
+                          check=True).stdout
+    flags = dict(re.findall(r"--([a-z0-9-]+) <[^>]+>\s+.*?\[default: ([^\]]+)\]", text))
+    keyword_flag = {"order": "order", "f0": "f0", "criterion": "criterion", "seed": "seed",
+                    "starts": "starts", "refine": "refine", "iterations": "iterations",
+                    "refine_iterations": "refine-iterations",
+                    "samples_per_harmonic": "samples-per-harmonic",
+                    "check_rate": "check-rate"}
+    for fn in (di.excite, di.evaluate_trajectory):
+        params = inspect.signature(fn).parameters
+        checked = 0
+        for keyword, flag in keyword_flag.items():
+            if keyword not in params:
+                continue
+            default = params[keyword].default
+            cli_default = flags[flag]
+            if isinstance(default, str):
+                assert default == cli_default, (fn.__name__, keyword)
+            else:
+                assert float(default) == float(cli_default), (fn.__name__, keyword)
+            checked += 1
+        assert checked >= (10 if fn is di.excite else 3)
+    # The switches: smooth by default, not at rest.
+    assert inspect.signature(di.excite).parameters["smooth"].default is True
+    assert "--no-smooth" in text
+    assert inspect.signature(di.excite).parameters["rest"].default is False
