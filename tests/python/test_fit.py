@@ -6,6 +6,7 @@ import os
 import signal
 import threading
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -436,3 +437,19 @@ def test_delay_auto_matches_cli(psm, cli, run_cli, tmp_path):
     # Bounds that a least-squares fit would not use are refused, as on the command line.
     with pytest.raises(di.InputError, match="method ols has none"):
         di.fit(psm, di.read_log(log, psm), method="ols", bounds="2019")
+
+
+def test_the_same_data_twice_is_warned(psm, tmp_path):
+    """A training log given twice, or a test log equal to a training log, is fitted
+    with a ``UserWarning`` naming both (the command line prints the same on stderr)."""
+    import warnings
+
+    log = di.read_log(Path(__file__).resolve().parents[2] / "examples" / "psm_excitation.mcap")
+    with pytest.warns(UserWarning, match="same data") as seen:
+        di.fit(psm, [log, log], method="ols", test=log)
+    messages = [str(w.message) for w in seen if "same data" in str(w.message)]
+    assert len(messages) == 2
+    assert "√2" in messages[0] and "not a test of generalization" in messages[1]
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        di.fit(psm, log, method="ols")

@@ -150,3 +150,43 @@ fn a_file_that_is_no_log_is_named_and_nothing_is_written() {
     assert_eq!(files(&dir), ["run_0.db3"]);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The same data given twice (a training log repeated, a test log equal to a training
+/// log) is fitted, with a warning naming both on stderr; distinct logs give none.
+#[test]
+fn the_same_data_twice_is_named_in_a_warning() {
+    let dir = support::temp_dir("same-data-twice");
+    let copy = dir.join("copy.mcap");
+    std::fs::copy(support::example("psm_excitation.mcap"), &copy).unwrap();
+    let log = support::example("psm_excitation.mcap");
+    let (ok, _, err) = support::run(&[
+        "fit",
+        &log,
+        &support::s(&copy),
+        "--robot",
+        "psm",
+        "--method",
+        "ols",
+        "--test",
+        &log,
+    ]);
+    assert!(ok, "{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    assert_eq!(warnings.len(), 2, "{err}");
+    assert!(
+        warnings[0].contains("train log")
+            && warnings[0].contains("copy.mcap")
+            && warnings[0].contains("√2"),
+        "{}",
+        warnings[0]
+    );
+    assert!(
+        warnings[1].starts_with("warning: test log")
+            && warnings[1].contains("not a test of generalization"),
+        "{}",
+        warnings[1]
+    );
+    let (ok, _, err) = support::run(&["fit", &log, "--robot", "psm", "--method", "ols"]);
+    assert!(ok && !err.contains("warning:"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -363,6 +363,49 @@ impl FitResult {
         out
     }
 
+    /// Warnings for inputs that are the same data (equal SHA-256 of their files or
+    /// samples): a training log given twice is fitted twice (its standard errors shrink
+    /// by √2 without new information), and a test log equal to a training log measures
+    /// training error, not generalization. What the command line prints on stderr and
+    /// Python warns; the fit itself is not refused, as a lab may mean it.
+    pub fn repeated_inputs(&self) -> Vec<String> {
+        let logs: Vec<&InputInfo> = self
+            .inputs
+            .iter()
+            .filter(|i| i.role == "train" || i.role == "test")
+            .collect();
+        let name = |i: &InputInfo| {
+            let what = if i.path.is_empty() {
+                &i.source
+            } else {
+                &i.path
+            };
+            format!("{} log {what}", i.role)
+        };
+        let mut out = Vec::new();
+        for (k, later) in logs.iter().enumerate() {
+            if let Some(first) = logs[..k].iter().find(|e| e.sha256 == later.sha256) {
+                let why = match (first.role.as_str(), later.role.as_str()) {
+                    ("train", "test") | ("test", "train") => {
+                        "its errors are training errors, not a test of generalization"
+                    }
+                    ("train", _) => {
+                        "fitted twice, which shrinks the standard errors by √2 with no new \
+                         information"
+                    }
+                    _ => "its errors are counted twice",
+                };
+                out.push(format!(
+                    "{} is the same data as {} (SHA-256 {}…): {why}",
+                    name(later),
+                    name(first),
+                    &later.sha256[..later.sha256.len().min(12)]
+                ));
+            }
+        }
+        out
+    }
+
     /// Checks that every number of the result is finite: a result is only ever written,
     /// printed or returned when it is. The error names the first bad field and, for the
     /// usual causes, why.

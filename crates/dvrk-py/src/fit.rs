@@ -216,6 +216,14 @@ pub fn fit(
             .map(|outcome| outcome.result)
             .map_err(fail_ident)
     })?;
+    for warning in inner.repeated_inputs() {
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &std::ffi::CString::new(warning)?,
+            1,
+        )?;
+    }
     let converged = inner.solver.converged;
     let status = inner.solver.status;
     let result = FitResultPy::new(inner, Some(robot.clone().unbind()));

@@ -265,6 +265,9 @@ pub fn run(args: Args) -> Result<()> {
             eprintln!("{note}");
         }
     }
+    for warning in result.repeated_inputs() {
+        eprintln!("warning: {warning}");
+    }
     if args.json {
         emit(&result.to_json())?;
     } else {
