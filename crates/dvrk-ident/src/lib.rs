@@ -19,7 +19,23 @@
 //!
 //! The command line and the Python module only map their flags and keyword arguments
 //! onto [`log::ReadOptions`] and [`request::FitRequest`]: a difference between them is a
-//! bug of one of the mappings.
+//! bug of one of the mappings. A program fits the same way, with the types re-exported
+//! here:
+//!
+//! ```
+//! use dvrk_ident::{FitRequest, LogSource, Method, Overrides, Training};
+//!
+//! let psm = dvrk_model::Model::builtin("psm").unwrap();
+//! let log = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/psm_excitation.mcap");
+//! let request = FitRequest {
+//!     overrides: Overrides { method: Some(Method::Ols), ..Overrides::default() },
+//!     ..FitRequest::new(Training::Logs(vec![LogSource::File(log.into())]))
+//! };
+//! let outcome = request.run(Some(&psm), &dvrk_ident::progress::Silent).unwrap();
+//! let result = outcome.result; // a FitResult: result.to_json() is the CLI's document
+//! assert_eq!(result.robot, "psm");
+//! assert!(result.metrics.train.relative_error.iter().all(|e| *e < 0.05));
+//! ```
 //!
 //! Cargo features (all default): `rust-lapack` (Clarabel's BLAS/LAPACK in Rust over
 //! faer, from the workspace's `lapack-faer` crate, so no system library is linked),
@@ -58,7 +74,10 @@ pub mod fit;
 pub mod result;
 
 pub use fit::{fit, BoundsSet, FitSettings, Method};
+pub use log::{LogFormat, ReadOptions};
+pub use request::{FitOutcome, FitRequest, LogSource, Overrides, Preset, Training};
 pub use result::FitResult;
+pub use settings::Joints;
 pub mod cable;
 pub mod export;
 

@@ -394,6 +394,15 @@ impl Observation {
         self.rows
     }
 
+    /// `‖R·[π; −1]‖²`: the sum over the rows of `(τ − H·π)²` (exact up to rounding),
+    /// the residual of `params` without a pass over the data (the training metrics and
+    /// IRLS's weights).
+    pub fn residual_sum_of_squares(&self, params: &[f64]) -> f64 {
+        let mut x = params.to_vec();
+        x.push(-1.0);
+        (&self.r * nalgebra::DVector::from_column_slice(&x)).norm_squared()
+    }
+
     /// The R factor, (p+1)×(p+1).
     pub fn r(&self) -> &DMatrix<f64> {
         &self.r

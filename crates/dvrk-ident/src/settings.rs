@@ -9,48 +9,8 @@ use serde::{Deserialize, Serialize};
 use crate::error::IdentError;
 pub use crate::estimate::sdp::PriorMetric;
 use crate::estimate::sdp::SdpOptions;
+pub use crate::estimate::Method;
 use crate::signal::Processing;
-
-/// Which estimator to run.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Ordinary least squares on the base parameters.
-    Ols,
-    /// Weighted least squares, joint weights 1 / (torque range on the training set).
-    Wls,
-    /// Iteratively re-weighted least squares: weights 1 / (residual std per joint).
-    Irls,
-    /// Physically consistent semidefinite fit over all parameters (WLS weights).
-    #[default]
-    Sdp,
-}
-
-impl Method {
-    /// The name the command line, Python and results use (see [`crate::names`]).
-    pub fn name(self) -> &'static str {
-        crate::names::Named::name(self)
-    }
-}
-
-impl crate::names::Named for Method {
-    const WHAT: &'static str = "method";
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("ols", Method::Ols),
-        ("wls", Method::Wls),
-        ("irls", Method::Irls),
-        ("sdp", Method::Sdp),
-    ];
-    const CANONICAL: usize = 4;
-}
-
-impl std::str::FromStr for Method {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        <Self as crate::names::Named>::parse_name(s)
-    }
-}
 
 /// Which joints a fit's errors, figures and predictions are reported in: the model's
 /// coordinates (the math's, default) or the arm's measured joints by their names (the

@@ -638,7 +638,10 @@ impl Processed {
 /// A per-column operation: (column samples, joint index) -> new column.
 type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 
-/// Processes a trajectory for identification:
+/// The reference processing of a whole log in memory, which the fit does not call: the
+/// fit processes every log block by block ([`stream::BlockProcessor`], through
+/// [`crate::fit::prepare`]), and the tests hold that processor to this definition (1e-12
+/// relative; the filters' settling tolerance, [`stream::SETTLE_TOLERANCE`]). The steps:
 /// 1. validate it; resample to `resample_hz` if set, else require a uniform clock;
 /// 2. low-pass q (zero phase), and tau with `filter_torque`;
 /// 3. dq: the filtered measured velocity, else the derivative of the filtered q;

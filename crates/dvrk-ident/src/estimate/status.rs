@@ -120,3 +120,25 @@ mod tests {
         }
     }
 }
+
+/// Solver statistics; `converged` false means the numbers are NOT a result.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct SolverInfo {
+    /// `qr` for the least-squares methods, `clarabel` for the semidefinite one.
+    pub name: String,
+    /// The solver's end state (Clarabel's status name; always `Solved` for least
+    /// squares); anything but `Solved`, `AlmostSolved` included, is not a result.
+    pub status: SolverStatus,
+    /// `status` is `Solved`: the flag scripts should check before using the numbers.
+    pub converged: bool,
+    /// Wall time, s: Clarabel's solve time, or for least squares the estimation from the
+    /// observation's R factors (IRLS re-weightings included).
+    pub seconds: f64,
+    /// Solver iterations: Clarabel's, or 1 + the re-weightings for IRLS, 1 for OLS/WLS.
+    pub iterations: u32,
+    /// The semidefinite solver's feasibility and gap tolerance (relative, in its scaled
+    /// problem): the link pseudo-inertias satisfy `J ⪰ eps·I` to it, while friction and
+    /// motor inertia bounds hold exactly (projected after the solve).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+}

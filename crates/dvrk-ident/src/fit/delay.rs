@@ -23,9 +23,12 @@
 use dvrk_model::{Model, Workspace};
 use nalgebra::{DMatrix, DVector};
 
+use super::metrics::TorqueRange;
+use super::observed::no_training_log;
+use super::prepare::{subtract_known_forces, to_model_coordinates, LogData};
 use crate::error::IdentError;
-use crate::fit::{subtract_known_forces, to_model_coordinates, LogData, Method, TorqueRange};
 use crate::result::DelayEstimate;
+use crate::settings::{FitSettings, Method};
 use crate::signal::stream::process_in_blocks;
 use crate::signal::{Processed, Processing};
 
@@ -70,7 +73,7 @@ impl std::str::FromStr for DelayOption {
 
 impl DelayOption {
     /// Sets the delay of `settings` for a model of `dof` coordinates.
-    pub fn apply(&self, settings: &mut crate::fit::FitSettings, dof: usize) -> Result<(), String> {
+    pub fn apply(&self, settings: &mut FitSettings, dof: usize) -> Result<(), String> {
         match self {
             DelayOption::Auto => {
                 settings.delay_search_s = Some(DEFAULT_MAX_DELAY_S);
@@ -106,7 +109,7 @@ impl DelayOption {
 pub fn estimate_delays(
     model: &Model,
     logs: &[LogData<'_>],
-    settings: &crate::fit::FitSettings,
+    settings: &FitSettings,
     max_s: f64,
 ) -> Result<DelayEstimate, IdentError> {
     if !(max_s.is_finite() && max_s > 0.0 && max_s <= crate::signal::advance::MAX_DELAY_S) {
@@ -127,7 +130,7 @@ pub fn estimate_delays(
         rate_hz: rate,
         shifts,
     } = shifted_logs(model, logs, settings, max_s)?;
-    let rate = rate.ok_or_else(crate::fit::no_training_log)?;
+    let rate = rate.ok_or_else(no_training_log)?;
     let columns = shifts + 1;
     let weights = match settings.method {
         Method::Ols | Method::Irls => vec![1.0; n],
@@ -169,7 +172,7 @@ pub fn estimate_delays(
 fn shifted_logs(
     model: &Model,
     logs: &[LogData<'_>],
-    settings: &crate::fit::FitSettings,
+    settings: &FitSettings,
     max_s: f64,
 ) -> Result<Shifted, IdentError> {
     let n = model.dof();

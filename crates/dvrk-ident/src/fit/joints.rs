@@ -7,7 +7,7 @@
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 
-use super::Prepared;
+use super::prepare::Prepared;
 use crate::error::IdentError;
 use crate::settings::Joints;
 

@@ -31,16 +31,18 @@ use std::ops::ControlFlow;
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 
-use super::{
-    fit_observed, no_training_log, subtract_known_forces, to_model_coordinates, FitSettings,
-    MetricPasses, MetricSums, Observed, ObservedLog, TorqueRange,
+use super::metrics::{MetricSums, TorqueRange};
+use super::observed::{
+    fit_observed, no_delay_search, no_training_log, MetricPasses, Observed, ObservedLog,
 };
+use super::prepare::{subtract_known_forces, to_model_coordinates};
 use crate::error::IdentError;
 use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogReader;
 use crate::observation::{PerCoordinate, Samples, CHUNK_SAMPLES};
 use crate::progress::{Progress, Silent};
 use crate::result::{FitResult, InputInfo};
+use crate::settings::FitSettings;
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
 
@@ -280,7 +282,7 @@ pub fn fit_stream_logs(
     if train.is_empty() {
         return Err(no_training_log());
     }
-    crate::fit::no_delay_search(settings, "a streamed fit")?;
+    no_delay_search(settings, "a streamed fit")?;
     // The model options of the settings (Stribeck terms), as the in-memory fit.
     let model_cow = settings.model(model)?;
     let model: &Model = &model_cow;

@@ -1,0 +1,29 @@
+//! The identification pipeline, one stage per module: [`prepare`](prepare()) (log →
+//! model coordinates → known forces removed → processed samples), the observation
+//! ([`Observed`], in `observed`), the estimator ([`crate::estimate`]), the metrics
+//! ([`MetricSums`], [`joint_metrics`]) and the result document. Three drivers run the
+//! stages: logs in memory ([`fit_logs`]), logs read from disk block by block for logs
+//! larger than memory ([`stream::fit_stream_logs`], the same result), and observation
+//! states ([`crate::state`]). [`crate::request::FitRequest`] picks the driver: it is
+//! the one way the command line and Python fit, and the documented way for a program.
+
+pub mod delay;
+mod document;
+mod joints;
+mod memory;
+mod metrics;
+mod observed;
+mod prepare;
+pub mod stream;
+
+pub use document::ELEMENT_TOLERANCE;
+pub use joints::{units, JointMap};
+pub use memory::{fit, fit_logs, fit_with_progress};
+pub use metrics::{joint_metrics, predict, range_weights, MetricSums, TorqueRange};
+pub use observed::{Observed, ObservedLog};
+pub use prepare::{prepare, to_model_coordinates, LogData, Prepared, RANGE_MARGIN};
+
+pub(crate) use memory::{observe_prepared, prepare_logs, test_inputs};
+pub(crate) use observed::{fit_observed, no_delay_search, no_training_log, MetricPasses};
+
+pub use crate::settings::{BoundsSet, FitSettings, Method};

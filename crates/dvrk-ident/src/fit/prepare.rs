@@ -1,0 +1,250 @@
+//! The first stage of a fit: a log in the robot's measured joints mapped to model
+//! coordinates (its joint ranges checked), the known forces subtracted and the samples
+//! processed into [`Prepared`], what the observation and the metrics read.
+
+use dvrk_model::Model;
+use nalgebra::DMatrix;
+
+use crate::error::IdentError;
+use crate::joint_log::{Coordinates, JointLog};
+use crate::observation::Samples;
+use crate::signal::stream::process_in_blocks;
+use crate::signal::Processing;
+
+/// Processed samples in model coordinates, known forces subtracted from the torques.
+#[derive(Clone, Debug)]
+pub struct Prepared {
+    /// The log the samples came from (a file, or a name given in Python), for messages.
+    pub source: String,
+    /// Time of each processed sample, s (after trimming and decimation).
+    pub time: Vec<f64>,
+    /// Positions in model coordinates, samples × coordinates, rad or m (filtered).
+    pub q: DMatrix<f64>,
+    /// Velocities, rad/s or m/s (measured or differentiated, filtered).
+    pub dq: DMatrix<f64>,
+    /// Accelerations, rad/s² or m/s² (differentiated from the raw velocity, filtered).
+    pub ddq: DMatrix<f64>,
+    /// N·m or N, known forces subtracted
+    pub tau: DMatrix<f64>,
+}
+
+impl Prepared {
+    /// The samples as the regressor and the metrics read them.
+    pub fn samples(&self) -> Samples<'_> {
+        Samples {
+            q: &self.q,
+            dq: &self.dq,
+            ddq: &self.ddq,
+            tau: &self.tau,
+        }
+    }
+
+    /// Number of processed samples.
+    pub fn len(&self) -> usize {
+        self.q.nrows()
+    }
+
+    /// Whether no sample is left.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// The trajectory in model coordinates: columns matched to the robot's measured joint
+/// names (any order, extra joints ignored), then `q = M⁻¹ q_measured`,
+/// `q̇ = M⁻¹ q̇_measured`, `τ = Mᵀ τ_measured`.
+pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, IdentError> {
+    let n = model.dof();
+    let mismatch = |message: String| IdentError::Mismatch {
+        source_name: traj.source.clone(),
+        message,
+    };
+    if traj.coordinates == Coordinates::Model {
+        // A headered CSV tells model coordinates by their names `q1..qn`; a robot whose
+        // measured joints carry those very names through a non-identity coupling would
+        // make such a file ambiguous.
+        if model.measured.joints == traj.joint_names
+            && model.measured.coupling != DMatrix::identity(n, n)
+        {
+            return Err(mismatch(format!(
+                "the log's joints `{}` are both robot {}'s model coordinates and its measured \
+                 joints, which differ by a coupling: rename the measured joints",
+                traj.joint_names.join(", "),
+                model.name
+            )));
+        }
+        if traj.dof() != n {
+            return Err(mismatch(format!(
+                "the log has {} joints in model coordinates but robot {} has {n} coordinates",
+                traj.dof(),
+                model.name
+            )));
+        }
+        let coupling = &model.measured.coupling;
+        check_ranges(model, traj, |i, k| {
+            (0..n).fold(0.0, |acc, j| acc + coupling[(k, j)] * traj.q[(i, j)])
+        })?;
+        return Ok(traj.clone());
+    }
+    let mut cols = Vec::with_capacity(n);
+    for name in &model.measured.joints {
+        match traj.joint_names.iter().position(|j| j == name) {
+            Some(c) => cols.push(c),
+            None => {
+                return Err(mismatch(format!(
+                    "joint `{name}` of robot {} is missing (the log has: {})",
+                    model.name,
+                    traj.joint_names.join(", ")
+                )))
+            }
+        }
+    }
+    check_ranges(model, traj, |i, k| traj.q[(i, cols[k])])?;
+    let minv = model
+        .measured_to_model_matrix()
+        .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
+    let mt = model.measured.coupling.transpose();
+    let rows = traj.len();
+    // `x · Mᵀ` of the picked columns, summed in a fixed order per sample, so that a
+    // sample maps to the same bits whatever block of a log it comes in.
+    let map = |x: &DMatrix<f64>, m: &DMatrix<f64>| {
+        DMatrix::from_fn(rows, n, |i, j| {
+            (0..n).fold(0.0, |acc, k| acc + x[(i, cols[k])] * m[(j, k)])
+        })
+    };
+    let q = map(&traj.q, &minv);
+    let dq = traj.dq.as_ref().map(|d| map(d, &minv));
+    let tau = map(&traj.tau, &mt);
+    Ok(JointLog {
+        time: traj.time.clone(),
+        q,
+        dq,
+        tau,
+        joint_names: model.coordinates.clone(),
+        coordinates: Coordinates::Model,
+        source: traj.source.clone(),
+    })
+}
+
+/// How far beyond a joint's physical range a log may go, as a fraction of the range's
+/// width. The check is for the gross mistakes (another arm's log, degrees for radians),
+/// not for joint limits: simulated and excitation logs go beyond the physical stops
+/// (the 2019 PSM excitation limits let the jaw open to 3 rad, and the bundled example
+/// reaches 1.79 rad against the instruments' 1.40), while another arm's log leaves
+/// the range by far more than its width (the MTM's 2019 log read as a PSM's:
+/// insertion −0.15 to 0.59 m against 0 to 0.24 m, wrist yaw to 5.2 rad, jaw ±10 rad).
+pub const RANGE_MARGIN: f64 = 1.0;
+
+/// Refuses a log whose measured joint `k` (positions `q_measured(i, k)` of sample `i`)
+/// leaves the robot's physical range ([`dvrk_model::Measured::ranges`]) by more than
+/// [`RANGE_MARGIN`], naming the joint, the range seen and the robot's.
+fn check_ranges(
+    model: &Model,
+    traj: &JointLog,
+    q_measured: impl Fn(usize, usize) -> f64,
+) -> Result<(), IdentError> {
+    for (k, range) in model.measured.ranges.iter().enumerate() {
+        let Some([lo, hi]) = *range else { continue };
+        let margin = RANGE_MARGIN * (hi - lo);
+        let (seen_lo, seen_hi) = (0..traj.len())
+            .map(|i| q_measured(i, k))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(x), b.max(x))
+            });
+        if seen_lo < lo - margin || seen_hi > hi + margin {
+            let unit = if model.measured.is_length(k, &model.coordinate_is_length) {
+                "m"
+            } else {
+                "rad"
+            };
+            return Err(IdentError::Mismatch {
+                source_name: traj.source.clone(),
+                message: format!(
+                    "joint {} runs from {seen_lo:.3} to {seen_hi:.3} {unit}, outside robot {}'s \
+                     range {} to {} {unit}: is this a log of another arm, or in \
+                     other units?",
+                    model.measured.joints[k],
+                    model.name,
+                    dvrk_model::input::show(lo),
+                    dvrk_model::input::show(hi)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Subtracts the known forces (e.g. the MTM cable) from the torques of `t` (model
+/// coordinates), evaluated on the raw positions as in 2019.
+pub(crate) fn subtract_known_forces(model: &Model, t: &mut JointLog) {
+    if !model.has_known_forces() {
+        return;
+    }
+    let n = model.dof();
+    let mut q = vec![0.0; n];
+    let mut known = vec![0.0; n];
+    for k in 0..t.len() {
+        for (j, qj) in q.iter_mut().enumerate() {
+            *qj = t.q[(k, j)];
+        }
+        known.fill(0.0);
+        model.add_known_forces(&q, &mut known);
+        for (j, kj) in known.iter().enumerate() {
+            t.tau[(k, j)] -= kj;
+        }
+    }
+}
+
+/// Model coordinates, known forces subtracted (on the raw positions, as in 2019), then
+/// processed by the block processor ([`process_in_blocks`]: equal to
+/// [`crate::signal::process`] to 1e-12 relative, and to the last bit to what
+/// [`super::stream::fit_stream`] sees of the same log read from its file).
+pub fn prepare(
+    model: &Model,
+    traj: &JointLog,
+    processing: &Processing,
+) -> Result<Prepared, IdentError> {
+    let mut t = to_model_coordinates(model, traj)?;
+    subtract_known_forces(model, &mut t);
+    let p = process_in_blocks(std::slice::from_ref(&t), processing).map_err(|error| {
+        IdentError::Signal {
+            source_name: t.source.clone(),
+            error,
+        }
+    })?;
+    if p.is_empty() {
+        return Err(IdentError::Mismatch {
+            source_name: t.source.clone(),
+            message: "no sample left after processing (log too short for the trimming?)".into(),
+        });
+    }
+    Ok(Prepared {
+        source: t.source,
+        time: p.time,
+        q: p.q,
+        dq: p.dq,
+        ddq: p.ddq,
+        tau: p.tau,
+    })
+}
+
+/// A log given to a fit: its samples and, when they were read from one, the file or
+/// rosbag2 folder (hashed into the result's provenance; without one, the samples are).
+#[derive(Clone, Copy, Debug)]
+pub struct LogData<'a> {
+    /// The samples, in the log's joints (mapped to model coordinates by the fit).
+    pub samples: &'a JointLog,
+    /// The file or rosbag2 folder they were read from, hashed into `inputs`; `None` hashes
+    /// the samples.
+    pub file: Option<&'a std::path::Path>,
+}
+
+impl<'a> LogData<'a> {
+    /// Samples without a file.
+    pub fn new(samples: &'a JointLog) -> Self {
+        LogData {
+            samples,
+            file: None,
+        }
+    }
+}
