@@ -1,7 +1,7 @@
 //! A joint-space log in memory: time stamps, positions, optional velocities and efforts.
 //!
 //! Every reader in [`crate::log`] produces a [`JointLog`] and every processing step in
-//! [`crate::signal`] consumes one, so this is the one place that states what a well-formed
+//! dvrk-ident's `signal` consumes one, so this is the one place that states what a well-formed
 //! log is (see [`JointLog::validate`]). Matrices have one row per sample and one column
 //! per joint, the layout of the CSV files they come from.
 
