@@ -8,7 +8,7 @@ pose and a status string, as a dVRK console publishes beside the joints), plus a
 setpoint JointState without efforts, which the automatic topic choice must pass over.
 
 Used by tests/python/test_bags.py and by the generator of the Rust fixtures,
-crates/dvrk-ident/tests/fixtures/bags/gen_bags.py.
+crates/dvrk-logs/tests/fixtures/bags/gen_bags.py.
 """
 
 from __future__ import annotations

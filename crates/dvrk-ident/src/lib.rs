@@ -52,12 +52,10 @@ pub mod compare;
 pub mod error;
 pub mod estimate;
 pub mod excite;
-pub mod joint_log;
-pub mod log;
-mod median;
-pub mod names;
+// The logs live in their own crate (crates/dvrk-logs), under the same paths here.
+use dvrk_logs::median;
+pub use dvrk_logs::{joint_log, log, names, output};
 pub mod observation;
-pub mod output;
 pub mod progress;
 #[cfg(feature = "report")]
 pub mod report;

@@ -519,6 +519,15 @@ impl Default for Processing {
     }
 }
 
+/// Logs read for this processing resample to its rate ([`ReadOptions::for_processing`]).
+///
+/// [`ReadOptions::for_processing`]: crate::log::ReadOptions::for_processing
+impl crate::log::Resampling for Processing {
+    fn resample_hz(&self) -> Option<f64> {
+        self.resample_hz
+    }
+}
+
 impl Processing {
     /// Sets the motion's low-pass cut-off as `--cutoff` and Python's `cutoff=` do:
     /// `None` removes the filter; a cut-off keeps the filter's order, form and

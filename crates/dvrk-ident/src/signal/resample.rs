@@ -1,134 +1,22 @@
-//! Linear resampling onto a uniform clock of a signal that arrives in rows: the one
-//! implementation behind [`crate::signal::resample_linear`] (which feeds it a whole
-//! matrix), the readers' `resample_hz` and the processing's.
+//! Linear resampling onto a uniform clock: the one implementation is dvrk-logs'
+//! [`dvrk_logs::resample`] (the readers' `resample_hz` uses it too); its errors are
+//! this module's [`SignalError`]s, with the same messages.
 
-use super::butter::check_rate;
+use dvrk_logs::resample::ResampleError;
+pub(crate) use dvrk_logs::resample::Resampler;
+
 use super::SignalError;
 
-/// Resampler of every column onto `t0 + k / rate` (`t0`: the first time) up to the last
-/// time. A grid time is interpolated as soon as a sample at or after it arrives,
-/// between that sample and the one before; grid times past the last sample (within
-/// the rounding allowance of the count) take the last sample.
-#[derive(Clone, Debug)]
-pub(crate) struct Resampler {
-    rate_hz: f64,
-    step: f64,
-    origin: f64,
-    /// The two latest samples: `[previous, latest]` times and rows.
-    times: [f64; 2],
-    rows: [Vec<f64>; 2],
-    count: usize,
-    /// Grid points emitted.
-    emitted: usize,
-    /// A non-finite first time, reported once a second sample shows the log is long
-    /// enough to resample (a one-sample log is "too few samples" first).
-    bad_first: bool,
-}
-
-/// Most resampled samples per logged sample, beyond a first [`RESAMPLE_ALLOWANCE`]:
-/// linear interpolation adds no information, so a rate far above the log's own only
-/// multiplies memory and time (`--resample 1e9` on a 200 Hz log asked for 5 million
-/// samples per logged one and aborted at 13.8 GB).
-pub const MAX_UPSAMPLING: usize = 4;
-
-/// Resampled samples always allowed (gaps at the start of a log), whatever the ratio.
-pub const RESAMPLE_ALLOWANCE: usize = 1 << 20;
-
-fn bad_time() -> SignalError {
-    SignalError::InvalidSetting {
-        name: "time",
-        reason: "time stamps must be finite and strictly increasing".into(),
-    }
-}
-
-impl Resampler {
-    pub(crate) fn new(columns: usize, rate_hz: f64) -> Result<Resampler, SignalError> {
-        check_rate(rate_hz)?;
-        Ok(Resampler {
-            rate_hz,
-            step: 1.0 / rate_hz,
-            origin: 0.0,
-            times: [0.0; 2],
-            rows: [vec![0.0; columns], vec![0.0; columns]],
-            count: 0,
-            emitted: 0,
-            bad_first: false,
-        })
-    }
-
-    /// Number of grid points of a log from `first` to `last` (s).
-    pub(crate) fn grid_len(&self, first: f64, last: f64) -> usize {
-        // Include the end point despite rounding in k * step.
-        ((last - first) / self.step + 1e-9).floor() as usize + 1
-    }
-
-    /// Appends grid point `emitted` (time, then the row) interpolated between the two
-    /// latest samples, unless that would make more than [`MAX_UPSAMPLING`] grid points
-    /// per logged sample (beyond [`RESAMPLE_ALLOWANCE`]).
-    fn emit(&mut self, times: &mut Vec<f64>, out: &mut Vec<f64>) -> Result<(), SignalError> {
-        if self.emitted >= MAX_UPSAMPLING * self.count + RESAMPLE_ALLOWANCE {
-            return Err(SignalError::InvalidSetting {
-                name: "resample",
-                reason: format!(
-                    "{} Hz makes more than {MAX_UPSAMPLING} samples per logged sample \
-                     ({} grid points after {} logged samples): interpolation adds no \
-                     information, resample near the log's own rate",
-                    self.rate_hz, self.emitted, self.count
-                ),
-            });
-        }
-        let t = self.origin + self.emitted as f64 * self.step;
-        let [ta, tb] = self.times;
-        let w = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-        let [a, b] = &self.rows;
-        out.extend(a.iter().zip(b).map(|(a, b)| (1.0 - w) * a + w * b));
-        times.push(t);
-        self.emitted += 1;
-        Ok(())
-    }
-
-    /// Adds the sample at `time` (s); appends the grid points that became known.
-    pub(crate) fn push(
-        &mut self,
-        time: f64,
-        row: &[f64],
-        times: &mut Vec<f64>,
-        out: &mut Vec<f64>,
-    ) -> Result<(), SignalError> {
-        if self.count == 0 {
-            self.bad_first = !time.is_finite();
-            self.origin = time;
-        } else if self.bad_first || !(time.is_finite() && time > self.times[1]) {
-            return Err(bad_time());
-        }
-        self.times = [self.times[1], time];
-        self.rows.swap(0, 1);
-        self.rows[1].copy_from_slice(row);
-        self.count += 1;
-        if self.count >= 2 {
-            while self.origin + self.emitted as f64 * self.step <= time {
-                self.emit(times, out)?;
+impl From<ResampleError> for SignalError {
+    fn from(e: ResampleError) -> SignalError {
+        match e {
+            ResampleError::InvalidRate { rate_hz } => SignalError::InvalidRate { rate_hz },
+            ResampleError::TooFewSamples { len, needed } => {
+                SignalError::TooFewSamples { len, needed }
+            }
+            ResampleError::InvalidSetting { name, reason } => {
+                SignalError::InvalidSetting { name, reason }
             }
         }
-        Ok(())
-    }
-
-    /// The end: appends the grid points left. Needs at least 2 samples.
-    pub(crate) fn finish(
-        &mut self,
-        times: &mut Vec<f64>,
-        out: &mut Vec<f64>,
-    ) -> Result<(), SignalError> {
-        if self.count < 2 {
-            return Err(SignalError::TooFewSamples {
-                len: self.count,
-                needed: 2,
-            });
-        }
-        let total = self.grid_len(self.origin, self.times[1]);
-        while self.emitted < total {
-            self.emit(times, out)?;
-        }
-        Ok(())
     }
 }

@@ -10,13 +10,25 @@ use dvrk_model::Model;
 #[allow(unused_imports)] // McapOptions: the docs' link without `recordings`
 use super::mcap::{McapOptions, TimeSource};
 use super::{LogError, LogFormat};
-use crate::signal::Processing;
+
+/// A processing of logs that may resample them ([`ReadOptions::for_processing`]):
+/// dvrk-ident's `signal::Processing`, or the rate itself.
+pub trait Resampling {
+    /// The uniform rate the logs are resampled to, Hz; `None`: not resampled.
+    fn resample_hz(&self) -> Option<f64>;
+}
+
+impl Resampling for Option<f64> {
+    fn resample_hz(&self) -> Option<f64> {
+        *self
+    }
+}
 
 /// How to read a log, whatever its format.
 ///
 /// ```rust
-/// use dvrk_ident::log::{write_wpi, LogFormat, ReadOptions};
-/// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
+/// use dvrk_logs::log::{write_wpi, LogFormat, ReadOptions};
+/// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 ///
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-options-{}.csv", std::process::id()));
@@ -90,17 +102,17 @@ impl ReadOptions {
     /// `fit(resample=)` does.
     ///
     /// ```rust
-    /// use dvrk_ident::log::ReadOptions;
-    /// use dvrk_ident::signal::Processing;
+    /// use dvrk_logs::log::ReadOptions;
     ///
-    /// let processing = Processing { resample_hz: Some(250.0), ..Processing::default() };
+    /// // dvrk-ident's `signal::Processing` or just the rate it resamples to
+    /// let processing = Some(250.0);
     /// assert_eq!(ReadOptions::default().for_processing(&processing).resample_hz, Some(250.0));
     /// let read_at_200 = ReadOptions { resample_hz: Some(200.0), ..ReadOptions::default() };
     /// assert_eq!(read_at_200.for_processing(&processing).resample_hz, Some(200.0));
     /// ```
-    pub fn for_processing(&self, processing: &Processing) -> ReadOptions {
+    pub fn for_processing(&self, processing: &impl Resampling) -> ReadOptions {
         ReadOptions {
-            resample_hz: self.resample_hz.or(processing.resample_hz),
+            resample_hz: self.resample_hz.or(processing.resample_hz()),
             ..self.clone()
         }
     }

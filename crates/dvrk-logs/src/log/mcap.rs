@@ -59,8 +59,8 @@
 //! repeated stamp is always an error: the log order cannot be trusted). A step longer
 //! than 1.5 median steps is a gap, a step off the median by more than
 //! [`JITTER_TOLERANCE`] (the default `uniform_tolerance` of
-//! [`crate::signal::Processing`]) is jitter. With [`McapOptions::resample_hz`] the log is
-//! resampled onto `k / rate` by linear interpolation ([`crate::signal::resample_linear`];
+//! dvrk-ident's `signal::Processing`) is jitter. With [`McapOptions::resample_hz`] the log is
+//! resampled onto `k / rate` by linear interpolation ([`crate::resample`];
 //! gaps are bridged by straight lines, see [`TimingReport::largest_step_s`]); without it
 //! a non-uniform log is refused with the first bad sample and a `--resample HZ` hint.
 //!

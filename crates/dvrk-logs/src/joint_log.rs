@@ -1,7 +1,7 @@
 //! A joint-space log in memory: time stamps, positions, optional velocities and efforts.
 //!
 //! Every reader in [`crate::log`] produces a [`JointLog`] and every processing step in
-//! [`crate::signal`] consumes one, so this is the one place that states what a well-formed
+//! dvrk-ident's `signal` consumes one, so this is the one place that states what a well-formed
 //! log is (see [`JointLog::validate`]). Matrices have one row per sample and one column
 //! per joint, the layout of the CSV files they come from.
 
@@ -223,7 +223,7 @@ pub struct JointLog {
 /// time stamps (e.g. the 2019 CSV files, 200 Hz).
 ///
 /// ```rust
-/// let t = dvrk_ident::joint_log::uniform_time(3, 200.0);
+/// let t = dvrk_logs::joint_log::uniform_time(3, 200.0);
 /// assert_eq!(t, vec![0.0, 0.005, 0.01]);
 /// ```
 pub fn uniform_time(n: usize, rate_hz: f64) -> Vec<f64> {
@@ -250,7 +250,7 @@ impl JointLog {
     /// kept: a part of a log (Python's `log[a:b:step]`, the tests' training windows).
     ///
     /// ```rust
-    /// use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
+    /// use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
     /// use nalgebra::DMatrix;
     ///
     /// let log = JointLog {
@@ -281,7 +281,7 @@ impl JointLog {
 
     /// Sample `k` as one row `[q, dq, tau]` (`3·dof` values; dq zeros when not
     /// measured) into `row`: the layout the block resampler and processor take.
-    pub(crate) fn stacked_row(&self, k: usize, row: &mut [f64]) {
+    pub fn stacked_row(&self, k: usize, row: &mut [f64]) {
         let n = self.dof();
         for j in 0..n {
             row[j] = self.q[(k, j)];
@@ -295,7 +295,7 @@ impl JointLog {
     /// non-positive median step.
     ///
     /// ```rust
-    /// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
+    /// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
     /// use nalgebra::DMatrix;
     /// let n = 5;
     /// let traj = JointLog {
@@ -431,7 +431,7 @@ impl JointLog {
     /// Checks that every time step is within `relative_tolerance` of the median step and
     /// returns the sampling rate, Hz (inverse median step). Zero-phase filtering and
     /// central differences assume a uniform clock; a log with gaps must be resampled
-    /// ([`crate::signal::resample_linear`]) or rejected, and this says where the first
+    /// (dvrk-ident's `signal::resample_linear`) or rejected, and this says where the first
     /// gap is. Call [`JointLog::validate`] first.
     pub fn check_uniform(&self, relative_tolerance: f64) -> Result<f64, JointLogError> {
         let median = median_step(&self.time).ok_or_else(|| JointLogError::TooFewSamples {

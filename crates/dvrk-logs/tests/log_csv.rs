@@ -1,7 +1,7 @@
 //! CSV log readers and writers: round trips, format detection and every error case.
 
-use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog, Signal};
-use dvrk_ident::log::{
+use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog, Signal};
+use dvrk_logs::log::{
     detect_format, read, read_headered, read_wpi, write, write_headered, write_wpi, LogError,
     LogFormat,
 };

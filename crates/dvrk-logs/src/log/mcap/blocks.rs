@@ -19,7 +19,7 @@ use super::topic::{decode, is_joint_state, JointRow, TopicState};
 use super::McapProblem;
 use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogError;
-use crate::signal::stream::Resampler;
+use crate::resample::Resampler;
 
 /// Clock samples waiting for the other topics, and the other topics' recent samples.
 struct Merge {
@@ -126,7 +126,7 @@ impl Merge {
     }
 }
 
-fn resample_error(path: &Path, plan: &Plan, e: crate::signal::SignalError) -> LogError {
+fn resample_error(path: &Path, plan: &Plan, e: crate::resample::ResampleError) -> LogError {
     mcap_error(
         path,
         Some(&plan.topics[0]),

@@ -42,7 +42,7 @@ pub use self::blocks::{LogBlocks, LogReader};
 pub use self::csv::{
     read_headered, read_wpi, write_headered, write_wpi, HeaderedBlocks, WpiBlocks,
 };
-pub use self::options::ReadOptions;
+pub use self::options::{ReadOptions, Resampling};
 
 use crate::joint_log::{Coordinates, JointLog, JointLogError, Signal};
 use serde::{Deserialize, Serialize};
@@ -361,7 +361,7 @@ pub enum LogError {
         rate_hz: f64,
         /// Why.
         #[source]
-        source: crate::signal::SignalError,
+        source: crate::resample::ResampleError,
     },
     /// Samples the reader parsed but refuses: a value beyond its signal's range
     /// ([`crate::joint_log::Signal::max_magnitude`]) or time not increasing (the
@@ -395,8 +395,8 @@ pub enum LogError {
 /// columns / 3 ([`ReadOptions::dof`] checks it).
 ///
 /// ```rust
-/// use dvrk_ident::log::{read, write_wpi};
-/// use dvrk_ident::joint_log::{Coordinates, JointLog, uniform_time};
+/// use dvrk_logs::log::{read, write_wpi};
+/// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-read-{}.csv", std::process::id()));
 /// let traj = JointLog {

@@ -5,8 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use dvrk_ident::log::mcap::{list_topics, read_mcap_log, McapOptions, McapProblem, McapReader};
-use dvrk_ident::log::{detect_format, LogError, LogFormat, ReadOptions};
+use dvrk_logs::log::mcap::{list_topics, read_mcap_log, McapOptions, McapProblem, McapReader};
+use dvrk_logs::log::{detect_format, LogError, LogFormat, ReadOptions};
 use dvrk_model::Model;
 use dvrk_test_support::fixtures::TempDir;
 

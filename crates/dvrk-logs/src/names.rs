@@ -3,13 +3,16 @@
 //! through [`Named`], so an option spelled one way in one front end is spelled the
 //! same in the other.
 //!
+//! The trait lives with the logs, the lowest crate that names options (log formats, time
+//! sources, coordinates); dvrk-ident implements it for its own (estimators, criteria...)
+//! and re-exports this module as `dvrk_ident::names`.
+//!
 //! ```
-//! use dvrk_ident::fit::Method;
-//! use dvrk_ident::names::Named;
-//! assert_eq!("SDP".parse::<Method>().unwrap(), Method::Sdp);
-//! assert_eq!(Method::Irls.name(), "irls");
-//! let e = "lasso".parse::<Method>().unwrap_err();
-//! assert_eq!(e, "unknown method \"lasso\": expected ols, wls, irls or sdp");
+//! use dvrk_logs::log::LogFormat;
+//! use dvrk_logs::names::Named;
+//! assert_eq!("CSV".parse::<LogFormat>().unwrap(), LogFormat::Csv);
+//! assert_eq!(LogFormat::Wpi.name(), "wpi");
+//! assert!("parquet".parse::<LogFormat>().unwrap_err().starts_with("unknown log format \"parquet\""));
 //! ```
 
 /// An option enum with one canonical name per value, and accepted aliases.

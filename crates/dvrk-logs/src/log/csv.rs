@@ -232,7 +232,7 @@ impl WpiBlocks {
 /// named `q1..qn`, like the model coordinates.
 ///
 /// ```rust
-/// use dvrk_ident::log::read_wpi;
+/// use dvrk_logs::log::read_wpi;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-wpi-{}.csv", std::process::id()));
 /// std::fs::write(&path, "0.1,0.2,1.0,2.0,-3.0,4.5\n0.2,0.3,1.0,2.0,-3.0,4.5\n").unwrap();
 /// let traj = read_wpi(&path, 200.0, None).unwrap();
@@ -549,7 +549,7 @@ impl HeaderedBlocks {
 /// earlier versions wrote) decides instead. Lines starting with `#` are comments.
 ///
 /// ```rust
-/// use dvrk_ident::log::read_headered;
+/// use dvrk_logs::log::read_headered;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-csv-{}.csv", std::process::id()));
 /// std::fs::write(&path, "effort.yaw,time,position.yaw\n0.5,0.0,1.0\n0.6,0.01,1.1\n").unwrap();
 /// let traj = read_headered(&path).unwrap();

@@ -17,14 +17,14 @@
 use std::collections::BTreeMap;
 
 /// Distinct values counted exactly in the first pass before falling back to histograms.
-pub(crate) const DISTINCT_LIMIT: usize = 1 << 14;
+pub const DISTINCT_LIMIT: usize = 1 << 14;
 
 /// Buckets of each refinement histogram.
-pub(crate) const BUCKETS: u64 = 1 << 16;
+pub const BUCKETS: u64 = 1 << 16;
 
 /// What a pass found.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum MedianPass {
+pub enum MedianPass {
     /// The two middle values in order (equal for an odd count); `None` for no value.
     Done(Option<(u64, u64)>),
     /// Read the sequence again, calling [`ExactMedian::observe`] for every value.
@@ -98,7 +98,7 @@ impl Target {
 
 /// Exact median of a sequence read in one or more passes (see the module docs).
 #[derive(Clone, Debug)]
-pub(crate) struct ExactMedian {
+pub struct ExactMedian {
     first_pass: bool,
     count: u64,
     min: u64,
@@ -123,7 +123,7 @@ impl Default for ExactMedian {
 
 impl ExactMedian {
     /// One value of the sequence (every pass must give the same values).
-    pub(crate) fn observe(&mut self, key: u64) {
+    pub fn observe(&mut self, key: u64) {
         if self.first_pass {
             self.count += 1;
             self.min = self.min.min(key);
@@ -142,17 +142,17 @@ impl ExactMedian {
     }
 
     /// Number of values of the sequence.
-    pub(crate) fn count(&self) -> u64 {
+    pub fn count(&self) -> u64 {
         self.count
     }
 
     /// The smallest and largest values (after the first pass; `None` for no value).
-    pub(crate) fn range(&self) -> Option<(u64, u64)> {
+    pub fn range(&self) -> Option<(u64, u64)> {
         (self.count > 0).then_some((self.min, self.max))
     }
 
     /// Ends a pass over the sequence.
-    pub(crate) fn end_pass(&mut self) -> MedianPass {
+    pub fn end_pass(&mut self) -> MedianPass {
         let ranks = [(self.count.max(1) - 1) / 2, self.count / 2];
         if self.first_pass {
             self.first_pass = false;

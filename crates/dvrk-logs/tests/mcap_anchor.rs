@@ -2,10 +2,10 @@
 //! official Python writer (mcap 1.6 + mcap-ros2-support 0.6: chunked, zstd, CRCs). Every
 //! value is checked against the formulas of the companion JSON.
 
-use dvrk_ident::log::mcap::{
+use dvrk_logs::log::mcap::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, McapOptions, McapProblem, TimeSource,
 };
-use dvrk_ident::log::{read, LogError};
+use dvrk_logs::log::{read, LogError};
 use std::f64::consts::PI;
 use std::path::PathBuf;
 
@@ -85,7 +85,7 @@ fn mcap_anchor_auto_topic_values_and_time() {
     let tr = &log.trajectory;
     assert_eq!(tr.len(), 2000);
     assert_eq!(tr.joint_names, f.names);
-    assert_eq!(tr.coordinates, dvrk_ident::Coordinates::Measured);
+    assert_eq!(tr.coordinates, dvrk_logs::Coordinates::Measured);
     assert!(tr.source.contains("/PSM1/measured_js"), "{}", tr.source);
     let dq = tr.dq.as_ref().expect("measured_js has velocities");
     let mut worst: f64 = 0.0;

@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 /// Largest accepted relative deviation of a time step from the median step before a log
 /// counts as jittered (equal to the default
-/// [`uniform_tolerance`](crate::signal::Processing::uniform_tolerance)).
+/// dvrk-ident's `signal::Processing::uniform_tolerance`).
 pub const JITTER_TOLERANCE: f64 = 0.1;
 
 /// A step longer than this many median steps is a gap.

@@ -760,7 +760,7 @@ fn sample_count(
 ) -> Result<usize, LogError> {
     Ok(match resample_hz {
         Some(rate) => {
-            let r = crate::signal::stream::Resampler::new(1, rate).map_err(|e| {
+            let r = crate::resample::Resampler::new(1, rate).map_err(|e| {
                 mcap_error(
                     path,
                     Some(clock_topic),

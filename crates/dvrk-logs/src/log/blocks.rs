@@ -10,7 +10,7 @@ use super::csv::{HeaderedBlocks, WpiBlocks};
 use super::mcap::{McapBlocks, McapReader};
 use super::{detect_format, LogError, LogFormat, ReadOptions};
 use crate::joint_log::{Coordinates, JointLog};
-use crate::signal::stream::Resampler;
+use crate::resample::Resampler;
 
 /// A log opened for reading in blocks, as many times as needed (each
 /// [`LogReader::blocks`] is one pass over the file). Opening reads the header (CSV), the
@@ -314,7 +314,7 @@ impl BlockResampler {
         })
     }
 
-    fn error(&self, source: crate::signal::SignalError) -> LogError {
+    fn error(&self, source: crate::resample::ResampleError) -> LogError {
         LogError::Resample {
             path: self.path.clone(),
             rate_hz: self.rate_hz,
