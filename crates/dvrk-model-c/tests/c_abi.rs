@@ -35,9 +35,9 @@ fn shared_library() -> PathBuf {
     lib
 }
 
-/// The system's C compiler, or None (then the test says so and checks nothing).
-fn c_compiler() -> Option<String> {
-    let cc = std::env::var("CC").unwrap_or_else(|_| "cc".to_string());
+/// The system's compiler `default` (or the one `$var` names) if it runs, else None.
+fn compiler(var: &str, default: &str) -> Option<String> {
+    let cc = std::env::var(var).unwrap_or_else(|_| default.to_string());
     let found = Command::new(&cc).arg("--version").output();
     found.is_ok_and(|o| o.status.success()).then_some(cc)
 }
@@ -120,12 +120,36 @@ fn compare(what: &str, got: &[f64], expected: &[f64]) -> f64 {
 }
 
 #[test]
-fn c_program_reproduces_the_rust_model() {
-    let Some(cc) = c_compiler() else {
-        println!("SKIPPED: no C compiler (`cc`, or $CC) on this machine");
-        eprintln!("SKIPPED: no C compiler (`cc`, or $CC) on this machine");
+fn c_and_cpp_programs_reproduce_the_rust_model() {
+    // (name, compiler, source, flags): the C API from C, the wrapper from C++.
+    let programs: Vec<(&str, String, &str, &[&str])> = [
+        (
+            "C",
+            compiler("CC", "cc"),
+            "tests/c/smoke.c",
+            &["-std=c99"][..],
+        ),
+        (
+            "C++",
+            compiler("CXX", "c++"),
+            "tests/cpp/smoke.cpp",
+            &["-std=c++11"][..],
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(name, cc, source, flags)| match cc {
+        Some(cc) => Some((name, cc, source, flags)),
+        None => {
+            // Visible in the test output (and with --nocapture) rather than a silent pass.
+            println!("SKIPPED {name}: no {name} compiler on this machine");
+            eprintln!("SKIPPED {name}: no {name} compiler on this machine");
+            None
+        }
+    })
+    .collect();
+    if programs.is_empty() {
         return;
-    };
+    }
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
     let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi");
     std::fs::create_dir_all(&dir).unwrap();
@@ -183,114 +207,140 @@ fn c_program_reproduces_the_rust_model() {
     let bad_path = dir.join("unknown_robot.json");
     std::fs::write(&bad_path, bad).unwrap();
 
-    // Compile and run the C program against the shared library.
-    // Linked by its full path: the library has no soname, so the program records that
-    // path and loads exactly this file, whatever the library search path holds (cargo
-    // test puts target/<profile>, with a possibly stale build, on LD_LIBRARY_PATH, which
-    // would win over an rpath).
+    // Compile and run the C and C++ programs against the shared library.
     let lib = shared_library();
-    let exe = dir.join("smoke");
-    let compiled = Command::new(&cc)
-        .args(["-O2", "-std=c99", "-Wall", "-Wextra", "-Werror", "-o"])
-        .arg(&exe)
-        .arg(crate_dir.join("tests/c/smoke.c"))
-        .arg("-I")
-        .arg(crate_dir.join("include"))
-        .arg(&lib)
-        .arg("-lm")
-        .output()
-        .unwrap();
-    assert!(
-        compiled.status.success(),
-        "{cc} failed:\n{}",
-        String::from_utf8_lossy(&compiled.stderr)
-    );
-    let run = Command::new(&exe)
-        .env_remove("LD_LIBRARY_PATH")
-        .arg(&result_path)
-        .arg(&cases_path)
-        .arg(&bad_path)
-        .output()
-        .unwrap();
-    let stdout = String::from_utf8(run.stdout).unwrap();
-    let stderr = String::from_utf8_lossy(&run.stderr);
-    assert!(
-        run.status.success(),
-        "smoke failed:\n{stderr}\nstdout:\n{stdout}"
-    );
-    assert!(stdout.contains("failures 0"), "{stdout}");
-    assert!(
-        stdout.contains(&format!("dof {n} measured {n} params 125")),
-        "{stdout}"
-    );
-    assert!(stdout.contains("names q1 jaw Fs"), "{stdout}");
-    assert!(
-        stdout.contains(&format!("version {}", env!("CARGO_PKG_VERSION"))),
-        "{stdout}"
-    );
-    // The loading errors, each with its reason.
-    assert!(
-        stdout.contains("null-path: result_path is NULL"),
-        "{stdout}"
-    );
-    assert!(
-        stdout.contains("bad-path: /nonexistent/result.json: No such file"),
-        "{stdout}"
-    );
-    let unknown = stdout
-        .lines()
-        .find(|l| l.starts_with("unknown-robot: "))
-        .unwrap();
-    assert!(unknown.contains("nosuchbot"), "{unknown}");
-
-    // Every number of the C program against dvrk-model's.
     let minv = model.measured_to_model_matrix().unwrap();
-    let mut lines = stdout.lines();
-    let mut worst = [0.0f64; 6];
-    for ([q, dq, ddq], t) in cases.iter().zip(&tau_fd) {
-        let mut g = vec![0.0; n];
-        model.gravity_torque(&mut ws, &params, q, &mut g);
-        worst[0] = worst[0].max(compare("gravity", &take(&mut lines, "g"), &g));
-
-        let mut tau = vec![0.0; n];
-        model.inverse_dynamics(&mut ws, &params, q, dq, ddq, &mut tau);
-        model.add_known_forces(q, &mut tau);
-        worst[1] = worst[1].max(compare("inverse dynamics", &take(&mut lines, "tau"), &tau));
-
-        let m = model.mass_matrix(&mut ws, &params, q);
-        let row_major: Vec<f64> = (0..n * n).map(|k| m[(k / n, k % n)]).collect();
-        worst[2] = worst[2].max(compare("mass matrix", &take(&mut lines, "m"), &row_major));
-
-        let acc = model.forward_dynamics(&mut ws, &params, q, dq, t).unwrap();
-        let got = take(&mut lines, "ddq");
-        worst[3] = worst[3].max(compare("forward dynamics", &got, acc.as_slice()));
-        // ... and it inverts the inverse dynamics (the acceleration the torque was for).
-        for (a, d) in got.iter().zip(ddq) {
-            assert!((a - (0.5 * d - 0.7)).abs() < 1e-8, "{got:?} vs {ddq:?}");
+    for (name, cc, source, flags) in programs {
+        // Linked by its full path: the library has no soname, so the program records
+        // that path and loads exactly this file, whatever the library search path holds
+        // (cargo test puts target/<profile>, with a possibly stale build, on
+        // LD_LIBRARY_PATH, which would win over an rpath).
+        let exe = dir.join(format!("smoke_{}", if name == "C" { "c" } else { "cpp" }));
+        let compiled = Command::new(&cc)
+            .args(["-O2", "-Wall", "-Wextra", "-Werror"])
+            .args(flags)
+            .arg("-o")
+            .arg(&exe)
+            .arg(crate_dir.join(source))
+            .arg("-I")
+            .arg(crate_dir.join("include"))
+            .arg(&lib)
+            .arg("-lm")
+            .output()
+            .unwrap();
+        assert!(
+            compiled.status.success(),
+            "{cc} {source} failed:\n{}",
+            String::from_utf8_lossy(&compiled.stderr)
+        );
+        let run = Command::new(&exe)
+            .env_remove("LD_LIBRARY_PATH")
+            .arg(&result_path)
+            .arg(&cases_path)
+            .arg(&bad_path)
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8(run.stdout).unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(
+            run.status.success(),
+            "{name} program failed:\n{stderr}\nstdout:\n{stdout}"
+        );
+        assert!(stdout.contains("failures 0"), "{stdout}");
+        assert!(
+            stdout.contains(&format!("dof {n} measured {n} params 125")),
+            "{stdout}"
+        );
+        assert!(stdout.contains("names q1 jaw Fs16"), "{stdout}");
+        assert!(
+            stdout.contains(&format!("version {}", env!("CARGO_PKG_VERSION"))),
+            "{stdout}"
+        );
+        // The loading errors, each with its reason.
+        if name == "C" {
+            assert!(
+                stdout.contains("null-path: result_path is NULL"),
+                "{stdout}"
+            );
         }
+        assert!(
+            stdout.contains("bad-path: /nonexistent/result.json: No such file"),
+            "{stdout}"
+        );
+        let unknown = stdout
+            .lines()
+            .find(|l| l.starts_with("unknown-robot: "))
+            .unwrap();
+        assert!(unknown.contains("nosuchbot"), "{unknown}");
 
-        let from_measured: Vec<f64> = (0..n)
-            .map(|i| (0..n).map(|k| minv[(i, k)] * q[k]).sum())
-            .collect();
-        worst[4] = worst[4].max(compare(
-            "measured to model",
-            &take(&mut lines, "from_measured"),
-            &from_measured,
-        ));
-        // τ_measured = M⁻ᵀ τ_model: mapped back with Mᵀ it is the model torque.
-        let to_measured = take(&mut lines, "to_measured");
-        let back: Vec<f64> = (0..n)
-            .map(|j| {
-                (0..n)
-                    .map(|k| model.measured.coupling[(k, j)] * to_measured[k])
-                    .sum()
-            })
-            .collect();
-        worst[5] = worst[5].max(compare("model to measured torque", &back, t));
+        // Every number of the program against dvrk-model's.
+        let mut lines = stdout.lines();
+        let mut worst = [0.0f64; 6];
+        for ([q, dq, ddq], t) in cases.iter().zip(&tau_fd) {
+            let mut g = vec![0.0; n];
+            model.gravity_torque(&mut ws, &params, q, &mut g);
+            worst[0] = worst[0].max(compare(
+                &format!("{name}: gravity"),
+                &take(&mut lines, "g"),
+                &g,
+            ));
+
+            let mut tau = vec![0.0; n];
+            model.inverse_dynamics(&mut ws, &params, q, dq, ddq, &mut tau);
+            model.add_known_forces(q, &mut tau);
+            worst[1] = worst[1].max(compare(
+                &format!("{name}: inverse dynamics"),
+                &take(&mut lines, "tau"),
+                &tau,
+            ));
+
+            let m = model.mass_matrix(&mut ws, &params, q);
+            let row_major: Vec<f64> = (0..n * n).map(|k| m[(k / n, k % n)]).collect();
+            worst[2] = worst[2].max(compare(
+                &format!("{name}: mass matrix"),
+                &take(&mut lines, "m"),
+                &row_major,
+            ));
+
+            let acc = model.forward_dynamics(&mut ws, &params, q, dq, t).unwrap();
+            let got = take(&mut lines, "ddq");
+            worst[3] = worst[3].max(compare(
+                &format!("{name}: forward dynamics"),
+                &got,
+                acc.as_slice(),
+            ));
+            // ... and it inverts the inverse dynamics (the acceleration the torque was for).
+            for (a, d) in got.iter().zip(ddq) {
+                assert!((a - (0.5 * d - 0.7)).abs() < 1e-8, "{got:?} vs {ddq:?}");
+            }
+
+            let from_measured: Vec<f64> = (0..n)
+                .map(|i| (0..n).map(|k| minv[(i, k)] * q[k]).sum())
+                .collect();
+            worst[4] = worst[4].max(compare(
+                &format!("{name}: measured to model"),
+                &take(&mut lines, "from_measured"),
+                &from_measured,
+            ));
+            // τ_measured = M⁻ᵀ τ_model: mapped back with Mᵀ it is the model torque.
+            let to_measured = take(&mut lines, "to_measured");
+            let back: Vec<f64> = (0..n)
+                .map(|j| {
+                    (0..n)
+                        .map(|k| model.measured.coupling[(k, j)] * to_measured[k])
+                        .sum()
+                })
+                .collect();
+            worst[5] = worst[5].max(compare(
+                &format!("{name}: model to measured torque"),
+                &back,
+                t,
+            ));
+        }
+        println!(
+            "{name}: worst relative differences vs Rust: gravity {:e}, inverse dynamics {:e}, mass \
+             matrix {:e}, forward dynamics {:e}, measured to model {:e}, torque round trip {:e}",
+            worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
+        );
     }
-    println!(
-        "worst relative differences C vs Rust: gravity {:e}, inverse dynamics {:e}, mass \
-         matrix {:e}, forward dynamics {:e}, measured to model {:e}, torque round trip {:e}",
-        worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
-    );
 }
