@@ -211,6 +211,24 @@ int dvrk_inverse_dynamics(const DvrkModel *model,
                           double *tau);
 
 /*
+ Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
+ part of `dvrk_inverse_dynamics`, without friction, springs, motor inertias or known
+ forces, for a controller that models those itself. At `dq = ddq = 0` it is
+ `dvrk_gravity`. Real-time: no allocation, no lock. 0, or a negative code with `tau`
+ untouched.
+
+ # Safety
+
+ As `dvrk_inverse_dynamics`.
+ */
+int dvrk_rigid_body_dynamics(const DvrkModel *model,
+                             DvrkWorkspace *ws,
+                             const double *q,
+                             const double *dq,
+                             const double *ddq,
+                             double *tau);
+
+/*
  Mass matrix `M(q)` (n×n, kg·m² or kg, motor inertias included), written row-major
  into `m` (it is symmetric). Real-time: no allocation, no lock. 0, or a negative code
  with `m` untouched.

@@ -104,6 +104,10 @@ class Workspace {
                          double *tau) noexcept {
         return dvrk_inverse_dynamics(model_, ws_.get(), q, dq, ddq, tau);
     }
+    int rigid_body_dynamics(const double *q, const double *dq, const double *ddq,
+                            double *tau) noexcept {
+        return dvrk_rigid_body_dynamics(model_, ws_.get(), q, dq, ddq, tau);
+    }
     int mass_matrix(const double *q, double *m) noexcept {
         return dvrk_mass_matrix(model_, ws_.get(), q, m);
     }

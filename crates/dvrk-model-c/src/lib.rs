@@ -65,6 +65,10 @@ pub const DVRK_ERR_INTERNAL: c_int = -6;
 pub struct DvrkModel {
     model: Model,
     params: Vec<f64>,
+    /// `params` with every parameter that is not a link's inertia set to zero: the
+    /// torque is linear in the parameters (`τ = H·π`), so the inverse dynamics with it
+    /// is that of the links alone (`dvrk_rigid_body_dynamics`), without allocating.
+    link_params: Vec<f64>,
     /// `M⁻¹` (n×n, row-major), the measured → model map of positions and velocities,
     /// `q_model = M⁻¹ q_measured`, where `q_measured = M q_model` is the description's
     /// coupling.
@@ -138,6 +142,12 @@ impl DvrkModel {
                 &shown.to_string(),
             )
             .map_err(|e| e.to_string())?;
+        let mut link_params = vec![0.0; params.len()];
+        for &j in model.link_frames() {
+            if let Some(p0) = model.frame(j).inertia {
+                link_params[p0..p0 + 10].copy_from_slice(&params[p0..p0 + 10]);
+            }
+        }
         let n = model.dof();
         let minv = model.measured_to_model_matrix().ok_or_else(|| {
             format!("{shown}: the robot's measured-joint coupling matrix is singular")
@@ -154,6 +164,7 @@ impl DvrkModel {
             coordinate_names: names(model.coordinates.clone())?,
             model,
             params,
+            link_params,
             measured_to_model,
         })
     }
@@ -535,6 +546,38 @@ pub unsafe extern "C" fn dvrk_inverse_dynamics(
         m.model
             .inverse_dynamics(&mut w.ws, &m.params, q, dq, ddq, &mut w.vector);
         m.model.add_known_forces(q, &mut w.vector);
+        deliver(&w.vector, tau)
+    })
+}
+
+/// Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
+/// part of `dvrk_inverse_dynamics`, without friction, springs, motor inertias or known
+/// forces, for a controller that models those itself. At `dq = ddq = 0` it is
+/// `dvrk_gravity`. Real-time: no allocation, no lock. 0, or a negative code with `tau`
+/// untouched.
+///
+/// # Safety
+///
+/// As `dvrk_inverse_dynamics`.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_rigid_body_dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    ddq: *const f64,
+    tau: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligations, passed on.
+        let (m, w) = unsafe { pair(model, ws) }?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (q, dq, ddq, tau) =
+            unsafe { (input(q, n)?, input(dq, n)?, input(ddq, n)?, output(tau, n)?) };
+        finite(&[q, dq, ddq])?;
+        m.model
+            .inverse_dynamics(&mut w.ws, &m.link_params, q, dq, ddq, &mut w.vector);
         deliver(&w.vector, tau)
     })
 }

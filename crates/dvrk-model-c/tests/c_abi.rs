@@ -275,7 +275,7 @@ fn c_and_cpp_programs_reproduce_the_rust_model() {
 
         // Every number of the program against dvrk-model's.
         let mut lines = stdout.lines();
-        let mut worst = [0.0f64; 6];
+        let mut worst = [0.0f64; 7];
         for ([q, dq, ddq], t) in cases.iter().zip(&tau_fd) {
             let mut g = vec![0.0; n];
             model.gravity_torque(&mut ws, &params, q, &mut g);
@@ -293,6 +293,31 @@ fn c_and_cpp_programs_reproduce_the_rust_model() {
                 &take(&mut lines, "tau"),
                 &tau,
             ));
+
+            // The links alone, against dvrk-model's links-only functions: the nonlinear
+            // effects at zero acceleration, the gravity at rest, and in general the
+            // nonlinear effects plus the links' mass matrix (no motor inertia) times ddq,
+            // that mass matrix from the links' parameters alone.
+            let rigid = take(&mut lines, "rigid");
+            let mut links = vec![0.0; model.n_params()];
+            for &j in model.link_frames() {
+                let p0 = model.frame(j).inertia.unwrap();
+                links[p0..p0 + 10].copy_from_slice(&params[p0..p0 + 10]);
+            }
+            let mut h = vec![0.0; n];
+            model.nonlinear_effects(&mut ws, &params, q, dq, &mut h);
+            let m_links = model.mass_matrix(&mut ws, &links, q);
+            let expected: Vec<f64> = (0..n)
+                .map(|i| h[i] + (0..n).map(|k| m_links[(i, k)] * ddq[k]).sum::<f64>())
+                .collect();
+            worst[6] = worst[6].max(compare(
+                &format!("{name}: rigid-body dynamics"),
+                &rigid,
+                &expected,
+            ));
+            if dq.iter().chain(ddq).all(|x| *x == 0.0) {
+                compare(&format!("{name}: rigid-body dynamics at rest"), &rigid, &g);
+            }
 
             let m = model.mass_matrix(&mut ws, &params, q);
             let row_major: Vec<f64> = (0..n * n).map(|k| m[(k / n, k % n)]).collect();
@@ -339,8 +364,8 @@ fn c_and_cpp_programs_reproduce_the_rust_model() {
         }
         println!(
             "{name}: worst relative differences vs Rust: gravity {:e}, inverse dynamics {:e}, mass \
-             matrix {:e}, forward dynamics {:e}, measured to model {:e}, torque round trip {:e}",
-            worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
+             matrix {:e}, forward dynamics {:e}, measured to model {:e}, torque round trip {:e}, rigid-body dynamics {:e}",
+            worst[0], worst[1], worst[2], worst[3], worst[4], worst[5], worst[6]
         );
     }
 }

@@ -1,4 +1,5 @@
-//! The real-time calls of the C ABI allocate nothing: a counting global allocator sees no
+//! The real-time calls of the C ABI (gravity, inverse, rigid-body and forward dynamics, mass
+//! matrix, measured-joint conversions) allocate nothing: a counting global allocator sees no
 //! allocation across many calls of each (successful ones and the error paths), through
 //! the `extern "C"` functions themselves, on the SDP+Stribeck fit of the bundled example.
 //! (A controller's real-time loop must not reach `malloc`: it may take a lock or page
@@ -82,7 +83,7 @@ fn real_time_calls_allocate_nothing() {
     assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), before + 1);
 
     let before = ALLOCATIONS.load(Ordering::SeqCst);
-    let mut codes = [0; 8];
+    let mut codes = [0; 9];
     for _ in 0..1000 {
         // SAFETY: a live model and its workspace; every buffer of n (or n·n) doubles.
         unsafe {
@@ -96,6 +97,14 @@ fn real_time_calls_allocate_nothing() {
                 tau.as_mut_ptr(),
             );
             codes[2] = dvrk_mass_matrix(model, ws, q.as_ptr(), m.as_mut_ptr());
+            codes[8] = dvrk_rigid_body_dynamics(
+                model,
+                ws,
+                q.as_ptr(),
+                dq.as_ptr(),
+                ddq.as_ptr(),
+                x.as_mut_ptr(),
+            );
             codes[3] = dvrk_forward_dynamics(
                 model,
                 ws,
@@ -116,6 +125,7 @@ fn real_time_calls_allocate_nothing() {
     assert_eq!(&codes[..6], &[DVRK_OK; 6]);
     assert_eq!(codes[6], DVRK_ERR_NOT_FINITE);
     assert_eq!(codes[7], DVRK_ERR_NULL);
+    assert_eq!(codes[8], DVRK_OK);
     assert_eq!(
         after - before,
         0,

@@ -6,7 +6,7 @@
    Compiled with the system's `cc -O2` and run by tests/c_abi.rs:
      smoke RESULT CASES BAD_ROBOT_RESULT
    CASES holds a count K, then K cases of 4n numbers (q, dq, ddq, tau_fd). For each case
-   the program prints the lines `g`, `tau`, `m` (row-major) and `ddq` (the forward
+   the program prints the lines `g`, `tau`, `rigid`, `m` (row-major) and `ddq` (the forward
    dynamics under tau_fd), every number with %.17g, which the Rust test compares with
    dvrk-model's own results. Any failed check prints `FAIL ...` on stderr and exits 1. */
 #include "dvrk_model.h"
@@ -82,6 +82,8 @@ static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkMo
             CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad dq[%zu]) = %d", k, rc);
             rc = dvrk_inverse_dynamics(model, ws, q, q, bad, out);
             CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad ddq[%zu]) = %d", k, rc);
+            rc = dvrk_rigid_body_dynamics(model, ws, q, bad, q, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "rigid(bad dq[%zu]) = %d", k, rc);
             rc = dvrk_forward_dynamics(model, ws, q, q, bad, out);
             CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "fd(bad tau[%zu]) = %d", k, rc);
             rc = dvrk_forward_dynamics(model, ws, bad, q, q, out);
@@ -93,6 +95,8 @@ static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkMo
     CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL dq) = %d", rc);
     rc = dvrk_inverse_dynamics(model, ws, q, q, NULL, out);
     CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL ddq) = %d", rc);
+    rc = dvrk_rigid_body_dynamics(model, ws, q, q, q, NULL);
+    CHECK(rc == DVRK_ERR_NULL, "rigid(NULL tau) = %d", rc);
     rc = dvrk_mass_matrix(NULL, ws, q, out);
     CHECK(rc == DVRK_ERR_NULL && untouched(out, n * n), "mass(NULL model) = %d", rc);
     rc = dvrk_mass_matrix(model, ws, q, NULL);
@@ -199,6 +203,9 @@ int main(int argc, char **argv) {
         rc = dvrk_inverse_dynamics(model, ws, q, dq, ddq, out);
         CHECK(rc == DVRK_OK, "inverse dynamics: %s", dvrk_error_string(rc));
         print_vector("tau", out, n);
+        rc = dvrk_rigid_body_dynamics(model, ws, q, dq, ddq, out);
+        CHECK(rc == DVRK_OK, "rigid-body dynamics: %s", dvrk_error_string(rc));
+        print_vector("rigid", out, n);
         rc = dvrk_mass_matrix(model, ws, q, out);
         CHECK(rc == DVRK_OK, "mass matrix: %s", dvrk_error_string(rc));
         print_vector("m", out, n * n);

@@ -1,6 +1,6 @@
 // The C++ wrapper (include/dvrk_model.hpp) as a controller uses it, compiled with the
 // system's `c++ -O2` and run by tests/c_abi.rs with the same arguments and output
-// lines as tests/c/smoke.c (`g`, `tau`, `m`, `ddq`, `from_measured`, `to_measured` per
+// lines as tests/c/smoke.c (`g`, `tau`, `rigid`, `m`, `ddq`, `from_measured`, `to_measured` per
 // case, %.17g), which the Rust test compares with dvrk-model's results. Also checks that
 // a bad path and an unknown robot throw dvrk::Error with the reason, and that a NaN
 // input returns DVRK_ERR_NOT_FINITE with the output untouched. Exits 1 on a failure.
@@ -63,6 +63,9 @@ int main(int argc, char **argv) {
         check(ws.inverse_dynamics(q.data(), dq.data(), ddq.data(), out.data()) == DVRK_OK,
               "inverse dynamics");
         print_vector("tau", out);
+        check(ws.rigid_body_dynamics(q.data(), dq.data(), ddq.data(), out.data()) == DVRK_OK,
+              "rigid-body dynamics");
+        print_vector("rigid", out);
         check(ws.mass_matrix(q.data(), m.data()) == DVRK_OK, "mass matrix");
         print_vector("m", m);
         check(ws.forward_dynamics(q.data(), dq.data(), tau_fd.data(), out.data()) == DVRK_OK,
