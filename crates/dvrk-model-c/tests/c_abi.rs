@@ -369,3 +369,64 @@ fn c_and_cpp_programs_reproduce_the_rust_model() {
         );
     }
 }
+
+/// The README's C++ example is tests/cpp/readme.cpp, word for word, and it compiles and
+/// runs on the example's fit: the static torque at rest it prints is the inverse
+/// dynamics at `dq = ddq = 0` of dvrk-model (printed to 6 decimals).
+#[test]
+fn readme_cpp_example_runs() {
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = std::fs::read_to_string(crate_dir.join("README.md")).unwrap();
+    let source = std::fs::read_to_string(crate_dir.join("tests/cpp/readme.cpp")).unwrap();
+    let start = readme.find("```cpp\n").expect("a C++ block in the README") + 7;
+    let end = start + readme[start..].find("```").unwrap();
+    assert_eq!(
+        &readme[start..end],
+        source,
+        "README.md's C++ block is not tests/cpp/readme.cpp"
+    );
+    let Some(cxx) = compiler("CXX", "c++") else {
+        println!("SKIPPED: no C++ compiler on this machine");
+        eprintln!("SKIPPED: no C++ compiler on this machine");
+        return;
+    };
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_readme");
+    std::fs::create_dir_all(&dir).unwrap();
+    let result_path = fit_example(&dir);
+    let exe = dir.join("readme");
+    let compiled = Command::new(&cxx)
+        .args(["-O2", "-std=c++11", "-Wall", "-Wextra", "-Werror", "-o"])
+        .arg(&exe)
+        .arg(crate_dir.join("tests/cpp/readme.cpp"))
+        .arg("-I")
+        .arg(crate_dir.join("include"))
+        .arg(shared_library())
+        .output()
+        .unwrap();
+    assert!(
+        compiled.status.success(),
+        "{}",
+        String::from_utf8_lossy(&compiled.stderr)
+    );
+    let run = Command::new(&exe)
+        .env_remove("LD_LIBRARY_PATH")
+        .arg(&result_path)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8(run.stdout).unwrap();
+    assert!(run.status.success(), "{stdout}");
+    let result = FitResult::read(&result_path).unwrap();
+    let model = result.model(None).unwrap();
+    let params = result.params_for(&model).unwrap();
+    let n = model.dof();
+    let mut q = vec![0.1; n];
+    q[2] = 0.12;
+    let mut tau = vec![0.0; n];
+    let mut ws = Workspace::new(&model);
+    model.inverse_dynamics(&mut ws, &params, &q, &vec![0.0; n], &vec![0.0; n], &mut tau);
+    model.add_known_forces(&q, &mut tau);
+    let expected: Vec<String> = tau.iter().map(|t| format!("{t:.6}")).collect();
+    let line = format!("static torque {}", expected.join(" "));
+    assert!(stdout.contains(&line), "{stdout}\nexpected: {line}");
+    println!("{stdout}");
+}
