@@ -22,9 +22,11 @@
 //!
 //! # Safety at the boundary
 //!
-//! - No unwinding crosses the ABI: every entry point runs inside
+//! - No unwinding crosses the ABI: every entry point that computes runs inside
 //!   [`std::panic::catch_unwind`] and turns a panic (a bug) into
-//!   [`DVRK_ERR_INTERNAL`] or a NULL model.
+//!   [`DVRK_ERR_INTERNAL`] or a NULL model; the others (sizes, names, the parameter
+//!   copy, error strings, version, the two `free`s) only read a field, copy slices of
+//!   equal length or drop, none of which panics.
 //! - The real-time calls (`dvrk_gravity`, `dvrk_inverse_dynamics`, `dvrk_mass_matrix`,
 //!   `dvrk_forward_dynamics`, the measured-joint conversions) allocate nothing and take
 //!   no lock: they check their pointers and inputs, then run dvrk-model's
@@ -73,10 +75,12 @@ pub struct DvrkModel {
     /// `q_model = M⁻¹ q_measured`, where `q_measured = M q_model` is the description's
     /// coupling.
     measured_to_model: Vec<f64>,
-    /// Measured joint names, then parameter names, then coordinate names, each
-    /// NUL-terminated, for the name getters (which return pointers into them).
+    /// Measured joint names, NUL-terminated for `dvrk_model_joint_name` (which returns
+    /// pointers into them, valid as long as the model).
     joint_names: Vec<std::ffi::CString>,
+    /// Parameter names, as `joint_names` for `dvrk_model_param_name`.
     param_names: Vec<std::ffi::CString>,
+    /// Model coordinate names, as `joint_names` for `dvrk_model_coordinate_name`.
     coordinate_names: Vec<std::ffi::CString>,
 }
 
