@@ -6,8 +6,8 @@
 //! (`dvrk-ident` and `python -m dvrk_ident` call [`run`] inside the extension module):
 //! one behaviour, whichever way it was installed.
 
-// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
-// BLAS/LAPACK Clarabel calls).
+// No unsafe code: the workspace's unsafe code is in crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls) and crates/dvrk-model-c (the C ABI).
 #![forbid(unsafe_code)]
 
 use std::ffi::OsString;

@@ -44,8 +44,8 @@
 //! can leave out the last two.
 
 #![warn(missing_docs)]
-// The Fortran-ABI routines Clarabel calls are the workspace's only unsafe code, in
-// crates/lapack-faer.
+// The Fortran-ABI routines Clarabel calls are unsafe code of their own crate,
+// crates/lapack-faer (the C ABI of crates/dvrk-model-c is the other one).
 #![forbid(unsafe_code)]
 
 pub mod compare;

@@ -29,8 +29,8 @@
 //! ```
 
 #![warn(missing_docs)]
-// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
-// BLAS/LAPACK Clarabel calls).
+// No unsafe code: the workspace's unsafe code is in crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls) and crates/dvrk-model-c (the C ABI).
 #![forbid(unsafe_code)]
 
 mod base;

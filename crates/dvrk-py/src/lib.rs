@@ -6,8 +6,8 @@
 //! without the GIL (per-sample loops in chunks with a signal check between them, fits
 //! and log reading on a worker thread polled for Ctrl-C).
 
-// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
-// BLAS/LAPACK Clarabel calls).
+// No unsafe code: the workspace's unsafe code is in crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls) and crates/dvrk-model-c (the C ABI).
 #![forbid(unsafe_code)]
 
 mod classes;

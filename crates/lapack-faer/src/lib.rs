@@ -21,7 +21,8 @@
 //! including negative increments, leading dimensions larger than the rows, every `job`
 //! of the SVDs and every `range` of `?syevr`).
 //!
-//! A crate of its own because it is the workspace's only `unsafe` code: a Fortran
+//! A crate of its own because it is `unsafe` code (with the C ABI of dvrk-model-c, the
+//! workspace's only): a Fortran
 //! routine receives raw pointers and must turn them into arrays. Here that is isolated,
 //! every unsafe operation carries its justification, and the routines are tested at the
 //! ABI (`tests/abi.rs`, through the `blas`/`lapack` wrappers Clarabel calls); every

@@ -17,8 +17,8 @@
 //! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
 //!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
-// No unsafe code: the workspace's only unsafe code is crates/lapack-faer (the Fortran-ABI
-// BLAS/LAPACK Clarabel calls).
+// No unsafe code: the workspace's unsafe code is in crates/lapack-faer (the Fortran-ABI
+// BLAS/LAPACK Clarabel calls) and crates/dvrk-model-c (the C ABI).
 #![forbid(unsafe_code)]
 
 pub mod fixtures;

@@ -1,0 +1,234 @@
+/* The C ABI from C, as a controller uses it: load a `dvrk-ident fit` result, evaluate
+   gravity, inverse dynamics, the mass matrix and forward dynamics, and check the error
+   paths (bad path, unknown robot, NULL pointers, NaN inputs, a workspace of another
+   model): every error a negative code or a message, outputs untouched, no crash.
+
+   Compiled with the system's `cc -O2` and run by tests/c_abi.rs:
+     smoke RESULT CASES BAD_ROBOT_RESULT
+   CASES holds a count K, then K cases of 4n numbers (q, dq, ddq, tau_fd). For each case
+   the program prints the lines `g`, `tau`, `rigid`, `m` (row-major) and `ddq` (the forward
+   dynamics under tau_fd), every number with %.17g, which the Rust test compares with
+   dvrk-model's own results. Any failed check prints `FAIL ...` on stderr and exits 1. */
+#include "dvrk_model.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int failures = 0;
+
+#define CHECK(cond, ...)                                   \
+    do {                                                   \
+        if (!(cond)) {                                     \
+            fprintf(stderr, "FAIL line %d: ", __LINE__);   \
+            fprintf(stderr, __VA_ARGS__);                  \
+            fprintf(stderr, "\n");                         \
+            failures++;                                    \
+        }                                                  \
+    } while (0)
+
+static void print_vector(const char *label, const double *x, size_t n) {
+    printf("%s", label);
+    for (size_t i = 0; i < n; i++) printf(" %.17g", x[i]);
+    printf("\n");
+}
+
+/* Fills x with a sentinel no computation returns, to see that an error leaves it. */
+static const double SENTINEL = -12345.678;
+static void fill(double *x, size_t n) {
+    for (size_t i = 0; i < n; i++) x[i] = SENTINEL;
+}
+static int untouched(const double *x, size_t n) {
+    for (size_t i = 0; i < n; i++)
+        if (x[i] != SENTINEL) return 0;
+    return 1;
+}
+
+/* Every error path of the real-time calls: NULL model, workspace, input and output; a
+   NaN and an infinity in each input; a workspace of another model. */
+static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkModel *other,
+                         const double *q, size_t n) {
+    double *out = malloc(n * n * sizeof(double));
+    double *bad = malloc(n * sizeof(double));
+    DvrkWorkspace *other_ws = dvrk_workspace_new(other);
+    int rc;
+
+    fill(out, n * n);
+    rc = dvrk_gravity(NULL, ws, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL model) = %d", rc);
+    rc = dvrk_gravity(model, NULL, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL ws) = %d", rc);
+    rc = dvrk_gravity(model, ws, NULL, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL q) = %d", rc);
+    rc = dvrk_gravity(model, ws, q, NULL);
+    CHECK(rc == DVRK_ERR_NULL, "gravity(NULL tau) = %d", rc);
+    rc = dvrk_gravity(model, other_ws, q, out);
+    CHECK(rc == DVRK_ERR_WORKSPACE && untouched(out, n), "gravity(other ws) = %d", rc);
+
+    for (size_t k = 0; k < n; k++) {
+        for (int inf = 0; inf < 2; inf++) {
+            memcpy(bad, q, n * sizeof(double));
+            bad[k] = inf ? INFINITY : NAN;
+            fill(out, n * n);
+            rc = dvrk_gravity(model, ws, bad, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "gravity(bad q[%zu]) = %d", k, rc);
+            rc = dvrk_mass_matrix(model, ws, bad, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n * n), "mass(bad q[%zu]) = %d", k, rc);
+            /* the bad vector in each of the three inputs in turn */
+            rc = dvrk_inverse_dynamics(model, ws, bad, q, q, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad q[%zu]) = %d", k, rc);
+            rc = dvrk_inverse_dynamics(model, ws, q, bad, q, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad dq[%zu]) = %d", k, rc);
+            rc = dvrk_inverse_dynamics(model, ws, q, q, bad, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad ddq[%zu]) = %d", k, rc);
+            rc = dvrk_rigid_body_dynamics(model, ws, q, bad, q, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "rigid(bad dq[%zu]) = %d", k, rc);
+            rc = dvrk_forward_dynamics(model, ws, q, q, bad, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "fd(bad tau[%zu]) = %d", k, rc);
+            rc = dvrk_forward_dynamics(model, ws, bad, q, q, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "fd(bad q[%zu]) = %d", k, rc);
+        }
+    }
+    fill(out, n * n);
+    rc = dvrk_inverse_dynamics(model, ws, q, NULL, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL dq) = %d", rc);
+    rc = dvrk_inverse_dynamics(model, ws, q, q, NULL, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL ddq) = %d", rc);
+    rc = dvrk_rigid_body_dynamics(model, ws, q, q, q, NULL);
+    CHECK(rc == DVRK_ERR_NULL, "rigid(NULL tau) = %d", rc);
+    rc = dvrk_mass_matrix(NULL, ws, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n * n), "mass(NULL model) = %d", rc);
+    rc = dvrk_mass_matrix(model, ws, q, NULL);
+    CHECK(rc == DVRK_ERR_NULL, "mass(NULL m) = %d", rc);
+    rc = dvrk_forward_dynamics(model, NULL, q, q, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "fd(NULL ws) = %d", rc);
+    rc = dvrk_forward_dynamics(model, ws, q, q, NULL, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "fd(NULL tau) = %d", rc);
+    rc = dvrk_measured_to_model(model, NULL, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "measured_to_model(NULL) = %d", rc);
+    rc = dvrk_model_to_measured_torque(NULL, q, out);
+    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "model_to_measured_torque(NULL) = %d", rc);
+
+    /* NULL objects are harmless everywhere else too. */
+    CHECK(dvrk_model_dof(NULL) == 0, "dof(NULL)");
+    CHECK(dvrk_model_n_measured(NULL) == 0, "n_measured(NULL)");
+    CHECK(dvrk_workspace_new(NULL) == NULL, "workspace_new(NULL)");
+    CHECK(dvrk_model_param_name(model, 1000000) == NULL, "param_name(out of range)");
+    dvrk_workspace_free(NULL);
+    dvrk_model_free(NULL);
+
+    /* Every code has its own message; an unknown code has one too. */
+    int codes[] = {DVRK_OK, DVRK_ERR_NULL, DVRK_ERR_NOT_FINITE, DVRK_ERR_WORKSPACE,
+                   DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_OVERFLOW, DVRK_ERR_INTERNAL};
+    size_t nc = sizeof codes / sizeof codes[0];
+    for (size_t i = 0; i < nc; i++) {
+        CHECK(dvrk_error_string(codes[i]) != NULL && strlen(dvrk_error_string(codes[i])) > 0,
+              "error_string(%d)", codes[i]);
+        for (size_t j = 0; j < i; j++)
+            CHECK(strcmp(dvrk_error_string(codes[i]), dvrk_error_string(codes[j])) != 0,
+                  "codes %d and %d share a message", codes[i], codes[j]);
+    }
+    printf("error %d: %s\n", DVRK_ERR_NOT_FINITE, dvrk_error_string(DVRK_ERR_NOT_FINITE));
+    CHECK(strcmp(dvrk_error_string(-999), "unknown error code") == 0, "error_string(-999)");
+
+    dvrk_workspace_free(other_ws);
+    free(bad);
+    free(out);
+}
+
+/* Loading errors: each a NULL model with a message, which the test prints for the Rust
+   side to check. */
+static void check_load_errors(const char *bad_robot_result) {
+    char err[256];
+    err[0] = 'x';
+    CHECK(dvrk_model_from_result(NULL, err, sizeof err) == NULL, "from_result(NULL)");
+    printf("null-path: %s\n", err);
+    CHECK(dvrk_model_from_result("/nonexistent/result.json", err, sizeof err) == NULL,
+          "from_result(bad path)");
+    printf("bad-path: %s\n", err);
+    CHECK(dvrk_model_from_result(bad_robot_result, err, sizeof err) == NULL,
+          "from_result(unknown robot)");
+    printf("unknown-robot: %s\n", err);
+    /* A short buffer: truncated and NUL-terminated; a NULL one: no message, no crash. */
+    char small[8];
+    memset(small, 'x', sizeof small);
+    CHECK(dvrk_model_from_result("/nonexistent/result.json", small, sizeof small) == NULL,
+          "from_result(bad path, small err)");
+    CHECK(strlen(small) == sizeof small - 1, "truncated message of %zu bytes", strlen(small));
+    CHECK(dvrk_model_from_result("/nonexistent/result.json", NULL, 0) == NULL,
+          "from_result(bad path, NULL err)");
+}
+
+int main(int argc, char **argv) {
+    if (argc != 4) {
+        fprintf(stderr, "usage: %s RESULT CASES BAD_ROBOT_RESULT\n", argv[0]);
+        return 2;
+    }
+    char err[512];
+    DvrkModel *model = dvrk_model_from_result(argv[1], err, sizeof err);
+    if (!model) {
+        fprintf(stderr, "FAIL: cannot load %s: %s\n", argv[1], err);
+        return 1;
+    }
+    DvrkModel *other = dvrk_model_from_result(argv[1], err, sizeof err);
+    CHECK(other != NULL, "second load: %s", err);
+    size_t n = dvrk_model_dof(model);
+    printf("version %s\n", dvrk_version());
+    printf("dof %zu measured %zu params %zu\n", n, dvrk_model_n_measured(model),
+           dvrk_model_n_params(model));
+    printf("names %s %s %s\n", dvrk_model_coordinate_name(model, 0),
+           dvrk_model_joint_name(model, n - 1),
+           dvrk_model_param_name(model, dvrk_model_n_params(model) - 1));
+    DvrkWorkspace *ws = dvrk_workspace_new(model);
+    CHECK(ws != NULL, "workspace_new");
+
+    FILE *cases = fopen(argv[2], "r");
+    if (!cases) {
+        fprintf(stderr, "FAIL: cannot open %s\n", argv[2]);
+        return 1;
+    }
+    int k_cases = 0;
+    if (fscanf(cases, "%d", &k_cases) != 1) return 1;
+    double *x = malloc(4 * n * sizeof(double));
+    double *out = malloc(n * n * sizeof(double));
+    for (int c = 0; c < k_cases; c++) {
+        for (size_t i = 0; i < 4 * n; i++)
+            if (fscanf(cases, "%lf", &x[i]) != 1) return 1;
+        const double *q = x, *dq = x + n, *ddq = x + 2 * n, *tau_fd = x + 3 * n;
+        int rc;
+        rc = dvrk_gravity(model, ws, q, out);
+        CHECK(rc == DVRK_OK, "gravity: %s", dvrk_error_string(rc));
+        print_vector("g", out, n);
+        rc = dvrk_inverse_dynamics(model, ws, q, dq, ddq, out);
+        CHECK(rc == DVRK_OK, "inverse dynamics: %s", dvrk_error_string(rc));
+        print_vector("tau", out, n);
+        rc = dvrk_rigid_body_dynamics(model, ws, q, dq, ddq, out);
+        CHECK(rc == DVRK_OK, "rigid-body dynamics: %s", dvrk_error_string(rc));
+        print_vector("rigid", out, n);
+        rc = dvrk_mass_matrix(model, ws, q, out);
+        CHECK(rc == DVRK_OK, "mass matrix: %s", dvrk_error_string(rc));
+        print_vector("m", out, n * n);
+        rc = dvrk_forward_dynamics(model, ws, q, dq, tau_fd, out);
+        CHECK(rc == DVRK_OK, "forward dynamics: %s", dvrk_error_string(rc));
+        print_vector("ddq", out, n);
+        rc = dvrk_measured_to_model(model, q, out);
+        CHECK(rc == DVRK_OK, "measured to model: %s", dvrk_error_string(rc));
+        print_vector("from_measured", out, n);
+        rc = dvrk_model_to_measured_torque(model, tau_fd, out);
+        CHECK(rc == DVRK_OK, "model to measured: %s", dvrk_error_string(rc));
+        print_vector("to_measured", out, n);
+    }
+    fclose(cases);
+
+    check_errors(model, ws, other, x, n);
+    check_load_errors(argv[3]);
+
+    free(out);
+    free(x);
+    dvrk_workspace_free(ws);
+    dvrk_model_free(other);
+    dvrk_model_free(model);
+    printf("failures %d\n", failures);
+    return failures == 0 ? 0 : 1;
+}

@@ -1,0 +1,143 @@
+//! The real-time calls of the C ABI (gravity, inverse, rigid-body and forward dynamics, mass
+//! matrix, measured-joint conversions) allocate nothing: a counting global allocator sees no
+//! allocation across many calls of each (successful ones and the error paths), through
+//! the `extern "C"` functions themselves, on the SDP+Stribeck fit of the bundled example.
+//! (A controller's real-time loop must not reach `malloc`: it may take a lock or page
+//! faults.) One test function, so no other test thread allocates meanwhile.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use dvrk_ident::{FitRequest, LogSource, Overrides, Training};
+use dvrk_model_c::*;
+
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+// SAFETY: forwards to the system allocator unchanged; counting touches no memory.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: the caller's layout, passed on.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: the caller's pointer and layout, passed on.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::SeqCst);
+        // SAFETY: the caller's arguments, passed on.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: Counting = Counting;
+
+#[test]
+fn real_time_calls_allocate_nothing() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no_alloc");
+    std::fs::create_dir_all(&dir).unwrap();
+    let log = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/psm_excitation.mcap"
+    );
+    let psm = dvrk_model::Model::builtin("psm").unwrap();
+    let request = FitRequest {
+        overrides: Overrides {
+            stribeck_velocity: Some(0.3),
+            ..Overrides::default()
+        },
+        ..FitRequest::new(Training::Logs(vec![LogSource::File(log.into())]))
+    };
+    let outcome = request
+        .run(Some(&psm), &dvrk_ident::progress::Silent)
+        .unwrap();
+    let path = dir.join("psm_sdp.json");
+    std::fs::write(&path, outcome.result.to_json()).unwrap();
+    let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
+
+    let mut err = [0 as std::ffi::c_char; 256];
+    // SAFETY: a NUL-terminated path and an error buffer of its length.
+    let model = unsafe { dvrk_model_from_result(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
+    assert!(!model.is_null());
+    // SAFETY: a live model.
+    let ws = unsafe { dvrk_workspace_new(model) };
+    // SAFETY: a live model.
+    let n = unsafe { dvrk_model_dof(model) };
+    let q: Vec<f64> = (0..n).map(|i| 0.1 + 0.05 * i as f64).collect();
+    let dq: Vec<f64> = (0..n).map(|i| 0.3 - 0.1 * i as f64).collect();
+    let ddq: Vec<f64> = (0..n).map(|i| 0.5 * i as f64 - 1.0).collect();
+    let mut nan = q.clone();
+    nan[1] = f64::NAN;
+    let mut tau = vec![0.0; n];
+    let mut acc = vec![0.0; n];
+    let mut m = vec![0.0; n * n];
+    let mut x = vec![0.0; n];
+
+    // The counter counts: a vector allocated here is seen.
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    drop(std::hint::black_box(vec![0u8; 16]));
+    assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), before + 1);
+
+    let before = ALLOCATIONS.load(Ordering::SeqCst);
+    let mut codes = [0; 9];
+    for _ in 0..1000 {
+        // SAFETY: a live model and its workspace; every buffer of n (or n·n) doubles.
+        unsafe {
+            codes[0] = dvrk_gravity(model, ws, q.as_ptr(), tau.as_mut_ptr());
+            codes[1] = dvrk_inverse_dynamics(
+                model,
+                ws,
+                q.as_ptr(),
+                dq.as_ptr(),
+                ddq.as_ptr(),
+                tau.as_mut_ptr(),
+            );
+            codes[2] = dvrk_mass_matrix(model, ws, q.as_ptr(), m.as_mut_ptr());
+            codes[8] = dvrk_rigid_body_dynamics(
+                model,
+                ws,
+                q.as_ptr(),
+                dq.as_ptr(),
+                ddq.as_ptr(),
+                x.as_mut_ptr(),
+            );
+            codes[3] = dvrk_forward_dynamics(
+                model,
+                ws,
+                q.as_ptr(),
+                dq.as_ptr(),
+                tau.as_ptr(),
+                acc.as_mut_ptr(),
+            );
+            codes[4] = dvrk_measured_to_model(model, q.as_ptr(), x.as_mut_ptr());
+            codes[5] = dvrk_model_to_measured_torque(model, tau.as_ptr(), x.as_mut_ptr());
+            // The error paths too.
+            codes[6] = dvrk_gravity(model, ws, nan.as_ptr(), tau.as_mut_ptr());
+            codes[7] = dvrk_mass_matrix(model, std::ptr::null_mut(), q.as_ptr(), m.as_mut_ptr());
+            std::hint::black_box(dvrk_error_string(DVRK_ERR_NULL));
+        }
+    }
+    let after = ALLOCATIONS.load(Ordering::SeqCst);
+    assert_eq!(&codes[..6], &[DVRK_OK; 6]);
+    assert_eq!(codes[6], DVRK_ERR_NOT_FINITE);
+    assert_eq!(codes[7], DVRK_ERR_NULL);
+    assert_eq!(codes[8], DVRK_OK);
+    assert_eq!(
+        after - before,
+        0,
+        "allocations in 1000 rounds of the real-time calls"
+    );
+    // Forward dynamics inverted the inverse dynamics: the calls computed something.
+    for (a, d) in acc.iter().zip(&ddq) {
+        assert!((a - d).abs() < 1e-8, "{acc:?} vs {ddq:?}");
+    }
+    // SAFETY: live pointers from their constructors, freed once, workspace first.
+    unsafe {
+        dvrk_workspace_free(ws);
+        dvrk_model_free(model);
+    }
+}
