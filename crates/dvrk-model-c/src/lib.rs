@@ -677,15 +677,8 @@ pub unsafe extern "C" fn dvrk_measured_to_model(
         // SAFETY: the caller's obligations, passed on.
         let (x, out) = unsafe { (input(measured, n)?, output(model_out, n)?) };
         finite(&[x])?;
-        let row = |i: usize| (0..n).fold(0.0, |acc, k| acc + m.measured_to_model[i * n + k] * x[k]);
-        if (0..n).all(|i| row(i).is_finite()) {
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = row(i);
-            }
-            Ok(())
-        } else {
-            Err(DVRK_ERR_OVERFLOW)
-        }
+        // out_i = Σ_k M⁻¹[i, k] x_k (row-major M⁻¹).
+        map_linear(x, out, |i, k| m.measured_to_model[i * n + k])
     })
 }
 
@@ -711,16 +704,24 @@ pub unsafe extern "C" fn dvrk_model_to_measured_torque(
         // SAFETY: the caller's obligations, passed on.
         let (t, out) = unsafe { (input(tau_model, n)?, output(measured_out, n)?) };
         finite(&[t])?;
-        let row = |k: usize| (0..n).fold(0.0, |acc, j| acc + m.measured_to_model[j * n + k] * t[j]);
-        if (0..n).all(|k| row(k).is_finite()) {
-            for (k, o) in out.iter_mut().enumerate() {
-                *o = row(k);
-            }
-            Ok(())
-        } else {
-            Err(DVRK_ERR_OVERFLOW)
-        }
+        // out_k = Σ_j M⁻¹[j, k] t_j: the transpose of M⁻¹ (row-major).
+        map_linear(t, out, |k, j| m.measured_to_model[j * n + k])
     })
+}
+
+/// `out_i = Σ_k a(i, k)·x_k` for the joint conversions, which have no workspace to
+/// compute into: every entry is checked finite before any is written (each computed
+/// twice, 2n² flops), so `out` is untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
+fn map_linear(x: &[f64], out: &mut [f64], a: impl Fn(usize, usize) -> f64) -> Result<(), c_int> {
+    let n = x.len();
+    let row = |i: usize| (0..n).fold(0.0, |acc, k| acc + a(i, k) * x[k]);
+    if !(0..out.len()).all(|i| row(i).is_finite()) {
+        return Err(DVRK_ERR_OVERFLOW);
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = row(i);
+    }
+    Ok(())
 }
 
 /// A static, NUL-terminated description of a return code (`DVRK_OK`, `DVRK_ERR_*`);
