@@ -12,7 +12,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use dvrk_ident::{FitRequest, FitResult, LogSource, Overrides, Training};
+mod common;
+use common::fit_example;
+use dvrk_ident::FitResult;
 use dvrk_model::Workspace;
 
 /// The shared library this test run built: cargo builds the crate's cdylib and
@@ -40,31 +42,6 @@ fn compiler(var: &str, default: &str) -> Option<String> {
     let cc = std::env::var(var).unwrap_or_else(|_| default.to_string());
     let found = Command::new(&cc).arg("--version").output();
     found.is_ok_and(|o| o.status.success()).then_some(cc)
-}
-
-/// Fits the bundled example (SDP, the default method, with Stribeck terms of 0.3 rad/s
-/// or m/s) and writes the result document into `dir`.
-fn fit_example(dir: &Path) -> PathBuf {
-    let log = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../examples/psm_excitation.mcap"
-    );
-    let psm = dvrk_model::Model::builtin("psm").unwrap();
-    let request = FitRequest {
-        overrides: Overrides {
-            stribeck_velocity: Some(0.3),
-            ..Overrides::default()
-        },
-        ..FitRequest::new(Training::Logs(vec![LogSource::File(log.into())]))
-    };
-    let outcome = request
-        .run(Some(&psm), &dvrk_ident::progress::Silent)
-        .expect("the example fits");
-    assert_eq!(outcome.result.method, "sdp");
-    assert!(outcome.result.solver.converged);
-    let path = dir.join("psm_sdp.json");
-    std::fs::write(&path, outcome.result.to_json()).unwrap();
-    path
 }
 
 /// A few states inside the PSM's ranges (joint 3, the insertion, in metres), one at rest

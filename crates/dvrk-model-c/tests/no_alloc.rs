@@ -5,10 +5,11 @@
 //! (A controller's real-time loop must not reach `malloc`: it may take a lock or page
 //! faults.) One test function, so no other test thread allocates meanwhile.
 
+mod common;
+
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use dvrk_ident::{FitRequest, LogSource, Overrides, Training};
 use dvrk_model_c::*;
 
 struct Counting;
@@ -40,23 +41,7 @@ static GLOBAL: Counting = Counting;
 fn real_time_calls_allocate_nothing() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no_alloc");
     std::fs::create_dir_all(&dir).unwrap();
-    let log = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../examples/psm_excitation.mcap"
-    );
-    let psm = dvrk_model::Model::builtin("psm").unwrap();
-    let request = FitRequest {
-        overrides: Overrides {
-            stribeck_velocity: Some(0.3),
-            ..Overrides::default()
-        },
-        ..FitRequest::new(Training::Logs(vec![LogSource::File(log.into())]))
-    };
-    let outcome = request
-        .run(Some(&psm), &dvrk_ident::progress::Silent)
-        .unwrap();
-    let path = dir.join("psm_sdp.json");
-    std::fs::write(&path, outcome.result.to_json()).unwrap();
+    let path = common::fit_example(&dir);
     let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
 
     let mut err = [0 as std::ffi::c_char; 256];
