@@ -515,10 +515,9 @@ impl PreparedPy {
     /// `p` (model coordinates) shown in the joints of `map`.
     pub fn new(p: Prepared, map: &dvrk_ident::fit::JointMap) -> PreparedPy {
         let inner = Arc::new(p);
-        let shown = if map.is_identity() {
-            inner.clone()
-        } else {
-            Arc::new(map.prepared(&inner))
+        let shown = match map.prepared(&inner) {
+            std::borrow::Cow::Borrowed(_) => inner.clone(),
+            std::borrow::Cow::Owned(shown) => Arc::new(shown),
         };
         PreparedPy {
             inner,

@@ -589,7 +589,9 @@ impl FitResultPy {
         let times = prepared.time.clone();
         let names = map.names.clone();
         let pred = background(py, move || {
-            Ok(map.torque(&predict(&model, &params, &prepared)))
+            Ok(map
+                .torque(&predict(&model, &params, &prepared))
+                .into_owned())
         })?;
         if as_dataframe {
             let mut cols = vec![("time".to_string(), times)];

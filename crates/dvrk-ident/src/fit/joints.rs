@@ -4,6 +4,8 @@
 //! `outer_wrist_yaw`, `jaw`). Errors, figures and predictions go through one
 //! [`JointMap`], so the metrics, the report and Python's `predict` agree.
 
+use std::borrow::Cow;
+
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 
@@ -119,19 +121,21 @@ impl JointMap {
         units(self.is_length.get(j).copied().unwrap_or(false))
     }
 
-    /// Positions, velocities or accelerations (samples × coordinates) in the shown joints.
-    pub fn motion(&self, x: &DMatrix<f64>) -> DMatrix<f64> {
+    /// Positions, velocities or accelerations (samples × coordinates) in the shown
+    /// joints; `x` itself, not a copy, for the model coordinates.
+    pub fn motion<'a>(&self, x: &'a DMatrix<f64>) -> Cow<'a, DMatrix<f64>> {
         match &self.maps {
-            None => x.clone(),
-            Some((m, _)) => x * m.transpose(),
+            None => Cow::Borrowed(x),
+            Some((m, _)) => Cow::Owned(x * m.transpose()),
         }
     }
 
-    /// Torques (samples × coordinates, N·m or N) in the shown joints.
-    pub fn torque(&self, x: &DMatrix<f64>) -> DMatrix<f64> {
+    /// Torques (samples × coordinates, N·m or N) in the shown joints; `x` itself for the
+    /// model coordinates.
+    pub fn torque<'a>(&self, x: &'a DMatrix<f64>) -> Cow<'a, DMatrix<f64>> {
         match &self.maps {
-            None => x.clone(),
-            Some((_, w)) => x * w.transpose(),
+            None => Cow::Borrowed(x),
+            Some((_, w)) => Cow::Owned(x * w.transpose()),
         }
     }
 
@@ -144,16 +148,20 @@ impl JointMap {
         }
     }
 
-    /// The processed samples in the shown joints (for figures and Python); the
-    /// estimator and the inverse dynamics read only model coordinates.
-    pub fn prepared(&self, p: &Prepared) -> Prepared {
-        Prepared {
+    /// The processed samples in the shown joints (for figures and Python); `p` itself
+    /// for the model coordinates. The estimator and the inverse dynamics read only
+    /// model coordinates.
+    pub fn prepared<'a>(&self, p: &'a Prepared) -> Cow<'a, Prepared> {
+        if self.is_identity() {
+            return Cow::Borrowed(p);
+        }
+        Cow::Owned(Prepared {
             source: p.source.clone(),
             time: p.time.clone(),
-            q: self.motion(&p.q),
-            dq: self.motion(&p.dq),
-            ddq: self.motion(&p.ddq),
-            tau: self.torque(&p.tau),
-        }
+            q: self.motion(&p.q).into_owned(),
+            dq: self.motion(&p.dq).into_owned(),
+            ddq: self.motion(&p.ddq).into_owned(),
+            tau: self.torque(&p.tau).into_owned(),
+        })
     }
 }
