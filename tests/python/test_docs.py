@@ -31,11 +31,15 @@ SRC = BOOK / "src"
 # What a snippet may read from the repository, copied into its working folder.
 COPIED = ("examples", "robots", "tests/fixtures")
 RUN = {"sh", "python"}
-SHOWN = {"text", "toml", "json"}
+# Shown, not run: cpp is the C library's example, compiled by its own tests; cmake a
+# downstream project's lines, built by crates/dvrk-model-c/tests/installed/run.sh.
+SHOWN = {"text", "toml", "json", "cpp", "cmake"}
 # Pages the book includes ({{#include}}) whose blocks other tests run.
 INCLUDED_ELSEWHERE = {
     "crates/dvrk-py/README.md": "tests/python/test_tutorial.py runs its Python tutorial; "
     "its install commands are those of .ci/wheel and .ci/run",
+    "crates/dvrk-model-c/tests/cpp/readme.cpp": "crates/dvrk-model-c/tests/c_abi.rs "
+    "(readme_cpp_example_runs) compiles and runs it",
 }
 # One snippet at most this long (s): a hang fails instead of stopping CI.
 TIMEOUT = 600

@@ -1,5 +1,5 @@
-//! dvrk_model.pc.in works from an install prefix: the libraries and headers copied into a
-//! scratch prefix as an install would lay them out, the template filled in, then
+//! dvrk_model.pc.in works from an install prefix: install.sh puts the libraries this run
+//! built, the headers and the filled-in template into a scratch prefix, then
 //! `pkg-config --cflags --libs dvrk_model` (and `--static`) give the flags that compile,
 //! link and run a C program calling the library. Skipped, visibly, without pkg-config
 //! or cc.
@@ -22,26 +22,46 @@ fn built(file: &str) -> PathBuf {
     path
 }
 
-/// Lays out `prefix` as an install would, with the shared library or the static one.
+/// Installs into `prefix` with install.sh, from the libraries this run built; for the
+/// static layout (`library` the .a) the shared library is removed, so the linker has
+/// only the static one to take.
 fn install(prefix: &Path, library: &str) {
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
     let _ = std::fs::remove_dir_all(prefix);
-    std::fs::create_dir_all(prefix.join("lib/pkgconfig")).unwrap();
-    std::fs::create_dir_all(prefix.join("include")).unwrap();
-    std::fs::copy(built(library), prefix.join("lib").join(library)).unwrap();
-    for header in ["dvrk_model.h", "dvrk_model.hpp"] {
-        std::fs::copy(
-            crate_dir.join("include").join(header),
-            prefix.join("include").join(header),
-        )
+    let libdir = built(library).parent().unwrap().to_path_buf();
+    let out = Command::new("sh")
+        .arg(crate_dir.join("install.sh"))
+        .arg(prefix)
+        .env("DVRK_MODEL_LIBDIR", &libdir)
+        .output()
         .unwrap();
-    }
-    let template = std::fs::read_to_string(crate_dir.join("dvrk_model.pc.in")).unwrap();
-    let pc = template
-        .replace("@PREFIX@", prefix.to_str().unwrap())
-        .replace("@VERSION@", env!("CARGO_PKG_VERSION"));
+    assert!(
+        out.status.success(),
+        "install.sh: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let pc = std::fs::read_to_string(prefix.join("lib/pkgconfig/dvrk_model.pc")).unwrap();
     assert!(!pc.contains('@'), "a placeholder is left:\n{pc}");
-    std::fs::write(prefix.join("lib/pkgconfig/dvrk_model.pc"), pc).unwrap();
+    assert!(
+        pc.contains(&format!("Version: {}", env!("CARGO_PKG_VERSION"))),
+        "{pc}"
+    );
+    for file in [
+        "include/dvrk_model.h",
+        "include/dvrk_model.hpp",
+        "lib/cmake/dvrk_model/dvrk_modelConfig.cmake",
+        "lib/cmake/dvrk_model/dvrk_modelConfigVersion.cmake",
+    ] {
+        assert!(prefix.join(file).is_file(), "install.sh left out {file}");
+    }
+    if library.ends_with(".a") {
+        let dll = format!(
+            "{}dvrk_model_c{}",
+            std::env::consts::DLL_PREFIX,
+            std::env::consts::DLL_SUFFIX
+        );
+        std::fs::remove_file(prefix.join("lib").join(dll)).unwrap();
+    }
 }
 
 /// `pkg-config ARGS dvrk_model` against `prefix`: the flags, split.
