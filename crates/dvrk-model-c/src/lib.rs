@@ -608,14 +608,12 @@ pub unsafe extern "C" fn dvrk_mass_matrix(
         // SAFETY: the caller's obligations, passed on.
         let (q, out) = unsafe { (input(q, n)?, output(m, n * n)?) };
         finite(&[q])?;
+        // dvrk-model writes M column-major, each off-diagonal product added to both of
+        // its entries at once, so M is symmetric to the bit and its column-major layout
+        // is its row-major one: no transpose (tests/c_abi.rs compares every entry with
+        // dvrk-model's, bit for bit).
         dm.model
             .mass_matrix_into(&mut w.ws, &dm.params, q, &mut w.matrix);
-        // Column-major to row-major: the transpose, in place.
-        for i in 0..n {
-            for j in i + 1..n {
-                w.matrix.swap(i + j * n, j + i * n);
-            }
-        }
         deliver(&w.matrix, out)
     })
 }
