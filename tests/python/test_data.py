@@ -56,7 +56,7 @@ def test_dataframe_round_trip_and_coordinates(psm, logs):
     bad = model.to_dataframe().rename(columns=lambda c: c.replace(".q3", ".outer_insertion"))
     with pytest.raises(di.InputError, match="neither coordinates of robot"):
         di.JointLog.from_dataframe(bad, psm)
-    with pytest.raises(di.InputError, match="no effort column"):
+    with pytest.raises(di.InputError, match='missing effort column for joint "q2"'):
         di.JointLog.from_dataframe(model.to_dataframe().drop(columns="effort.q2"))
     with pytest.raises(di.InputError, match="no sample times"):
         di.JointLog.from_dataframe(model.to_dataframe().drop(columns="time"))
@@ -172,3 +172,39 @@ def test_multiprocessing_round_trip(psm, logs):
         str(remote.solver["seconds"]), "") == local.to_json().replace(str(local.solver["seconds"]), "")
     assert robot.parameter_names == psm.parameter_names
     same(data[1], train[1])
+
+
+@pytest.mark.parametrize("columns", [
+    ["time", "position.a", "q.a", "effort.a"],
+    ["time", "position.a", "effort.a", "speed.a"],
+    ["time", "position.a", "effort.a", "effort.b"],
+    ["time", "position.a", "position.b", "effort.a"],
+    ["time", "position.a", "position.b", "effort.a", "effort.b", "velocity.b"],
+    ["time", "effort.a"],
+])
+def test_a_dataframe_and_a_csv_share_one_column_grammar(tmp_path, columns):
+    """The same columns give the same verdict, word for word, from a DataFrame and from
+    the headered CSV (dvrk_logs::columns, one grammar for both)."""
+    df = pd.DataFrame([[0.01 * (k + 1) for k in range(len(columns))]], columns=columns)
+    path = tmp_path / "log.csv"
+    df.to_csv(path, index=False)
+    with pytest.raises(di.InputError) as from_df:
+        di.JointLog.from_dataframe(df)
+    with pytest.raises(di.InputError) as from_csv:
+        di.read_log(path)
+    assert str(from_df.value).startswith("df: ")
+    assert str(from_csv.value).startswith(f"{path}:1: ")
+    assert str(from_df.value)[len("df: "):] == str(from_csv.value)[len(f"{path}:1: "):]
+
+
+def test_aliases_read_alike_from_a_dataframe_and_a_csv(tmp_path):
+    columns = ["time", "q.q1", "tau.q1", "position.q2", "torque.q2", "dq.q1", "velocity.q2"]
+    df = pd.DataFrame([[0.0, 1, 2, 3, 4, 5, 6], [0.01, 1.5, 2.5, 3.5, 4.5, 5.5, 6.5]], columns=columns)
+    path = tmp_path / "log.csv"
+    df.to_csv(path, index=False)
+    a, b = di.JointLog.from_dataframe(df), di.read_log(path)
+    assert a.joint_names == b.joint_names == ["q1", "q2"]
+    assert a.coordinates == b.coordinates == "model"
+    for signal in ("q", "dq", "tau"):
+        np.testing.assert_array_equal(getattr(a, signal), getattr(b, signal))
+    np.testing.assert_array_equal(a.q, [[1, 3], [1.5, 3.5]])

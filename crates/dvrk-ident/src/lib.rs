@@ -54,7 +54,7 @@ pub mod estimate;
 pub mod excite;
 // The logs live in their own crate (crates/dvrk-logs), under the same paths here.
 use dvrk_logs::median;
-pub use dvrk_logs::{joint_log, log, names, output};
+pub use dvrk_logs::{columns, joint_log, log, names, output};
 pub mod observation;
 pub mod progress;
 #[cfg(feature = "report")]

@@ -37,6 +37,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod columns;
 pub mod joint_log;
 pub mod log;
 pub mod median;

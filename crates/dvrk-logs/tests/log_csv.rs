@@ -1,6 +1,7 @@
 //! CSV log readers and writers: round trips, format detection and every error case.
 
-use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog, Signal};
+use dvrk_logs::columns::ColumnError;
+use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_logs::log::{
     detect_format, read, read_headered, read_wpi, write, write_headered, write_wpi, LogError,
     LogFormat,
@@ -301,7 +302,7 @@ fn missing_columns() {
     );
     assert!(matches!(
         e,
-        LogError::MissingJointColumn { signal: Signal::Effort, ref joint, .. } if joint == "b"
+        LogError::Columns { source: ColumnError::MissingEffort { ref joint }, .. } if joint == "b"
     ));
 
     let path = write_file(
@@ -320,7 +321,10 @@ fn missing_columns() {
     let path = write_file(&dir, "nojoint.csv", "time\n0\n");
     assert!(matches!(
         read_headered(&path).unwrap_err(),
-        LogError::NoJoints { .. }
+        LogError::Columns {
+            source: ColumnError::NoJoints,
+            ..
+        }
     ));
 
     let path = write_file(
@@ -338,7 +342,10 @@ fn missing_columns() {
     let path = write_file(&dir, "nodot.csv", "time,position,effort.a\n0,1,2\n");
     assert!(matches!(
         read_headered(&path).unwrap_err(),
-        LogError::UnknownColumn { .. }
+        LogError::Columns {
+            source: ColumnError::Unknown { .. },
+            ..
+        }
     ));
 
     let path = write_file(
@@ -431,7 +438,10 @@ fn rate_and_format_errors() {
     // Forcing the headered reader on a headerless file: numbers are unknown columns.
     assert!(matches!(
         read(&path, Some(LogFormat::Csv), None).unwrap_err(),
-        LogError::UnknownColumn { .. }
+        LogError::Columns {
+            source: ColumnError::Unknown { .. },
+            ..
+        }
     ));
     // By content, not by extension: a text file named .mcap is a CSV.
     let mcap = write_file(&dir, "x.mcap", "not really");

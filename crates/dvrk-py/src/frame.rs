@@ -2,7 +2,8 @@
 //! (converted exactly), joint columns named `position.<joint>` (or a MultiIndex), and
 //! DataFrames out. pandas is imported only when a DataFrame is asked for.
 
-use dvrk_ident::joint_log::Coordinates;
+use dvrk_ident::columns::{are_model_coordinate_names, signal_of, ColumnLayout};
+use dvrk_ident::joint_log::{Coordinates, Signal};
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 use pyo3::prelude::*;
@@ -75,23 +76,6 @@ pub fn times(py: Python<'_>, obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Vec
     Ok(from_first(&ns))
 }
 
-/// The signal a column holds: `q`, `dq` or `tau`.
-#[derive(Clone, Copy, PartialEq, Eq, Debug)]
-pub enum Column {
-    Position,
-    Velocity,
-    Effort,
-}
-
-fn signal_of(prefix: &str) -> Option<Column> {
-    match prefix {
-        "position" | "q" => Some(Column::Position),
-        "velocity" | "dq" => Some(Column::Velocity),
-        "effort" | "tau" | "torque" => Some(Column::Effort),
-        _ => None,
-    }
-}
-
 /// Joint names from a DataFrame's columns (or `None` for an object without columns),
 /// a `signal.` prefix removed.
 pub fn column_names(obj: &Bound<'_, PyAny>) -> PyResult<Option<Vec<String>>> {
@@ -115,7 +99,7 @@ pub fn column_names(obj: &Bound<'_, PyAny>) -> PyResult<Option<Vec<String>>> {
 }
 
 /// Model coordinates when every name is one of the robot's coordinates (without a
-/// robot: every name is `q<k>`), measured joints when every name is one of its measured
+/// robot: the names are `q1..qn` in order, as the headered CSV decides), measured joints when every name is one of its measured
 /// joints (without a robot: otherwise); an error naming what fits neither.
 pub fn infer_coordinates(names: &[String], model: Option<&Model>) -> PyResult<Coordinates> {
     match model {
@@ -138,18 +122,11 @@ pub fn infer_coordinates(names: &[String], model: Option<&Model>) -> PyResult<Co
                 )))
             }
         }
-        None => Ok(
-            if !names.is_empty()
-                && names.iter().all(|n| {
-                    n.strip_prefix('q')
-                        .is_some_and(|k| !k.is_empty() && k.bytes().all(|b| b.is_ascii_digit()))
-                })
-            {
-                Coordinates::Model
-            } else {
-                Coordinates::Measured
-            },
-        ),
+        None => Ok(if are_model_coordinate_names(names) {
+            Coordinates::Model
+        } else {
+            Coordinates::Measured
+        }),
     }
 }
 
@@ -163,9 +140,10 @@ pub struct Columns<'py> {
     pub time: Bound<'py, PyAny>,
 }
 
-/// Reads a DataFrame laid out as the headered CSV (`time`, `position.<joint>`,
-/// `velocity.<joint>`, `effort.<joint>`; also `q.`, `dq.`, `tau.`) or with a
-/// two-level column MultiIndex `(signal, joint)`; the time is the `time_column` (default
+/// Reads a DataFrame laid out as the headered CSV (its column grammar,
+/// `dvrk_logs::columns`: `time`, `position.<joint>`, `velocity.<joint>`,
+/// `effort.<joint>`, also `q.`, `dq.`, `tau.`) or with a two-level column MultiIndex
+/// `(signal, joint)`, read as `signal.joint`; the time is the `time_column` (default
 /// `"time"` if there is one) or the index.
 pub fn read_frame<'py>(
     py: Python<'py>,
@@ -175,46 +153,23 @@ pub fn read_frame<'py>(
     let columns = df
         .getattr("columns")
         .map_err(|_| input("df: expected a pandas DataFrame (no columns attribute)"))?;
-    let mut by_signal: Vec<(Column, String, Bound<'py, PyAny>)> = Vec::new();
-    let mut time = None;
     let wanted_time = time_column.unwrap_or("time");
+    let mut keys = Vec::new();
+    let mut names = Vec::new();
     for c in columns.try_iter()? {
         let c = c?;
-        let (signal, joint) = match c.extract::<(String, String)>() {
-            Ok((s, j)) => (s, j),
-            Err(_) => {
-                let name = c.str()?.to_string();
-                if name == wanted_time {
-                    time = Some(df.get_item(&c)?);
-                    continue;
-                }
-                match name.split_once('.') {
-                    Some((s, j)) => (s.to_string(), j.to_string()),
-                    None => {
-                        return Err(input(format!(
-                            "df: column {name:?} is not time, position.<joint>, velocity.<joint> or effort.<joint>"
-                        )))
-                    }
-                }
-            }
-        };
-        let kind = signal_of(&signal).ok_or_else(|| {
-            input(format!(
-                "df: column {signal}.{joint}: {signal:?} is not position, velocity or effort"
-            ))
-        })?;
-        if by_signal.iter().any(|(k, j, _)| *k == kind && *j == joint) {
-            return Err(input(format!(
-                "df: two {signal} columns for joint {joint:?}"
-            )));
-        }
-        by_signal.push((kind, joint, df.get_item(&c)?));
+        names.push(match c.extract::<(String, String)>() {
+            Ok((signal, joint)) => format!("{signal}.{joint}"),
+            Err(_) => c.str()?.to_string(),
+        });
+        keys.push(c);
     }
-    if time_column.is_some() && time.is_none() {
+    let layout = ColumnLayout::parse(&names, wanted_time).map_err(|e| input(format!("df: {e}")))?;
+    if time_column.is_some() && layout.time().is_none() {
         return Err(input(format!("df: no column {wanted_time:?}")));
     }
-    let time = match time {
-        Some(t) => t,
+    let time = match layout.time() {
+        Some(k) => df.get_item(&keys[k])?,
         None => {
             let index = df.getattr("index")?;
             let kind: String = index.getattr("dtype")?.getattr("kind")?.extract()?;
@@ -227,65 +182,31 @@ pub fn read_frame<'py>(
             index
         }
     };
-    let joints: Vec<String> = by_signal
-        .iter()
-        .filter(|(k, _, _)| *k == Column::Position)
-        .map(|(_, j, _)| j.clone())
-        .collect();
-    if joints.is_empty() {
-        return Err(input("df: no position.<joint> column"));
-    }
     let n: usize = df.call_method0("__len__")?.extract()?;
-    for (kind, joint, _) in &by_signal {
-        if *kind != Column::Position && !joints.contains(joint) {
-            return Err(input(format!(
-                "df: joint {joint:?} has no position.{joint} column"
-            )));
-        }
-    }
-    // The matrix of one signal and the joints without a column of it.
-    let gather = |kind: Column, what: &str| -> PyResult<(DMatrix<f64>, Vec<String>)> {
-        let mut m = DMatrix::zeros(n, joints.len());
-        let mut missing = Vec::new();
-        for (j, joint) in joints.iter().enumerate() {
-            match by_signal
-                .iter()
-                .find(|(k, jn, _)| *k == kind && jn == joint)
-            {
-                Some((_, _, col)) => {
-                    let arr = float_array(py, col, &format!("{what}.{joint}"))?;
-                    let ro = numpy::PyArrayMethods::readonly(&arr);
-                    for (i, v) in ro.as_array().iter().enumerate() {
-                        m[(i, j)] = *v;
-                    }
-                }
-                None => missing.push(joint.clone()),
+    // The matrix of one signal (the layout has checked that every joint has a column
+    // of it, or, for the velocity, that none has).
+    let gather = |signal: Signal| -> PyResult<DMatrix<f64>> {
+        let mut m = DMatrix::zeros(n, layout.joints.len());
+        for (j, joint) in layout.joints.iter().enumerate() {
+            let k = layout
+                .column(signal, j)
+                .ok_or_else(|| input(format!("df: no {signal} column for joint {joint:?}")))?;
+            let arr = float_array(py, &df.get_item(&keys[k])?, &format!("df[{:?}]", names[k]))?;
+            let ro = numpy::PyArrayMethods::readonly(&arr);
+            for (i, v) in ro.as_array().iter().enumerate() {
+                m[(i, j)] = *v;
             }
         }
-        Ok((m, missing))
+        Ok(m)
     };
-    let (q, _) = gather(Column::Position, "position")?;
-    let (dq, no_velocity) = gather(Column::Velocity, "velocity")?;
-    let dq = match no_velocity.len() {
-        0 => Some(dq),
-        k if k == joints.len() => None,
-        _ => {
-            return Err(input(format!(
-                "df: no velocity column for joints {no_velocity:?}: velocity columns must be given for all joints or none"
-            )))
-        }
-    };
-    let (tau, no_effort) = gather(Column::Effort, "effort")?;
-    if !no_effort.is_empty() {
-        return Err(input(format!(
-            "df: no effort column for joints {no_effort:?}"
-        )));
-    }
     Ok(Columns {
-        joints,
-        q,
-        dq,
-        tau,
+        q: gather(Signal::Position)?,
+        dq: layout
+            .with_velocity
+            .then(|| gather(Signal::Velocity))
+            .transpose()?,
+        tau: gather(Signal::Effort)?,
+        joints: layout.joints.clone(),
         time,
     })
 }

@@ -5,6 +5,7 @@
 //! so a log too long for memory and a short one go through the same parsing and checks.
 
 use super::{fmt_f64, open_text, write_atomic, LogError, TrajectoryBuilder};
+use crate::columns::{are_model_coordinate_names, ColumnKind, ColumnLayout};
 use crate::joint_log::{Coordinates, JointLog, Signal};
 use csv::{ReaderBuilder, StringRecord, Trim, WriterBuilder};
 use nalgebra::DMatrix;
@@ -254,24 +255,6 @@ pub fn read_wpi(
     Ok(all.build())
 }
 
-/// What a headered-CSV column holds.
-#[derive(Clone, Copy, PartialEq)]
-enum Kind {
-    Time,
-    Joint(Signal, usize), // signal, joint index (into the position-column order)
-}
-
-/// Whether `joints` are the model coordinates' names `q1, q2, ..., qn` in order: what
-/// [`write_headered`] writes for a log in model coordinates (measured joints carry the
-/// robot's joint names).
-pub(crate) fn are_model_coordinate_names(joints: &[String]) -> bool {
-    !joints.is_empty()
-        && joints
-            .iter()
-            .enumerate()
-            .all(|(k, j)| j.strip_prefix('q') == Some((k + 1).to_string().as_str()))
-}
-
 /// Coordinates stated in a leading `# ... coordinates: model|measured` comment (read
 /// from the file's first lines only), as files written before 0.2 have it.
 fn stated_coordinates(path: &Path) -> Result<Option<Coordinates>, LogError> {
@@ -315,7 +298,7 @@ pub struct HeaderedBlocks {
     path: PathBuf,
     records: Records,
     names: Vec<String>,
-    kinds: Vec<Kind>,
+    kinds: Vec<ColumnKind>,
     joints: Vec<String>,
     with_velocity: bool,
     coordinates: Coordinates,
@@ -338,88 +321,23 @@ impl HeaderedBlocks {
             }
             Some(r) => r?,
         };
-        // Classify columns.
-        let names: Vec<String> = header.iter().map(str::to_string).collect();
-        for (i, n) in names.iter().enumerate() {
-            if names[..i].contains(n) {
-                return Err(LogError::DuplicateColumn {
+        let layout =
+            ColumnLayout::parse(&header.iter().collect::<Vec<_>>(), "time").map_err(|source| {
+                LogError::Columns {
                     path: p(),
                     line: header_line,
-                    column: n.clone(),
-                });
-            }
-        }
-        let mut joints: Vec<String> = Vec::new();
-        let mut parsed: Vec<Option<(Signal, String)>> = Vec::with_capacity(names.len());
-        for n in &names {
-            if n == "time" {
-                parsed.push(None);
-                continue;
-            }
-            let (prefix, joint) = n.split_once('.').unwrap_or((n.as_str(), ""));
-            let signal = match prefix {
-                "position" => Signal::Position,
-                "velocity" => Signal::Velocity,
-                "effort" => Signal::Effort,
-                _ => Signal::Time,
-            };
-            if signal == Signal::Time || joint.is_empty() {
-                return Err(LogError::UnknownColumn {
-                    path: p(),
-                    line: header_line,
-                    column: n.clone(),
-                });
-            }
-            if signal == Signal::Position {
-                joints.push(joint.to_string());
-            }
-            parsed.push(Some((signal, joint.to_string())));
-        }
-        if !names.iter().any(|n| n == "time") {
+                    source,
+                }
+            })?;
+        if layout.time().is_none() {
             return Err(LogError::MissingTime { path: p() });
         }
-        if joints.is_empty() {
-            return Err(LogError::NoJoints { path: p() });
-        }
-        let dof = joints.len();
-        let mut kinds = Vec::with_capacity(names.len());
-        let mut have = vec![[false; 2]; dof]; // velocity, effort
-        for (n, pc) in names.iter().zip(&parsed) {
-            match pc {
-                None => kinds.push(Kind::Time),
-                Some((signal, joint)) => {
-                    let Some(j) = joints.iter().position(|x| x == joint) else {
-                        return Err(LogError::OrphanColumn {
-                            path: p(),
-                            column: n.clone(),
-                            joint: joint.clone(),
-                        });
-                    };
-                    match signal {
-                        Signal::Velocity => have[j][0] = true,
-                        Signal::Effort => have[j][1] = true,
-                        _ => {}
-                    }
-                    kinds.push(Kind::Joint(*signal, j));
-                }
-            }
-        }
-        if let Some(j) = have.iter().position(|h| !h[1]) {
-            return Err(LogError::MissingJointColumn {
-                path: p(),
-                signal: Signal::Effort,
-                joint: joints[j].clone(),
-            });
-        }
-        let with_velocity = have.iter().any(|h| h[0]);
-        if with_velocity {
-            if let Some(j) = have.iter().position(|h| !h[0]) {
-                return Err(LogError::PartialVelocity {
-                    path: p(),
-                    joint: joints[j].clone(),
-                });
-            }
-        }
+        let names: Vec<String> = header.iter().map(str::to_string).collect();
+        let ColumnLayout {
+            kinds,
+            joints,
+            with_velocity,
+        } = layout;
         // Files of earlier versions state the coordinates in a leading comment; today's
         // carry them in the column names alone (model coordinates are `q1..qn`), so that
         // every CSV reader sees the header on the first line.
@@ -490,7 +408,7 @@ impl HeaderedBlocks {
             }
             for (c, kind) in self.kinds.iter().enumerate() {
                 match *kind {
-                    Kind::Time => {
+                    ColumnKind::Time => {
                         let t = row[c];
                         if let Some(prev) = self.last {
                             if t <= prev {
@@ -505,9 +423,9 @@ impl HeaderedBlocks {
                         self.last = Some(t);
                         time.push(t);
                     }
-                    Kind::Joint(Signal::Position, j) => q[base + j] = row[c],
-                    Kind::Joint(Signal::Velocity, j) => dq[base + j] = row[c],
-                    Kind::Joint(_, j) => tau[base + j] = row[c],
+                    ColumnKind::Joint(Signal::Position, j) => q[base + j] = row[c],
+                    ColumnKind::Joint(Signal::Velocity, j) => dq[base + j] = row[c],
+                    ColumnKind::Joint(_, j) => tau[base + j] = row[c],
                 }
             }
         }

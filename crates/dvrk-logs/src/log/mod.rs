@@ -44,7 +44,7 @@ pub use self::csv::{
 };
 pub use self::options::{ReadOptions, Resampling};
 
-use crate::joint_log::{Coordinates, JointLog, JointLogError, Signal};
+use crate::joint_log::{Coordinates, JointLog, JointLogError};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
@@ -189,65 +189,21 @@ pub enum LogError {
         /// Number of joints requested by the caller, if any.
         dof: Option<usize>,
     },
-    /// A required column is missing from a headered CSV.
-    #[error("{}: missing {signal} column for joint {joint:?} (expected a column named \"{signal}.{joint}\")", path.display())]
-    MissingJointColumn {
+    /// A headered CSV's header that is not a log's columns (see [`crate::columns`]).
+    #[error("{}:{line}: {source}", path.display())]
+    Columns {
         /// The file.
         path: PathBuf,
-        /// Which signal.
-        signal: Signal,
-        /// Joint name.
-        joint: String,
-    },
-    /// Velocity columns given for some joints but not all.
-    #[error("{}: missing velocity column for joint {joint:?}: velocity columns must be given for all joints or none", path.display())]
-    PartialVelocity {
-        /// The file.
-        path: PathBuf,
-        /// The first joint without velocity.
-        joint: String,
+        /// Line of the header, 1-based.
+        line: u64,
+        /// What is wrong with the names.
+        source: crate::columns::ColumnError,
     },
     /// A headered CSV without a `time` column.
     #[error("{}: missing column \"time\" (s)", path.display())]
     MissingTime {
         /// The file.
         path: PathBuf,
-    },
-    /// A headered CSV without any `position.<joint>` column.
-    #[error("{}: no position.<joint> column: the joint list is taken from the position columns", path.display())]
-    NoJoints {
-        /// The file.
-        path: PathBuf,
-    },
-    /// A header name that is not `time`, `position.*`, `velocity.*` or `effort.*`.
-    #[error("{}:{line}: unknown column {column:?}: expected time, position.<joint>, velocity.<joint> or effort.<joint>", path.display())]
-    UnknownColumn {
-        /// The file.
-        path: PathBuf,
-        /// Line of the header, 1-based.
-        line: u64,
-        /// The header name.
-        column: String,
-    },
-    /// A velocity or effort column for a joint that has no position column.
-    #[error("{}: column {column:?} has no matching \"position.{joint}\" column", path.display())]
-    OrphanColumn {
-        /// The file.
-        path: PathBuf,
-        /// The header name.
-        column: String,
-        /// Its joint.
-        joint: String,
-    },
-    /// The same header name twice.
-    #[error("{}:{line}: duplicate column {column:?}", path.display())]
-    DuplicateColumn {
-        /// The file.
-        path: PathBuf,
-        /// Line of the header, 1-based.
-        line: u64,
-        /// The header name.
-        column: String,
     },
     /// Time stamps that do not strictly increase.
     #[error("{}:{line}: time {current} s is not after the previous row's {previous} s", path.display())]
@@ -345,7 +301,7 @@ pub enum LogError {
     },
     /// A recording (or a compressed file) read or written by a build of dvrk-ident
     /// without its `recordings` feature.
-    #[error("{}: {what}: reading and writing recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) needs dvrk-ident's `recordings` feature, which this build leaves out", path.display())]
+    #[error("{}: {what}: reading and writing recordings (MCAP, rosbag2, sqlite3, ROS 1 bags) needs the `recordings` feature of dvrk-logs (which dvrk-ident's feature of the same name enables), left out of this build", path.display())]
     RecordingsNotBuilt {
         /// The file.
         path: PathBuf,
