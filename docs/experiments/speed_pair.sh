@@ -17,7 +17,7 @@ row() { # label, then fit flags
   for dir in "full half" "half full"; do
     set -- $dir "${@:3}"; a=$1; b=$2
     echo -n "$label, $a -> $b: "
-    $B fit $a.csv --robot psm ${P:---cutoff 16.965 --filter-torque} "${@:3}" --test $b.csv --json 2>/dev/null | python3 -c "$show" || echo FAIL
+    $B fit $a.csv --robot ${ROBOT:-psm} ${P:---cutoff 16.965 --filter-torque} "${@:3}" --test $b.csv --json 2>/dev/null | python3 -c "$show" || echo FAIL
   done
 }
 ROWS=(
@@ -41,6 +41,10 @@ done
 for p in "--cutoff 16.965" "--cutoff 8.48 --filter-torque" "--cutoff 30 --filter-torque"; do
   P="$p" row "--preset dvrk, $p" x x --preset dvrk
 done
+# The monotone friction element on every friction frame of the PSM.
+sed "s/^friction = true$/friction = true\nmonotone_friction = { velocities = [0.05, 0.2] }/" \
+  "$ROOT/robots/psm.toml" > psm_mono.toml
+ROBOT=psm_mono.toml row "SDP, delays, monotone_friction 0.05 0.2" x x --method sdp --delay auto
 for t in full half; do
   echo -n "both speeds, --preset dvrk --resample 200, test $t: "
   $B fit full.csv half.csv --robot psm --cutoff 16.965 --filter-torque --preset dvrk --resample 200 --test $t.csv --json 2>/dev/null | python3 -c "$show" || echo FAIL
