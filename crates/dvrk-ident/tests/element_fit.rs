@@ -2,7 +2,8 @@
 //! unit classes): an element added in one module of dvrk-model, the quadratic viscous
 //! friction `Fq·ṡ·|ṡ|`, is fitted with no change here. Noise-free synthetic torques of a
 //! pendulum: least squares and the semidefinite fit recover `Fq`; torques asking for a
-//! a negative `Fq` (or one above its `max`) get the bound from the SDP, never beyond.
+//! a negative `Fq` (or one above its `max`) get the bound from the SDP, never beyond. The
+//! monotone friction of issue 28 likewise: weights recovered, and held at 0.
 
 use dvrk_test_support as support;
 
@@ -115,4 +116,78 @@ fn sdp_holds_quadratic_viscous_friction_at_its_bounds() {
             sol.params[FQ]
         );
     }
+}
+
+/// The pendulum with friction and monotone friction of steps 0.1 and 0.5 rad/s
+/// (weights `Fpa1 Fna1 Fpb1 Fnb1` after `Fc1 Fv1 Fo1`).
+fn monotone_pendulum() -> Model {
+    let text = one_link_with("friction = true\nmonotone_friction = { velocities = [0.1, 0.5] }\n");
+    Model::from_toml_str(&text, "monotone.toml").unwrap()
+}
+
+/// Column of `Fpa1`.
+const FM: usize = 13;
+
+/// The link and friction of [`truth`], then the monotone friction's `weights`.
+fn monotone_truth(model: &Model, weights: [f64; 4]) -> Vec<f64> {
+    let mut pi = truth(&pendulum(), 0.0)[..FM].to_vec();
+    pi.extend(weights);
+    assert_eq!(pi.len(), model.n_params());
+    pi
+}
+
+#[test]
+fn sdp_recovers_monotone_friction() {
+    let model = monotone_pendulum();
+    assert_eq!(&model.param_names()[FM..], ["Fpa1", "Fna1", "Fpb1", "Fnb1"]);
+    let weights = [0.2, 0.05, 0.1, 0.3];
+    let pi = monotone_truth(&model, weights);
+    let (h, tau) = observe(&model, &pi, 600);
+    let base = model.base_parameters().unwrap();
+    assert!((FM..FM + 4).all(|c| base.independent.contains(&c)));
+    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
+    assert!(sol.converged, "status {}", sol.status);
+    for (k, want) in weights.iter().enumerate() {
+        let got = sol.params[FM + k];
+        assert!((got - want).abs() < 1e-6, "weight {k}: {got} vs {want}");
+    }
+    for (k, want) in [(10, 0.08), (11, 0.03), (12, -0.01)] {
+        assert!(
+            (sol.params[k] - want).abs() < 1e-6,
+            "{k}: {}",
+            sol.params[k]
+        );
+    }
+}
+
+/// Torques asking for a negative weight (a friction curve that falls with speed): least
+/// squares follows them, the semidefinite fit keeps every weight at or above 0 and the
+/// result physically consistent.
+#[test]
+fn sdp_keeps_monotone_friction_weights_nonnegative() {
+    let model = monotone_pendulum();
+    let pi = monotone_truth(&model, [-0.1, 0.05, 0.3, 0.1]);
+    let (h, tau) = observe(&model, &pi, 600);
+    let ls = h.clone().svd(true, true).solve(&tau, 1e-12).unwrap();
+    assert!((ls[FM] + 0.1).abs() < 1e-6, "least squares Fpa1 {}", ls[FM]);
+    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
+    assert!(sol.converged, "status {}", sol.status);
+    for k in FM..FM + 4 {
+        assert!(
+            sol.params[k] >= 0.0,
+            "{}: {}",
+            model.param_names()[k],
+            sol.params[k]
+        );
+    }
+    assert!(
+        sol.params[FM] < 1e-6,
+        "Fpa1 {} held at its bound",
+        sol.params[FM]
+    );
+    assert!(model
+        .frame(1)
+        .elements
+        .iter()
+        .all(|e| e.consistent(&sol.params, -1e-9)));
 }

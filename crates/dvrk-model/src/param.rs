@@ -26,6 +26,9 @@ pub enum ParamKind {
     Stribeck,
     /// Quadratic viscous friction `Fq` (see [`QuadraticViscous`](crate::QuadraticViscous)).
     QuadraticViscous,
+    /// A weight of monotone friction (N·m or N; see
+    /// [`MonotoneFriction`](crate::MonotoneFriction)).
+    MonotoneFriction,
 }
 
 impl ParamKind {
@@ -35,7 +38,10 @@ impl ParamKind {
             ParamKind::Inertia { index } if index < 6 => UnitClass::LinkInertia,
             ParamKind::Inertia { index } if index < 9 => UnitClass::FirstMoment,
             ParamKind::Inertia { .. } => UnitClass::Mass,
-            ParamKind::Coulomb | ParamKind::Offset | ParamKind::Stribeck => UnitClass::Force,
+            ParamKind::Coulomb
+            | ParamKind::Offset
+            | ParamKind::Stribeck
+            | ParamKind::MonotoneFriction => UnitClass::Force,
             ParamKind::Viscous => UnitClass::Viscous,
             ParamKind::QuadraticViscous => UnitClass::QuadraticViscous,
             ParamKind::MotorInertia => UnitClass::MotorInertia,
@@ -190,7 +196,7 @@ pub enum UnitClass {
     FirstMoment,
     /// Link mass, kg.
     Mass,
-    /// A force along the joint value: Coulomb, offset, Stribeck friction (N·m or N).
+    /// A force along the joint value: Coulomb, offset, Stribeck, monotone friction (N·m or N).
     Force,
     /// Viscous friction, N·m·s/rad or N·s/m.
     Viscous,

@@ -59,6 +59,7 @@ pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, 
         source_name: traj.source.clone(),
         message,
     };
+    check_velocity_clock(traj)?;
     if traj.coordinates == Coordinates::Model {
         // A headered CSV tells model coordinates by their names `q1..qn`; a robot whose
         // measured joints carry those very names through a non-identity coupling would
@@ -174,6 +175,73 @@ fn check_ranges(
     Ok(())
 }
 
+/// How far a joint's measured velocities may disagree with its positions' rate of
+/// change on the log's clock (as a ratio either way) before the log is refused. A
+/// controller's velocity estimate lags and smooths, but keeps the scale (the 2019 PSM
+/// logs agree within 1 %); a wrong clock or other units give a factor: the half-speed
+/// PSM log of `psm_speed/` read at 200 Hz, its real 100 Hz, gives 2.0.
+pub const VELOCITY_CLOCK_RATIO: f64 = 1.5;
+
+/// Correlation below which a joint's measured velocities are too unlike its positions'
+/// rate of change (noise, a joint at rest) to say anything about the clock.
+const VELOCITY_CLOCK_MIN_CORRELATION: f64 = 0.9;
+
+/// Refuses a log whose measured velocities contradict its clock: for each joint, the
+/// least-squares slope of the positions' central differences on the log's time stamps
+/// against the measured velocities must be within [`VELOCITY_CLOCK_RATIO`] of 1. A
+/// wrong `--rate` scales every derivative (the accelerations by its square) and the
+/// fit then explains inertial torques with the wrong factor; nothing downstream would
+/// see it. Joints whose velocities correlate less than 0.9 with the differences are
+/// not judged.
+fn check_velocity_clock(traj: &JointLog) -> Result<(), IdentError> {
+    let Some(dq) = &traj.dq else { return Ok(()) };
+    let n = traj.len();
+    for j in 0..traj.dof() {
+        let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+        for i in 1..n.saturating_sub(1) {
+            let dt = traj.time[i + 1] - traj.time[i - 1];
+            // Time stamps are checked increasing and finite later; skip what is not.
+            if dt.is_nan() || dt <= 0.0 {
+                continue;
+            }
+            let x = dq[(i, j)];
+            let y = (traj.q[(i + 1, j)] - traj.q[(i - 1, j)]) / dt;
+            sxy += x * y;
+            sxx += x * x;
+            syy += y * y;
+        }
+        // `!(… >= …)` also skips a NaN (sums overflowed by huge values, which the
+        // log's own magnitude check refuses).
+        let correlation = sxy / (sxx * syy).sqrt();
+        if !(sxx > 0.0 && syy > 0.0 && correlation >= VELOCITY_CLOCK_MIN_CORRELATION) {
+            continue;
+        }
+        let slope = sxy / sxx;
+        if !(1.0 / VELOCITY_CLOCK_RATIO..=VELOCITY_CLOCK_RATIO).contains(&slope) {
+            let clock = match traj.rate_hz() {
+                Some(rate) => format!(
+                    " at {} Hz; they match a clock of {} Hz",
+                    dvrk_model::input::show_approx(rate),
+                    dvrk_model::input::show_significant(rate / slope, 3)
+                ),
+                None => String::new(),
+            };
+            return Err(IdentError::Mismatch {
+                source_name: traj.source.clone(),
+                message: format!(
+                    "the measured velocities of joint {} are {} times the rate of change of its \
+                     positions on the log's clock{clock}: give the log's real sampling rate \
+                     (--rate, or time stamps), or velocities in the positions' units per \
+                     second",
+                    traj.joint_names[j],
+                    dvrk_model::input::show_significant(1.0 / slope, 3),
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Subtracts the known forces (e.g. the MTM cable) from the torques of `t` (model
 /// coordinates), evaluated on the raw positions as in 2019.
 pub(crate) fn subtract_known_forces(model: &Model, t: &mut JointLog) {
@@ -246,5 +314,88 @@ impl<'a> LogData<'a> {
             samples,
             file: None,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::joint_log::uniform_time;
+
+    /// A two-joint log of `n` samples stamped at `stamp_hz` whose positions move as
+    /// `sin(w·t)` on the true clock `true_hz` and whose velocities are `velocity(k, j)`.
+    fn log(stamp_hz: f64, true_hz: f64, velocity: impl Fn(usize, usize) -> f64) -> JointLog {
+        let n = 400;
+        let w = [1.3, 2.1];
+        JointLog {
+            time: uniform_time(n, stamp_hz),
+            q: DMatrix::from_fn(n, 2, |k, j| (w[j] * k as f64 / true_hz).sin()),
+            dq: Some(DMatrix::from_fn(n, 2, velocity)),
+            tau: DMatrix::zeros(n, 2),
+            joint_names: vec!["a".into(), "b".into()],
+            coordinates: Coordinates::Model,
+            source: "test.csv".into(),
+        }
+    }
+
+    fn cosine(true_hz: f64) -> impl Fn(usize, usize) -> f64 {
+        let w = [1.3, 2.1];
+        move |k, j| w[j] * (w[j] * k as f64 / true_hz).cos()
+    }
+
+    #[test]
+    fn velocities_that_match_the_clock_pass() {
+        check_velocity_clock(&log(200.0, 200.0, cosine(200.0))).unwrap();
+        // Without measured velocities there is nothing to compare.
+        let mut t = log(200.0, 200.0, cosine(200.0));
+        t.dq = None;
+        check_velocity_clock(&t).unwrap();
+    }
+
+    #[test]
+    fn a_clock_twice_too_fast_is_refused_with_the_rate_the_velocities_imply() {
+        // Recorded at 100 Hz, read as 200 Hz (the half-speed PSM log of issue 28).
+        let e = check_velocity_clock(&log(200.0, 100.0, cosine(100.0))).unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.starts_with("test.csv: the measured velocities of joint a are 0.5 times"),
+            "{m}"
+        );
+        assert!(m.contains("at 200 Hz; they match a clock of 100 Hz"), "{m}");
+        // And the other way: 200 Hz read as 100 Hz.
+        let m = check_velocity_clock(&log(100.0, 200.0, cosine(200.0)))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            m.contains("are 2 times") && m.contains("clock of 200 Hz"),
+            "{m}"
+        );
+    }
+
+    #[test]
+    fn velocities_in_other_units_are_refused() {
+        // Joint b's velocities in degrees per second against positions in radians.
+        let c = cosine(200.0);
+        let deg = move |k, j| {
+            c(k, j)
+                * if j == 1 {
+                    180.0 / std::f64::consts::PI
+                } else {
+                    1.0
+                }
+        };
+        let m = check_velocity_clock(&log(200.0, 200.0, deg))
+            .unwrap_err()
+            .to_string();
+        assert!(m.contains("joint b are 57.3 times"), "{m}");
+    }
+
+    #[test]
+    fn velocities_unlike_the_positions_are_not_judged() {
+        // Noise (a pseudo-random sequence) and a joint reported at rest say nothing
+        // about the clock.
+        let noise = |k: usize, j: usize| (((k * 7919 + j * 104_729) % 1000) as f64 / 500.0) - 1.0;
+        check_velocity_clock(&log(200.0, 100.0, noise)).unwrap();
+        check_velocity_clock(&log(200.0, 100.0, |_, _| 0.0)).unwrap();
     }
 }

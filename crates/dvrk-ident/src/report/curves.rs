@@ -20,7 +20,7 @@ pub const BINS: usize = 32;
 pub const MIN_BIN_SAMPLES: usize = 20;
 
 /// Whether a parameter belongs to friction: Coulomb, viscous, offset, Stribeck and
-/// quadratic viscous terms (not the links, motor inertias or springs).
+/// quadratic viscous and monotone friction terms (not the links, motor inertias or springs).
 pub fn is_friction(kind: ParamKind) -> bool {
     matches!(
         kind,
@@ -29,6 +29,7 @@ pub fn is_friction(kind: ParamKind) -> bool {
             | ParamKind::Offset
             | ParamKind::Stribeck
             | ParamKind::QuadraticViscous
+            | ParamKind::MonotoneFriction
     )
 }
 

@@ -1,5 +1,6 @@
 //! A frame's element fields in a description file (`robots/README.md`): `friction`,
-//! `stribeck_velocity`, `motor_inertia`, `spring`, `known_force`, `quadratic_viscous`.
+//! `stribeck_velocity`, `motor_inertia`, `spring`, `known_force`, `quadratic_viscous`,
+//! `monotone_friction`.
 //! Their expressions and constants are resolved here, then each element is built by the
 //! numeric constructor's [`ElementSpec`], so a description and a model built from numbers
 //! are checked by the same code and their errors read the same.
@@ -26,6 +27,14 @@ pub(super) struct ElementsDesc {
     spring: Option<String>,
     known_force: Option<KnownForceDesc>,
     quadratic_viscous: Option<QuadraticViscousDesc>,
+    monotone_friction: Option<MonotoneFrictionDesc>,
+}
+
+/// `monotone_friction = { velocities = [v1, ...] }` (rad/s or m/s).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MonotoneFrictionDesc {
+    velocities: Vec<f64>,
 }
 
 /// `known_force = { polynomial = [...], along = "..." }` (`along` defaults to the
@@ -54,7 +63,8 @@ struct QuadraticViscousTable {
 
 impl ElementsDesc {
     /// Reads the elements, pushing their parameters onto `params`, in the order of the
-    /// parameter vector: friction, motor inertia, spring, quadratic viscous friction.
+    /// parameter vector: friction, motor inertia, spring, quadratic viscous friction,
+    /// monotone friction.
     pub(super) fn build(
         &self,
         ctx: &Ctx,
@@ -90,6 +100,12 @@ impl ElementsDesc {
         };
         if let Some((nominal, max)) = quadratic_viscous {
             ElementSpec::QuadraticViscous { nominal, max }.build(fx, params, &mut out)?;
+        }
+        if let Some(m) = &self.monotone_friction {
+            ElementSpec::MonotoneFriction {
+                velocities: m.velocities.clone(),
+            }
+            .build(fx, params, &mut out)?;
         }
         Ok(out)
     }

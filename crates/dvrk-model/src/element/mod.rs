@@ -1,6 +1,6 @@
 //! A frame's elements: what acts on its joint value besides the links — friction (with
 //! an optional Stribeck term), a motor inertia, a spring, a known force, a quadratic viscous
-//! friction. Each is a value of [`Element`], and each variant's module holds everything
+//! friction, a monotone friction. Each is a value of [`Element`], and each variant's module holds everything
 //! about it: its parameters (names, kinds, unit classes), its regressor columns, its
 //! torque, its share of the mass matrix, its nominal values, its bounds for the
 //! physically consistent fit, its consistency test and its export notes. Its description
@@ -18,6 +18,7 @@
 
 mod friction;
 mod known_force;
+mod monotone_friction;
 mod motor_inertia;
 mod quadratic_viscous;
 mod spring;
@@ -29,6 +30,7 @@ use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
 
 pub use friction::Friction;
 pub use known_force::KnownForce;
+pub use monotone_friction::MonotoneFriction;
 pub use motor_inertia::MotorInertia;
 pub use quadratic_viscous::QuadraticViscous;
 pub use spring::{Deflection, Spring};
@@ -232,6 +234,8 @@ pub enum Element {
     KnownForce(KnownForce),
     /// Friction quadratic in the joint rate.
     QuadraticViscous(QuadraticViscous),
+    /// Monotone friction: saturating steps of several widths, forward and backward.
+    MonotoneFriction(MonotoneFriction),
 }
 
 /// Runs `$body` with `$e` bound to the variant's value.
@@ -243,13 +247,14 @@ macro_rules! each {
             Element::Spring($e) => $body,
             Element::KnownForce($e) => $body,
             Element::QuadraticViscous($e) => $body,
+            Element::MonotoneFriction($e) => $body,
         }
     };
 }
 
 impl Element {
     /// Names in summaries: `friction` (and `stribeck`), `motor_inertia`, `spring`,
-    /// `known_force`, `quadratic_viscous`.
+    /// `known_force`, `quadratic_viscous`, `monotone_friction`.
     pub fn labels(&self) -> &'static [&'static str] {
         each!(self, e => e.labels())
     }
@@ -403,6 +408,12 @@ pub enum ElementSpec {
         /// Upper bound of `Fq` for the physically consistent fit.
         max: Option<f64>,
     },
+    /// Monotone friction with steps of these velocities (rad/s or m/s; 1 to 4,
+    /// positive, increasing).
+    MonotoneFriction {
+        /// The steps' velocities (rad/s or m/s).
+        velocities: Vec<f64>,
+    },
 }
 
 /// The frame an element is built for.
@@ -485,6 +496,10 @@ impl ElementSpec {
             ElementSpec::QuadraticViscous { nominal, max } => {
                 let q = QuadraticViscous::on(fx, *nominal, *max, params.len())?;
                 out.push(fx, Element::QuadraticViscous(q), params);
+            }
+            ElementSpec::MonotoneFriction { velocities } => {
+                let f = MonotoneFriction::on(fx, velocities, params.len())?;
+                out.push(fx, Element::MonotoneFriction(f), params);
             }
         }
         Ok(())

@@ -1,0 +1,78 @@
+//! Issue 28's speed pair (`../shared/data/dvrk/psm_speed/`): the same PSM, the same
+//! trajectory at full and at half speed. The half-speed log has no time stamps and was
+//! recorded at 100 Hz, not at the 200 Hz its README states: its measured velocities are
+//! half the positions' rate of change at 200 Hz (both logs advance the trajectory by the
+//! same step per sample). Read at 200 Hz it is refused; read at its real rate, a fit of
+//! either speed predicts the other. Skips with a reason when ../shared is absent.
+
+#[path = "support/protocol_2019.rs"]
+mod protocol_2019;
+
+use dvrk_ident::log::{self, LogFormat};
+use dvrk_ident::{fit, FitResult, JointLog};
+use dvrk_model::Model;
+
+/// The full-speed log (200 Hz) and the half-speed log read at `half_hz`.
+fn load(half_hz: f64) -> Option<(Model, JointLog, JointLog)> {
+    let full = protocol_2019::data("psm_speed/one_speed_1.0_105g.csv")?;
+    let half = protocol_2019::data("psm_speed/one_speed_0.5_105g.csv")?;
+    let read = |p, hz| log::read(p, Some(LogFormat::Wpi), Some(hz)).unwrap();
+    Some((
+        Model::builtin("psm").unwrap(),
+        read(&full, 200.0),
+        read(&half, half_hz),
+    ))
+}
+
+#[test]
+fn half_speed_log_at_the_stated_200_hz_is_refused() {
+    let Some((model, full, half)) = load(200.0) else {
+        return;
+    };
+    let s = protocol_2019::delay_settings(&protocol_2019::PSM);
+    let m = fit(&model, &full, Some(&half), &s).unwrap_err().to_string();
+    assert!(
+        m.contains("one_speed_0.5_105g.csv: the measured velocities of joint q1 are 0.503 times"),
+        "{m}"
+    );
+    assert!(m.contains("they match a clock of 101 Hz"), "{m}");
+}
+
+/// Test relative errors per joint over the whole test log.
+fn test_errors(r: &FitResult) -> Vec<f64> {
+    r.metrics.test.as_ref().unwrap().relative_error.clone()
+}
+
+/// `fit --method sdp --delay auto --stribeck 0.3` on one speed, tested on the other
+/// (2019 processing, whole test log). Measured (2026-11-27): 1.0 → 0.5 mean 0.270,
+/// q1–q3 0.325 0.415 0.258; 0.5 → 1.0 mean 0.290, q1–q3 0.267 0.301 0.346 (read at
+/// 200 Hz the half-speed log gave 0.428 and 0.332, q1 1.08 and 0.52). The bounds
+/// guard these figures with a margin for the solver's platform rounding.
+#[test]
+fn a_fit_at_one_speed_predicts_the_other() {
+    let Some((model, full, half)) = load(100.0) else {
+        return;
+    };
+    let mut s = protocol_2019::delay_settings(&protocol_2019::PSM);
+    s.test_window = None;
+    for (label, train, test, mean_max) in [
+        ("1.0 -> 0.5", &full, &half, 0.28),
+        ("0.5 -> 1.0", &half, &full, 0.30),
+    ] {
+        let r = fit(&model, train, Some(test), &s).unwrap();
+        assert!(r.physically_consistent, "{label}");
+        let e = test_errors(&r);
+        let mean = e.iter().sum::<f64>() / e.len() as f64;
+        println!(
+            "speed pair {label}: mean {mean:.3}, per joint {}",
+            e.iter()
+                .map(|v| format!("{v:.3}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+        assert!(mean <= mean_max, "{label}: mean {mean}");
+        for (j, v) in e.iter().take(3).enumerate() {
+            assert!(*v <= 0.45, "{label}: q{} {v}", j + 1);
+        }
+    }
+}
