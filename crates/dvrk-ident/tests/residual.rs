@@ -111,12 +111,11 @@ fn residual_without_external_force_stays_within_the_noise_floor() {
     let log = dvrk_ident::log::read(example("psm_excitation.mcap"), None, None).unwrap();
     let own = external_torque(&model, &params, &result, &log, &ResidualOptions::default()).unwrap();
     let floor = own.noise_floor.clone().unwrap();
-    for j in 0..7 {
+    for (j, f) in floor.iter().enumerate() {
         assert!(
-            (own.rms[j] - floor[j]).abs() <= 1e-9 * floor[j],
-            "{j}: {} {}",
-            own.rms[j],
-            floor[j]
+            (own.rms[j] - f).abs() <= 1e-9 * f,
+            "{j}: {} {f}",
+            own.rms[j]
         );
     }
     // On another log of the same arm (new noise), within the floor.
@@ -135,18 +134,10 @@ fn residual_without_external_force_stays_within_the_noise_floor() {
         &ResidualOptions::default(),
     )
     .unwrap();
-    for j in 0..7 {
-        eprintln!(
-            "{}: residual rms {:.5}, noise floor {:.5}",
-            r.joints[j], r.rms[j], floor[j]
-        );
-        assert!(
-            r.rms[j] <= 1.1 * floor[j],
-            "{}: {} against {}",
-            r.joints[j],
-            r.rms[j],
-            floor[j]
-        );
+    for (j, f) in floor.iter().enumerate() {
+        let (name, rms) = (&r.joints[j], r.rms[j]);
+        eprintln!("{name}: residual rms {rms:.5}, noise floor {f:.5}");
+        assert!(rms <= 1.1 * f, "{name}: {rms} against {f}");
     }
     // Measured joints: the same torques through the coupling, no floor in other joints.
     let measured = ResidualOptions {
