@@ -47,6 +47,10 @@ enum Command {
     /// Two results side by side: the settings that differ, the parameters with their
     /// uncertainty, and each one's errors on test logs.
     Compare(cmd::compare::Args),
+    /// External joint torques of logs: what the identified model does not explain
+    /// (τ_measured − τ_model), with the fit's noise floor and the momentum observer's
+    /// estimate.
+    Residual(cmd::residual::Args),
     /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
     CableFit(cmd::cable_fit::Args),
     /// Simulate a log of a robot with known parameters along a Fourier trajectory.
@@ -89,6 +93,7 @@ where
         Command::Observe(args) => cmd::observe::run(args),
         Command::Validate(args) => cmd::validate::run(args),
         Command::Compare(args) => cmd::compare::run(args),
+        Command::Residual(args) => cmd::residual::run(args),
         Command::CableFit(args) => cmd::cable_fit::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),

@@ -112,6 +112,7 @@ fn fit_help_groups_its_options_under_headings() {
     for command in [
         "observe",
         "validate",
+        "residual",
         "report",
         "convert",
         "simulate",

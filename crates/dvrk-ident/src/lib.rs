@@ -52,6 +52,7 @@ pub mod compare;
 pub mod error;
 pub mod estimate;
 pub mod excite;
+pub mod external;
 // The logs live in their own crate (crates/dvrk-logs), under the same paths here.
 use dvrk_logs::median;
 pub use dvrk_logs::{columns, joint_log, log, names, output};
@@ -61,6 +62,7 @@ pub mod progress;
 pub mod report;
 pub mod reproduce;
 pub mod request;
+pub mod residual;
 pub mod settings;
 pub mod signal;
 pub mod simulate;
@@ -86,3 +88,9 @@ pub mod export;
 #[cfg(doctest)]
 #[doc = include_str!("../../../docs/book/src/rust.md")]
 pub struct BookRustChapter;
+
+// The book's page on external torques (docs/book/src/residual.md): its Rust block (the
+// momentum observer) is a doc test too.
+#[cfg(doctest)]
+#[doc = include_str!("../../../docs/book/src/residual.md")]
+pub struct BookResidualChapter;

@@ -2,8 +2,9 @@
 //! "measures" its joints, as the real robot would log them.
 //!
 //! [`simulate`] samples the trajectory (model coordinates) at a fixed rate, computes the
-//! torques `τ = H(q, q̇, q̈)·π + known forces(q) + noise` with independent Gaussian noise
-//! per model coordinate, then maps everything to the robot's measured joints
+//! torques `τ = H(q, q̇, q̈)·π + known forces(q) + τ_ext(t) + noise` with independent
+//! Gaussian noise per model coordinate (`π` with the payload's parameters added, if any;
+//! `τ_ext` the external torque file's, if any), then maps everything to the robot's measured joints
 //! ([`to_measured_coordinates`]): `q_meas = M q`, `q̇_meas = M q̇`, `τ_meas = M⁻ᵀ τ`
 //! with `M` = `model.measured.coupling`. The result is a [`JointLog`] in
 //! [`Coordinates::Measured`] with the model's measured joint names and the exact
@@ -12,11 +13,14 @@
 //! The noise comes from a small built-in generator (SplitMix64 and Box–Muller), so a
 //! seed gives the same log on every platform and with every dependency version.
 
-use dvrk_model::{Model, Workspace};
+use std::borrow::Cow;
+
+use dvrk_model::{Model, Payload, Workspace};
 use nalgebra::DMatrix;
 
 use crate::error::IdentError;
 use crate::excite::FourierTrajectory;
+use crate::external::ExternalTorque;
 use crate::joint_log::{uniform_time, Coordinates, JointLog};
 
 /// Most samples [`simulate`] produces (a guard against a mistyped duration or rate).
@@ -39,6 +43,12 @@ pub struct Simulation {
     /// one of the motion at `t − d_j` (what `fit --delay` estimates). Empty for none,
     /// one value for every coordinate or one per coordinate.
     pub delay_s: Vec<f64>,
+    /// A rigid payload fixed to a frame, added to the parameters: the arm carries it.
+    pub payload: Option<Payload>,
+    /// An external torque per model coordinate over time (N·m or N), added to the
+    /// simulated torques (the torque the model does not explain: what `residual`
+    /// estimates); delayed with each coordinate's torque.
+    pub external_torque: Option<ExternalTorque>,
 }
 
 impl Default for Simulation {
@@ -50,6 +60,8 @@ impl Default for Simulation {
             noise_std: Vec::new(),
             seed: 0,
             delay_s: Vec::new(),
+            payload: None,
+            external_torque: None,
         }
     }
 }
@@ -118,9 +130,20 @@ pub fn simulate(
 ) -> Result<JointLog, IdentError> {
     check_inputs(model, params, traj)?;
     let (noise, delay, count) = check_simulation(model.dof(), traj, sim)?;
+    let params = match &sim.payload {
+        None => Cow::Borrowed(params),
+        Some(payload) => {
+            let mut with = params.to_vec();
+            payload.add_to(model, &mut with, "payload")?;
+            Cow::Owned(with)
+        }
+    };
     let time = uniform_time(count, sim.rate_hz);
     let (q, dq, ddq) = traj.sample(&time);
-    let mut tau = torques(model, params, traj, &time, (&q, &dq, &ddq), &delay);
+    let mut tau = torques(model, &params, traj, &time, (&q, &dq, &ddq), &delay);
+    if let Some(external) = &sim.external_torque {
+        add_external(&mut tau, external, &time, &delay);
+    }
     add_noise(&mut tau, &noise, sim.seed);
     let in_model = model_log(model, time, q, dq, tau);
     let measured = to_measured_coordinates(model, &in_model)?;
@@ -208,6 +231,14 @@ fn check_simulation(
             "delay",
             format!("delays must be within [0, {max_delay}] s, got {v}"),
         ));
+    }
+    if let Some(e) = &sim.external_torque {
+        if e.tau.ncols() != n || e.time.is_empty() {
+            return Err(setting(
+                "external_torque",
+                format!("{} columns of torques for {n} coordinates", e.tau.ncols()),
+            ));
+        }
     }
     let count = sim.samples(traj);
     if count < 2 {
@@ -324,6 +355,18 @@ pub fn model_log(
         joint_names: model.coordinates.clone(),
         coordinates: Coordinates::Model,
         source: format!("simulated {}", model.name),
+    }
+}
+
+/// Adds the external torque at each sample's time (coordinate `j` at `t − delay[j]`).
+fn add_external(tau: &mut DMatrix<f64>, external: &ExternalTorque, time: &[f64], delay: &[f64]) {
+    let n = tau.ncols();
+    let mut at = vec![0.0; n];
+    for (k, t) in time.iter().enumerate() {
+        for j in 0..n {
+            external.at(t - delay[j], &mut at);
+            tau[(k, j)] += at[j];
+        }
     }
 }
 

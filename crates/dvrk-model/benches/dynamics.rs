@@ -2,12 +2,13 @@
 //! `cargo bench -p dvrk-model --bench dynamics`. The book's Benchmarks
 //! (docs/book/src/benchmarks.md) quotes these numbers
 //! (`<robot> inverse dynamics`, `full regressor`, `mass matrix`, `forward dynamics`,
-//! `gravity`, `nonlinear effects`, for psm, mtm and the Panda of `../shared/anchors`).
+//! `gravity`, `nonlinear effects`, `momentum observer`, for psm, mtm and the Panda of
+//! `../shared/anchors`).
 
 use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use dvrk_model::{Model, Workspace};
+use dvrk_model::{Model, MomentumObserver, Workspace};
 
 mod common;
 use common::{physical, sample, PANDA};
@@ -59,6 +60,15 @@ fn bench_model(c: &mut Criterion, label: &str, model: &Model) {
         b.iter(|| {
             model.nonlinear_effects(&mut ws, &params, black_box(&q), &dq, &mut tau);
             black_box(&tau);
+        })
+    });
+    // One control cycle of the observer (mass matrix and h in one kinematics pass, the
+    // lag's coefficients kept from the previous cycle's equal step).
+    let mut observer = MomentumObserver::new(model, &vec![50.0; n]).expect("gains");
+    c.bench_function(&format!("{label} momentum observer"), |b| {
+        b.iter(|| {
+            let r = observer.update(model, &mut ws, &params, black_box(&q), &dq, &applied, 1e-3);
+            black_box(r);
         })
     });
 }

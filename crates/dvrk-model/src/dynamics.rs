@@ -234,7 +234,7 @@ impl Model {
         }
     }
 
-    fn check_state(&self, ws: &Workspace, params: &[f64], vectors: &[&[f64]]) {
+    pub(crate) fn check_state(&self, ws: &Workspace, params: &[f64], vectors: &[&[f64]]) {
         ws.check(self);
         let n = self.dof();
         assert!(
@@ -550,20 +550,38 @@ impl Model {
     ) -> Result<(), NotPositiveDefinite> {
         let n = self.dof();
         self.check_state(ws, params, &[q, dq, tau, ddq]);
-        self.bodies_at(ws, params, q);
-        // h(q, q̇): everything at zero acceleration, into ddq.
-        self.body_rnea(ws, dq, dq, Motion::COASTING, true, ddq);
-        let terms = Terms { inertial: false };
-        self.add_elements(params, q, dq, dq, terms, ddq);
-        self.add_known_forces(q, ddq);
+        let mut m = std::mem::take(&mut ws.mass);
+        // h(q, q̇) into ddq, then M·q̈ = τ − h.
+        self.bias_and_mass(ws, params, q, dq, ddq, &mut m);
         for (a, t) in ddq.iter_mut().zip(tau) {
             *a = t - *a;
         }
-        let mut m = std::mem::take(&mut ws.mass);
-        self.mass_from_positions(ws, params, &mut m);
         let solved = cholesky_solve(&mut m, n, ddq);
         ws.mass = m;
         solved
+    }
+
+    /// The two halves of the equation of motion `M(q)·q̈ + h(q, q̇) = τ` (τ as measured)
+    /// from one kinematics pass: `h` (N·m or N: links' Coriolis, centrifugal and gravity
+    /// torques, the elements' torques at zero acceleration — friction, springs — and the
+    /// known forces) into `bias`, and `M(q)` (motor inertias included, n×n column-major)
+    /// into `mass`. Shared by forward dynamics and the momentum observer. Allocates
+    /// nothing; the lengths are the caller's to check.
+    pub(crate) fn bias_and_mass(
+        &self,
+        ws: &mut Workspace,
+        params: &[f64],
+        q: &[f64],
+        dq: &[f64],
+        bias: &mut [f64],
+        mass: &mut [f64],
+    ) {
+        self.bodies_at(ws, params, q);
+        self.body_rnea(ws, dq, dq, Motion::COASTING, true, bias);
+        let terms = Terms { inertial: false };
+        self.add_elements(params, q, dq, dq, terms, bias);
+        self.add_known_forces(q, bias);
+        self.mass_from_positions(ws, params, mass);
     }
 
     /// [`Model::forward_dynamics_into`] returning a vector (allocates); `None` if the

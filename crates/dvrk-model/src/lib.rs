@@ -10,10 +10,10 @@
 //!
 //! Design, as in Pinocchio: an immutable [`Model`] built once, and a mutable
 //! [`Workspace`] reused per sample, so the real-time calls (inverse dynamics, gravity,
-//! regressor into a buffer) allocate nothing. The crate has no dependency on the
-//! identification stack and can be embedded in a controller: without its default feature
-//! `description` (`default-features = false`) it parses no file (no TOML, URDF, XML or
-//! serde) and [`ModelBuilder`] builds the model from numbers.
+//! regressor into a buffer, the momentum observer) allocate nothing. The crate has no
+//! dependency on the identification stack and can be embedded in a controller: without
+//! its default feature `description` (`default-features = false`) it parses no file (no
+//! TOML, URDF, XML or serde) and [`ModelBuilder`] builds the model from numbers.
 //!
 //! ```
 //! use dvrk_model::{Model, Workspace};
@@ -46,7 +46,9 @@ pub mod input;
 mod kinematics;
 mod limits;
 mod model;
+mod observer;
 mod param;
+mod payload;
 mod regressor;
 mod spatial;
 mod summary;
@@ -63,6 +65,8 @@ pub use error::ModelError;
 pub use expr::{Affine, NumOrExpr};
 pub use limits::Limits;
 pub use model::*;
+pub use observer::{InvalidGain, MomentumObserver};
+pub use payload::Payload;
 pub use summary::{BaseSummary, FrameSummary, ModelSummary};
 pub use workspace::Workspace;
 

@@ -1,6 +1,6 @@
 //! Per-sample scratch buffers, reused across calls so that the real-time algorithms
-//! (inverse and forward dynamics, gravity, nonlinear effects, mass matrix, regressor)
-//! allocate nothing.
+//! (inverse and forward dynamics, gravity, nonlinear effects, mass matrix, regressor,
+//! momentum observer) allocate nothing.
 
 use nalgebra::Vector3;
 

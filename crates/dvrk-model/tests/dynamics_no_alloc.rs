@@ -10,7 +10,7 @@ use std::cell::Cell;
 
 use dvrk_test_support as support;
 
-use dvrk_model::{Model, Workspace};
+use dvrk_model::{Model, MomentumObserver, Workspace};
 
 struct Counting;
 
@@ -112,11 +112,25 @@ fn check(name: &str) {
     report.push(("add_known_forces", a));
     let a = allocations(|| model.forward_kinematics(&mut ws, &q));
     report.push(("forward_kinematics", a));
+    let mut observer = MomentumObserver::new(&model, &vec![50.0; n]).unwrap();
+    observer.update(&model, &mut ws, &params, &q, &dq, &tau, 1e-3);
+    let mut estimate = vec![0.0; n];
+    let a = allocations(|| {
+        let r = observer.update(&model, &mut ws, &params, &q, &dq, &tau, 1e-3);
+        estimate.copy_from_slice(r);
+    });
+    report.push(("MomentumObserver::update", a));
+    // A new step: its lag coefficients are recomputed in place.
+    let a = allocations(|| {
+        observer.update(&model, &mut ws, &params, &dq, &q, &tau, 2e-3);
+    });
+    report.push(("MomentumObserver::update, new dt", a));
     let bad: Vec<_> = report.iter().filter(|(_, a)| *a != 0).collect();
     assert!(bad.is_empty(), "{name}: allocations per call: {bad:?}");
     // The calls did something.
     assert!(h.iter().any(|x| *x != 0.0) && mass.iter().any(|x| *x != 0.0));
     assert!(acc.iter().all(|x| x.is_finite()) && acc.iter().any(|x| *x != 0.0));
+    assert!(estimate.iter().all(|x| x.is_finite()) && estimate.iter().any(|x| *x != 0.0));
 }
 
 #[test]

@@ -391,12 +391,7 @@ fn delays_and_prior(s: &mut String, r: &FitResult) {
 /// Per joint, the training and test errors.
 fn errors(s: &mut String, r: &FitResult) {
     let names = &r.metrics.train.joints;
-    let width = names
-        .iter()
-        .map(|n| n.chars().count())
-        .max()
-        .unwrap_or(0)
-        .max(8);
+    let width = super::joint_width(names);
     let _ = writeln!(
         s,
         "{:<width$} {:>12} {:>12} {:>12} {:>12}",

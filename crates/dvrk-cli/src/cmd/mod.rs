@@ -10,6 +10,7 @@ pub mod fit;
 pub mod model;
 pub mod observe;
 pub mod report;
+pub mod residual;
 pub mod shell;
 pub mod simulate;
 pub mod validate;
@@ -96,6 +97,17 @@ pub fn emit(text: &str) -> Result<()> {
     }
     out.flush()?;
     Ok(())
+}
+
+/// The width of a table's joint column: its longest name, at least 8 characters (the
+/// tables of `fit`, `validate` and `residual`).
+pub fn joint_width(names: &[String]) -> usize {
+    names
+        .iter()
+        .map(|n| n.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(8)
 }
 
 /// The summary of a command: on stdout, or on stderr when an output (`-`) has stdout.

@@ -5,6 +5,7 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::external::ExternalTorque;
 use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::simulate::{simulate, Simulation};
@@ -50,6 +51,14 @@ pub struct Args {
     /// motion at t − d. One value or one per coordinate, comma-separated [default: 0]
     #[arg(long, value_name = "D", help_heading = MEASUREMENT)]
     pub delay: Option<String>,
+    /// A rigid payload fixed to a frame (TOML: frame, mass kg, com m in that frame,
+    /// optional inertia kg·m² about the com: xx yy zz xy xz yz), added to the parameters
+    #[arg(long, value_name = "PAYLOAD.toml", help_heading = MODEL)]
+    pub payload: Option<String>,
+    /// External torque added to the simulated torques: CSV with time (s), then one
+    /// column per model coordinate (N·m or N); linear between rows, zero outside them
+    #[arg(long, value_name = "FILE.csv", help_heading = MEASUREMENT)]
+    pub external_torque: Option<String>,
     /// Output log (written atomically; `-` for stdout)
     #[arg(long, value_name = "LOG", help_heading = OUTPUT)]
     pub out: String,
@@ -140,6 +149,16 @@ pub fn run(args: Args) -> Result<()> {
         noise_std: noise,
         seed: args.seed,
         delay_s,
+        payload: args
+            .payload
+            .as_deref()
+            .map(|p| dvrk_model::Payload::load(model, p))
+            .transpose()?,
+        external_torque: args
+            .external_torque
+            .as_deref()
+            .map(|p| ExternalTorque::read_csv(Path::new(p), &model.coordinates))
+            .transpose()?,
     };
     let format = output_format(&args.out, args.out_format);
     let log = simulate(model, &params, &traj, &sim)?;

@@ -77,13 +77,7 @@ pub fn run(args: Args) -> Result<()> {
         }
         sets.retain(|(_, s)| s.joints == m.joints);
         sets.push(("this log", &m));
-        let width = m
-            .joints
-            .iter()
-            .map(|n| n.chars().count())
-            .max()
-            .unwrap_or(0)
-            .max(8);
+        let width = super::joint_width(&m.joints);
         let _ = writeln!(text, "{path} ({} samples)", m.samples);
         let _ = write!(text, "{:<width$}", "joint");
         for (name, _) in &sets {

@@ -10,6 +10,8 @@
 //!   numeric constructor's [`ElementSpec`](crate::ElementSpec);
 //! - [`limits`]: `[[limits]]` and `[[cartesian_limits]]`, in a description, a limits file
 //!   or a Python dict, compiled into [`Limits`](crate::Limits);
+//! - [`payload`]: the payload file (a rigid body fixed to a frame) into a
+//!   [`Payload`](crate::Payload);
 //! - [`builtin`]: the dVRK descriptions shipped with the crate, and loading by name or path;
 //! - [`urdf`]: URDF import, and the two URDF exports (into an existing URDF, or generated).
 //!
@@ -19,6 +21,7 @@
 mod builtin;
 mod elements;
 mod limits;
+mod payload;
 mod resolve;
 mod robot;
 mod urdf;

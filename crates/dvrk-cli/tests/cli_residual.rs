@@ -1,0 +1,122 @@
+//! `residual` and `simulate --payload/--external-torque` from the command line: a push
+//! simulated from a CSV file comes back out of `residual --out` in the same layout, and
+//! bad payload or torque files are refused, naming the file, with nothing written.
+
+mod support;
+
+use support::{fit_example_args, run, run_json, run_ok, s, simulate_example, temp_dir};
+
+#[test]
+fn a_simulated_push_comes_back_out_of_residual() {
+    let dir = temp_dir("cli-residual");
+    let fit = dir.join("fit.json");
+    run_ok(&fit_example_args(&["--out", &s(&fit)]));
+    // 0.3 N·m on the first joint from 4 to 6 s, nothing elsewhere.
+    let push = dir.join("push.csv");
+    std::fs::write(
+        &push,
+        "4,0,0,0,0,0,0,0\n4,0.3,0,0,0,0,0,0\n6,0.3,0,0,0,0,0,0\n6,0,0,0,0,0,0,0\n",
+    )
+    .unwrap();
+    let log = dir.join("pushed.mcap");
+    simulate_example(
+        &log,
+        &[
+            "--periods",
+            "2",
+            "--noise",
+            "0.002",
+            "--seed",
+            "3",
+            "--external-torque",
+            &s(&push),
+        ],
+    );
+    let (out, observer) = (dir.join("residual.csv"), dir.join("observer.csv"));
+    let doc = run_json(&[
+        "residual",
+        &s(&fit),
+        &s(&log),
+        "--out",
+        &s(&out),
+        "--observer-out",
+        &s(&observer),
+        "--json",
+    ]);
+    let r = &doc["residuals"][0];
+    let floor: Vec<f64> = r["noise_floor"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let rms: Vec<f64> = r["rms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    // The push shows on the first joint only.
+    assert!(rms[0] > 5.0 * floor[0], "{rms:?} {floor:?}");
+    for j in 1..7 {
+        assert!(
+            rms[j] < 1.2 * floor[j],
+            "joint {j}: {} against {}",
+            rms[j],
+            floor[j]
+        );
+    }
+    // The CSV: time then the joints; the residual at 5 s is the push (the processing's
+    // low-pass filter rounds its edges only).
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert!(lines.next().unwrap().starts_with("time,"));
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    let mid: Vec<&Vec<f64>> = rows.iter().filter(|r| (r[0] - 5.0).abs() < 0.5).collect();
+    let mean = mid.iter().map(|r| r[1]).sum::<f64>() / mid.len() as f64;
+    assert!(
+        (mean - 0.3).abs() < 0.01,
+        "residual of joint 1 around 5 s: {mean}"
+    );
+    let obs = std::fs::read_to_string(&observer).unwrap();
+    assert_eq!(obs.lines().count(), text.lines().count());
+}
+
+#[test]
+fn bad_payload_and_torque_files_are_refused() {
+    let dir = temp_dir("cli-residual-bad");
+    let payload = dir.join("payload.toml");
+    std::fs::write(
+        &payload,
+        "frame = \"tool_roll\"\nmass = 0.2\ncom = [0, 0, 0]\n",
+    )
+    .unwrap();
+    let log = dir.join("never.mcap");
+    let args = support::simulate_args(
+        "psm",
+        &support::example("psm_trajectory.json"),
+        &log,
+        &["--payload", &s(&payload)],
+    );
+    let (ok, _, err) = run(&args);
+    assert!(
+        !ok && err.contains("payload.toml") && err.contains("carries no link parameters"),
+        "{err}"
+    );
+    let torque = dir.join("torque.csv");
+    std::fs::write(&torque, "0,1,2\n").unwrap();
+    let args = support::simulate_args(
+        "psm",
+        &support::example("psm_trajectory.json"),
+        &log,
+        &["--external-torque", &s(&torque)],
+    );
+    let (ok, _, err) = run(&args);
+    assert!(
+        !ok && err.contains("torque.csv: line 1: 3 fields; expected 8"),
+        "{err}"
+    );
+    assert!(!log.exists());
+}

@@ -1,0 +1,156 @@
+//! External torques from a log (`dvrk_ident::residual`): on a simulated PSM log with a
+//! payload the model was not fitted with, the residual is the payload's torque (its
+//! inverse dynamics on the same processed samples), and the momentum observer's estimate
+//! is that torque through the observer's first-order lag; without any external force the
+//! residual stays within the fit's noise floor.
+
+use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::fit::{fit, predict, prepare};
+use dvrk_ident::residual::{external_torque, ResidualOptions};
+use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::{FitResult, FitSettings, Joints};
+use dvrk_model::{Model, Payload};
+use dvrk_test_support::{example, fixtures::example_params};
+
+fn psm_fit() -> (Model, FitResult, FourierTrajectory, Vec<f64>) {
+    let model = Model::builtin("psm").unwrap();
+    let truth = example_params(&model);
+    let traj = FourierTrajectory::from_json_file(example("psm_trajectory.json")).unwrap();
+    let log = dvrk_ident::log::read(example("psm_excitation.mcap"), None, None).unwrap();
+    let result = fit(&model, &log, None, &FitSettings::default()).unwrap();
+    (model, result, traj, truth)
+}
+
+fn rms(x: impl Iterator<Item = f64>) -> f64 {
+    let (mut s, mut n) = (0.0, 0);
+    for v in x {
+        s += v * v;
+        n += 1;
+    }
+    (s / n as f64).sqrt()
+}
+
+#[test]
+fn residual_of_a_payload_log_is_the_payloads_torque() {
+    let (model, result, traj, truth) = psm_fit();
+    let params = result.params_for(&model).unwrap();
+    let payload = Payload {
+        frame: "main_insertion".into(),
+        mass: 0.2,
+        com: [0.0, 0.02, 0.165],
+        inertia: [1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0],
+    };
+    let sim = Simulation {
+        duration_s: Some(2.0 * traj.period_s()),
+        noise_std: vec![0.002],
+        seed: 2,
+        payload: Some(payload.clone()),
+        ..Simulation::default()
+    };
+    let log = simulate(&model, &truth, &traj, &sim).unwrap();
+    let options = ResidualOptions {
+        joints: Some(Joints::Model),
+        ..ResidualOptions::default()
+    };
+    let r = external_torque(&model, &params, &result, &log, &options).unwrap();
+    // The payload's torque on the same processed samples.
+    let data = prepare(&model, &log, &result.settings.processing).unwrap();
+    let carried = predict(&model, &payload.params(&model, "test").unwrap(), &data);
+    assert_eq!(r.external.shape(), carried.shape());
+    let floor = r.noise_floor.clone().expect("the fit's joints");
+    // The observer's lag applied to the payload's torque: what its estimate should be.
+    let gain = options.observer_gain;
+    let mut lagged = carried.clone();
+    for k in 1..carried.nrows() {
+        let a = (-gain * (r.time[k] - r.time[k - 1])).exp();
+        for j in 0..7 {
+            lagged[(k, j)] = a * lagged[(k - 1, j)] + (1.0 - a) * carried[(k, j)];
+        }
+    }
+    let skip = (1.0 / gain * 10.0 / (r.time[1] - r.time[0])) as usize; // the observer's start
+    for j in 0..7 {
+        let size = rms(carried.column(j).iter().copied());
+        let err = rms((0..carried.nrows()).map(|k| r.external[(k, j)] - carried[(k, j)]));
+        let obs = rms((skip..carried.nrows()).map(|k| r.observer[(k, j)] - lagged[(k, j)]));
+        let share = if size > 0.0 {
+            format!("{:.2} %", 100.0 * err / size)
+        } else {
+            "no payload torque".into()
+        };
+        eprintln!(
+            "{}: payload rms {size:.4}, residual error rms {err:.5} ({share}), observer error \
+             rms {obs:.5}, noise floor {:.5}",
+            r.joints[j], floor[j]
+        );
+        if size > 20.0 * floor[j] {
+            assert!(err < 0.05 * size, "{}: {err} against {size}", r.joints[j]);
+            assert!(
+                obs < 0.05 * size,
+                "{}: observer {obs} against {size}",
+                r.joints[j]
+            );
+        } else {
+            // Not carried by this joint (the wrist): the residual is noise.
+            assert!(size < 1e-12, "{}: {size}", r.joints[j]);
+            assert!(
+                r.rms[j] < 1.5 * floor[j],
+                "{}: {} against {}",
+                r.joints[j],
+                r.rms[j],
+                floor[j]
+            );
+        }
+    }
+}
+
+#[test]
+fn residual_without_external_force_stays_within_the_noise_floor() {
+    let (model, result, traj, truth) = psm_fit();
+    let params = result.params_for(&model).unwrap();
+    // On its own training log, the residual's RMS is the fit's training error.
+    let log = dvrk_ident::log::read(example("psm_excitation.mcap"), None, None).unwrap();
+    let own = external_torque(&model, &params, &result, &log, &ResidualOptions::default()).unwrap();
+    let floor = own.noise_floor.clone().unwrap();
+    for (j, f) in floor.iter().enumerate() {
+        assert!(
+            (own.rms[j] - f).abs() <= 1e-9 * f,
+            "{j}: {} {f}",
+            own.rms[j]
+        );
+    }
+    // On another log of the same arm (new noise), within the floor.
+    let sim = Simulation {
+        duration_s: Some(2.0 * traj.period_s()),
+        noise_std: vec![0.002],
+        seed: 9,
+        ..Simulation::default()
+    };
+    let other = simulate(&model, &truth, &traj, &sim).unwrap();
+    let r = external_torque(
+        &model,
+        &params,
+        &result,
+        &other,
+        &ResidualOptions::default(),
+    )
+    .unwrap();
+    for (j, f) in floor.iter().enumerate() {
+        let (name, rms) = (&r.joints[j], r.rms[j]);
+        eprintln!("{name}: residual rms {rms:.5}, noise floor {f:.5}");
+        assert!(rms <= 1.1 * f, "{name}: {rms} against {f}");
+    }
+    // Measured joints: the same torques through the coupling, no floor in other joints.
+    let measured = ResidualOptions {
+        joints: Some(Joints::Measured),
+        ..ResidualOptions::default()
+    };
+    let m = external_torque(&model, &params, &result, &other, &measured).unwrap();
+    assert_eq!(m.joints, model.measured.joints);
+    assert!(m.noise_floor.is_none());
+    let bad = ResidualOptions {
+        observer_gain: -1.0,
+        ..ResidualOptions::default()
+    };
+    let e = external_torque(&model, &params, &result, &other, &bad).unwrap_err();
+    assert!(e.to_string().contains("observer_gain"), "{e}");
+}
