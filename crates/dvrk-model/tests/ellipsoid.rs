@@ -144,8 +144,8 @@ fn box_and_cylinder_ellipsoids_touch_their_corners() {
             assert!((squared_radius(&e, x) - 1.0).abs() < 1e-12);
         }
         // Least volume: semi-axes √3·h (equal shares of the corner's 1).
-        for k in 0..3 {
-            assert!((e.semi_axes[k] - 3f64.sqrt() * half[k]).abs() < 1e-15);
+        for (a, h) in e.semi_axes.iter().zip(half) {
+            assert!((a - 3f64.sqrt() * h).abs() < 1e-15);
         }
         let (radius, length) = (rng.uniform(0.01, 0.2), rng.uniform(0.01, 0.8));
         let c = Ellipsoid::around_cylinder(center, radius, length, rpy);

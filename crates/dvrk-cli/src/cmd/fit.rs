@@ -69,7 +69,7 @@ pub struct Args {
     pub bounds: Option<BoundsSet>,
     /// Ignore the links' bounding ellipsoids of the robot description (by default the
     /// semidefinite fit keeps each link's mass inside its ellipsoid, when the description
-    /// gives one: the built-in PSM and MTM, a URDF's collision geometry)
+    /// gives one: the built-in MTM, a URDF's collision geometry)
     #[arg(long, help_heading = MODEL)]
     pub no_ellipsoids: bool,
     #[command(flatten)]
