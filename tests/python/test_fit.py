@@ -90,6 +90,7 @@ OPTIONS = [
     ({"method": "sdp", "sdp_regularization": 1e-6},
      ["--method", "sdp", "--sdp-regularization", "1e-6"]),
     ({"method": "sdp", "bounds": "2019"}, ["--method", "sdp", "--bounds", "2019"]),
+    ({"method": "sdp", "ellipsoids": False}, ["--method", "sdp", "--no-ellipsoids"]),
     ({"method": "ols", "delay": 0.01}, ["--method", "ols", "--delay", "0.01"]),
     ({"method": "ols", "delay": [0.01, 0.02, 0.0, 0.0, 0.0, 0.0, 0.005]},
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
@@ -117,6 +118,7 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             "stribeck": settings["stribeck_velocity"],
             "irls_iterations": settings["irls_iterations"],
             "sdp_regularization": settings["sdp_regularization"],
+            "ellipsoids": settings.get("ellipsoids", True),
         }.get(key)
         if recorded is not None:
             assert recorded == value, key

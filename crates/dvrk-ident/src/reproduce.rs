@@ -110,6 +110,8 @@ fn py_value(v: &serde_json::Value) -> String {
 enum Value {
     /// A switch (`--filter-torque`, `filter_torque=True`).
     Switch,
+    /// A switch that turns a default off (`--no-ellipsoids`, `ellipsoids=False`).
+    SwitchOff,
     /// A number.
     Num(f64),
     /// An integer.
@@ -123,7 +125,7 @@ enum Value {
 impl Value {
     fn flag(&self) -> Option<String> {
         match self {
-            Value::Switch => None,
+            Value::Switch | Value::SwitchOff => None,
             Value::Num(v) => Some(num(*v)),
             Value::Int(v) => Some(v.to_string()),
             Value::Name(n) => Some(n.clone()),
@@ -134,6 +136,7 @@ impl Value {
     fn python(&self) -> String {
         match self {
             Value::Switch => "True".into(),
+            Value::SwitchOff => "False".into(),
             Value::Num(v) => num(*v),
             Value::Int(v) => v.to_string(),
             Value::Name(n) => py_str(n),
@@ -299,6 +302,9 @@ fn options(settings: &FitSettings) -> Options {
     if let Some(b) = settings.bounds {
         given.push(("bounds", Value::Name(b.name().into())));
     }
+    if !settings.ellipsoids {
+        given.push(("ellipsoids", Value::SwitchOff));
+    }
     if let Some(prior) = &settings.prior {
         prior_options(prior, &mut given, &mut without_flag);
     }
@@ -416,7 +422,10 @@ pub fn cli_command(
     args.push("--robot".into());
     args.push(loadable_robot(robot).into());
     let push = |args: &mut Vec<String>, name: &str, v: &Value| {
-        args.push(flag(name));
+        args.push(match v {
+            Value::SwitchOff => flag(&format!("no_{name}")),
+            _ => flag(name),
+        });
         if let Some(text) = v.flag() {
             args.push(text);
         }
@@ -607,6 +616,7 @@ mod tests {
         s.test_window = Some(300);
         s.stribeck_velocity = Some(0.3);
         s.bounds = Some(crate::BoundsSet::Wang2019);
+        s.ellipsoids = false;
         s.sdp_regularization = 1e-9;
         let read = ReadOptions {
             format: Some(crate::log::LogFormat::Wpi),
@@ -620,7 +630,7 @@ mod tests {
             "dvrk-ident fit 'my one.csv' --robot psm --format wpi --rate 200 --method sdp \
              --test two.csv --cutoff 5,3.5 --filter-torque --trim 150 --decimate 2 \
              --min-speed 0.01 --delay 0.01,0.02 --test-window 300 --sdp-regularization 1e-9 \
-             --stribeck 0.3 --bounds 2019"
+             --stribeck 0.3 --bounds 2019 --no-ellipsoids"
         );
         assert!(cli.unrendered.is_empty(), "{:?}", cli.unrendered);
         let py = python_call("psm", &s, &inputs, Some(&read));
@@ -631,7 +641,8 @@ mod tests {
              test = [di.read_log(\"two.csv\", robot, format=\"wpi\", rate=200)]\n\
              result = di.fit(robot, train, method=\"sdp\", test=test, cutoff=[5, 3.5], \
              filter_torque=True, trim=150, decimate=2, min_speed=0.01, delay=[0.01, 0.02], \
-             test_window=300, sdp_regularization=1e-9, stribeck=0.3, bounds=\"2019\")\n"
+             test_window=300, sdp_regularization=1e-9, stribeck=0.3, bounds=\"2019\", \
+             ellipsoids=False)\n"
         );
         // Unknown reading options are said, not guessed.
         let unknown = cli_command("psm", &s, &inputs, None);

@@ -184,6 +184,10 @@ pub struct FitSettings {
     /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub bounds: Option<BoundsSet>,
+    /// Keep each link with a bounding ellipsoid in its description inside it (the
+    /// semidefinite fit's `tr(Q·J) ≥ 0`, see `estimate::sdp`); `false` ignores them.
+    #[serde(skip_serializing_if = "is_true")]
+    pub ellipsoids: bool,
     /// Estimate the torques' measurement delays over `[0, this]` s and fit
     /// with them (they replace `processing.delay_s`, where the result records them; see
     /// `fit::delay`).
@@ -380,9 +384,15 @@ impl Default for FitSettings {
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
             bounds: None,
+            ellipsoids: true,
             delay_search_s: None,
             prior: None,
             joints: Joints::Model,
         }
     }
+}
+
+/// Serde's `skip_serializing_if` for a field whose default is `true`.
+fn is_true(b: &bool) -> bool {
+    *b
 }

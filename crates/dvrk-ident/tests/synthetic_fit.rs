@@ -88,6 +88,15 @@ fn simulate(
     model_log(model, time, q, dq, tau)
 }
 
+/// `tr(Q·J)` of frame `j`'s link at `params` (kg; ≥ 0: its mass can lie inside its
+/// bounding ellipsoid), `None` without an ellipsoid.
+fn ellipsoid_margin(model: &Model, j: usize, params: &[f64]) -> Option<f64> {
+    let f = model.frame(j);
+    let p0 = f.inertia?;
+    let e = f.bounds.ellipsoid.as_ref()?;
+    Some((e.q_matrix() * inertia::pseudo_inertia(&params[p0..p0 + 10])).trace())
+}
+
 fn settings(method: Method) -> FitSettings {
     let mut s = FitSettings {
         method,
@@ -105,6 +114,14 @@ fn check(robot: &str) {
     for &j in model.link_frames() {
         let p0 = model.frame(j).inertia.unwrap();
         assert!(inertia::pseudo_inertia_min_eigenvalue(&truth[p0..p0 + 10]) > 0.0);
+        // The truth lies inside the description's bounding ellipsoids (the MTM's).
+        if let Some(t) = ellipsoid_margin(&model, j, &truth) {
+            assert!(
+                t > 0.0,
+                "{robot} {}: truth outside its ellipsoid",
+                model.frame(j).name
+            );
+        }
     }
     let noise = 0.005; // N·m
     let train = simulate(&model, &truth, 60.0, 200.0, noise, 1);
@@ -138,6 +155,27 @@ fn check(robot: &str) {
             );
             for c in &r.consistency {
                 assert!(c.min_eigenvalue > 0.0, "{}: {}", c.link, c.min_eigenvalue);
+            }
+            // The fit stays inside every bounding ellipsoid (to the solver's tolerance).
+            let fitted = model
+                .params_from_named(r.parameters.iter().map(|(k, v)| (k.as_str(), *v)), "fit")
+                .unwrap();
+            let mut checked = 0;
+            for &j in model.link_frames() {
+                if let Some(t) = ellipsoid_margin(&model, j, &fitted) {
+                    // tr(Q·J) = m·(1 − E[d²]), to the solver's tolerance (see the
+                    // semidefinite fit's unit tests).
+                    let m = fitted[model.frame(j).inertia.unwrap() + 9];
+                    assert!(
+                        t > -1e-5 * m,
+                        "{robot} {}: tr(QJ) = {t:e}",
+                        model.frame(j).name
+                    );
+                    checked += 1;
+                }
+            }
+            if robot == "mtm" {
+                assert_eq!(checked, 7, "the MTM's seven ellipsoids");
             }
         }
         // The residual left is the noise: RMS error close to the noise level.

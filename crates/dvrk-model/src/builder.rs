@@ -774,13 +774,17 @@ fn check_frame_bounds(
                 .map_err(|m| ModelError::field(file, place, field, m))?;
         }
     }
-    if (bounds.mass.is_some() || bounds.com.is_some()) && !has_link {
+    if (bounds.mass.is_some() || bounds.com.is_some() || bounds.ellipsoid.is_some()) && !has_link {
         return Err(ModelError::field(
             file,
             place,
             "bounds",
-            "mass/com bounds on a frame without link inertia",
+            "mass/com/ellipsoid bounds on a frame without link inertia",
         ));
+    }
+    if let Some(e) = &bounds.ellipsoid {
+        e.check()
+            .map_err(|m| ModelError::field(file, place, "bounds.ellipsoid", m))?;
     }
     check_range(file, place, "bounds.mass", bounds.mass)?;
     check_range(file, place, "bounds.spring", bounds.spring)?;

@@ -153,6 +153,139 @@ pub fn pseudo_inertia_min_eigenvalue(p: &[f64]) -> f64 {
     pseudo_inertia(p).symmetric_eigenvalues().min()
 }
 
+/// Rotation matrix of URDF's fixed-axis roll, pitch, yaw (rad): `Rz(yaw)·Ry(pitch)·Rx(roll)`.
+pub fn rotation_rpy(rpy: &[f64; 3]) -> Matrix3<f64> {
+    *nalgebra::Rotation3::from_euler_angles(rpy[0], rpy[1], rpy[2]).matrix()
+}
+
+/// A solid ellipsoid in a link's frame, `{x : (x − c)ᵀ·R·diag(1/a²)·Rᵀ·(x − c) ≤ 1}`:
+/// a region the link's mass must lie in (its bounding ellipsoid). Centre `c` and semi-axes
+/// `a` in m, the axes rotated by `R = rotation_rpy(rpy)` from the frame's.
+///
+/// A link whose mass lies inside the ellipsoid has `tr(Q·J) ≥ 0` for its pseudo-inertia
+/// `J` ([`pseudo_inertia`]) and `Q = `[`Ellipsoid::q_matrix`] (Wensing, Kim & Slotine,
+/// "Linear Matrix Inequalities for Physically Consistent Inertial Parameter
+/// Identification: A Statistical Perspective on the Mass Distribution", RA-L 2018): for a
+/// point mass `m` at `x`, `tr(Q·J) = m·(1 − (x − c)ᵀ·A·(x − c))`, and `J` is a sum (an
+/// integral) of those; with `J ⪰ 0` the two are the paper's density realizability
+/// condition for the ellipsoid.
+///
+/// ```
+/// use dvrk_model::inertia::{barycentric_from_standard, pseudo_inertia, Ellipsoid};
+/// let e = Ellipsoid { center: [0.1, 0.0, 0.0], semi_axes: [0.2, 0.05, 0.05], rpy: [0.0; 3] };
+/// // 1 kg at x = 0.25 m (inside) and at x = 0.35 m (outside).
+/// let inside = pseudo_inertia(&barycentric_from_standard(1.0, [0.25, 0.0, 0.0], [0.0; 6]));
+/// let outside = pseudo_inertia(&barycentric_from_standard(1.0, [0.35, 0.0, 0.0], [0.0; 6]));
+/// assert!((e.q_matrix() * inside).trace() > 0.0);
+/// assert!((e.q_matrix() * outside).trace() < 0.0);
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+#[cfg_attr(
+    feature = "serde",
+    derive(serde::Deserialize, serde::Serialize),
+    serde(deny_unknown_fields)
+)]
+pub struct Ellipsoid {
+    /// Centre in the link frame (m).
+    pub center: [f64; 3],
+    /// Semi-axes along the ellipsoid's own axes (m), each positive.
+    pub semi_axes: [f64; 3],
+    /// Roll, pitch, yaw of the ellipsoid's axes in the link frame (rad, URDF convention,
+    /// [`rotation_rpy`]); zero: the frame's axes.
+    #[cfg_attr(feature = "serde", serde(default))]
+    pub rpy: [f64; 3],
+}
+
+impl Ellipsoid {
+    /// The ellipsoid of least volume enclosing the box of centre `center` and half sides
+    /// `half` (m) along the axes rotated by `rpy`: semi-axes `√3·half` (by symmetry
+    /// its axes are the box's, and among those the volume `∏ aᵢ` under the corner
+    /// constraint `Σ hᵢ²/aᵢ² = 1` is least at equal terms).
+    pub fn around_box(center: [f64; 3], half: [f64; 3], rpy: [f64; 3]) -> Ellipsoid {
+        Ellipsoid {
+            center,
+            semi_axes: half.map(|h| 3f64.sqrt() * h),
+            rpy,
+        }
+    }
+
+    /// The ellipsoid of least volume enclosing a solid cylinder of radius `radius` and
+    /// length `length` (m) along the z axis rotated by `rpy`, centred at `center`: semi-axes
+    /// `√(3/2)·radius` across and `√3·length/2` along (the rim circles on the surface,
+    /// `r²/a² + h²/b² = 1`, and `a²·b` least at `r²/a² = 2/3`).
+    pub fn around_cylinder(center: [f64; 3], radius: f64, length: f64, rpy: [f64; 3]) -> Ellipsoid {
+        let across = 1.5f64.sqrt() * radius;
+        Ellipsoid {
+            center,
+            semi_axes: [across, across, 3f64.sqrt() * 0.5 * length],
+            rpy,
+        }
+    }
+
+    /// Finite centre and angles within the accepted magnitudes, positive finite semi-axes;
+    /// the message names the field.
+    pub fn check(&self) -> Result<(), String> {
+        for (field, values, max) in [
+            ("center", self.center, crate::input::MAX_LENGTH_M),
+            ("rpy", self.rpy, crate::input::MAX_ANGLE_RAD),
+        ] {
+            for v in values {
+                crate::input::check_magnitude(v, max, "").map_err(|m| format!("{field}: {m}"))?;
+            }
+        }
+        for a in self.semi_axes {
+            if !(a.is_finite() && a > 0.0 && a <= crate::input::MAX_LENGTH_M) {
+                return Err(format!(
+                    "semi_axes: each must be a positive length of at most {:e} m, got {a}",
+                    crate::input::MAX_LENGTH_M
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// `A = R·diag(1/a²)·Rᵀ` (1/m²): the ellipsoid is `(x − c)ᵀ·A·(x − c) ≤ 1`.
+    pub fn shape(&self) -> Matrix3<f64> {
+        let r = rotation_rpy(&self.rpy);
+        let d = Matrix3::from_diagonal(&Vector3::from(self.semi_axes.map(|a| 1.0 / (a * a))));
+        r * d * r.transpose()
+    }
+
+    /// Whether the point `x` (m, link frame) lies in the closed ellipsoid.
+    pub fn contains(&self, x: [f64; 3]) -> bool {
+        let d = Vector3::from(x) - Vector3::from(self.center);
+        (d.transpose() * self.shape() * d)[0] <= 1.0
+    }
+
+    /// `Q = [[−A, A·c], [cᵀ·A, 1 − cᵀ·A·c]]`, so that `[x; 1]ᵀ·Q·[x; 1] =
+    /// 1 − (x − c)ᵀ·A·(x − c)` and the mass lies inside only if `tr(Q·J) ≥ 0` (see
+    /// [`Ellipsoid`]).
+    pub fn q_matrix(&self) -> Matrix4<f64> {
+        let a = self.shape();
+        let c = Vector3::from(self.center);
+        let ac = a * c;
+        let mut q = Matrix4::zeros();
+        q.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-a));
+        for k in 0..3 {
+            q[(k, 3)] = ac[k];
+            q[(3, k)] = ac[k];
+        }
+        q[(3, 3)] = 1.0 - c.dot(&ac);
+        q
+    }
+
+    /// `tr(Q·J(π))` as coefficients of the 10 barycentric parameters
+    /// `[Lxx, Lxy, Lxz, Lyy, Lyz, Lzz, lx, ly, lz, m]` (the constraint is linear in them).
+    pub fn barycentric_coefficients(&self) -> [f64; 10] {
+        let q = self.q_matrix();
+        std::array::from_fn(|k| {
+            let mut e = [0.0; 10];
+            e[k] = 1.0;
+            (q * pseudo_inertia(&e)).trace()
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -133,6 +133,13 @@ pub struct FrameBounds {
     pub ia_max: Option<f64>,
     /// Spring stiffness range `[min, max]` (N·m or N per unit of deflection).
     pub spring: Option<[f64; 2]>,
+    /// A region the link's mass lies in, in the frame (m): the fit keeps
+    /// `tr(Q·J) ≥ 0` ([`crate::inertia::Ellipsoid`]) unless asked not to.
+    #[cfg_attr(
+        feature = "serde",
+        serde(default, skip_serializing_if = "Option::is_none")
+    )]
+    pub ellipsoid: Option<crate::inertia::Ellipsoid>,
 }
 
 /// Lower bounds applied to every element by the physically consistent fit.

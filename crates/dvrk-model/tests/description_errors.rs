@@ -431,3 +431,62 @@ fn unknown_builtin_robot() {
     let err = Model::load("/nonexistent/robot.toml").unwrap_err();
     assert!(err.to_string().contains("/nonexistent/robot.toml"));
 }
+
+#[test]
+fn ellipsoid_loads_and_names_its_mistakes() {
+    let ellipsoid = |fields: &str| {
+        with(
+            "bounds = { mass = [0.1, 2.0] }",
+            &format!("bounds = {{ mass = [0.1, 2.0], ellipsoid = {{ {fields} }} }}"),
+        )
+    };
+    let model = load(&ellipsoid(
+        "center = [0.1, 0.0, 0.0], semi_axes = [0.2, 0.05, 0.04], rpy = [0.0, 0.0, 0.5]",
+    ))
+    .unwrap();
+    let e = model.frames[0].bounds.ellipsoid.as_ref().unwrap();
+    assert_eq!(e.center, [0.1, 0.0, 0.0]);
+    assert_eq!(e.semi_axes, [0.2, 0.05, 0.04]);
+    assert_eq!(e.rpy, [0.0, 0.0, 0.5]);
+    // rpy defaults to the frame's axes.
+    let model = load(&ellipsoid(
+        "center = [0.0, 0.0, 0.0], semi_axes = [0.1, 0.1, 0.1]",
+    ))
+    .unwrap();
+    assert_eq!(
+        model.frames[0].bounds.ellipsoid.as_ref().unwrap().rpy,
+        [0.0; 3]
+    );
+    expect_error(
+        &ellipsoid("center = [0.0, 0.0, 0.0], semi_axes = [0.1, -0.1, 0.1]"),
+        &["upper", "bounds.ellipsoid", "semi_axes", "positive", "-0.1"],
+    );
+    expect_error(
+        &ellipsoid("center = [0.0, 0.0, 0.0], semi_axes = [0.1, 0.0, 0.1]"),
+        &["upper", "bounds.ellipsoid", "semi_axes"],
+    );
+    expect_error(
+        &ellipsoid("center = [0.0, nan, 0.0], semi_axes = [0.1, 0.1, 0.1]"),
+        &["upper", "bounds.ellipsoid", "center", "finite"],
+    );
+    expect_error(
+        &ellipsoid("center = [0.0, 0.0, 0.0], semi_axes = [0.1, nan, 0.1]"),
+        &["upper", "bounds.ellipsoid", "semi_axes"],
+    );
+    expect_error(
+        &ellipsoid("center = [0.0, 0.0, 0.0], semi_axes = [0.1, 0.1, 0.1], rpy = [0.0, inf, 0.0]"),
+        &["upper", "bounds.ellipsoid", "rpy"],
+    );
+    // Missing semi-axes, an unknown field: the parser names them.
+    expect_error(&ellipsoid("center = [0.0, 0.0, 0.0]"), &["semi_axes"]);
+    expect_error(
+        &ellipsoid("center = [0.0, 0.0, 0.0], semi_axes = [0.1, 0.1, 0.1], radius = 1"),
+        &["radius"],
+    );
+    // On a frame without a link.
+    let text = with(
+        "[[limits]]",
+        "[[frames]]\nname = \"massless\"\nparent = \"lower\"\ntheta = \"q2\"\nbounds = { ellipsoid = { center = [0.0, 0.0, 0.0], semi_axes = [0.1, 0.1, 0.1] } }\n\n[[limits]]",
+    );
+    expect_error(&text, &["massless", "bounds", "without link inertia"]);
+}

@@ -902,3 +902,113 @@ fn error_structure() {
         &["s.urdf", "link `b`", "non-negative"],
     );
 }
+
+/// A link with `<collision>` elements `geometries` (each `(origin xyz, rpy, geometry)`).
+fn collision_link(name: &str, geometries: &[([f64; 3], [f64; 3], &str)]) -> String {
+    let inertial = link(
+        name,
+        1.0,
+        [0.0; 3],
+        [0.0; 3],
+        [0.01, 0.0, 0.0, 0.01, 0.0, 0.01],
+    );
+    let collisions: String = geometries
+        .iter()
+        .map(|(xyz, rpy, g)| {
+            format!(
+                r#"<collision><origin xyz="{} {} {}" rpy="{} {} {}"/><geometry>{g}</geometry></collision>"#,
+                xyz[0], xyz[1], xyz[2], rpy[0], rpy[1], rpy[2]
+            )
+        })
+        .collect();
+    inertial.replace("</link>", &format!("{collisions}</link>"))
+}
+
+/// The bounding ellipsoid of the one link of a revolute chain whose link has
+/// `geometries`.
+fn collision_ellipsoid(
+    geometries: &[([f64; 3], [f64; 3], &str)],
+) -> Result<Option<dvrk_model::inertia::Ellipsoid>, dvrk_model::ModelError> {
+    let doc = robot(
+        "collide",
+        &[
+            collision_link("arm", geometries),
+            joint(
+                "j1",
+                "revolute",
+                ("base", "arm"),
+                ([0.0; 3], [0.0; 3]),
+                Some([0.0, 0.0, 1.0]),
+                UNIT_LIMIT,
+            ),
+        ],
+    );
+    let model = Model::from_urdf_str(&doc, "collide.urdf")?;
+    Ok(model.frame(frame(&model, "arm")).bounds.ellipsoid.clone())
+}
+
+#[test]
+fn collision_geometry_gives_bounding_ellipsoids() {
+    let s3 = 3f64.sqrt();
+    // A box: the least-volume ellipsoid through its corners, placed by the origin.
+    let e = collision_ellipsoid(&[(
+        [0.1, 0.0, 0.2],
+        [0.0, 0.0, 0.3],
+        r#"<box size="0.2 0.1 0.4"/>"#,
+    )])
+    .unwrap()
+    .unwrap();
+    assert_eq!(e.center, [0.1, 0.0, 0.2]);
+    assert_eq!(e.rpy, [0.0, 0.0, 0.3]);
+    for (a, h) in e.semi_axes.iter().zip([0.1, 0.05, 0.2]) {
+        close(*a, s3 * h, 1e-15, "box semi-axis");
+    }
+    // A cylinder along its z: √(3/2)·r across, √3·l/2 along.
+    let e = collision_ellipsoid(&[(
+        [0.0; 3],
+        [0.0; 3],
+        r#"<cylinder radius="0.05" length="0.3"/>"#,
+    )])
+    .unwrap()
+    .unwrap();
+    close(
+        e.semi_axes[0],
+        1.5f64.sqrt() * 0.05,
+        1e-15,
+        "cylinder across",
+    );
+    close(e.semi_axes[2], s3 * 0.15, 1e-15, "cylinder along");
+    // A sphere is its own ellipsoid.
+    let e = collision_ellipsoid(&[([0.0, 0.1, 0.0], [0.0; 3], r#"<sphere radius="0.07"/>"#)])
+        .unwrap()
+        .unwrap();
+    assert_eq!(e.semi_axes, [0.07; 3]);
+    // Two spheres: the box around both, then its ellipsoid.
+    let e = collision_ellipsoid(&[
+        ([0.0; 3], [0.0; 3], r#"<sphere radius="0.1"/>"#),
+        ([0.4, 0.0, 0.0], [0.0; 3], r#"<sphere radius="0.1"/>"#),
+    ])
+    .unwrap()
+    .unwrap();
+    for (got, want) in e.center.iter().zip([0.2, 0.0, 0.0]) {
+        close(*got, want, 1e-15, "union centre");
+    }
+    for (got, want) in e.semi_axes.iter().zip([0.3, 0.1, 0.1]) {
+        close(*got, s3 * want, 1e-15, "union semi-axis");
+    }
+    // A mesh (vertices in another file) or no collision at all: no ellipsoid.
+    assert!(
+        collision_ellipsoid(&[([0.0; 3], [0.0; 3], r#"<mesh filename="arm.stl"/>"#)])
+            .unwrap()
+            .is_none()
+    );
+    assert!(collision_ellipsoid(&[]).unwrap().is_none());
+    // A degenerate box is refused, naming the link.
+    let err =
+        collision_ellipsoid(&[([0.0; 3], [0.0; 3], r#"<box size="0.1 0 0.1"/>"#)]).unwrap_err();
+    let msg = err.to_string();
+    assert!(
+        msg.contains("collide.urdf") && msg.contains("arm") && msg.contains("semi_axes"),
+        "{msg}"
+    );
+}

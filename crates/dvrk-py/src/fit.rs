@@ -93,6 +93,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 /// - ``bounds``: ``"physical"`` (friction ≥ 0, motor inertias ≥ 1e-6) or ``"2019"`` (≥ 0.001,
 ///   to reproduce the 2019 fit): the semidefinite fit's lower bounds in place of the
 ///   robot description's (``dvrk-ident fit --bounds``);
+/// - ``ellipsoids``: ``False`` ignores the links' bounding ellipsoids of the robot
+///   description, which the semidefinite fit otherwise keeps each link's mass inside
+///   (``dvrk-ident fit --no-ellipsoids``);
 /// - ``prior``: regularize the semidefinite fit toward ``"nominal"`` (the robot
 ///   description's nominal parameters, e.g. a URDF's inertias), a result document's
 ///   path or a :class:`FitResult`; ``prior_weight`` (default 0.001, relative to the data
@@ -128,7 +131,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, ellipsoids = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -148,6 +151,7 @@ pub fn fit(
     sdp_regularization: Option<f64>,
     stribeck: Option<f64>,
     bounds: Option<&str>,
+    ellipsoids: Option<bool>,
     delay: Option<&Bound<'_, PyAny>>,
     prior: Option<&Bound<'_, PyAny>>,
     prior_weight: Option<f64>,
@@ -172,6 +176,7 @@ pub fn fit(
         sdp_regularization,
         stribeck,
         bounds,
+        ellipsoids,
         delay,
         prior,
         prior_weight,

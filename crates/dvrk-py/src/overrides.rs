@@ -71,6 +71,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub sdp_regularization: Option<f64>,
     pub stribeck: Option<f64>,
     pub bounds: Option<&'a str>,
+    pub ellipsoids: Option<bool>,
     pub delay: Option<&'a Bound<'py, PyAny>>,
     pub prior: Option<&'a Bound<'py, PyAny>>,
     pub prior_weight: Option<f64>,
@@ -131,6 +132,7 @@ impl Overrides<'_, '_> {
                 .bounds
                 .map(|b| crate::convert::named("bounds", b))
                 .transpose()?,
+            ellipsoids: self.ellipsoids,
             delay: self
                 .delay
                 .filter(|d| !d.is_none())

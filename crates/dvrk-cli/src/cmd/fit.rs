@@ -67,6 +67,11 @@ pub struct Args {
     /// robots': physical]
     #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET", help_heading = MODEL)]
     pub bounds: Option<BoundsSet>,
+    /// Ignore the links' bounding ellipsoids of the robot description (by default the
+    /// semidefinite fit keeps each link's mass inside its ellipsoid, when the description
+    /// gives one: the built-in MTM, a URDF's collision geometry)
+    #[arg(long, help_heading = MODEL)]
+    pub no_ellipsoids: bool,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Measurement delay of the torques: `auto` (estimated per coordinate within
@@ -151,6 +156,7 @@ fn request(args: &Args) -> Result<FitRequest> {
     overrides.irls_iterations = args.irls_iterations;
     overrides.sdp_regularization = args.sdp_regularization;
     overrides.bounds = args.bounds;
+    overrides.ellipsoids = args.no_ellipsoids.then_some(false);
     overrides.prior = match &args.prior {
         Some(p) => Some(
             p.parse::<PriorSource>()

@@ -9,6 +9,7 @@
 //! minimize   ‖R[:, 0..p]·π − R[:, p]‖²  +  λ·Σᵢ dᵢ²·(πᵢ − priorᵢ)²
 //! subject to J(π_link) ⪰ eps·I                       every link (4×4 pseudo-inertia)
 //!            m_min ≤ m ≤ m_max,  m·r_min ≤ l ≤ m·r_max  frame bounds (mass, com box)
+//!            tr(Q_E·J(π_link)) ≥ 0                  links with a bounding ellipsoid E
 //!            Fc ≥ fc_min, Fv ≥ fv_min, Ia ≥ ia_min      global lower bounds
 //!            Fc ≤ fc_max, Fv ≤ fv_max, |Fo| ≤ fo_max, Ia ≤ ia_max, K ∈ [k_min, k_max]
 //! ```
@@ -16,6 +17,17 @@
 //! `R` is the (p+1)×(p+1) factor of the weighted observation `[W·H | W·τ] = Q·R`, so the
 //! first term is `‖W·H·π − W·τ‖² = ‖R11·π − r1‖² + ρ²` without the tens of thousands of
 //! rows (any square `R` with the same `RᵀR` works: all p+1 rows are used).
+//!
+//! # Bounding ellipsoids
+//!
+//! A link whose description gives a bounding ellipsoid `E` ([`dvrk_model::FrameBounds`]
+//! `ellipsoid`, e.g. from a URDF's collision geometry or the dVRK's meshes) gets the row
+//! `tr(Q_E·J) ≥ 0` ([`dvrk_model::inertia::Ellipsoid`]): with `J ⪰ 0` it is Wensing, Kim
+//! & Slotine's condition (RA-L 2018) that the mass distribution can lie inside `E`. It
+//! is linear in π, a row of the nonnegative cone like the mass bounds, and it bounds
+//! what `J ⪰ 0` leaves free: the mass's spread (`tr(L)` from above) and, with the
+//! mass, the first moment (the centre of mass inside `E`). Off with
+//! [`SdpOptions::ellipsoids`] `false` or with `override_bounds`.
 //!
 //! # Regularization
 //!
@@ -124,6 +136,9 @@ pub struct SdpOptions {
     /// only physical consistency (`J ⪰ eps·I`) and the global lower bounds
     /// ([`dvrk_model::GlobalBounds`]: `fc_min`, `fv_min`, `ia_min`).
     pub override_bounds: bool,
+    /// `true`: keep every link with a bounding ellipsoid in its description inside it
+    /// (see the module documentation); `false`: ignore the ellipsoids.
+    pub ellipsoids: bool,
 }
 
 impl Default for SdpOptions {
@@ -136,6 +151,7 @@ impl Default for SdpOptions {
             max_iter: 200,
             tolerance: 1e-8,
             override_bounds: false,
+            ellipsoids: true,
         }
     }
 }
@@ -336,7 +352,9 @@ impl Linear {
     }
 }
 
-fn bounds_rows(model: &Model, override_bounds: bool) -> Result<Linear, SdpError> {
+/// The linear rows of the frame bounds, the elements' bounds and (with `ellipsoids`) the
+/// bounding ellipsoids' `tr(Q·J) ≥ 0`.
+fn bounds_rows(model: &Model, override_bounds: bool, ellipsoids: bool) -> Result<Linear, SdpError> {
     let g = &model.bounds;
     let mut lin = Linear::default();
     for (fi, f) in model.frames.iter().enumerate() {
@@ -358,6 +376,17 @@ fn bounds_rows(model: &Model, override_bounds: bool) -> Result<Linear, SdpError>
                         lin.le(vec![(m, lo), (p0 + 6 + k, -1.0)], 0.0, &place("com"))?;
                         lin.le(vec![(p0 + 6 + k, 1.0), (m, -hi)], 0.0, &place("com"))?;
                     }
+                }
+                if let Some(e) = b.ellipsoid.as_ref().filter(|_| ellipsoids) {
+                    // −tr(Q·J(π)) ≤ 0.
+                    let coefs = e.barycentric_coefficients();
+                    if coefs.iter().any(|c| !c.is_finite()) {
+                        return Err(SdpError::NonFinite {
+                            what: place("ellipsoid"),
+                        });
+                    }
+                    let row = (0..10).map(|k| (p0 + k, -coefs[k])).collect();
+                    lin.le(row, 0.0, &place("ellipsoid"))?;
                 }
             }
         }
@@ -446,7 +475,7 @@ pub fn solve_sdp(
     q[p] = 1.0;
     let mut rows = Rows::default();
     objective_rows(&mut rows, r, (&s, gamma), &prior, &penalty, &whitening);
-    linear_rows(&mut rows, model, &s, options.override_bounds)?;
+    linear_rows(&mut rows, model, &s, options)?;
     lmi_rows_of_links(&mut rows, model, &s, eps, options.override_bounds);
     entropic_rows(&mut rows, &mut q, &whitening, &s, penalty.w);
     let Rows {
@@ -707,9 +736,9 @@ fn linear_rows(
     rows: &mut Rows,
     model: &Model,
     s: &[f64],
-    override_bounds: bool,
+    options: &SdpOptions,
 ) -> Result<(), SdpError> {
-    let lin = bounds_rows(model, override_bounds)?;
+    let lin = bounds_rows(model, options.override_bounds, options.ellipsoids)?;
     for (coefs, c) in &lin.rows {
         let scaled: Vec<(usize, f64)> = coefs.iter().map(|&(k, a)| (k, a * s[k])).collect();
         let w = scaled.iter().fold(0.0f64, |m, &(_, a)| m.max(a.abs()));

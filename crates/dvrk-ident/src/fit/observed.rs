@@ -119,6 +119,7 @@ pub(crate) fn fit_observed(
         prior: Prior::values_for(prior, model)?,
         prior_weight: prior.map_or(0.0, |p| p.weight),
         prior_metric: prior.map_or(PriorMetric::default(), |p| p.metric),
+        ellipsoids: settings.ellipsoids,
         ..SdpOptions::default()
     };
     let how = Estimator {

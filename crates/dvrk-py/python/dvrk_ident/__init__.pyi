@@ -392,6 +392,7 @@ def fit(
     sdp_regularization: Optional[float] = None,
     stribeck: Optional[float] = None,
     bounds: Optional[str] = None,
+    ellipsoids: Optional[bool] = None,
     delay: Optional[Union[str, float, Sequence[float]]] = None,
     prior: Optional[Union[str, PathLike, FitResult]] = None,
     prior_weight: Optional[float] = None,
@@ -404,7 +405,8 @@ def fit(
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
-    ``"2019"``; ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
+    ``"2019"``; ``ellipsoids=False``: ignore the links' bounding ellipsoids of the
+    description (``--no-ellipsoids``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3`` for
     the keywords not given); ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:

@@ -45,6 +45,18 @@ fn frob_vec(j: &Matrix4<f64>) -> Vec<f64> {
     v
 }
 
+/// Columns 0..10 of `g` (rows 0..10): column k = `frob_vec(J(e_k))`, so that
+/// `‖G·π − frob_vec(J_t)‖ = ‖J(π) − J_t‖_F` on a link's 10 parameters (invertible).
+fn frobenius_columns(g: &mut DMatrix<f64>) {
+    for k in 0..10 {
+        let mut e = [0.0; 10];
+        e[k] = 1.0;
+        for (i, v) in frob_vec(&pseudo_inertia(&e)).into_iter().enumerate() {
+            g[(i, k)] = v;
+        }
+    }
+}
+
 /// With `‖R11·π − r1‖ = ‖J(π) − J_t‖_F` (link) and `R11 = I` (friction), the SDP is
 /// a Euclidean projection with a closed form: clip J_t's eigenvalues at eps, clip the
 /// friction parameters into their bounds.
@@ -65,13 +77,7 @@ fn sdp_tiny_projection_has_closed_form() {
     let target_friction = [-0.002, 2.003, -0.304];
     // G: column k = frob_vec(J(e_k)) (10×10, invertible), friction block identity.
     let mut g = DMatrix::zeros(13, 13);
-    for k in 0..10 {
-        let mut e = [0.0; 10];
-        e[k] = 1.0;
-        for (i, v) in frob_vec(&pseudo_inertia(&e)).into_iter().enumerate() {
-            g[(i, k)] = v;
-        }
-    }
+    frobenius_columns(&mut g);
     for k in 10..13 {
         g[(k, k)] = 1.0;
     }
@@ -216,11 +222,12 @@ fn random_consistent(model: &Model, rng: &mut Rng) -> Vec<f64> {
                     inner(com[1][0], com[1][1], rng),
                     inner(com[2][0], com[2][1], rng),
                 ];
-                // Solid box a×b×c, randomly rotated.
+                // Solid box a×b×c, randomly rotated (smaller inside a bounding ellipsoid).
+                let side = if b.ellipsoid.is_some() { 0.1 } else { 0.4 };
                 let (x, y, z) = (
-                    rng.uniform(0.03, 0.4),
-                    rng.uniform(0.03, 0.4),
-                    rng.uniform(0.03, 0.4),
+                    rng.uniform(0.03, side),
+                    rng.uniform(0.03, side),
+                    rng.uniform(0.03, side),
                 );
                 let d = Matrix3::from_diagonal(&Vector3::new(
                     m * (y * y + z * z) / 12.0,
@@ -234,7 +241,12 @@ fn random_consistent(model: &Model, rng: &mut Rng) -> Vec<f64> {
                 );
                 let ic = rot.matrix() * d * rot.matrix().transpose();
                 let bary = barycentric_from_standard(m, c, sym6(&ic));
-                if pseudo_inertia_min_eigenvalue(&bary) > 20.0 * g.pseudo_inertia_eps {
+                // Strictly inside the link's bounding ellipsoid, if it has one.
+                let inside = b
+                    .ellipsoid
+                    .as_ref()
+                    .is_none_or(|e| (e.q_matrix() * pseudo_inertia(&bary)).trace() > 0.05 * m);
+                if inside && pseudo_inertia_min_eigenvalue(&bary) > 20.0 * g.pseudo_inertia_eps {
                     break bary;
                 }
             };
@@ -272,6 +284,17 @@ fn assert_feasible(model: &Model, pi: &[f64], tol: f64) {
             let m = pi[p0 + 9];
             if let Some([lo, hi]) = b.mass {
                 assert!(m >= lo - tol && m <= hi + tol, "{name}: mass {m}");
+            }
+            if let Some(e) = &b.ellipsoid {
+                // tr(Q·J) = m·(1 − E[d²]): the mass's mean squared ellipsoid radius at
+                // most 1 + 1e-5. The solver meets the row, scaled to a unit largest
+                // coefficient (1/a² on the inertia, up to 1300 m⁻² on the MTM's wrist),
+                // to its tolerance: on the noisy MTM fit the wrist yaw missed by 8e-7 kg.
+                let t = (e.q_matrix() * pseudo_inertia(&pi[p0..p0 + 10])).trace();
+                assert!(
+                    t >= -(tol.max(1e-5)) * m,
+                    "{name}: tr(QJ) = {t:e}, mass outside its ellipsoid"
+                );
             }
             if let Some(com) = b.com {
                 for k in 0..3 {
@@ -774,4 +797,89 @@ fn sdp_prior_errors() {
             })
         ));
     }
+}
+
+/// One link whose bounding ellipsoid excludes the data's link: with `R11` the
+/// Frobenius-norm map of `J` (as in [`sdp_tiny_projection_has_closed_form`]), the fit is
+/// the projection of `J_t` onto `{J ⪰ eps·I, tr(Q·J) ≥ 0}`: it ends on the ellipsoid's
+/// boundary, and no mass distribution inside the ellipsoid (brute force: random clouds
+/// of point masses) is closer to `J_t`. Without the ellipsoid, `J_t` itself.
+#[test]
+fn sdp_ellipsoid_projection_is_optimal_on_the_boundary() {
+    let ellipsoid =
+        "center = [0.05, 0.0, 0.0], semi_axes = [0.1, 0.05, 0.04], rpy = [0.0, 0.0, 0.3]";
+    let model = Model::from_toml_str(
+        &one_link_with(&format!("bounds = {{ ellipsoid = {{ {ellipsoid} }} }}\n")),
+        "one_link.toml",
+    )
+    .unwrap();
+    assert_eq!(model.n_params(), 10);
+    let e = model.frame(1).bounds.ellipsoid.clone().unwrap();
+    let q = e.q_matrix();
+    // 1 kg around x = 0.25 m: consistent, but outside the ellipsoid.
+    let target =
+        barycentric_from_standard(1.0, [0.25, 0.02, 0.0], [1e-3, 0.0, 0.0, 2e-3, 0.0, 2e-3]);
+    let jt = pseudo_inertia(&target);
+    assert!(pseudo_inertia_min_eigenvalue(&target) > 0.0);
+    assert!((q * jt).trace() < -0.5);
+    let mut g = DMatrix::zeros(10, 10);
+    frobenius_columns(&mut g);
+    let rhs = DVector::from_vec(frob_vec(&jt));
+    let r = r_factor(&g, &rhs);
+    let options = SdpOptions {
+        regularization: 0.0,
+        ..SdpOptions::default()
+    };
+    let sol = solve_sdp(&model, &r, &options).unwrap();
+    assert!(sol.converged, "status {}", sol.status);
+    let j = pseudo_inertia(&sol.params);
+    let on_boundary = (q * j).trace();
+    assert!(on_boundary.abs() < 1e-6, "tr(QJ) = {on_boundary:e}");
+    assert!(pseudo_inertia_min_eigenvalue(&sol.params) > 0.0);
+    let distance = (j - jt).norm();
+    // Brute force: clouds of 1–12 point masses inside the ellipsoid.
+    let mut rng = Rng::new(0xe111);
+    let r_e = dvrk_model::inertia::rotation_rpy(&e.rpy);
+    for trial in 0..5000 {
+        let n = 1 + (rng.next_u64() % 12) as usize;
+        let mut cand = Matrix4::zeros();
+        for _ in 0..n {
+            let u = Vector3::new(rng.normal(), rng.normal(), rng.normal()).normalize()
+                * rng.uniform(0.0, 1.0).cbrt();
+            let x = r_e * Vector3::from(e.semi_axes).component_mul(&u) + Vector3::from(e.center);
+            let m = rng.uniform(0.0, 2.0) / n as f64;
+            cand += pseudo_inertia(&barycentric_from_standard(m, x.into(), [0.0; 6]));
+        }
+        assert!((q * cand).trace() >= 0.0);
+        let d = (cand - jt).norm();
+        assert!(
+            d >= distance * (1.0 - 1e-6),
+            "trial {trial}: a distribution inside is closer, {d} < {distance}"
+        );
+    }
+    // Without the ellipsoid the target is feasible: the fit returns it.
+    let free = solve_sdp(
+        &model,
+        &r,
+        &SdpOptions {
+            ellipsoids: false,
+            ..options.clone()
+        },
+    )
+    .unwrap();
+    assert!(free.converged);
+    let jf = pseudo_inertia(&free.params);
+    assert!((jf - jt).norm() < 1e-6 * jt.norm(), "{}", (jf - jt).norm());
+    assert!((q * jf).trace() < -0.5);
+    // The same with the frame bounds overridden.
+    let over = solve_sdp(
+        &model,
+        &r,
+        &SdpOptions {
+            override_bounds: true,
+            ..options
+        },
+    )
+    .unwrap();
+    assert!((pseudo_inertia(&over.params) - jt).norm() < 1e-6 * jt.norm());
 }

@@ -20,9 +20,7 @@ use crate::expr::Affine;
 use crate::input;
 use crate::model::*;
 
-fn rpy(r: &[f64; 3]) -> Matrix3<f64> {
-    *Rotation3::from_euler_angles(r[0], r[1], r[2]).matrix()
-}
+use crate::inertia::rotation_rpy as rpy;
 
 /// Rotation taking z onto `axis` (unit), the shortest one (π about x for axis = −z).
 fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
@@ -147,7 +145,10 @@ impl Model {
                 inertia: Some(p0),
                 elements: Vec::new(),
                 nominal,
-                bounds: FrameBounds::default(),
+                bounds: FrameBounds {
+                    ellipsoid: collision_ellipsoid(link).map_err(err)?,
+                    ..FrameBounds::default()
+                },
             });
         }
         // After the frames, so that a broken mimic is reported as such.
@@ -448,6 +449,66 @@ fn child_link<'a>(
                 j.name, j.child.link
             )
         })
+}
+
+/// The link's bounding ellipsoid in the link frame from its `<collision>` geometry, for
+/// the fit's density-realizability constraint ([`crate::inertia::Ellipsoid`]): one box,
+/// cylinder, capsule (as its enclosing cylinder) or sphere gives the least-volume
+/// ellipsoid enclosing it; several give the one enclosing the axis-aligned box around
+/// their ellipsoids. `None` without collision geometry or with a mesh (its vertices are
+/// in another file, which the import does not read): that link is only kept physically
+/// consistent.
+fn collision_ellipsoid(link: &urdf_rs::Link) -> Result<Option<crate::inertia::Ellipsoid>, String> {
+    use crate::inertia::Ellipsoid;
+    use urdf_rs::Geometry;
+    let mut parts = Vec::new();
+    for c in &link.collision {
+        let (center, rpy) = (c.origin.xyz.0, c.origin.rpy.0);
+        let e = match &c.geometry {
+            Geometry::Box { size } => Ellipsoid::around_box(center, size.0.map(|s| 0.5 * s), rpy),
+            Geometry::Cylinder { radius, length } => {
+                Ellipsoid::around_cylinder(center, *radius, *length, rpy)
+            }
+            Geometry::Capsule { radius, length } => {
+                Ellipsoid::around_cylinder(center, *radius, length + 2.0 * radius, rpy)
+            }
+            Geometry::Sphere { radius } => Ellipsoid {
+                center,
+                semi_axes: [*radius; 3],
+                rpy,
+            },
+            Geometry::Mesh { .. } => return Ok(None),
+        };
+        e.check()
+            .map_err(|m| format!("link `{}`: <collision> geometry: {m}", link.name))?;
+        parts.push(e);
+    }
+    Ok(match parts.len() {
+        0 => None,
+        1 => parts.pop(),
+        _ => {
+            // Half widths of an ellipsoid along the frame axes: sqrt of diag(A⁻¹).
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for e in &parts {
+                let r = rpy(&e.rpy);
+                let a2 = Matrix3::from_diagonal(&Vector3::from(e.semi_axes.map(|a| a * a)));
+                let cov = r * a2 * r.transpose();
+                for k in 0..3 {
+                    let w = cov[(k, k)].sqrt();
+                    lo[k] = lo[k].min(e.center[k] - w);
+                    hi[k] = hi[k].max(e.center[k] + w);
+                }
+            }
+            let e = Ellipsoid::around_box(
+                std::array::from_fn(|k| 0.5 * (lo[k] + hi[k])),
+                std::array::from_fn(|k| 0.5 * (hi[k] - lo[k])),
+                [0.0; 3],
+            );
+            e.check()
+                .map_err(|m| format!("link `{}`: <collision> geometry: {m}", link.name))?;
+            Some(e)
+        }
+    })
 }
 
 /// The link's `<inertial>` as nominal values in the link frame: a rigid body of finite
