@@ -52,6 +52,10 @@ struct Case {
     /// Files an exit-0 case must have written (folder-relative).
     #[serde(default)]
     outputs: Vec<String>,
+    /// Files (folder-relative) whose content must be the same after the case (inputs
+    /// given as outputs too).
+    #[serde(default)]
+    unchanged: Vec<String>,
     /// Needs `../shared` (skipped, visibly, when it is absent).
     #[serde(default)]
     shared: bool,
@@ -166,10 +170,12 @@ fn listing(dir: &Path) -> Vec<String> {
     support::files(dir)
 }
 
-/// Runs the binary with a time limit; `None` when it had to be killed.
-fn run_limited(args: &[String]) -> Option<(i32, String, String)> {
+/// Runs the binary with a time limit and `temp` as its temporary folder; `None` when it
+/// had to be killed.
+fn run_limited(args: &[String], temp: &Path) -> Option<(i32, String, String)> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
         .args(args)
+        .env("TMPDIR", temp)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -281,14 +287,20 @@ fn hostile_corpus() {
         }
         let tmp = root.join(&case.name);
         std::fs::create_dir_all(&tmp).unwrap();
+        // Names may be in subfolders (a rosbag2 folder's files), made first.
+        let in_folder = |name: &str| {
+            let path = tmp.join(name);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            path
+        };
         for (name, content) in &case.files {
-            std::fs::write(tmp.join(name), expand(content, &tmp, &work)).unwrap();
+            std::fs::write(in_folder(name), expand(content, &tmp, &work)).unwrap();
         }
         for d in &case.derive {
-            std::fs::write(tmp.join(&d.name), make(d, &tmp, &work)).unwrap();
+            std::fs::write(in_folder(&d.name), make(d, &tmp, &work)).unwrap();
         }
         for (link, target) in &case.links {
-            std::os::unix::fs::symlink(target, tmp.join(link)).unwrap();
+            std::os::unix::fs::symlink(expand(target, &tmp, &work), in_folder(link)).unwrap();
         }
         if let Some(dev) = &case.null_device {
             if !make_null_device(&tmp.join(dev)) {
@@ -301,9 +313,18 @@ fn hostile_corpus() {
             }
         }
         let before = listing(&tmp);
+        let contents: Vec<Vec<u8>> = case
+            .unchanged
+            .iter()
+            .map(|f| std::fs::read(tmp.join(f)).expect("an unchanged file"))
+            .collect();
+        // The case's own temporary folder (TMPDIR): whatever the command leaves in it
+        // (a decompressed copy, a scratch file) is a failure.
+        let temp = root.join(format!("{}.tmpdir", case.name));
+        std::fs::create_dir_all(&temp).unwrap();
         let args: Vec<String> = case.args.iter().map(|a| expand(a, &tmp, &work)).collect();
         let mut problems = Vec::new();
-        match run_limited(&args) {
+        match run_limited(&args, &temp) {
             None => problems.push(format!("did not finish in {HANG_LIMIT:?} (hang)")),
             Some((code, stdout, stderr)) => {
                 if code != case.exit {
@@ -339,6 +360,15 @@ fn hostile_corpus() {
                 if after != expected {
                     problems.push(format!("folder has {after:?}, expected {expected:?}"));
                 }
+                for (f, before) in case.unchanged.iter().zip(&contents) {
+                    if std::fs::read(tmp.join(f)).ok().as_ref() != Some(before) {
+                        problems.push(format!("{f} was changed"));
+                    }
+                }
+                let left = listing(&temp);
+                if !left.is_empty() {
+                    problems.push(format!("temporary files left behind: {left:?}"));
+                }
                 for link in case.links.keys() {
                     let is_link = std::fs::symlink_metadata(tmp.join(link))
                         .is_ok_and(|m| m.file_type().is_symlink());
@@ -363,6 +393,7 @@ fn hostile_corpus() {
             }
         }
         ran += 1;
+        let _ = std::fs::remove_dir_all(&temp);
         if problems.is_empty() {
             let _ = std::fs::remove_dir_all(&tmp);
         } else {

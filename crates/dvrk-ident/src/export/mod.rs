@@ -16,6 +16,14 @@
 //! - [`wpi_params`]: the 2019 package's `params.json` layout;
 //! - [`dvrk_gc`]: sawIntuitiveResearchKit's MTM gravity-compensation file (version 2.0).
 //!
+//! What each checks: the URDF and the controller's gravity compensation hold rigid
+//! bodies and refuse parameters that are not ([`Model::check_rigid_bodies`]: a negative
+//! mass, a first moment without mass, moments outside the triangle inequality), with no
+//! flag to force them: a controller compensating a negative mass pushes the arm the
+//! wrong way. `params.json` is the 2019 package's layout for its own least-squares fits,
+//! which are representatives of the base parameters, not rigid bodies: it takes any
+//! finite fit, as that package did.
+//!
 //! The next consumer's file (e.g. the dVRK's kinematic gravity-compensation file of the
 //! ECM and Si arms, `--dvrk-kinematic-gc`) is one new module here computing its document
 //! from a [`Model`] and its parameters, one variant of [`Export`] with its arm in
@@ -127,6 +135,9 @@ impl Export<'_> {
                 details: String::new(),
             },
             Export::DvrkGc { points } => {
+                // The controller's file holds the links' gravity: only rigid bodies, as
+                // a URDF (whose exports check the same inside dvrk-model).
+                model.check_rigid_bodies(params)?;
                 let gc = dvrk_gc::dvrk_gc(model, params, *points)?;
                 Exported {
                     document: Document::Json(gc.to_json()),

@@ -149,10 +149,67 @@ fn not_a_recording(path: &Path, looks_like: &str) -> LogError {
     )
 }
 
-/// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`).
+/// Most recording files a rosbag2 `metadata.yaml` may list: a split recording of 10 000
+/// files is terabytes at rosbag2's usual split sizes.
+pub(crate) const MAX_BAG_FILES: usize = 10_000;
+
+/// Deepest nesting of a `metadata.yaml` (rosbag2 writes 4 levels).
+const MAX_YAML_DEPTH: usize = 32;
+
+/// Checks a `metadata.yaml` before it is loaded: no anchors or aliases (rosbag2 never
+/// writes them, and an alias expanded by the loader can turn a kilobyte into gigabytes)
+/// and a nesting of at most [`MAX_YAML_DEPTH`] (a deeper one is no rosbag2 metadata).
+fn check_yaml_events(text: &str) -> Result<(), String> {
+    use yaml_rust2::parser::{Event, Parser};
+    let mut parser = Parser::new_from_str(text);
+    let mut depth = 0usize;
+    loop {
+        let (event, mark) = parser
+            .next_token()
+            .map_err(|e| format!("not valid YAML: {e}"))?;
+        let at = || format!("line {}", mark.line());
+        let anchored = match &event {
+            Event::StreamEnd => return Ok(()),
+            Event::Alias(_) => {
+                return Err(format!(
+                    "{}: a YAML alias (`*name`); rosbag2 never writes anchors or aliases",
+                    at()
+                ))
+            }
+            Event::SequenceStart(anchor, _) | Event::MappingStart(anchor, _) => {
+                depth += 1;
+                if depth > MAX_YAML_DEPTH {
+                    return Err(format!(
+                        "{}: nested more than {MAX_YAML_DEPTH} levels deep; rosbag2 \
+                         metadata has 4",
+                        at()
+                    ));
+                }
+                *anchor
+            }
+            Event::SequenceEnd | Event::MappingEnd => {
+                depth = depth.saturating_sub(1);
+                0
+            }
+            Event::Scalar(_, _, anchor, _) => *anchor,
+            _ => 0,
+        };
+        if anchored > 0 {
+            return Err(format!(
+                "{}: a YAML anchor (`&name`); rosbag2 never writes anchors or aliases",
+                at()
+            ));
+        }
+    }
+}
+
+/// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`):
+/// each a file inside `dir` (no absolute path, no `..`, no symbolic link leading out of
+/// it), each once, at most [`MAX_BAG_FILES`].
 fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let bad = |reason: String| mcap_error(yaml, None, McapProblem::Metadata { reason });
-    let text = std::fs::read_to_string(yaml).map_err(io_error(yaml))?;
+    let text = dvrk_model::input::read_text(yaml).map_err(io_error(yaml))?;
+    check_yaml_events(&text).map_err(bad)?;
     let docs = yaml_rust2::YamlLoader::load_from_str(&text)
         .map_err(|e| bad(format!("not valid YAML: {e}")))?;
     let info = docs
@@ -163,26 +220,36 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let list = info["relative_file_paths"]
         .as_vec()
         .ok_or_else(|| bad("no relative_file_paths list".into()))?;
+    if list.len() > MAX_BAG_FILES {
+        return Err(bad(format!(
+            "relative_file_paths lists {} files, more than the {MAX_BAG_FILES} accepted",
+            list.len()
+        )));
+    }
+    // The folder as the links inside it are compared with.
+    let root = std::fs::canonicalize(dir).map_err(io_error(dir))?;
     let mut files = Vec::with_capacity(list.len());
+    let mut seen = std::collections::HashMap::with_capacity(list.len());
     for entry in list {
         let name = entry
             .as_str()
             .ok_or_else(|| bad(format!("relative_file_paths: {entry:?} is not a file name")))?;
-        // Older rosbag2 versions wrote the paths with the folder's name in front.
-        let direct = dir.join(name);
-        let file = if direct.exists() {
-            direct
-        } else {
-            match Path::new(name).file_name().map(|n| dir.join(n)) {
-                Some(p) if p.exists() => p,
-                _ => {
-                    return Err(bad(format!(
-                        "it lists {name}, which is not in {}",
-                        dir.display()
-                    )))
-                }
-            }
-        };
+        let file = member(dir, &root, name)
+            .map_err(|reason| bad(format!("relative_file_paths entry `{name}`: {reason}")))?;
+        let id = crate::output::FileId::of(&file)
+            .ok()
+            .flatten()
+            .ok_or_else(|| {
+                bad(format!(
+                    "relative_file_paths entry `{name}`: cannot be read"
+                ))
+            })?;
+        if let Some(first) = seen.insert(id, name) {
+            return Err(bad(format!(
+                "relative_file_paths entries `{first}` and `{name}` are the same file: a \
+                 recording lists each of its files once"
+            )));
+        }
         files.push(file);
     }
     if files.is_empty() {
@@ -191,13 +258,81 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     Ok(files)
 }
 
+/// The file `name` of a rosbag2 folder `dir` (canonically `root`): a relative path of
+/// normal components only, which exists and, symbolic links followed, is a file inside
+/// the folder. Older rosbag2 versions wrote the paths with the folder's name in front:
+/// the file name alone is tried next.
+fn member(dir: &Path, root: &Path, name: &str) -> Result<PathBuf, String> {
+    use std::path::Component;
+    let relative = Path::new(name);
+    if name.is_empty() {
+        return Err("an empty file name".into());
+    }
+    if relative.is_absolute() || relative.has_root() {
+        return Err("an absolute path; a recording names files inside its folder".into());
+    }
+    if relative
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+    {
+        return Err(
+            "a path leading out of the folder (`..`); a recording names files \
+                    inside its folder"
+                .into(),
+        );
+    }
+    let direct = dir.join(relative);
+    let file = if std::fs::symlink_metadata(&direct).is_ok() {
+        direct
+    } else {
+        match relative.file_name().map(|n| dir.join(n)) {
+            Some(p) if std::fs::symlink_metadata(&p).is_ok() => p,
+            _ => return Err(format!("not in {}", dir.display())),
+        }
+    };
+    let resolved = std::fs::canonicalize(&file).map_err(|e| {
+        if e.raw_os_error() == Some(40) || e.to_string().contains("symbolic links") {
+            "a loop of symbolic links".to_string()
+        } else {
+            format!("cannot be followed: {e}")
+        }
+    })?;
+    if !resolved.starts_with(root) {
+        return Err(format!(
+            "a symbolic link to {}, outside the folder; a recording names files inside \
+             its folder",
+            resolved.display()
+        ));
+    }
+    if !resolved.is_file() {
+        return Err("not a file".into());
+    }
+    Ok(file)
+}
+
 /// A rosbag2 folder without its metadata.yaml (a recording that was interrupted before
 /// writing it): its recording files, ordered by the split index rosbag2 puts at the end
 /// of their names (`name_0.mcap`, `name_1.mcap`, ...).
 fn folder_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let mut found = Vec::new();
+    let root = std::fs::canonicalize(dir).map_err(io_error(dir))?;
     for entry in std::fs::read_dir(dir).map_err(io_error(dir))? {
-        let p = entry.map_err(io_error(dir))?.path();
+        let entry = entry.map_err(io_error(dir))?;
+        let p = entry.path();
+        // A symbolic link is a member only if it stays in the folder, as for a listed file.
+        if entry.file_type().is_ok_and(|t| t.is_symlink()) {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            member(dir, &root, &name).map_err(|reason| {
+                mcap_error(
+                    dir,
+                    None,
+                    McapProblem::Damaged {
+                        kind: "rosbag2 folder",
+                        reason: format!("entry `{name}`: {reason}"),
+                    },
+                )
+            })?;
+        }
         if p.is_file() && matches!(sniff(&p)?, Content::Bag(..)) {
             found.push(p);
         }
@@ -266,7 +401,8 @@ impl TempCopy {
             mcap_error(
                 src,
                 None,
-                McapProblem::Container {
+                McapProblem::Damaged {
+                    kind: "compressed file",
                     reason: format!("cannot decompress the {what} file: {e}"),
                 },
             )

@@ -31,7 +31,14 @@ pub(crate) struct Ros1File {
 }
 
 fn container(path: &Path, reason: String) -> LogError {
-    mcap_error(path, None, McapProblem::Container { reason })
+    mcap_error(
+        path,
+        None,
+        McapProblem::Damaged {
+            kind: "ROS 1 bag",
+            reason,
+        },
+    )
 }
 
 impl Ros1File {

@@ -33,8 +33,7 @@ pub(crate) struct SqliteFile {
 impl SqliteFile {
     pub(crate) fn open(file: &BagFile, channels: &mut Channels) -> Result<SqliteFile, LogError> {
         let path = file.path.clone();
-        check_size(file.readable())
-            .map_err(|reason| mcap_error(&path, None, McapProblem::Container { reason }))?;
+        check_size(file.readable()).map_err(|reason| mcap_error(&path, None, invalid(reason)))?;
         let fail = |e: rusqlite::Error| sqlite_error(&path, &e);
         let conn = Connection::open_with_flags(
             file.readable(),
@@ -97,11 +96,9 @@ impl SqliteFile {
                 mcap_error(
                     &self.path,
                     None,
-                    McapProblem::Container {
-                        reason: format!(
-                            "message {id} refers to topic id {topic}, which the topics table does not define"
-                        ),
-                    },
+                    invalid(format!(
+                        "message {id} refers to topic id {topic}, which the topics table does not define"
+                    )),
                 )
             })?;
             self.last_id = id;
@@ -136,9 +133,17 @@ fn sqlite_error(path: &std::path::Path, e: &rusqlite::Error) -> LogError {
     let reason = if text.contains("no such table") || text.contains("no such column") {
         format!("an SQLite database but not rosbag2's sqlite3 storage ({text}; expected the tables topics and messages)")
     } else {
-        format!("sqlite3: {text}")
+        text
     };
-    mcap_error(path, None, McapProblem::Container { reason })
+    mcap_error(path, None, invalid(reason))
+}
+
+/// The problem of a rosbag2 sqlite3 file that cannot be read.
+fn invalid(reason: String) -> McapProblem {
+    McapProblem::Damaged {
+        kind: "rosbag2 sqlite3 file",
+        reason,
+    }
 }
 
 /// SQLite reads the missing end of a truncated file as zeros, so a cut file would give
