@@ -75,6 +75,13 @@ struct Derive {
     /// XOR these byte offsets with 0xFF.
     #[serde(default)]
     flip: Vec<usize>,
+    /// XOR these byte offsets counted from the end (1: the last byte) with 0xFF.
+    #[serde(default)]
+    flip_end: Vec<usize>,
+    /// Text replacements in the JSON header of an observation state (`from` a state
+    /// file), its length field rewritten to match: a state forged consistently.
+    #[serde(default)]
+    state_header: BTreeMap<String, String>,
     /// Text written `repeat` times (after `from`'s content and `prefix`, before
     /// `suffix`), `{n}` replaced by the repetition's index (0-based).
     #[serde(default)]
@@ -148,11 +155,33 @@ fn make(d: &Derive, tmp: &Path, work: &Path) -> Vec<u8> {
         // Numbers JSON cannot hold (1e400) are written as text by the case itself.
         bytes = serde_json::to_vec_pretty(&doc).unwrap();
     }
+    if !d.state_header.is_empty() {
+        // The state layout: 24-byte prefix (header length at 16..24), header, numbers.
+        let h = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+        let mut header = String::from_utf8(bytes[24..24 + h].to_vec()).unwrap();
+        for (old, new) in &d.state_header {
+            assert!(
+                header.contains(old.as_str()),
+                "{}: no {old} in the header",
+                d.name
+            );
+            header = header.replace(old.as_str(), &expand(new, tmp, work));
+        }
+        let mut out = bytes[..16].to_vec();
+        out.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(&bytes[24 + h..]);
+        bytes = out;
+    }
     if let Some(n) = d.truncate {
         bytes.truncate(n);
     }
     for &k in &d.flip {
         bytes[k] ^= 0xFF;
+    }
+    let len = bytes.len();
+    for &k in &d.flip_end {
+        bytes[len - k] ^= 0xFF;
     }
     bytes.extend_from_slice(expand(&d.prefix, tmp, work).as_bytes());
     if let Some(text) = &d.text {

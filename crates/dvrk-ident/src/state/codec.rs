@@ -59,7 +59,8 @@ pub const MAX_SAMPLES_PER_LOG: usize = 100_000_000_000;
 /// `RᵀR` would overflow.
 pub const MAX_FACTOR_ENTRY: f64 = 1e100;
 /// Relative tolerance of the merged factors against the logs' (`RᵀR` of the merge
-/// equals the sum over the logs up to rounding, about 1e-14 relative).
+/// equals the sum over the logs up to rounding: each entry within about 1e-14 of the
+/// product of its two columns' norms).
 const MERGE_TOLERANCE: f64 = 1e-8;
 
 #[derive(Serialize, Deserialize)]
@@ -382,8 +383,24 @@ fn check_merged(
         for l in logs {
             sum += gram(l.parts[j].r());
         }
-        let scale = sum.diagonal().max().max(f64::MIN_POSITIVE);
-        let difference = (gram(m.r()) - &sum).abs().max() / scale;
+        // Each entry against its columns' norms (rounding errs by about eps·‖a‖·‖b‖),
+        // with a floor for columns that are (nearly) zero.
+        let d = sum.diagonal();
+        let floor = 1e-12 * d.max().max(f64::MIN_POSITIVE);
+        let merged = gram(m.r());
+        let mut difference = 0.0f64;
+        for a in 0..d.len() {
+            for b in a..d.len() {
+                let norm = (d[a] * d[b]).sqrt().max(floor);
+                let x = (merged[(a, b)] - sum[(a, b)]).abs() / norm;
+                // NaN (never: the entries are finite and bounded) counts as a mismatch.
+                difference = if x.is_nan() {
+                    f64::INFINITY
+                } else {
+                    difference.max(x)
+                };
+            }
+        }
         if !(difference <= MERGE_TOLERANCE) {
             return Err(bad(
                 file,

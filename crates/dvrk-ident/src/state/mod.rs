@@ -28,7 +28,7 @@ use crate::signal::Processing;
 
 mod codec;
 
-pub use codec::{MAGIC, MAX_HEADER_BYTES, VERSION};
+pub use codec::{MAGIC, MAX_FACTOR_ENTRY, MAX_HEADER_BYTES, MAX_SAMPLES_PER_LOG, VERSION};
 
 /// The training logs of a fit reduced, with what identifies the model and the
 /// processing they were reduced for (see the module docs).
