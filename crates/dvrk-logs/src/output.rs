@@ -746,6 +746,68 @@ mod tests {
     }
 
     #[test]
+    fn an_input_is_never_an_output() {
+        let d = dir("inputs");
+        let log = d.join("log.csv");
+        std::fs::write(&log, "recording").unwrap();
+        let mut inputs = Inputs::new();
+        inputs.add_log(&log);
+        inputs.add("the robot", Path::new("psm")); // a built-in name: no file, skipped
+                                                   // The same file under every spelling: itself, through `..`, a symbolic link, a
+                                                   // hard link.
+        std::fs::create_dir(d.join("sub")).unwrap();
+        std::os::unix::fs::symlink("log.csv", d.join("link.csv")).unwrap();
+        std::fs::hard_link(&log, d.join("hard.csv")).unwrap();
+        for same in [
+            log.clone(),
+            d.join("sub").join("..").join("log.csv"),
+            d.join("link.csv"),
+            d.join("hard.csv"),
+        ] {
+            let e = inputs.check(&same).unwrap_err().to_string();
+            assert!(
+                e.contains("the same file as the log") && e.contains("log.csv"),
+                "{e}"
+            );
+            let mut outputs = Outputs::protecting(inputs.clone());
+            let e = outputs.add(&same, b"json").unwrap_err().to_string();
+            assert!(e.contains("an output never replaces an input"), "{e}");
+            drop(outputs);
+        }
+        // Another file, a new file and standard output are outputs.
+        std::fs::write(d.join("other.json"), "old").unwrap();
+        for other in ["other.json", "new.json", "-"] {
+            let p = if other == "-" {
+                PathBuf::from("-")
+            } else {
+                d.join(other)
+            };
+            inputs.check(&p).unwrap();
+        }
+        // A report folder may not be an input folder; a file in it that is an input is
+        // refused when staged.
+        let mut folder = Inputs::new();
+        folder.add("the folder", &d.join("sub"));
+        folder.add("the log", &log);
+        let mut outputs = Outputs::protecting(folder);
+        assert!(outputs
+            .add_dir(&d.join("sub"), &[("r.html".into(), b"r")])
+            .is_err());
+        let e = outputs
+            .add_dir(&d, &[("log.csv".into(), b"r")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the same file as the log"), "{e}");
+        drop(outputs);
+        assert_eq!(std::fs::read_to_string(&log).unwrap(), "recording");
+        assert_eq!(
+            entries(&d),
+            ["hard.csv", "link.csv", "log.csv", "other.json", "sub"]
+        );
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
     fn commit_puts_everything_in_place() {
         let d = dir("commit");
         std::fs::create_dir(d.join("existing")).unwrap();
