@@ -148,3 +148,33 @@ impl Export<'_> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every export that holds rigid bodies refuses a link of negative mass (−5 kg on
+    /// the MTM's shoulder): the controller's file as the URDF, naming the link; the
+    /// 2019 layout, which holds least-squares representatives, takes it.
+    #[test]
+    fn exports_of_rigid_bodies_refuse_a_negative_mass() {
+        let model = Model::builtin("mtm").unwrap();
+        let mut params = dvrk_gc::tests::mtm_params(&model);
+        let good = Export::DvrkGc { points: 6 }.build(&model, &params);
+        assert!(good.is_ok(), "{:?}", good.err());
+        let frame = model.frames.iter().find(|f| f.inertia.is_some()).unwrap();
+        params[frame.inertia.unwrap() + 9] = -5.0;
+        for export in [
+            Export::DvrkGc { points: 6 },
+            Export::Urdf { template: None },
+        ] {
+            let e = export.build(&model, &params).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("link {} (mass -5)", frame.name))
+                    && e.contains("is not a rigid body"),
+                "{export:?}: {e}"
+            );
+        }
+        assert!(Export::WpiParams.build(&model, &params).is_ok());
+    }
+}
