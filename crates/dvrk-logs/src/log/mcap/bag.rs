@@ -44,7 +44,9 @@ pub(crate) struct Bag {
 impl Bag {
     /// Finds the files of the recording at `path` (see the module docs). A file that is
     /// no recording is a [`McapProblem::NotARecording`] error saying what it looks like.
-    pub fn open(path: &Path) -> Result<Bag, LogError> {
+    /// `max_unpacked_mib` bounds what a compressed sqlite3 or ROS 1 file may decompress
+    /// to ([`unpack_limit`]).
+    pub fn open(path: &Path, max_unpacked_mib: Option<u64>) -> Result<Bag, LogError> {
         let located = locate(path)?;
         let (paths, format) = (located.files, located.format);
         let mut files = Vec::with_capacity(paths.len());
@@ -61,7 +63,7 @@ impl Bag {
             };
             let unpacked = match (storage, packing) {
                 (_, Packing::None) | (Storage::Mcap, _) => None,
-                _ => Some(TempCopy::unpack(&p, packing)?),
+                _ => Some(TempCopy::unpack(&p, packing, max_unpacked_mib)?),
             };
             files.push(BagFile {
                 path: p,
@@ -362,6 +364,26 @@ fn folder_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
 
 static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
 
+/// Default bound of a decompressed copy, as a multiple of the compressed file: JointState
+/// recordings compress 5 to 20 times; a decompression bomb, thousands of times.
+pub const UNPACK_RATIO: u64 = 100;
+/// The default bound is at least this, bytes (64 MiB: small files may compress better).
+pub const UNPACK_FLOOR: u64 = 64 << 20;
+/// The default bound is at most this, bytes (16 GiB).
+pub const UNPACK_CEILING: u64 = 16 << 30;
+
+/// The most bytes a compressed sqlite3 or ROS 1 file of `compressed` bytes may
+/// decompress to: `max_unpacked_mib` MiB when given (`--max-unpacked-mib`), else
+/// [`UNPACK_RATIO`] times its size within [`UNPACK_FLOOR`] and [`UNPACK_CEILING`].
+pub fn unpack_limit(compressed: u64, max_unpacked_mib: Option<u64>) -> u64 {
+    match max_unpacked_mib {
+        Some(mib) => mib.saturating_mul(1 << 20),
+        None => compressed
+            .saturating_mul(UNPACK_RATIO)
+            .clamp(UNPACK_FLOOR, UNPACK_CEILING),
+    }
+}
+
 /// A decompressed copy of a file in the temporary folder, removed when dropped.
 #[derive(Debug)]
 struct TempCopy {
@@ -369,7 +391,11 @@ struct TempCopy {
 }
 
 impl TempCopy {
-    fn unpack(src: &Path, packing: Packing) -> Result<TempCopy, LogError> {
+    fn unpack(
+        src: &Path,
+        packing: Packing,
+        max_unpacked_mib: Option<u64>,
+    ) -> Result<TempCopy, LogError> {
         let name = src
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
@@ -382,6 +408,8 @@ impl TempCopy {
             )),
         };
         let file = std::fs::File::open(src).map_err(io_error(src))?;
+        let compressed = file.metadata().map_err(io_error(src))?.len();
+        let limit = unpack_limit(compressed, max_unpacked_mib);
         let mut out = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
@@ -392,11 +420,29 @@ impl TempCopy {
         } else {
             "lz4"
         };
+        // One byte more than the bound tells a larger content, which is never written.
         let copied = match packing {
             Packing::Zstd => zstd::stream::read::Decoder::new(file)
-                .and_then(|mut d| std::io::copy(&mut d, &mut out)),
-            _ => lz4::Decoder::new(file).and_then(|mut d| std::io::copy(&mut d, &mut out)),
+                .and_then(|d| std::io::copy(&mut d.take(limit + 1), &mut out)),
+            _ => lz4::Decoder::new(file)
+                .and_then(|d| std::io::copy(&mut d.take(limit + 1), &mut out)),
         };
+        if matches!(copied, Ok(n) if n > limit) {
+            return Err(mcap_error(
+                src,
+                None,
+                McapProblem::Damaged {
+                    kind: "compressed file",
+                    reason: format!(
+                        "it decompresses to more than {} MiB ({} times its {compressed} \
+                         bytes): a decompression bomb, or a recording larger than the \
+                         bound; raise it with --max-unpacked-mib",
+                        limit >> 20,
+                        limit / compressed.max(1)
+                    ),
+                },
+            ));
+        }
         copied.map_err(|e| {
             mcap_error(
                 src,
@@ -485,6 +531,58 @@ impl Unpacker {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A compressed sqlite3 file that expands beyond its bound is refused before the
+    /// bound is exceeded on disk, and its temporary copy is removed; a given bound
+    /// replaces the default.
+    #[test]
+    fn decompression_is_bounded() {
+        assert_eq!(unpack_limit(1000, None), UNPACK_FLOOR);
+        assert_eq!(unpack_limit(1 << 30, None), UNPACK_CEILING);
+        assert_eq!(unpack_limit(1 << 22, None), 100 << 22);
+        assert_eq!(unpack_limit(1000, Some(3)), 3 << 20);
+        assert_eq!(unpack_limit(1000, Some(u64::MAX)), u64::MAX);
+        let dir = std::env::temp_dir().join(format!("dvrk-ident-bomb-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // An SQLite header and 80 MiB of zeros: a few kB compressed.
+        let mut content = b"SQLite format 3\0".to_vec();
+        content.resize(80 << 20, 0);
+        let packed = zstd::bulk::compress(&content, 3).unwrap();
+        assert!(packed.len() < 100_000, "{}", packed.len());
+        let bomb = dir.join("bomb.db3.zst");
+        std::fs::write(&bomb, &packed).unwrap();
+        let left = || {
+            std::fs::read_dir(std::env::temp_dir())
+                .unwrap()
+                .flatten()
+                .filter(|e| {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    name.starts_with(&format!("dvrk-ident-{}-", std::process::id()))
+                        && name.ends_with("bomb.db3.zst")
+                })
+                .count()
+        };
+        let e = Bag::open(&bomb, None).unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "bomb.db3.zst: invalid compressed file: it decompresses to more than 64 MiB"
+            ) && e.contains("--max-unpacked-mib"),
+            "{e}"
+        );
+        assert_eq!(left(), 0);
+        let e = Bag::open(&bomb, Some(1)).unwrap_err().to_string();
+        assert!(e.contains("more than 1 MiB"), "{e}");
+        assert_eq!(left(), 0);
+        // Raised above its size, it is decompressed (and removed when dropped).
+        let bag = Bag::open(&bomb, Some(81)).unwrap();
+        assert_eq!(
+            std::fs::metadata(bag.files[0].readable()).unwrap().len(),
+            80 << 20
+        );
+        drop(bag);
+        assert_eq!(left(), 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn message_unpacking() {
