@@ -424,3 +424,68 @@ fn metadata_names_files_inside_its_folder_once() {
         "{e}"
     );
 }
+
+/// rosbag2 sqlite3 details: a messages table without the integer primary key reads the
+/// same samples in insertion order (in batches from the rowid, not a scan per batch), a
+/// row without an id is refused and counted instead of skipped, a hot rollback journal is
+/// named, and the file is never written (its bytes unchanged, no `-shm` or `-wal` made).
+#[test]
+fn sqlite3_without_primary_key_null_ids_and_journals() {
+    let dir = TempDir::new("bags-sqlite3-details");
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    let original = fixture("rosbag2_sqlite").join("rosbag2_sqlite_0.db3");
+    let reference = read_mcap_log(&original, &options).unwrap();
+    let copy = |name: &str, nulls: usize| {
+        let path = dir.path(name);
+        let conn = rusqlite::Connection::open(&path).unwrap();
+        conn.execute_batch(&format!(
+            "ATTACH '{}' AS o;
+             CREATE TABLE topics AS SELECT * FROM o.topics;
+             CREATE TABLE messages(id INTEGER, topic_id INTEGER, timestamp INTEGER, data BLOB);
+             INSERT INTO messages SELECT id, topic_id, timestamp, data FROM o.messages ORDER BY id;
+             UPDATE messages SET id = NULL WHERE rowid IN (SELECT rowid FROM messages LIMIT {nulls});
+             DETACH o;",
+            original.display()
+        ))
+        .unwrap();
+        drop(conn);
+        path
+    };
+    let plain = copy("plain.db3", 0);
+    let bytes = std::fs::read(&plain).unwrap();
+    let log = read_mcap_log(&plain, &options).unwrap();
+    assert_eq!(log.trajectory.q, reference.trajectory.q);
+    assert_eq!(log.trajectory.tau, reference.trajectory.tau);
+    assert_eq!(
+        std::fs::read(&plain).unwrap(),
+        bytes,
+        "the recording was written"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(dir.path(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["plain.db3"]);
+
+    let holes = copy("holes.db3", 3);
+    let e = read_mcap_log(&holes, &options).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "holes.db3: invalid rosbag2 sqlite3 file: 3 rows of the messages table have no id"
+        ),
+        "{e}"
+    );
+
+    let journal = dir.path("plain.db3-journal");
+    std::fs::write(&journal, b"\xd9\xd5\x05\xf9\x20\xa1\x63\xd7 a hot journal").unwrap();
+    let e = read_mcap_log(&plain, &options).unwrap_err().to_string();
+    assert!(
+        e.contains("invalid rosbag2 sqlite3 file: a rollback journal")
+            && e.contains("plain.db3-journal"),
+        "{e}"
+    );
+}
