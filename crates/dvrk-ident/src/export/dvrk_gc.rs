@@ -449,6 +449,9 @@ fn solve(obs: &Observation, what: &str) -> Result<Vec<f64>, IdentError> {
 /// 10⁶ configurations take about 20 s and 250 MB).
 pub fn dvrk_gc(model: &Model, params: &[f64], points: usize) -> Result<DvrkGc, IdentError> {
     let to_model = check_inputs(model, params, points)?;
+    // The controller's file holds the links' gravity: only rigid bodies, as a URDF
+    // (whose exports check the same inside dvrk-model).
+    model.check_rigid_bodies(params)?;
     let grid = Grid {
         ranges: joint_ranges(model)?,
         points,

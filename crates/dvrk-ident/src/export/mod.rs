@@ -135,9 +135,6 @@ impl Export<'_> {
                 details: String::new(),
             },
             Export::DvrkGc { points } => {
-                // The controller's file holds the links' gravity: only rigid bodies, as
-                // a URDF (whose exports check the same inside dvrk-model).
-                model.check_rigid_bodies(params)?;
                 let gc = dvrk_gc::dvrk_gc(model, params, *points)?;
                 Exported {
                     document: Document::Json(gc.to_json()),
