@@ -401,7 +401,7 @@ fn check_merged(
                 };
             }
         }
-        if !(difference <= MERGE_TOLERANCE) {
+        if difference > MERGE_TOLERANCE {
             return Err(bad(
                 file,
                 format!(
