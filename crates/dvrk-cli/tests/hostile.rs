@@ -52,6 +52,10 @@ struct Case {
     /// Files an exit-0 case must have written (folder-relative).
     #[serde(default)]
     outputs: Vec<String>,
+    /// Files (folder-relative) whose content must be the same after the case (inputs
+    /// given as outputs too).
+    #[serde(default)]
+    unchanged: Vec<String>,
     /// Needs `../shared` (skipped, visibly, when it is absent).
     #[serde(default)]
     shared: bool,
@@ -71,6 +75,13 @@ struct Derive {
     /// XOR these byte offsets with 0xFF.
     #[serde(default)]
     flip: Vec<usize>,
+    /// XOR these byte offsets counted from the end (1: the last byte) with 0xFF.
+    #[serde(default)]
+    flip_end: Vec<usize>,
+    /// Text replacements in the JSON header of an observation state (`from` a state
+    /// file), its length field rewritten to match: a state forged consistently.
+    #[serde(default)]
+    state_header: BTreeMap<String, String>,
     /// Text written `repeat` times (after `from`'s content and `prefix`, before
     /// `suffix`), `{n}` replaced by the repetition's index (0-based).
     #[serde(default)]
@@ -144,11 +155,33 @@ fn make(d: &Derive, tmp: &Path, work: &Path) -> Vec<u8> {
         // Numbers JSON cannot hold (1e400) are written as text by the case itself.
         bytes = serde_json::to_vec_pretty(&doc).unwrap();
     }
+    if !d.state_header.is_empty() {
+        // The state layout: 24-byte prefix (header length at 16..24), header, numbers.
+        let h = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+        let mut header = String::from_utf8(bytes[24..24 + h].to_vec()).unwrap();
+        for (old, new) in &d.state_header {
+            assert!(
+                header.contains(old.as_str()),
+                "{}: no {old} in the header",
+                d.name
+            );
+            header = header.replace(old.as_str(), &expand(new, tmp, work));
+        }
+        let mut out = bytes[..16].to_vec();
+        out.extend_from_slice(&(header.len() as u64).to_le_bytes());
+        out.extend_from_slice(header.as_bytes());
+        out.extend_from_slice(&bytes[24 + h..]);
+        bytes = out;
+    }
     if let Some(n) = d.truncate {
         bytes.truncate(n);
     }
     for &k in &d.flip {
         bytes[k] ^= 0xFF;
+    }
+    let len = bytes.len();
+    for &k in &d.flip_end {
+        bytes[len - k] ^= 0xFF;
     }
     bytes.extend_from_slice(expand(&d.prefix, tmp, work).as_bytes());
     if let Some(text) = &d.text {
@@ -166,10 +199,12 @@ fn listing(dir: &Path) -> Vec<String> {
     support::files(dir)
 }
 
-/// Runs the binary with a time limit; `None` when it had to be killed.
-fn run_limited(args: &[String]) -> Option<(i32, String, String)> {
+/// Runs the binary with a time limit and `temp` as its temporary folder; `None` when it
+/// had to be killed.
+fn run_limited(args: &[String], temp: &Path) -> Option<(i32, String, String)> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_dvrk-ident"))
         .args(args)
+        .env("TMPDIR", temp)
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
@@ -281,14 +316,20 @@ fn hostile_corpus() {
         }
         let tmp = root.join(&case.name);
         std::fs::create_dir_all(&tmp).unwrap();
+        // Names may be in subfolders (a rosbag2 folder's files), made first.
+        let in_folder = |name: &str| {
+            let path = tmp.join(name);
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            path
+        };
         for (name, content) in &case.files {
-            std::fs::write(tmp.join(name), expand(content, &tmp, &work)).unwrap();
+            std::fs::write(in_folder(name), expand(content, &tmp, &work)).unwrap();
         }
         for d in &case.derive {
-            std::fs::write(tmp.join(&d.name), make(d, &tmp, &work)).unwrap();
+            std::fs::write(in_folder(&d.name), make(d, &tmp, &work)).unwrap();
         }
         for (link, target) in &case.links {
-            std::os::unix::fs::symlink(target, tmp.join(link)).unwrap();
+            std::os::unix::fs::symlink(expand(target, &tmp, &work), in_folder(link)).unwrap();
         }
         if let Some(dev) = &case.null_device {
             if !make_null_device(&tmp.join(dev)) {
@@ -301,9 +342,18 @@ fn hostile_corpus() {
             }
         }
         let before = listing(&tmp);
+        let contents: Vec<Vec<u8>> = case
+            .unchanged
+            .iter()
+            .map(|f| std::fs::read(tmp.join(f)).expect("an unchanged file"))
+            .collect();
+        // The case's own temporary folder (TMPDIR): whatever the command leaves in it
+        // (a decompressed copy, a scratch file) is a failure.
+        let temp = root.join(format!("{}.tmpdir", case.name));
+        std::fs::create_dir_all(&temp).unwrap();
         let args: Vec<String> = case.args.iter().map(|a| expand(a, &tmp, &work)).collect();
         let mut problems = Vec::new();
-        match run_limited(&args) {
+        match run_limited(&args, &temp) {
             None => problems.push(format!("did not finish in {HANG_LIMIT:?} (hang)")),
             Some((code, stdout, stderr)) => {
                 if code != case.exit {
@@ -339,6 +389,15 @@ fn hostile_corpus() {
                 if after != expected {
                     problems.push(format!("folder has {after:?}, expected {expected:?}"));
                 }
+                for (f, before) in case.unchanged.iter().zip(&contents) {
+                    if std::fs::read(tmp.join(f)).ok().as_ref() != Some(before) {
+                        problems.push(format!("{f} was changed"));
+                    }
+                }
+                let left = listing(&temp);
+                if !left.is_empty() {
+                    problems.push(format!("temporary files left behind: {left:?}"));
+                }
                 for link in case.links.keys() {
                     let is_link = std::fs::symlink_metadata(tmp.join(link))
                         .is_ok_and(|m| m.file_type().is_symlink());
@@ -363,6 +422,7 @@ fn hostile_corpus() {
             }
         }
         ran += 1;
+        let _ = std::fs::remove_dir_all(&temp);
         if problems.is_empty() {
             let _ = std::fs::remove_dir_all(&tmp);
         } else {

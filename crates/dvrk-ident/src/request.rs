@@ -727,20 +727,26 @@ impl FitRequest {
         let ((first, _), rest) = states
             .split_first()
             .ok_or_else(crate::fit::no_training_log)?;
-        let mut state = ObservationState::clone(first);
-        for (s, file) in rest {
-            state.merge(s).map_err(|e| match file {
-                Some(f) => IdentError::State {
-                    file: f.display().to_string(),
-                    message: e.to_string(),
-                },
-                None => e,
-            })?;
-        }
+        // Every state checked against the robot on its own, so that an error names its
+        // file, before any is merged.
+        let named = |file: &Option<PathBuf>, e: IdentError| match file {
+            Some(f) if !e.to_string().contains(&f.display().to_string()) => IdentError::State {
+                file: f.display().to_string(),
+                message: e.to_string(),
+            },
+            _ => e,
+        };
         let base = match robot {
             Some(r) => r.clone(),
-            None => state.robot_model()?,
+            None => first.robot_model().map_err(|e| named(&states[0].1, e))?,
         };
+        for (s, file) in states {
+            s.model(&base).map_err(|e| named(file, e))?;
+        }
+        let mut state = ObservationState::clone(first);
+        for (s, file) in rest {
+            state.merge(s).map_err(|e| named(file, e))?;
+        }
         let model = state.model(&base)?;
         let mut settings = state.settings(&self.overrides.apply(self.settings.clone()));
         self.overrides.set_prior(&mut settings, &model)?;

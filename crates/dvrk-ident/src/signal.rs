@@ -264,15 +264,27 @@ impl Cutoff {
             .map(|v| v.trim().parse::<f64>())
             .collect::<Result<_, _>>()
             .map_err(|_| format!("`{text}` is not a cut-off (Hz), a list of them or `none`"))?;
+        let cutoff = match values[..] {
+            [one] => Cutoff::All(one),
+            _ => Cutoff::PerJoint(values),
+        };
+        cutoff.check_values()?;
+        Ok(Some(cutoff))
+    }
+
+    /// Every cut-off positive and finite: what any cut-off read (a flag, a result's or a
+    /// state's settings) must be.
+    fn check_values(&self) -> Result<(), String> {
+        let values = match self {
+            Cutoff::All(v) => std::slice::from_ref(v),
+            Cutoff::PerJoint(v) => v.as_slice(),
+        };
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
             return Err(format!(
                 "cut-off {v} Hz: must be positive and finite (or `none`: no filter)"
             ));
         }
-        Ok(Some(match values[..] {
-            [one] => Cutoff::All(one),
-            _ => Cutoff::PerJoint(values),
-        }))
+        Ok(())
     }
 
     /// Cut-off of joint `j`, Hz (`None` when a per-joint list is too short).
@@ -289,7 +301,12 @@ impl Cutoff {
                 expected: dof,
                 found: v.len(),
             }),
-            _ => Ok(()),
+            _ => self
+                .check_values()
+                .map_err(|reason| SignalError::InvalidSetting {
+                    name: "cutoff_hz",
+                    reason,
+                }),
         }
     }
 }
@@ -572,6 +589,23 @@ impl Processing {
                     reason: format!("must be finite and non-negative, got {s}"),
                 });
             }
+        }
+        if let Some(r) = self.resample_hz {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(SignalError::InvalidSetting {
+                    name: "resample_hz",
+                    reason: format!("must be positive and finite, got {r}"),
+                });
+            }
+        }
+        if !(self.uniform_tolerance.is_finite() && self.uniform_tolerance >= 0.0) {
+            return Err(SignalError::InvalidSetting {
+                name: "uniform_tolerance",
+                reason: format!(
+                    "must be finite and non-negative, got {}",
+                    self.uniform_tolerance
+                ),
+            });
         }
         Ok(())
     }

@@ -266,10 +266,103 @@ fn damaged_files_are_refused_with_the_file_named() {
     v.extend_from_slice(&(text.len() as u64).to_le_bytes());
     v.extend_from_slice(text.as_bytes());
     v.extend_from_slice(&pair[24 + header..]);
-    assert!(err(&v).contains("sample counts overflow"), "{}", err(&v));
+    assert!(
+        err(&v).contains("samples, more than the 100000000000 a log can hold"),
+        "{}",
+        err(&v)
+    );
     // A NaN among the numbers (the last one: the last log's last factor entry).
     let mut v = bytes.clone();
     let end = v.len();
     v[end - 8..].copy_from_slice(&f64::NAN.to_le_bytes());
     assert!(err(&v).contains("is not finite"), "{}", err(&v));
+}
+
+/// `bytes` (a state file) with its JSON header edited by `edit`, the length field
+/// rewritten: a forged state that passes the layout checks.
+fn with_header(bytes: &[u8], edit: impl Fn(&str) -> String) -> Vec<u8> {
+    let h = u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize;
+    let text = edit(std::str::from_utf8(&bytes[24..24 + h]).unwrap());
+    let mut v = bytes[..16].to_vec();
+    v.extend_from_slice(&(text.len() as u64).to_le_bytes());
+    v.extend_from_slice(text.as_bytes());
+    v.extend_from_slice(&bytes[24 + h..]);
+    v
+}
+
+#[test]
+fn forged_headers_are_refused_with_the_file_named() {
+    let psm = Model::builtin("psm").unwrap();
+    let simplified = Model::builtin("psm_simplified").unwrap();
+    let [a, ..] = pieces();
+    let s = settings(Method::Ols);
+    let bytes = observe(&psm, &a, &s).to_bytes();
+    let read = |b: &[u8]| ObservationState::from_bytes(b, "x.obs");
+    let err = |b: &[u8]| read(b).unwrap_err().to_string();
+    let expect = |e: String, words: &[&str]| {
+        assert!(e.starts_with("x.obs: "), "{e}");
+        for w in words {
+            assert!(e.contains(w), "{w:?} not in {e}");
+        }
+    };
+    // Every processing setting is checked as a flag would be.
+    let e = err(&with_header(&bytes, |t| {
+        t.replace("\"cutoff_hz\":5.4", "\"cutoff_hz\":-5.4")
+    }));
+    expect(e, &["cut-off -5.4 Hz", "positive"]);
+    let e = err(&with_header(&bytes, |t| {
+        t.replace("\"cutoff_hz\":5.4", "\"cutoff_hz\":[5.4,5.4]")
+    }));
+    expect(e, &["2 per-joint cut-offs given for 7 joints"]);
+    let e = err(&with_header(&bytes, |t| {
+        t.replace("\"stribeck_velocity\":null", "\"stribeck_velocity\":-0.3")
+    }));
+    expect(
+        e,
+        &["Stribeck velocity must be positive and finite, got -0.3"],
+    );
+    let e = err(&with_header(&bytes, |t| {
+        t.replace("\"uniform_tolerance\":0.1", "\"uniform_tolerance\":-1.0")
+    }));
+    expect(e, &["uniform_tolerance"]);
+    // A factor entry beyond any regressor's (its square would overflow).
+    let mut v = bytes.clone();
+    let end = v.len();
+    v[end - 8..].copy_from_slice(&1e300f64.to_le_bytes());
+    expect(err(&v), &["1e300 is beyond the accepted ±1e100"]);
+    // The merged factors of other data than the logs': refused. The state of one log has
+    // the log's factor as its merge, so scaling one entry of the merged R (coordinate
+    // 1's first non-zero one) breaks it.
+    let merged_at = 24 + u64::from_le_bytes(bytes[16..24].try_into().unwrap()) as usize + 8 * 14;
+    let number = |v: &[u8], k: usize| f64::from_le_bytes(v[k..k + 8].try_into().unwrap());
+    let k = (0..116 * 117 / 2)
+        .map(|i| merged_at + 8 * i)
+        .find(|&k| number(&bytes, k) != 0.0)
+        .expect("a non-zero entry of coordinate 1");
+    let mut v = bytes.clone();
+    v[k..k + 8].copy_from_slice(&(number(&bytes, k) * 1.001).to_le_bytes());
+    expect(
+        err(&v),
+        &["coordinate 1", "not the merge of the logs' factors"],
+    );
+    // Unchanged, it reads.
+    assert!(read(&bytes).is_ok());
+
+    // A consistent file of another model's shape under psm's hash: an error naming the
+    // file, from the fit and from a merge, never a panic in the factors' arithmetic.
+    let forged = observe(&simplified, &a, &s).to_bytes();
+    let hash = dvrk_ident::state::model_hash(&psm);
+    let forged = with_header(&forged, |t| {
+        let v: serde_json::Value = serde_json::from_str(t).unwrap();
+        let old = v["robot_hash"].as_str().unwrap().to_string();
+        t.replace(&old, &hash)
+            .replace("builtin:psm_simplified", "builtin:psm")
+            .replace("\"robot\":\"psm_simplified\"", "\"robot\":\"psm\"")
+    });
+    let state = read(&forged).unwrap();
+    let e = state.fit(&psm, &s, &[], &Silent).unwrap_err().to_string();
+    expect(e, &["factors of width", "the file was altered"]);
+    let mut good = read(&bytes).unwrap();
+    let e = good.merge(&state).unwrap_err().to_string();
+    expect(e, &["factors of width"]);
 }

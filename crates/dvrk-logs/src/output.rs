@@ -18,6 +18,13 @@
 //! checked and every file written to its temporary name first, and only when all of them
 //! succeeded are they put in place ([`Outputs::commit`]). An error before the commit
 //! leaves nothing behind.
+//!
+//! **No output is an input.** A command names its inputs ([`Inputs`]: logs with the
+//! members of a rosbag2 folder, results, parameters, states, descriptions) and every
+//! output is compared with them by identity ([`FileId`]: device and inode after following
+//! symbolic links), not by name: `x.csv`, `./x.csv`, a link to it and a hard link are the
+//! same file. An output that is an input is an error naming both before anything is
+//! written: a recording is the one thing a lab cannot make again.
 
 use std::fs::{File, OpenOptions};
 use std::io::{Seek, Write};
@@ -146,6 +153,112 @@ pub fn check_dir(dir: &Path) -> std::io::Result<(PathBuf, bool)> {
             Ok((resolved, false))
         }
         Err(e) => Err(e),
+    }
+}
+
+/// The identity of an existing file or folder, symbolic links followed: two paths with
+/// the same identity are the same file, whatever their spelling (links, `..`, hard
+/// links). On Unix the device and inode; elsewhere the canonical path.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub struct FileId(#[cfg(unix)] (u64, u64), #[cfg(not(unix))] PathBuf);
+
+impl FileId {
+    /// The identity of `path`, `None` when it does not exist (nothing to protect; a
+    /// dangling link included).
+    pub fn of(path: &Path) -> std::io::Result<Option<FileId>> {
+        match std::fs::metadata(path) {
+            #[cfg(unix)]
+            Ok(m) => {
+                use std::os::unix::fs::MetadataExt;
+                Ok(Some(FileId((m.dev(), m.ino()))))
+            }
+            #[cfg(not(unix))]
+            Ok(_) => std::fs::canonicalize(path).map(|p| Some(FileId(p))),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(e),
+        }
+    }
+}
+
+/// The files a command reads, to refuse an output that is one of them (see the module
+/// documentation). Paths that do not exist are skipped: the command's read fails on them
+/// before anything is written.
+#[derive(Clone, Debug, Default)]
+pub struct Inputs {
+    /// Identity, with the path as given and, for a member of a rosbag2 folder, the path
+    /// of the member.
+    files: Vec<(FileId, String)>,
+}
+
+impl Inputs {
+    /// No input yet.
+    pub fn new() -> Inputs {
+        Inputs::default()
+    }
+
+    /// Adds the file (or folder) `path`, named `what` in messages (e.g. `the log
+    /// a.mcap`). Standard input (`-`) and paths without an identity are skipped.
+    pub fn add(&mut self, what: impl Into<String>, path: &Path) {
+        if path.as_os_str() == "-" {
+            return;
+        }
+        if let Ok(Some(id)) = FileId::of(path) {
+            let what = what.into();
+            if !self.files.iter().any(|(i, _)| *i == id) {
+                self.files.push((id, what));
+            }
+        }
+    }
+
+    /// Adds a log: the file, or a rosbag2 folder with its `metadata.yaml` and every
+    /// recording file it lists ([`crate::log::files_of`]; a folder whose list cannot be
+    /// read protects every file directly in it instead).
+    pub fn add_log(&mut self, path: &Path) {
+        let given = path.display().to_string();
+        self.add(format!("the log {given}"), path);
+        if !std::fs::metadata(path).is_ok_and(|m| m.is_dir()) {
+            // A metadata.yaml given for its folder stands for the folder's files too.
+            if let Ok(files) = crate::log::files_of(path) {
+                for f in files.iter().filter(|f| f.as_path() != path) {
+                    self.add(format!("{} (in the log {given})", f.display()), f);
+                }
+            }
+            return;
+        }
+        let members = crate::log::files_of(path).unwrap_or_else(|_| {
+            std::fs::read_dir(path)
+                .into_iter()
+                .flatten()
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| p.is_file())
+                .collect()
+        });
+        for f in &members {
+            self.add(format!("{} (in the log {given})", f.display()), f);
+        }
+    }
+
+    /// An error when `output` is one of the inputs, naming the input (the caller names
+    /// the output). A folder output is compared as a whole (a report folder may not be a
+    /// rosbag2 recording's folder).
+    pub fn check(&self, output: &Path) -> std::io::Result<()> {
+        if output.as_os_str() == "-" || self.files.is_empty() {
+            return Ok(());
+        }
+        let Some(id) = FileId::of(output)? else {
+            return Ok(());
+        };
+        match self.files.iter().find(|(i, _)| *i == id) {
+            Some((_, what)) => Err(std::io::Error::new(
+                std::io::ErrorKind::AlreadyExists,
+                format!(
+                    "the same file as {what}, an input of this command: an output never \
+                     replaces an input (give another output path)"
+                ),
+            )),
+            None => Ok(()),
+        }
     }
 }
 
@@ -324,6 +437,8 @@ pub struct Outputs {
     /// Destinations taken so far (resolved paths; `None` for standard output), with the
     /// path as given.
     taken: Vec<(Option<PathBuf>, PathBuf)>,
+    /// The command's inputs, which no output may replace.
+    inputs: Inputs,
 }
 
 impl Outputs {
@@ -332,10 +447,22 @@ impl Outputs {
         Outputs::default()
     }
 
+    /// No output yet, none of which may replace one of `inputs`.
+    pub fn protecting(inputs: Inputs) -> Outputs {
+        Outputs {
+            staged: Vec::new(),
+            taken: Vec::new(),
+            inputs,
+        }
+    }
+
     /// Checks that `path` can be an output of this command (see [`Destination::of`]) and
     /// that no earlier output of it goes to the same place.
     fn claim(&mut self, path: &Path) -> Result<Destination, OutputError> {
         let destination = Destination::of(path).map_err(|e| OutputError::new(path, e))?;
+        self.inputs
+            .check(path)
+            .map_err(|e| OutputError::new(path, e))?;
         let key = destination.key().map(Path::to_path_buf);
         if let Some((_, other)) = self.taken.iter().find(|(k, _)| *k == key) {
             return Err(OutputError::new(
@@ -400,6 +527,7 @@ impl Outputs {
         files: &[(String, &[u8])],
     ) -> Result<Vec<PathBuf>, OutputError> {
         let err = |e| OutputError::new(dir, e);
+        self.inputs.check(dir).map_err(err)?;
         match check_dir(dir).map_err(err)? {
             (_, true) => {
                 for (name, bytes) in files {
@@ -614,6 +742,68 @@ mod tests {
         assert!(e.to_string().contains("does not exist"), "{e}");
         drop(outputs);
         assert!(entries(&d).is_empty(), "{:?}", entries(&d));
+        std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    #[test]
+    fn an_input_is_never_an_output() {
+        let d = dir("inputs");
+        let log = d.join("log.csv");
+        std::fs::write(&log, "recording").unwrap();
+        let mut inputs = Inputs::new();
+        inputs.add_log(&log);
+        inputs.add("the robot", Path::new("psm")); // a built-in name: no file, skipped
+                                                   // The same file under every spelling: itself, through `..`, a symbolic link, a
+                                                   // hard link.
+        std::fs::create_dir(d.join("sub")).unwrap();
+        std::os::unix::fs::symlink("log.csv", d.join("link.csv")).unwrap();
+        std::fs::hard_link(&log, d.join("hard.csv")).unwrap();
+        for same in [
+            log.clone(),
+            d.join("sub").join("..").join("log.csv"),
+            d.join("link.csv"),
+            d.join("hard.csv"),
+        ] {
+            let e = inputs.check(&same).unwrap_err().to_string();
+            assert!(
+                e.contains("the same file as the log") && e.contains("log.csv"),
+                "{e}"
+            );
+            let mut outputs = Outputs::protecting(inputs.clone());
+            let e = outputs.add(&same, b"json").unwrap_err().to_string();
+            assert!(e.contains("an output never replaces an input"), "{e}");
+            drop(outputs);
+        }
+        // Another file, a new file and standard output are outputs.
+        std::fs::write(d.join("other.json"), "old").unwrap();
+        for other in ["other.json", "new.json", "-"] {
+            let p = if other == "-" {
+                PathBuf::from("-")
+            } else {
+                d.join(other)
+            };
+            inputs.check(&p).unwrap();
+        }
+        // A report folder may not be an input folder; a file in it that is an input is
+        // refused when staged.
+        let mut folder = Inputs::new();
+        folder.add("the folder", &d.join("sub"));
+        folder.add("the log", &log);
+        let mut outputs = Outputs::protecting(folder);
+        assert!(outputs
+            .add_dir(&d.join("sub"), &[("r.html".into(), b"r")])
+            .is_err());
+        let e = outputs
+            .add_dir(&d, &[("log.csv".into(), b"r")])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("the same file as the log"), "{e}");
+        drop(outputs);
+        assert_eq!(std::fs::read_to_string(&log).unwrap(), "recording");
+        assert_eq!(
+            entries(&d),
+            ["hard.csv", "link.csv", "log.csv", "other.json", "sub"]
+        );
         std::fs::remove_dir_all(&d).unwrap();
     }
 

@@ -334,3 +334,158 @@ fn cut_or_corrupted_bags_are_errors_not_panics() {
         }
     }
 }
+
+/// A `metadata.yaml` names files inside its folder, each once, in plain YAML: anchors
+/// and aliases (an alias bomb), entries leaving the folder (absolute, `..`, a symbolic
+/// link out, a loop of links), the same file twice (100 000 times) and more files than
+/// accepted are each an error naming the entry, before any recording is read.
+#[test]
+fn metadata_names_files_inside_its_folder_once() {
+    let dir = TempDir::new("bags-metadata-hostile");
+    let bag = dir.path("rec");
+    copy_dir(&fixture("split"), &bag);
+    let outside = dir.path("other.mcap");
+    std::fs::copy(bag.join("split_0.mcap"), &outside).unwrap();
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    let refused = |yaml: &str, words: &[&str]| {
+        std::fs::write(bag.join("metadata.yaml"), yaml).unwrap();
+        let e = read_mcap_log(&bag, &options).unwrap_err();
+        assert!(matches!(problem(&e), McapProblem::Metadata { .. }), "{e}");
+        let text = e.to_string();
+        assert!(
+            text.contains("metadata.yaml: invalid rosbag2 metadata.yaml"),
+            "{text}"
+        );
+        for w in words {
+            assert!(text.contains(w), "{w:?} not in {text}");
+        }
+    };
+    let list = |entries: &str| {
+        format!("rosbag2_bagfile_information:\n  relative_file_paths: [{entries}]\n")
+    };
+    // The alias bomb: nine levels of nine aliases are 9^9 strings once expanded.
+    let mut bomb = String::from("a0: &a0 [x, x, x, x, x, x, x, x, x]\n");
+    for k in 1..10 {
+        let p = k - 1;
+        bomb += &format!(
+            "a{k}: &a{k} [*a{p}, *a{p}, *a{p}, *a{p}, *a{p}, *a{p}, *a{p}, *a{p}, *a{p}]\n"
+        );
+    }
+    bomb += &list("split_0.mcap");
+    refused(&bomb, &["line 1", "anchor", "rosbag2 never writes"]);
+    refused(
+        &format!("{}  x: *a\n", list("split_0.mcap")),
+        &["unknown anchor"],
+    );
+    refused(
+        &format!(
+            "rosbag2_bagfile_information:\n  relative_file_paths: {}{}\n",
+            "[".repeat(40),
+            "]".repeat(40)
+        ),
+        &["nested more than 32 levels"],
+    );
+    refused(
+        &list(&outside.display().to_string()),
+        &["an absolute path", "other.mcap"],
+    );
+    refused(
+        &list("../other.mcap"),
+        &["`../other.mcap`", "leading out of the folder"],
+    );
+    std::os::unix::fs::symlink("../other.mcap", bag.join("out.mcap")).unwrap();
+    refused(&list("out.mcap"), &["`out.mcap`", "outside the folder"]);
+    std::os::unix::fs::symlink("loop_b", bag.join("loop_a")).unwrap();
+    std::os::unix::fs::symlink("loop_a", bag.join("loop_b")).unwrap();
+    refused(&list("loop_a"), &["`loop_a`", "loop of symbolic links"]);
+    refused(
+        &list("split_0.mcap, ./split_0.mcap"),
+        &["`split_0.mcap` and `./split_0.mcap` are the same file"],
+    );
+    let many = vec!["split_0.mcap"; 100_000].join(", ");
+    refused(&list(&many), &["lists 100000 files, more than the 10000"]);
+    let twice = vec!["split_0.mcap"; 5_000].join(", ");
+    refused(&list(&twice), &["are the same file"]);
+    // A link inside the folder is a member; the recording reads.
+    std::os::unix::fs::symlink("split_1.mcap", bag.join("inside.mcap")).unwrap();
+    std::fs::write(bag.join("metadata.yaml"), list("split_0.mcap, inside.mcap")).unwrap();
+    assert!(read_mcap_log(&bag, &options).is_ok());
+    // Without metadata.yaml, a link out of the folder is refused too, naming it.
+    std::fs::remove_file(bag.join("metadata.yaml")).unwrap();
+    for l in ["loop_a", "loop_b", "inside.mcap"] {
+        std::fs::remove_file(bag.join(l)).unwrap();
+    }
+    let e = read_mcap_log(&bag, &options).unwrap_err().to_string();
+    assert!(
+        e.contains("invalid rosbag2 folder: entry `out.mcap`"),
+        "{e}"
+    );
+}
+
+/// rosbag2 sqlite3 details: a messages table without the integer primary key reads the
+/// same samples in insertion order (in batches from the rowid, not a scan per batch), a
+/// row without an id is refused and counted instead of skipped, a hot rollback journal is
+/// named, and the file is never written (its bytes unchanged, no `-shm` or `-wal` made).
+#[test]
+fn sqlite3_without_primary_key_null_ids_and_journals() {
+    let dir = TempDir::new("bags-sqlite3-details");
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    let original = fixture("rosbag2_sqlite").join("rosbag2_sqlite_0.db3");
+    let reference = read_mcap_log(&original, &options).unwrap();
+    let copy = |name: &str, nulls: usize| {
+        let path = dir.path(name);
+        let conn = rusqlite::Connection::open(&path).unwrap();
+        conn.execute_batch(&format!(
+            "ATTACH '{}' AS o;
+             CREATE TABLE topics AS SELECT * FROM o.topics;
+             CREATE TABLE messages(id INTEGER, topic_id INTEGER, timestamp INTEGER, data BLOB);
+             INSERT INTO messages SELECT id, topic_id, timestamp, data FROM o.messages ORDER BY id;
+             UPDATE messages SET id = NULL WHERE rowid IN (SELECT rowid FROM messages LIMIT {nulls});
+             DETACH o;",
+            original.display()
+        ))
+        .unwrap();
+        drop(conn);
+        path
+    };
+    let plain = copy("plain.db3", 0);
+    let bytes = std::fs::read(&plain).unwrap();
+    let log = read_mcap_log(&plain, &options).unwrap();
+    assert_eq!(log.trajectory.q, reference.trajectory.q);
+    assert_eq!(log.trajectory.tau, reference.trajectory.tau);
+    assert_eq!(
+        std::fs::read(&plain).unwrap(),
+        bytes,
+        "the recording was written"
+    );
+    let mut names: Vec<String> = std::fs::read_dir(dir.path(""))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["plain.db3"]);
+
+    let holes = copy("holes.db3", 3);
+    let e = read_mcap_log(&holes, &options).unwrap_err().to_string();
+    assert!(
+        e.contains(
+            "holes.db3: invalid rosbag2 sqlite3 file: 3 rows of the messages table have no id"
+        ),
+        "{e}"
+    );
+
+    let journal = dir.path("plain.db3-journal");
+    std::fs::write(&journal, b"\xd9\xd5\x05\xf9\x20\xa1\x63\xd7 a hot journal").unwrap();
+    let e = read_mcap_log(&plain, &options).unwrap_err().to_string();
+    assert!(
+        e.contains("invalid rosbag2 sqlite3 file: a rollback journal")
+            && e.contains("plain.db3-journal"),
+        "{e}"
+    );
+}

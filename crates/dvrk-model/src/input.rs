@@ -53,7 +53,8 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
         return Err(std::io::Error::new(
             std::io::ErrorKind::InvalidData,
             format!(
-                "larger than {} MiB: not a description, result or parameter file",
+                "larger than {} MiB, more than any text file dvrk-ident reads (description, \
+                 result, parameters, rosbag2 metadata)",
                 MAX_TEXT_BYTES >> 20
             ),
         ));

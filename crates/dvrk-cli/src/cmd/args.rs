@@ -43,6 +43,11 @@ pub struct McapArgs {
     /// (bridges gaps and jitter; without it such logs are refused)
     #[arg(long, value_name = "HZ", help_heading = PROCESSING)]
     pub resample: Option<f64>,
+    /// Recordings: the largest size (MiB) a zstd- or lz4-compressed sqlite3 .db3 or ROS 1
+    /// .bag may decompress to in the temporary folder [default: 100 times its compressed
+    /// size, at least 64 MiB, at most 16 GiB]
+    #[arg(long, value_name = "MIB", help_heading = INPUT)]
+    pub max_unpacked_mib: Option<u64>,
 }
 
 /// The reading options of `--format`, `--rate` and the recording flags.
@@ -53,6 +58,7 @@ pub fn read_options(format: Option<LogFormat>, rate: Option<f64>, mcap: &McapArg
         topics: mcap.topics.clone(),
         time_source: mcap.time,
         resample_hz: mcap.resample,
+        max_unpacked_mib: mcap.max_unpacked_mib,
         ..ReadOptions::default()
     }
 }

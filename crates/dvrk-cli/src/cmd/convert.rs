@@ -46,7 +46,8 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[])?;
+    let inputs = super::inputs(&[&args.input], &[("the robot", args.robot.as_deref())]);
+    let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[], &inputs)?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
     let traj = read(
         &read_options(args.in_format, args.rate, &args.mcap),

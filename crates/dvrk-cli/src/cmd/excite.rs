@@ -158,6 +158,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--plot", args.plot.as_deref()),
         ],
         &[],
+        &inputs(&args),
     )?;
     if stdout_taken && args.out.is_none() && args.evaluate.is_none() {
         bail!("the trajectory goes to stdout without --out, and so does an output `-`: give --out");
@@ -233,7 +234,7 @@ fn evaluate(
     )
     .map_err(|e| limits.name(e))?;
     if let Some(path) = &args.plot {
-        let mut outputs = Outputs::new();
+        let mut outputs = Outputs::protecting(inputs(args));
         outputs.add(
             Path::new(path),
             plot(model, &traj, &limits.limits.joint, path)?,
@@ -241,6 +242,19 @@ fn evaluate(
         outputs.commit()?;
     }
     print_evaluation(&ev, args.json, stdout_taken)
+}
+
+/// The files the command reads, which no output may replace.
+fn inputs(args: &Args) -> super::Inputs {
+    super::inputs(
+        &[],
+        &[
+            ("the robot", Some(&args.robot)),
+            ("the limits", args.limits.as_deref()),
+            ("the initial trajectory", args.init.as_deref()),
+            ("the evaluated trajectory", args.evaluate.as_deref()),
+        ],
+    )
 }
 
 /// The optimizer's settings from the flags.
@@ -287,7 +301,7 @@ fn search(args: &Args, model: &Model, base: &BaseParameters, limits: &LimitsOf) 
     .map_err(|e| limits.name(e))?;
     let doc = serde_json::to_string_pretty(&result.to_json_value())?;
     // Every output built before the first is written.
-    let mut outputs = Outputs::new();
+    let mut outputs = Outputs::protecting(inputs(args));
     if let Some(path) = &args.out {
         outputs.add(Path::new(path), doc.clone() + "\n")?;
     }

@@ -48,6 +48,18 @@ pub struct Args {
     pub gc_points: usize,
 }
 
+/// The files the export reads, which no output may replace.
+fn inputs(args: &Args) -> super::Inputs {
+    super::inputs(
+        &[],
+        &[
+            ("the result", Some(&args.result)),
+            ("the template", args.template.as_deref()),
+            ("the robot", args.robot.as_deref()),
+        ],
+    )
+}
+
 pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(
         &[
@@ -56,6 +68,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--dvrk-gc", args.dvrk_gc.as_deref()),
         ],
         &[],
+        &inputs(&args),
     )?;
     let loaded = load_result(&args.result, args.robot.as_deref())?;
     // None of the formats has a place for the torques' measurement delays: a controller
@@ -99,7 +112,7 @@ pub fn run(args: Args) -> Result<()> {
         built.push((out, exported));
     }
     let mut report = String::new();
-    let mut outputs = Outputs::new();
+    let mut outputs = Outputs::protecting(inputs(&args));
     for (out, e) in &built {
         outputs.add(Path::new(out), e.document.to_text())?;
         report += &format!("wrote {out}: {}\n{}", e.what, e.details);
@@ -122,23 +135,22 @@ fn urdf_template(template: Option<&str>, robot: &str) -> Result<Option<(String, 
 /// What a failed export says: the result file, the format, and for a URDF of a
 /// least-squares fit why its links are no rigid bodies and what would be.
 fn failure(export: &Export, loaded: &LoadedResult, result: &str) -> String {
+    let method = &loaded.result.method;
+    // Both hold rigid bodies, which a least-squares fit's link parameters are not.
+    let hint = if method == "sdp" {
+        String::new()
+    } else {
+        format!(
+            " (this {method} fit identifies the base parameters only, its link \
+             parameters are a representative, not rigid bodies; `dvrk-ident fit \
+             --method sdp` gives physically consistent ones)"
+        )
+    };
     match export {
-        Export::Urdf { .. } => {
-            let method = &loaded.result.method;
-            let hint = if method == "sdp" {
-                String::new()
-            } else {
-                format!(
-                    " (this {method} fit identifies the base parameters only, its link \
-                     parameters are a representative, not rigid bodies; `dvrk-ident fit \
-                     --method sdp` gives physically consistent ones)"
-                )
-            };
-            format!("{result}: cannot export to URDF{hint}")
-        }
+        Export::Urdf { .. } => format!("{result}: cannot export to URDF{hint}"),
         Export::WpiParams => format!("{result}: cannot export the 2019 params.json"),
         Export::DvrkGc { .. } => {
-            format!("{result}: cannot export the dVRK gravity compensation")
+            format!("{result}: cannot export the dVRK gravity compensation{hint}")
         }
     }
 }

@@ -123,6 +123,27 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The files the fit reads, which no output may replace: logs (training and test),
+/// states, the excitation, the prior, the robot.
+fn inputs(args: &Args) -> super::Inputs {
+    let logs: Vec<&str> = args
+        .logs
+        .iter()
+        .chain(&args.test)
+        .map(String::as_str)
+        .collect();
+    let mut files: Vec<(&str, Option<&str>)> = vec![
+        ("the robot", args.robot.as_deref()),
+        ("the excitation", args.excitation.as_deref()),
+        (
+            "the prior",
+            args.prior.as_deref().filter(|p| *p != "nominal"),
+        ),
+    ];
+    files.extend(args.states.iter().map(|s| ("the state", Some(s.as_str()))));
+    super::inputs(&logs, &files)
+}
+
 /// The request of these flags: everything but the outputs.
 fn request(args: &Args) -> Result<FitRequest> {
     let train = if args.states.is_empty() {
@@ -199,6 +220,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--wpi-json", args.wpi_json.as_deref()),
         ],
         &[("--report", args.report.as_deref())],
+        &inputs(&args),
     )?;
     if stdout_taken && args.json {
         bail!("--json prints the result to stdout, and so does an output `-`: give one of them");
@@ -220,7 +242,7 @@ pub fn run(args: Args) -> Result<()> {
     } = request.run(robot.as_ref(), &bars).map_err(flag_error)?;
     if result.solver.converged {
         // Every output built and staged before the first is put in place.
-        let mut outputs = Outputs::new();
+        let mut outputs = Outputs::protecting(inputs(&args));
         let mut report_note = None;
         if let Some(out) = &args.out {
             outputs.add(Path::new(out), result.to_json())?;

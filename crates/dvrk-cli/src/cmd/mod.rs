@@ -17,6 +17,7 @@ pub mod validate;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::names::Named;
+use dvrk_ident::output::Inputs;
 use dvrk_ident::FitResult;
 use dvrk_model::Model;
 
@@ -123,13 +124,21 @@ pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
 /// Checks every output of a command before any work is done (see
 /// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
 /// writable destinations whose folder exists, no two the same, at most one `-`
-/// (standard output). Returns whether one of them is standard output.
+/// (standard output), none of them one of the command's `inputs`. Returns whether one of
+/// them is standard output.
 pub fn check_outputs(
     files: &[(&str, Option<&str>)],
     dirs: &[(&str, Option<&str>)],
+    inputs: &Inputs,
 ) -> Result<bool> {
     use dvrk_ident::output::{check_dir, Destination};
     let mut seen: Vec<(Option<std::path::PathBuf>, &str)> = Vec::new();
+    for &(flag, path) in files.iter().chain(dirs) {
+        let Some(path) = path else { continue };
+        inputs
+            .check(std::path::Path::new(path))
+            .with_context(|| format!("{flag} {path}"))?;
+    }
     for &(flag, path) in files {
         let Some(path) = path else { continue };
         let key = match Destination::of(std::path::Path::new(path))
@@ -153,6 +162,24 @@ pub fn check_outputs(
         seen.push((Some(resolved), flag));
     }
     Ok(seen.iter().any(|(k, _)| k.is_none()))
+}
+
+/// The inputs of a command, which no output may replace (see [`check_outputs`]): `logs`
+/// (with the members of rosbag2 folders), and `files` `(what, path)` such as `("the
+/// result", Some("r.json"))`. A robot given by a built-in name is no file.
+pub fn inputs(logs: &[&str], files: &[(&str, Option<&str>)]) -> Inputs {
+    let mut inputs = Inputs::new();
+    for log in logs {
+        inputs.add_log(std::path::Path::new(log));
+    }
+    for &(what, path) in files {
+        let Some(path) = path else { continue };
+        if what == "the robot" && dvrk_model::Model::builtin_names().contains(&path) {
+            continue;
+        }
+        inputs.add(format!("{what} {path}"), std::path::Path::new(path));
+    }
+    inputs
 }
 
 /// A count flag that must be at least 1 (e.g. `--test-window`: 0 samples have no

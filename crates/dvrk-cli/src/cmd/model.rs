@@ -114,7 +114,8 @@ fn draw(model: &Model, args: &Args) -> Result<()> {
         None => vec![0.0; model.dof()],
     };
     let out = args.out.as_deref().context("--draw needs --out")?;
-    let stdout_taken = super::check_outputs(&[("--out", Some(out))], &[])?;
+    let inputs = super::inputs(&[], &[("the robot", Some(&args.robot))]);
+    let stdout_taken = super::check_outputs(&[("--out", Some(out))], &[], &inputs)?;
     let drawing = kinematic_drawing(model, &q).map_err(anyhow::Error::msg)?;
     write_figure(&drawing, std::path::Path::new(out))?;
     super::emit_summary(out, stdout_taken)

@@ -36,7 +36,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let stdout_taken = super::check_outputs(&[("--out", Some(args.out.as_str()))], &[])?;
+    let logs: Vec<&str> = args.logs.iter().map(String::as_str).collect();
+    let inputs = super::inputs(&logs, &[("the robot", Some(&args.robot))]);
+    let stdout_taken = super::check_outputs(&[("--out", Some(args.out.as_str()))], &[], &inputs)?;
     let model = Model::load(&args.robot)?;
     let request = ObserveRequest {
         read: args.log_args.read_options(),
@@ -58,7 +60,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     let state = request.run(&model, &crate::progress::Bars::new())?;
     let bytes = state.to_bytes();
-    let mut outputs = Outputs::new();
+    let mut outputs = Outputs::protecting(inputs);
     outputs.add(Path::new(&args.out), &bytes)?;
     outputs.commit()?;
     super::emit_summary(

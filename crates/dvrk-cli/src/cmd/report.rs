@@ -71,7 +71,16 @@ pub fn build(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    super::check_outputs(&[], &[("--out", Some(&args.out))])?;
+    let logs: Vec<&str> = args.logs.iter().map(String::as_str).collect();
+    let mut inputs = super::inputs(
+        &logs,
+        &[
+            ("the result", Some(&args.result)),
+            ("the excitation", args.excitation.as_deref()),
+            ("the robot", args.robot.as_deref()),
+        ],
+    );
+    super::check_outputs(&[], &[("--out", Some(&args.out))], &inputs)?;
     let super::LoadedResult { result, model, .. } =
         super::load_result(&args.result, args.robot.as_deref())?;
     let mut settings = args.log_args.settings(result.settings.clone())?;
@@ -118,6 +127,10 @@ pub fn run(args: Args) -> Result<()> {
             .map(|(k, p)| (format!("log {}", k + 1), p.clone()))
             .collect()
     };
+    // The result's own logs are inputs too.
+    for (_, p) in &sources {
+        inputs.add_log(Path::new(p));
+    }
     let read = args
         .log_args
         .read_options()
@@ -153,7 +166,7 @@ pub fn run(args: Args) -> Result<()> {
         excitation.as_ref(),
         &args.log_args.read_options(),
     )?;
-    let mut outputs = Outputs::new();
+    let mut outputs = Outputs::protecting(inputs);
     let written = built.stage(&mut outputs, Path::new(&args.out))?;
     outputs.commit()?;
     eprintln!("report: {} files", written.len());

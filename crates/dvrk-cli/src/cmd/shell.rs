@@ -88,7 +88,7 @@ pub fn man(args: ManArgs, cli: clap::Command) -> Result<()> {
         .map(|s| s.get_name().to_string())
         .collect();
     if let Some(dir) = &args.out {
-        super::check_outputs(&[], &[("--out", Some(dir))])?;
+        super::check_outputs(&[], &[("--out", Some(dir))], &Default::default())?;
         let pages = pages(cli)?;
         let files: Vec<(String, &[u8])> = pages
             .iter()

@@ -112,7 +112,15 @@ pub fn write_log(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[])?;
+    let inputs = super::inputs(
+        &[],
+        &[
+            ("the robot", Some(&args.robot)),
+            ("the parameters", Some(&args.params)),
+            ("the excitation", Some(&args.excitation)),
+        ],
+    );
+    let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[], &inputs)?;
     let robot = Model::load(&args.robot)?;
     // A result is simulated with the model it was fitted with (e.g. its Stribeck terms).
     let (model, params) = read_params(&robot, &args.params)?;

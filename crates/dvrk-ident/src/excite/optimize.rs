@@ -475,9 +475,7 @@ pub fn optimize(
     let (starts, mut best) = explore_and_refine(&setup, progress);
     hop_from_best(&setup, progress, &mut best);
     let Some((obj, x)) = best else {
-        return Err(ExciteError::Infeasible(
-            "every start failed (rank-deficient regressor or no feasible motion)".into(),
-        ));
+        return Err(no_motion(&setup));
     };
     let trajectory = from_x(&x, n, order, f0, &model.coordinates);
     let mut ws = Workspace::new(model);
@@ -619,6 +617,35 @@ fn explore_and_refine(
         }
     }
     (starts, best)
+}
+
+/// Why every start failed: when a motion of a micro-radian (or micrometre) about the
+/// static pose already breaks a limit, that limit leaves no room to move (e.g. a
+/// Cartesian box of zero width, a velocity range of one value) and is named; else the
+/// regressor was rank deficient everywhere the limits allow.
+fn no_motion(setup: &Setup<'_>) -> ExciteError {
+    let (model, xs) = (setup.model, setup.xs);
+    let n = model.dof();
+    let mut rng = super::rng::Rng(0x5eed);
+    let x: Vec<f64> = xs
+        .iter()
+        .enumerate()
+        .map(|(k, v)| if k < n { *v } else { v + 1e-6 * rng.normal() })
+        .collect();
+    let mut ws = Workspace::new(model);
+    let check = setup
+        .cons
+        .check(model, &mut ws, &x, setup.dense, setup.opts.check_rate_hz);
+    match check.violated.first() {
+        Some(w) => ExciteError::ImpossibleLimits(format!(
+            "every start failed: no motion fits limit {}, which leaves no room to move (a \
+             motion of 1e-6 about the static pose gives {} = {} beyond {}); widen it",
+            w.limit, w.quantity, w.value, w.bound
+        )),
+        None => ExciteError::Infeasible(
+            "every start failed (rank-deficient regressor or no feasible motion)".into(),
+        ),
+    }
 }
 
 /// Basin hopping from `best`, which it replaces by a better point.

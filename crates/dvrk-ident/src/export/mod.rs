@@ -16,6 +16,14 @@
 //! - [`wpi_params`]: the 2019 package's `params.json` layout;
 //! - [`dvrk_gc`]: sawIntuitiveResearchKit's MTM gravity-compensation file (version 2.0).
 //!
+//! What each checks: the URDF and the controller's gravity compensation hold rigid
+//! bodies and refuse parameters that are not ([`Model::check_rigid_bodies`]: a negative
+//! mass, a first moment without mass, moments outside the triangle inequality), with no
+//! flag to force them: a controller compensating a negative mass pushes the arm the
+//! wrong way. `params.json` is the 2019 package's layout for its own least-squares fits,
+//! which are representatives of the base parameters, not rigid bodies: it takes any
+//! finite fit, as that package did.
+//!
 //! The next consumer's file (e.g. the dVRK's kinematic gravity-compensation file of the
 //! ECM and Si arms, `--dvrk-kinematic-gc`) is one new module here computing its document
 //! from a [`Model`] and its parameters, one variant of [`Export`] with its arm in
@@ -135,5 +143,35 @@ impl Export<'_> {
                 }
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every export that holds rigid bodies refuses a link of negative mass (−5 kg on
+    /// the MTM's shoulder): the controller's file as the URDF, naming the link; the
+    /// 2019 layout, which holds least-squares representatives, takes it.
+    #[test]
+    fn exports_of_rigid_bodies_refuse_a_negative_mass() {
+        let model = Model::builtin("mtm").unwrap();
+        let mut params = dvrk_gc::tests::mtm_params(&model);
+        let good = Export::DvrkGc { points: 6 }.build(&model, &params);
+        assert!(good.is_ok(), "{:?}", good.err());
+        let frame = model.frames.iter().find(|f| f.inertia.is_some()).unwrap();
+        params[frame.inertia.unwrap() + 9] = -5.0;
+        for export in [
+            Export::DvrkGc { points: 6 },
+            Export::Urdf { template: None },
+        ] {
+            let e = export.build(&model, &params).unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("link {} (mass -5)", frame.name))
+                    && e.contains("is not a rigid body"),
+                "{export:?}: {e}"
+            );
+        }
+        assert!(Export::WpiParams.build(&model, &params).is_ok());
     }
 }

@@ -50,6 +50,18 @@ pub const MAX_HEADER_BYTES: u64 = 16 << 20;
 const PREFIX: usize = 24;
 /// The header's `format` value.
 const FORMAT: &str = "dvrk-ident observation";
+/// Most processed samples one log of a state may count: more than three years at 1 kHz.
+/// The count sets the degrees of freedom of the standard errors, which a forged count
+/// would shrink at will; it cannot be checked against the factors, only bounded.
+pub const MAX_SAMPLES_PER_LOG: usize = 100_000_000_000;
+/// Largest magnitude of a factor entry: `R` holds square roots of sums of squared
+/// regressor entries, far below this for logged values within their bounds; beyond it
+/// `RᵀR` would overflow.
+pub const MAX_FACTOR_ENTRY: f64 = 1e100;
+/// Relative tolerance of the merged factors against the logs' (`RᵀR` of the merge
+/// equals the sum over the logs up to rounding: each entry within about 1e-14 of the
+/// product of its two columns' norms).
+const MERGE_TOLERANCE: f64 = 1e-8;
 
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -293,6 +305,27 @@ fn parse_header(bytes: &[u8], file: &str) -> Result<(Header, u64), IdentError> {
     if let Some(l) = header.logs.iter().find(|l| l.samples == 0) {
         return Err(bad(file, format!("log {}: no sample", l.path)));
     }
+    if let Some(l) = header.logs.iter().find(|l| l.samples > MAX_SAMPLES_PER_LOG) {
+        return Err(bad(
+            file,
+            format!(
+                "log {}: {} samples, more than the {MAX_SAMPLES_PER_LOG} a log can hold",
+                l.path, l.samples
+            ),
+        ));
+    }
+    if let Some(v) = header.stribeck_velocity {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(bad(
+                file,
+                format!("Stribeck velocity must be positive and finite, got {v}"),
+            ));
+        }
+    }
+    header
+        .processing
+        .check(n)
+        .map_err(|e| bad(file, format!("its processing settings: {e}")))?;
     if header
         .logs
         .iter()
@@ -335,6 +368,54 @@ fn check_payload_size(got: u64, size: u64, file: &str) -> Result<(), IdentError>
     Ok(())
 }
 
+/// The merged factors must be the merge of the logs' factors: for each coordinate `RᵀR`
+/// of the merge equals the sum over the logs of their `RᵀR`, up to rounding (a state
+/// edited by hand, or merged factors of other logs, would fit other data than the logs
+/// it lists).
+fn check_merged(
+    merged: &[Observation],
+    logs: &[ObservedLog],
+    file: &str,
+) -> Result<(), IdentError> {
+    for (j, m) in merged.iter().enumerate() {
+        let gram = |r: &DMatrix<f64>| r.tr_mul(r);
+        let mut sum = DMatrix::zeros(m.r().ncols(), m.r().ncols());
+        for l in logs {
+            sum += gram(l.parts[j].r());
+        }
+        // Each entry against its columns' norms (rounding errs by about eps·‖a‖·‖b‖),
+        // with a floor for columns that are (nearly) zero.
+        let d = sum.diagonal();
+        let floor = 1e-12 * d.max().max(f64::MIN_POSITIVE);
+        let merged = gram(m.r());
+        let mut difference = 0.0f64;
+        for a in 0..d.len() {
+            for b in a..d.len() {
+                let norm = (d[a] * d[b]).sqrt().max(floor);
+                let x = (merged[(a, b)] - sum[(a, b)]).abs() / norm;
+                // NaN (never: the entries are finite and bounded) counts as a mismatch.
+                difference = if x.is_nan() {
+                    f64::INFINITY
+                } else {
+                    difference.max(x)
+                };
+            }
+        }
+        if difference > MERGE_TOLERANCE {
+            return Err(bad(
+                file,
+                format!(
+                    "coordinate {}: the merged factors are not the merge of the logs' \
+                     factors (relative difference {difference:.1e}, more than \
+                     {MERGE_TOLERANCE:e}): the file was altered; observe the logs again",
+                    j + 1
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The state from a checked header and a payload of its exact size.
 fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState, IdentError> {
     let (n, w) = (header.coordinates, header.width);
@@ -343,10 +424,18 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
         .map(|b| f64::from_le_bytes(b.try_into().expect("8 bytes")));
     let mut next = |what: &dyn Fn() -> String| -> Result<f64, IdentError> {
         let x = numbers.next().expect("the size was checked");
-        if x.is_finite() {
-            Ok(x)
-        } else {
+        if !x.is_finite() {
             Err(bad(file, format!("{}: {x} is not finite", what())))
+        } else if x.abs() > MAX_FACTOR_ENTRY {
+            Err(bad(
+                file,
+                format!(
+                    "{}: {x:e} is beyond the accepted ±{MAX_FACTOR_ENTRY:e}",
+                    what()
+                ),
+            ))
+        } else {
+            Ok(x)
         }
     };
     let mut bound = |name: &str| -> Result<Vec<f64>, IdentError> {
@@ -356,6 +445,13 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
     };
     let min = bound("min")?;
     let max = bound("max")?;
+    let max_torque = crate::joint_log::Signal::Effort.max_magnitude();
+    if let Some(x) = min.iter().chain(&max).find(|x| x.abs() > max_torque) {
+        return Err(bad(
+            file,
+            format!("torque range: {x:e} is beyond the accepted ±{max_torque:e} N·m or N"),
+        ));
+    }
     if let Some(j) = (0..n).find(|&j| min[j] > max[j]) {
         return Err(bad(
             file,
@@ -407,7 +503,9 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
             parts,
         });
     }
+    check_merged(&parts, &logs, file)?;
     Ok(ObservationState {
+        file: Some(file.to_string()),
         robot: header.robot,
         robot_source: header.robot_source,
         robot_hash: header.robot_hash,

@@ -28,12 +28,15 @@ use crate::signal::Processing;
 
 mod codec;
 
-pub use codec::{MAGIC, MAX_HEADER_BYTES, VERSION};
+pub use codec::{MAGIC, MAX_FACTOR_ENTRY, MAX_HEADER_BYTES, MAX_SAMPLES_PER_LOG, VERSION};
 
 /// The training logs of a fit reduced, with what identifies the model and the
 /// processing they were reduced for (see the module docs).
 #[derive(Clone, Debug)]
 pub struct ObservationState {
+    /// The file the state was read from (named in errors); `None` for a state made in
+    /// memory.
+    pub file: Option<String>,
     /// The robot's name from its description, e.g. `psm`.
     pub robot: String,
     /// `builtin:psm` or the description's path, as [`Model::load`] takes it (without
@@ -114,6 +117,7 @@ impl ObservationState {
     ) -> Result<ObservationState, IdentError> {
         let fitted = settings.model(model)?;
         Ok(ObservationState {
+            file: None,
             robot: model.name.clone(),
             robot_source: model.source.clone(),
             robot_hash: model_hash(&fitted),
@@ -176,6 +180,17 @@ impl ObservationState {
         format!("observation of {}", names.join(" + "))
     }
 
+    /// What names this state in errors: its file, else its logs ([`Self::name`]).
+    fn label(&self) -> String {
+        self.file.clone().unwrap_or_else(|| self.name())
+    }
+
+    /// The coordinates and the factor width (parameters + 1) of the state.
+    fn shape(&self) -> (usize, usize) {
+        let parts = &self.observed.parts;
+        (parts.len(), parts.first().map_or(0, |p| p.r().ncols()))
+    }
+
     /// Processed samples of all the logs.
     pub fn samples(&self) -> usize {
         self.observed.samples()
@@ -191,6 +206,16 @@ impl ObservationState {
                 &other.robot_hash[..12.min(other.robot_hash.len())],
                 self.robot,
                 &self.robot_hash[..12.min(self.robot_hash.len())]
+            ));
+        }
+        if self.shape() != other.shape() {
+            return Some(format!(
+                "{} coordinates and factors of width {} differ from {} and {} of the \
+                 states before it",
+                other.shape().0,
+                other.shape().1,
+                self.shape().0,
+                self.shape().1
             ));
         }
         if self.processing != other.processing {
@@ -216,7 +241,7 @@ impl ObservationState {
     pub fn merge(&mut self, other: &ObservationState) -> Result<(), IdentError> {
         if let Some(message) = self.mismatch(other) {
             return Err(IdentError::Mismatch {
-                source_name: other.name(),
+                source_name: other.label(),
                 message,
             });
         }
@@ -242,7 +267,7 @@ impl ObservationState {
         let hash = model_hash(&fitted);
         if hash != self.robot_hash {
             return Err(IdentError::Mismatch {
-                source_name: self.name(),
+                source_name: self.label(),
                 message: format!(
                     "reduced for robot {} (model hash {}), but the robot given is {} from {} \
                      (model hash {}): give the robot the logs were observed with",
@@ -254,6 +279,23 @@ impl ObservationState {
                 ),
             });
         }
+        // The hash is the file's word only: its factors must have the model's shape.
+        let expected = (fitted.dof(), fitted.n_params() + 1);
+        if self.shape() != expected {
+            return Err(IdentError::State {
+                file: self.label(),
+                message: format!(
+                    "{} coordinates and factors of width {}, but its robot {} has {} \
+                     coordinates and {} parameters (width {}): the file was altered",
+                    self.shape().0,
+                    self.shape().1,
+                    fitted.name,
+                    expected.0,
+                    expected.1 - 1,
+                    expected.1
+                ),
+            });
+        }
         Ok(fitted.into_owned())
     }
 
@@ -262,7 +304,7 @@ impl ObservationState {
     pub fn robot_model(&self) -> Result<Model, IdentError> {
         let robot = crate::result::loadable_robot(&self.robot_source);
         Model::load(robot).map_err(|e| IdentError::State {
-            file: self.name(),
+            file: self.label(),
             message: format!("its robot {robot}: {e}"),
         })
     }

@@ -80,6 +80,9 @@ pub struct ReadOptions {
     /// so the others (with time stamps) do not refuse it. Set by
     /// [`ReadOptions::for_logs`].
     pub rate_for_some_logs: bool,
+    /// Recordings: the largest size a compressed sqlite3 or ROS 1 file may decompress
+    /// to, MiB ([`McapOptions::max_unpacked_mib`]); `None`: the default bound.
+    pub max_unpacked_mib: Option<u64>,
 }
 
 impl ReadOptions {
@@ -141,6 +144,7 @@ impl ReadOptions {
             time_source: self.time_source.unwrap_or_default(),
             resample_hz: self.resample_hz,
             joints: self.joints.clone(),
+            max_unpacked_mib: self.max_unpacked_mib,
         }
     }
 

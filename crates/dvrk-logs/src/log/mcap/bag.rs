@@ -44,7 +44,9 @@ pub(crate) struct Bag {
 impl Bag {
     /// Finds the files of the recording at `path` (see the module docs). A file that is
     /// no recording is a [`McapProblem::NotARecording`] error saying what it looks like.
-    pub fn open(path: &Path) -> Result<Bag, LogError> {
+    /// `max_unpacked_mib` bounds what a compressed sqlite3 or ROS 1 file may decompress
+    /// to ([`unpack_limit`]).
+    pub fn open(path: &Path, max_unpacked_mib: Option<u64>) -> Result<Bag, LogError> {
         let located = locate(path)?;
         let (paths, format) = (located.files, located.format);
         let mut files = Vec::with_capacity(paths.len());
@@ -61,7 +63,7 @@ impl Bag {
             };
             let unpacked = match (storage, packing) {
                 (_, Packing::None) | (Storage::Mcap, _) => None,
-                _ => Some(TempCopy::unpack(&p, packing)?),
+                _ => Some(TempCopy::unpack(&p, packing, max_unpacked_mib)?),
             };
             files.push(BagFile {
                 path: p,
@@ -149,10 +151,67 @@ fn not_a_recording(path: &Path, looks_like: &str) -> LogError {
     )
 }
 
-/// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`).
+/// Most recording files a rosbag2 `metadata.yaml` may list: a split recording of 10 000
+/// files is terabytes at rosbag2's usual split sizes.
+pub(crate) const MAX_BAG_FILES: usize = 10_000;
+
+/// Deepest nesting of a `metadata.yaml` (rosbag2 writes 4 levels).
+const MAX_YAML_DEPTH: usize = 32;
+
+/// Checks a `metadata.yaml` before it is loaded: no anchors or aliases (rosbag2 never
+/// writes them, and an alias expanded by the loader can turn a kilobyte into gigabytes)
+/// and a nesting of at most [`MAX_YAML_DEPTH`] (a deeper one is no rosbag2 metadata).
+fn check_yaml_events(text: &str) -> Result<(), String> {
+    use yaml_rust2::parser::{Event, Parser};
+    let mut parser = Parser::new_from_str(text);
+    let mut depth = 0usize;
+    loop {
+        let (event, mark) = parser
+            .next_token()
+            .map_err(|e| format!("not valid YAML: {e}"))?;
+        let at = || format!("line {}", mark.line());
+        let anchored = match &event {
+            Event::StreamEnd => return Ok(()),
+            Event::Alias(_) => {
+                return Err(format!(
+                    "{}: a YAML alias (`*name`); rosbag2 never writes anchors or aliases",
+                    at()
+                ))
+            }
+            Event::SequenceStart(anchor, _) | Event::MappingStart(anchor, _) => {
+                depth += 1;
+                if depth > MAX_YAML_DEPTH {
+                    return Err(format!(
+                        "{}: nested more than {MAX_YAML_DEPTH} levels deep; rosbag2 \
+                         metadata has 4",
+                        at()
+                    ));
+                }
+                *anchor
+            }
+            Event::SequenceEnd | Event::MappingEnd => {
+                depth = depth.saturating_sub(1);
+                0
+            }
+            Event::Scalar(_, _, anchor, _) => *anchor,
+            _ => 0,
+        };
+        if anchored > 0 {
+            return Err(format!(
+                "{}: a YAML anchor (`&name`); rosbag2 never writes anchors or aliases",
+                at()
+            ));
+        }
+    }
+}
+
+/// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`):
+/// each a file inside `dir` (no absolute path, no `..`, no symbolic link leading out of
+/// it), each once, at most [`MAX_BAG_FILES`].
 fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let bad = |reason: String| mcap_error(yaml, None, McapProblem::Metadata { reason });
-    let text = std::fs::read_to_string(yaml).map_err(io_error(yaml))?;
+    let text = dvrk_model::input::read_text(yaml).map_err(io_error(yaml))?;
+    check_yaml_events(&text).map_err(bad)?;
     let docs = yaml_rust2::YamlLoader::load_from_str(&text)
         .map_err(|e| bad(format!("not valid YAML: {e}")))?;
     let info = docs
@@ -163,26 +222,36 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let list = info["relative_file_paths"]
         .as_vec()
         .ok_or_else(|| bad("no relative_file_paths list".into()))?;
+    if list.len() > MAX_BAG_FILES {
+        return Err(bad(format!(
+            "relative_file_paths lists {} files, more than the {MAX_BAG_FILES} accepted",
+            list.len()
+        )));
+    }
+    // The folder as the links inside it are compared with.
+    let root = std::fs::canonicalize(dir).map_err(io_error(dir))?;
     let mut files = Vec::with_capacity(list.len());
+    let mut seen = std::collections::HashMap::with_capacity(list.len());
     for entry in list {
         let name = entry
             .as_str()
             .ok_or_else(|| bad(format!("relative_file_paths: {entry:?} is not a file name")))?;
-        // Older rosbag2 versions wrote the paths with the folder's name in front.
-        let direct = dir.join(name);
-        let file = if direct.exists() {
-            direct
-        } else {
-            match Path::new(name).file_name().map(|n| dir.join(n)) {
-                Some(p) if p.exists() => p,
-                _ => {
-                    return Err(bad(format!(
-                        "it lists {name}, which is not in {}",
-                        dir.display()
-                    )))
-                }
-            }
-        };
+        let file = member(dir, &root, name)
+            .map_err(|reason| bad(format!("relative_file_paths entry `{name}`: {reason}")))?;
+        let id = crate::output::FileId::of(&file)
+            .ok()
+            .flatten()
+            .ok_or_else(|| {
+                bad(format!(
+                    "relative_file_paths entry `{name}`: cannot be read"
+                ))
+            })?;
+        if let Some(first) = seen.insert(id, name) {
+            return Err(bad(format!(
+                "relative_file_paths entries `{first}` and `{name}` are the same file: a \
+                 recording lists each of its files once"
+            )));
+        }
         files.push(file);
     }
     if files.is_empty() {
@@ -191,13 +260,81 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     Ok(files)
 }
 
+/// The file `name` of a rosbag2 folder `dir` (canonically `root`): a relative path of
+/// normal components only, which exists and, symbolic links followed, is a file inside
+/// the folder. Older rosbag2 versions wrote the paths with the folder's name in front:
+/// the file name alone is tried next.
+fn member(dir: &Path, root: &Path, name: &str) -> Result<PathBuf, String> {
+    use std::path::Component;
+    let relative = Path::new(name);
+    if name.is_empty() {
+        return Err("an empty file name".into());
+    }
+    if relative.is_absolute() || relative.has_root() {
+        return Err("an absolute path; a recording names files inside its folder".into());
+    }
+    if relative
+        .components()
+        .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
+    {
+        return Err(
+            "a path leading out of the folder (`..`); a recording names files \
+                    inside its folder"
+                .into(),
+        );
+    }
+    let direct = dir.join(relative);
+    let file = if std::fs::symlink_metadata(&direct).is_ok() {
+        direct
+    } else {
+        match relative.file_name().map(|n| dir.join(n)) {
+            Some(p) if std::fs::symlink_metadata(&p).is_ok() => p,
+            _ => return Err(format!("not in {}", dir.display())),
+        }
+    };
+    let resolved = std::fs::canonicalize(&file).map_err(|e| {
+        if e.raw_os_error() == Some(40) || e.to_string().contains("symbolic links") {
+            "a loop of symbolic links".to_string()
+        } else {
+            format!("cannot be followed: {e}")
+        }
+    })?;
+    if !resolved.starts_with(root) {
+        return Err(format!(
+            "a symbolic link to {}, outside the folder; a recording names files inside \
+             its folder",
+            resolved.display()
+        ));
+    }
+    if !resolved.is_file() {
+        return Err("not a file".into());
+    }
+    Ok(file)
+}
+
 /// A rosbag2 folder without its metadata.yaml (a recording that was interrupted before
 /// writing it): its recording files, ordered by the split index rosbag2 puts at the end
 /// of their names (`name_0.mcap`, `name_1.mcap`, ...).
 fn folder_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let mut found = Vec::new();
+    let root = std::fs::canonicalize(dir).map_err(io_error(dir))?;
     for entry in std::fs::read_dir(dir).map_err(io_error(dir))? {
-        let p = entry.map_err(io_error(dir))?.path();
+        let entry = entry.map_err(io_error(dir))?;
+        let p = entry.path();
+        // A symbolic link is a member only if it stays in the folder, as for a listed file.
+        if entry.file_type().is_ok_and(|t| t.is_symlink()) {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            member(dir, &root, &name).map_err(|reason| {
+                mcap_error(
+                    dir,
+                    None,
+                    McapProblem::Damaged {
+                        kind: "rosbag2 folder",
+                        reason: format!("entry `{name}`: {reason}"),
+                    },
+                )
+            })?;
+        }
         if p.is_file() && matches!(sniff(&p)?, Content::Bag(..)) {
             found.push(p);
         }
@@ -227,6 +364,26 @@ fn folder_files(dir: &Path) -> Result<Vec<PathBuf>, LogError> {
 
 static TEMP_COUNTER: AtomicUsize = AtomicUsize::new(0);
 
+/// Default bound of a decompressed copy, as a multiple of the compressed file: JointState
+/// recordings compress 5 to 20 times; a decompression bomb, thousands of times.
+pub const UNPACK_RATIO: u64 = 100;
+/// The default bound is at least this, bytes (64 MiB: small files may compress better).
+pub const UNPACK_FLOOR: u64 = 64 << 20;
+/// The default bound is at most this, bytes (16 GiB).
+pub const UNPACK_CEILING: u64 = 16 << 30;
+
+/// The most bytes a compressed sqlite3 or ROS 1 file of `compressed` bytes may
+/// decompress to: `max_unpacked_mib` MiB when given (`--max-unpacked-mib`), else
+/// [`UNPACK_RATIO`] times its size within [`UNPACK_FLOOR`] and [`UNPACK_CEILING`].
+pub fn unpack_limit(compressed: u64, max_unpacked_mib: Option<u64>) -> u64 {
+    match max_unpacked_mib {
+        Some(mib) => mib.saturating_mul(1 << 20),
+        None => compressed
+            .saturating_mul(UNPACK_RATIO)
+            .clamp(UNPACK_FLOOR, UNPACK_CEILING),
+    }
+}
+
 /// A decompressed copy of a file in the temporary folder, removed when dropped.
 #[derive(Debug)]
 struct TempCopy {
@@ -234,7 +391,11 @@ struct TempCopy {
 }
 
 impl TempCopy {
-    fn unpack(src: &Path, packing: Packing) -> Result<TempCopy, LogError> {
+    fn unpack(
+        src: &Path,
+        packing: Packing,
+        max_unpacked_mib: Option<u64>,
+    ) -> Result<TempCopy, LogError> {
         let name = src
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
@@ -247,6 +408,8 @@ impl TempCopy {
             )),
         };
         let file = std::fs::File::open(src).map_err(io_error(src))?;
+        let compressed = file.metadata().map_err(io_error(src))?.len();
+        let limit = unpack_limit(compressed, max_unpacked_mib);
         let mut out = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
@@ -257,16 +420,35 @@ impl TempCopy {
         } else {
             "lz4"
         };
+        // One byte more than the bound tells a larger content, which is never written.
         let copied = match packing {
             Packing::Zstd => zstd::stream::read::Decoder::new(file)
-                .and_then(|mut d| std::io::copy(&mut d, &mut out)),
-            _ => lz4::Decoder::new(file).and_then(|mut d| std::io::copy(&mut d, &mut out)),
+                .and_then(|d| std::io::copy(&mut d.take(limit + 1), &mut out)),
+            _ => lz4::Decoder::new(file)
+                .and_then(|d| std::io::copy(&mut d.take(limit + 1), &mut out)),
         };
+        if matches!(copied, Ok(n) if n > limit) {
+            return Err(mcap_error(
+                src,
+                None,
+                McapProblem::Damaged {
+                    kind: "compressed file",
+                    reason: format!(
+                        "it decompresses to more than {} MiB ({} times its {compressed} \
+                         bytes): a decompression bomb, or a recording larger than the \
+                         bound; raise it with --max-unpacked-mib",
+                        limit >> 20,
+                        limit / compressed.max(1)
+                    ),
+                },
+            ));
+        }
         copied.map_err(|e| {
             mcap_error(
                 src,
                 None,
-                McapProblem::Container {
+                McapProblem::Damaged {
+                    kind: "compressed file",
                     reason: format!("cannot decompress the {what} file: {e}"),
                 },
             )
@@ -349,6 +531,58 @@ impl Unpacker {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A compressed sqlite3 file that expands beyond its bound is refused before the
+    /// bound is exceeded on disk, and its temporary copy is removed; a given bound
+    /// replaces the default.
+    #[test]
+    fn decompression_is_bounded() {
+        assert_eq!(unpack_limit(1000, None), UNPACK_FLOOR);
+        assert_eq!(unpack_limit(1 << 30, None), UNPACK_CEILING);
+        assert_eq!(unpack_limit(1 << 22, None), 100 << 22);
+        assert_eq!(unpack_limit(1000, Some(3)), 3 << 20);
+        assert_eq!(unpack_limit(1000, Some(u64::MAX)), u64::MAX);
+        let dir = std::env::temp_dir().join(format!("dvrk-ident-bomb-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        // An SQLite header and 80 MiB of zeros: a few kB compressed.
+        let mut content = b"SQLite format 3\0".to_vec();
+        content.resize(80 << 20, 0);
+        let packed = zstd::bulk::compress(&content, 3).unwrap();
+        assert!(packed.len() < 100_000, "{}", packed.len());
+        let bomb = dir.join("bomb.db3.zst");
+        std::fs::write(&bomb, &packed).unwrap();
+        let left = || {
+            std::fs::read_dir(std::env::temp_dir())
+                .unwrap()
+                .flatten()
+                .filter(|e| {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    name.starts_with(&format!("dvrk-ident-{}-", std::process::id()))
+                        && name.ends_with("bomb.db3.zst")
+                })
+                .count()
+        };
+        let e = Bag::open(&bomb, None).unwrap_err().to_string();
+        assert!(
+            e.contains(
+                "bomb.db3.zst: invalid compressed file: it decompresses to more than 64 MiB"
+            ) && e.contains("--max-unpacked-mib"),
+            "{e}"
+        );
+        assert_eq!(left(), 0);
+        let e = Bag::open(&bomb, Some(1)).unwrap_err().to_string();
+        assert!(e.contains("more than 1 MiB"), "{e}");
+        assert_eq!(left(), 0);
+        // Raised above its size, it is decompressed (and removed when dropped).
+        let bag = Bag::open(&bomb, Some(81)).unwrap();
+        assert_eq!(
+            std::fs::metadata(bag.files[0].readable()).unwrap().len(),
+            80 << 20
+        );
+        drop(bag);
+        assert_eq!(left(), 0);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn message_unpacking() {

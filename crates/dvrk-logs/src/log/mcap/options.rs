@@ -72,6 +72,10 @@ pub struct McapOptions {
     /// topic choice: a topic holding them all, else a dVRK arm topic and its jaw topic
     /// (`X/measured_js` + `X/jaw/measured_js`) holding them together. Empty: unknown.
     pub joints: Vec<String>,
+    /// Largest size a compressed sqlite3 or ROS 1 file may decompress to, MiB; `None`:
+    /// [`super::bag::unpack_limit`]'s default (100 times the compressed size, at least
+    /// 64 MiB and at most 16 GiB).
+    pub max_unpacked_mib: Option<u64>,
 }
 
 #[cfg(test)]

@@ -79,6 +79,16 @@ pub enum McapProblem {
         /// What is wrong.
         reason: String,
     },
+    /// A malformed or corrupted recording of another kind than MCAP, or a rosbag2 folder
+    /// that cannot be used as one.
+    #[error("invalid {kind}: {reason}")]
+    Damaged {
+        /// What the file is: `rosbag2 sqlite3 file`, `ROS 1 bag`, `compressed file`,
+        /// `rosbag2 folder`.
+        kind: &'static str,
+        /// What is wrong.
+        reason: String,
+    },
     /// A requested topic is not in the file.
     #[error(
         "no such topic in the file; its topics: {}",

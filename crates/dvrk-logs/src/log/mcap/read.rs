@@ -36,7 +36,7 @@ pub struct McapLog {
 /// Lists the topics of an MCAP file with their types and message counts (one pass over
 /// the file).
 pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>, LogError> {
-    let bag = Arc::new(bag::Bag::open(path.as_ref())?);
+    let bag = Arc::new(bag::Bag::open(path.as_ref(), None)?);
     Ok(container::scan(&bag, |_| Ok(()))?.topics)
 }
 
@@ -106,7 +106,7 @@ impl McapReader {
     /// Opens `path` (a file or a rosbag2 folder, see the module docs) and checks it
     /// (see the type docs); errors are those of [`read_mcap`].
     pub fn open(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapReader, LogError> {
-        let bag = Arc::new(bag::Bag::open(path.as_ref())?);
+        let bag = Arc::new(bag::Bag::open(path.as_ref(), options.max_unpacked_mib)?);
         Ok(McapReader {
             plan: survey::plan(&bag, options)?,
             bag,
@@ -170,7 +170,7 @@ pub fn read_joint_states(
     topics: &[String],
     time_source: TimeSource,
 ) -> Result<Vec<JointStateSeries>, LogError> {
-    let bag = Arc::new(bag::Bag::open(path.as_ref())?);
+    let bag = Arc::new(bag::Bag::open(path.as_ref(), None)?);
     Ok(survey::survey(&bag, topics, &[], time_source, true)?
         .into_iter()
         .map(survey::TopicSurvey::into_series)

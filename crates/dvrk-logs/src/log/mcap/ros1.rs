@@ -31,7 +31,14 @@ pub(crate) struct Ros1File {
 }
 
 fn container(path: &Path, reason: String) -> LogError {
-    mcap_error(path, None, McapProblem::Container { reason })
+    mcap_error(
+        path,
+        None,
+        McapProblem::Damaged {
+            kind: "ROS 1 bag",
+            reason,
+        },
+    )
 }
 
 impl Ros1File {
@@ -41,8 +48,8 @@ impl Ros1File {
         // The crate slices its memory map at the header's index position without
         // checking it: check it first, so a bag that was never closed is an error.
         check_header(readable).map_err(|reason| container(&path, reason))?;
-        let bag = RosBag::new(readable).map_err(|e| container(&path, format!("ROS 1 bag: {e}")))?;
-        let fail = |e: rosbag::Error| container(&path, format!("ROS 1 bag index: {e}"));
+        let bag = RosBag::new(readable).map_err(|e| container(&path, e.to_string()))?;
+        let fail = |e: rosbag::Error| container(&path, format!("its index: {e}"));
         let mut connections = HashMap::new();
         let mut chunks = Vec::new();
         for record in bag.index_records() {
@@ -73,8 +80,7 @@ impl Ros1File {
         let pos = self.chunks[self.next_chunk];
         self.next_chunk += 1;
         let path = &self.path;
-        let fail =
-            |e: rosbag::Error| container(path, format!("ROS 1 bag chunk at byte {pos}: {e}"));
+        let fail = |e: rosbag::Error| container(path, format!("chunk at byte {pos}: {e}"));
         let mut records = self.bag.chunk_records();
         records.seek(pos).map_err(fail)?;
         let chunk = match records.next() {
@@ -134,15 +140,15 @@ impl Ros1File {
 /// Checks the bag header record: its index position must lie after the header and
 /// within the file (0 while `rosbag record` is still writing, or was killed).
 fn check_header(path: &Path) -> Result<(), String> {
-    let io = |e: std::io::Error| format!("ROS 1 bag: {e}");
+    let io = |e: std::io::Error| e.to_string();
     let mut file = std::fs::File::open(path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
     let mut head = [0u8; 13 + 4];
     file.read_exact(&mut head)
-        .map_err(|_| "ROS 1 bag: the file ends inside its header (truncated)".to_string())?;
+        .map_err(|_| "the file ends inside its header (truncated)".to_string())?;
     let header_len = u32::from_le_bytes(head[13..17].try_into().expect("4 bytes")) as u64;
     if header_len > 1 << 20 || 17 + header_len + 4 > len {
-        return Err("ROS 1 bag: invalid or truncated header record".into());
+        return Err("invalid or truncated header record".into());
     }
     let mut header = vec![0u8; header_len as usize];
     let mut data_len = [0u8; 4];
@@ -164,10 +170,10 @@ fn check_header(path: &Path) -> Result<(), String> {
         fields = &fields[4 + n..];
     }
     match index_pos {
-        None => Err("ROS 1 bag: the header has no index position".into()),
-        Some(0) => Err("ROS 1 bag without an index: the recording was not closed (`rosbag reindex` rebuilds it)".into()),
+        None => Err("the header has no index position".into()),
+        Some(0) => Err("no index: the recording was not closed (`rosbag reindex` rebuilds it)".into()),
         Some(p) if p < start || p > len => Err(format!(
-            "ROS 1 bag: the header's index position {p} is outside the file ({len} bytes): truncated? (`rosbag reindex` may rebuild it)"
+            "the header's index position {p} is outside the file ({len} bytes): truncated? (`rosbag reindex` may rebuild it)"
         )),
         Some(_) => Ok(()),
     }

@@ -134,7 +134,8 @@ fn unreadable(path: &Path, what: &str, e: &std::io::Error) -> LogError {
     mcap_error(
         path,
         None,
-        McapProblem::Container {
+        McapProblem::Damaged {
+            kind: "compressed file",
             reason: format!(
                 "the file starts like {what}-compressed data but does not decompress: {e}"
             ),

@@ -28,19 +28,37 @@ pub(crate) struct SqliteFile {
     batch: VecDeque<(usize, i64, Vec<u8>)>,
     done: bool,
     current: Vec<u8>,
+    /// The column the messages are read in order of, by batches from an index:
+    /// `id` when it is the table's primary key (rosbag2's `INTEGER PRIMARY KEY`), else
+    /// the `rowid` (insertion order): a batch on a column without an index would scan
+    /// the whole table each time, quadratic in its length.
+    order: &'static str,
 }
 
 impl SqliteFile {
     pub(crate) fn open(file: &BagFile, channels: &mut Channels) -> Result<SqliteFile, LogError> {
         let path = file.path.clone();
-        check_size(file.readable())
-            .map_err(|reason| mcap_error(&path, None, McapProblem::Container { reason }))?;
+        check_size(file.readable()).map_err(|reason| mcap_error(&path, None, invalid(reason)))?;
         let fail = |e: rusqlite::Error| sqlite_error(&path, &e);
-        let conn = Connection::open_with_flags(
-            file.readable(),
-            OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX,
-        )
-        .map_err(fail)?;
+        let conn = open_read_only(file.readable())
+            .map_err(|reason| mcap_error(&path, None, invalid(reason)))?;
+        let order = message_order(&conn).map_err(fail)?;
+        // Rows without an id would be skipped by the batches: refused, counted.
+        let missing: i64 = conn
+            .query_row("SELECT count(*) FROM messages WHERE id IS NULL", [], |r| {
+                r.get(0)
+            })
+            .map_err(fail)?;
+        if missing > 0 {
+            return Err(mcap_error(
+                &path,
+                None,
+                invalid(format!(
+                    "{missing} rows of the messages table have no id (NULL): rosbag2 numbers \
+                     every message, so the file was altered"
+                )),
+            ));
+        }
         let mut topics = HashMap::new();
         {
             let mut stmt = conn
@@ -69,16 +87,19 @@ impl SqliteFile {
             batch: VecDeque::new(),
             done: false,
             current: Vec::new(),
+            order,
         })
     }
 
     fn fetch(&mut self) -> Result<(), LogError> {
         let fail = |e: rusqlite::Error| sqlite_error(&self.path, &e);
+        let order = self.order;
         let mut stmt = self
             .conn
-            .prepare_cached(
-                "SELECT id, topic_id, timestamp, data FROM messages WHERE id > ?1 ORDER BY id LIMIT ?2",
-            )
+            .prepare_cached(&format!(
+                "SELECT {order}, topic_id, timestamp, data FROM messages WHERE {order} > ?1 \
+                 ORDER BY {order} LIMIT ?2"
+            ))
             .map_err(fail)?;
         let rows = stmt
             .query_map([self.last_id, BATCH_ROWS], |r| {
@@ -97,11 +118,9 @@ impl SqliteFile {
                 mcap_error(
                     &self.path,
                     None,
-                    McapProblem::Container {
-                        reason: format!(
-                            "message {id} refers to topic id {topic}, which the topics table does not define"
-                        ),
-                    },
+                    invalid(format!(
+                        "message {id} refers to topic id {topic}, which the topics table does not define"
+                    )),
                 )
             })?;
             self.last_id = id;
@@ -136,9 +155,83 @@ fn sqlite_error(path: &std::path::Path, e: &rusqlite::Error) -> LogError {
     let reason = if text.contains("no such table") || text.contains("no such column") {
         format!("an SQLite database but not rosbag2's sqlite3 storage ({text}; expected the tables topics and messages)")
     } else {
-        format!("sqlite3: {text}")
+        text
     };
-    mcap_error(path, None, McapProblem::Container { reason })
+    mcap_error(path, None, invalid(reason))
+}
+
+/// Opens `path` read-only. Without a write-ahead log or rollback journal beside it, as
+/// `immutable` (no lock, no `-shm` file: a recording on a read-only medium or folder
+/// opens); with a `-wal`, read-only with it (its pages are part of the recording), which
+/// needs a writable folder for SQLite's `-shm`; a `-journal` is a transaction that was
+/// interrupted, which only a writable copy can roll back.
+fn open_read_only(path: &std::path::Path) -> Result<Connection, String> {
+    let beside = |suffix: &str| {
+        let mut p = path.as_os_str().to_owned();
+        p.push(suffix);
+        PathBuf::from(p)
+    };
+    let (wal, journal) = (beside("-wal"), beside("-journal"));
+    if std::fs::metadata(&journal).is_ok_and(|m| m.len() > 0) {
+        return Err(format!(
+            "a rollback journal {} beside it: the recording was interrupted inside a \
+             transaction; open a copy of both with sqlite3 (which rolls it back) and read \
+             the copy",
+            journal.display()
+        ));
+    }
+    let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
+    if wal.exists() {
+        return Connection::open_with_flags(path, flags).map_err(|e| {
+            format!(
+                "{e}: it has a write-ahead log {} beside it, which SQLite reads only from \
+                 a folder it may write (for its -shm file); copy the recording with its \
+                 -wal to a writable folder",
+                wal.display()
+            )
+        });
+    }
+    let uri = format!("file:{}?immutable=1", uri_path(path));
+    Connection::open_with_flags(uri, flags | OpenFlags::SQLITE_OPEN_URI).map_err(|e| e.to_string())
+}
+
+/// `path` for an SQLite URI: every byte but unreserved characters and `/`
+/// percent-encoded (a `?` or `#` in a name would end the path).
+fn uri_path(path: &std::path::Path) -> String {
+    use std::os::unix::ffi::OsStrExt;
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut out = String::new();
+    for &b in absolute.as_os_str().as_bytes() {
+        if b.is_ascii_alphanumeric() || b"/-._~".contains(&b) {
+            out.push(b as char);
+        } else {
+            out.push_str(&format!("%{b:02X}"));
+        }
+    }
+    out
+}
+
+/// The column to read the messages in order of (see [`SqliteFile::order`]).
+fn message_order(conn: &Connection) -> rusqlite::Result<&'static str> {
+    let mut stmt = conn.prepare("SELECT name, pk FROM pragma_table_info('messages')")?;
+    let keys: Vec<(String, i64)> = stmt
+        .query_map([], |r| Ok((r.get(0)?, r.get(1)?)))?
+        .collect::<rusqlite::Result<Vec<(String, i64)>>>()?
+        .into_iter()
+        .filter(|(_, pk)| *pk > 0)
+        .collect();
+    Ok(match &keys[..] {
+        [(name, _)] if name.eq_ignore_ascii_case("id") => "id",
+        _ => "rowid",
+    })
+}
+
+/// The problem of a rosbag2 sqlite3 file that cannot be read.
+fn invalid(reason: String) -> McapProblem {
+    McapProblem::Damaged {
+        kind: "rosbag2 sqlite3 file",
+        reason,
+    }
 }
 
 /// SQLite reads the missing end of a truncated file as zeros, so a cut file would give

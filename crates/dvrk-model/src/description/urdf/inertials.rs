@@ -49,6 +49,16 @@ impl Model {
         Ok(())
     }
 
+    /// Checks that `params` (the full vector, SI units) are exportable: the right length,
+    /// finite, and every link a rigid body as [`Self::export_inertials`] requires. Every
+    /// export of identified parameters to another tool (URDF, a controller's gravity
+    /// compensation) goes through here: a controller fed a negative mass pushes the arm
+    /// the wrong way.
+    pub fn check_rigid_bodies(&self, params: &[f64]) -> Result<(), ModelError> {
+        self.check_export_params(params)?;
+        self.export_inertials(params).map(|_| ())
+    }
+
     /// Standard inertials per frame index (`None` for the base and frames without link
     /// inertia), refusing what a URDF `<inertial>` cannot hold exactly: a negative mass,
     /// or a first moment without mass (a least-squares representative is typically
@@ -101,13 +111,19 @@ impl Model {
             return Err(ModelError::Numeric {
                 model: self.name.clone(),
                 message: format!(
-                    "cannot write URDF inertials for link{} {}: a URDF inertial is a rigid \
-                     body (mass ≥ 0, no first moment without mass, principal moments ≥ 0 within \
-                     the triangle inequality); these parameters are not \
+                    "{} {} {}: an exported link (a URDF inertial, a \
+                     controller's gravity model) is a rigid body (mass ≥ 0, no first moment \
+                     without mass, principal moments ≥ 0 within the triangle inequality); \
+                     these parameters are not \
                      (e.g. a least-squares representative of the base parameters), use \
                      physically consistent ones",
-                    if bad.len() > 1 { "s" } else { "" },
-                    bad.join(", ")
+                    if bad.len() > 1 { "links" } else { "link" },
+                    bad.join(", "),
+                    if bad.len() > 1 {
+                        "are not rigid bodies"
+                    } else {
+                        "is not a rigid body"
+                    }
                 ),
             });
         }
