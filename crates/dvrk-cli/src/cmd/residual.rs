@@ -51,6 +51,13 @@ pub fn run(args: Args) -> Result<()> {
             ("--observer-out", args.observer_out.as_deref()),
         ],
         &[],
+        &super::inputs(
+            &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
+            &[
+                ("the result", Some(&args.result)),
+                ("the robot", args.robot.as_deref()),
+            ],
+        ),
     )?;
     if (args.out.is_some() || args.observer_out.is_some()) && args.logs.len() != 1 {
         bail!(
