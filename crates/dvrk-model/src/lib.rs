@@ -56,8 +56,8 @@ pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
-    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
-    KnownForce, MotorInertia, Note, QuadraticViscous, Sample, Spring, Stribeck,
+    near, sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
+    KnownForce, MotorInertia, Note, QuadraticViscous, Sample, Side, Spring, Stribeck,
 };
 pub use error::ModelError;
 pub use expr::{Affine, NumOrExpr};
