@@ -45,7 +45,7 @@ pub struct LinkResult {
 /// constraints or the representative of a least-squares fit: `unidentified`. A
 /// semidefinite fit's parameter that sits on one of its linear bounds (mass range,
 /// centre-of-mass box, friction and motor-inertia bounds, `Fc + Fs ≥ 0`; to
-/// `1e-6·max(1, |bound|)` or 1e-6 of its plausible magnitude) is `at_lower_bound` or
+/// `1e-5·max(1, |bound|)`, [`crate::fit::status::BOUND_TOLERANCE`]) is `at_lower_bound` or
 /// `at_upper_bound` whatever the data say: the bound, not the data, set it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -332,13 +332,12 @@ impl FitResult {
     /// [`dvrk_model::Param::inertia_block`] names them), or `None` for a result written
     /// before parameter statuses.
     pub fn link_status(&self, link: &LinkResult) -> Option<[(String, ParameterStatus); 10]> {
-        let block: Vec<(String, ParameterStatus)> =
-            dvrk_model::Param::inertia_block(link.frame)
-                .map(|p| {
-                    let s = self.parameter_status.get(&p.name).copied();
-                    s.map(|s| (p.name, s))
-                })
-                .collect::<Option<_>>()?;
+        let block: Vec<(String, ParameterStatus)> = dvrk_model::Param::inertia_block(link.frame)
+            .map(|p| {
+                let s = self.parameter_status.get(&p.name).copied();
+                s.map(|s| (p.name, s))
+            })
+            .collect::<Option<_>>()?;
         block.try_into().ok()
     }
 

@@ -56,7 +56,7 @@ pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
-    near, sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
+    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
     KnownForce, MotorInertia, Note, QuadraticViscous, Sample, Side, Spring, Stribeck,
 };
 pub use error::ModelError;

@@ -11,9 +11,9 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{
     FitOutcome, FitRequest, LogSource, Preset, PriorSource, Streaming, Training,
 };
+use dvrk_ident::result::{LinkResult, ParameterStatus};
 use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::result::{LinkResult, ParameterStatus};
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
 use dvrk_model::Model;
 
@@ -346,7 +346,11 @@ fn parameters(s: &mut String, r: &FitResult) {
         }
     }
     if known {
-        let identified = r.parameter_status.values().filter(|v| v.identified()).count();
+        let identified = r
+            .parameter_status
+            .values()
+            .filter(|v| v.identified())
+            .count();
         let at_bound: Vec<String> = r
             .parameter_status
             .iter()

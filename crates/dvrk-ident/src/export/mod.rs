@@ -58,11 +58,11 @@ fn with_xml_comment(text: &str, lines: &[String]) -> String {
          regularization or a prior of the fit; see parameter_status in the result):\n  \
          {body}\n-->\n"
     );
-    let start = text.strip_prefix('\u{feff}').map_or(0, |_| '\u{feff}'.len_utf8());
+    let start = text
+        .strip_prefix('\u{feff}')
+        .map_or(0, |_| '\u{feff}'.len_utf8());
     let at = match text[start..].starts_with("<?xml") {
-        true => text[start..]
-            .find("?>")
-            .map_or(start, |i| start + i + 2),
+        true => text[start..].find("?>").map_or(start, |i| start + i + 2),
         false => start,
     };
     let (head, tail) = text.split_at(at);
@@ -197,8 +197,11 @@ impl Export<'_> {
             Export::DvrkGc { .. } => (false, Elements::Static),
         };
         let mut out = Vec::new();
-        let kinds: std::collections::HashMap<&str, ParamKind> =
-            model.params.iter().map(|p| (p.name.as_str(), p.kind)).collect();
+        let kinds: std::collections::HashMap<&str, ParamKind> = model
+            .params
+            .iter()
+            .map(|p| (p.name.as_str(), p.kind))
+            .collect();
         for l in result.links.iter().filter(|_| links) {
             let Some(d) = l.determined else { continue };
             let missing: Vec<&str> = [

@@ -2,8 +2,8 @@
 
 use dvrk_model::{inertia, BaseParameters, Model};
 
-use crate::error::IdentError;
 use super::status::{link_determined, parameter_status, StatusInputs};
+use crate::error::IdentError;
 use crate::estimate::Estimated;
 use crate::result::*;
 use crate::settings::FitSettings;

@@ -30,9 +30,8 @@
 //!
 //! Bounds come first: a parameter of a semidefinite fit sitting on one of the fit's
 //! linear bounds ([`dvrk_model::Model::bound_rows`]: mass range, centre-of-mass box,
-//! friction and motor-inertia bounds, `Fc + Fs ≥ 0`) to `1e-6·max(1, |bound|)`
-//! ([`dvrk_model::near`], the tolerance the fit clamps its element parameters with) or
-//! to [`BOUND_TOLERANCE`] of its plausible magnitude is
+//! friction and motor-inertia bounds, `Fc + Fs ≥ 0`) to
+//! `BOUND_TOLERANCE·max(1, |bound|)` ([`BOUND_TOLERANCE`] = 1e-5) is
 //! `at_lower_bound` / `at_upper_bound`, whether or not the data would determine it: the
 //! bound, not the data, set its value. Least-squares fits have no bounds.
 
@@ -46,13 +45,13 @@ use crate::result::{LinkDetermined, ParameterStatus};
 /// documentation).
 pub const DETERMINED_FRACTION: f64 = 0.1;
 
-/// A parameter within this fraction of its plausible magnitude `‖W·τ‖ / ‖W·H·eᵢ‖` of
-/// a bound sits on it: the semidefinite fit meets its bounds to Clarabel's tolerance
-/// (1e-8) in variables scaled by that magnitude, so a link parameter on its bound can
-/// miss it by more than [`dvrk_model::near`]'s `1e-6·max(1, |bound|)` (the real MTM's
-/// `m4 = 9.99998968` kg on its 10 kg bound), while 1e-6 of the magnitude is far below
-/// what the data resolve.
-pub const BOUND_TOLERANCE: f64 = 1e-6;
+/// A parameter within `BOUND_TOLERANCE·max(1, |bound|)` of a bound sits on it (in the
+/// bound's unit; ten times the tolerance the fit clamps element parameters onto their
+/// bounds with, [`dvrk_model::Element::clamp`]). The semidefinite
+/// fit meets its link bounds only to Clarabel's tolerance (1e-8) in variables scaled
+/// by each parameter's plausible magnitude, so a link parameter on its bound misses it
+/// by more than 1e-6: the real MTM's `m4 = 9.99998968` kg on its 10 kg bound.
+pub const BOUND_TOLERANCE: f64 = 1e-5;
 
 /// What the fit had to decide each parameter's status from.
 pub(crate) struct StatusInputs<'a> {
@@ -95,9 +94,7 @@ pub(crate) fn parameter_status(
             let Some((k, bound, side)) = row.bound_on_first(inputs.params) else {
                 continue;
             };
-            let scale = gamma / inputs.column_norms[k];
-            let v = inputs.params[k];
-            if dvrk_model::near(v, bound) || (v - bound).abs() <= BOUND_TOLERANCE * scale {
+            if (inputs.params[k] - bound).abs() <= BOUND_TOLERANCE * bound.abs().max(1.0) {
                 status[k] = match side {
                     Side::Lower => ParameterStatus::AtLowerBound,
                     Side::Upper => ParameterStatus::AtUpperBound,

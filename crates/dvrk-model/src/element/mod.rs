@@ -173,10 +173,8 @@ pub(crate) fn clamp_near(v: &mut f64, lo: f64, hi: Option<f64>) {
     }
 }
 
-/// `v` within `1e-6·max(1, |bound|)` of `bound`: a solver's feasibility tolerance, the
-/// distance at which the fit's parameters are clamped onto their bounds and a result
-/// reports a parameter at its bound.
-pub fn near(v: f64, bound: f64) -> bool {
+/// `v` within `1e-6·max(1, |bound|)` of `bound`.
+pub(crate) fn near(v: f64, bound: f64) -> bool {
     (v - bound).abs() <= 1e-6 * bound.abs().max(1.0)
 }
 
