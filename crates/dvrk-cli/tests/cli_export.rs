@@ -318,8 +318,9 @@ fn summary_and_export_say_what_the_data_did_not_determine() {
         )),
         "{summary}"
     );
-    // A revolute chain never determines its link masses one by one (they fold into the
-    // parents' first moments and inertias), so every URDF link gets a warning.
+    // No PSM link has its mass, centre of mass and inertia all determined (revolute
+    // joints fold what they carry into the parents' moments and inertias), so every URDF
+    // link gets a warning.
     let urdf = dir.join("psm.urdf");
     let (ok, _, warnings) = run(&["export", &s(&out), "--urdf", &s(&urdf)]);
     assert!(ok, "{warnings}");
