@@ -225,6 +225,33 @@ def test_dvrk_gc_file_matches_the_real_mtm_fit(mtm, mtm_fit, cli, tmp_path):
     assert max(res["pos_max"][:6]) < 0.02 and max(res["neg_max"][:6]) < 0.02
 
 
+def test_result_says_what_the_data_determined_and_exports_warn(psm, psm_logs):
+    # The semidefinite fit of the synthetic PSM: a status for every parameter, the
+    # per-link summary equal to its parameters' statuses, and the 2019 layout warning
+    # about each link whose mass the data did not determine (most of them: a revolute
+    # joint folds the masses of what it carries into its parents' moments).
+    result = di.fit(psm, di.read_log(psm_logs["csv"], psm))
+    status = result.parameter_status
+    assert list(status) == result.parameter_order
+    assert set(status.values()) <= {
+        "identified", "at_lower_bound", "at_upper_bound", "unidentified"}
+    for link in result.links:
+        frame = link["frame"]
+        names = [f"L{frame}{s}" for s in ("xx", "xy", "xz", "yy", "yz", "zz")]
+        d = link["determined"]
+        assert d["mass"] == (status[f"m{frame}"] == "identified")
+        assert d["first_moment"] == all(
+            status[f"l{frame}{a}"] == "identified" for a in "xyz")
+        assert d["inertia"] == all(status[n] == "identified" for n in names)
+    undetermined = [link for link in result.links if not link["determined"]["mass"]]
+    assert undetermined
+    with pytest.warns(UserWarning) as caught:
+        result.wpi_params()
+    text = [str(w.message) for w in caught]
+    for link in undetermined:
+        assert any(t.startswith(f"link {link['link']}: mass") for t in text), text
+
+
 def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
     result = di.fit(psm, di.read_log(psm_logs["csv"], psm), method="ols")
     with pytest.raises(di.InputError, match="for the MTM"):

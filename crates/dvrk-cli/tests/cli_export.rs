@@ -283,3 +283,80 @@ fn export_errors_name_the_file_and_write_nothing() {
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&inputs).unwrap();
 }
+
+/// The fit's summary marks what the data determined, and `export` warns about every
+/// link whose mass, centre of mass or inertia it writes without the data having
+/// determined them (on stderr, and in an XML comment of the URDF, which stays a URDF the
+/// importer reads), and about the parameters the semidefinite fit left on a bound.
+#[test]
+fn summary_and_export_say_what_the_data_did_not_determine() {
+    let dir = temp_dir("export-status");
+    let out = dir.join("sdp.json");
+    let (ok, summary, err) = run(&[
+        "fit",
+        &example("psm_excitation.mcap"),
+        "--robot",
+        "psm",
+        "--cutoff",
+        "none",
+        "--out",
+        &s(&out),
+    ]);
+    assert!(ok, "{err}");
+    let result = FitResult::read(&out).unwrap();
+    let model = Model::builtin("psm").unwrap();
+    assert_eq!(result.parameter_status.len(), model.n_params());
+    let identified = result
+        .parameter_status
+        .values()
+        .filter(|s| s.identified())
+        .count();
+    assert!(
+        summary.contains(&format!(
+            "parameters identified by the data: {identified} of {}",
+            model.n_params()
+        )),
+        "{summary}"
+    );
+    // No PSM link has its mass, centre of mass and inertia all determined (revolute
+    // joints fold what they carry into the parents' moments and inertias), so every URDF
+    // link gets a warning.
+    let urdf = dir.join("psm.urdf");
+    let (ok, _, warnings) = run(&["export", &s(&out), "--urdf", &s(&urdf)]);
+    assert!(ok, "{warnings}");
+    let text = std::fs::read_to_string(&urdf).unwrap();
+    for l in &result.links {
+        let d = l.determined.unwrap();
+        assert!(!d.inertia_com(), "{}", l.link);
+        let line = format!("link {}: ", l.link);
+        assert!(
+            warnings.contains(&format!("warning: {}: {line}", s(&urdf))),
+            "{warnings}"
+        );
+        assert!(text.contains(&line), "{text}");
+        // The summary's mass column says the same as the document.
+        let mark = match result.parameter_status[&format!("m{}", l.frame)] {
+            dvrk_ident::result::ParameterStatus::Identified => "yes",
+            dvrk_ident::result::ParameterStatus::AtLowerBound => "lower",
+            dvrk_ident::result::ParameterStatus::AtUpperBound => "upper",
+            dvrk_ident::result::ParameterStatus::Unidentified => "no",
+        };
+        let row = summary
+            .lines()
+            .find(|r| r.split_whitespace().nth(1) == Some(l.link.as_str()))
+            .unwrap();
+        let marks = row.split(']').nth(1).unwrap();
+        assert_eq!(marks.split_whitespace().next(), Some(mark), "{row}");
+    }
+    for (name, st) in &result.parameter_status {
+        if matches!(
+            st,
+            dvrk_ident::result::ParameterStatus::AtLowerBound
+                | dvrk_ident::result::ParameterStatus::AtUpperBound
+        ) {
+            assert!(warnings.contains(&format!("{name} ")), "{name}: {warnings}");
+        }
+    }
+    assert!(text.starts_with("<?xml"), "the declaration stays first");
+    Model::from_urdf_str(&text, "psm.urdf").expect("still a URDF");
+}

@@ -27,6 +27,86 @@ pub struct LinkResult {
     pub com: [f64; 3],
     /// inertia about the centre of mass `[xx, xy, xz, yy, yz, zz]`, kg·m²
     pub inertia_com: [f64; 6],
+    /// Which of the link's barycentric quantities the data determined (from
+    /// [`FitResult::parameter_status`]); `None` in results written before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub determined: Option<LinkDetermined>,
+}
+
+/// What the data determined of a fitted parameter: the result's `parameter_status`.
+///
+/// A parameter is `identified` when the data alone fix it: it is a base parameter by
+/// itself (the unit vector of its column lies in the row space of the regressor, so no
+/// combination of other columns can stand in for it; see [`crate::fit::status`]), and
+/// its standard deviation from the same weighted data is at most
+/// [`crate::fit::status::DETERMINED_FRACTION`] of its plausible magnitude `‖W·τ‖ /
+/// ‖W·H·eᵢ‖` (the value at which it alone would produce the whole measured torque).
+/// Otherwise its value is set by the regularization, a prior, the physical-consistency
+/// constraints or the representative of a least-squares fit: `unidentified`. A
+/// semidefinite fit's parameter that sits on one of its linear bounds (mass range,
+/// centre-of-mass box, friction and motor-inertia bounds, `Fc + Fs ≥ 0`; to
+/// `1e-5·max(1, |bound|)`, [`crate::fit::status::BOUND_TOLERANCE`]) is `at_lower_bound` or
+/// `at_upper_bound` whatever the data say: the bound, not the data, set it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ParameterStatus {
+    /// The data alone determine it.
+    Identified,
+    /// It sits on a lower bound of the semidefinite fit.
+    AtLowerBound,
+    /// It sits on an upper bound of the semidefinite fit.
+    AtUpperBound,
+    /// Its value is set by something other than the data (see the type's documentation).
+    Unidentified,
+}
+
+impl ParameterStatus {
+    /// The name a result document, the command line and Python use: `identified`,
+    /// `at_lower_bound`, `at_upper_bound`, `unidentified`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ParameterStatus::Identified => "identified",
+            ParameterStatus::AtLowerBound => "at_lower_bound",
+            ParameterStatus::AtUpperBound => "at_upper_bound",
+            ParameterStatus::Unidentified => "unidentified",
+        }
+    }
+
+    /// Identified by the data (not at a bound).
+    pub fn identified(self) -> bool {
+        self == ParameterStatus::Identified
+    }
+}
+
+impl std::fmt::Display for ParameterStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Per link, whether the data determined its barycentric quantities (every parameter
+/// of the group [`ParameterStatus::Identified`]).
+#[derive(Clone, Copy, Debug, Serialize, Deserialize, PartialEq, Eq)]
+pub struct LinkDetermined {
+    /// The mass `m`.
+    pub mass: bool,
+    /// The first moment `l = m·r` (all three components).
+    pub first_moment: bool,
+    /// The rotational inertia about the frame origin `L` (all six components).
+    pub inertia: bool,
+}
+
+impl LinkDetermined {
+    /// The centre of mass `r = l/m` is determined when `l` and `m` are.
+    pub fn com(&self) -> bool {
+        self.mass && self.first_moment
+    }
+
+    /// The inertia about the centre of mass `L − m·S(r)ᵀS(r)` is determined when `L`,
+    /// `l` and `m` are.
+    pub fn inertia_com(&self) -> bool {
+        self.inertia && self.com()
+    }
 }
 
 /// Physical consistency of one link: the smallest eigenvalue of its 4×4 pseudo-inertia.
@@ -211,6 +291,10 @@ pub struct FitResult {
     /// The parameter names in the model's order (the order of `parameters`, for readers
     /// that do not keep JSON key order).
     pub parameter_order: Vec<String>,
+    /// What the data determined of each parameter ([`ParameterStatus`]); empty in results
+    /// written before it (then nothing is known, and nothing is warned about).
+    #[serde(default, skip_serializing_if = "IndexMap::is_empty")]
+    pub parameter_status: IndexMap<String, ParameterStatus>,
     /// Standard parameters per link.
     pub links: Vec<LinkResult>,
     /// The identifiable combinations with their values and standard deviations.
@@ -244,6 +328,19 @@ pub struct FitResult {
 }
 
 impl FitResult {
+    /// The statuses of a link's 10 parameters `[Lxx … Lzz, lx, ly, lz, m]` (named as
+    /// [`dvrk_model::Param::inertia_block`] names them), or `None` for a result written
+    /// before parameter statuses.
+    pub fn link_status(&self, link: &LinkResult) -> Option<[(String, ParameterStatus); 10]> {
+        let block: Vec<(String, ParameterStatus)> = dvrk_model::Param::inertia_block(link.frame)
+            .map(|p| {
+                let s = self.parameter_status.get(&p.name).copied();
+                s.map(|s| (p.name, s))
+            })
+            .collect::<Option<_>>()?;
+        block.try_into().ok()
+    }
+
     /// The parameter vector in the model's order.
     pub fn params_for(&self, model: &dvrk_model::Model) -> Result<Vec<f64>, IdentError> {
         Ok(model.params_from_named(

@@ -248,6 +248,26 @@ fn report_page_carries_the_result_metrics_and_is_self_contained() {
     }
     for l in &result.links {
         assert!(html.contains(&format!("<td class=l>{}</td>", l.link)));
+        // The row's last cell says what the data determined, coloured as the result says.
+        let at = html.find(&format!("<td class=l>{}</td>", l.link)).unwrap();
+        let row = &html[at..at + html[at..].find("</tr>").unwrap()];
+        let d = l.determined.unwrap();
+        let class = |ok: bool| if ok { "ok" } else { "bad" };
+        for (ok, what) in [(d.first_moment, "first moment"), (d.inertia, "inertia")] {
+            let span = format!("<span class={}>{what}</span>", class(ok));
+            assert!(row.contains(&span), "{}: {span} not in {row}", l.link);
+        }
+    }
+    for (name, st) in &result.parameter_status {
+        if name.starts_with('F') {
+            let cell = format!(
+                "<td class=l>{name}</td><td>{}</td><td class=l><span class={}>{}</span></td>",
+                dvrk_ident::report::html::number(result.parameters[name]),
+                if st.identified() { "ok" } else { "bad" },
+                st.name().replace('_', " ")
+            );
+            assert!(html.contains(&cell), "{cell}");
+        }
     }
     // Every figure inlined as SVG, nothing fetched from elsewhere.
     assert_eq!(html.matches("<svg").count(), report.figures.len());

@@ -491,6 +491,49 @@ impl Model {
         &self.links
     }
 
+    /// Every linear bound of the physically consistent fit, each with the index of its
+    /// frame in [`Model::frames`] (0-based): per link, with `use_frame`, the frame's
+    /// mass range (`m_min ≤ m ≤ m_max`) and centre-of-mass box (`m·r_min ≤ l ≤ m·r_max`
+    /// per axis), then each element's bounds ([`Element::bound_rows`]: the global lower
+    /// bounds always, the frame's maxima and ranges with `use_frame`). Each row lists the
+    /// parameter it bounds first ([`crate::BoundRow::bound_on_first`]).
+    pub fn bound_rows(&self, use_frame: bool) -> Vec<(usize, crate::BoundRow)> {
+        use crate::{BoundOrigin, BoundRow, BoundsContext};
+        let mut out = Vec::new();
+        for (fi, f) in self.frames.iter().enumerate() {
+            let b = &f.bounds;
+            if let (Some(p0), true) = (f.inertia, use_frame) {
+                let m = p0 + 9;
+                if let Some([lo, hi]) = b.mass {
+                    out.push((fi, BoundRow::at_least(m, lo, BoundOrigin::Frame("mass"))));
+                    out.push((fi, BoundRow::at_most(m, hi, BoundOrigin::Frame("mass"))));
+                }
+                for (k, [lo, hi]) in b.com.into_iter().flatten().enumerate() {
+                    let l = p0 + 6 + k;
+                    let row = |coefficients, origin| BoundRow {
+                        coefficients,
+                        limit: 0.0,
+                        origin,
+                    };
+                    // m·lo ≤ l and l ≤ m·hi
+                    out.push((fi, row(vec![(l, -1.0), (m, lo)], BoundOrigin::Frame("com"))));
+                    out.push((fi, row(vec![(l, 1.0), (m, -hi)], BoundOrigin::Frame("com"))));
+                }
+            }
+            let context = BoundsContext {
+                global: &self.bounds,
+                frame: b,
+                use_frame,
+            };
+            let mut rows = Vec::new();
+            for e in &f.elements {
+                e.bound_rows(&context, &mut rows);
+            }
+            out.extend(rows.into_iter().map(|r| (fi, r)));
+        }
+        out
+    }
+
     /// Frame names with the base first, indexed like frame indices.
     pub fn frame_names(&self) -> Vec<String> {
         std::iter::once("base".to_string())

@@ -221,14 +221,7 @@ pub fn fit(
             .map(|outcome| outcome.result)
             .map_err(fail_ident)
     })?;
-    for warning in inner.repeated_inputs() {
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &std::ffi::CString::new(warning)?,
-            1,
-        )?;
-    }
+    warn_all(py, &inner.repeated_inputs())?;
     let converged = inner.solver.converged;
     let status = inner.solver.status;
     let result = FitResultPy::new(inner, Some(robot.clone().unbind()));
@@ -422,6 +415,14 @@ impl FitResultPy {
     #[getter]
     fn parameter_order(&self) -> Vec<String> {
         self.inner.parameter_order.clone()
+    }
+
+    /// What the data determined of each parameter: ``{name: "identified" |
+    /// "at_lower_bound" | "at_upper_bound" | "unidentified"}`` (empty for a result
+    /// written before statuses); per link, ``links[i]["determined"]``.
+    #[getter]
+    fn parameter_status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.parameter_status)
     }
 
     #[getter]
@@ -642,8 +643,9 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let wpi = Export::WpiParams
-            .build(&model, &params)
+            .build_for(&model, &params, &self.inner)
             .map_err(from_ident)?;
+        warn_all(py, &wpi.undetermined)?;
         to_python(py, &wpi.document)
     }
 
@@ -661,9 +663,11 @@ impl FitResultPy {
     ) -> PyResult<Bound<'py, PyAny>> {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
+        let result = self.inner.clone();
         let gc = py
-            .detach(move || Export::DvrkGc { points }.build(&model, &params))
+            .detach(move || Export::DvrkGc { points }.build_for(&model, &params, &result))
             .map_err(from_ident)?;
+        warn_all(py, &gc.undetermined)?;
         to_python(py, &gc.document)
     }
 
@@ -676,4 +680,17 @@ impl FitResultPy {
             py_bool(self.inner.physically_consistent)
         )
     }
+}
+
+/// Each line as a Python ``UserWarning`` (what the command line prints as `warning:`).
+fn warn_all(py: Python<'_>, lines: &[String]) -> PyResult<()> {
+    for line in lines {
+        PyErr::warn(
+            py,
+            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
+            &std::ffi::CString::new(line.as_str())?,
+            1,
+        )?;
+    }
+    Ok(())
 }

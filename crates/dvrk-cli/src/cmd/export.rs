@@ -107,7 +107,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut built = Vec::new();
     for (out, export) in wanted {
         let exported = export
-            .build(&loaded.model, &loaded.params)
+            .build_for(&loaded.model, &loaded.params, &loaded.result)
             .with_context(|| failure(&export, &loaded, &args.result))?;
         built.push((out, exported));
     }
@@ -118,6 +118,11 @@ pub fn run(args: Args) -> Result<()> {
         report += &format!("wrote {out}: {}\n{}", e.what, e.details);
     }
     outputs.commit()?;
+    for (out, e) in &built {
+        for line in &e.undetermined {
+            eprintln!("warning: {out}: {line}");
+        }
+    }
     emit_summary(&report, stdout_taken)
 }
 

@@ -11,6 +11,7 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{
     FitOutcome, FitRequest, LogSource, Preset, PriorSource, Streaming, Training,
 };
+use dvrk_ident::result::{LinkResult, ParameterStatus};
 use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
@@ -244,13 +245,17 @@ pub fn run(args: Args) -> Result<()> {
         // Every output built and staged before the first is put in place.
         let mut outputs = Outputs::protecting(inputs(&args));
         let mut report_note = None;
+        let mut export_warnings = Vec::new();
         if let Some(out) = &args.out {
             outputs.add(Path::new(out), result.to_json())?;
         }
         if let Some(out) = &args.wpi_json {
             let params = result.params_for(&model)?;
-            let wpi = dvrk_ident::export::Export::WpiParams.build(&model, &params)?;
+            let wpi = dvrk_ident::export::Export::WpiParams.build_for(&model, &params, &result)?;
             outputs.add(Path::new(out), wpi.document.to_text())?;
+            for line in &wpi.undetermined {
+                export_warnings.push(format!("{out}: {line}"));
+            }
         }
         if let (Some(dir), Some((train, test))) = (&args.report, &logs) {
             let roles = |role: &str, count: usize| -> Vec<String> {
@@ -291,6 +296,9 @@ pub fn run(args: Args) -> Result<()> {
         outputs.commit()?;
         if let Some(note) = report_note {
             eprintln!("{note}");
+        }
+        for warning in export_warnings {
+            eprintln!("warning: {warning}");
         }
     }
     for warning in result.repeated_inputs() {
@@ -342,14 +350,85 @@ fn parameters(s: &mut String, r: &FitResult) {
     for b in &r.base_parameters {
         let _ = writeln!(s, "  {:>12.6} ± {:<10.2e} {}", b.value, b.std, b.expression);
     }
-    let _ = writeln!(s, "links (mass kg, centre of mass m in the link frame):");
+    let known = !r.parameter_status.is_empty();
+    let _ = writeln!(
+        s,
+        "links (mass kg, centre of mass m in the link frame{}):",
+        if known {
+            "; determined by the data: mass, first moment, inertia"
+        } else {
+            ""
+        }
+    );
     for l in &r.links {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "  {:>2} {:<24} {:>9.4}  [{:>8.4} {:>8.4} {:>8.4}]",
             l.frame, l.link, l.mass, l.com[0], l.com[1], l.com[2]
         );
+        match link_marks(r, l) {
+            Some([m, f, i]) => {
+                let _ = writeln!(s, "  {m:<5} {f:<5} {i:<5}");
+            }
+            None => s.push('\n'),
+        }
     }
+    if known {
+        let identified = r
+            .parameter_status
+            .values()
+            .filter(|v| v.identified())
+            .count();
+        let at_bound: Vec<String> = r
+            .parameter_status
+            .iter()
+            .filter(|(_, v)| {
+                matches!(
+                    v,
+                    ParameterStatus::AtLowerBound | ParameterStatus::AtUpperBound
+                )
+            })
+            .map(|(k, v)| format!("{k} {}", v.name()))
+            .collect();
+        let _ = writeln!(
+            s,
+            "parameters identified by the data: {identified} of {} (the others are set by the \
+             bounds, the regularization or a prior; see parameter_status)",
+            r.parameter_status.len()
+        );
+        if !at_bound.is_empty() {
+            let _ = writeln!(s, "at a bound: {}", at_bound.join(", "));
+        }
+    }
+}
+
+/// A link's marks in the summary: its mass's status (`yes`, `no`, `lower`, `upper`
+/// bound) and whether its first moment and its inertia are determined (`yes`, `no`, or
+/// `bound` when a component sits on a bound); `None` for a result without statuses.
+fn link_marks(r: &FitResult, l: &LinkResult) -> Option<[&'static str; 3]> {
+    let d = l.determined?;
+    let block = r.link_status(l)?;
+    let group = |range: std::ops::Range<usize>, ok: bool| {
+        if ok {
+            "yes"
+        } else if block[range].iter().any(|(_, s)| {
+            matches!(
+                s,
+                ParameterStatus::AtLowerBound | ParameterStatus::AtUpperBound
+            )
+        }) {
+            "bound"
+        } else {
+            "no"
+        }
+    };
+    let mass = match block[9].1 {
+        ParameterStatus::Identified => "yes",
+        ParameterStatus::AtLowerBound => "lower",
+        ParameterStatus::AtUpperBound => "upper",
+        ParameterStatus::Unidentified => "no",
+    };
+    Some([mass, group(6..9, d.first_moment), group(0..6, d.inertia)])
 }
 
 /// The problem's size, the solver's outcome and the links that are not consistent.

@@ -70,6 +70,10 @@ pub struct Estimated {
     pub solver: SolverInfo,
     /// Rows of the weighted observation.
     pub rows: usize,
+    /// The column norms of the weighted observation `[W·H | W·τ]` (p + 1 entries, the
+    /// last `‖W·τ‖`; units of the weighted torque per unit of each parameter): the
+    /// scales [`crate::fit::status`] measures each parameter's precision against.
+    pub column_norms: Vec<f64>,
     /// With an entropic prior, `Σ_links d(J‖J₀)` at `params`.
     pub prior_divergence: Option<f64>,
 }
@@ -149,6 +153,7 @@ pub(crate) fn estimate(
         weights,
         solver,
         rows: obs.rows(),
+        column_norms: obs.r().column_iter().map(|c| c.norm()).collect(),
         prior_divergence,
     })
 }

@@ -342,7 +342,7 @@ impl Linear {
         if c == f64::INFINITY {
             return Ok(());
         }
-        if !c.is_finite() {
+        if !c.is_finite() || a.iter().any(|(_, v)| !v.is_finite()) {
             return Err(SdpError::NonFinite {
                 what: what.to_string(),
             });
@@ -352,60 +352,35 @@ impl Linear {
     }
 }
 
-/// The linear rows of the frame bounds, the elements' bounds and (with `ellipsoids`) the
-/// bounding ellipsoids' `tr(Q·J) ≥ 0`.
+/// The linear rows of the frame bounds, the elements' bounds ([`Model::bound_rows`]) and
+/// (with `ellipsoids`) the bounding ellipsoids' `tr(Q·J) ≥ 0`.
 fn bounds_rows(model: &Model, override_bounds: bool, ellipsoids: bool) -> Result<Linear, SdpError> {
-    let g = &model.bounds;
     let mut lin = Linear::default();
-    for (fi, f) in model.frames.iter().enumerate() {
-        let place = |what: &str| format!("bounds of frame {} ({}): {what}", fi + 1, f.name);
-        let b = &f.bounds;
-        if let Some(p0) = f.inertia {
-            let m = p0 + 9;
-            if !override_bounds {
-                if let Some([lo, hi]) = b.mass {
-                    lin.le(vec![(m, -1.0)], -lo, &place("mass"))?;
-                    lin.le(vec![(m, 1.0)], hi, &place("mass"))?;
-                }
-                if let Some(com) = b.com {
-                    for (k, [lo, hi]) in com.into_iter().enumerate() {
-                        if !(lo.is_finite() && hi.is_finite()) {
-                            return Err(SdpError::NonFinite { what: place("com") });
-                        }
-                        // m·lo ≤ l_k ≤ m·hi
-                        lin.le(vec![(m, lo), (p0 + 6 + k, -1.0)], 0.0, &place("com"))?;
-                        lin.le(vec![(p0 + 6 + k, 1.0), (m, -hi)], 0.0, &place("com"))?;
-                    }
-                }
-                if let Some(e) = b.ellipsoid.as_ref().filter(|_| ellipsoids) {
-                    // −tr(Q·J(π)) ≤ 0.
-                    let coefs = e.barycentric_coefficients();
-                    if coefs.iter().any(|c| !c.is_finite()) {
-                        return Err(SdpError::NonFinite {
-                            what: place("ellipsoid"),
-                        });
-                    }
-                    let row = (0..10).map(|k| (p0 + k, -coefs[k])).collect();
-                    lin.le(row, 0.0, &place("ellipsoid"))?;
-                }
-            }
-        }
-        let bounds = BoundsContext {
-            global: g,
-            frame: b,
-            use_frame: !override_bounds,
+    for (fi, row) in model.bound_rows(!override_bounds) {
+        let what = match row.origin {
+            BoundOrigin::Global(field) => format!("global bound {field}"),
+            BoundOrigin::Frame(field) => format!(
+                "bounds of frame {} ({}): {field}",
+                fi + 1,
+                model.frames[fi].name
+            ),
+            BoundOrigin::Physical(constraint) => constraint.to_string(),
         };
-        let mut rows = Vec::new();
-        for e in &f.elements {
-            e.bound_rows(&bounds, &mut rows);
-        }
-        for row in rows {
-            let what = match row.origin {
-                BoundOrigin::Global(field) => format!("global bound {field}"),
-                BoundOrigin::Frame(field) => place(field),
-                BoundOrigin::Physical(constraint) => constraint.to_string(),
+        lin.le(row.coefficients, row.limit, &what)?;
+    }
+    if ellipsoids && !override_bounds {
+        for (fi, f) in model.frames.iter().enumerate() {
+            let (Some(p0), Some(e)) = (f.inertia, f.bounds.ellipsoid.as_ref()) else {
+                continue;
             };
-            lin.le(row.coefficients, row.limit, &what)?;
+            // −tr(Q·J(π)) ≤ 0.
+            let what = format!("bounds of frame {} ({}): ellipsoid", fi + 1, f.name);
+            let coefs = e.barycentric_coefficients();
+            if coefs.iter().any(|c| !c.is_finite()) {
+                return Err(SdpError::NonFinite { what });
+            }
+            let row = (0..10).map(|k| (p0 + k, -coefs[k])).collect();
+            lin.le(row, 0.0, &what)?;
         }
     }
     Ok(lin)

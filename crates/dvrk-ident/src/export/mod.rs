@@ -33,10 +33,52 @@
 pub mod dvrk_gc;
 pub mod wpi_params;
 
-use dvrk_model::Model;
+use dvrk_model::{Model, ParamKind};
 use serde::{Serialize, Serializer};
 
-use crate::IdentError;
+use crate::result::ParameterStatus;
+use crate::{FitResult, IdentError};
+
+/// Which element parameters an export writes (see [`Export::undetermined`]).
+#[derive(Clone, Copy)]
+enum Elements {
+    None,
+    All,
+    /// Those of the static torque: Coulomb, offset, Stribeck, spring.
+    Static,
+}
+
+/// `at its lower bound` / `at its upper bound`, or `None` off the bounds.
+fn bound_word(status: &ParameterStatus) -> Option<&'static str> {
+    match status {
+        ParameterStatus::AtLowerBound => Some("at its lower bound"),
+        ParameterStatus::AtUpperBound => Some("at its upper bound"),
+        _ => None,
+    }
+}
+
+/// `text` (an XML document) with a comment of `lines` after its declaration (or first,
+/// without one). `--`, which a comment may not hold, becomes `- -`.
+fn with_xml_comment(text: &str, lines: &[String]) -> String {
+    let body = lines.join("\n  ").replace("--", "- -");
+    let comment = format!(
+        "<!-- dvrk-ident: values not determined by the data (set by the bounds, the \
+         regularization or a prior of the fit; see parameter_status in the result):\n  \
+         {body}\n-->\n"
+    );
+    let start = text
+        .strip_prefix('\u{feff}')
+        .map_or(0, |_| '\u{feff}'.len_utf8());
+    let at = match text[start..].starts_with("<?xml") {
+        true => text[start..].find("?>").map_or(start, |i| start + i + 2),
+        false => start,
+    };
+    let (head, tail) = text.split_at(at);
+    match at > start {
+        true => format!("{head}\n{comment}{}", tail.trim_start_matches(['\r', '\n'])),
+        false => format!("{head}{comment}{tail}"),
+    }
+}
 
 /// One file written from an identified model.
 #[derive(Clone, Copy, Debug)]
@@ -76,6 +118,10 @@ pub struct Exported {
     pub what: String,
     /// More for the report, one line each, or empty (the gravity compensation's residuals).
     pub details: String,
+    /// The values written that the data did not determine, one line each
+    /// ([`Export::build_for`]; empty from [`Export::build`]): what the command line
+    /// prints as warnings and Python raises as `UserWarning`s.
+    pub undetermined: Vec<String>,
 }
 
 /// An exported document: the JSON formats as a value (Python hands it over as a dict),
@@ -108,7 +154,121 @@ impl Serialize for Document {
 }
 
 impl Export<'_> {
-    /// The document of `model` with parameters `params` (the full vector, SI units).
+    /// The document of a fit's `result` (its parameters `params` on `model`, SI units),
+    /// with the values it writes that the data did not determine
+    /// ([`Export::undetermined`]) in [`Exported::undetermined`] and in the file itself:
+    /// an XML comment after a URDF's declaration, a `not_determined_by_the_data` list
+    /// in the gravity compensation's `dvrk_ident` object (which the controller does not
+    /// read). The 2019 `params.json` gets no such note: its top-level keys are the frame
+    /// numbers `"1"` … `"N"`, and readers that iterate over them would take another key
+    /// for a frame.
+    pub fn build_for(
+        &self,
+        model: &Model,
+        params: &[f64],
+        result: &FitResult,
+    ) -> Result<Exported, IdentError> {
+        let mut exported = self.build(model, params)?;
+        let lines = self.undetermined(model, result);
+        if !lines.is_empty() {
+            match &mut exported.document {
+                Document::Text(text) => *text = with_xml_comment(text, &lines),
+                Document::Json(value) => {
+                    if let Some(ours) = value.get_mut("dvrk_ident").and_then(|v| v.as_object_mut())
+                    {
+                        ours.insert("not_determined_by_the_data".into(), lines.clone().into());
+                    }
+                }
+            }
+        }
+        exported.undetermined = lines;
+        Ok(exported)
+    }
+
+    /// The values this export writes of `result` that the data did not determine
+    /// (`result.parameter_status`, see [`crate::fit::status`]), one line each; empty for
+    /// a result written before parameter statuses. What each format writes: a URDF the
+    /// links' mass, centre of mass and inertia (a generated one also lists every
+    /// element's parameter in its header), `params.json` the links and the elements; the
+    /// gravity compensation depends on the links only through the base parameters, which
+    /// the data determine, so it names the parameters at a bound (which moved them) and
+    /// the static elements' (Coulomb, offset, Stribeck, spring) parameters the data did
+    /// not determine.
+    pub fn undetermined(&self, model: &Model, result: &FitResult) -> Vec<String> {
+        let status = &result.parameter_status;
+        if status.is_empty() {
+            return Vec::new();
+        }
+        let (links, elements) = match self {
+            Export::Urdf { template: Some(_) } => (true, Elements::None),
+            Export::Urdf { template: None } | Export::WpiParams => (true, Elements::All),
+            Export::DvrkGc { .. } => (false, Elements::Static),
+        };
+        let mut out = Vec::new();
+        let kinds: std::collections::HashMap<&str, ParamKind> = model
+            .params
+            .iter()
+            .map(|p| (p.name.as_str(), p.kind))
+            .collect();
+        for l in result.links.iter().filter(|_| links) {
+            let Some(d) = l.determined else { continue };
+            let missing: Vec<&str> = [
+                (d.mass, "mass"),
+                (d.com(), "centre of mass"),
+                (d.inertia_com(), "inertia"),
+            ]
+            .into_iter()
+            .filter(|(ok, _)| !ok)
+            .map(|(_, what)| what)
+            .collect();
+            if missing.is_empty() {
+                continue;
+            }
+            let at_bounds: Vec<String> = result
+                .link_status(l)
+                .into_iter()
+                .flatten()
+                .filter_map(|(name, s)| bound_word(&s).map(|w| format!("{name} {w}")))
+                .collect();
+            let bounds = match at_bounds.is_empty() {
+                true => String::new(),
+                false => format!("; {}", at_bounds.join(", ")),
+            };
+            out.push(format!(
+                "link {}: {} not determined by the data{bounds}",
+                l.link,
+                missing.join(", ")
+            ));
+        }
+        for (name, st) in status {
+            let Some(&kind) = kinds.get(name.as_str()) else {
+                continue;
+            };
+            let link = matches!(kind, ParamKind::Inertia { .. });
+            let wanted = match elements {
+                Elements::None => false,
+                Elements::All => !link && !st.identified(),
+                Elements::Static => {
+                    bound_word(st).is_some()
+                        || (!st.identified()
+                            && matches!(
+                                kind,
+                                ParamKind::Coulomb
+                                    | ParamKind::Offset
+                                    | ParamKind::Stribeck
+                                    | ParamKind::Spring
+                            ))
+                }
+            };
+            if wanted {
+                let why = bound_word(st).unwrap_or("not determined by the data");
+                out.push(format!("{name} = {}: {why}", result.parameters[name]));
+            }
+        }
+        out
+    }
+    /// The document of `model` with parameters `params` (the full vector, SI units),
+    /// without the notes on undetermined values that [`Export::build_for`] adds.
     pub fn build(&self, model: &Model, params: &[f64]) -> Result<Exported, IdentError> {
         Ok(match self {
             Export::Urdf {
@@ -120,6 +280,7 @@ impl Export<'_> {
                     t.file, model.name
                 ),
                 details: String::new(),
+                undetermined: Vec::new(),
             },
             Export::Urdf { template: None } => Exported {
                 document: Document::Text(model.to_urdf(params)?),
@@ -128,11 +289,13 @@ impl Export<'_> {
                     model.name
                 ),
                 details: String::new(),
+                undetermined: Vec::new(),
             },
             Export::WpiParams => Exported {
                 document: Document::Json(wpi_params::wpi_params_json(model, params)),
                 what: "2019 params.json layout".into(),
                 details: String::new(),
+                undetermined: Vec::new(),
             },
             Export::DvrkGc { points } => {
                 let gc = dvrk_gc::dvrk_gc(model, params, *points)?;
@@ -140,6 +303,7 @@ impl Export<'_> {
                     document: Document::Json(gc.to_json()),
                     what: "dVRK MTM gravity compensation".into(),
                     details: gc.summary(),
+                    undetermined: Vec::new(),
                 }
             }
         })

@@ -2,6 +2,7 @@
 
 use dvrk_model::{inertia, BaseParameters, Model};
 
+use super::status::{link_determined, parameter_status, StatusInputs};
 use crate::error::IdentError;
 use crate::estimate::Estimated;
 use crate::result::*;
@@ -13,8 +14,9 @@ use crate::settings::FitSettings;
 /// never hangs on Clarabel's feasibility tolerance (1e-8 relative).
 pub const ELEMENT_TOLERANCE: f64 = 1e-9;
 
-/// The result document of an estimate: every parameter by name, each link's standard
-/// parameters and pseudo-inertia verdict, the base parameters with their standard
+/// The result document of an estimate: every parameter by name with what the data
+/// determined of it ([`super::status`]), each link's standard parameters and
+/// pseudo-inertia verdict, the base parameters with their standard
 /// deviations, the solver's end state, and `metrics`.
 pub(crate) fn build_result(
     model: &Model,
@@ -29,13 +31,25 @@ pub(crate) fn build_result(
         weights,
         solver,
         rows,
+        column_norms,
         prior_divergence,
     } = estimated;
     let beta = base.project(&params);
     let names = model.param_names();
+    let parameter_status = parameter_status(
+        model,
+        &StatusInputs {
+            base,
+            params: &params,
+            base_std: &estimate.std,
+            column_norms: &column_norms,
+            bounded: settings.method == crate::Method::Sdp,
+        },
+    );
+    let determined = link_determined(model, &parameter_status);
     let mut links = Vec::new();
     let mut consistency = Vec::new();
-    for &j in model.link_frames() {
+    for (&j, determined) in model.link_frames().iter().zip(determined) {
         let f = model.frame(j);
         let p0 = f.inertia.expect("link");
         let bary = &params[p0..p0 + 10];
@@ -47,6 +61,7 @@ pub(crate) fn build_result(
             mass: std.mass,
             com: std.com,
             inertia_com: std.inertia_com,
+            determined: Some(determined),
         });
         consistency.push(Consistency {
             frame: j,
@@ -80,6 +95,7 @@ pub(crate) fn build_result(
         inputs: Vec::new(),
         parameters: names.iter().cloned().zip(params.iter().copied()).collect(),
         parameter_order: names,
+        parameter_status,
         links,
         base_parameters,
         consistency,

@@ -9,7 +9,7 @@ use super::{LogSummary, RenderedFigure};
 use crate::fit::JointMap;
 use crate::log::ReadOptions;
 use crate::reproduce::{cli_command, python_call};
-use crate::result::{FitResult, JointMetrics};
+use crate::result::{FitResult, JointMetrics, LinkResult, ParameterStatus};
 use crate::settings::Difference;
 
 /// Escapes text for HTML element content and attribute values.
@@ -352,10 +352,13 @@ fn links(o: &mut String, result: &FitResult) {
     o.push_str(
         "<h2 id=links>Links</h2><p>Standard parameters in each link's frame: mass (kg), centre of mass (m), \
          inertia about the centre of mass (kg·m²); consistency is the smallest eigenvalue of the \
-         4×4 pseudo-inertia (kg·m², positive: realizable by a positive mass density).</p>\
+         4×4 pseudo-inertia (kg·m², positive: realizable by a positive mass density); \
+         determined by the data: whether the data alone fix the mass, the first moment and \
+         the inertia about the frame origin (in red when the bounds, the regularization or a \
+         prior set them; the result's <code>parameter_status</code>).</p>\
          <table><tr><th>frame</th><th class=l>link</th><th>mass</th><th>cx</th><th>cy</th><th>cz</th>\
          <th>Ixx</th><th>Ixy</th><th>Ixz</th><th>Iyy</th><th>Iyz</th><th>Izz</th>\
-         <th>min eigenvalue</th><th class=l>consistent</th></tr>",
+         <th>min eigenvalue</th><th class=l>consistent</th><th class=l>determined by the data</th></tr>",
     );
     for link in &result.links {
         let c = result.consistency.iter().find(|c| c.frame == link.frame);
@@ -373,7 +376,7 @@ fn links(o: &mut String, result: &FitResult) {
             Some(c) => {
                 let _ = write!(
                     o,
-                    "<td>{}</td><td class=l>{}</td></tr>",
+                    "<td>{}</td><td class=l>{}</td>",
                     number(c.min_eigenvalue),
                     if c.consistent {
                         "<span class=ok>yes</span>"
@@ -382,18 +385,60 @@ fn links(o: &mut String, result: &FitResult) {
                     }
                 );
             }
-            None => o.push_str("<td></td><td></td></tr>"),
+            None => o.push_str("<td></td><td></td>"),
         }
+        let _ = write!(o, "<td class=l>{}</td></tr>", determined_cell(result, link));
     }
     o.push_str("</table>");
+}
+
+/// A link's mass, first moment and inertia, green when the data determined them, red
+/// (with the bound, for the mass) when not; empty for a result without statuses.
+fn determined_cell(result: &FitResult, link: &LinkResult) -> String {
+    let (Some(d), Some(block)) = (link.determined, result.link_status(link)) else {
+        return String::new();
+    };
+    let mass = match block[9].1 {
+        ParameterStatus::AtLowerBound => "mass at its lower bound",
+        ParameterStatus::AtUpperBound => "mass at its upper bound",
+        _ => "mass",
+    };
+    [
+        (d.mass, mass),
+        (d.first_moment, "first moment"),
+        (d.inertia, "inertia"),
+    ]
+    .iter()
+    .map(|&(ok, what)| {
+        format!(
+            "<span class={}>{what}</span>",
+            if ok { "ok" } else { "bad" }
+        )
+    })
+    .collect::<Vec<_>>()
+    .join(", ")
+}
+
+/// A parameter's status, red unless identified; empty without one.
+fn status_cell(status: Option<&ParameterStatus>) -> String {
+    match status {
+        None => String::new(),
+        Some(s) => format!(
+            "<span class={}>{}</span>",
+            if s.identified() { "ok" } else { "bad" },
+            s.name().replace('_', " ")
+        ),
+    }
 }
 
 /// Joint elements (friction, motor inertia, spring) by frame.
 fn joint_elements(o: &mut String, model: &Model, result: &FitResult) {
     o.push_str(
         "<h2 id=joint-elements>Joint elements</h2><p>Coulomb Fc, viscous Fv and offset Fo friction (N·m, N·m·s/rad; N, N·s/m), \
-         motor inertia Im (kg·m²), spring K, by frame.</p>\
-         <table><tr><th>frame</th><th class=l>name</th><th class=l>parameter</th><th>value</th></tr>",
+         motor inertia Im (kg·m²), spring K, by frame, with what the data determined of each \
+         (the result's <code>parameter_status</code>).</p>\
+         <table><tr><th>frame</th><th class=l>name</th><th class=l>parameter</th><th>value</th>\
+         <th class=l>status</th></tr>",
     );
     for p in &model.params {
         if matches!(p.kind, ParamKind::Inertia { .. }) {
@@ -402,11 +447,12 @@ fn joint_elements(o: &mut String, model: &Model, result: &FitResult) {
         let value = result.parameters.get(&p.name).copied().unwrap_or(f64::NAN);
         let _ = write!(
             o,
-            "<tr><td>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td></tr>",
+            "<tr><td>{}</td><td class=l>{}</td><td class=l>{}</td><td>{}</td><td class=l>{}</td></tr>",
             p.frame,
             escape(&model.frames[p.frame - 1].name),
             escape(&p.name),
-            number(value)
+            number(value),
+            status_cell(result.parameter_status.get(&p.name))
         );
     }
     o.push_str("</table>");

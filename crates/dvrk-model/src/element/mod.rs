@@ -108,7 +108,9 @@ pub enum BoundOrigin {
 /// no bound).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BoundRow {
-    /// `(parameter index, coefficient)` pairs.
+    /// `(parameter index, coefficient)` pairs. The first is the parameter the row
+    /// bounds, the others set where ([`BoundRow::bound_on_first`]): `l` before `m` in a
+    /// centre-of-mass row `m·r_min ≤ l`, `Fs` before `Fc` in `Fc + Fs ≥ 0`.
     pub coefficients: Vec<(usize, f64)>,
     /// Right-hand side of the bound, in the unit of the combination (`+∞`: no bound).
     pub limit: f64,
@@ -134,6 +136,30 @@ impl BoundRow {
             origin,
         }
     }
+
+    /// The bound the row puts on its first parameter `k` given the others' values in
+    /// `params`: `(k, b, Side::Upper)` for `π[k] ≤ b`, `(k, b, Side::Lower)` for
+    /// `π[k] ≥ b` (`b = (limit − Σ_{j>0} aⱼ·πⱼ) / a₀`). `None` for no bound: an infinite
+    /// limit, a zero first coefficient or a non-finite `b`.
+    pub fn bound_on_first(&self, params: &[f64]) -> Option<(usize, f64, Side)> {
+        let (&(k, a0), rest) = self.coefficients.split_first()?;
+        if a0 == 0.0 || !self.limit.is_finite() {
+            return None;
+        }
+        let others: f64 = rest.iter().map(|&(j, a)| a * params[j]).sum();
+        let b = (self.limit - others) / a0;
+        let side = if a0 > 0.0 { Side::Upper } else { Side::Lower };
+        b.is_finite().then_some((k, b, side))
+    }
+}
+
+/// Which side of a parameter a bound is on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Side {
+    /// `π ≥ bound`.
+    Lower,
+    /// `π ≤ bound`.
+    Upper,
 }
 
 /// Moves `v` onto `[lo, hi]` when it misses by at most `1e-6·max(1, |bound|)` (a

@@ -43,7 +43,7 @@ impl Stribeck {
     /// the measured Coulomb steps).
     pub(super) fn bound_row(&self, fc: usize) -> BoundRow {
         BoundRow {
-            coefficients: vec![(fc, -1.0), (self.param, -1.0)],
+            coefficients: vec![(self.param, -1.0), (fc, -1.0)],
             limit: 0.0,
             origin: BoundOrigin::Physical("Fc + Fs ≥ 0"),
         }

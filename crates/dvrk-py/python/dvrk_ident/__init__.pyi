@@ -258,10 +258,15 @@ class FitResult:
     @property
     def parameter_order(self) -> List[str]: ...
     @property
+    def parameter_status(self) -> Dict[str, str]:
+        """``{name: "identified" | "at_lower_bound" | "at_upper_bound" | "unidentified"}``."""
+    @property
     def base_parameters(self) -> List[Dict[str, Any]]:
         """``[{name, expression, value, std}]``."""
     @property
-    def links(self) -> List[Dict[str, Any]]: ...
+    def links(self) -> List[Dict[str, Any]]:
+        """``[{frame, link, mass, com, inertia_com, determined}]``, ``determined``
+        ``{mass, first_moment, inertia}`` (booleans)."""
     @property
     def consistency(self) -> List[Dict[str, Any]]:
         """``[{frame, link, min_eigenvalue, consistent}]``."""
