@@ -180,6 +180,13 @@ pub struct FitSettings {
     /// m/s) to every friction element of the model that has none (see
     /// [`FitSettings::model`]). `None`: the model as described.
     pub stribeck_velocity: Option<f64>,
+    /// The arm's mounting pitch, degrees: gravity in the base frame becomes
+    /// `(0, −9.81·sin p, −9.81·cos p)` m/s² (as the dVRK's `mounting_pitch`, see
+    /// [`dvrk_model::Model::mounting_pitch_gravity`]) in the model of the fit and of every
+    /// use of the result (see [`FitSettings::model`]). `None`: the description's
+    /// `gravity`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mounting_pitch_deg: Option<f64>,
     /// Lower bounds on Fc, Fv, Ia of the semidefinite fit in place of the description's
     /// (see [`FitSettings::model`]). `None`: the description's `[bounds]`.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -249,7 +256,8 @@ impl FitSettings {
     }
 
     /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
-    /// of [`FitSettings::stribeck_velocity`] and the bounds of [`FitSettings::bounds`].
+    /// of [`FitSettings::stribeck_velocity`], the gravity of
+    /// [`FitSettings::mounting_pitch_deg`] and the bounds of [`FitSettings::bounds`].
     /// Everything that reads a result back (validate, report, export) goes through here
     /// so the parameters line up.
     pub fn model<'m>(&self, model: &'m Model) -> Result<std::borrow::Cow<'m, Model>, IdentError> {
@@ -264,6 +272,16 @@ impl FitSettings {
             },
             None => std::borrow::Cow::Borrowed(model),
         };
+        if let Some(pitch) = self.mounting_pitch_deg {
+            let gravity =
+                Model::mounting_pitch_gravity(pitch).map_err(|message| IdentError::Setting {
+                    name: "mounting_pitch".into(),
+                    message,
+                })?;
+            if m.gravity != gravity {
+                m.to_mut().gravity = gravity;
+            }
+        }
         if let Some(set) = self.bounds {
             // The set's sign bounds; the description's `pseudo_inertia_eps` stays.
             let wanted = dvrk_model::GlobalBounds {
@@ -383,6 +401,7 @@ impl Default for FitSettings {
             irls_iterations: 5,
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
+            mounting_pitch_deg: None,
             bounds: None,
             ellipsoids: true,
             delay_search_s: None,

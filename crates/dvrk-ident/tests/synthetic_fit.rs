@@ -109,7 +109,17 @@ fn settings(method: Method) -> FitSettings {
 }
 
 fn check(robot: &str) {
-    let model = Model::builtin(robot).unwrap();
+    check_at(robot, None);
+}
+
+/// `robot` mounted at `pitch_deg` (simulated with that gravity; the fit is given the
+/// description as loaded and the pitch in its settings, which it must apply).
+fn check_at(robot: &str, pitch_deg: Option<f64>) {
+    let loaded = Model::builtin(robot).unwrap();
+    let mut model = loaded.clone();
+    if let Some(p) = pitch_deg {
+        model.set_mounting_pitch(p).unwrap();
+    }
     let truth = consistent_params(&model);
     for &j in model.link_frames() {
         let p0 = model.frame(j).inertia.unwrap();
@@ -129,7 +139,15 @@ fn check(robot: &str) {
     let base = model.base_parameters().unwrap();
     let beta_true = base.project(&truth);
     for method in [Method::Ols, Method::Sdp] {
-        let r = fit(&model, &train, Some(&test), &settings(method)).unwrap();
+        let s = FitSettings {
+            mounting_pitch_deg: pitch_deg,
+            ..settings(method)
+        };
+        let r = fit(&loaded, &train, Some(&test), &s).unwrap();
+        assert_eq!(
+            r.settings.mounting_pitch_deg, pitch_deg,
+            "{robot}: recorded pitch"
+        );
         assert!(
             r.solver.converged,
             "{robot} {method:?}: {}",
@@ -193,4 +211,13 @@ fn psm_synthetic_fit_recovers_base_parameters() {
 #[test]
 fn mtm_synthetic_fit_recovers_base_parameters() {
     check("mtm");
+}
+
+/// The arms the dVRK controller's kinematic gravity compensation is for, mounted as the
+/// dVRK mounts them (PSM1 −45°, ECM Si −70°, Classic ECM −45°).
+#[test]
+fn ecm_and_si_arms_mounted_synthetic_fit_recovers_base_parameters() {
+    check_at("psm_si", Some(-45.0));
+    check_at("ecm_si", Some(-70.0));
+    check_at("ecm", Some(-45.0));
 }

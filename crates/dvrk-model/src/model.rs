@@ -248,6 +248,10 @@ impl Measured {
     }
 }
 
+/// The gravitational acceleration the dVRK's controller uses, m/s² (the magnitude of
+/// [`Model::mounting_pitch_gravity`]).
+pub const STANDARD_GRAVITY: f64 = 9.81;
+
 /// The robot model. Build it from numbers with [`ModelBuilder`](crate::ModelBuilder), or,
 /// with the `description` feature (default), from a file with `Model::load`,
 /// `Model::builtin`, `Model::from_toml_str` or `Model::from_urdf_str`.
@@ -648,6 +652,45 @@ impl Model {
             m.add_stribeck(i, velocity)?;
         }
         Ok(m)
+    }
+
+    /// Gravity of a dVRK arm mounted at pitch `pitch_deg` (degrees), in its base frame:
+    /// `(0, −g·sin p, −g·cos p)` with `g` = [`STANDARD_GRAVITY`]. The dVRK controller
+    /// turns its `mounting_pitch` (rad) into the "up" vector `(0, g·sin p, g·cos p)` it
+    /// passes to its gravity compensation (sawIntuitiveResearchKit,
+    /// `mtsIntuitiveResearchKitArm.cpp`); gravity is its opposite. The dVRK mounts the
+    /// PSMs on the patient cart at −45° (PSM1, PSM2) and −15° (PSM3), the ECM at −70°
+    /// (Si) or −45° (Classic). Refuses a pitch that is not finite or beyond ±180°.
+    ///
+    /// ```
+    /// let g = dvrk_model::Model::mounting_pitch_gravity(-45.0).unwrap();
+    /// assert!((g[1] - 9.81 * 0.5f64.sqrt()).abs() < 1e-12 && (g[2] + 9.81 * 0.5f64.sqrt()).abs() < 1e-12);
+    /// assert!(dvrk_model::Model::mounting_pitch_gravity(f64::NAN).is_err());
+    /// ```
+    pub fn mounting_pitch_gravity(pitch_deg: f64) -> Result<Vector3<f64>, String> {
+        if !(pitch_deg.is_finite() && pitch_deg.abs() <= 180.0) {
+            return Err(format!(
+                "mounting pitch must be a finite angle within ±180°, got {}",
+                crate::input::show(pitch_deg)
+            ));
+        }
+        let p = pitch_deg.to_radians();
+        Ok(Vector3::new(
+            0.0,
+            -STANDARD_GRAVITY * p.sin(),
+            -STANDARD_GRAVITY * p.cos(),
+        ))
+    }
+
+    /// Sets [`Model::gravity`] to that of the arm mounted at `pitch_deg` (degrees, see
+    /// [`Model::mounting_pitch_gravity`]).
+    pub fn set_mounting_pitch(&mut self, pitch_deg: f64) -> Result<(), ModelError> {
+        self.gravity =
+            Model::mounting_pitch_gravity(pitch_deg).map_err(|message| ModelError::Numeric {
+                model: self.name.clone(),
+                message,
+            })?;
+        Ok(())
     }
 
     /// True if the model has known forces to subtract before fitting.

@@ -82,7 +82,7 @@ inertia = true
 "#;
 
 fn models() -> Vec<Model> {
-    let mut models: Vec<Model> = ["psm", "psm_simplified", "mtm"]
+    let mut models: Vec<Model> = Model::builtin_names()
         .iter()
         .map(|name| Model::builtin(name).unwrap())
         .collect();

@@ -14,7 +14,7 @@ use support::{
     random_state, Rng,
 };
 
-const ROBOTS: [&str; 3] = ["psm", "psm_simplified", "mtm"];
+const ROBOTS: [&str; 6] = ["psm", "psm_simplified", "mtm", "ecm", "psm_si", "ecm_si"];
 const SAMPLES: usize = 30;
 
 fn builtin(name: &str) -> Model {

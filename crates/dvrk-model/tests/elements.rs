@@ -245,7 +245,7 @@ fn quadratic_viscous_description_errors() {
 /// Stribeck terms) and the quadratic viscous example.
 #[test]
 fn element_description_round_trip_and_columns() {
-    let mut models: Vec<Model> = ["psm", "psm_simplified", "mtm"]
+    let mut models: Vec<Model> = Model::builtin_names()
         .iter()
         .map(|name| Model::builtin(name).unwrap().with_stribeck(0.3).unwrap())
         .collect();

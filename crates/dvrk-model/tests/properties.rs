@@ -16,7 +16,7 @@ use support::id;
 /// The built-in robots (parallelograms, tendon couplings, springs, the MTM cable) and
 /// the MTM with a Stribeck term on every friction element.
 fn models() -> Vec<Model> {
-    let mut v: Vec<Model> = ["psm", "psm_simplified", "mtm"]
+    let mut v: Vec<Model> = Model::builtin_names()
         .iter()
         .map(|n| Model::builtin(n).unwrap())
         .collect();

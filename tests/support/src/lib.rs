@@ -14,6 +14,8 @@
 //!   included;
 //! - [`PlanarTwoLink`]: the textbook closed form of a two-link arm's dynamics;
 //! - [`models`]: robot descriptions the tests of several crates share (`tests/fixtures/`);
+//! - [`cisst`]: the dVRK controller's DH kinematics and gravity compensation (cisst's
+//!   `robManipulator::CCG_MDH` and the arms' joint maps), transcribed;
 //! - [`fixtures`]: a scratch folder removed on drop, the bundled example's generating
 //!   parameters, the check that a fit recovers known parameters.
 #![allow(clippy::missing_panics_doc)]
@@ -21,6 +23,7 @@
 // BLAS/LAPACK Clarabel calls) and crates/dvrk-model-c (the C ABI).
 #![forbid(unsafe_code)]
 
+pub mod cisst;
 pub mod fixtures;
 pub mod models;
 

@@ -226,3 +226,29 @@ pub fn result_defaults(arg: clap::Arg) -> clap::Arg {
         library_defaults(arg)
     }
 }
+
+/// `--mounting-pitch DEG`, for every command that builds a robot's model: the arm's
+/// mounting angle, the gravity of [`dvrk_model::Model::mounting_pitch_gravity`]
+/// (mapped onto [`Overrides::mounting_pitch_deg`] where a fit is made).
+#[derive(clap::Args, Clone, Copy, Debug, Default)]
+pub struct MountingArgs {
+    /// The arm's mounting pitch, degrees, as the dVRK's `mounting_pitch` (which is in
+    /// radians): gravity in the base frame becomes (0, −9.81·sin p, −9.81·cos p) m/s²
+    /// (the dVRK mounts PSM1 and PSM2 at −45°, PSM3 at −15°, the ECM at −70° (Si) or
+    /// −45° (Classic)). A fit records it and every use of its result applies it
+    /// [default: the description's gravity (a result's: its own)]
+    #[arg(long, value_name = "DEG", allow_hyphen_values = true, help_heading = MODEL)]
+    pub mounting_pitch: Option<f64>,
+}
+
+impl MountingArgs {
+    /// `model` mounted at the pitch given, if one is.
+    pub fn apply(&self, model: &mut dvrk_model::Model) -> Result<()> {
+        if let Some(p) = self.mounting_pitch {
+            model
+                .set_mounting_pitch(p)
+                .map_err(|e| anyhow::anyhow!("--mounting-pitch: {e}"))?;
+        }
+        Ok(())
+    }
+}

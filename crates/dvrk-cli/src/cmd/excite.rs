@@ -14,7 +14,7 @@ use dvrk_ident::report::figures::excitation_figure;
 use dvrk_model::{BaseParameters, Limit, Model};
 use std::path::Path;
 
-use super::args::{MODEL, OUTPUT};
+use super::args::{MountingArgs, MODEL, OUTPUT};
 use super::{emit, emit_summary};
 use dvrk_ident::names::Named;
 
@@ -28,9 +28,11 @@ const EVALUATION: &str = "Evaluation";
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
     #[arg(long, help_heading = MODEL)]
     pub robot: String,
+    #[command(flatten)]
+    pub mounting: MountingArgs,
     /// Number of harmonics L
     #[arg(long, value_name = "L", default_value_t = ExciteOptions::default().order, help_heading = TRAJECTORY)]
     pub order: usize,
@@ -166,7 +168,8 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.plot {
         dvrk_ident::report::plot::ImageFormat::from_path(std::path::Path::new(path))?;
     }
-    let model = Model::load(&args.robot)?;
+    let mut model = Model::load(&args.robot)?;
+    args.mounting.apply(&mut model)?;
     let base = model.base_parameters()?;
     let limits = LimitsOf::load(&args, &model)?;
     match &args.evaluate {

@@ -1,6 +1,8 @@
 //! `dvrk-ident export RESULT --urdf OUT.urdf [--template ROBOT.urdf] [--wpi-json OUT.json]
-//! [--dvrk-gc gc-MTML.json]`: an identified model for the tools that read URDF, the 2019
-//! params.json, or the dVRK controller's MTM gravity compensation. Each output flag is one
+//! [--dvrk-gc gc-MTML.json] [--dvrk-kinematic-gc GC.json [--endoscope TYPE]]`: an
+//! identified model for the tools that read URDF, the 2019 params.json, or the dVRK
+//! controller's gravity compensation (the MTM's file, the ECM's and Si arms' kinematic
+//! file). Each output flag is one
 //! variant of [`dvrk_ident::export::Export`], which Python's methods map onto too.
 
 use std::path::Path;
@@ -19,7 +21,7 @@ use super::{emit_summary, load_result, LoadedResult};
 #[command(allow_negative_numbers = true)]
 #[command(group(
     clap::ArgGroup::new("outputs")
-        .args(["urdf", "wpi_json", "dvrk_gc"])
+        .args(["urdf", "wpi_json", "dvrk_gc", "dvrk_kinematic_gc"])
         .required(true)
         .multiple(true)
 ))]
@@ -46,6 +48,15 @@ pub struct Args {
     /// Grid points per joint of the gravity-compensation fit (joints 1-6), 6 to 10
     #[arg(long, value_name = "N", default_value_t = dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
     pub gc_points: usize,
+    /// Write the dVRK controller's kinematic gravity-compensation file (the physical DH
+    /// its `kinematic_gc` key names) of an ecm, psm_si or ecm_si result here (atomically)
+    #[arg(long, value_name = "GC.json", help_heading = OUTPUT)]
+    pub dvrk_kinematic_gc: Option<String>,
+    /// The ECM's endoscope type, as its configuration's `endoscope` (Classic_SD_STRAIGHT,
+    /// Classic_HD_UP, Si_HD_STRAIGHT, Custom_DOWN, NONE, ...): the controller sets the
+    /// insertion link's mass from it
+    #[arg(long, value_name = "TYPE", requires = "dvrk_kinematic_gc", help_heading = OUTPUT)]
+    pub endoscope: Option<String>,
 }
 
 /// The files the export reads, which no output may replace.
@@ -66,6 +77,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--urdf", args.urdf.as_deref()),
             ("--wpi-json", args.wpi_json.as_deref()),
             ("--dvrk-gc", args.dvrk_gc.as_deref()),
+            ("--dvrk-kinematic-gc", args.dvrk_kinematic_gc.as_deref()),
         ],
         &[],
         &inputs(&args),
@@ -102,6 +114,10 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(out) = &args.dvrk_gc {
         let points = args.gc_points;
         wanted.push((out, Export::DvrkGc { points }));
+    }
+    if let Some(out) = &args.dvrk_kinematic_gc {
+        let endoscope = args.endoscope.as_deref();
+        wanted.push((out, Export::DvrkKinematicGc { endoscope }));
     }
     // Everything is built before anything is written: an error leaves no output.
     let mut built = Vec::new();
@@ -156,6 +172,9 @@ fn failure(export: &Export, loaded: &LoadedResult, result: &str) -> String {
         Export::WpiParams => format!("{result}: cannot export the 2019 params.json"),
         Export::DvrkGc { .. } => {
             format!("{result}: cannot export the dVRK gravity compensation{hint}")
+        }
+        Export::DvrkKinematicGc { .. } => {
+            format!("{result}: cannot export the dVRK kinematic gravity compensation")
         }
     }
 }

@@ -17,7 +17,7 @@ use dvrk_ident::state::ObservationState;
 use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
 use dvrk_model::Model;
 
-use super::args::{JointsArgs, LogArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
+use super::args::{JointsArgs, LogArgs, MountingArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::emit;
 
 #[derive(clap::Args)]
@@ -34,7 +34,7 @@ pub struct Args {
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
     #[arg(long, alias = "from", num_args = 1.., value_name = "STATE", help_heading = INPUT,
-          conflicts_with_all = ["logs", "stream", "report", "stribeck", "delay"])]
+          conflicts_with_all = ["logs", "stream", "report", "stribeck", "mounting_pitch", "delay"])]
     pub states: Vec<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG", help_heading = INPUT)]
@@ -53,7 +53,7 @@ pub struct Args {
     /// Automatic for a log larger than 256 MiB
     #[arg(long, help_heading = INPUT)]
     pub stream: bool,
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path (with
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path (with
     /// --states: default the states' robot, and it must be the robot they were observed
     /// with)
     #[arg(long, required_unless_present = "states", help_heading = MODEL)]
@@ -62,6 +62,8 @@ pub struct Args {
     /// or m/s) to every friction element (parameters Fs<frame>) [default: none]
     #[arg(long, value_name = "VS", help_heading = MODEL)]
     pub stribeck: Option<f64>,
+    #[command(flatten)]
+    pub mounting: MountingArgs,
     /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
     /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019`
     /// (≥ 0.001, to reproduce the 2019 fit) [default: the description's; the built-in
@@ -175,6 +177,7 @@ fn request(args: &Args) -> Result<FitRequest> {
     overrides.preset = args.preset;
     overrides.test_window = args.test_window;
     overrides.stribeck_velocity = args.stribeck;
+    overrides.mounting_pitch_deg = args.mounting.mounting_pitch;
     overrides.irls_iterations = args.irls_iterations;
     overrides.sdp_regularization = args.sdp_regularization;
     overrides.bounds = args.bounds;

@@ -226,11 +226,22 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
 /// a result document (`dvrk-ident fit --out`) is evaluated with the model it was fitted
 /// with (its Stribeck terms, its bounds) and refused for another robot in one line; a
 /// plain `{name: value}` object (or `{"parameters": {...}}`) must name exactly `model`'s
-/// parameters.
+/// parameters; `nominal` stands for the description's nominal parameters.
 pub fn read_params<'m>(
     model: &'m dvrk_model::Model,
     path: &str,
 ) -> Result<(std::borrow::Cow<'m, dvrk_model::Model>, Vec<f64>)> {
+    if path == "nominal" {
+        let nominal = model.nominal_parameters().with_context(|| {
+            format!(
+                "{}: the description has no nominal value for every parameter (every link \
+                 needs a nominal mass, every motor inertia and spring a nominal value); give a \
+                 parameter file",
+                model.source
+            )
+        })?;
+        return Ok((std::borrow::Cow::Borrowed(model), nominal));
+    }
     let text = dvrk_model::input::read_text(std::path::Path::new(path))
         .with_context(|| format!("{path}: cannot read"))?;
     let doc: serde_json::Value =

@@ -8,7 +8,7 @@ use serde_json::json;
 
 use std::fmt::Write as _;
 
-use super::args::OUTPUT;
+use super::args::{MountingArgs, OUTPUT};
 use super::{emit, parse_vector, read_params};
 
 /// The heading of the regressor and torque evaluation's flags.
@@ -19,8 +19,10 @@ const EVALUATION: &str = "Evaluation";
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm) or a path to a .toml description or .urdf
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a path to a .toml description or .urdf
     pub robot: String,
+    #[command(flatten)]
+    pub mounting: MountingArgs,
     /// Print JSON instead of text
     #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
@@ -55,7 +57,8 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let model = Model::load(&args.robot)?;
+    let mut model = Model::load(&args.robot)?;
+    args.mounting.apply(&mut model)?;
     if args.draw {
         return draw(&model, &args);
     }
@@ -82,6 +85,8 @@ pub fn run(args: Args) -> Result<()> {
         "measured joints: {}",
         summary.measured_joints.join(" ")
     )?;
+    let [gx, gy, gz] = summary.gravity;
+    writeln!(out, "gravity (base frame): {gx} {gy} {gz} m/s²")?;
     writeln!(out, "{} frames:", summary.frames.len())?;
     for f in &summary.frames {
         writeln!(
@@ -152,18 +157,7 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
             .collect();
         return emit(&json!({"parameters": names, "rows": rows}).to_string());
     }
-    let (model, params) = match &args.params {
-        Some(path) => read_params(model, path)?,
-        None => {
-            let nominal = model.nominal_parameters().with_context(|| {
-                format!(
-                    "{}: the description has no nominal value for every parameter; give --params FILE",
-                    args.robot
-                )
-            })?;
-            (std::borrow::Cow::Borrowed(model), nominal)
-        }
-    };
+    let (model, params) = read_params(model, args.params.as_deref().unwrap_or("nominal"))?;
     // A result with Stribeck terms has more parameters, and its own workspace.
     let mut ws = Workspace::new(&model);
     let mut tau = vec![0.0; n];

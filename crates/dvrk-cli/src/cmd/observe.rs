@@ -9,7 +9,7 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
 use dvrk_model::Model;
 
-use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
+use super::args::{LogArgs, MountingArgs, INPUT, MODEL, OUTPUT};
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true, mut_args = super::args::library_defaults)]
@@ -21,13 +21,15 @@ pub struct Args {
     /// Read the logs block by block, as `fit --stream` (automatic above 256 MiB)
     #[arg(long, help_heading = INPUT)]
     pub stream: bool,
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
     #[arg(long, help_heading = MODEL)]
     pub robot: String,
     /// Add a Stribeck friction term with this velocity (rad/s or m/s), as `fit
     /// --stribeck` [default: none]
     #[arg(long, value_name = "VS", help_heading = MODEL)]
     pub stribeck: Option<f64>,
+    #[command(flatten)]
+    pub mounting: MountingArgs,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// The observation state file (written atomically; `-` for stdout)
@@ -44,6 +46,7 @@ pub fn run(args: Args) -> Result<()> {
         read: args.log_args.read_options(),
         overrides: Overrides {
             stribeck_velocity: args.stribeck,
+            mounting_pitch_deg: args.mounting.mounting_pitch,
             ..args.log_args.overrides()?
         },
         streaming: if args.stream {

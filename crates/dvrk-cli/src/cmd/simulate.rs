@@ -11,7 +11,7 @@ use dvrk_ident::log::{self, mcap, LogFormat};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_model::Model;
 
-use super::args::{INPUT, MODEL, OUTPUT};
+use super::args::{MountingArgs, INPUT, MODEL, OUTPUT};
 use super::{emit_summary, read_params};
 
 #[derive(clap::Args)]
@@ -19,11 +19,14 @@ use super::{emit_summary, read_params};
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
     pub robot: String,
-    /// Parameters: a result file ({"parameters": {name: value}}) or a {name: value} object
-    #[arg(long, value_name = "FILE", help_heading = MODEL)]
+    /// Parameters: a result file ({"parameters": {name: value}}), a {name: value} object,
+    /// or `nominal` (the description's nominal parameters)
+    #[arg(long, value_name = "FILE|nominal", help_heading = MODEL)]
     pub params: String,
+    #[command(flatten)]
+    pub mounting: MountingArgs,
     /// Excitation trajectory: Fourier JSON (order, base_frequency_hz, q0, a, b in model
     /// coordinates; `dvrk-ident excite`), or the 2019 coefficient file with --pick
     #[arg(long, alias = "trajectory", value_name = "TRAJ.json", help_heading = INPUT)]
@@ -123,7 +126,10 @@ pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[], &inputs)?;
     let robot = Model::load(&args.robot)?;
     // A result is simulated with the model it was fitted with (e.g. its Stribeck terms).
-    let (model, params) = read_params(&robot, &args.params)?;
+    let (mut model, params) = read_params(&robot, &args.params)?;
+    if args.mounting.mounting_pitch.is_some() {
+        args.mounting.apply(model.to_mut())?;
+    }
     let model: &Model = &model;
     let traj = match &args.pick {
         Some(name) => FourierTrajectory::from_wpi_file(&args.excitation, name)?,

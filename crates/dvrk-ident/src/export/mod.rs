@@ -14,7 +14,9 @@
 //!   generates a URDF of a whole description. Python's `Model.to_urdf` calls the latter
 //!   directly, and Python has no way to the former;
 //! - [`wpi_params`]: the 2019 package's `params.json` layout;
-//! - [`dvrk_gc`]: sawIntuitiveResearchKit's MTM gravity-compensation file (version 2.0).
+//! - [`dvrk_gc`]: sawIntuitiveResearchKit's MTM gravity-compensation file (version 2.0);
+//! - [`dvrk_kinematic_gc`]: its kinematic gravity-compensation file (the physical DH the
+//!   `kinematic_gc` key names) of the ECM, the PSM Si and the ECM Si.
 //!
 //! What each checks: the URDF and the controller's gravity compensation hold rigid
 //! bodies and refuse parameters that are not ([`Model::check_rigid_bodies`]: a negative
@@ -24,13 +26,13 @@
 //! which are representatives of the base parameters, not rigid bodies: it takes any
 //! finite fit, as that package did.
 //!
-//! The next consumer's file (e.g. the dVRK's kinematic gravity-compensation file of the
-//! ECM and Si arms, `--dvrk-kinematic-gc`) is one new module here computing its document
-//! from a [`Model`] and its parameters, one variant of [`Export`] with its arm in
+//! The next consumer's file is one new module here computing its document from a
+//! [`Model`] and its parameters, one variant of [`Export`] with its arm in
 //! [`Export::build`], then a flag of the CLI's `export` and a method of Python's
 //! `FitResult`, each mapped onto that variant.
 
 pub mod dvrk_gc;
+pub mod dvrk_kinematic_gc;
 pub mod wpi_params;
 
 use dvrk_model::{Model, ParamKind};
@@ -97,6 +99,13 @@ pub enum Export<'a> {
     DvrkGc {
         /// Grid points per joint ([`dvrk_gc::DEFAULT_POINTS`] by default).
         points: usize,
+    },
+    /// The dVRK controller's kinematic gravity-compensation file of the ECM, PSM Si and
+    /// ECM Si ([`dvrk_kinematic_gc`]).
+    DvrkKinematicGc {
+        /// The ECM's endoscope type ([`dvrk_kinematic_gc::ENDOSCOPES`]); `None` for the
+        /// PSM Si.
+        endoscope: Option<&'a str>,
     },
 }
 
@@ -202,7 +211,7 @@ impl Export<'_> {
         let (links, elements) = match self {
             Export::Urdf { template: Some(_) } => (true, Elements::None),
             Export::Urdf { template: None } | Export::WpiParams => (true, Elements::All),
-            Export::DvrkGc { .. } => (false, Elements::Static),
+            Export::DvrkGc { .. } | Export::DvrkKinematicGc { .. } => (false, Elements::Static),
         };
         let mut out = Vec::new();
         let kinds: std::collections::HashMap<&str, ParamKind> = model
@@ -302,6 +311,15 @@ impl Export<'_> {
                 Exported {
                     document: Document::Json(gc.to_json()),
                     what: "dVRK MTM gravity compensation".into(),
+                    details: gc.summary(),
+                    undetermined: Vec::new(),
+                }
+            }
+            Export::DvrkKinematicGc { endoscope } => {
+                let gc = dvrk_kinematic_gc::dvrk_kinematic_gc(model, params, *endoscope)?;
+                Exported {
+                    document: Document::Json(gc.to_json()),
+                    what: format!("dVRK kinematic gravity compensation of robot `{}`", model.name),
                     details: gc.summary(),
                     undetermined: Vec::new(),
                 }

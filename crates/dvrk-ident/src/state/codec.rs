@@ -17,7 +17,8 @@
 //!
 //! and nothing after. The header: `{"format": "dvrk-ident observation", "robot",
 //! "robot_source", "robot_hash", "processing" (the `settings.processing` of a result),
-//! "stribeck_velocity" (rad/s or m/s, or null), "coordinates": n, "width": w (the
+//! "stribeck_velocity" (rad/s or m/s, or null), "mounting_pitch_deg" (degrees, absent for
+//! the description's gravity), "coordinates": n, "width": w (the
 //! model's parameters + 1, the torque column last), "logs": [{"path", "sha256", "bytes",
 //! "source", "samples"}]}` (`L` logs). A log's factor reduces `samples` rows per
 //! coordinate; the merged factor the sum. A PSM state (n = 7, w = 116) is 380 KB per
@@ -72,6 +73,9 @@ struct Header {
     robot_hash: String,
     processing: Processing,
     stribeck_velocity: Option<f64>,
+    /// Degrees; absent in states written before mounting pitches (level arms).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    mounting_pitch_deg: Option<f64>,
     coordinates: usize,
     width: usize,
     logs: Vec<HeaderLog>,
@@ -107,6 +111,7 @@ impl ObservationState {
             robot_hash: self.robot_hash.clone(),
             processing: self.processing.clone(),
             stribeck_velocity: self.stribeck_velocity,
+            mounting_pitch_deg: self.mounting_pitch_deg,
             coordinates: n,
             width: w,
             logs: o
@@ -511,6 +516,7 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
         robot_hash: header.robot_hash,
         processing: header.processing,
         stribeck_velocity: header.stribeck_velocity,
+        mounting_pitch_deg: header.mounting_pitch_deg,
         observed: Observed {
             logs,
             parts,

@@ -49,6 +49,9 @@ pub struct ObservationState {
     /// The Stribeck velocity of the model the logs were reduced for, rad/s or m/s (it adds
     /// regressor columns); states to merge must agree on it.
     pub stribeck_velocity: Option<f64>,
+    /// The mounting pitch (degrees) whose gravity the logs were reduced with; states to
+    /// merge must agree on it.
+    pub mounting_pitch_deg: Option<f64>,
     /// The reduced logs: each log's factors, their merge and the torque range.
     pub observed: Observed,
 }
@@ -123,6 +126,7 @@ impl ObservationState {
             robot_hash: model_hash(&fitted),
             processing: settings.processing.clone(),
             stribeck_velocity: settings.stribeck_velocity,
+            mounting_pitch_deg: settings.mounting_pitch_deg,
             observed,
         })
     }
@@ -233,6 +237,12 @@ impl ObservationState {
                 other.stribeck_velocity, self.stribeck_velocity
             ));
         }
+        if self.mounting_pitch_deg != other.mounting_pitch_deg {
+            return Some(format!(
+                "mounting pitch {:?}° differs from {:?}° of the states before it",
+                other.mounting_pitch_deg, self.mounting_pitch_deg
+            ));
+        }
         None
     }
 
@@ -256,6 +266,7 @@ impl ObservationState {
         FitSettings {
             processing: self.processing.clone(),
             stribeck_velocity: self.stribeck_velocity,
+            mounting_pitch_deg: self.mounting_pitch_deg,
             ..estimator.clone()
         }
     }

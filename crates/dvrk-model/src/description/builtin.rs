@@ -6,17 +6,20 @@ use crate::error::ModelError;
 use crate::model::Model;
 
 /// Built-in robot descriptions: (name, TOML text).
-pub const BUILTIN: [(&str, &str); 3] = [
+pub const BUILTIN: [(&str, &str); 6] = [
     ("psm", include_str!("../../robots/psm.toml")),
     (
         "psm_simplified",
         include_str!("../../robots/psm_simplified.toml"),
     ),
     ("mtm", include_str!("../../robots/mtm.toml")),
+    ("ecm", include_str!("../../robots/ecm.toml")),
+    ("psm_si", include_str!("../../robots/psm_si.toml")),
+    ("ecm_si", include_str!("../../robots/ecm_si.toml")),
 ];
 
 impl Model {
-    /// A built-in robot: `psm`, `psm_simplified` or `mtm`.
+    /// A built-in robot: `psm`, `psm_simplified`, `mtm`, `ecm`, `psm_si` or `ecm_si`.
     pub fn builtin(name: &str) -> Result<Model, ModelError> {
         let (_, text) = BUILTIN
             .iter()
