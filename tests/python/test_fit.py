@@ -91,6 +91,7 @@ OPTIONS = [
      ["--method", "sdp", "--sdp-regularization", "1e-6"]),
     ({"method": "sdp", "bounds": "2019"}, ["--method", "sdp", "--bounds", "2019"]),
     ({"method": "sdp", "ellipsoids": False}, ["--method", "sdp", "--no-ellipsoids"]),
+    ({"method": "ols", "mounting_pitch": -45.0}, ["--method", "ols", "--mounting-pitch", "-45"]),
     ({"method": "ols", "delay": 0.01}, ["--method", "ols", "--delay", "0.01"]),
     ({"method": "ols", "delay": [0.01, 0.02, 0.0, 0.0, 0.0, 0.0, 0.005]},
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
@@ -119,6 +120,7 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             "irls_iterations": settings["irls_iterations"],
             "sdp_regularization": settings["sdp_regularization"],
             "ellipsoids": settings.get("ellipsoids", True),
+            "mounting_pitch": settings.get("mounting_pitch_deg"),
         }.get(key)
         if recorded is not None:
             assert recorded == value, key

@@ -96,6 +96,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 /// - ``ellipsoids``: ``False`` ignores the links' bounding ellipsoids of the robot
 ///   description, which the semidefinite fit otherwise keeps each link's mass inside
 ///   (``dvrk-ident fit --no-ellipsoids``);
+/// - ``mounting_pitch``: the arm's mounting pitch (degrees) as the dVRK states it: gravity
+///   ``(0, −9.81·sin p, −9.81·cos p)`` m/s² in the base frame, recorded in the result
+///   (``dvrk-ident fit --mounting-pitch``);
 /// - ``prior``: regularize the semidefinite fit toward ``"nominal"`` (the robot
 ///   description's nominal parameters, e.g. a URDF's inertias), a result document's
 ///   path or a :class:`FitResult`; ``prior_weight`` (default 0.001, relative to the data
@@ -131,7 +134,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, ellipsoids = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, ellipsoids = None, mounting_pitch = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -152,6 +155,7 @@ pub fn fit(
     stribeck: Option<f64>,
     bounds: Option<&str>,
     ellipsoids: Option<bool>,
+    mounting_pitch: Option<f64>,
     delay: Option<&Bound<'_, PyAny>>,
     prior: Option<&Bound<'_, PyAny>>,
     prior_weight: Option<f64>,
@@ -177,6 +181,7 @@ pub fn fit(
         stribeck,
         bounds,
         ellipsoids,
+        mounting_pitch,
         delay,
         prior,
         prior_weight,

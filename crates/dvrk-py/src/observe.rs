@@ -186,7 +186,7 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
 ///     ...     lambda a, b: a + b).compute()
 ///     >>> result = di.fit(psm, obs, method="wls")
 #[pyfunction]
-#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, stribeck = None, settings = None))]
+#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, stribeck = None, mounting_pitch = None, settings = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn observe(
     py: Python<'_>,
@@ -199,6 +199,7 @@ pub fn observe(
     min_speed: Option<f64>,
     resample: Option<f64>,
     stribeck: Option<f64>,
+    mounting_pitch: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<ObservationPy> {
     let kw = Overrides {
@@ -210,6 +211,7 @@ pub fn observe(
         min_speed,
         resample,
         stribeck,
+        mounting_pitch,
         ..Overrides::default()
     };
     let request = ObserveRequest {

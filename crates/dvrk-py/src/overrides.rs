@@ -72,6 +72,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub stribeck: Option<f64>,
     pub bounds: Option<&'a str>,
     pub ellipsoids: Option<bool>,
+    pub mounting_pitch: Option<f64>,
     pub delay: Option<&'a Bound<'py, PyAny>>,
     pub prior: Option<&'a Bound<'py, PyAny>>,
     pub prior_weight: Option<f64>,
@@ -133,6 +134,7 @@ impl Overrides<'_, '_> {
                 .map(|b| crate::convert::named("bounds", b))
                 .transpose()?,
             ellipsoids: self.ellipsoids,
+            mounting_pitch_deg: self.mounting_pitch,
             delay: self
                 .delay
                 .filter(|d| !d.is_none())

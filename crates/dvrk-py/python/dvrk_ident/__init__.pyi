@@ -374,6 +374,7 @@ def observe(
     min_speed: Optional[float] = None,
     resample: Optional[float] = None,
     stribeck: Optional[float] = None,
+    mounting_pitch: Optional[float] = None,
     settings: Optional[Mapping[str, Any]] = None,
 ) -> Observation:
     """The logs processed as :func:`fit` processes them and reduced: the map of a fit
@@ -398,6 +399,7 @@ def fit(
     stribeck: Optional[float] = None,
     bounds: Optional[str] = None,
     ellipsoids: Optional[bool] = None,
+    mounting_pitch: Optional[float] = None,
     delay: Optional[Union[str, float, Sequence[float]]] = None,
     prior: Optional[Union[str, PathLike, FitResult]] = None,
     prior_weight: Optional[float] = None,
@@ -411,7 +413,8 @@ def fit(
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
     per coordinate, or ``"none"``/``False`` (no filter); ``bounds``: ``"physical"`` or
     ``"2019"``; ``ellipsoids=False``: ignore the links' bounding ellipsoids of the
-    description (``--no-ellipsoids``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
+    description (``--no-ellipsoids``); ``mounting_pitch``: degrees, gravity
+    ``(0, -9.81 sin p, -9.81 cos p)`` in the base frame (``--mounting-pitch``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3`` for
     the keywords not given); ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
