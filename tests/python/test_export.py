@@ -15,6 +15,7 @@
 import json
 import shutil
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -256,6 +257,36 @@ def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
     result = di.fit(psm, di.read_log(psm_logs["csv"], psm), method="ols")
     with pytest.raises(di.InputError, match="for the MTM"):
         result.dvrk_gc()
+    # The Classic PSM has no kinematic gravity compensation either: told which it has.
+    with pytest.raises(di.InputError, match="Classic PSM"):
+        result.dvrk_kinematic_gc()
+
+
+def test_dvrk_kinematic_gc_matches_cli(run_cli, cli, tmp_path):
+    """result.dvrk_kinematic_gc() is `export --dvrk-kinematic-gc` of the same result: a
+    PSM Si mounted at -45 degrees, simulated from its nominal parameters and fitted."""
+    robot = di.Model("psm_si")
+    traj = di.FourierTrajectory(order=2, base_frequency_hz=0.1, q0=[0.0, 0.0, 0.12],
+                                a=[[0.3, 0.1], [0.2, 0.1], [0.03, 0.01]],
+                                b=[[0.1, 0.05], [0.1, 0.0], [0.01, 0.0]])
+    excitation = tmp_path / "excitation.json"
+    traj.write(excitation)
+    log = tmp_path / "log.csv"
+    subprocess.run([cli, "simulate", "psm_si", "--params", "nominal", "--excitation",
+                    excitation, "--mounting-pitch", "-45", "--noise", "0.001", "--out", log,
+                    "--quiet"], check=True, capture_output=True)
+    result = di.fit(robot, di.read_log(log, robot), mounting_pitch=-45.0)
+    path = tmp_path / "psm_si.json"
+    result.write(path)
+    out = tmp_path / "gc.json"
+    subprocess.run([cli, "export", path, "--dvrk-kinematic-gc", out, "--quiet"], check=True,
+                   capture_output=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ours = result.dvrk_kinematic_gc()
+    assert ours == json.loads(out.read_text())
+    with pytest.raises(di.InputError, match="carries no endoscope"):
+        result.dvrk_kinematic_gc(endoscope="Si_HD_UP")
 
 
 # A standard-DH robot with gravity along -y (the URDF gets a rotated root), a reversed

@@ -178,4 +178,8 @@ fn other_arms_and_bad_endoscopes_are_refused() {
     );
     let psm_si = message("psm_si", Some("Si_HD_UP"));
     assert!(psm_si.contains("carries no endoscope"), "{psm_si}");
+    // The settings right, parameters of no rigid body (0.1 everywhere: principal
+    // moments of −0.3 kg·m²) are refused, as the MTM's file and a URDF refuse them.
+    let not_rigid = message("ecm", Some("Classic_HD_STRAIGHT"));
+    assert!(not_rigid.contains("are not rigid bodies"), "{not_rigid}");
 }

@@ -53,7 +53,7 @@ const ROUNDS: usize = 400;
 
 /// The fastest block's time per call (ns) of `a` and of `b`, their blocks alternating
 /// (and which one goes first, so neither always follows the other).
-fn paired(mut a: impl FnMut(), mut b: impl FnMut()) -> (f64, f64) {
+fn paired(a: &mut dyn FnMut(), b: &mut dyn FnMut()) -> (f64, f64) {
     let block = |f: &mut dyn FnMut()| {
         let start = std::time::Instant::now();
         for _ in 0..BLOCK {
@@ -63,35 +63,45 @@ fn paired(mut a: impl FnMut(), mut b: impl FnMut()) -> (f64, f64) {
     };
     // Warm-up (caches, branch predictors, the clock's frequency), not counted.
     for _ in 0..ROUNDS / 8 {
-        block(&mut a);
-        block(&mut b);
+        block(a);
+        block(b);
     }
     let (mut best_a, mut best_b) = (f64::INFINITY, f64::INFINITY);
     for round in 0..ROUNDS {
         if round % 2 == 0 {
-            best_a = best_a.min(block(&mut a));
-            best_b = best_b.min(block(&mut b));
+            best_a = best_a.min(block(a));
+            best_b = best_b.min(block(b));
         } else {
-            best_b = best_b.min(block(&mut b));
-            best_a = best_a.min(block(&mut a));
+            best_b = best_b.min(block(b));
+            best_a = best_a.min(block(a));
         }
     }
     (best_a, best_b)
 }
 
+/// One computation through two paths: dvrk-model directly and the `extern "C"` entry.
+struct Paths<'a> {
+    algorithm: &'static str,
+    rust: Box<dyn FnMut() + 'a>,
+    abi: Box<dyn FnMut() + 'a>,
+}
+
 fn bench_robot(c: &mut Criterion, robot: &str, source: &str) {
     let (model, params, path) = result_of(robot, source);
     let n = model.dof();
-    let mut ws = Workspace::new(&model);
     let q: Vec<f64> = (0..n).map(|i| 0.1 + 0.05 * i as f64).collect();
     let dq: Vec<f64> = (0..n).map(|i| 0.3 - 0.1 * i as f64).collect();
     let ddq: Vec<f64> = (0..n).map(|i| 0.5 * i as f64 - 1.0).collect();
-    let mut tau = vec![0.0; n];
-    let mut m = vec![0.0; n * n];
-    let mut acc = vec![0.0; n];
-    model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
-    model.add_known_forces(&q, &mut tau);
-    let applied = tau.clone();
+    let mut applied = vec![0.0; n];
+    model.inverse_dynamics(
+        &mut Workspace::new(&model),
+        &params,
+        &q,
+        &dq,
+        &ddq,
+        &mut applied,
+    );
+    model.add_known_forces(&q, &mut applied);
 
     let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
     // SAFETY: a NUL-terminated path, no error buffer.
@@ -100,183 +110,109 @@ fn bench_robot(c: &mut Criterion, robot: &str, source: &str) {
     // SAFETY: a live model.
     let dw = unsafe { dvrk_workspace_new(dm) };
 
+    // Each closure owns its output (and the Rust ones a workspace), so the two paths
+    // share nothing but the inputs.
+    let (model, params, q, dq, ddq, applied) = (&model, &params, &q, &dq, &ddq, &applied);
+    let rust_ws = || Workspace::new(model);
+    let mut paths = {
+        let (mut ws1, mut ws2, mut ws3, mut ws4) = (rust_ws(), rust_ws(), rust_ws(), rust_ws());
+        let (mut t1, mut t2, mut t3, mut t4) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (mut m1, mut m2) = (vec![0.0; n * n], vec![0.0; n * n]);
+        let (mut a1, mut a2) = (vec![0.0; n], vec![0.0; n]);
+        vec![
+            Paths {
+                algorithm: "inverse dynamics",
+                rust: Box::new(move || {
+                    model.inverse_dynamics(&mut ws1, params, black_box(q), dq, ddq, &mut t1);
+                    model.add_known_forces(q, &mut t1);
+                    black_box(&t1);
+                }),
+                abi: Box::new(move || {
+                    // SAFETY: live model and workspace, buffers of n doubles.
+                    let rc = unsafe {
+                        dvrk_inverse_dynamics(
+                            dm,
+                            dw,
+                            black_box(q.as_ptr()),
+                            dq.as_ptr(),
+                            ddq.as_ptr(),
+                            t2.as_mut_ptr(),
+                        )
+                    };
+                    black_box((rc, &t2));
+                }),
+            },
+            Paths {
+                algorithm: "gravity",
+                rust: Box::new(move || {
+                    model.gravity_torque(&mut ws2, params, black_box(q), &mut t3);
+                    black_box(&t3);
+                }),
+                abi: Box::new(move || {
+                    // SAFETY: live model and workspace, buffers of n doubles.
+                    let rc =
+                        unsafe { dvrk_gravity(dm, dw, black_box(q.as_ptr()), t4.as_mut_ptr()) };
+                    black_box((rc, &t4));
+                }),
+            },
+            Paths {
+                algorithm: "mass matrix",
+                rust: Box::new(move || {
+                    model.mass_matrix_into(&mut ws3, params, black_box(q), &mut m1);
+                    black_box(&m1);
+                }),
+                abi: Box::new(move || {
+                    // SAFETY: live model and workspace, buffers of n and n·n doubles.
+                    let rc =
+                        unsafe { dvrk_mass_matrix(dm, dw, black_box(q.as_ptr()), m2.as_mut_ptr()) };
+                    black_box((rc, &m2));
+                }),
+            },
+            Paths {
+                algorithm: "forward dynamics",
+                rust: Box::new(move || {
+                    model
+                        .forward_dynamics_into(&mut ws4, params, black_box(q), dq, applied, &mut a1)
+                        .expect("physical parameters");
+                    black_box(&a1);
+                }),
+                abi: Box::new(move || {
+                    // SAFETY: live model and workspace, buffers of n doubles.
+                    let rc = unsafe {
+                        dvrk_forward_dynamics(
+                            dm,
+                            dw,
+                            black_box(q.as_ptr()),
+                            dq.as_ptr(),
+                            applied.as_ptr(),
+                            a2.as_mut_ptr(),
+                        )
+                    };
+                    assert_eq!(rc, DVRK_OK);
+                    black_box(&a2);
+                }),
+            },
+        ]
+    };
     // The paired measurement (see the file's comment): one line per algorithm.
-    {
-        let cell = std::cell::RefCell::new((&mut ws, &mut tau, &mut m, &mut acc));
-        let rows: [(&str, (f64, f64)); 4] = [
-            (
-                "inverse dynamics",
-                paired(
-                    || {
-                        let (ws, tau, ..) = &mut *cell.borrow_mut();
-                        model.inverse_dynamics(ws, &params, black_box(&q), &dq, &ddq, tau);
-                        model.add_known_forces(&q, tau);
-                        black_box(&tau);
-                    },
-                    || {
-                        let (_, tau, ..) = &mut *cell.borrow_mut();
-                        // SAFETY: live model and workspace, buffers of n doubles.
-                        let rc = unsafe {
-                            dvrk_inverse_dynamics(
-                                dm,
-                                dw,
-                                black_box(q.as_ptr()),
-                                dq.as_ptr(),
-                                ddq.as_ptr(),
-                                tau.as_mut_ptr(),
-                            )
-                        };
-                        black_box((rc, &tau));
-                    },
-                ),
-            ),
-            (
-                "gravity",
-                paired(
-                    || {
-                        let (ws, tau, ..) = &mut *cell.borrow_mut();
-                        model.gravity_torque(ws, &params, black_box(&q), tau);
-                        black_box(&tau);
-                    },
-                    || {
-                        let (_, tau, ..) = &mut *cell.borrow_mut();
-                        // SAFETY: live model and workspace, buffers of n doubles.
-                        let rc = unsafe {
-                            dvrk_gravity(dm, dw, black_box(q.as_ptr()), tau.as_mut_ptr())
-                        };
-                        black_box((rc, &tau));
-                    },
-                ),
-            ),
-            (
-                "mass matrix",
-                paired(
-                    || {
-                        let (ws, _, m, _) = &mut *cell.borrow_mut();
-                        model.mass_matrix_into(ws, &params, black_box(&q), m);
-                        black_box(&m);
-                    },
-                    || {
-                        let (_, _, m, _) = &mut *cell.borrow_mut();
-                        // SAFETY: live model and workspace, buffers of n and n·n doubles.
-                        let rc = unsafe {
-                            dvrk_mass_matrix(dm, dw, black_box(q.as_ptr()), m.as_mut_ptr())
-                        };
-                        black_box((rc, &m));
-                    },
-                ),
-            ),
-            (
-                "forward dynamics",
-                paired(
-                    || {
-                        let (ws, _, _, acc) = &mut *cell.borrow_mut();
-                        model
-                            .forward_dynamics_into(ws, &params, black_box(&q), &dq, &applied, acc)
-                            .expect("physical parameters");
-                        black_box(&acc);
-                    },
-                    || {
-                        let (.., acc) = &mut *cell.borrow_mut();
-                        // SAFETY: live model and workspace, buffers of n doubles.
-                        let rc = unsafe {
-                            dvrk_forward_dynamics(
-                                dm,
-                                dw,
-                                black_box(q.as_ptr()),
-                                dq.as_ptr(),
-                                applied.as_ptr(),
-                                acc.as_mut_ptr(),
-                            )
-                        };
-                        assert_eq!(rc, DVRK_OK);
-                        black_box(&acc);
-                    },
-                ),
-            ),
-        ];
-        for (algorithm, (rust, abi)) in rows {
-            println!(
-                "paired {robot} {algorithm}: rust {rust:.1} ns, abi {abi:.1} ns, overhead {:+.1} %",
-                100.0 * (abi / rust - 1.0)
-            );
-        }
+    for p in &mut paths {
+        let (rust, abi) = paired(&mut *p.rust, &mut *p.abi);
+        println!(
+            "paired {robot} {}: rust {rust:.1} ns, abi {abi:.1} ns, overhead {:+.1} %",
+            p.algorithm,
+            100.0 * (abi / rust - 1.0)
+        );
     }
-
-    c.bench_function(&format!("{robot} inverse dynamics rust"), |b| {
-        b.iter(|| {
-            model.inverse_dynamics(&mut ws, &params, black_box(&q), &dq, &ddq, &mut tau);
-            model.add_known_forces(&q, &mut tau);
-            black_box(&tau);
-        })
-    });
-    c.bench_function(&format!("{robot} inverse dynamics abi"), |b| {
-        b.iter(|| {
-            // SAFETY: live model and workspace, buffers of n doubles.
-            let rc = unsafe {
-                dvrk_inverse_dynamics(
-                    dm,
-                    dw,
-                    black_box(q.as_ptr()),
-                    dq.as_ptr(),
-                    ddq.as_ptr(),
-                    tau.as_mut_ptr(),
-                )
-            };
-            black_box((rc, &tau));
-        })
-    });
-    c.bench_function(&format!("{robot} gravity rust"), |b| {
-        b.iter(|| {
-            model.gravity_torque(&mut ws, &params, black_box(&q), &mut tau);
-            black_box(&tau);
-        })
-    });
-    c.bench_function(&format!("{robot} gravity abi"), |b| {
-        b.iter(|| {
-            // SAFETY: live model and workspace, buffers of n doubles.
-            let rc = unsafe { dvrk_gravity(dm, dw, black_box(q.as_ptr()), tau.as_mut_ptr()) };
-            black_box((rc, &tau));
-        })
-    });
-    c.bench_function(&format!("{robot} mass matrix rust"), |b| {
-        b.iter(|| {
-            model.mass_matrix_into(&mut ws, &params, black_box(&q), &mut m);
-            black_box(&m);
-        })
-    });
-    c.bench_function(&format!("{robot} mass matrix abi"), |b| {
-        b.iter(|| {
-            // SAFETY: live model and workspace, buffers of n and n·n doubles.
-            let rc = unsafe { dvrk_mass_matrix(dm, dw, black_box(q.as_ptr()), m.as_mut_ptr()) };
-            black_box((rc, &m));
-        })
-    });
-    c.bench_function(&format!("{robot} forward dynamics rust"), |b| {
-        b.iter(|| {
-            model
-                .forward_dynamics_into(&mut ws, &params, black_box(&q), &dq, &applied, &mut acc)
-                .expect("physical parameters");
-            black_box(&acc);
-        })
-    });
-    c.bench_function(&format!("{robot} forward dynamics abi"), |b| {
-        b.iter(|| {
-            // SAFETY: live model and workspace, buffers of n doubles.
-            let rc = unsafe {
-                dvrk_forward_dynamics(
-                    dm,
-                    dw,
-                    black_box(q.as_ptr()),
-                    dq.as_ptr(),
-                    applied.as_ptr(),
-                    acc.as_mut_ptr(),
-                )
-            };
-            assert_eq!(rc, DVRK_OK);
-            black_box(&acc);
-        })
-    });
+    for p in &mut paths {
+        c.bench_function(&format!("{robot} {} rust", p.algorithm), |b| {
+            b.iter(&mut p.rust)
+        });
+        c.bench_function(&format!("{robot} {} abi", p.algorithm), |b| {
+            b.iter(&mut p.abi)
+        });
+    }
+    drop(paths);
     // SAFETY: live pointers, freed once, workspace first.
     unsafe {
         dvrk_workspace_free(dw);

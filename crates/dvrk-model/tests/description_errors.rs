@@ -425,9 +425,12 @@ theta = "q1"
 
 #[test]
 fn unknown_builtin_robot() {
-    let err = Model::builtin("ecm").unwrap_err();
-    assert!(matches!(err, ModelError::UnknownRobot(ref n) if n == "ecm"));
-    assert!(err.to_string().contains("psm"));
+    let err = Model::builtin("suj").unwrap_err();
+    assert!(matches!(err, ModelError::UnknownRobot(ref n) if n == "suj"));
+    // The message lists every built-in arm, the ECM and Si arms too.
+    for name in Model::builtin_names() {
+        assert!(err.to_string().contains(name), "{name}: {err}");
+    }
     let err = Model::load("/nonexistent/robot.toml").unwrap_err();
     assert!(err.to_string().contains("/nonexistent/robot.toml"));
 }

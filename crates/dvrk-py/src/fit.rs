@@ -676,6 +676,35 @@ impl FitResultPy {
         to_python(py, &gc.document)
     }
 
+    /// The dVRK controller's kinematic gravity-compensation file of an ``ecm``,
+    /// ``psm_si`` or ``ecm_si`` result (``dvrk-ident export --dvrk-kinematic-gc``) as a
+    /// dict: the physical DH its ``kinematic_gc`` key names, with masses and centres of
+    /// mass whose gravity, through the controller's position and effort maps, is this
+    /// result's. ``endoscope``: the ECM's endoscope type (its configuration's
+    /// ``endoscope``), whose mass the controller sets on the insertion link. Raises
+    /// ``InputError`` for another robot, naming the export that arm has.
+    #[pyo3(signature = (robot = None, *, endoscope = None))]
+    fn dvrk_kinematic_gc<'py>(
+        &self,
+        py: Python<'py>,
+        robot: Option<&Bound<'py, ModelPy>>,
+        endoscope: Option<String>,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let model = self.model(py, robot)?;
+        let params = self.params(&model)?;
+        let result = self.inner.clone();
+        let gc = py
+            .detach(move || {
+                Export::DvrkKinematicGc {
+                    endoscope: endoscope.as_deref(),
+                }
+                .build_for(&model, &params, &result)
+            })
+            .map_err(from_ident)?;
+        warn_all(py, &gc.undetermined)?;
+        to_python(py, &gc.document)
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "FitResult(robot={}, method={}, converged={}, physically_consistent={})",

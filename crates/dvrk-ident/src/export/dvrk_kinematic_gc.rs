@@ -337,9 +337,6 @@ pub fn dvrk_kinematic_gc(
             ),
         ));
     }
-    // The controller's file holds the links' gravity: only rigid bodies, as the MTM's
-    // gravity compensation and a URDF (a negative mass would push the arm the wrong way).
-    model.check_rigid_bodies(params)?;
     let endoscope =
         match (arm.endoscope_link, endoscope) {
             (Some(_), None) => {
@@ -372,6 +369,9 @@ pub fn dvrk_kinematic_gc(
             }
             (None, None) => None,
         };
+    // The controller's file holds the links' gravity: only rigid bodies, as the MTM's
+    // gravity compensation and a URDF (a negative mass would push the arm the wrong way).
+    model.check_rigid_bodies(params)?;
     let frames = check_model(model, arm)?;
     let geometry = dh_at_zero(model, &frames)?;
     let ranges: Vec<[f64; 2]> = model

@@ -324,6 +324,11 @@ class FitResult:
     def wpi_params(self, robot: Optional[Model] = None) -> Dict[str, Any]: ...
     def dvrk_gc(self, robot: Optional[Model] = None, points: int = 7) -> Dict[str, Any]:
         """The dVRK controller's MTM gravity-compensation file (version "2.0")."""
+    def dvrk_kinematic_gc(
+        self, robot: Optional[Model] = None, *, endoscope: Optional[str] = None
+    ) -> Dict[str, Any]:
+        """The dVRK controller's kinematic gravity-compensation file (the physical DH
+        of its ``kinematic_gc`` key) of an ecm, psm_si or ecm_si result."""
 
 def read_log(
     path: PathLike,
