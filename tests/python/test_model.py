@@ -26,7 +26,7 @@ def state(robot, n, seed=3):
 
 
 def test_builtin_names_and_properties(psm):
-    assert di.Model.builtin_names() == ["psm", "psm_simplified", "mtm"]
+    assert di.Model.builtin_names() == ["psm", "psm_simplified", "mtm", "ecm", "psm_si", "ecm_si"]
     assert psm.name == "psm"
     assert psm.source == "builtin:psm"
     assert psm.dof == 7
