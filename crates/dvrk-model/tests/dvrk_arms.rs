@@ -5,6 +5,10 @@
 //! every physical-DH frame against the gravity-compensation chain, and the nominal
 //! masses' gravity torque against the controller's gravity compensation at several
 //! mounting pitches.
+// The dVRK's files write π/2 as 1.5708 or 1.570796327 (and π as 3.14159625): those
+// literals are transcribed as they are, which is what the controller reads.
+#![allow(clippy::approx_constant)]
+#![cfg(feature = "description")]
 
 use std::f64::consts::FRAC_PI_2;
 

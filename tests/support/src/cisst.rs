@@ -68,7 +68,9 @@ impl Link {
         self.kind.eq_ignore_ascii_case("prismatic") || self.kind.eq_ignore_ascii_case("slider")
     }
 
-    /// `robModifiedDH::ReadParameters`: "just make sure we're accurate".
+    /// `robModifiedDH::ReadParameters`: "just make sure we're accurate". The literal
+    /// 1.5708 is what the dVRK's files write and cisst compares with, not π/2.
+    #[allow(clippy::approx_constant)]
     fn alpha(&self) -> f64 {
         if self.alpha == 1.5708 {
             std::f64::consts::FRAC_PI_2
