@@ -73,7 +73,7 @@ pub struct McapOptions {
     /// (`X/measured_js` + `X/jaw/measured_js`) holding them together. Empty: unknown.
     pub joints: Vec<String>,
     /// Largest size a compressed sqlite3 or ROS 1 file may decompress to, MiB; `None`:
-    /// [`super::bag::unpack_limit`]'s default (100 times the compressed size, at least
+    /// the default (100 times the compressed size, at least
     /// 64 MiB and at most 16 GiB).
     pub max_unpacked_mib: Option<u64>,
 }

@@ -50,7 +50,7 @@ impl Model {
     }
 
     /// Checks that `params` (the full vector, SI units) are exportable: the right length,
-    /// finite, and every link a rigid body as [`Self::export_inertials`] requires. Every
+    /// finite, and every link a rigid body (what a URDF inertial must hold). Every
     /// export of identified parameters to another tool (URDF, a controller's gravity
     /// compensation) goes through here: a controller fed a negative mass pushes the arm
     /// the wrong way.
