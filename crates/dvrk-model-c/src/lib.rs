@@ -549,19 +549,8 @@ pub unsafe extern "C" fn dvrk_inverse_dynamics(
     ddq: *const f64,
     tau: *mut f64,
 ) -> c_int {
-    guarded(|| {
-        // SAFETY: the caller's obligations, passed on.
-        let (m, w) = unsafe { pair(model, ws) }?;
-        let n = m.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (q, dq, ddq, tau) =
-            unsafe { (input(q, n)?, input(dq, n)?, input(ddq, n)?, output(tau, n)?) };
-        finite(&[q, dq, ddq])?;
-        m.model
-            .inverse_dynamics(&mut w.ws, &m.params, q, dq, ddq, &mut w.vector);
-        m.model.add_known_forces(q, &mut w.vector);
-        deliver(&w.vector, tau)
-    })
+    // SAFETY: the caller's obligations, passed on.
+    unsafe { dynamics(model, ws, q, dq, ddq, tau, Dynamics::Whole) }
 }
 
 /// Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
@@ -582,6 +571,34 @@ pub unsafe extern "C" fn dvrk_rigid_body_dynamics(
     ddq: *const f64,
     tau: *mut f64,
 ) -> c_int {
+    // SAFETY: the caller's obligations, passed on.
+    unsafe { dynamics(model, ws, q, dq, ddq, tau, Dynamics::Links) }
+}
+
+/// Which torque [`dynamics`] computes.
+#[derive(Clone, Copy, PartialEq)]
+enum Dynamics {
+    /// The result's whole model, known forces included (`dvrk_inverse_dynamics`).
+    Whole,
+    /// The links alone (`dvrk_rigid_body_dynamics`).
+    Links,
+}
+
+/// The body of `dvrk_inverse_dynamics` and `dvrk_rigid_body_dynamics`, which differ only
+/// in the parameters and the known forces.
+///
+/// # Safety
+///
+/// As `dvrk_inverse_dynamics`.
+unsafe fn dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    ddq: *const f64,
+    tau: *mut f64,
+    which: Dynamics,
+) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligations, passed on.
         let (m, w) = unsafe { pair(model, ws) }?;
@@ -590,8 +607,15 @@ pub unsafe extern "C" fn dvrk_rigid_body_dynamics(
         let (q, dq, ddq, tau) =
             unsafe { (input(q, n)?, input(dq, n)?, input(ddq, n)?, output(tau, n)?) };
         finite(&[q, dq, ddq])?;
+        let params = match which {
+            Dynamics::Whole => &m.params,
+            Dynamics::Links => &m.link_params,
+        };
         m.model
-            .inverse_dynamics(&mut w.ws, &m.link_params, q, dq, ddq, &mut w.vector);
+            .inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
+        if which == Dynamics::Whole {
+            m.model.add_known_forces(q, &mut w.vector);
+        }
         deliver(&w.vector, tau)
     })
 }
