@@ -128,7 +128,7 @@ def test_docstrings():
 @pytest.mark.parametrize("old,new", [("Robot", "Model"), ("Data", "JointLog"),
                                      ("Result", "FitResult"), ("Trajectory", "FourierTrajectory")])
 def test_old_class_names_warn_and_are_the_new_classes(old, new):
-    """The first release's names stay one more release, each with a DeprecationWarning
+    """The names of the development builds before 0.1.0 stay until 0.2.0, each with a DeprecationWarning
     that names its replacement; the stubs declare them as aliases."""
     with pytest.warns(DeprecationWarning, match=f"dvrk_ident.{old} is deprecated.*dvrk_ident.{new}"):
         cls = getattr(di, old)

@@ -6,11 +6,11 @@
 mod support;
 
 use std::path::Path;
+use std::sync::Arc;
 
-use dvrk_ident::fit::{fit_logs, LogData};
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::{FitSettings, JointLog, Method};
+use dvrk_ident::{FitRequest, FitSettings, JointLog, LogSource, Method, Training};
 use dvrk_model::Model;
 use dvrk_test_support::read_json;
 use support::{example, files, run, run_ok, s, temp_dir};
@@ -86,24 +86,25 @@ fn several_logs_of_mixed_formats() {
 
     // The library on the same logs: the same parameters and metrics.
     let model = Model::builtin("psm").unwrap();
-    let read: Vec<JointLog> = [&a, &bag, &c]
+    // Each log read here, handed to the library as samples with their file.
+    let mut data: Vec<LogSource> = [&a, &bag, &c]
         .iter()
-        .map(|p| log::read(p, None, None).unwrap())
-        .collect();
-    let data: Vec<LogData> = read
-        .iter()
-        .zip([&a, &bag, &c])
-        .map(|(samples, p)| LogData {
-            samples,
-            file: Some(p),
+        .map(|p| LogSource::Samples {
+            samples: Arc::new(log::read(p, None, None).unwrap()),
+            file: Some(p.to_path_buf()),
         })
         .collect();
-    let settings = FitSettings {
-        method: Method::Wls,
-        test_window: Some(100),
-        ..FitSettings::default()
+    let test = data.split_off(2);
+    let request = FitRequest {
+        test,
+        settings: FitSettings {
+            method: Method::Wls,
+            test_window: Some(100),
+            ..FitSettings::default()
+        },
+        ..FitRequest::new(Training::Logs(data))
     };
-    let lib = fit_logs(&model, &data[..2], &data[2..], &settings, &Silent).unwrap();
+    let lib = request.run(Some(&model), &Silent).unwrap().result;
     let lib: serde_json::Value = serde_json::from_str(&lib.to_json()).unwrap();
     assert_eq!(doc["parameters"], lib["parameters"]);
     assert_eq!(doc["metrics"], lib["metrics"]);

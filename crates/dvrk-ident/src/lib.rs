@@ -1,26 +1,15 @@
 //! Identification pipeline for coupled robot arms (dVRK PSM/MTM and others).
 //!
-//! Data flows one way: [`log`] reads joint-space logs into a [`JointLog`],
-//! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
-//! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
-//! the parameters (least squares or the physically consistent semidefinite program),
-//! and [`fit()`] runs the whole pipeline and builds the [`result`] document, which
-//! [`export`] writes as the files other tools read (URDF, the 2019 params.json, the dVRK
-//! controller's gravity compensation).
-//!
-//! Logs larger than memory go through the same steps block by block:
-//! [`log::LogReader`] reads any format in blocks, [`signal::stream`] processes them,
-//! and [`fit::stream::fit_stream`] reduces them into the observation in several passes
-//! over the files, with the same result as [`fit()`].
-//!
-//! Fits spread over processes or machines: [`state::ObservationState`] holds the
-//! training logs reduced (each log's factors, all of them merged, the torque range) in a
-//! versioned file; states merge, and the fit of a merged state is the fit of its logs.
-//!
-//! The command line and the Python module only map their flags and keyword arguments
-//! onto [`log::ReadOptions`] and [`request::FitRequest`]: a difference between them is a
-//! bug of one of the mappings. A program fits the same way, with the types re-exported
-//! here:
+//! [`FitRequest`] is the one way to fit: the training logs ([`LogSource`]: files, or
+//! samples already in memory; or observation states), the test logs, how the files are
+//! read ([`ReadOptions`]), the base settings ([`FitSettings`]) and the settings changed
+//! from them ([`Overrides`], the command line's flags and Python's keyword arguments),
+//! the decision to read the logs block by block ([`Streaming`]). [`FitRequest::run`]
+//! gives a [`FitOutcome`]: the model and settings used, and the [`FitResult`] document
+//! that [`Export`] writes as the files other tools read (URDF, the 2019 params.json, the
+//! dVRK controller's gravity compensation). The command line and the Python module only
+//! map their flags and keyword arguments onto it: a difference between them is a bug of
+//! one of the mappings.
 //!
 //! ```
 //! use dvrk_ident::{FitRequest, LogSource, Method, Overrides, Training};
@@ -37,6 +26,20 @@
 //! assert!(result.metrics.train.relative_error.iter().all(|e| *e < 0.05));
 //! ```
 //!
+//! Inside, data flow one way: [`log`] reads joint-space logs into a [`JointLog`],
+//! [`signal`] filters and differentiates them into `q, dq, ddq, tau`, [`observation`]
+//! reduces the weighted regressor to an R factor in parallel chunks, [`estimate`] fits
+//! the parameters (least squares or the physically consistent semidefinite program), and
+//! [`fit`] holds the stages and the drivers [`FitRequest`] picks: logs in memory, logs
+//! larger than memory read block by block ([`log::LogReader`], [`signal::stream`]; the
+//! same result), and observation states ([`ObservationState`]: the training logs
+//! reduced in a versioned file, merged across processes or machines, the fit of a
+//! merged state being the fit of its logs).
+//!
+//! Around the fit: [`excite`] designs excitation trajectories ([`FourierTrajectory`]),
+//! [`simulate`] makes logs from a model, [`residual`] estimates external torques from a
+//! log and a result, [`compare`] sets two results side by side, [`report`] draws them.
+//!
 //! Cargo features (all default): `rust-lapack` (Clarabel's BLAS/LAPACK in Rust over
 //! faer, from the workspace's `lapack-faer` crate, so no system library is linked),
 //! `recordings` (the readers of ROS recordings and the MCAP writer, [`log::mcap`]) and
@@ -48,14 +51,19 @@
 // crates/lapack-faer (the C ABI of crates/dvrk-model-c is the other one).
 #![forbid(unsafe_code)]
 
+// The modules. A program uses the types re-exported below, at the root; the modules
+// stay public for the parts the command line, Python and the tests reach inside them
+// (the processing stages, the readers, the report's figures).
+use dvrk_logs::median;
+pub use dvrk_logs::{columns, joint_log, log, names, output};
+pub mod cable;
 pub mod compare;
 pub mod error;
 pub mod estimate;
 pub mod excite;
+pub mod export;
 pub mod external;
-// The logs live in their own crate (crates/dvrk-logs), under the same paths here.
-use dvrk_logs::median;
-pub use dvrk_logs::{columns, joint_log, log, names, output};
+pub mod fit;
 pub mod observation;
 pub mod progress;
 #[cfg(feature = "report")]
@@ -63,6 +71,7 @@ pub mod report;
 pub mod reproduce;
 pub mod request;
 pub mod residual;
+pub mod result;
 pub mod settings;
 pub mod signal;
 pub mod simulate;
@@ -70,18 +79,23 @@ pub mod state;
 #[cfg(all(test, not(feature = "recordings")))]
 mod without_recordings;
 
-pub use error::IdentError;
+// The request, its logs and its outcome.
+pub use request::{
+    FitOutcome, FitRequest, LogSource, ObserveRequest, Overrides, Preset, Streaming, Training,
+};
+// Logs and how they are read.
 pub use joint_log::{Coordinates, JointLog, JointLogError};
-pub mod fit;
-pub mod result;
-
-pub use fit::{fit, BoundsSet, FitSettings, Method};
 pub use log::{LogFormat, ReadOptions};
-pub use request::{FitOutcome, FitRequest, LogSource, Overrides, Preset, Training};
+// Settings.
+pub use settings::{BoundsSet, FitSettings, Joints, Method};
+// The result, the observation states, the exports.
+pub use export::Export;
 pub use result::FitResult;
-pub use settings::Joints;
-pub mod cable;
-pub mod export;
+pub use state::ObservationState;
+// Errors.
+pub use error::IdentError;
+// Excitation trajectories.
+pub use excite::FourierTrajectory;
 
 // The book's Rust chapter (docs/book/src/rust.md): its Rust blocks are this crate's doc
 // tests, so the chapter's examples compile and pass with the API they show.

@@ -517,6 +517,9 @@ pub struct FitRequest {
     pub excitation: Option<FourierTrajectory>,
     /// Whether the logs are read block by block (default: by size).
     pub streaming: Streaming,
+    /// Samples per block when the logs are streamed (default [`BLOCK_SAMPLES`]): a
+    /// memory knob only, the result is the same to the last bit for any block size.
+    pub block_samples: usize,
 }
 
 /// The training and the test logs of a fit, in order.
@@ -547,6 +550,41 @@ impl FitRequest {
             overrides: Overrides::default(),
             excitation: None,
             streaming: Streaming::Auto,
+            block_samples: BLOCK_SAMPLES,
+        }
+    }
+
+    /// A request to fit logs already in memory with `settings` as the base (the
+    /// result's `inputs` hash their samples): the shortest way for a program that holds
+    /// its logs. Set the other fields as usual (`..FitRequest::of_samples(..)`).
+    ///
+    /// ```rust
+    /// use dvrk_ident::{log, FitRequest, FitSettings, Method};
+    ///
+    /// let psm = dvrk_model::Model::builtin("psm").unwrap();
+    /// let file = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/psm_excitation.mcap");
+    /// let samples = log::read(file, None, None).unwrap();
+    /// let settings = FitSettings { method: Method::Wls, ..FitSettings::default() };
+    /// let request = FitRequest::of_samples([&samples], None, settings);
+    /// let result = request.run(Some(&psm), &dvrk_ident::progress::Silent).unwrap().result;
+    /// assert_eq!((result.robot.as_str(), result.method.as_str()), ("psm", "wls"));
+    /// ```
+    pub fn of_samples<'a>(
+        train: impl IntoIterator<Item = &'a JointLog>,
+        test: impl IntoIterator<Item = &'a JointLog>,
+        settings: FitSettings,
+    ) -> FitRequest {
+        let samples = |logs: &mut dyn Iterator<Item = &'a JointLog>| -> Vec<LogSource> {
+            logs.map(|l| LogSource::Samples {
+                samples: Arc::new(l.clone()),
+                file: None,
+            })
+            .collect()
+        };
+        FitRequest {
+            test: samples(&mut test.into_iter()),
+            settings,
+            ..FitRequest::new(Training::Logs(samples(&mut train.into_iter())))
         }
     }
 
@@ -695,7 +733,7 @@ impl FitRequest {
                 &train.iter().collect::<Vec<_>>(),
                 &test.iter().collect::<Vec<_>>(),
                 &settings,
-                BLOCK_SAMPLES,
+                self.block_samples,
                 progress,
             )?;
             return Ok(FitOutcome {

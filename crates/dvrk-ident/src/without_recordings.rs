@@ -4,8 +4,9 @@
 
 use crate::excite::FourierTrajectory;
 use crate::log::{detect_format, write, write_headered, LogError, LogFormat, ReadOptions};
+use crate::progress::Silent;
 use crate::simulate::{simulate, Simulation};
-use crate::{fit, FitSettings, Method};
+use crate::{FitRequest, FitSettings, Method};
 use dvrk_model::Model;
 
 /// A CSV log is read and fitted as usual, and the
@@ -39,7 +40,10 @@ fn without_recordings_csv_fits_and_a_recording_is_refused() {
     // Exact signals: no filter; derivatives of the analytic velocity are accurate.
     settings.processing.filter = None;
     settings.processing.trim = 10;
-    let result = fit(&model, &read, None, &settings).unwrap();
+    let result = FitRequest::of_samples([&read], None, settings)
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let beta_true = model.base_parameters().unwrap().project(&truth);
     dvrk_test_support::fixtures::assert_recovered(
         "psm OLS",

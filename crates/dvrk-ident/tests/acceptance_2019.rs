@@ -8,7 +8,8 @@
 #[path = "support/protocol_2019.rs"]
 mod protocol_2019;
 
-use dvrk_ident::{fit, FitResult, JointLog, Method};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::{FitRequest, FitResult, JointLog, Method};
 use dvrk_model::Model;
 use protocol_2019::{settings, stribeck_settings, Protocol};
 use serde::Deserialize;
@@ -111,7 +112,10 @@ fn run(case: &Case) {
     );
     for (method, published) in &case.figures.published.by_method() {
         let s = settings(&case.protocol, *method);
-        let r = fit(&model, &train, Some(&test), &s).unwrap();
+        let r = FitRequest::of_samples([&train], Some(&test), s.clone())
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result;
         let ours = &r.metrics.test.as_ref().unwrap().relative_error;
         let row: Vec<String> = ours
             .iter()
@@ -173,7 +177,10 @@ fn beyond_2019(case: &Case, model: &Model, train: &JointLog, test: &JointLog) {
         ),
     ] {
         let s = stribeck_settings(&case.protocol, method);
-        let r = fit(m, train, Some(test), &s).unwrap();
+        let r = FitRequest::of_samples([train], Some(test), s.clone())
+            .run(Some(m), &Silent)
+            .unwrap()
+            .result;
         let ours = &r.metrics.test.as_ref().unwrap().relative_error;
         let better = ours
             .iter()
@@ -217,7 +224,10 @@ fn delays_beat_2019(case: &Case, mean_gain: f64) {
         return;
     };
     let s = protocol_2019::delay_settings(&case.protocol);
-    let r = fit(&model, &train, Some(&test), &s).unwrap();
+    let r = FitRequest::of_samples([&train], Some(&test), s.clone())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let m = s.model(&model).unwrap();
     check_sdp(&m, &r);
     assert!(r.physically_consistent, "{}", case.protocol.robot);
@@ -309,13 +319,11 @@ fn priors_on_a_short_log(case: &Case) {
         return;
     };
     let w = case.protocol.window;
-    let prior_fit = fit(
-        &model,
-        &one,
-        None,
-        &protocol_2019::delay_settings(&case.protocol),
-    )
-    .unwrap();
+    let prior_fit =
+        FitRequest::of_samples([&one], None, protocol_2019::delay_settings(&case.protocol))
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result;
     assert!(prior_fit.solver.converged);
     let short = rows(&two, w, (3 * w).min(two.len()));
     let mut s = protocol_2019::delay_settings(&case.protocol);
@@ -325,7 +333,10 @@ fn priors_on_a_short_log(case: &Case) {
         let e = &r.metrics.test.as_ref().unwrap().relative_error;
         e.iter().sum::<f64>() / e.len() as f64
     };
-    let none = fit(&model, &short, Some(&two), &s).unwrap();
+    let none = FitRequest::of_samples([&short], Some(&two), s.clone())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     assert!(none.solver.converged && none.physically_consistent);
     println!(
         "{} prior \"one\" → periods 2-3 of \"two\": no prior {:.4}",
@@ -342,7 +353,10 @@ fn priors_on_a_short_log(case: &Case) {
                 weight,
                 parameters: prior_fit.parameters.clone(),
             });
-            let r = fit(&model, &short, Some(&two), &sp).unwrap();
+            let r = FitRequest::of_samples([&short], Some(&two), sp.clone())
+                .run(Some(&model), &Silent)
+                .unwrap()
+                .result;
             assert!(
                 r.solver.converged,
                 "{metric:?} {weight}: {}",

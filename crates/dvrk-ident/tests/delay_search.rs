@@ -8,8 +8,9 @@
 use std::path::PathBuf;
 
 use dvrk_ident::excite::FourierTrajectory;
+use dvrk_ident::progress::Silent;
 use dvrk_ident::simulate::{simulate, Simulation};
-use dvrk_ident::{fit, FitResult, FitSettings, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
 fn example(name: &str) -> PathBuf {
@@ -56,7 +57,10 @@ fn search_residual_is_the_fit_residual_and_a_minimum() {
         delay_search_s: Some(0.05),
         ..FitSettings::default()
     };
-    let r = fit(&model, &log, None, &searched).unwrap();
+    let r = FitRequest::of_samples([&log], None, searched.clone())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let found = r.delay.clone().unwrap();
     println!(
         "found (ms) {:?}",
@@ -73,7 +77,10 @@ fn search_residual_is_the_fit_residual_and_a_minimum() {
             ..FitSettings::default()
         };
         s.processing.delay_s = d;
-        rss(&fit(&model, &log, None, &s).unwrap())
+        rss(&FitRequest::of_samples([&log], None, s.clone())
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result)
     };
     let at = fixed(found.delay_s.clone());
     assert!(

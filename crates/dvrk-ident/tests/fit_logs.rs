@@ -6,12 +6,12 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_ident::fit::stream::fit_stream_logs;
-use dvrk_ident::fit::{fit_logs, joint_metrics, prepare, JointMap, LogData};
-use dvrk_ident::log::{self, LogFormat, LogReader, ReadOptions};
+use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
+use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::progress::Silent;
+use dvrk_ident::request::Streaming;
 use dvrk_ident::settings::Joints;
-use dvrk_ident::{FitSettings, JointLog, Method};
+use dvrk_ident::{FitRequest, FitSettings, JointLog, LogSource, Method, Training};
 use dvrk_model::{Model, Workspace};
 use logs::{example, part};
 use nalgebra::{DMatrix, DVector};
@@ -29,14 +29,10 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
         method: Method::Ols,
         ..FitSettings::default()
     };
-    let r = fit_logs(
-        &model,
-        &[LogData::new(&a), LogData::new(&b)],
-        &[],
-        &settings,
-        &Silent,
-    )
-    .unwrap();
+    let r = FitRequest::of_samples([&a, &b], None, settings.clone())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     // Each log trimmed at both of its ends: 200 samples at each end of each.
     let trim = settings.processing.trim;
     let (na, nb) = (a.len() - 2 * trim, b.len() - 2 * trim);
@@ -146,7 +142,9 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
         ..a.clone()
     };
     // (Its 100-sample hole is a gap: refused as a single log without resampling.)
-    let e = fit_logs(&model, &[LogData::new(&joined)], &[], &settings, &Silent).unwrap_err();
+    let e = FitRequest::of_samples([&joined], None, settings.clone())
+        .run(Some(&model), &Silent)
+        .unwrap_err();
     assert!(
         e.to_string().contains("gap") || e.to_string().contains("uniform"),
         "{e}"
@@ -170,38 +168,31 @@ fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
         log::write(&path, t, *format).unwrap();
         paths.push(path);
     }
-    let read: Vec<JointLog> = paths
-        .iter()
-        .map(|p| log::read(p, None, None).unwrap())
-        .collect();
-    let data: Vec<LogData> = read
-        .iter()
-        .zip(&paths)
-        .map(|(samples, p)| LogData {
-            samples,
-            file: Some(p),
-        })
-        .collect();
-    let readers: Vec<LogReader> = paths
-        .iter()
-        .map(|p| ReadOptions::default().open(p).unwrap())
-        .collect();
+    let files = |range: std::ops::Range<usize>| -> Vec<LogSource> {
+        paths[range]
+            .iter()
+            .map(|p| LogSource::File(p.clone()))
+            .collect()
+    };
     for method in [Method::Wls, Method::Irls, Method::Sdp] {
         let settings = FitSettings {
             method,
             test_window: Some(100),
             ..FitSettings::default()
         };
-        let memory = fit_logs(&model, &data[..2], &data[2..], &settings, &Silent).unwrap();
-        let streamed = fit_stream_logs(
-            &model,
-            &[&readers[0], &readers[1]],
-            &[&readers[2]],
-            &settings,
-            700,
-            &Silent,
-        )
-        .unwrap();
+        let request = FitRequest {
+            test: files(2..3),
+            settings,
+            streaming: Streaming::Never,
+            block_samples: 700,
+            ..FitRequest::new(Training::Logs(files(0..2)))
+        };
+        let memory = request.run(Some(&model), &Silent).unwrap().result;
+        let streamed = FitRequest {
+            streaming: Streaming::Always,
+            ..request
+        };
+        let streamed = streamed.run(Some(&model), &Silent).unwrap().result;
         // To the last bit: the same per-log processing and chunk factors.
         assert_eq!(memory.parameters, streamed.parameters, "{method:?}");
         assert_eq!(memory.metrics, streamed.metrics, "{method:?}");

@@ -4,11 +4,11 @@
 
 use dvrk_ident::estimate::sdp::PriorMetric;
 use dvrk_ident::excite::optimize::Criterion;
-use dvrk_ident::fit::{BoundsSet, Method};
 use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::LogFormat;
 use dvrk_ident::names::Named;
 use dvrk_ident::Coordinates;
+use dvrk_ident::{BoundsSet, Method};
 
 /// Every name parses back to its value in any case and with `-` for `_`; the
 /// canonical names cover every value; an unknown name lists them.

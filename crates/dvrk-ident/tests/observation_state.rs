@@ -6,11 +6,13 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_ident::fit::{fit_logs, LogData};
+use std::sync::Arc;
+
+use dvrk_ident::fit::LogData;
 use dvrk_ident::progress::Silent;
 use dvrk_ident::signal::{Cutoff, LowPass};
 use dvrk_ident::state::{ObservationState, MAGIC};
-use dvrk_ident::{FitResult, FitSettings, JointLog, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, IdentError, JointLog, Method, Training};
 use dvrk_model::Model;
 use logs::{example, part};
 
@@ -34,6 +36,20 @@ fn settings(method: Method) -> FitSettings {
 
 fn observe(model: &Model, log: &JointLog, s: &FitSettings) -> ObservationState {
     ObservationState::observe(model, &[LogData::new(log)], s, &Silent).unwrap()
+}
+
+/// The fit of `state` with the estimator of `s`, validated on `test`.
+fn fit_state(
+    state: &ObservationState,
+    model: &Model,
+    s: &FitSettings,
+    test: &[&JointLog],
+) -> Result<FitResult, IdentError> {
+    let request = FitRequest {
+        train: Training::Observations(vec![(Arc::new(state.clone()), None)]),
+        ..FitRequest::of_samples([], test.iter().copied(), s.clone())
+    };
+    Ok(request.run(Some(model), &Silent)?.result)
 }
 
 /// The document without the solver's wall-clock time.
@@ -60,16 +76,12 @@ fn fit_of_merged_states_is_the_fit_of_the_logs() {
             test_window: Some(150),
             ..settings(method)
         };
-        let direct = fit_logs(
-            &model,
-            &[LogData::new(&a), LogData::new(&b)],
-            &[LogData::new(&c)],
-            &s,
-            &Silent,
-        )
-        .unwrap();
+        let direct = FitRequest::of_samples([&a, &b], [&c], s.clone())
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result;
         let state = merged(&[&observe(&model, &a, &s), &observe(&model, &b, &s)]);
-        let from_state = state.fit(&model, &s, &[LogData::new(&c)], &Silent).unwrap();
+        let from_state = fit_state(&state, &model, &s, &[&c]).unwrap();
         // The same merges in the same order: the same document to the last bit.
         assert_eq!(
             document(&from_state),
@@ -107,8 +119,8 @@ fn file_round_trip_is_exact() {
     let read = ObservationState::read(&path).unwrap();
     assert_eq!(read.to_bytes(), bytes);
     assert_eq!(
-        document(&read.fit(&model, &s, &[], &Silent).unwrap()),
-        document(&state.fit(&model, &s, &[], &Silent).unwrap())
+        document(&fit_state(&read, &model, &s, &[]).unwrap()),
+        document(&fit_state(&state, &model, &s, &[]).unwrap())
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -145,7 +157,7 @@ fn merge_is_associative_and_commutative() {
             merged(&[&b, &merged(&[&c, &a])]),
             merged(&[&c, &b, &a]),
         ];
-        let fit = |st: &ObservationState| st.fit(&model, &s, &[], &Silent).unwrap();
+        let fit = |st: &ObservationState| fit_state(st, &model, &s, &[]).unwrap();
         let reference = fit(&left);
         let beta =
             |r: &FitResult| -> Vec<f64> { r.base_parameters.iter().map(|b| b.value).collect() };
@@ -215,10 +227,7 @@ fn merge_refuses_other_robots_and_settings() {
     // Nothing was merged by the refusals.
     assert_eq!(x.observed.logs.len(), 1);
     // A state fitted with another robot.
-    let e = x
-        .fit(&simplified, &s, &[], &Silent)
-        .unwrap_err()
-        .to_string();
+    let e = fit_state(&x, &simplified, &s, &[]).unwrap_err().to_string();
     assert!(e.contains("reduced for robot psm"), "{e}");
 }
 
@@ -360,7 +369,7 @@ fn forged_headers_are_refused_with_the_file_named() {
             .replace("\"robot\":\"psm_simplified\"", "\"robot\":\"psm\"")
     });
     let state = read(&forged).unwrap();
-    let e = state.fit(&psm, &s, &[], &Silent).unwrap_err().to_string();
+    let e = fit_state(&state, &psm, &s, &[]).unwrap_err().to_string();
     expect(e, &["factors of width", "the file was altered"]);
     let mut good = read(&bytes).unwrap();
     let e = good.merge(&state).unwrap_err().to_string();

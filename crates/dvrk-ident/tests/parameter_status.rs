@@ -13,9 +13,10 @@
 //! unseen) is not.
 
 use dvrk_ident::joint_log::uniform_time;
+use dvrk_ident::progress::Silent;
 use dvrk_ident::result::ParameterStatus;
 use dvrk_ident::simulate::{model_log, motion_torques};
-use dvrk_ident::{fit, FitResult, FitSettings, JointLog, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, JointLog, Method};
 use dvrk_model::{inertia, Model};
 use nalgebra::DMatrix;
 
@@ -148,7 +149,10 @@ fn least_squares_identifies_exactly_the_analytic_base_parameters_that_stand_alon
     let model = arm();
     let log = simulate(&model, &truth(&model), 30.0, 100.0, 0.001);
     for method in [Method::Ols, Method::Wls] {
-        let r = fit(&model, &log, None, &settings(method)).unwrap();
+        let r = FitRequest::of_samples([&log], None, settings(method))
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result;
         // No bounds in least squares: the offsets outside fo_max are identified.
         check_classification(&r, &[]);
         for l in &r.links {
@@ -167,7 +171,10 @@ fn least_squares_identifies_exactly_the_analytic_base_parameters_that_stand_alon
 fn a_parameter_on_a_bound_of_the_semidefinite_fit_is_reported_at_it() {
     let model = arm();
     let log = simulate(&model, &truth(&model), 30.0, 100.0, 0.001);
-    let r = fit(&model, &log, None, &settings(Method::Sdp)).unwrap();
+    let r = FitRequest::of_samples([&log], None, settings(Method::Sdp))
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     assert!(r.solver.converged, "{}", r.solver.status);
     // On their bounds to the solver's tolerance (the data ask for ±0.3 N·m).
     assert!(
@@ -201,7 +208,10 @@ fn data_drowned_in_noise_identify_nothing() {
     // determined.
     let model = arm();
     let log = simulate(&model, &truth(&model), 0.5, 40.0, 30.0);
-    let r = fit(&model, &log, None, &settings(Method::Ols)).unwrap();
+    let r = FitRequest::of_samples([&log], None, settings(Method::Ols))
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let identified: Vec<&String> = r
         .parameter_status
         .iter()
@@ -215,7 +225,10 @@ fn data_drowned_in_noise_identify_nothing() {
 fn a_result_written_before_parameter_statuses_still_loads() {
     let model = arm();
     let log = simulate(&model, &truth(&model), 5.0, 100.0, 0.001);
-    let r = fit(&model, &log, None, &settings(Method::Ols)).unwrap();
+    let r = FitRequest::of_samples([&log], None, settings(Method::Ols))
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let mut doc: serde_json::Value = serde_json::from_str(&r.to_json()).unwrap();
     doc.as_object_mut().unwrap().remove("parameter_status");
     for l in doc["links"].as_array_mut().unwrap() {

@@ -5,9 +5,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 use dvrk_ident::excite::optimize::{optimize, ExciteOptions, Limits};
-use dvrk_ident::fit::{fit_with_progress, prepare};
+use dvrk_ident::fit::prepare;
 use dvrk_ident::progress::Progress;
-use dvrk_ident::{FitSettings, Method};
+use dvrk_ident::{FitRequest, FitSettings, Method};
 use dvrk_model::Model;
 
 #[derive(Default)]
@@ -49,7 +49,9 @@ fn fit_counts_every_sample() {
         settings.processing.filter = None;
         let samples = prepare(&model, &log, &settings.processing).unwrap().len() as u64;
         let rec = Recorder::default();
-        fit_with_progress(&model, &log, None, &settings, &rec).unwrap();
+        FitRequest::of_samples([&log], None, settings)
+            .run(Some(&model), &rec)
+            .unwrap();
         let stages = rec.stages.lock().unwrap().clone();
         let assembling = stages
             .iter()

@@ -9,11 +9,12 @@ use std::path::PathBuf;
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::{joint_metrics, predict, prepare, JointMap};
 use dvrk_ident::joint_log::JointLog;
+use dvrk_ident::progress::Silent;
 use dvrk_ident::report::draw::kinematic_drawing;
 use dvrk_ident::report::plot::{render, Figure, ImageFormat, MAX_POINTS};
 use dvrk_ident::report::{build, figures, ReportInput, ReportLog};
 use dvrk_ident::settings::Joints;
-use dvrk_ident::{fit, FitResult, FitSettings, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 
 fn examples() -> PathBuf {
@@ -46,7 +47,10 @@ fn settings() -> FitSettings {
 fn fitted() -> (Model, JointLog, FitResult) {
     let model = Model::builtin("psm").unwrap();
     let log = example_log(4.0);
-    let result = fit(&model, &log, Some(&log), &settings()).unwrap();
+    let result = FitRequest::of_samples([&log], Some(&log), settings())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     (model, log, result)
 }
 

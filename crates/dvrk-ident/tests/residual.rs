@@ -5,9 +5,11 @@
 //! residual stays within the fit's noise floor.
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::{fit, predict, prepare};
+use dvrk_ident::fit::{predict, prepare};
+use dvrk_ident::progress::Silent;
 use dvrk_ident::residual::{external_torque, ResidualOptions};
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::FitRequest;
 use dvrk_ident::{FitResult, FitSettings, Joints};
 use dvrk_model::{Model, Payload};
 use dvrk_test_support::{example, fixtures::example_params};
@@ -17,7 +19,10 @@ fn psm_fit() -> (Model, FitResult, FourierTrajectory, Vec<f64>) {
     let truth = example_params(&model);
     let traj = FourierTrajectory::from_json_file(example("psm_trajectory.json")).unwrap();
     let log = dvrk_ident::log::read(example("psm_excitation.mcap"), None, None).unwrap();
-    let result = fit(&model, &log, None, &FitSettings::default()).unwrap();
+    let result = FitRequest::of_samples([&log], None, FitSettings::default())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     (model, result, traj, truth)
 }
 

@@ -17,7 +17,8 @@ mod protocol_2019;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use dvrk_ident::fit;
+use dvrk_ident::progress::Silent;
+use dvrk_ident::FitRequest;
 use protocol_2019::{Protocol, MTM, PSM};
 use serde::{Deserialize, Serialize};
 
@@ -52,7 +53,10 @@ fn fits(protocol: &Protocol) -> Option<Vec<Recorded>> {
         protocol_2019::sdp_variants(protocol, &model)
             .into_iter()
             .map(|(label, m, s)| {
-                let r = fit(&m, &train, Some(&test), &s).unwrap();
+                let r = FitRequest::of_samples([&train], Some(&test), s.clone())
+                    .run(Some(&m), &Silent)
+                    .unwrap()
+                    .result;
                 Recorded {
                     label: label.to_string(),
                     status: r.solver.status.to_string(),

@@ -9,7 +9,8 @@
 mod protocol_2019;
 
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::{fit, FitResult, JointLog};
+use dvrk_ident::progress::Silent;
+use dvrk_ident::{FitRequest, FitResult, JointLog};
 use dvrk_model::Model;
 
 /// The full-speed log (200 Hz) and the half-speed log read at `half_hz`.
@@ -30,7 +31,10 @@ fn half_speed_log_at_the_stated_200_hz_is_refused() {
         return;
     };
     let s = protocol_2019::delay_settings(&protocol_2019::PSM);
-    let m = fit(&model, &full, Some(&half), &s).unwrap_err().to_string();
+    let m = FitRequest::of_samples([&full], Some(&half), s.clone())
+        .run(Some(&model), &Silent)
+        .unwrap_err()
+        .to_string();
     assert!(
         m.contains("one_speed_0.5_105g.csv: the measured velocities of joint q1 are 0.503 times"),
         "{m}"
@@ -59,7 +63,10 @@ fn a_fit_at_one_speed_predicts_the_other() {
         ("1.0 -> 0.5", &full, &half, 0.28),
         ("0.5 -> 1.0", &half, &full, 0.30),
     ] {
-        let r = fit(&model, train, Some(test), &s).unwrap();
+        let r = FitRequest::of_samples([train], Some(test), s.clone())
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result;
         assert!(r.physically_consistent, "{label}");
         let e = test_errors(&r);
         let mean = e.iter().sum::<f64>() / e.len() as f64;

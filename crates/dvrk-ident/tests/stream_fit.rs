@@ -8,16 +8,51 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::stream::fit_stream;
 use dvrk_ident::fit::to_model_coordinates;
 use dvrk_ident::log::{self, LogFormat, ReadOptions};
 use dvrk_ident::progress::{Progress, Silent};
+use dvrk_ident::request::Streaming;
 use dvrk_ident::simulate::{simulate, Simulation};
-use dvrk_ident::{fit, FitResult, FitSettings, JointLog, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, JointLog, LogSource, Method, Training};
 use dvrk_model::Model;
 
 fn example() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../examples/psm_excitation.mcap")
+}
+
+/// The in-memory fit of the samples `train` (and `test`).
+fn fit(
+    model: &Model,
+    train: &JointLog,
+    test: Option<&JointLog>,
+    settings: &FitSettings,
+) -> Result<FitResult, dvrk_ident::IdentError> {
+    let request = FitRequest::of_samples([train], test, settings.clone());
+    Ok(request.run(Some(model), &Silent)?.result)
+}
+
+/// The fit of the files `train` (and `test`) read with `read`, block by block
+/// (`block` samples each).
+fn fit_stream(
+    model: &Model,
+    (train, test): (&PathBuf, Option<&PathBuf>),
+    read: &ReadOptions,
+    settings: &FitSettings,
+    block: usize,
+    progress: &dyn Progress,
+) -> Result<FitResult, dvrk_ident::IdentError> {
+    let request = FitRequest {
+        test: test
+            .map(|p| LogSource::File(p.clone()))
+            .into_iter()
+            .collect(),
+        read: read.clone(),
+        settings: settings.clone(),
+        streaming: Streaming::Always,
+        block_samples: block,
+        ..FitRequest::new(Training::Logs(vec![LogSource::File(train.clone())]))
+    };
+    Ok(request.run(Some(model), progress)?.result)
 }
 
 /// Largest relative difference, each entry against `max(|b|, 1e-3 max|b|)` (entries
@@ -85,7 +120,7 @@ impl Progress for Counter {
 fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
     let model = Model::builtin("psm").unwrap();
     let whole_log = log::read(example(), None, None).unwrap();
-    let reader = ReadOptions::default().open(example()).unwrap();
+    let (file, read) = (example(), ReadOptions::default());
     for method in [Method::Ols, Method::Wls, Method::Irls, Method::Sdp] {
         let settings = FitSettings {
             method,
@@ -94,7 +129,8 @@ fn streamed_fit_of_the_example_equals_the_in_memory_fit() {
         let whole = fit(&model, &whole_log, None, &settings).unwrap();
         for block in [1000, 333] {
             let counter = Counter::default();
-            let streamed = fit_stream(&model, &reader, None, &settings, block, &counter).unwrap();
+            let streamed =
+                fit_stream(&model, (&file, None), &read, &settings, block, &counter).unwrap();
             let (p, m) = compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
             println!("example {method:?}, blocks of {block}: parameters {p:.1e}, metrics {m:.1e}");
             let stages = counter.stages.lock().unwrap();
@@ -169,13 +205,11 @@ fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
     let opts = ReadOptions::default();
     let train_whole = log::read(&train_path, None, None).unwrap();
     let test_whole = log::read(&test_path, None, Some(200.0)).unwrap();
-    let train_reader = opts.open(&train_path).unwrap();
-    let test_reader = ReadOptions {
+    // The rate is the 2019-layout test log's (the training log has time stamps).
+    let read = ReadOptions {
         rate_hz: Some(200.0),
-        ..opts.clone()
-    }
-    .open(&test_path)
-    .unwrap();
+        ..opts
+    };
     for (method, filter_torque) in [
         (Method::Ols, false),
         (Method::Wls, true),
@@ -197,8 +231,8 @@ fn streamed_fit_of_csv_logs_equals_the_in_memory_fit() {
         for block in [4096, 250] {
             let streamed = fit_stream(
                 &model,
-                &train_reader,
-                Some(&test_reader),
+                (&train_path, Some(&test_path)),
+                &read,
                 &settings,
                 block,
                 &Silent,
@@ -229,9 +263,8 @@ fn streamed_fit_errors_name_the_file() {
         ..whole.clone()
     };
     log::write(&short, &first, LogFormat::Mcap).unwrap();
-    let reader = opts.open(&short).unwrap();
     let settings = FitSettings::default();
-    let e = fit_stream(&model, &reader, None, &settings, 100, &Silent).unwrap_err();
+    let e = fit_stream(&model, (&short, None), &opts, &settings, 100, &Silent).unwrap_err();
     let in_memory = fit(
         &model,
         &log::read(&short, None, None).unwrap(),
@@ -261,8 +294,7 @@ fn streamed_fit_errors_name_the_file() {
     let mut out: Vec<&str> = lines.clone();
     out[100] = &bad;
     std::fs::write(&nan, out.join("\n")).unwrap();
-    let reader = opts.open(&nan).unwrap();
-    let e = fit_stream(&model, &reader, None, &settings, 64, &Silent).unwrap_err();
+    let e = fit_stream(&model, (&nan, None), &opts, &settings, 64, &Silent).unwrap_err();
     assert!(e.to_string().contains("nan.csv:101"), "{e}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -305,8 +337,9 @@ mod properties {
             settings.processing.decimate = decimate;
             let whole = fit(&model, &log::read(&path, None, None).unwrap(), None, &settings)
                 .unwrap();
-            let reader = ReadOptions::default().open(&path).unwrap();
-            let streamed = fit_stream(&model, &reader, None, &settings, block, &Silent).unwrap();
+            let read = ReadOptions::default();
+            let streamed =
+                fit_stream(&model, (&path, None), &read, &settings, block, &Silent).unwrap();
             compare(&streamed, &whole, &format!("{method:?}, blocks of {block}"));
             std::fs::remove_dir_all(&dir).unwrap();
         }

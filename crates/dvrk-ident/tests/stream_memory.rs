@@ -7,11 +7,11 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::stream::{fit_stream, BLOCK_SAMPLES};
-use dvrk_ident::log::{self, LogFormat, ReadOptions};
+use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::progress::Silent;
+use dvrk_ident::request::Streaming;
 use dvrk_ident::simulate::{simulate, Simulation};
-use dvrk_ident::{fit, FitSettings, Method};
+use dvrk_ident::{FitRequest, FitResult, FitSettings, LogSource, Method, Training};
 use dvrk_model::Model;
 
 /// Bytes allocated now, and the most since the last reset (all threads).
@@ -81,6 +81,16 @@ fn write_log(model: &Model, samples: usize, path: &Path) {
     log::write(path, &log, LogFormat::Mcap).unwrap();
 }
 
+/// The fit of the file `path`, read block by block (default block size) or whole.
+fn fit_file(model: &Model, path: &Path, settings: &FitSettings, streaming: Streaming) -> FitResult {
+    let request = FitRequest {
+        settings: settings.clone(),
+        streaming,
+        ..FitRequest::new(Training::Logs(vec![LogSource::File(path.into())]))
+    };
+    request.run(Some(model), &Silent).unwrap().result
+}
+
 #[test]
 fn streamed_fit_memory_does_not_grow_with_the_log() {
     let model = Model::builtin("psm").unwrap();
@@ -101,19 +111,13 @@ fn streamed_fit_memory_does_not_grow_with_the_log() {
             // What a process allocates once, not per log: the thread pool, the base
             // parameters, and faer's global buffers on its first QR (about 660 MB of
             // address space on this machine, kept for the process's lifetime).
-            let reader = ReadOptions::default().open(&path).unwrap();
-            fit_stream(&model, &reader, None, &settings, BLOCK_SAMPLES, &Silent).unwrap();
+            fit_file(&model, &path, &settings, Streaming::Always);
         }
-        let (peak, result) = peak_during(|| {
-            let reader = ReadOptions::default().open(&path).unwrap();
-            fit_stream(&model, &reader, None, &settings, BLOCK_SAMPLES, &Silent).unwrap()
-        });
+        let (peak, result) = peak_during(|| fit_file(&model, &path, &settings, Streaming::Always));
         assert_eq!(result.metrics.train.samples, samples - 400);
         streamed.push(peak);
-        let (peak, in_memory) = peak_during(|| {
-            let traj = log::read(&path, None, None).unwrap();
-            fit(&model, &traj, None, &settings).unwrap()
-        });
+        let (peak, in_memory) =
+            peak_during(|| fit_file(&model, &path, &settings, Streaming::Never));
         assert_eq!(in_memory.parameters, result.parameters);
         whole.push(peak);
         std::fs::remove_file(&path).unwrap();

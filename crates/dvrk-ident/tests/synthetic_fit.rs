@@ -4,8 +4,9 @@
 //! semidefinite fit is consistent.
 
 use dvrk_ident::joint_log::{uniform_time, JointLog};
+use dvrk_ident::progress::Silent;
 use dvrk_ident::simulate::{model_log, motion_torques};
-use dvrk_ident::{fit, FitSettings, Method};
+use dvrk_ident::{FitRequest, FitSettings, Method};
 use dvrk_model::{inertia, Model};
 use dvrk_test_support::fixtures::assert_recovered;
 use nalgebra::DMatrix;
@@ -143,7 +144,10 @@ fn check_at(robot: &str, pitch_deg: Option<f64>) {
             mounting_pitch_deg: pitch_deg,
             ..settings(method)
         };
-        let r = fit(&loaded, &train, Some(&test), &s).unwrap();
+        let r = FitRequest::of_samples([&train], Some(&test), s.clone())
+            .run(Some(&loaded), &Silent)
+            .unwrap()
+            .result;
         assert_eq!(
             r.settings.mounting_pitch_deg, pitch_deg,
             "{robot}: recorded pitch"

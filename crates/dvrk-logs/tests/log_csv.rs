@@ -122,7 +122,8 @@ fn headered_round_trip_is_exact() {
 
 #[test]
 fn headered_files_of_earlier_versions_still_read() {
-    // Before 0.2 the writer put the coordinates in a comment line above the header.
+    // The development builds before 0.1.0 put the coordinates in a comment line above
+    // the header.
     let dir = test_dir("earlier_versions");
     let header = "time,position.a,position.b,effort.a,effort.b\n0,1,2,3,4\n0.005,1,2,3,4\n";
     for (stated, expected) in [

@@ -1,6 +1,6 @@
-//! The names of the first release, kept one more release with a `DeprecationWarning`
-//! (the vocabulary is now the library's: `Model`, `JointLog`, `FitResult`,
-//! `FourierTrajectory`).
+//! The names of the development builds before 0.1.0, still accepted with a
+//! `DeprecationWarning` until 0.2.0 (the vocabulary is now the library's: `Model`,
+//! `JointLog`, `FitResult`, `FourierTrajectory`).
 
 use pyo3::exceptions::{PyAttributeError, PyDeprecationWarning};
 use pyo3::prelude::*;
@@ -19,7 +19,7 @@ pub fn warn(py: Python<'_>, old: &str, new: &str) -> PyResult<()> {
         py,
         &py.get_type::<PyDeprecationWarning>(),
         &std::ffi::CString::new(format!(
-            "dvrk_ident.{old} is deprecated and will be removed in the next release: \
+            "dvrk_ident.{old} is deprecated and will be removed in 0.2.0: \
              use dvrk_ident.{new}"
         ))?,
         1,

@@ -1,4 +1,4 @@
-//! The fit of logs in memory ([`fit_logs`]): each log prepared on its own, reduced,
+//! The fit of logs in memory ([`fit_logs`], run by [`crate::FitRequest`]): each log prepared on its own, reduced,
 //! and fitted through the shared end ([`super::observed::fit_observed`]).
 
 use dvrk_model::Model;
@@ -9,39 +9,14 @@ use super::metrics::TorqueRange;
 use super::observed::{fit_observed, no_training_log, MetricPasses, Observed, ObservedLog};
 use super::prepare::{prepare, LogData, Prepared};
 use crate::error::IdentError;
-use crate::joint_log::JointLog;
 use crate::observation::Observation;
-use crate::progress::{Progress, Silent};
+use crate::progress::Progress;
 use crate::result::{FitResult, InputInfo};
 use crate::settings::FitSettings;
 use crate::signal::Processing;
 
-/// Runs the whole fit on one log. `test` (optional) is validated with
-/// `settings.test_window`. See [`fit_logs`] for several logs.
-pub fn fit(
-    model: &Model,
-    train: &JointLog,
-    test: Option<&JointLog>,
-    settings: &FitSettings,
-) -> Result<FitResult, IdentError> {
-    fit_with_progress(model, train, test, settings, &Silent)
-}
-
-/// [`fit`] announcing its stages (processing, assembling with a sample count, solving)
-/// to `progress`.
-pub fn fit_with_progress(
-    model: &Model,
-    train: &JointLog,
-    test: Option<&JointLog>,
-    settings: &FitSettings,
-    progress: &dyn Progress,
-) -> Result<FitResult, IdentError> {
-    let test: Vec<LogData> = test.into_iter().map(LogData::new).collect();
-    fit_logs(model, &[LogData::new(train)], &test, settings, progress)
-}
-
-/// The fit of several logs (the entry point of the command line and of Python): each
-/// log is processed on its own (filters, trimming and differentiation never cross a
+/// The fit of logs in memory (the driver [`crate::FitRequest::run`] picks for logs it
+/// does not stream): each log is processed on its own (filters, trimming and differentiation never cross a
 /// log boundary), then the observations of the training logs are merged, the WLS
 /// weights come from all their torques, and the metrics are summed over the logs. The
 /// test metrics cover the first `settings.test_window` samples of each test log. The
@@ -49,7 +24,7 @@ pub fn fit_with_progress(
 /// metrics; `metrics` holds those of all the training (test) logs together.
 ///
 /// [`super::stream::fit_stream_logs`] reads the same logs from disk with the same result.
-pub fn fit_logs(
+pub(crate) fn fit_logs(
     model: &Model,
     train: &[LogData<'_>],
     test: &[LogData<'_>],

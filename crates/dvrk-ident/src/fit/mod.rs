@@ -2,10 +2,10 @@
 //! model coordinates → known forces removed → processed samples), the observation
 //! ([`Observed`], in `observed`), the estimator ([`crate::estimate`]), the metrics
 //! ([`MetricSums`], [`joint_metrics`]) and the result document. Three drivers run the
-//! stages: logs in memory ([`fit_logs`]), logs read from disk block by block for logs
-//! larger than memory ([`stream::fit_stream_logs`], the same result), and observation
-//! states ([`crate::state`]). [`crate::request::FitRequest`] picks the driver: it is
-//! the one way the command line and Python fit, and the documented way for a program.
+//! stages: logs in memory (`memory`), logs read from disk block by block for logs
+//! larger than memory ([`stream`], the same result), and observation states
+//! ([`crate::state`]). [`crate::FitRequest`] picks the driver: it is the one way to fit,
+//! for the command line, Python and a program alike.
 
 pub mod delay;
 mod document;
@@ -19,12 +19,9 @@ pub mod stream;
 
 pub use document::ELEMENT_TOLERANCE;
 pub use joints::{units, JointMap};
-pub use memory::{fit, fit_logs, fit_with_progress};
 pub use metrics::{joint_metrics, predict, range_weights, MetricSums, TorqueRange};
 pub use observed::{Observed, ObservedLog};
 pub use prepare::{prepare, to_model_coordinates, LogData, Prepared, RANGE_MARGIN};
 
-pub(crate) use memory::{observe_prepared, prepare_logs, test_inputs};
+pub(crate) use memory::{fit_logs, observe_prepared, prepare_logs, test_inputs};
 pub(crate) use observed::{fit_observed, no_delay_search, no_training_log, MetricPasses};
-
-pub use crate::settings::{BoundsSet, FitSettings, Method};

@@ -43,8 +43,8 @@ pub struct ObservedLog {
 }
 
 /// The training logs reduced to everything a fit needs of them: each log's factors,
-/// all of them merged, and the running torque range of the WLS weights. What
-/// [`super::fit_logs`] and [`super::stream::fit_stream_logs`] build before the estimator, and what an
+/// all of them merged, and the running torque range of the WLS weights. What the fit
+/// of logs in memory and the streamed fit build before the estimator, and what an
 /// observation state file ([`crate::state`]) holds, so that a fit of states equals the
 /// fit of their logs.
 #[derive(Clone, Debug)]

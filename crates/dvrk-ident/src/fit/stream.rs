@@ -1,4 +1,4 @@
-//! The fit of logs larger than memory: [`fit`](super::fit) with the logs read from disk
+//! The fit of logs larger than memory: the fit of logs in memory with the logs read from disk
 //! block by block, in memory independent of their length.
 //!
 //! Each pass reads a log from its file in blocks ([`LogReader::blocks`]), maps each
@@ -20,7 +20,7 @@
 //!    ([`crate::settings::Joints`]), whose cross terms the factors lack: one more pass
 //!    over the training log then.
 //!
-//! [`super::fit`] of the logs in memory processes them with the same block processor
+//! The fit of the logs in memory processes them with the same block processor
 //! and reduces them with the same chunks, so the two give the same result to the last
 //! bit (the tests require 1e-9 relative); both differ from the exact whole-log
 //! [`crate::signal::process`] only by the filters' settling tolerance
@@ -252,26 +252,12 @@ fn samples(p: &Processed) -> Samples<'_> {
     }
 }
 
-/// [`super::fit`] of logs read from their files block by block (see the module docs
-/// for the passes). `block_samples` is the block size ([`BLOCK_SAMPLES`]); `progress`
-/// hears a stage per pass, counted in the log's samples. See [`fit_stream_logs`] for
-/// several logs.
-pub fn fit_stream(
-    model: &Model,
-    train: &LogReader,
-    test: Option<&LogReader>,
-    settings: &FitSettings,
-    block_samples: usize,
-    progress: &dyn Progress,
-) -> Result<FitResult, IdentError> {
-    let test: Vec<&LogReader> = test.into_iter().collect();
-    fit_stream_logs(model, &[train], &test, settings, block_samples, progress)
-}
-
-/// [`super::fit_logs`] of logs read from their files block by block: each log processed
-/// on its own, the observations merged, the same result to the last bit (the inputs
-/// hashed from the files).
-pub fn fit_stream_logs(
+/// [`super::fit_logs`] of logs read from their files block by block (see the module
+/// docs for the passes): each log processed on its own, the observations merged, the
+/// same result to the last bit (the inputs hashed from the files). `block_samples` is
+/// the block size ([`BLOCK_SAMPLES`], [`crate::FitRequest::block_samples`]); `progress`
+/// hears a stage per pass, counted in the log's samples.
+pub(crate) fn fit_stream_logs(
     model: &Model,
     train: &[&LogReader],
     test: &[&LogReader],

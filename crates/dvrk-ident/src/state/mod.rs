@@ -20,10 +20,11 @@ use dvrk_model::Model;
 use sha2::{Digest, Sha256};
 
 use crate::error::IdentError;
-use crate::fit::{fit_observed, prepare_logs, test_inputs, FitSettings, LogData, Observed};
+use crate::fit::{fit_observed, prepare_logs, test_inputs, LogData, Observed};
 use crate::log::LogReader;
 use crate::progress::Progress;
 use crate::result::FitResult;
+use crate::settings::FitSettings;
 use crate::signal::Processing;
 
 mod codec;
@@ -132,7 +133,7 @@ impl ObservationState {
     }
 
     /// The map: training logs in memory, each processed on its own and reduced, as
-    /// [`crate::fit::fit_logs`] does before the estimator.
+    /// the fit of logs in memory does before the estimator.
     pub fn observe(
         model: &Model,
         logs: &[LogData<'_>],
@@ -322,8 +323,9 @@ impl ObservationState {
 
     /// The fit of the state's logs with the estimator settings of `estimator` (see
     /// [`Self::settings`]), validated on `test` logs (processed with the state's
-    /// settings): the document of [`crate::fit::fit_logs`] of the same logs.
-    pub fn fit(
+    /// settings): the document of the fit of the same logs. A program runs it through
+    /// [`crate::FitRequest`] ([`crate::Training::Observations`]).
+    pub(crate) fn fit(
         &self,
         model: &Model,
         estimator: &FitSettings,

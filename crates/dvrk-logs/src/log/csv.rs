@@ -256,7 +256,8 @@ pub fn read_wpi(
 }
 
 /// Coordinates stated in a leading `# ... coordinates: model|measured` comment (read
-/// from the file's first lines only), as files written before 0.2 have it.
+/// from the file's first lines only), as the headered files of the development builds
+/// before 0.1.0 have it.
 fn stated_coordinates(path: &Path) -> Result<Option<Coordinates>, LogError> {
     let io = |source| LogError::Io {
         path: path.to_path_buf(),

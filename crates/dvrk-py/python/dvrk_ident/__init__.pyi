@@ -562,7 +562,7 @@ def evaluate_trajectory(
     """``dvrk-ident excite --evaluate --json``: ``{criterion, feasible,
     worst_violation, violated, check_samples, check_rate_hz}``."""
 
-# The first release's names, kept one more release: accessing them warns
+# The names of the development builds before 0.1.0, kept until 0.2.0: accessing them warns
 # (DeprecationWarning) and gives the class of the new name.
 Robot = Model
 Data = JointLog
