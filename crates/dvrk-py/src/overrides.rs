@@ -155,6 +155,7 @@ impl Overrides<'_, '_> {
                 .map(|p| crate::convert::named("preset", p))
                 .transpose()?,
             joints: self.joints.map(parse_joints).transpose()?,
+            ..request::Overrides::default()
         })
     }
 
