@@ -134,6 +134,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
 #[pyo3(signature = (robot, data, method = None, *, test = None, excitation = None, settings = None, allow_unconverged = false, **options))]
+#[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
