@@ -96,6 +96,7 @@ OPTIONS = [
     ({"method": "ols", "delay": [0.01, 0.02, 0.0, 0.0, 0.0, 0.0, 0.005]},
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
     ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
+    ({"method": "ols", "filter_order": 2}, ["--method", "ols", "--filter-order", "2"]),
 ]
 
 
@@ -113,6 +114,7 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
         recorded = {
             "method": settings["method"],
             "filter_torque": settings["processing"]["filter_torque"],
+            "filter_order": (settings["processing"]["filter"] or {}).get("order"),
             "trim": settings["processing"]["trim"],
             "decimate": settings["processing"]["decimate"],
             "min_speed": settings["processing"]["min_speed"],

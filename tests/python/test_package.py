@@ -69,9 +69,13 @@ def stub_parameters(fn):
 
 
 def module_parameters(obj):
-    """The same list from the compiled signature (pyo3's ``__text_signature__``)."""
+    """The same list from the compiled signature (pyo3's ``__text_signature__``), a
+    function's ``**options`` (the fit options, ``dvrk_ident._options``) written out."""
     names, star = [], False
     for p in inspect.signature(obj).parameters.values():
+        if p.kind == p.VAR_KEYWORD and p.name == "options":
+            names += [n for n in di._options[obj.__name__] if n not in names]
+            continue
         if p.kind == p.VAR_POSITIONAL:
             names.append("*" + p.name)
             star = True
@@ -110,6 +114,32 @@ def test_stub_signatures_match_the_module():
             assert module_parameters(obj) == stub_parameters(stub), name
             checked += 1
     assert checked > 60, checked
+
+
+def test_stub_lists_every_option(psm, psm_excitation):
+    e = psm_excitation
+    log = di.JointLog(e["t"], e["q"], e["noisy"])
+    """The fit options a function takes as keywords (``**options``, converted in one
+    place from the library's list of options) are in the stub, in the library's order,
+    each defaulting to None: an option the stub misses (a new one) fails here."""
+    stubs = {n.name: n for n in ast.parse((PACKAGE / "__init__.pyi").read_text()).body
+             if isinstance(n, ast.FunctionDef)}
+    assert set(di._options) == {"fit", "observe", "prepare"}
+    assert "filter_order" in di._options["prepare"] and "method" in di._options["fit"]
+    for function, names in di._options.items():
+        args = stubs[function].args
+        positional = [a.arg for a in args.args]
+        keywords = dict(zip((a.arg for a in args.kwonlyargs), args.kw_defaults))
+        listed = [n for n in keywords if n in names]
+        assert listed == [n for n in names if n not in positional], function
+        for n in listed:
+            assert isinstance(keywords[n], ast.Constant) and keywords[n].value is None, n
+    with pytest.raises(TypeError, match="unexpected keyword argument 'stribeck'"):
+        di.prepare(psm, log, stribeck=0.3)
+    # The option added through the list (tests/python/test_fit.py compares it with
+    # --filter-order): refused without a filter, named as the keyword.
+    with pytest.raises(di.InputError, match="filter_order: the order is the motion's low-pass"):
+        di.fit(psm, log, method="ols", cutoff="none", filter_order=4)
 
 
 def test_docstrings():

@@ -16,87 +16,12 @@ use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use crate::fit::{fit_logs, LogData};
 use crate::log::{self, LogReader, ReadOptions};
 use crate::progress::Progress;
-use crate::settings::{Joints, Prior, PriorMetric};
-use crate::signal::Cutoff;
+use crate::settings::{Prior, PriorMetric};
 use crate::state::ObservationState;
-use crate::{BoundsSet, FitResult, FitSettings, IdentError, JointLog, Method};
+use crate::{FitResult, FitSettings, IdentError, JointLog, Method};
 
-/// Settings changed from a base (the defaults, or a result's `settings`): each field
-/// that is `Some` replaces the base's value, the same way for every front end.
-///
-/// ```rust
-/// use dvrk_ident::request::Overrides;
-/// use dvrk_ident::signal::Cutoff;
-/// use dvrk_ident::{FitSettings, Method};
-///
-/// let base = FitSettings::default();
-/// let order = base.processing.filter.as_ref().unwrap().order;
-/// let s = Overrides {
-///     method: Some(Method::Wls),
-///     cutoff: Some(Some(Cutoff::All(16.965))),
-///     trim: Some(50),
-///     ..Overrides::default()
-/// }
-/// .apply(base);
-/// assert_eq!(s.method, Method::Wls);
-/// assert_eq!(s.processing.trim, 50);
-/// // A new cut-off keeps the filter's order and form.
-/// assert_eq!(s.processing.filter.as_ref().unwrap().order, order);
-/// // `Some(None)`: no filter.
-/// let none = Overrides { cutoff: Some(None), ..Overrides::default() }.apply(s);
-/// assert!(none.processing.filter.is_none());
-/// ```
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct Overrides {
-    /// The estimator.
-    pub method: Option<Method>,
-    /// The motion's low-pass cut-off; `Some(None)`: no filter (see
-    /// [`crate::signal::Processing::set_cutoff`]).
-    pub cutoff: Option<Option<Cutoff>>,
-    /// Low-pass the torques too (the 2019 protocol).
-    pub filter_torque: Option<bool>,
-    /// Samples trimmed at each end after filtering.
-    pub trim: Option<usize>,
-    /// Keep every n-th processed sample.
-    pub decimate: Option<usize>,
-    /// Drop samples where some joint moves slower than this, rad/s or m/s.
-    pub min_speed: Option<f64>,
-    /// Resample to this uniform rate, Hz, first thing in the processing (recorded in the
-    /// settings); the request's files are read at that rate too
-    /// ([`ReadOptions::for_processing`]), so recordings with gaps can be read.
-    pub resample_hz: Option<f64>,
-    /// Metrics on the first N processed samples of each test log.
-    pub test_window: Option<usize>,
-    /// Re-weighting passes of IRLS.
-    pub irls_iterations: Option<usize>,
-    /// Tikhonov weight of the SDP, relative.
-    pub sdp_regularization: Option<f64>,
-    /// A Stribeck term with this velocity (rad/s or m/s) on every friction element.
-    pub stribeck_velocity: Option<f64>,
-    /// The arm's mounting pitch, degrees (gravity `(0, −9.81·sin p, −9.81·cos p)` in the
-    /// base frame, [`FitSettings::mounting_pitch_deg`]).
-    pub mounting_pitch_deg: Option<f64>,
-    /// The semidefinite fit's lower bounds in place of the description's.
-    pub bounds: Option<BoundsSet>,
-    /// Keep the links inside the description's bounding ellipsoids
-    /// ([`FitSettings::ellipsoids`]; `Some(false)`: ignore them).
-    pub ellipsoids: Option<bool>,
-    /// The torques' measurement delays: estimated, or fixed (one for every coordinate or
-    /// one each); applied by [`Overrides::settings_for`], which knows the coordinates.
-    pub delay: Option<DelayOption>,
-    /// Regularize the semidefinite fit toward these values; read by
-    /// [`Overrides::settings_for`], which knows the model.
-    pub prior: Option<PriorSource>,
-    /// The prior's weight (default [`Prior::DEFAULT_WEIGHT`]).
-    pub prior_weight: Option<f64>,
-    /// The prior's metric (default entropic).
-    pub prior_metric: Option<PriorMetric>,
-    /// A named set of settings ([`Preset`]) for the fields not given here; the result
-    /// records the settings it expanded to.
-    pub preset: Option<Preset>,
-    /// The joints the metrics are reported in ([`Joints`]).
-    pub joints: Option<Joints>,
-}
+mod overrides;
+pub use overrides::{Overrides, Setting, SettingError};
 
 /// Settings recommended for a kind of robot, by name (`--preset dvrk`, Python
 /// `preset="dvrk"`): each fills the settings the request does not give itself.
@@ -113,7 +38,8 @@ pub struct Overrides {
 /// assert_eq!(e.stribeck_velocity, Some(0.3));
 /// assert_eq!(e.preset, None);
 /// ```
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Preset {
     /// The dVRK arms (PSM, MTM): the physically consistent fit (`sdp`), the torques'
     /// measurement delays estimated (`delay auto`) and a Stribeck term of 0.3 rad/s (m/s)
@@ -166,6 +92,30 @@ pub enum PriorSource {
     File(PathBuf),
     /// An earlier result in memory (e.g. Python's `prior=result`).
     Result(Arc<FitResult>),
+}
+
+/// As the flag reads it: `"nominal"` or the file's path (a result in memory as its
+/// description).
+impl serde::Serialize for PriorSource {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            PriorSource::Nominal => s.serialize_str("nominal"),
+            PriorSource::File(p) => s.serialize_str(&p.display().to_string()),
+            PriorSource::Result(r) => s.collect_str(&format_args!(
+                "a result in memory ({}, robot {})",
+                r.tool, r.robot
+            )),
+        }
+    }
+}
+
+/// `"nominal"` or a file's path.
+impl<'de> serde::Deserialize<'de> for PriorSource {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        String::deserialize(d)?
+            .parse()
+            .map_err(<D::Error as serde::de::Error>::custom)
+    }
 }
 
 /// Results in memory are equal when they are the same one.
@@ -262,32 +212,13 @@ impl Overrides {
         let Some(preset) = o.preset.take() else {
             return o;
         };
-        let p = preset.overrides();
-        o.method = o.method.or(p.method);
-        o.cutoff = o.cutoff.or(p.cutoff);
-        o.filter_torque = o.filter_torque.or(p.filter_torque);
-        o.trim = o.trim.or(p.trim);
-        o.decimate = o.decimate.or(p.decimate);
-        o.min_speed = o.min_speed.or(p.min_speed);
-        o.resample_hz = o.resample_hz.or(p.resample_hz);
-        o.test_window = o.test_window.or(p.test_window);
-        o.irls_iterations = o.irls_iterations.or(p.irls_iterations);
-        o.sdp_regularization = o.sdp_regularization.or(p.sdp_regularization);
-        o.stribeck_velocity = o.stribeck_velocity.or(p.stribeck_velocity);
-        o.mounting_pitch_deg = o.mounting_pitch_deg.or(p.mounting_pitch_deg);
-        o.bounds = o.bounds.or(p.bounds);
-        o.ellipsoids = o.ellipsoids.or(p.ellipsoids);
-        o.delay = o.delay.or(p.delay);
-        o.prior = o.prior.or(p.prior);
-        o.prior_weight = o.prior_weight.or(p.prior_weight);
-        o.prior_metric = o.prior_metric.or(p.prior_metric);
-        o.joints = o.joints.or(p.joints);
+        o = o.or(preset.overrides());
         if from_states {
             let given = self.observation_fields();
-            if !given.contains(&"stribeck") {
+            if !given.contains(&Setting::Stribeck) {
                 o.stribeck_velocity = self.stribeck_velocity;
             }
-            if !given.contains(&"delay") {
+            if !given.contains(&Setting::Delay) {
                 o.delay = self.delay.clone();
             }
         }
@@ -302,6 +233,11 @@ impl Overrides {
         }
         if let Some(c) = &self.cutoff {
             s.processing.set_cutoff(c.clone());
+        }
+        if let Some(n) = self.filter_order {
+            if let Some(f) = &mut s.processing.filter {
+                f.order = n;
+            }
         }
         if let Some(f) = self.filter_torque {
             s.processing.filter_torque = f;
@@ -401,21 +337,10 @@ impl Overrides {
     /// The overrides that change how logs are processed or which model is fitted
     /// (the delays shift the torques before the reduction): observation states carry
     /// their own, so these are refused with them.
-    fn observation_fields(&self) -> Vec<&'static str> {
-        let given = [
-            ("cutoff", self.cutoff.is_some()),
-            ("filter_torque", self.filter_torque.is_some()),
-            ("trim", self.trim.is_some()),
-            ("decimate", self.decimate.is_some()),
-            ("min_speed", self.min_speed.is_some()),
-            ("resample", self.resample_hz.is_some()),
-            ("stribeck", self.stribeck_velocity.is_some()),
-            ("mounting_pitch", self.mounting_pitch_deg.is_some()),
-            ("delay", self.delay.is_some()),
-        ];
-        given
+    fn observation_fields(&self) -> Vec<Setting> {
+        self.given()
             .into_iter()
-            .filter_map(|(name, set)| set.then_some(name))
+            .filter(|s| Setting::OBSERVE.contains(s) || *s == Setting::Delay)
             .collect()
     }
 }
@@ -691,6 +616,13 @@ impl FitRequest {
             Some(cutoff) => cutoff.is_some(),
             None => self.settings.processing.filter.is_some(),
         };
+        if o.filter_order.is_some() && !filtered {
+            return refuse(
+                "filter_order",
+                "the order is the motion's low-pass filter's, and there is none (cutoff none)"
+                    .into(),
+            );
+        }
         if o.filter_torque == Some(true) && !filtered {
             return refuse(
                 "filter_torque",
@@ -764,7 +696,11 @@ impl FitRequest {
         let fields = self.overrides.observation_fields();
         if !fields.is_empty() {
             return Err(IdentError::Setting {
-                name: fields.join(", "),
+                name: fields
+                    .iter()
+                    .map(|s| s.name())
+                    .collect::<Vec<_>>()
+                    .join(", "),
                 message: "the processing (and the Stribeck terms) of observation states are \
                           their own, set when they were observed: give these options to observe"
                     .into(),

@@ -23,7 +23,6 @@ use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input,
 use crate::excite::FourierTrajectoryPy;
 use crate::json::{to_python, write_document};
 use crate::observe::observations_arg;
-use crate::overrides::Overrides;
 
 /// A :class:`JointLog` or a list of them: the samples and the files they were read from.
 pub(crate) fn logs_arg(
@@ -134,60 +133,29 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, ellipsoids = None, mounting_pitch = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, test = None, excitation = None, settings = None, allow_unconverged = false, **options))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, PyAny>,
-    method: Option<&str>,
-    cutoff: Option<&Bound<'_, PyAny>>,
-    filter_torque: Option<bool>,
+    method: Option<&Bound<'_, PyAny>>,
     test: Option<&Bound<'_, PyAny>>,
-    test_window: Option<usize>,
     excitation: Option<&Bound<'_, PyAny>>,
-    trim: Option<usize>,
-    decimate: Option<usize>,
-    min_speed: Option<f64>,
-    resample: Option<f64>,
-    irls_iterations: Option<usize>,
-    sdp_regularization: Option<f64>,
-    stribeck: Option<f64>,
-    bounds: Option<&str>,
-    ellipsoids: Option<bool>,
-    mounting_pitch: Option<f64>,
-    delay: Option<&Bound<'_, PyAny>>,
-    prior: Option<&Bound<'_, PyAny>>,
-    prior_weight: Option<f64>,
-    prior_metric: Option<&str>,
-    preset: Option<&str>,
-    joints: Option<&str>,
     settings: Option<&Bound<'_, PyAny>>,
     allow_unconverged: bool,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<FitResultPy> {
-    let kw = Overrides {
-        joints,
-        settings,
-        method,
-        cutoff,
-        filter_torque,
-        trim,
-        test_window,
-        decimate,
-        min_speed,
-        resample,
-        irls_iterations,
-        sdp_regularization,
-        stribeck,
-        bounds,
-        ellipsoids,
-        mounting_pitch,
-        delay,
-        prior,
-        prior_weight,
-        prior_metric,
-        preset,
+    // `method` is positional too: one of the options all the same.
+    let options = match method {
+        Some(m) => {
+            let all = options.map_or_else(|| Ok(PyDict::new(py)), |o| o.copy())?;
+            all.set_item("method", m)?;
+            Some(all)
+        }
+        None => options.cloned(),
     };
+    let overrides = crate::overrides::options("fit", options.as_ref())?;
     let train = match observations_arg(data)? {
         Some(states) => Training::Observations(states.into_iter().map(|s| (s, None)).collect()),
         None => Training::Logs(samples(logs_arg(data, "data")?)),
@@ -213,8 +181,8 @@ pub fn fit(
     };
     let request = FitRequest {
         test,
-        settings: kw.base(py)?,
-        overrides: kw.overrides()?,
+        settings: crate::overrides::base(py, settings)?,
+        overrides,
         excitation,
         streaming: Streaming::Never,
         ..FitRequest::new(train)
@@ -247,31 +215,16 @@ pub fn fit(
 /// ``robot``'s model coordinates, known forces subtracted, filtered, differentiated
 /// and trimmed, with the settings of :func:`fit` (same keywords and defaults).
 #[pyfunction]
-#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, settings = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (robot, data, *, settings = None, **options))]
 pub fn prepare(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, JointLogPy>,
-    cutoff: Option<&Bound<'_, PyAny>>,
-    filter_torque: Option<bool>,
-    trim: Option<usize>,
-    decimate: Option<usize>,
-    min_speed: Option<f64>,
-    resample: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<PreparedPy> {
-    let settings = Overrides {
-        settings,
-        cutoff,
-        filter_torque,
-        trim,
-        decimate,
-        min_speed,
-        resample,
-        ..Overrides::default()
-    }
-    .apply(py)?;
+    let settings =
+        crate::overrides::options("prepare", options)?.apply(crate::overrides::base(py, settings)?);
     prepared(py, robot.get().model.clone(), data.get(), settings)
 }
 

@@ -82,6 +82,7 @@ mod dvrk_ident_module {
     fn init(m: &Bound<'_, PyModule>) -> PyResult<()> {
         crate::errors::register(m)?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
+        m.add("_options", crate::overrides::options_table(m.py())?)?;
         Ok(())
     }
 }

@@ -15,7 +15,6 @@ use crate::convert::background;
 use crate::data::{absolute, fail_ident, JointLogPy};
 use crate::errors::{from_ident, input};
 use crate::json::to_python;
-use crate::overrides::Overrides;
 
 /// The training logs of a fit reduced to their R factors (see :func:`observe`): the
 /// robot and processing they were reduced for, each log's provenance and factors, and
@@ -186,37 +185,17 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
 ///     ...     lambda a, b: a + b).compute()
 ///     >>> result = di.fit(psm, obs, method="wls")
 #[pyfunction]
-#[pyo3(signature = (robot, data, *, cutoff = None, filter_torque = None, trim = None, decimate = None, min_speed = None, resample = None, stribeck = None, mounting_pitch = None, settings = None))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (robot, data, *, settings = None, **options))]
 pub fn observe(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
     data: &Bound<'_, PyAny>,
-    cutoff: Option<&Bound<'_, PyAny>>,
-    filter_torque: Option<bool>,
-    trim: Option<usize>,
-    decimate: Option<usize>,
-    min_speed: Option<f64>,
-    resample: Option<f64>,
-    stribeck: Option<f64>,
-    mounting_pitch: Option<f64>,
     settings: Option<&Bound<'_, PyAny>>,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<ObservationPy> {
-    let kw = Overrides {
-        settings,
-        cutoff,
-        filter_torque,
-        trim,
-        decimate,
-        min_speed,
-        resample,
-        stribeck,
-        mounting_pitch,
-        ..Overrides::default()
-    };
     let request = ObserveRequest {
-        settings: kw.base(py)?,
-        overrides: kw.overrides()?,
+        settings: crate::overrides::base(py, settings)?,
+        overrides: crate::overrides::options("observe", options)?,
         ..ObserveRequest::new(log_sources(data)?)
     };
     let model = robot.get().model.clone();

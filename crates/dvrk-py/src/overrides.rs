@@ -1,165 +1,151 @@
-//! The keyword arguments that change fit settings, shared by `fit`, `observe` and
-//! `prepare`, mapped onto the library's [`request::Overrides`] in one place.
+//! The fit options as keyword arguments (`**options` of `fit`, `observe` and
+//! `prepare`): each named as the library's option ([`Setting::name`]), converted in one
+//! place ([`options`]) by the library's one conversion
+//! ([`request::Overrides::from_values`]). The type stub lists them; a test checks it
+//! against [`options_table`], so an option the stub misses fails a test.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::fit::delay::DelayOption;
-use dvrk_ident::request::{self, PriorSource};
+use dvrk_ident::request::{self, PriorSource, Setting, SettingError};
 use dvrk_ident::settings::Joints;
-use dvrk_ident::signal::Cutoff;
-use dvrk_ident::{FitSettings, Method};
+use dvrk_ident::FitSettings;
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyString};
 
 use crate::classes::FitResultPy;
 use crate::errors::input;
 use crate::json::from_python;
-
-pub(crate) fn parse_method(text: &str) -> PyResult<Method> {
-    crate::convert::named("method", text)
-}
 
 /// `joints=`: ``"model"`` or ``"measured"``.
 pub(crate) fn parse_joints(text: &str) -> PyResult<Joints> {
     crate::convert::named("joints", text)
 }
 
-/// `delay=`: ``"auto"``, seconds, or a list of seconds (one per coordinate).
-fn delay_option(d: &Bound<'_, PyAny>) -> PyResult<DelayOption> {
-    if let Ok(text) = d.extract::<String>() {
-        text.parse::<DelayOption>()
-    } else if let Ok(v) = d.extract::<f64>() {
-        Ok(DelayOption::Fixed(vec![v]))
-    } else if let Ok(v) = d.extract::<Vec<f64>>() {
-        Ok(DelayOption::Fixed(v))
+/// The options each function takes as keyword arguments, by function.
+pub(crate) const FUNCTIONS: [(&str, &[Setting]); 3] = [
+    ("fit", Setting::ALL),
+    ("observe", Setting::OBSERVE),
+    ("prepare", Setting::PROCESSING),
+];
+
+/// `dvrk_ident._options`: `{function: [option name, ...]}` in the library's order (the
+/// stub's test reads it).
+pub(crate) fn options_table<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    let table = PyDict::new(py);
+    for (function, settings) in FUNCTIONS {
+        let names: Vec<&str> = settings.iter().map(|s| s.name()).collect();
+        table.set_item(function, names)?;
+    }
+    Ok(table)
+}
+
+/// How Python spells an option: its keyword (`cutoff`).
+pub(crate) fn keyword(s: Setting) -> &'static str {
+    s.name()
+}
+
+/// An option's value refused, named as its keyword: a value of the wrong type is
+/// Python's `TypeError`, any other `InputError`.
+fn setting_error(e: SettingError) -> PyErr {
+    let message = format!("{}: {}", keyword(e.setting), e.message);
+    if e.message.starts_with("invalid type") {
+        PyTypeError::new_err(message)
     } else {
-        Err("expected \"auto\", seconds, or a list of seconds".to_string())
+        input(message)
     }
-    .map_err(|e| input(format!("delay: {e}")))
 }
 
-/// `prior=`: ``"nominal"``, the path of a result document, or a :class:`FitResult`.
-fn prior_source(p: &Bound<'_, PyAny>) -> PyResult<PriorSource> {
-    if let Ok(r) = p.cast::<FitResultPy>() {
-        return Ok(PriorSource::Result(Arc::new(r.get().inner.clone())));
+/// The fit options among `function`'s keyword arguments (`None`: not given) as the
+/// library's overrides; a keyword that is not one of `function`'s options is a
+/// `TypeError`, as Python's own.
+pub(crate) fn options(
+    function: &str,
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<request::Overrides> {
+    let scope = FUNCTIONS
+        .iter()
+        .find(|(f, _)| *f == function)
+        .map_or(&[][..], |(_, s)| *s);
+    let mut values = Vec::new();
+    let mut in_memory = None;
+    for (key, value) in kwargs.into_iter().flatten() {
+        let name: String = key.extract()?;
+        let setting = Setting::from_name(&name)
+            .filter(|s| scope.contains(s))
+            .ok_or_else(|| {
+                PyTypeError::new_err(format!(
+                    "{function}() got an unexpected keyword argument '{name}'"
+                ))
+            })?;
+        if value.is_none() {
+            continue;
+        }
+        if setting == Setting::Prior {
+            if let Ok(r) = value.cast::<FitResultPy>() {
+                in_memory = Some(PriorSource::Result(Arc::new(r.get().inner.clone())));
+                continue;
+            }
+            // A path-like object as its path.
+            if !value.is_instance_of::<PyString>() {
+                let path: PathBuf = value.extract().map_err(|_| {
+                    input("prior: expected \"nominal\", the path of a result document, or a FitResult")
+                })?;
+                values.push((
+                    setting,
+                    serde_json::Value::String(path.display().to_string()),
+                ));
+                continue;
+            }
+        }
+        values.push((setting, json(&value, setting)?));
     }
-    if let Ok(text) = p.extract::<String>() {
-        return text
-            .parse::<PriorSource>()
-            .map_err(|e| input(format!("prior: {e}")));
+    let mut overrides = request::Overrides::from_values(values).map_err(setting_error)?;
+    if in_memory.is_some() {
+        overrides.prior = in_memory;
     }
-    let path: PathBuf = p.extract().map_err(|_| {
-        input("prior: expected \"nominal\", the path of a result document, or a FitResult")
-    })?;
-    Ok(PriorSource::File(path))
+    Ok(overrides)
 }
 
-/// The keyword arguments that change the settings, shared by `fit`, `observe` and
-/// `prepare`: a base (`settings`) and the library's [`request::Overrides`].
-#[derive(Default)]
-pub(crate) struct Overrides<'a, 'py> {
-    pub settings: Option<&'a Bound<'py, PyAny>>,
-    pub method: Option<&'a str>,
-    pub cutoff: Option<&'a Bound<'py, PyAny>>,
-    pub filter_torque: Option<bool>,
-    pub trim: Option<usize>,
-    pub test_window: Option<usize>,
-    pub decimate: Option<usize>,
-    pub min_speed: Option<f64>,
-    pub resample: Option<f64>,
-    pub irls_iterations: Option<usize>,
-    pub sdp_regularization: Option<f64>,
-    pub stribeck: Option<f64>,
-    pub bounds: Option<&'a str>,
-    pub ellipsoids: Option<bool>,
-    pub mounting_pitch: Option<f64>,
-    pub delay: Option<&'a Bound<'py, PyAny>>,
-    pub prior: Option<&'a Bound<'py, PyAny>>,
-    pub prior_weight: Option<f64>,
-    pub prior_metric: Option<&'a str>,
-    pub preset: Option<&'a str>,
-    pub joints: Option<&'a str>,
-}
-
-impl Overrides<'_, '_> {
-    /// The base settings: `settings` (the result document's `settings` layout; missing
-    /// fields take the defaults) or the defaults.
-    pub(crate) fn base(&self, py: Python<'_>) -> PyResult<FitSettings> {
-        match self.settings.filter(|s| !s.is_none()) {
-            Some(obj) => from_python::<FitSettings>(py, obj, "settings"),
-            None => Ok(FitSettings::default()),
+/// A keyword's value as the option's value: booleans, text, numbers (Python's and
+/// NumPy's; a non-finite number as its text, which the option's own check refuses) and
+/// sequences of them.
+fn json(value: &Bound<'_, PyAny>, setting: Setting) -> PyResult<serde_json::Value> {
+    use serde_json::Value;
+    if value.is_instance_of::<PyBool>() {
+        return Ok(Value::Bool(value.extract()?));
+    }
+    if value.is_instance_of::<PyString>() {
+        return Ok(Value::String(value.extract()?));
+    }
+    if value.hasattr("__index__")? {
+        if let Ok(n) = value.extract::<i64>() {
+            return Ok(Value::from(n));
         }
     }
-
-    /// The keywords that are not `None`, as the library's overrides.
-    pub(crate) fn overrides(&self) -> PyResult<request::Overrides> {
-        let cutoff = match self.cutoff.filter(|c| !c.is_none()) {
-            None => None,
-            Some(c) => {
-                let bad = || {
-                    input(
-                        "cutoff: expected a number (Hz), one number per coordinate, \
-                         or \"none\" (no filter)",
-                    )
-                };
-                Some(if c.extract::<bool>().ok() == Some(false) {
-                    None
-                } else if let Ok(text) = c.extract::<String>() {
-                    Cutoff::parse_flag(&text).map_err(|e| input(format!("cutoff: {e}")))?
-                } else if c.is_instance_of::<pyo3::types::PyBool>() {
-                    return Err(bad());
-                } else if let Ok(v) = c.extract::<f64>() {
-                    Some(Cutoff::All(v))
-                } else {
-                    Some(Cutoff::PerJoint(
-                        c.extract::<Vec<f64>>().map_err(|_| bad())?,
-                    ))
-                })
-            }
-        };
-        Ok(request::Overrides {
-            method: self.method.map(parse_method).transpose()?,
-            cutoff,
-            filter_torque: self.filter_torque,
-            trim: self.trim,
-            decimate: self.decimate,
-            min_speed: self.min_speed,
-            resample_hz: self.resample,
-            test_window: self.test_window,
-            irls_iterations: self.irls_iterations,
-            sdp_regularization: self.sdp_regularization,
-            stribeck_velocity: self.stribeck,
-            bounds: self
-                .bounds
-                .map(|b| crate::convert::named("bounds", b))
-                .transpose()?,
-            ellipsoids: self.ellipsoids,
-            mounting_pitch_deg: self.mounting_pitch,
-            delay: self
-                .delay
-                .filter(|d| !d.is_none())
-                .map(delay_option)
-                .transpose()?,
-            prior: self
-                .prior
-                .filter(|p| !p.is_none())
-                .map(prior_source)
-                .transpose()?,
-            prior_weight: self.prior_weight,
-            prior_metric: self
-                .prior_metric
-                .map(|m| crate::convert::named("prior_metric", m))
-                .transpose()?,
-            preset: self
-                .preset
-                .map(|p| crate::convert::named("preset", p))
-                .transpose()?,
-            joints: self.joints.map(parse_joints).transpose()?,
-        })
+    if let Ok(x) = value.extract::<f64>() {
+        return Ok(serde_json::Number::from_f64(x)
+            .map_or_else(|| Value::String(x.to_string()), Value::Number));
     }
+    if let Ok(items) = value.try_iter() {
+        return items
+            .map(|item| json(&item?, setting))
+            .collect::<PyResult<Vec<_>>>()
+            .map(Value::Array);
+    }
+    Err(PyTypeError::new_err(format!(
+        "{}: unexpected {}",
+        keyword(setting),
+        value.get_type().name()?
+    )))
+}
 
-    /// `settings` (or the defaults), then each keyword that is not `None`.
-    pub fn apply(&self, py: Python<'_>) -> PyResult<FitSettings> {
-        Ok(self.overrides()?.apply(self.base(py)?))
+/// The base settings: `settings` (the result document's `settings` layout; missing
+/// fields take the defaults) or the defaults.
+pub(crate) fn base(py: Python<'_>, settings: Option<&Bound<'_, PyAny>>) -> PyResult<FitSettings> {
+    match settings.filter(|s| !s.is_none()) {
+        Some(obj) => from_python::<FitSettings>(py, obj, "settings"),
+        None => Ok(FitSettings::default()),
     }
 }

@@ -1,16 +1,14 @@
-//! The flag groups every command that reads logs shares (reading options, processing
-//! overrides), mapped onto the library's [`ReadOptions`] and
-//! [`dvrk_ident::request::Overrides`], and the help's headings and shown defaults. A
-//! leaf of the command modules.
+//! The flag groups every command that reads logs shares (reading options), mapped onto
+//! the library's [`ReadOptions`], and the help's headings and shown defaults (the fit
+//! options' flags are in [`super::settings`]). A leaf of the command modules.
 
 use anyhow::Result;
 use clap::builder::StyledStr;
 use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::{LogFormat, ReadOptions};
 use dvrk_ident::names::Named;
-use dvrk_ident::request::Overrides;
-use dvrk_ident::settings::{FitSettings, Joints, Prior, PriorMetric};
-use dvrk_ident::signal::Cutoff;
+use dvrk_ident::request::Setting;
+use dvrk_ident::settings::Joints;
 use dvrk_ident::JointLog;
 
 /// Help headings: every subcommand groups its options under these (those it has).
@@ -39,9 +37,11 @@ pub struct McapArgs {
     /// measured the joints), the recorder's log times or the publish times
     #[arg(long, value_parser = super::named::<TimeSource>(), help_heading = INPUT)]
     pub time: Option<TimeSource>,
-    /// Resample to this uniform rate (Hz) by linear interpolation before anything else
-    /// (bridges gaps and jitter; without it such logs are refused)
-    #[arg(long, value_name = "HZ", help_heading = PROCESSING)]
+    /// The fit option `resample` (its help is the library's): a processing setting
+    /// where a fit's options are taken ([`super::settings::SettingFlags`] reads it), a
+    /// reading option elsewhere.
+    #[arg(long, value_name = "HZ", help_heading = PROCESSING,
+          help = dvrk_ident::request::Setting::Resample.doc())]
     pub resample: Option<f64>,
     /// Recordings: the largest size (MiB) a zstd- or lz4-compressed sqlite3 .db3 or ROS 1
     /// .bag may decompress to in the temporary folder [default: 100 times its compressed
@@ -80,25 +80,6 @@ pub struct LogArgs {
     /// Sampling rate of logs without time stamps (the 2019 layout), Hz
     #[arg(long, value_name = "HZ", help_heading = INPUT)]
     pub rate: Option<f64>,
-    /// Low-pass cut-off (Hz) of the positions, velocities and accelerations, zero-phase
-    /// 6th-order Butterworth; one value or one per coordinate, comma-separated, or
-    /// `none` (no filter). The 2019 PSM/MTM fits effectively used 16.965/5.655
-    #[arg(long, value_name = "HZ|HZ1,HZ2,...|none", help_heading = PROCESSING)]
-    pub cutoff: Option<String>,
-    /// Also low-pass the torques, as the 2019 protocol did (it smooths the Coulomb
-    /// friction steps on the measured side only, which biases the friction estimates)
-    #[arg(long, help_heading = PROCESSING)]
-    pub filter_torque: bool,
-    /// Samples trimmed at each end after filtering
-    #[arg(long, value_name = "N", help_heading = PROCESSING)]
-    pub trim: Option<usize>,
-    /// Keep every N-th processed sample (after filtering; N ≥ 1)
-    #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = PROCESSING)]
-    pub decimate: Option<usize>,
-    /// Drop processed samples where some joint moves slower than this (rad/s or m/s):
-    /// the sign of its Coulomb friction is noise there
-    #[arg(long, value_name = "SPEED", help_heading = PROCESSING)]
-    pub min_speed: Option<f64>,
     #[command(flatten)]
     pub mcap: McapArgs,
 }
@@ -106,35 +87,13 @@ pub struct LogArgs {
 impl LogArgs {
     /// How these flags read logs (the robot's joints added by
     /// [`ReadOptions::for_model`]). `--resample` is a processing setting here (see
-    /// [`LogArgs::overrides`]): the library reads at its rate
+    /// [`super::settings::SettingFlags`]): the library reads at its rate
     /// ([`ReadOptions::for_processing`]).
     pub fn read_options(&self) -> ReadOptions {
         ReadOptions {
             resample_hz: None,
             ..read_options(self.format, self.rate, &self.mcap)
         }
-    }
-
-    /// The processing flags as settings overrides.
-    pub fn overrides(&self) -> Result<Overrides> {
-        let cutoff = match &self.cutoff {
-            Some(c) => Some(Cutoff::parse_flag(c).map_err(|e| anyhow::anyhow!("--cutoff: {e}"))?),
-            None => None,
-        };
-        Ok(Overrides {
-            cutoff,
-            trim: self.trim,
-            filter_torque: self.filter_torque.then_some(true),
-            decimate: self.decimate,
-            min_speed: self.min_speed,
-            resample_hz: self.mcap.resample,
-            ..Overrides::default()
-        })
-    }
-
-    /// `base` with the processing flags applied.
-    pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
-        Ok(self.overrides()?.apply(base))
     }
 }
 
@@ -148,47 +107,23 @@ pub struct JointsArgs {
     pub joints: Option<Joints>,
 }
 
-/// The default of each optional flag whose default is the library's
-/// ([`FitSettings::default`], [`TimeSource::default`], [`Prior::DEFAULT_WEIGHT`]),
-/// by the flag's id: what the help shows, taken from the library so it cannot drift.
+/// The default of each optional flag whose default is the library's: a fit option's
+/// ([`Setting::default_text`]) or [`TimeSource::default`], by the flag's id: what the
+/// help shows, taken from the library so it cannot drift.
 fn library_default(id: &str) -> Option<String> {
-    let fit = FitSettings::default();
-    let p = &fit.processing;
-    Some(match id {
-        "cutoff" => match &p.filter {
-            Some(f) => cutoff_text(&f.cutoff_hz),
-            None => "none".into(),
-        },
-        "trim" => p.trim.to_string(),
-        "decimate" => p.decimate.to_string(),
-        "min_speed" => match p.min_speed {
-            Some(v) => v.to_string(),
-            None => "none, every sample kept".into(),
-        },
-        "resample" => match p.resample_hz {
-            Some(v) => v.to_string(),
-            None => "none, the log's own rate".into(),
-        },
-        "time" => TimeSource::default().name().into(),
-        "irls_iterations" => fit.irls_iterations.to_string(),
-        "sdp_regularization" => format!("{:e}", fit.sdp_regularization),
-        "prior_weight" => format!("{:e}", Prior::DEFAULT_WEIGHT),
-        "prior_metric" => PriorMetric::default().name().into(),
-        "joints" => fit.joints.name().into(),
-        _ => return None,
-    })
-}
-
-/// A cut-off as `--cutoff` takes it.
-fn cutoff_text(c: &Cutoff) -> String {
-    match c {
-        Cutoff::All(hz) => hz.to_string(),
-        Cutoff::PerJoint(hz) => hz.iter().map(f64::to_string).collect::<Vec<_>>().join(","),
+    match id {
+        "time" => Some(TimeSource::default().name().into()),
+        id => Setting::from_name(id).and_then(Setting::default_text),
     }
 }
 
-/// The processing flags that refine a result's own settings (`validate`, `report`).
-const RESULT_SETTINGS: [&str; 4] = ["cutoff", "trim", "decimate", "min_speed"];
+/// Whether a flag is a processing option with a default, which a command that reads a
+/// result (`validate`, `report`) takes from the result's settings.
+fn result_setting(id: &str) -> bool {
+    Setting::from_name(id).is_some_and(|s| {
+        (Setting::PROCESSING.contains(&s) || s == Setting::Joints) && s.default_text().is_some()
+    })
+}
 
 /// Appends `[default: text]` to an argument's help (and long help), as clap does for a
 /// `default_value`.
@@ -219,17 +154,16 @@ pub fn library_defaults(arg: clap::Arg) -> clap::Arg {
 /// that reads a result (`validate`, `report`) default to the result's settings; the
 /// others show the library's default.
 pub fn result_defaults(arg: clap::Arg) -> clap::Arg {
-    let id = arg.get_id().as_str().to_string();
-    if RESULT_SETTINGS.contains(&id.as_str()) || id == "resample" || id == "joints" {
-        with_default(arg, "the result's")
-    } else {
-        library_defaults(arg)
+    match arg.get_id().as_str() {
+        id if result_setting(id) => with_default(arg, "the result's"),
+        "time" => library_defaults(arg),
+        _ => arg,
     }
 }
 
 /// `--mounting-pitch DEG`, for every command that builds a robot's model: the arm's
 /// mounting angle, the gravity of [`dvrk_model::Model::mounting_pitch_gravity`]
-/// (mapped onto [`Overrides::mounting_pitch_deg`] where a fit is made).
+/// (where a fit is made, the fit option of the same name, [`super::settings`]).
 #[derive(clap::Args, Clone, Copy, Debug, Default)]
 pub struct MountingArgs {
     /// The arm's mounting pitch, degrees, as the dVRK's `mounting_pitch` (which is in

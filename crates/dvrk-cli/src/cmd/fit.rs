@@ -6,19 +6,16 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{
-    FitOutcome, FitRequest, LogSource, Preset, PriorSource, Streaming, Training,
-};
+use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
 use dvrk_ident::result::{LinkResult, ParameterStatus};
-use dvrk_ident::settings::PriorMetric;
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::{BoundsSet, FitResult, IdentError, JointLog, Method};
+use dvrk_ident::{FitResult, IdentError, JointLog};
 use dvrk_model::Model;
 
-use super::args::{JointsArgs, LogArgs, MountingArgs, ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
+use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
 use super::emit;
+use super::settings::{Fit, SettingFlags};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -39,10 +36,6 @@ pub struct Args {
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG", help_heading = INPUT)]
     pub test: Vec<String>,
-    /// Metrics on the first N processed samples of each test log only (N ≥ 1) [default:
-    /// the excitation's first period with --excitation, else every sample]
-    #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = INPUT)]
-    pub test_window: Option<usize>,
     /// The excitation trajectory the logs follow (JSON of `dvrk-ident excite`): drawn in
     /// --report, and with --test but no --test-window the test metrics cover its first
     /// period (the 2019 protocol)
@@ -58,58 +51,12 @@ pub struct Args {
     /// with)
     #[arg(long, required_unless_present = "states", help_heading = MODEL)]
     pub robot: Option<String>,
-    /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
-    /// or m/s) to every friction element (parameters Fs<frame>) [default: none]
-    #[arg(long, value_name = "VS", help_heading = MODEL)]
-    pub stribeck: Option<f64>,
+    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
+    // `log_args`: they read `--resample`, which `log_args` declares and takes.
     #[command(flatten)]
-    pub mounting: MountingArgs,
-    /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
-    /// the robot description's: `physical` (friction ≥ 0, motor inertia ≥ 1e-6) or `2019`
-    /// (≥ 0.001, to reproduce the 2019 fit) [default: the description's; the built-in
-    /// robots': physical]
-    #[arg(long, value_parser = super::named::<BoundsSet>(), value_name = "SET", help_heading = MODEL)]
-    pub bounds: Option<BoundsSet>,
-    /// Ignore the links' bounding ellipsoids of the robot description (by default the
-    /// semidefinite fit keeps each link's mass inside its ellipsoid, when the description
-    /// gives one: the built-in MTM, a URDF's collision geometry)
-    #[arg(long, help_heading = MODEL)]
-    pub no_ellipsoids: bool,
+    pub settings: SettingFlags<Fit>,
     #[command(flatten)]
     pub log_args: LogArgs,
-    /// Measurement delay of the torques: `auto` (estimated per coordinate within
-    /// 0–0.150 s with the parameters, recorded in the result), `0` (none) or seconds, one
-    /// for all coordinates or one per coordinate `d1,d2,...` [default: 0]
-    #[arg(long, value_name = "auto|D|D1,D2,...", help_heading = PROCESSING)]
-    pub delay: Option<String>,
-    /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
-    /// settings it expanded to [default: none]
-    #[arg(long, value_parser = super::named::<Preset>(), value_name = "PRESET", help_heading = ESTIMATOR)]
-    pub preset: Option<Preset>,
-    /// Estimator: ordinary, weighted or iteratively re-weighted least squares on the
-    /// base parameters, or the physically consistent semidefinite fit [default: sdp]
-    #[arg(long, value_parser = super::named::<Method>(), help_heading = ESTIMATOR)]
-    pub method: Option<Method>,
-    /// Re-weighting passes of --method irls
-    #[arg(long, value_name = "N", help_heading = ESTIMATOR)]
-    pub irls_iterations: Option<usize>,
-    /// Tikhonov weight of the semidefinite fit toward zero (toward the prior with
-    /// --prior), relative
-    #[arg(long, value_name = "W", help_heading = ESTIMATOR)]
-    pub sdp_regularization: Option<f64>,
-    /// Regularize the semidefinite fit toward a prior: `nominal` (the description's
-    /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
-    /// values are recorded in the result's settings) [default: none]
-    #[arg(long, value_name = "FILE|nominal", help_heading = ESTIMATOR)]
-    pub prior: Option<String>,
-    /// Weight of the prior, relative to the data term scaled to at most 1
-    #[arg(long, value_name = "W", help_heading = ESTIMATOR)]
-    pub prior_weight: Option<f64>,
-    /// How the prior's distance is measured: `entropic` (the log-det divergence of each
-    /// link's pseudo-inertia from the prior's) or `euclidean`
-    #[arg(long, value_parser = super::named::<PriorMetric>(), value_name = "METRIC", help_heading = ESTIMATOR)]
-    pub prior_metric: Option<PriorMetric>,
     /// Write the result document here (atomically; `-` for stdout)
     #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<String>,
@@ -119,8 +66,6 @@ pub struct Args {
     /// Also write figures and report.html into this folder (see `dvrk-ident report`)
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub report: Option<String>,
-    #[command(flatten)]
-    pub joints: JointsArgs,
     /// Print the result document to stdout instead of the table
     #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
@@ -135,13 +80,15 @@ fn inputs(args: &Args) -> super::Inputs {
         .chain(&args.test)
         .map(String::as_str)
         .collect();
+    // A prior refused here is reported by `request`.
+    let prior = match args.settings.overrides().map(|o| o.prior) {
+        Ok(Some(PriorSource::File(path))) => path.to_str().map(String::from),
+        _ => None,
+    };
     let mut files: Vec<(&str, Option<&str>)> = vec![
         ("the robot", args.robot.as_deref()),
         ("the excitation", args.excitation.as_deref()),
-        (
-            "the prior",
-            args.prior.as_deref().filter(|p| *p != "nominal"),
-        ),
+        ("the prior", prior.as_deref()),
     ];
     files.extend(args.states.iter().map(|s| ("the state", Some(s.as_str()))));
     super::inputs(&logs, &files)
@@ -172,33 +119,7 @@ fn request(args: &Args) -> Result<FitRequest> {
         }
         None => None,
     };
-    let mut overrides = args.log_args.overrides()?;
-    overrides.method = args.method;
-    overrides.preset = args.preset;
-    overrides.test_window = args.test_window;
-    overrides.stribeck_velocity = args.stribeck;
-    overrides.mounting_pitch_deg = args.mounting.mounting_pitch;
-    overrides.irls_iterations = args.irls_iterations;
-    overrides.sdp_regularization = args.sdp_regularization;
-    overrides.bounds = args.bounds;
-    overrides.ellipsoids = args.no_ellipsoids.then_some(false);
-    overrides.prior = match &args.prior {
-        Some(p) => Some(
-            p.parse::<PriorSource>()
-                .map_err(|e| anyhow::anyhow!("--prior: {e}"))?,
-        ),
-        None => None,
-    };
-    overrides.prior_weight = args.prior_weight;
-    overrides.prior_metric = args.prior_metric;
-    overrides.joints = args.joints.joints;
-    overrides.delay = match &args.delay {
-        Some(d) => Some(
-            d.parse::<DelayOption>()
-                .map_err(|e| anyhow::anyhow!("--delay: {e}"))?,
-        ),
-        None => None,
-    };
+    let overrides = args.settings.overrides()?;
     Ok(FitRequest {
         test: args
             .test

@@ -11,6 +11,7 @@ pub mod model;
 pub mod observe;
 pub mod report;
 pub mod residual;
+pub mod settings;
 pub mod shell;
 pub mod simulate;
 pub mod validate;

@@ -6,10 +6,11 @@ use std::path::Path;
 
 use anyhow::Result;
 use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
+use dvrk_ident::request::{LogSource, ObserveRequest, Streaming};
 use dvrk_model::Model;
 
-use super::args::{LogArgs, MountingArgs, INPUT, MODEL, OUTPUT};
+use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
+use super::settings::{Observe, SettingFlags};
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true, mut_args = super::args::library_defaults)]
@@ -24,12 +25,10 @@ pub struct Args {
     /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
     #[arg(long, help_heading = MODEL)]
     pub robot: String,
-    /// Add a Stribeck friction term with this velocity (rad/s or m/s), as `fit
-    /// --stribeck` [default: none]
-    #[arg(long, value_name = "VS", help_heading = MODEL)]
-    pub stribeck: Option<f64>,
+    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
+    // `log_args`: they read `--resample`, which `log_args` declares and takes.
     #[command(flatten)]
-    pub mounting: MountingArgs,
+    pub settings: SettingFlags<Observe>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// The observation state file (written atomically; `-` for stdout)
@@ -44,11 +43,7 @@ pub fn run(args: Args) -> Result<()> {
     let model = Model::load(&args.robot)?;
     let request = ObserveRequest {
         read: args.log_args.read_options(),
-        overrides: Overrides {
-            stribeck_velocity: args.stribeck,
-            mounting_pitch_deg: args.mounting.mounting_pitch,
-            ..args.log_args.overrides()?
-        },
+        overrides: args.settings.overrides()?,
         streaming: if args.stream {
             Streaming::Always
         } else {

@@ -14,6 +14,7 @@ use dvrk_model::Model;
 
 use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
 use super::emit;
+use super::settings::{Processing, SettingFlags};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -32,6 +33,10 @@ pub struct Args {
     /// Robot [default: the one the result was fitted for]
     #[arg(long, help_heading = MODEL)]
     pub robot: Option<String>,
+    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
+    // `log_args`: they read `--resample`, which `log_args` declares and takes.
+    #[command(flatten)]
+    pub settings: SettingFlags<Processing>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Folder to write report.html and the figures (SVG and PNG) into
@@ -83,7 +88,7 @@ pub fn run(args: Args) -> Result<()> {
     super::check_outputs(&[], &[("--out", Some(&args.out))], &inputs)?;
     let super::LoadedResult { result, model, .. } =
         super::load_result(&args.result, args.robot.as_deref())?;
-    let mut settings = args.log_args.settings(result.settings.clone())?;
+    let mut settings = args.settings.settings(result.settings.clone())?;
     settings.test_window = result.settings.test_window;
     if let Some(note) = super::settings_note(&settings.differences(&result.settings)) {
         eprintln!("{note}");

@@ -11,6 +11,7 @@ use dvrk_ident::residual::{external_torque, ResidualOptions, DEFAULT_OBSERVER_GA
 use serde_json::json;
 
 use super::args::{JointsArgs, LogArgs, MODEL, OUTPUT};
+use super::settings::{Processing, SettingFlags};
 use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -28,6 +29,10 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_OBSERVER_GAIN, value_name = "PER_S", help_heading = MODEL)]
     pub observer_gain: f64,
     // The processing flags default to the result's own settings, as for validate.
+    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
+    // `log_args`: they read `--resample`, which `log_args` declares and takes.
+    #[command(flatten)]
+    pub settings: SettingFlags<Processing>,
     #[command(flatten)]
     pub log_args: LogArgs,
     #[command(flatten)]
@@ -72,7 +77,7 @@ pub fn run(args: Args) -> Result<()> {
         ..
     } = load_result(&args.result, args.robot.as_deref())?;
     let mut result = result;
-    result.settings = args.log_args.settings(result.settings.clone())?;
+    result.settings = args.settings.settings(result.settings.clone())?;
     let options = ResidualOptions {
         joints: args.joints.joints,
         observer_gain: args.observer_gain,

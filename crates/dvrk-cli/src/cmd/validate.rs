@@ -7,6 +7,7 @@ use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
 use serde_json::json;
 
 use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
+use super::settings::{Processing, SettingFlags};
 use super::{emit, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -27,6 +28,10 @@ pub struct Args {
     pub robot: Option<String>,
     // The processing flags (--cutoff, --trim, ...) default to the result's own settings;
     // given, they replace them, and the output says which differ from the fit's.
+    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
+    // `log_args`: they read `--resample`, which `log_args` declares and takes.
+    #[command(flatten)]
+    pub settings: SettingFlags<Processing>,
     #[command(flatten)]
     pub log_args: LogArgs,
     #[command(flatten)]
@@ -44,7 +49,7 @@ pub fn run(args: Args) -> Result<()> {
         ..
     } = load_result(&args.result, args.robot.as_deref())?;
     // The processing the result was fitted with, unless overridden on the command line.
-    let mut settings = args.log_args.settings(result.settings.clone())?;
+    let mut settings = args.settings.settings(result.settings.clone())?;
     // Flags that change the processing make this log's column differ from the fit's
     // columns beside it for a reason other than the model: said first. (Other joints
     // only leave the fit's columns out.)

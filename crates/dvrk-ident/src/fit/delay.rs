@@ -49,6 +49,16 @@ pub enum DelayOption {
     Fixed(Vec<f64>),
 }
 
+/// As the flag reads it: `"auto"`, or the list of seconds.
+impl serde::Serialize for DelayOption {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            DelayOption::Auto => s.serialize_str("auto"),
+            DelayOption::Fixed(d) => d.serialize(s),
+        }
+    }
+}
+
 impl std::str::FromStr for DelayOption {
     type Err = String;
 

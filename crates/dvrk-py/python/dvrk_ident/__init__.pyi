@@ -372,7 +372,10 @@ def observe(
     robot: Model,
     data: Union[JointLog, PathLike, Sequence[Union[JointLog, PathLike]]],
     *,
+    settings: Optional[Mapping[str, Any]] = None,
+    # The fit options (dvrk_ident._options["observe"], the library's order).
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    filter_order: Optional[int] = None,
     filter_torque: Optional[bool] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
@@ -380,7 +383,6 @@ def observe(
     resample: Optional[float] = None,
     stribeck: Optional[float] = None,
     mounting_pitch: Optional[float] = None,
-    settings: Optional[Mapping[str, Any]] = None,
 ) -> Observation:
     """The logs processed as :func:`fit` processes them and reduced: the map of a fit
     over many processes or machines."""
@@ -390,29 +392,31 @@ def fit(
     data: Union[JointLog, Sequence[JointLog], Observation, Sequence[Observation]],
     method: Optional[str] = None,
     *,
-    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    filter_torque: Optional[bool] = None,
     test: Optional[Union[JointLog, Sequence[JointLog]]] = None,
-    test_window: Optional[int] = None,
     excitation: Optional[Union[FourierTrajectory, PathLike]] = None,
+    settings: Optional[Mapping[str, Any]] = None,
+    allow_unconverged: bool = False,
+    # The fit options (dvrk_ident._options["fit"], the library's order).
+    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    filter_order: Optional[int] = None,
+    filter_torque: Optional[bool] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
     min_speed: Optional[float] = None,
     resample: Optional[float] = None,
+    test_window: Optional[int] = None,
     irls_iterations: Optional[int] = None,
     sdp_regularization: Optional[float] = None,
     stribeck: Optional[float] = None,
+    mounting_pitch: Optional[float] = None,
     bounds: Optional[str] = None,
     ellipsoids: Optional[bool] = None,
-    mounting_pitch: Optional[float] = None,
     delay: Optional[Union[str, float, Sequence[float]]] = None,
     prior: Optional[Union[str, PathLike, FitResult]] = None,
     prior_weight: Optional[float] = None,
     prior_metric: Optional[str] = None,
     preset: Optional[str] = None,
     joints: Optional[str] = None,
-    settings: Optional[Mapping[str, Any]] = None,
-    allow_unconverged: bool = False,
 ) -> FitResult:
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
@@ -429,13 +433,15 @@ def prepare(
     robot: Model,
     data: JointLog,
     *,
+    settings: Optional[Mapping[str, Any]] = None,
+    # The fit options (dvrk_ident._options["prepare"], the library's order).
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    filter_order: Optional[int] = None,
     filter_torque: Optional[bool] = None,
     trim: Optional[int] = None,
     decimate: Optional[int] = None,
     min_speed: Optional[float] = None,
     resample: Optional[float] = None,
-    settings: Optional[Mapping[str, Any]] = None,
 ) -> Prepared:
     """The processed samples the estimators see."""
 

@@ -1,0 +1,333 @@
+//! The fit options' flags, made from the library's list of options
+//! ([`Setting`], declared once with [`Overrides`]): each flag's name, help and default
+//! come from there; this file adds only what is the command line's own (heading, value
+//! name, parser) in one exhaustive `match`, so an option without a flag does not
+//! compile. [`SettingFlags`] declares a command's options and maps what was given onto
+//! [`Overrides`] through the library's one conversion ([`Overrides::from_values`]).
+
+use std::marker::PhantomData;
+
+use anyhow::Result;
+use clap::parser::ValueSource;
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use dvrk_ident::request::{Overrides, Preset, Setting, SettingError};
+use dvrk_ident::settings::{FitSettings, Joints, PriorMetric};
+use dvrk_ident::{BoundsSet, Method};
+
+use super::args::{ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
+use super::{at_least_one, named};
+
+/// How the command line spells an option: its flag (`--cutoff`, `--no-ellipsoids`).
+pub fn flag(s: Setting) -> String {
+    match s {
+        Setting::Ellipsoids => "--no-ellipsoids".into(),
+        s => format!("--{}", s.name().replace('_', "-")),
+    }
+}
+
+/// An option's value refused, named as its flag.
+pub fn setting_error(e: SettingError) -> anyhow::Error {
+    anyhow::anyhow!("{}: {}", flag(e.setting), e.message)
+}
+
+/// Whether the flag is a switch (given or not), and the value it gives.
+fn switch(s: Setting) -> Option<bool> {
+    match s {
+        Setting::FilterTorque => Some(true),
+        Setting::Ellipsoids => Some(false),
+        _ => None,
+    }
+}
+
+/// The flag of an option: name and help from the library, the rest here.
+pub fn arg(s: Setting) -> Arg {
+    // clap takes a flag's name as a `&'static str`; the command is built once per
+    // process (twenty-odd short names).
+    let long: &'static str = Box::leak(flag(s)[2..].to_string().into_boxed_str());
+    let a = Arg::new(s.name()).long(long).help(s.doc());
+    let a = match switch(s) {
+        Some(_) => a.action(ArgAction::SetTrue),
+        None => a.action(ArgAction::Set),
+    };
+    let usize = clap::value_parser!(usize);
+    let f64 = clap::value_parser!(f64);
+    match s {
+        Setting::Method => a
+            .value_parser(named::<Method>())
+            .value_name("METHOD")
+            .help_heading(ESTIMATOR),
+        Setting::Cutoff => a.value_name("HZ|HZ1,HZ2,...|none").help_heading(PROCESSING),
+        Setting::FilterOrder => a
+            .value_parser(at_least_one)
+            .value_name("N")
+            .help_heading(PROCESSING),
+        Setting::FilterTorque => a.help_heading(PROCESSING),
+        Setting::Trim => a
+            .value_parser(usize)
+            .value_name("N")
+            .help_heading(PROCESSING),
+        Setting::Decimate => a
+            .value_parser(at_least_one)
+            .value_name("N")
+            .help_heading(PROCESSING),
+        Setting::MinSpeed => a
+            .value_parser(f64)
+            .value_name("SPEED")
+            .help_heading(PROCESSING),
+        Setting::Resample => a
+            .value_parser(f64)
+            .value_name("HZ")
+            .help_heading(PROCESSING),
+        Setting::TestWindow => a
+            .value_parser(at_least_one)
+            .value_name("N")
+            .help_heading(INPUT),
+        Setting::IrlsIterations => a
+            .value_parser(usize)
+            .value_name("N")
+            .help_heading(ESTIMATOR),
+        Setting::SdpRegularization => a.value_parser(f64).value_name("W").help_heading(ESTIMATOR),
+        Setting::Stribeck => a.value_parser(f64).value_name("VS").help_heading(MODEL),
+        Setting::MountingPitch => a
+            .value_parser(f64)
+            .value_name("DEG")
+            .allow_hyphen_values(true)
+            .help_heading(MODEL),
+        Setting::Bounds => a
+            .value_parser(named::<BoundsSet>())
+            .value_name("SET")
+            .help_heading(MODEL),
+        Setting::Ellipsoids => a.help_heading(MODEL),
+        Setting::Delay => a.value_name("auto|D|D1,D2,...").help_heading(PROCESSING),
+        Setting::Prior => a.value_name("FILE|nominal").help_heading(ESTIMATOR),
+        Setting::PriorWeight => a.value_parser(f64).value_name("W").help_heading(ESTIMATOR),
+        Setting::PriorMetric => a
+            .value_parser(named::<PriorMetric>())
+            .value_name("METRIC")
+            .help_heading(ESTIMATOR),
+        Setting::Preset => a
+            .value_parser(named::<Preset>())
+            .value_name("PRESET")
+            .help_heading(ESTIMATOR),
+        Setting::Joints => a
+            .value_parser(named::<Joints>())
+            .value_name("model|measured")
+            .help_heading(OUTPUT),
+    }
+}
+
+/// The options a command takes. `--resample` is a reading flag every command that
+/// reads logs has ([`super::args::McapArgs`], with [`arg`]'s help): read as an option
+/// here, declared there.
+pub trait Scope {
+    /// The options the command takes.
+    const SETTINGS: &'static [Setting];
+}
+
+/// `fit`: every option.
+#[derive(Clone, Debug, Default)]
+pub struct Fit;
+impl Scope for Fit {
+    const SETTINGS: &'static [Setting] = Setting::ALL;
+}
+
+/// `observe`: the options an observation state carries.
+#[derive(Clone, Debug, Default)]
+pub struct Observe;
+impl Scope for Observe {
+    const SETTINGS: &'static [Setting] = Setting::OBSERVE;
+}
+
+/// `validate`, `report`, `residual`: the processing of the logs.
+#[derive(Clone, Debug, Default)]
+pub struct Processing;
+impl Scope for Processing {
+    const SETTINGS: &'static [Setting] = Setting::PROCESSING;
+}
+
+/// A command's option flags (`#[command(flatten)]`), and the values given.
+#[derive(Clone, Debug, Default)]
+pub struct SettingFlags<S> {
+    values: Vec<(Setting, serde_json::Value)>,
+    scope: PhantomData<S>,
+}
+
+impl<S: Scope> SettingFlags<S> {
+    /// The options given, as overrides (an error names the flag).
+    pub fn overrides(&self) -> Result<Overrides> {
+        Overrides::from_values(self.values.iter().cloned()).map_err(setting_error)
+    }
+
+    /// `base` with the options given applied.
+    pub fn settings(&self, base: FitSettings) -> Result<FitSettings> {
+        Ok(self.overrides()?.apply(base))
+    }
+}
+
+impl<S: Scope> clap::FromArgMatches for SettingFlags<S> {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut values = Vec::new();
+        for &s in S::SETTINGS {
+            if m.value_source(s.name()) != Some(ValueSource::CommandLine) {
+                continue;
+            }
+            let value = match switch(s) {
+                Some(on) => serde_json::Value::Bool(on),
+                None => match m.try_get_raw(s.name()) {
+                    Ok(Some(mut raw)) => match raw.next_back() {
+                        Some(text) => serde_json::Value::String(text.to_string_lossy().into()),
+                        None => continue,
+                    },
+                    _ => continue,
+                },
+            };
+            values.push((s, value));
+        }
+        Ok(SettingFlags {
+            values,
+            scope: PhantomData,
+        })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl<S: Scope> clap::Args for SettingFlags<S> {
+    fn augment_args(cmd: Command) -> Command {
+        cmd.args(
+            S::SETTINGS
+                .iter()
+                .filter(|s| **s != Setting::Resample)
+                .map(|s| arg(*s)),
+        )
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// Every option of a command's scope has its flag there, named and documented as
+    /// the library's list says (the help adds only the shown default).
+    #[test]
+    fn every_option_has_its_flag() {
+        let cli = crate::Cli::command();
+        for (command, scope) in [
+            ("fit", Setting::ALL),
+            ("observe", Setting::OBSERVE),
+            ("validate", Setting::PROCESSING),
+            ("report", Setting::PROCESSING),
+            ("residual", Setting::PROCESSING),
+        ] {
+            let cmd = cli.find_subcommand(command).unwrap();
+            for s in scope {
+                let a = cmd
+                    .get_arguments()
+                    .find(|a| a.get_id() == s.name())
+                    .unwrap_or_else(|| panic!("{command}: no flag for {s:?}"));
+                assert_eq!(
+                    format!("--{}", a.get_long().unwrap()),
+                    flag(*s),
+                    "{command}"
+                );
+                let help = a.get_help().unwrap().to_string();
+                assert!(help.starts_with(&s.doc()), "{command} {}: {help}", flag(*s));
+            }
+        }
+        assert_eq!(Setting::ALL.len(), 21);
+    }
+
+    /// `--resample`, declared with the reading flags, is read as the fit option in
+    /// every command that takes it (the reading flags take their values afterwards).
+    #[test]
+    fn commands_read_resample_as_an_option() {
+        use clap::Parser;
+        for command in ["fit", "observe", "validate"] {
+            let mut argv = vec![
+                "dvrk-ident",
+                command,
+                "a.json",
+                "b.csv",
+                "--resample",
+                "250",
+            ];
+            argv.extend(["--trim", "5", "--robot", "psm", "--out", "s"]);
+            let argv: Vec<&str> = match command {
+                "fit" => argv
+                    .into_iter()
+                    .filter(|a| *a != "--out" && *a != "s")
+                    .collect(),
+                "validate" => argv[..8].to_vec(),
+                _ => argv,
+            };
+            let cli = crate::Cli::try_parse_from(&argv).unwrap();
+            let o = match cli.command {
+                crate::Command::Fit(a) => a.settings.overrides(),
+                crate::Command::Observe(a) => a.settings.overrides(),
+                crate::Command::Validate(a) => a.settings.overrides(),
+                _ => unreachable!(),
+            }
+            .unwrap();
+            assert_eq!((o.resample_hz, o.trim), (Some(250.0), Some(5)), "{command}");
+        }
+    }
+
+    /// Text given on the command line and mapped through [`SettingFlags`] is the
+    /// library's overrides, and a refused value names the flag.
+    #[test]
+    fn flags_map_onto_overrides() {
+        use clap::FromArgMatches;
+        let cmd = <SettingFlags<Fit> as clap::Args>::augment_args(Command::new("t"))
+            .arg(Arg::new("resample").long("resample"));
+        let m = cmd
+            .clone()
+            .try_get_matches_from([
+                "t",
+                "--cutoff",
+                "5,3",
+                "--no-ellipsoids",
+                "--filter-order",
+                "4",
+                "--resample",
+                "250",
+                "--delay",
+                "auto",
+            ])
+            .unwrap();
+        let o = SettingFlags::<Fit>::from_arg_matches(&m)
+            .unwrap()
+            .overrides()
+            .unwrap();
+        assert_eq!(
+            o.given(),
+            [
+                Setting::Cutoff,
+                Setting::FilterOrder,
+                Setting::Resample,
+                Setting::Ellipsoids,
+                Setting::Delay
+            ]
+        );
+        assert_eq!(
+            (o.ellipsoids, o.filter_order, o.resample_hz),
+            (Some(false), Some(4), Some(250.0))
+        );
+        let m = cmd.try_get_matches_from(["t", "--delay", "soon"]).unwrap();
+        let e = SettingFlags::<Fit>::from_arg_matches(&m)
+            .unwrap()
+            .overrides()
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "--delay: `soon` is not a delay: expected auto or seconds d1,d2,..."
+        );
+    }
+}
