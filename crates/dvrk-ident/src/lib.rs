@@ -57,6 +57,7 @@ pub mod external;
 use dvrk_logs::median;
 pub use dvrk_logs::{columns, joint_log, log, names, output};
 pub mod observation;
+pub mod payload;
 pub mod progress;
 #[cfg(feature = "report")]
 pub mod report;

@@ -10,6 +10,7 @@ pub mod fit;
 pub mod model;
 pub mod observe;
 pub mod report;
+pub mod payload;
 pub mod residual;
 pub mod shell;
 pub mod simulate;
