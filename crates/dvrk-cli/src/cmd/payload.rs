@@ -130,11 +130,22 @@ pub fn run(args: Args) -> Result<()> {
             id.std.inertia.map(|s| format!("[{}]", v3(&s)))
         )
     );
-    if d.first_moment && !d.mass {
+    if !(d.mass && d.first_moment && d.inertia) {
+        let (yes, no): (Vec<_>, Vec<_>) = id
+            .parameter_status
+            .iter()
+            .partition(|(_, s)| s.identified());
+        let names = |v: Vec<(&String, _)>| {
+            v.into_iter()
+                .map(|(k, _)| k.as_str())
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
         let _ = writeln!(
             text,
-            "  (the first moment m·c is determined, the mass is not: the frame's motion \
-             does not expose it)"
+            "  these logs determine {}; not {} (set by physical consistency, not by the data)",
+            names(yes),
+            names(no)
         );
     }
     let width = super::joint_width(&id.coordinates);
