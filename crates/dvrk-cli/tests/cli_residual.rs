@@ -199,5 +199,8 @@ fn payload_comes_back_out_of_a_loaded_log() {
     other["robot"] = "mtm".into();
     std::fs::write(&mtm, other.to_string()).unwrap();
     let err = bad(&[&s(&mtm), &s(&log), "--frame", "main_insertion"]);
-    assert!(err.contains("mtm.json was fitted for mtm, not psm"), "{err}");
+    assert!(
+        err.contains("mtm.json was fitted for mtm, not psm"),
+        "{err}"
+    );
 }

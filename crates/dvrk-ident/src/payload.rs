@@ -45,7 +45,9 @@ use crate::fit::{predict, prepare, Prepared};
 use crate::joint_log::JointLog;
 use crate::observation::Observation;
 use crate::progress::Silent;
-use crate::result::{BaseParameterResult, FitResult, LinkDetermined, ParameterStatus, ResultPayload};
+use crate::result::{
+    BaseParameterResult, FitResult, LinkDetermined, ParameterStatus, ResultPayload,
+};
 
 /// Standard deviations of a payload's quantities (the least-squares fit of the same
 /// weighted data); `None` for a quantity the logs do not determine.
@@ -93,7 +95,10 @@ impl PayloadIdentification {
         let mut out = Vec::new();
         let s = &self.std;
         out.extend(s.mass.map(|m| ("std.mass".to_string(), m)));
-        for (what, v) in [("com", s.com.map(|c| c.to_vec())), ("inertia", s.inertia.map(|c| c.to_vec()))] {
+        for (what, v) in [
+            ("com", s.com.map(|c| c.to_vec())),
+            ("inertia", s.inertia.map(|c| c.to_vec())),
+        ] {
             for (i, x) in v.into_iter().flatten().enumerate() {
                 out.push((format!("std.{what}[{i}]"), x));
             }
@@ -102,7 +107,11 @@ impl PayloadIdentification {
             out.push((format!("base_parameters.{}.value", b.name), b.value));
             out.push((format!("base_parameters.{}.std", b.name), b.std));
         }
-        for (list, name) in [(&self.weights, "weights"), (&self.rms_without, "rms_without"), (&self.rms_with, "rms_with")] {
+        for (list, name) in [
+            (&self.weights, "weights"),
+            (&self.rms_without, "rms_without"),
+            (&self.rms_with, "rms_with"),
+        ] {
             for (i, x) in list.iter().enumerate() {
                 out.push((format!("{name}[{i}]"), *x));
             }

@@ -182,13 +182,26 @@ fn payload_of_a_simulated_log_is_found() {
     let est = identify_payload(&model, &params, &result, &[log.clone()], "main_insertion").unwrap();
     let (p, id) = (&est.payload, &est.identification);
     eprintln!("{p:?}\n{:?}", id.std);
-    assert!(id.determined.mass && id.determined.com(), "{:?}", id.determined);
+    assert!(
+        id.determined.mass && id.determined.com(),
+        "{:?}",
+        id.determined
+    );
     assert!((p.mass - 0.2).abs() < 0.02 * 0.2, "mass {}", p.mass);
     let std = id.std.com.unwrap();
     for k in 0..3 {
         let err = (p.com[k] - payload.com[k]).abs();
-        assert!(err < 3e-3, "com[{k}] {} against {}", p.com[k], payload.com[k]);
-        assert!(err < 5.0 * std[k] + 1e-4, "com[{k}] error {err} against std {}", std[k]);
+        assert!(
+            err < 3e-3,
+            "com[{k}] {} against {}",
+            p.com[k],
+            payload.com[k]
+        );
+        assert!(
+            err < 5.0 * std[k] + 1e-4,
+            "com[{k}] error {err} against std {}",
+            std[k]
+        );
     }
     let ms = id.std.mass.unwrap();
     assert!((p.mass - 0.2).abs() < 5.0 * ms + 1e-4 && ms > 0.0, "{ms}");
@@ -208,7 +221,10 @@ fn payload_of_a_simulated_log_is_found() {
     assert_eq!(with, expected);
     // A payload on top of a payload is refused.
     let err = identify_payload(&model, &with, &back, &[log], "main_insertion").unwrap_err();
-    assert!(err.to_string().contains("already carries a payload"), "{err}");
+    assert!(
+        err.to_string().contains("already carries a payload"),
+        "{err}"
+    );
 }
 
 /// What the logs cannot determine is told, not invented: a payload on the PSM's first
@@ -236,7 +252,10 @@ fn payload_that_the_logs_cannot_show_is_reported() {
     let log = simulate(&model, &truth, &traj, &sim).unwrap();
     let est = identify_payload(&model, &params, &result, &[log.clone()], "yaw").unwrap();
     let id = &est.identification;
-    eprintln!("{:?}\n{:?}\n{:?}", id.determined, id.parameter_status, est.payload);
+    eprintln!(
+        "{:?}\n{:?}\n{:?}",
+        id.determined, id.parameter_status, est.payload
+    );
     // About the fixed axis z: the first moment across it and the inertia about it.
     let identified: Vec<&str> = id
         .parameter_status
@@ -262,7 +281,10 @@ fn payload_that_the_logs_cannot_show_is_reported() {
         "{err}"
     );
     let err = identify_payload(&model, &params, &result, &[log.clone()], "tool_roll").unwrap_err();
-    assert!(err.to_string().contains("carries no link parameters"), "{err}");
+    assert!(
+        err.to_string().contains("carries no link parameters"),
+        "{err}"
+    );
     let mtm = Model::builtin("mtm").unwrap();
     let err = identify_payload(&mtm, &vec![0.0; mtm.n_params()], &result, &[log], "yaw")
         .unwrap_err()

@@ -109,7 +109,11 @@ fn payload_model_regressor_is_the_payload_torque() {
     let alone = payload.params(&psm, "payload.toml").unwrap();
     let body = psm.payload_model("main_insertion", "--frame").unwrap();
     assert_eq!(body.n_params(), 10);
-    let frame = 1 + psm.frames.iter().position(|f| f.name == "main_insertion").unwrap();
+    let frame = 1 + psm
+        .frames
+        .iter()
+        .position(|f| f.name == "main_insertion")
+        .unwrap();
     assert_eq!(body.param_names()[9], format!("m{frame}"));
     assert!(!body.has_known_forces());
     let (mut ws, mut wb) = (Workspace::new(&psm), Workspace::new(&body));
@@ -125,10 +129,21 @@ fn payload_model_regressor_is_the_payload_torque() {
         body.regressor_into(&mut wb, &q, &dq, &ddq, &mut h);
         for r in 0..7 {
             let hp: f64 = (0..10).map(|c| h[r * 10 + c] * pi[c]).sum();
-            assert!((hp - tau[r]).abs() < 1e-12, "q{}: {hp} against {}", r + 1, tau[r]);
+            assert!(
+                (hp - tau[r]).abs() < 1e-12,
+                "q{}: {hp} against {}",
+                r + 1,
+                tau[r]
+            );
         }
         assert!(tau[1].abs() + tau[2].abs() > 1e-2, "{tau:?}");
     }
-    let err = psm.payload_model("tool_roll", "--frame").unwrap_err().to_string();
-    assert!(err.contains("carries no link parameters") && err.contains("main_insertion"), "{err}");
+    let err = psm
+        .payload_model("tool_roll", "--frame")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("carries no link parameters") && err.contains("main_insertion"),
+        "{err}"
+    );
 }

@@ -110,7 +110,11 @@ pub fn run(args: Args) -> Result<()> {
     let _ = writeln!(
         text,
         "  mass            {}",
-        shown(d.mass, format!("{:.5} kg", p.mass), id.std.mass.map(|s| format!("{s:.5} kg")))
+        shown(
+            d.mass,
+            format!("{:.5} kg", p.mass),
+            id.std.mass.map(|s| format!("{s:.5} kg"))
+        )
     );
     let _ = writeln!(
         text,
