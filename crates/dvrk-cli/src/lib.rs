@@ -51,6 +51,9 @@ enum Command {
     /// (τ_measured − τ_model), with the fit's noise floor and the momentum observer's
     /// estimate.
     Residual(cmd::residual::Args),
+    /// Identify a rigid payload fixed to a frame (mass, centre of mass, inertia) from logs
+    /// of the arm carrying it, the rest of the model held at a result.
+    Payload(cmd::payload::Args),
     /// Fit a known-force polynomial (e.g. the MTM joint-4 cable) to a slow two-way sweep.
     CableFit(cmd::cable_fit::Args),
     /// Simulate a log of a robot with known parameters along a Fourier trajectory.
@@ -94,6 +97,7 @@ where
         Command::Validate(args) => cmd::validate::run(args),
         Command::Compare(args) => cmd::compare::run(args),
         Command::Residual(args) => cmd::residual::run(args),
+        Command::Payload(args) => cmd::payload::run(args),
         Command::CableFit(args) => cmd::cable_fit::run(args),
         Command::Simulate(args) => cmd::simulate::run(args),
         Command::Convert(args) => cmd::convert::run(args),

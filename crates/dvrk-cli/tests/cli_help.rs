@@ -113,6 +113,7 @@ fn fit_help_groups_its_options_under_headings() {
         "observe",
         "validate",
         "residual",
+        "payload",
         "report",
         "convert",
         "simulate",

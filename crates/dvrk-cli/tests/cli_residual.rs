@@ -120,3 +120,87 @@ fn bad_payload_and_torque_files_are_refused() {
     );
     assert!(!log.exists());
 }
+
+/// `payload` on a simulated log carrying the issue's payload: the mass within 2 % and
+/// the centre of mass within 3 mm, and `--out` a result whose `validate` on that log is
+/// at the noise; bad input (an unknown frame, an empty log, another robot's result) is
+/// refused with nothing written.
+#[test]
+fn payload_comes_back_out_of_a_loaded_log() {
+    let dir = temp_dir("cli-payload");
+    let fit = dir.join("fit.json");
+    run_ok(&fit_example_args(&["--out", &s(&fit)]));
+    let payload = dir.join("payload.toml");
+    std::fs::write(
+        &payload,
+        "frame = \"main_insertion\"\nmass = 0.2\ncom = [0.0, 0.02, 0.165]\n\
+         inertia = [1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0]\n",
+    )
+    .unwrap();
+    let log = dir.join("loaded.mcap");
+    simulate_example(
+        &log,
+        &["--noise", "0.002", "--seed", "4", "--payload", &s(&payload)],
+    );
+    let out = dir.join("loaded.json");
+    let doc = run_json(&[
+        "payload",
+        &s(&fit),
+        &s(&log),
+        "--frame",
+        "main_insertion",
+        "--json",
+        "--out",
+        &s(&out),
+    ]);
+    let p = &doc["payload"];
+    let mass = p["mass"].as_f64().unwrap();
+    assert!((mass - 0.2).abs() < 0.004, "{p}");
+    for (k, c) in [0.0, 0.02, 0.165].iter().enumerate() {
+        assert!((p["com"][k].as_f64().unwrap() - c).abs() < 3e-3, "{p}");
+    }
+    assert_eq!(doc["identification"]["determined"]["mass"], true);
+    let v = run_json(&["validate", &s(&out), &s(&log), "--json"]);
+    let without = run_json(&["validate", &s(&fit), &s(&log), "--json"]);
+    let rms = |v: &serde_json::Value| -> Vec<f64> {
+        v["validations"][0]["metrics"]["rms"]
+            .as_array()
+            .unwrap_or_else(|| panic!("{v}"))
+            .iter()
+            .map(|x| x.as_f64().unwrap())
+            .collect()
+    };
+    // The payload's torque without it, the noise (0.002) with it.
+    assert!(rms(&without)[..3].iter().all(|r| *r > 0.1), "{without}");
+    assert!(rms(&v)[..3].iter().all(|r| *r < 0.0025), "{v}");
+
+    // Bad input: nothing written.
+    let never = dir.join("never.json");
+    let bad = |extra: &[&str]| {
+        let mut args = vec!["payload".to_string()];
+        args.extend(extra.iter().map(|a| a.to_string()));
+        args.extend(["--out".to_string(), s(&never)]);
+        let (ok, _, err) = run(&args);
+        assert!(!ok && !never.exists(), "{err}");
+        err
+    };
+    let err = bad(&[&s(&fit), &s(&log), "--frame", "nowhere"]);
+    assert!(
+        err.contains("robot psm has no frame `nowhere`") && err.contains("main_insertion"),
+        "{err}"
+    );
+    let empty = dir.join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    let err = bad(&[&s(&fit), &s(&empty), "--frame", "main_insertion"]);
+    assert!(err.contains("empty.csv: empty log"), "{err}");
+    let mtm = dir.join("mtm.json");
+    let mut other: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&fit).unwrap()).unwrap();
+    other["robot"] = "mtm".into();
+    std::fs::write(&mtm, other.to_string()).unwrap();
+    let err = bad(&[&s(&mtm), &s(&log), "--frame", "main_insertion"]);
+    assert!(
+        err.contains("mtm.json was fitted for mtm, not psm"),
+        "{err}"
+    );
+}

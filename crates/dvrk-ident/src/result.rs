@@ -325,6 +325,26 @@ pub struct FitResult {
     /// prior).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub prior_divergence: Option<f64>,
+    /// A rigid payload the arm carries, identified on top of this fit by `dvrk-ident
+    /// payload` ([`crate::payload`]): `parameters`, `links` and the rest stay the arm's
+    /// own, and every use of the result as a model ([`FitResult::params_for`]: validate,
+    /// residual, report, every export, the C ABI) adds the payload to its frame's link.
+    /// `None` in results without one (and in every result written before it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub payload: Option<ResultPayload>,
+}
+
+/// A result's `payload` section: the body (`frame`, `mass` kg, `com` m in that frame,
+/// `inertia` kg·m² about the centre of mass, `xx yy zz xy xz yz`: the fields of a
+/// `simulate --payload` file) and, when it was identified from logs, how.
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
+pub struct ResultPayload {
+    /// The payload.
+    #[serde(flatten)]
+    pub body: dvrk_model::Payload,
+    /// How it was identified; `None` for a payload written by hand.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub identification: Option<crate::payload::PayloadIdentification>,
 }
 
 impl FitResult {
@@ -341,12 +361,18 @@ impl FitResult {
         block.try_into().ok()
     }
 
-    /// The parameter vector in the model's order.
+    /// The parameter vector in the model's order: the fitted `parameters`, with the
+    /// result's `payload` (if any) added to its frame's link parameters, so that the
+    /// model is the arm with its load. Errors name a payload frame `model` lacks.
     pub fn params_for(&self, model: &dvrk_model::Model) -> Result<Vec<f64>, IdentError> {
-        Ok(model.params_from_named(
+        let mut params = model.params_from_named(
             self.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
             "result",
-        )?)
+        )?;
+        if let Some(p) = &self.payload {
+            p.body.add_to(model, &mut params, "result")?;
+        }
+        Ok(params)
     }
 
     /// Refuses `model` when it is not the robot this result was fitted for, in one line
@@ -435,6 +461,20 @@ impl FitResult {
         }
         if let Some(d) = self.prior_divergence {
             put("prior_divergence".into(), d);
+        }
+        if let Some(p) = &self.payload {
+            put("payload.mass".into(), p.body.mass);
+            for (i, c) in p.body.com.iter().enumerate() {
+                put(format!("payload.com[{i}]"), *c);
+            }
+            for (i, c) in p.body.inertia.iter().enumerate() {
+                put(format!("payload.inertia[{i}]"), *c);
+            }
+            if let Some(id) = &p.identification {
+                for (place, v) in id.numbers() {
+                    put(format!("payload.identification.{place}"), v);
+                }
+            }
         }
         if let Some(p) = &self.settings.prior {
             put("settings.prior.weight".into(), p.weight);
@@ -542,7 +582,10 @@ impl FitResult {
             message: format!("not a dvrk-ident result: {e}"),
         })?;
         for (place, v) in result.numbers() {
-            let max = if place.starts_with("parameters.") || place.starts_with("links.") {
+            let max = if place.starts_with("parameters.")
+                || place.starts_with("links.")
+                || place.starts_with("payload.")
+            {
                 dvrk_model::input::MAX_VALUE
             } else {
                 f64::MAX

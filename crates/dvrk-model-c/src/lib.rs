@@ -105,6 +105,9 @@ struct ResultDocument {
     #[serde(default)]
     settings: ResultSettings,
     parameters: std::collections::BTreeMap<String, f64>,
+    /// A payload the arm carries (`dvrk-ident payload`), added to its frame's link.
+    #[serde(default)]
+    payload: Option<dvrk_model::Payload>,
 }
 
 #[derive(serde::Deserialize, Default)]
@@ -117,8 +120,9 @@ impl DvrkModel {
     /// Loads a result document as `dvrk-ident model --params RESULT` does: the recorded
     /// robot (`builtin:psm` or a description path, as written, relative to the working
     /// directory), refused if its name is not the result's robot, with a Stribeck term
-    /// on every friction element when the fit had `stribeck_velocity`, and every
-    /// parameter by name (missing, unknown or non-finite ones refused).
+    /// on every friction element when the fit had `stribeck_velocity`, every
+    /// parameter by name (missing, unknown or non-finite ones refused), and its
+    /// `payload` (`dvrk-ident payload`), if any, added to its frame's link.
     pub fn from_result(path: &Path) -> Result<DvrkModel, String> {
         let shown = path.display();
         let text = dvrk_model::input::read_text(path).map_err(|e| format!("{shown}: {e}"))?;
@@ -140,12 +144,17 @@ impl DvrkModel {
                 .with_stribeck(v)
                 .map_err(|e| format!("{shown}: {e}"))?;
         }
-        let params = model
+        let mut params = model
             .params_from_named(
                 doc.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
                 &shown.to_string(),
             )
             .map_err(|e| e.to_string())?;
+        // As every consumer of a result: the arm with its payload, if it carries one.
+        if let Some(p) = &doc.payload {
+            p.add_to(&model, &mut params, &shown.to_string())
+                .map_err(|e| e.to_string())?;
+        }
         let mut link_params = vec![0.0; params.len()];
         for &j in model.link_frames() {
             if let Some(p0) = model.frame(j).inertia {

@@ -7,6 +7,7 @@ use crate::error::ModelError;
 use crate::inertia::{barycentric_from_standard, pseudo_inertia_min_eigenvalue};
 use crate::input::MAX_VALUE;
 use crate::model::Model;
+use crate::param::{FrameBounds, Nominal, Param};
 
 /// A rigid payload fixed to frame `frame`.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,35 +69,7 @@ impl Payload {
                     .into(),
             ));
         }
-        let frames = || {
-            model
-                .link_frames()
-                .iter()
-                .map(|&j| model.frame(j).name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        let Some(j) = model.frames.iter().position(|f| f.name == self.frame) else {
-            return Err(field(
-                "frame",
-                format!(
-                    "robot {} has no frame `{}` (frames with link parameters: {})",
-                    model.name,
-                    self.frame,
-                    frames()
-                ),
-            ));
-        };
-        model.frames[j].inertia.ok_or_else(|| {
-            field(
-                "frame",
-                format!(
-                    "frame `{}` carries no link parameters; fix the payload to one that does: {}",
-                    self.frame,
-                    frames()
-                ),
-            )
-        })
+        link_frame(model, &self.frame, file).map(|(_, p0)| p0)
     }
 
     /// Adds the payload to the link parameters of its frame in `params` (the model's
@@ -116,5 +89,66 @@ impl Payload {
         let mut params = vec![0.0; model.n_params()];
         self.add_to(model, &mut params, file)?;
         Ok(params)
+    }
+}
+
+/// The frame named `frame` that carries link parameters: its index in `model.frames`
+/// and the index of its first link parameter (`L{i}xx`). The error names the robot's
+/// frames that do; `file` names where the frame's name came from.
+fn link_frame(model: &Model, frame: &str, file: &str) -> Result<(usize, usize), ModelError> {
+    let error = |message: String| ModelError::field(file, "payload", "frame", message);
+    let frames = || {
+        model
+            .link_frames()
+            .iter()
+            .map(|&j| model.frame(j).name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let Some(j) = model.frames.iter().position(|f| f.name == frame) else {
+        return Err(error(format!(
+            "robot {} has no frame `{frame}` (frames with link parameters: {})",
+            model.name,
+            frames()
+        )));
+    };
+    match model.frames[j].inertia {
+        Some(p0) => Ok((j, p0)),
+        None => Err(error(format!(
+            "frame `{frame}` carries no link parameters; fix the payload to one that does: {}",
+            frames()
+        ))),
+    }
+}
+
+impl Model {
+    /// This robot carrying nothing but a rigid body fixed to frame `frame`: the same
+    /// kinematics, gravity and coordinates, one link (the body) with the 10 barycentric
+    /// parameters of that frame (named as its link parameters, `L{i}xx … m{i}`), and no
+    /// other link, element, known force, nominal value or frame bound. Its regressor is
+    /// the torque such a body adds to the arm (`τ = H·π_payload`), so identifying a
+    /// payload is a fit of this model to what the arm's model leaves unexplained, with
+    /// the estimators, base parameters and consistency constraints of any fit. `frame`
+    /// must carry link parameters (as for [`Payload::check`]); `file` names where its
+    /// name came from in the error.
+    ///
+    /// ```
+    /// let psm = dvrk_model::Model::builtin("psm").unwrap();
+    /// let body = psm.payload_model("main_insertion", "--frame").unwrap();
+    /// assert_eq!(body.n_params(), 10);
+    /// assert_eq!(body.dof(), psm.dof());
+    /// assert!(psm.payload_model("nowhere", "--frame").is_err());
+    /// ```
+    pub fn payload_model(&self, frame: &str, file: &str) -> Result<Model, ModelError> {
+        let (j, _) = link_frame(self, frame, file)?;
+        let mut model = self.clone();
+        for (i, f) in model.frames.iter_mut().enumerate() {
+            f.inertia = (i == j).then_some(0);
+            f.elements.clear();
+            f.nominal = Nominal::default();
+            f.bounds = FrameBounds::default();
+        }
+        model.params = Param::inertia_block(j + 1).collect();
+        Ok(model.finish())
     }
 }

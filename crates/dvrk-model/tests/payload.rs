@@ -97,3 +97,53 @@ fn payload_file_errors_name_the_file_and_field() {
     let e = err("frame = \"main_insertion\"\nmass = 1\ncom = [0, 0, 0]\nvolume = 2\n");
     assert!(e.contains("unknown field `volume`"), "{e}");
 }
+
+/// The payload model's regressor times the payload's barycentric parameters is the
+/// torque the payload adds: the inverse dynamics of the whole arm with only the payload's
+/// parameters (the Newton–Euler pass, not the regressor), at poses, rates and
+/// accelerations away from zero; its base parameters are those of one body.
+#[test]
+fn payload_model_regressor_is_the_payload_torque() {
+    let psm = Model::builtin("psm").unwrap();
+    let payload = Payload::from_toml_str(&psm, FILE, "payload.toml").unwrap();
+    let alone = payload.params(&psm, "payload.toml").unwrap();
+    let body = psm.payload_model("main_insertion", "--frame").unwrap();
+    assert_eq!(body.n_params(), 10);
+    let frame = 1 + psm
+        .frames
+        .iter()
+        .position(|f| f.name == "main_insertion")
+        .unwrap();
+    assert_eq!(body.param_names()[9], format!("m{frame}"));
+    assert!(!body.has_known_forces());
+    let (mut ws, mut wb) = (Workspace::new(&psm), Workspace::new(&body));
+    let pi = payload.barycentric();
+    for k in 0..5 {
+        let t = k as f64;
+        let q: Vec<f64> = (0..7).map(|i| 0.3 * (t + i as f64).sin()).collect();
+        let dq: Vec<f64> = (0..7).map(|i| 0.7 * (2.0 * t + i as f64).cos()).collect();
+        let ddq: Vec<f64> = (0..7).map(|i| 1.3 * (3.0 * t - i as f64).sin()).collect();
+        let mut tau = vec![0.0; 7];
+        psm.inverse_dynamics(&mut ws, &alone, &q, &dq, &ddq, &mut tau);
+        let mut h = vec![0.0; 7 * 10];
+        body.regressor_into(&mut wb, &q, &dq, &ddq, &mut h);
+        for r in 0..7 {
+            let hp: f64 = (0..10).map(|c| h[r * 10 + c] * pi[c]).sum();
+            assert!(
+                (hp - tau[r]).abs() < 1e-12,
+                "q{}: {hp} against {}",
+                r + 1,
+                tau[r]
+            );
+        }
+        assert!(tau[1].abs() + tau[2].abs() > 1e-2, "{tau:?}");
+    }
+    let err = psm
+        .payload_model("tool_roll", "--frame")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("carries no link parameters") && err.contains("main_insertion"),
+        "{err}"
+    );
+}

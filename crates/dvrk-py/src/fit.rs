@@ -274,7 +274,8 @@ impl FitResultPy {
         Ok(crate::robot::shared(&base, fitted))
     }
 
-    fn params(&self, model: &Model) -> PyResult<Vec<f64>> {
+    /// The parameters in `model`'s order, the result's payload (if any) added.
+    pub(crate) fn params(&self, model: &Model) -> PyResult<Vec<f64>> {
         self.inner.params_for(model).map_err(from_ident)
     }
 }
@@ -418,6 +419,15 @@ impl FitResultPy {
     #[getter]
     fn delay<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_python(py, &self.inner.delay)
+    }
+
+    /// The payload the arm carries (:func:`identify_payload`): ``{frame, mass, com,
+    /// inertia, identification}`` (kg, m in the frame, kg·m² about the centre of mass
+    /// ``xx yy zz xy xz yz``), or ``None``. :attr:`parameters` stay the arm's own; every
+    /// use of the result as a model (validate, exports) adds the payload.
+    #[getter]
+    fn payload<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.payload)
     }
 
     /// With an entropic prior: the summed log-det divergence of the links from the

@@ -23,6 +23,7 @@ mod json;
 mod limits;
 mod observe;
 mod overrides;
+mod payload;
 mod robot;
 
 use pyo3::prelude::*;
@@ -56,6 +57,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::compare::compare;
+
+    #[pymodule_export]
+    use crate::payload::identify_payload;
 
     #[pymodule_export]
     use crate::observe::{observe, ObservationPy};

@@ -9,6 +9,7 @@ pub mod export;
 pub mod fit;
 pub mod model;
 pub mod observe;
+pub mod payload;
 pub mod report;
 pub mod residual;
 pub mod settings;

@@ -112,6 +112,7 @@ pub(crate) fn build_result(
         metrics,
         delay: None,
         prior_divergence,
+        payload: None,
     };
     result.check_finite()?;
     Ok(result)

@@ -282,6 +282,11 @@ class FitResult:
     def prior_divergence(self) -> Optional[float]:
         """With an entropic prior: the links' summed log-det divergence from it, or None."""
     @property
+    def payload(self) -> Optional[Dict[str, Any]]:
+        """The payload the arm carries (:func:`identify_payload`): ``{frame, mass, com,
+        inertia, identification}`` (kg, m, kg·m² about the com ``xx yy zz xy xz yz``),
+        or None. ``parameters`` stay the arm's; validate and the exports add it."""
+    @property
     def metrics(self) -> Dict[str, Any]:
         """``{train, test}``, each ``{joints, samples, relative_error, rms}`` or None."""
     @property
@@ -457,6 +462,18 @@ def compare(
     differ, the base parameters with their standard deviations and the difference in
     combined standard deviations, every parameter and link mass, and each result's
     per-joint errors on the ``test`` logs with its own model and processing."""
+
+def identify_payload(
+    result: FitResult,
+    data: Union[JointLog, Sequence[JointLog]],
+    *,
+    frame: str,
+    robot: Optional[Model] = None,
+) -> FitResult:
+    """A rigid payload fixed to ``frame`` estimated from logs of the arm carrying it,
+    the rest of the model held at ``result`` (``dvrk-ident payload``): ``result`` with
+    the payload added (:attr:`FitResult.payload`, with what the logs determine and the
+    standard deviations under ``identification``)."""
 
 #: Limits of an excitation: None (the robot description's), a limits file (TOML with
 #: ``[[limits]]`` and ``[[cartesian_limits]]`` tables) or a dict in that layout.
