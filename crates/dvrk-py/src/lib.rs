@@ -23,6 +23,7 @@ mod json;
 mod limits;
 mod observe;
 mod overrides;
+mod residual;
 mod robot;
 
 use pyo3::prelude::*;
@@ -56,6 +57,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::compare::compare;
+
+    #[pymodule_export]
+    use crate::residual::{external_torque, MomentumObserverPy};
 
     #[pymodule_export]
     use crate::observe::{observe, ObservationPy};
