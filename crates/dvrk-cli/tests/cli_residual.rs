@@ -103,7 +103,7 @@ fn a_simulated_push_comes_back_out_of_residual() {
     let (csv_m, obs_m) = (dir.join("residual_m.csv"), dir.join("observer_m.csv"));
     for (out, observer_out) in [(&mcap, &obs_mcap), (&csv_m, &obs_m)] {
         let (out, observer_out) = (s(out), s(observer_out));
-        let mut args: Vec<&str> = vec![
+        run_ok(&[
             "residual",
             &fit_s,
             &log_s,
@@ -113,8 +113,7 @@ fn a_simulated_push_comes_back_out_of_residual() {
             &out,
             "--observer-out",
             &observer_out,
-        ];
-        run_ok(&args);
+        ]);
     }
     for (m, c) in [(&mcap, &csv_m), (&obs_mcap, &obs_m)] {
         let back = dvrk_ident::log::read(m, None, None).unwrap();
