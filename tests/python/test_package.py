@@ -124,7 +124,7 @@ def test_stub_lists_every_option(psm, psm_excitation):
     each defaulting to None: an option the stub misses (a new one) fails here."""
     stubs = {n.name: n for n in ast.parse((PACKAGE / "__init__.pyi").read_text()).body
              if isinstance(n, ast.FunctionDef)}
-    assert set(di._options) == {"fit", "observe", "prepare"}
+    assert set(di._options) == {"fit", "observe", "prepare", "external_torque"}
     assert "filter_order" in di._options["prepare"] and "method" in di._options["fit"]
     for function, names in di._options.items():
         args = stubs[function].args

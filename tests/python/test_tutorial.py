@@ -45,7 +45,8 @@ def test_tutorial(tmp_path, monkeypatch, capsys):
 # The entry points whose whole signature the README's API list writes out.
 DOCUMENTED = ("read_log", "list_topics", "fit", "prepare", "observe", "excite",
               "evaluate_trajectory", "JointLog", "JointLog.from_dataframe",
-              "FourierTrajectory", "identify_payload")
+              "FourierTrajectory", "identify_payload", "external_torque",
+              "MomentumObserver")
 
 
 def test_readme_signatures_match_the_module():

@@ -1,6 +1,7 @@
 //! `residual` and `simulate --payload/--external-torque` from the command line: a push
 //! simulated from a CSV file comes back out of `residual --out` in the same layout, and
-//! bad payload or torque files are refused, naming the file, with nothing written.
+//! bad payload or torque files are refused, naming the file, with nothing written; the
+//! residual as MCAP (read back: the CSV's numbers) and its report page.
 
 mod support;
 
@@ -82,6 +83,81 @@ fn a_simulated_push_comes_back_out_of_residual() {
     );
     let obs = std::fs::read_to_string(&observer).unwrap();
     assert_eq!(obs.lines().count(), text.lines().count());
+
+    // MCAP holds measured joints: refused in the model coordinates, nothing written.
+    let (mcap, obs_mcap) = (dir.join("residual.mcap"), dir.join("observer.mcap"));
+    let report = dir.join("report");
+    let (fit_s, log_s, report_s) = (s(&fit), s(&log), s(&report));
+    let (ok, _, err) = run(&[
+        "residual",
+        &s(&fit),
+        &s(&log),
+        "--out",
+        &s(&mcap),
+        "--report",
+        &s(&report),
+    ]);
+    assert!(!ok && err.contains("--joints measured"), "{err}");
+    assert!(!mcap.exists() && !report.exists());
+    // In the measured joints: the MCAP's efforts are the CSV's residual, bit for bit.
+    let (csv_m, obs_m) = (dir.join("residual_m.csv"), dir.join("observer_m.csv"));
+    for (out, observer_out) in [(&mcap, &obs_mcap), (&csv_m, &obs_m)] {
+        let (out, observer_out) = (s(out), s(observer_out));
+        run_ok(&[
+            "residual",
+            &fit_s,
+            &log_s,
+            "--joints",
+            "measured",
+            "--out",
+            &out,
+            "--observer-out",
+            &observer_out,
+        ]);
+    }
+    for (m, c) in [(&mcap, &csv_m), (&obs_mcap, &obs_m)] {
+        let back = dvrk_ident::log::read(m, None, None).unwrap();
+        let text = std::fs::read_to_string(c).unwrap();
+        let mut lines = text.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        assert_eq!(
+            header[1..],
+            back.joint_names
+                .iter()
+                .map(String::as_str)
+                .collect::<Vec<_>>()[..]
+        );
+        assert_eq!(back.joint_names[6], "jaw", "measured joints");
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        assert_eq!(rows.len(), back.len());
+        for (k, row) in rows.iter().enumerate() {
+            for j in 0..7 {
+                assert_eq!(
+                    back.tau[(k, j)].to_bits(),
+                    row[j + 1].to_bits(),
+                    "{} {k} {j}",
+                    m.display()
+                );
+            }
+        }
+        assert!(back.dq.is_some());
+    }
+    // The report (the fit's joints, where the noise floor is): the page with a row per
+    // joint, joint 1's ratio flagged, the figure.
+    run_ok(&["residual", &fit_s, &log_s, "--report", &report_s]);
+    let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+    for joint in ["q1", "q7", "noise floor", "<svg"] {
+        assert!(page.contains(joint), "{joint} missing from the page");
+    }
+    assert!(
+        page.contains("<td class=bad>"),
+        "joint 1's RMS well above its floor"
+    );
+    let svg = std::fs::read_to_string(report.join("residual_1.svg")).unwrap();
+    assert!(svg.contains("momentum observer (20 /s)") && svg.contains("τ_measured − τ_model"));
+    assert!(report.join("residual_1.png").exists());
 }
 
 #[test]

@@ -19,7 +19,7 @@ use nalgebra::DMatrix;
 use crate::error::IdentError;
 use crate::external::ExternalTorque;
 use crate::fit::{predict, prepare, JointMap};
-use crate::joint_log::JointLog;
+use crate::joint_log::{Coordinates, JointLog};
 use crate::result::FitResult;
 use crate::settings::Joints;
 
@@ -54,6 +54,11 @@ pub struct Residual {
     pub joints: Vec<String>,
     /// Time of each processed sample, s.
     pub time: Vec<f64>,
+    /// The processed positions (rad or m) and velocities (rad/s or m/s) per sample and
+    /// joint, where the torques are.
+    pub q: DMatrix<f64>,
+    /// See [`Residual::q`].
+    pub dq: DMatrix<f64>,
     /// `τ_measured − τ_model` per processed sample (rows) and joint, N·m or N.
     pub external: DMatrix<f64>,
     /// The momentum observer's estimate of the same, N·m or N.
@@ -74,6 +79,31 @@ impl Residual {
         }
     }
 
+    /// RMS of the observer's estimate per joint, N·m or N (lower than [`Residual::rms`]
+    /// where the noise is faster than the observer's lag).
+    pub fn observer_rms(&self) -> Vec<f64> {
+        column_rms(&self.observer)
+    }
+
+    /// The residual as a log: the processed `q`, `q̇` and the residual (`observer`:
+    /// the observer's estimate) as the effort, in these joints (`coordinates`: which
+    /// they are), for the log writers (an MCAP `JointState` holds measured joints).
+    pub fn to_log(&self, coordinates: Coordinates, observer: bool) -> JointLog {
+        JointLog {
+            time: self.time.clone(),
+            q: self.q.clone(),
+            dq: Some(self.dq.clone()),
+            tau: if observer {
+                self.observer.clone()
+            } else {
+                self.external.clone()
+            },
+            joint_names: self.joints.clone(),
+            coordinates,
+            source: self.source.clone(),
+        }
+    }
+
     /// The observer's estimate as a time series.
     pub fn observer_series(&self) -> ExternalTorque {
         ExternalTorque {
@@ -81,6 +111,14 @@ impl Residual {
             tau: self.observer.clone(),
         }
     }
+}
+
+/// RMS of each column of a samples × joints matrix.
+fn column_rms(m: &DMatrix<f64>) -> Vec<f64> {
+    let count = m.nrows().max(1) as f64;
+    (0..m.ncols())
+        .map(|j| (m.column(j).norm_squared() / count).sqrt())
+        .collect()
 }
 
 /// The residual of `log` under `result` (`model` is the result's model, e.g. from
@@ -133,16 +171,19 @@ pub fn external_torque(
     let joints = JointMap::new(model, options.joints.unwrap_or(result.settings.joints))?;
     let external = joints.torque(&external).into_owned();
     let observer = joints.torque(&observed).into_owned();
-    let count = external.nrows().max(1) as f64;
-    let rms = (0..n)
-        .map(|j| (external.column(j).norm_squared() / count).sqrt())
-        .collect();
+    let (q, dq) = (
+        joints.motion(&data.q).into_owned(),
+        joints.motion(&data.dq).into_owned(),
+    );
+    let rms = column_rms(&external);
     let noise_floor =
         (result.metrics.train.joints == joints.names).then(|| result.metrics.train.rms.clone());
     Ok(Residual {
         source: data.source,
         joints: joints.names,
         time: data.time,
+        q,
+        dq,
         external,
         observer,
         rms,

@@ -47,11 +47,24 @@
 #define DVRK_ERR_INTERNAL -6
 
 /*
+ An argument is out of its range: the observer's step `dt` is not positive (a
+ non-finite `dt` is `DVRK_ERR_NOT_FINITE`), or the observer was created for another
+ model.
+ */
+#define DVRK_ERR_ARGUMENT -7
+
+/*
  The model of a `dvrk-ident fit` result: the robot with the fit's model options
  (Stribeck terms) and the fitted parameter vector. Immutable once loaded: share it
  read-only between threads.
  */
 typedef struct DvrkModel DvrkModel;
+
+/*
+ A generalized-momentum observer of one model (`dvrk_observer_new`): its gains and the
+ previous sample. Serves one thread at a time, like a workspace.
+ */
+typedef struct DvrkObserver DvrkObserver;
 
 /*
  Scratch buffers for one thread's calls on one model (`dvrk_workspace_new`).
@@ -298,6 +311,71 @@ const char *dvrk_error_string(int code);
  The library's version (the workspace's, e.g. "0.1.0"), static and NUL-terminated.
  */
 const char *dvrk_version(void);
+
+/*
+ A momentum observer for `model` with gain `gains[k]` (1/s, positive and finite;
+ `dvrk_model_dof` values) on model coordinate `k`: each estimate follows the external
+ torque with a first-order lag of time constant `1/gains[k]` s. NULL if `model` or
+ `gains` is NULL or a gain is not positive and finite. Not real-time (allocates):
+ create it before the control loop, free it with `dvrk_observer_free` before the
+ model.
+
+ # Safety
+
+ `model` is NULL or a live pointer from `dvrk_model_from_result`, which must outlive
+ the observer; `gains` is NULL or valid for `dvrk_model_dof` doubles.
+ */
+DvrkObserver *dvrk_observer_new(const DvrkModel *model, const double *gains);
+
+/*
+ Frees an observer from `dvrk_observer_new`; NULL does nothing.
+
+ # Safety
+
+ `observer` is NULL or a pointer from `dvrk_observer_new` not freed yet.
+ */
+void dvrk_observer_free(DvrkObserver *observer);
+
+/*
+ Forgets the previous sample and the estimate: the next update starts the observer
+ again (returning zeros), as after a pause of the control loop or a change of tool.
+ Real-time. 0, or `DVRK_ERR_NULL`.
+
+ # Safety
+
+ `observer` is NULL or live, not used by another thread during the call.
+ */
+int dvrk_observer_reset(DvrkObserver *observer);
+
+/*
+ One control cycle of the observer: the sample `q` (rad or m), `dq` (rad/s or m/s)
+ and applied torque `tau` (N·m or N per model coordinate, as measured: known forces
+ such as the MTM's cable are the model's), `dt` seconds after the previous update.
+ Writes into `tau_ext` the estimate of the external torque `tau − tau_model` (the
+ torque the joints apply beyond the result's model, e.g. `+g` of a payload it does not
+ know; the opposite of the torque the environment applies), N·m or N per model
+ coordinate. The first update (and the first after `dvrk_observer_reset`) only stores
+ the sample and writes zeros. Real-time: no allocation, no lock.
+
+ 0, or a negative code with `tau_ext` and the observer untouched: `DVRK_ERR_NULL`,
+ `DVRK_ERR_NOT_FINITE` (an input or `dt`), `DVRK_ERR_ARGUMENT` (`dt ≤ 0`, or an
+ observer of another model), `DVRK_ERR_WORKSPACE`. On `DVRK_ERR_OVERFLOW` (an
+ estimate that is not finite) `tau_ext` is untouched and the observer is reset.
+
+ # Safety
+
+ `model`, `ws` and `observer` are NULL or live (ws and observer made for model, used
+ by this thread alone); `q`, `dq`, `tau` and `tau_ext` are NULL or valid for
+ `dvrk_model_dof` doubles.
+ */
+int dvrk_observer_update(const DvrkModel *model,
+                         DvrkWorkspace *ws,
+                         DvrkObserver *observer,
+                         const double *q,
+                         const double *dq,
+                         const double *tau,
+                         double dt,
+                         double *tau_ext);
 
 #ifdef __cplusplus
 }  // extern "C"

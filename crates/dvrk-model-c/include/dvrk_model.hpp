@@ -116,12 +116,45 @@ class Workspace {
         return dvrk_forward_dynamics(model_, ws_.get(), q, dq, tau, ddq);
     }
 
+    // The C handle, for the C API.
+    DvrkWorkspace *get() noexcept { return ws_.get(); }
+
   private:
     struct Free {
         void operator()(DvrkWorkspace *w) const noexcept { dvrk_workspace_free(w); }
     };
     const DvrkModel *model_;
     std::unique_ptr<DvrkWorkspace, Free> ws_;
+};
+
+// The generalized-momentum observer of one model: each estimate of the external torque
+// (tau - tau_model, N·m or N per model coordinate) follows it with a first-order lag of
+// time constant 1/gain. One update per control cycle, from one thread at a time, with
+// a Workspace of the same model. The model must outlive the observer.
+class Observer {
+  public:
+    // dof() gains, 1/s, positive and finite; throws dvrk::Error otherwise (not real-time).
+    Observer(const Model &model, const double *gains)
+        : model_(model.get()), obs_(dvrk_observer_new(model.get(), gains)) {
+        if (!obs_) throw Error("dvrk_observer_new: expected dof() gains, positive and finite (1/s)");
+    }
+
+    // One cycle: q, dq, tau (as measured) and the step dt (s) since the previous update;
+    // the estimate into tau_ext (zeros on the first update). Real-time: 0 or a negative
+    // DVRK_ERR_* code with tau_ext untouched.
+    int update(Workspace &ws, const double *q, const double *dq, const double *tau, double dt,
+               double *tau_ext) noexcept {
+        return dvrk_observer_update(model_, ws.get(), obs_.get(), q, dq, tau, dt, tau_ext);
+    }
+    // Forgets the previous sample and the estimate. Real-time.
+    int reset() noexcept { return dvrk_observer_reset(obs_.get()); }
+
+  private:
+    struct Free {
+        void operator()(DvrkObserver *o) const noexcept { dvrk_observer_free(o); }
+    };
+    const DvrkModel *model_;
+    std::unique_ptr<DvrkObserver, Free> obs_;
 };
 
 }  // namespace dvrk

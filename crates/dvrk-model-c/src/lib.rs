@@ -28,7 +28,8 @@
 //!   copy, error strings, version, the two `free`s) only read a field, copy slices of
 //!   equal length or drop, none of which panics.
 //! - The real-time calls (`dvrk_gravity`, `dvrk_inverse_dynamics`, `dvrk_mass_matrix`,
-//!   `dvrk_forward_dynamics`, the measured-joint conversions) allocate nothing and take
+//!   `dvrk_forward_dynamics`, the measured-joint conversions, `dvrk_observer_update`
+//!   and `dvrk_observer_reset`, the momentum observer of `observer.rs`) allocate nothing and take
 //!   no lock: they check their pointers and inputs, then run dvrk-model's
 //!   allocation-free algorithms in the caller's workspace. On an error they return a
 //!   negative code and leave every output untouched (results are computed into the
@@ -44,6 +45,12 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::Path;
 
 use dvrk_model::{Model, Workspace};
+
+mod observer;
+pub use observer::{
+    dvrk_observer_free, dvrk_observer_new, dvrk_observer_reset, dvrk_observer_update, DvrkObserver,
+    DVRK_ERR_ARGUMENT,
+};
 
 /// Success.
 pub const DVRK_OK: c_int = 0;
@@ -809,6 +816,9 @@ pub extern "C" fn dvrk_error_string(code: c_int) -> *const c_char {
         }
         DVRK_ERR_OVERFLOW => c"the result is not finite (the parameters and motion overflow)",
         DVRK_ERR_INTERNAL => c"internal error (a bug of dvrk-model-c; please report it)",
+        DVRK_ERR_ARGUMENT => {
+            c"an argument is out of range (a step dt <= 0, or an observer of another model)"
+        }
         _ => c"unknown error code",
     };
     text.as_ptr()

@@ -1,5 +1,5 @@
 //! The real-time calls of the C ABI (gravity, inverse, rigid-body and forward dynamics, mass
-//! matrix, measured-joint conversions) allocate nothing: a counting global allocator sees no
+//! matrix, measured-joint conversions, the momentum observer's update and reset) allocate nothing: a counting global allocator sees no
 //! allocation across many calls of each (successful ones and the error paths), through
 //! the `extern "C"` functions themselves, on the SDP+Stribeck fit of the bundled example.
 //! (A controller's real-time loop must not reach `malloc`: it may take a lock or page
@@ -61,6 +61,11 @@ fn real_time_calls_allocate_nothing() {
     let mut acc = vec![0.0; n];
     let mut m = vec![0.0; n * n];
     let mut x = vec![0.0; n];
+    let gains = vec![30.0; n];
+    // SAFETY: a live model and n gains.
+    let observer = unsafe { dvrk_observer_new(model, gains.as_ptr()) };
+    assert!(!observer.is_null());
+    let mut estimate = vec![0.0; n];
 
     // The counter counts: a vector allocated here is seen.
     let before = ALLOCATIONS.load(Ordering::SeqCst);
@@ -68,7 +73,7 @@ fn real_time_calls_allocate_nothing() {
     assert_eq!(ALLOCATIONS.load(Ordering::SeqCst), before + 1);
 
     let before = ALLOCATIONS.load(Ordering::SeqCst);
-    let mut codes = [0; 9];
+    let mut codes = [0; 12];
     for _ in 0..1000 {
         // SAFETY: a live model and its workspace; every buffer of n (or n·n) doubles.
         unsafe {
@@ -103,7 +108,43 @@ fn real_time_calls_allocate_nothing() {
             // The error paths too.
             codes[6] = dvrk_gravity(model, ws, nan.as_ptr(), tau.as_mut_ptr());
             codes[7] = dvrk_mass_matrix(model, std::ptr::null_mut(), q.as_ptr(), m.as_mut_ptr());
+            codes[9] = dvrk_observer_update(
+                model,
+                ws,
+                observer,
+                q.as_ptr(),
+                dq.as_ptr(),
+                tau.as_ptr(),
+                1e-3,
+                estimate.as_mut_ptr(),
+            );
+            codes[10] = dvrk_observer_update(
+                model,
+                ws,
+                observer,
+                q.as_ptr(),
+                dq.as_ptr(),
+                tau.as_ptr(),
+                -1.0,
+                estimate.as_mut_ptr(),
+            );
             std::hint::black_box(dvrk_error_string(DVRK_ERR_NULL));
+        }
+    }
+    // SAFETY: a live observer; reset, then two updates (the second one computes).
+    unsafe {
+        codes[11] = dvrk_observer_reset(observer);
+        for _ in 0..2 {
+            dvrk_observer_update(
+                model,
+                ws,
+                observer,
+                q.as_ptr(),
+                dq.as_ptr(),
+                tau.as_ptr(),
+                1e-3,
+                estimate.as_mut_ptr(),
+            );
         }
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
@@ -111,6 +152,9 @@ fn real_time_calls_allocate_nothing() {
     assert_eq!(codes[6], DVRK_ERR_NOT_FINITE);
     assert_eq!(codes[7], DVRK_ERR_NULL);
     assert_eq!(codes[8], DVRK_OK);
+    assert_eq!(codes[9], DVRK_OK);
+    assert_eq!(codes[10], DVRK_ERR_ARGUMENT);
+    assert_eq!(codes[11], DVRK_OK);
     assert_eq!(
         after - before,
         0,
@@ -120,8 +164,26 @@ fn real_time_calls_allocate_nothing() {
     for (a, d) in acc.iter().zip(&ddq) {
         assert!((a - d).abs() < 1e-8, "{acc:?} vs {ddq:?}");
     }
+    // The observer computed: q̇ did not change between the two updates after the reset,
+    // so the torque of q̈ (the inverse dynamics' tau) is unexplained and the estimate is
+    // (1 − e^{−K·dt})·M(q)·q̈.
+    let loaded = DvrkModel::from_result(&path).unwrap();
+    let mut rust_ws = dvrk_model::Workspace::new(loaded.model());
+    let mass = loaded
+        .model()
+        .mass_matrix(&mut rust_ws, loaded.params(), &q);
+    let lag = 1.0 - (-30.0f64 * 1e-3).exp();
+    for i in 0..n {
+        let expected = lag * (0..n).map(|k| mass[(i, k)] * ddq[k]).sum::<f64>();
+        assert!(
+            (estimate[i] - expected).abs() <= 1e-9 * (1.0 + expected.abs()),
+            "observer {i}: {} vs {expected}",
+            estimate[i]
+        );
+    }
     // SAFETY: live pointers from their constructors, freed once, workspace first.
     unsafe {
+        dvrk_observer_free(observer);
         dvrk_workspace_free(ws);
         dvrk_model_free(model);
     }

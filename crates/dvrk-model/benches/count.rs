@@ -11,12 +11,13 @@
 //!
 //! `ROBOT`: psm, mtm or panda (`../shared/anchors/panda_arm_7dof.urdf`); `OP`: mass
 //! (`mass_matrix_into`), forward (`forward_dynamics_into`), inverse
-//! (`inverse_dynamics`). Pinocchio's side: `pinocchio/count.cpp`. Without arguments (as
+//! (`inverse_dynamics`), nonlinear (`nonlinear_effects`), observer (one
+//! `MomentumObserver::update` at 1 kHz, as the `momentum observer` bench). Pinocchio's side: `pinocchio/count.cpp`. Without arguments (as
 //! `cargo bench` runs every bench) it does nothing.
 
 use std::hint::black_box;
 
-use dvrk_model::{Model, Workspace};
+use dvrk_model::{Model, MomentumObserver, Workspace};
 
 mod common;
 use common::{physical, sample, PANDA};
@@ -42,6 +43,7 @@ fn main() {
     let (mut tau, mut acc, mut m) = (vec![0.0; n], vec![0.0; n], vec![0.0; n * n]);
     model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
     let applied = tau.clone();
+    let mut observer = MomentumObserver::new(&model, &vec![50.0; n]).expect("gains");
     for _ in 0..iterations {
         match op.as_str() {
             "mass" => model.mass_matrix_into(&mut ws, &params, black_box(&q), &mut m),
@@ -51,7 +53,13 @@ fn main() {
             "inverse" => {
                 model.inverse_dynamics(&mut ws, &params, black_box(&q), &dq, &ddq, &mut tau)
             }
-            _ => panic!("OP is mass, forward or inverse"),
+            "nonlinear" => model.nonlinear_effects(&mut ws, &params, black_box(&q), &dq, &mut tau),
+            "observer" => {
+                let r =
+                    observer.update(&model, &mut ws, &params, black_box(&q), &dq, &applied, 1e-3);
+                black_box(r);
+            }
+            _ => panic!("OP is mass, forward, inverse, nonlinear or observer"),
         }
         black_box((&m, &acc, &tau));
     }

@@ -177,16 +177,22 @@ impl MomentumObserver {
                 }
                 self.alpha_dt = dt;
             }
+            // Δq̇ once (into the previous velocity, replaced below), not per row.
+            for (d, v) in self.dq_prev.iter_mut().zip(dq) {
+                *d = v - *d;
+            }
+            let change = &self.dq_prev[..n];
             for i in 0..n {
-                // Row i of M̄·Δq̇ (both matrices symmetric: column i).
+                // Row i of 2·M̄·Δq̇ (both matrices symmetric: column i).
                 let (now, before) = (&self.mass[i * n..][..n], &self.mass_prev[i * n..][..n]);
                 let mut momentum = 0.0;
-                for j in 0..n {
-                    momentum += 0.5 * (now[j] + before[j]) * (dq[j] - self.dq_prev[j]);
+                for ((a, b), d) in now.iter().zip(before).zip(change) {
+                    momentum += (a + b) * d;
                 }
-                let dy = 0.5 * dt * (self.net[i] + self.net_prev[i]) - momentum;
+                // Δy/dt: the mean of τ − h over the step minus M̄·Δq̇/dt.
+                let mean = 0.5 * (self.net[i] + self.net_prev[i]) - 0.5 * momentum / dt;
                 let a = self.alpha[i];
-                self.estimate[i] = a * self.estimate[i] + (1.0 - a) * dy / dt;
+                self.estimate[i] = a * self.estimate[i] + (1.0 - a) * mean;
             }
         } else {
             self.estimate.fill(0.0);

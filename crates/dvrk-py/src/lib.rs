@@ -24,6 +24,7 @@ mod limits;
 mod observe;
 mod overrides;
 mod payload;
+mod residual;
 mod robot;
 
 use pyo3::prelude::*;
@@ -60,6 +61,9 @@ mod dvrk_ident_module {
 
     #[pymodule_export]
     use crate::payload::identify_payload;
+
+    #[pymodule_export]
+    use crate::residual::{external_torque, MomentumObserverPy};
 
     #[pymodule_export]
     use crate::observe::{observe, ObservationPy};

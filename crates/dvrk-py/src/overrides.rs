@@ -24,10 +24,11 @@ pub(crate) fn parse_joints(text: &str) -> PyResult<Joints> {
 }
 
 /// The options each function takes as keyword arguments, by function.
-pub(crate) const FUNCTIONS: [(&str, &[Setting]); 3] = [
+pub(crate) const FUNCTIONS: [(&str, &[Setting]); 4] = [
     ("fit", Setting::ALL),
     ("observe", Setting::OBSERVE),
     ("prepare", Setting::PROCESSING),
+    ("external_torque", Setting::PROCESSING),
 ];
 
 /// `dvrk_ident._options`: `{function: [option name, ...]}` in the library's order (the

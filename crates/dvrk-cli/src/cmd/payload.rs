@@ -11,6 +11,7 @@ use dvrk_ident::payload::identify_payload;
 use serde_json::json;
 
 use super::args::{LogArgs, MODEL, OUTPUT};
+use super::settings::{Processing, SettingFlags};
 use super::{emit_summary, load_result, LoadedResult};
 
 #[derive(clap::Args)]
@@ -28,6 +29,10 @@ pub struct Args {
     #[arg(long, help_heading = MODEL)]
     pub robot: Option<String>,
     // The processing flags default to the result's own settings, as for validate.
+    // The fit options (`--cutoff`, ...: every processing `Setting`), before `log_args`:
+    // they read `--resample`, which `log_args` declares and takes.
+    #[command(flatten)]
+    pub settings: SettingFlags<Processing>,
     #[command(flatten)]
     pub log_args: LogArgs,
     /// Write the result with the payload added (a `payload` section: validate, residual,
@@ -59,7 +64,7 @@ pub fn run(args: Args) -> Result<()> {
     } = load_result(&args.result, args.robot.as_deref())?;
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
-    result.settings = args.log_args.settings(result.settings.clone())?;
+    result.settings = args.settings.settings(result.settings.clone())?;
     let read = args
         .log_args
         .read_options()

@@ -6,8 +6,13 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Result};
+use dvrk_ident::fit::JointMap;
+use dvrk_ident::joint_log::Coordinates;
+use dvrk_ident::log::mcap;
 use dvrk_ident::output::Outputs;
+use dvrk_ident::report::residual::residual_report;
 use dvrk_ident::residual::{external_torque, ResidualOptions, DEFAULT_OBSERVER_GAIN};
+use dvrk_ident::settings::Joints;
 use serde_json::json;
 
 use super::args::{JointsArgs, LogArgs, MODEL, OUTPUT};
@@ -37,13 +42,21 @@ pub struct Args {
     pub log_args: LogArgs,
     #[command(flatten)]
     pub joints: JointsArgs,
-    /// Write the residual per processed sample as CSV (time, then one column per joint:
-    /// the `simulate --external-torque` layout); one log only
-    #[arg(long, value_name = "FILE.csv", help_heading = OUTPUT)]
+    /// Write the residual per processed sample: CSV (time, then one column per joint:
+    /// the `simulate --external-torque` layout), or for a `.mcap` file a ROS 2 MCAP of
+    /// `sensor_msgs/JointState` on /residual (the processed positions and velocities,
+    /// the residual as the effort; measured joints only, `--joints measured`); one log
+    /// only
+    #[arg(long, value_name = "FILE.csv|FILE.mcap", help_heading = OUTPUT)]
     pub out: Option<String>,
-    /// Write the momentum observer's estimate as CSV, in the same layout; one log only
-    #[arg(long, value_name = "FILE.csv", help_heading = OUTPUT)]
+    /// Write the momentum observer's estimate in the same layouts (MCAP topic
+    /// /residual_observer); one log only
+    #[arg(long, value_name = "FILE.csv|FILE.mcap", help_heading = OUTPUT)]
     pub observer_out: Option<String>,
+    /// Write a report into this folder: report.html with each log's residual and
+    /// observer per joint against the fit's noise floor, and the figures as SVG and PNG
+    #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
+    pub report: Option<String>,
     /// Print JSON
     #[arg(long, help_heading = OUTPUT)]
     pub json: bool,
@@ -55,7 +68,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--out", args.out.as_deref()),
             ("--observer-out", args.observer_out.as_deref()),
         ],
-        &[],
+        &[("--report", args.report.as_deref())],
         &super::inputs(
             &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
             &[
@@ -78,6 +91,17 @@ pub fn run(args: Args) -> Result<()> {
     } = load_result(&args.result, args.robot.as_deref())?;
     let mut result = result;
     result.settings = args.settings.settings(result.settings.clone())?;
+    let joints = args.joints.joints.unwrap_or(result.settings.joints);
+    for (flag, path) in [("--out", &args.out), ("--observer-out", &args.observer_out)] {
+        if let Some(path) = path {
+            if is_mcap(path) && joints != Joints::Measured {
+                bail!(
+                    "{flag} {path}: an MCAP JointState holds measured joints, but the residual \
+                     is in the model coordinates: add --joints measured (or write CSV)"
+                );
+            }
+        }
+    }
     let options = ResidualOptions {
         joints: args.joints.joints,
         observer_gain: args.observer_gain,
@@ -89,12 +113,11 @@ pub fn run(args: Args) -> Result<()> {
         .for_processing(&result.settings.processing)
         .for_logs(args.logs.iter().map(Path::new));
     let (mut text, mut reports, mut outputs) = (String::new(), Vec::new(), Outputs::new());
+    let mut residuals = Vec::new();
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;
         let r = external_torque(&model, &params, &result, &traj, &options)?;
-        let observer_rms: Vec<f64> = (0..r.joints.len())
-            .map(|j| (r.observer.column(j).norm_squared() / r.time.len().max(1) as f64).sqrt())
-            .collect();
+        let observer_rms = r.observer_rms();
         let width = super::joint_width(&r.joints);
         let _ = writeln!(
             text,
@@ -124,11 +147,19 @@ pub fn run(args: Args) -> Result<()> {
                 result.settings.joints.name()
             );
         }
-        if let Some(out) = &args.out {
-            outputs.add(Path::new(out), r.external_series().to_csv(&r.joints))?;
-        }
-        if let Some(out) = &args.observer_out {
-            outputs.add(Path::new(out), r.observer_series().to_csv(&r.joints))?;
+        for (out, observer, topic) in [
+            (&args.out, false, "/residual"),
+            (&args.observer_out, true, "/residual_observer"),
+        ] {
+            let Some(out) = out else { continue };
+            let bytes = if is_mcap(out) {
+                mcap_bytes(&r.to_log(Coordinates::Measured, observer), topic)?
+            } else if observer {
+                r.observer_series().to_csv(&r.joints).into_bytes()
+            } else {
+                r.external_series().to_csv(&r.joints).into_bytes()
+            };
+            outputs.add(Path::new(out), bytes)?;
         }
         reports.push(json!({
             "log": path,
@@ -138,6 +169,17 @@ pub fn run(args: Args) -> Result<()> {
             "observer_rms": observer_rms,
             "noise_floor": r.noise_floor,
         }));
+        residuals.push(r);
+    }
+    if let Some(dir) = &args.report {
+        let map = JointMap::new(&model, joints)?;
+        let report = residual_report(&map, &args.result, &residuals, args.observer_gain)?;
+        report.stage(&mut outputs, Path::new(dir))?;
+        let _ = writeln!(
+            text,
+            "report: {}",
+            Path::new(dir).join("report.html").display()
+        );
     }
     outputs.commit()?;
     if args.json {
@@ -152,4 +194,28 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         emit_summary(&text, stdout_taken)
     }
+}
+
+/// Whether `path` names an MCAP file (by its extension).
+fn is_mcap(path: &str) -> bool {
+    Path::new(path)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+}
+
+/// `log` as the bytes of an MCAP file on `topic`, written by the log writer (which
+/// needs a seekable file: a scratch file in the temporary folder, removed after), so
+/// that it is staged with the command's other outputs.
+fn mcap_bytes(log: &dvrk_ident::JointLog, topic: &str) -> Result<Vec<u8>> {
+    static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let scratch = std::env::temp_dir().join(format!(
+        "dvrk-ident-residual-{}-{}.mcap",
+        std::process::id(),
+        COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
+    let written = mcap::write_mcap(&scratch, log, topic, &mcap::McapWriteOptions::default())
+        .map_err(anyhow::Error::from)
+        .and_then(|()| Ok(std::fs::read(&scratch)?));
+    let _ = std::fs::remove_file(&scratch);
+    written
 }

@@ -226,6 +226,7 @@ mod tests {
             ("validate", Setting::PROCESSING),
             ("report", Setting::PROCESSING),
             ("residual", Setting::PROCESSING),
+            ("payload", Setting::PROCESSING),
         ] {
             let cmd = cli.find_subcommand(command).unwrap();
             for s in scope {

@@ -47,7 +47,7 @@ pub fn number(v: f64) -> String {
     }
 }
 
-const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;margin:24px;color:#222;max-width:1400px}\
+pub(crate) const STYLE: &str = "body{font-family:'DejaVu Sans',Arial,sans-serif;margin:24px;color:#222;max-width:1400px}\
 h1{font-size:24px}h2{font-size:19px;border-bottom:1px solid #ccc;padding-bottom:4px;margin-top:32px}\
 table{border-collapse:collapse;margin:8px 0;font-size:13px}\
 th,td{border:1px solid #ccc;padding:3px 8px;text-align:right}\
@@ -95,7 +95,7 @@ fn metrics_table(
 }
 
 /// The SVG document without an XML prolog, ready to inline.
-fn inline_svg(svg: &str) -> &str {
+pub(crate) fn inline_svg(svg: &str) -> &str {
     match svg.find("<svg") {
         Some(i) => &svg[i..],
         None => svg,

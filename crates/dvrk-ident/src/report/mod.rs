@@ -10,6 +10,7 @@ pub mod draw;
 pub mod figures;
 pub mod html;
 pub mod plot;
+pub mod residual;
 
 use std::path::{Path, PathBuf};
 

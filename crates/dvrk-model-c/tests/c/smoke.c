@@ -8,7 +8,12 @@
    CASES holds a count K, then K cases of 4n numbers (q, dq, ddq, tau_fd). For each case
    the program prints the lines `g`, `tau`, `rigid`, `m` (row-major) and `ddq` (the forward
    dynamics under tau_fd), every number with %.17g, which the Rust test compares with
-   dvrk-model's own results. Any failed check prints `FAIL ...` on stderr and exits 1. */
+   dvrk-model's own results. CASES then holds the momentum observer's run: a count M and
+   a step dt (s), the n gains (1/s), and M samples of 3n numbers (q, dq, tau); the program
+   prints `obs` and the estimate after each update, with the error paths of
+   dvrk_observer_update tried before update M/2 (the Rust side's observer, which sees
+   none of them, must still agree bit for bit), then `obs-reset` after a reset and one
+   update. Any failed check prints `FAIL ...` on stderr and exits 1. */
 #include "dvrk_model.h"
 
 #include <math.h>
@@ -120,7 +125,8 @@ static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkMo
 
     /* Every code has its own message; an unknown code has one too. */
     int codes[] = {DVRK_OK, DVRK_ERR_NULL, DVRK_ERR_NOT_FINITE, DVRK_ERR_WORKSPACE,
-                   DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_OVERFLOW, DVRK_ERR_INTERNAL};
+                   DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_OVERFLOW, DVRK_ERR_INTERNAL,
+                   DVRK_ERR_ARGUMENT};
     size_t nc = sizeof codes / sizeof codes[0];
     for (size_t i = 0; i < nc; i++) {
         CHECK(dvrk_error_string(codes[i]) != NULL && strlen(dvrk_error_string(codes[i])) > 0,
@@ -135,6 +141,90 @@ static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkMo
     dvrk_workspace_free(other_ws);
     free(bad);
     free(out);
+}
+
+/* The momentum observer over the samples of `cases` (see the top comment); `other` is
+   another model, whose observer and workspace the calls on `model` refuse. */
+static void run_observer(FILE *cases, const DvrkModel *model, DvrkWorkspace *ws,
+                         const DvrkModel *other) {
+    size_t n = dvrk_model_dof(model);
+    int m_samples = 0;
+    double dt = 0.0;
+    if (fscanf(cases, "%d %lf", &m_samples, &dt) != 2) {
+        CHECK(0, "no observer samples in the cases file");
+        return;
+    }
+    double *gains = malloc(n * sizeof(double));
+    double *x = malloc(3 * n * sizeof(double));
+    double *out = malloc(n * sizeof(double));
+    double *bad = malloc(n * sizeof(double));
+    for (size_t i = 0; i < n; i++)
+        if (fscanf(cases, "%lf", &gains[i]) != 1) CHECK(0, "gains");
+    /* Gains that are not positive and finite, or none: no observer. */
+    memcpy(bad, gains, n * sizeof(double));
+    bad[n - 1] = 0.0;
+    CHECK(dvrk_observer_new(model, bad) == NULL, "observer_new(gain 0)");
+    bad[n - 1] = NAN;
+    CHECK(dvrk_observer_new(model, bad) == NULL, "observer_new(gain NaN)");
+    CHECK(dvrk_observer_new(model, NULL) == NULL, "observer_new(NULL gains)");
+    CHECK(dvrk_observer_new(NULL, gains) == NULL, "observer_new(NULL model)");
+    DvrkObserver *obs = dvrk_observer_new(model, gains);
+    DvrkObserver *other_obs = dvrk_observer_new(other, gains);
+    DvrkWorkspace *other_ws = dvrk_workspace_new(other);
+    CHECK(obs != NULL && other_obs != NULL, "observer_new");
+    const double *q = x, *dq = x + n, *tau = x + 2 * n;
+    for (int k = 0; k < m_samples; k++) {
+        for (size_t i = 0; i < 3 * n; i++)
+            if (fscanf(cases, "%lf", &x[i]) != 1) CHECK(0, "observer sample %d", k);
+        if (k == m_samples / 2) {
+            int rc;
+            fill(out, n);
+            rc = dvrk_observer_update(model, ws, NULL, q, dq, tau, dt, out);
+            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL observer) = %d", rc);
+            rc = dvrk_observer_update(NULL, ws, obs, q, dq, tau, dt, out);
+            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL model) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, NULL, tau, dt, out);
+            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL dq) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, dt, NULL);
+            CHECK(rc == DVRK_ERR_NULL, "update(NULL tau_ext) = %d", rc);
+            rc = dvrk_observer_update(model, other_ws, obs, q, dq, tau, dt, out);
+            CHECK(rc == DVRK_ERR_WORKSPACE && untouched(out, n), "update(other ws) = %d", rc);
+            rc = dvrk_observer_update(model, ws, other_obs, q, dq, tau, dt, out);
+            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(other observer) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, 0.0, out);
+            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(dt 0) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, -dt, out);
+            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(dt < 0) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, NAN, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(dt NaN) = %d", rc);
+            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, INFINITY, out);
+            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(dt inf) = %d", rc);
+            for (int which = 0; which < 3; which++) {
+                memcpy(bad, x + which * n, n * sizeof(double));
+                bad[which] = NAN;
+                rc = dvrk_observer_update(model, ws, obs, which == 0 ? bad : q,
+                                          which == 1 ? bad : dq, which == 2 ? bad : tau, dt, out);
+                CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(NaN in input %d) = %d",
+                      which, rc);
+            }
+        }
+        int rc = dvrk_observer_update(model, ws, obs, q, dq, tau, dt, out);
+        CHECK(rc == DVRK_OK, "observer update %d: %s", k, dvrk_error_string(rc));
+        print_vector("obs", out, n);
+    }
+    CHECK(dvrk_observer_reset(NULL) == DVRK_ERR_NULL, "reset(NULL)");
+    CHECK(dvrk_observer_reset(obs) == DVRK_OK, "reset");
+    int rc = dvrk_observer_update(model, ws, obs, q, dq, tau, dt, out);
+    CHECK(rc == DVRK_OK, "update after reset: %s", dvrk_error_string(rc));
+    print_vector("obs-reset", out, n);
+    dvrk_observer_free(NULL);
+    dvrk_observer_free(other_obs);
+    dvrk_observer_free(obs);
+    dvrk_workspace_free(other_ws);
+    free(bad);
+    free(out);
+    free(x);
+    free(gains);
 }
 
 /* Loading errors: each a NULL model with a message, which the test prints for the Rust
@@ -219,6 +309,7 @@ int main(int argc, char **argv) {
         CHECK(rc == DVRK_OK, "model to measured: %s", dvrk_error_string(rc));
         print_vector("to_measured", out, n);
     }
+    run_observer(cases, model, ws, other);
     fclose(cases);
 
     check_errors(model, ws, other, x, n);

@@ -1,7 +1,7 @@
 // The C++ wrapper (include/dvrk_model.hpp) as a controller uses it, compiled with the
 // system's `c++ -O2` and run by tests/c_abi.rs with the same arguments and output
 // lines as tests/c/smoke.c (`g`, `tau`, `rigid`, `m`, `ddq`, `from_measured`, `to_measured` per
-// case, %.17g), which the Rust test compares with dvrk-model's results. Also checks that
+// case, %.17g, and the momentum observer's `obs` and `obs-reset`), which the Rust test compares with dvrk-model's results. Also checks that
 // a bad path and an unknown robot throw dvrk::Error with the reason, and that a NaN
 // input returns DVRK_ERR_NOT_FINITE with the output untouched. Exits 1 on a failure.
 #include "dvrk_model.hpp"
@@ -36,6 +36,16 @@ static std::string load_error(const std::string &path) {
         return e.what();
     }
     return "";
+}
+
+// Whether an observer with these gains is refused with dvrk::Error.
+static bool load_observer_error(const dvrk::Model &model, const double *gains) {
+    try {
+        dvrk::Observer observer(model, gains);
+    } catch (const dvrk::Error &) {
+        return true;
+    }
+    return false;
 }
 
 int main(int argc, char **argv) {
@@ -78,6 +88,28 @@ int main(int argc, char **argv) {
         print_vector("to_measured", out);
     }
     check(static_cast<bool>(cases), "the cases file reads whole");
+
+    // The momentum observer's run (see tests/c/smoke.c): `obs` lines, then `obs-reset`.
+    int m_samples = 0;
+    double dt = 0.0;
+    cases >> m_samples >> dt;
+    std::vector<double> gains(n), tau(n);
+    for (double &g : gains) cases >> g;
+    std::vector<double> zero(n, 0.0);
+    check(load_observer_error(model, zero.data()), "Observer(gains 0) throws");
+    dvrk::Observer observer(model, gains.data());
+    for (int k = 0; k < m_samples; k++) {
+        for (auto *v : {&q, &dq, &tau})
+            for (double &x : *v) cases >> x;
+        check(observer.update(ws, q.data(), dq.data(), tau.data(), dt, out.data()) == DVRK_OK,
+              "observer update");
+        print_vector("obs", out);
+    }
+    check(static_cast<bool>(cases), "the observer samples read whole");
+    check(observer.reset() == DVRK_OK, "observer reset");
+    check(observer.update(ws, q.data(), dq.data(), tau.data(), dt, out.data()) == DVRK_OK,
+          "observer update after reset");
+    print_vector("obs-reset", out);
 
     // A NaN: the code, and the output as it was.
     std::vector<double> bad = q;

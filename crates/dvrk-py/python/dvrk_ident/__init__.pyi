@@ -474,6 +474,53 @@ def identify_payload(
     the rest of the model held at ``result`` (``dvrk-ident payload``): ``result`` with
     the payload added (:attr:`FitResult.payload`, with what the logs determine and the
     standard deviations under ``identification``)."""
+def external_torque(
+    result: FitResult,
+    data: JointLog,
+    robot: Optional[Model] = None,
+    *,
+    observer_gain: float = 20.0,
+    joints: Optional[str] = None,
+    as_dataframe: bool = False,
+    # The fit options (dvrk_ident._options["external_torque"], the library's order).
+    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
+    filter_order: Optional[int] = None,
+    filter_torque: Optional[bool] = None,
+    trim: Optional[int] = None,
+    decimate: Optional[int] = None,
+    min_speed: Optional[float] = None,
+    resample: Optional[float] = None,
+) -> Any:
+    """``dvrk-ident residual``: per processed sample ``tau_measured − tau_model`` and the
+    momentum observer's estimate, with the result's processing (the keywords replace
+    it). A dict ``{source, joints, time (N,), residual (N, dof), observer (N, dof),
+    rms (dof,), noise_floor (dof,) or None, observer_gain}``; with ``as_dataframe``, a
+    DataFrame of ``time``, ``residual.<joint>``, ``observer.<joint>`` (the rest in its
+    ``attrs``)."""
+
+class MomentumObserver:
+    """The generalized-momentum observer (real time): ``update(q, dq, tau, dt)`` returns
+    the estimate of ``tau − tau_model`` (N·m or N), each coordinate a first-order lag of
+    time constant ``1/gain`` s; the first update after construction or :meth:`reset`
+    returns zeros."""
+
+    def __init__(
+        self, robot: Model, params: Params, gains: Union[float, ArrayLike] = 20.0
+    ) -> None: ...
+    def update(
+        self, q: ArrayLike, dq: ArrayLike, tau: ArrayLike, dt: Union[float, ArrayLike]
+    ) -> FloatArray:
+        """One sample ``(dof,)`` → ``(dof,)``, or ``N`` consecutive samples ``(N, dof)``
+        → ``(N, dof)``; ``dt`` (s, positive): the step before each sample."""
+    def reset(self) -> None: ...
+    @property
+    def gains(self) -> FloatArray:
+        """``(dof,)``, 1/s."""
+    @property
+    def estimate(self) -> FloatArray:
+        """The current estimate, ``(dof,)``."""
+    @property
+    def dof(self) -> int: ...
 
 #: Limits of an excitation: None (the robot description's), a limits file (TOML with
 #: ``[[limits]]`` and ``[[cartesian_limits]]`` tables) or a dict in that layout.
