@@ -55,7 +55,7 @@ pub mod excite;
 pub mod external;
 // The logs live in their own crate (crates/dvrk-logs), under the same paths here.
 use dvrk_logs::median;
-pub use dvrk_logs::{columns, joint_log, log, names, output};
+pub use dvrk_logs::{columns, joint_log, log, names, output, temporary};
 pub mod observation;
 pub mod progress;
 #[cfg(feature = "report")]
