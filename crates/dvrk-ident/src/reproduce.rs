@@ -665,7 +665,7 @@ mod tests {
         let cli = cli_command("psm", &s, &inputs, Some(&read));
         assert_eq!(
             cli.text,
-            "dvrk-ident fit big.mcap.zst --robot psm --max-unpacked-mib 40000"
+            "dvrk-ident fit big.mcap.zst --robot psm --max-unpacked-mib 40000 --method sdp"
         );
         let py = python_call("psm", &s, &inputs, Some(&read));
         assert!(
