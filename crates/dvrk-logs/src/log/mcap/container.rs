@@ -78,7 +78,8 @@ pub(crate) fn scan(
 
 /// One file of a recording being read.
 enum Backend {
-    Mcap(McapFile),
+    /// Boxed: it holds two readers, the file's and its current chunk's.
+    Mcap(Box<McapFile>),
     Sqlite(SqliteFile),
     Ros1(Ros1File),
 }
@@ -86,7 +87,7 @@ enum Backend {
 impl Backend {
     fn open(file: &BagFile, channels: &mut Channels) -> Result<Backend, LogError> {
         Ok(match file.storage {
-            Storage::Mcap => Backend::Mcap(McapFile::open(file)?),
+            Storage::Mcap => Backend::Mcap(Box::new(McapFile::open(file)?)),
             Storage::Sqlite3 => Backend::Sqlite(SqliteFile::open(file, channels)?),
             Storage::Ros1 => Backend::Ros1(Ros1File::open(file, channels)?),
         })
