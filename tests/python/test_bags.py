@@ -4,6 +4,7 @@ the same base parameters as the headered CSV of the same samples (1e-9 relative)
 Python and from the command line; several logs per fit."""
 
 import json
+from pathlib import Path
 import subprocess
 
 import numpy as np
@@ -130,6 +131,27 @@ def test_not_a_log_says_what_it_is(psm, tmp_path):
     assert "gzip-compressed data" in msg and "supported: a rosbag2 folder" in msg, msg
     with pytest.raises(di.InputError):
         di.fit(psm, di.read_log(p))
+
+
+def test_decompression_is_bounded_and_max_unpacked_mib_sets_the_bound():
+    """A compressed file (sqlite3 as a whole, MCAP chunks) that expands beyond its bound
+    is refused, naming the file and the bound, before it is expanded; max_unpacked_mib
+    sets the bound (the CLI's --max-unpacked-mib)."""
+    hostile = Path(__file__).resolve().parents[2] / "tests" / "fixtures" / "hostile"
+    for name, what in [
+        ("bomb.db3.zst", "it decompresses to more than"),
+        ("chunk_100mib.mcap", "its compressed chunks decompress to more than"),
+    ]:
+        with pytest.raises(di.InputError) as e:
+            di.read_log(hostile / name)
+        assert name in str(e.value) and f"{what} 64 MiB" in str(e.value), str(e.value)
+        with pytest.raises(di.InputError) as e:
+            di.read_log(hostile / name, max_unpacked_mib=1)
+        assert f"{what} 1 MiB" in str(e.value), str(e.value)
+    # One chunk of 100 MiB: refused under a bound of 50 MiB, before it is decompressed.
+    with pytest.raises(di.InputError) as e:
+        di.read_log(hostile / "chunk_100mib.mcap", max_unpacked_mib=50)
+    assert "more than 50 MiB" in str(e.value), str(e.value)
 
 
 def test_several_logs_per_fit(psm, recordings, run_cli, tmp_path):

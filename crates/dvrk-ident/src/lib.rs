@@ -55,7 +55,7 @@
 // stay public for the parts the command line, Python and the tests reach inside them
 // (the processing stages, the readers, the report's figures).
 use dvrk_logs::median;
-pub use dvrk_logs::{columns, joint_log, log, names, output};
+pub use dvrk_logs::{columns, joint_log, log, names, output, temporary};
 pub mod cable;
 pub mod compare;
 pub mod error;

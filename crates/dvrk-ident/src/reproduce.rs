@@ -363,6 +363,9 @@ fn read_options(read: &ReadOptions) -> Vec<(&'static str, Value)> {
     if let Some(t) = read.time_source {
         out.push(("time", Value::Name(t.name().into())));
     }
+    if let Some(m) = read.max_unpacked_mib {
+        out.push(("max_unpacked_mib", Value::Int(m as usize)));
+    }
     out
 }
 
@@ -647,5 +650,29 @@ mod tests {
         // Unknown reading options are said, not guessed.
         let unknown = cli_command("psm", &s, &inputs, None);
         assert!(unknown.unrendered[0].contains("--format, --rate"));
+    }
+
+    /// A raised decompression bound is part of how the logs were read: a compressed
+    /// recording larger than the default bound needs it again.
+    #[test]
+    fn the_decompression_bound_is_repeated() {
+        let s = FitSettings::default();
+        let read = ReadOptions {
+            max_unpacked_mib: Some(40_000),
+            ..ReadOptions::default()
+        };
+        let inputs = [input("train", "big.mcap.zst")];
+        let cli = cli_command("psm", &s, &inputs, Some(&read));
+        assert_eq!(
+            cli.text,
+            "dvrk-ident fit big.mcap.zst --robot psm --max-unpacked-mib 40000 --method sdp"
+        );
+        let py = python_call("psm", &s, &inputs, Some(&read));
+        assert!(
+            py.text
+                .contains("train = [di.read_log(\"big.mcap.zst\", robot, max_unpacked_mib=40000)]"),
+            "{}",
+            py.text
+        );
     }
 }

@@ -498,7 +498,8 @@ pub struct Processing {
     pub acceleration_stencil: Stencil,
     /// Velocity that accelerations are differentiated from.
     pub acceleration_from: AccelerationSource,
-    /// Samples dropped at each end after filtering (filter and difference edge effects).
+    /// Samples dropped at each end after filtering (filter and difference edge effects),
+    /// at most [`MAX_TRIM`].
     pub trim: usize,
     /// Keep every `decimate`-th sample after filtering and trimming (1: keep all).
     pub decimate: usize,
@@ -517,6 +518,11 @@ pub struct Processing {
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub delay_s: Vec<f64>,
 }
+
+/// Most samples [`Processing::trim`] may drop at each end: 10⁹, 58 days at 200 Hz and
+/// far beyond any log, so that twice the trim never overflows and a state file (whose
+/// processing is read, not given) cannot claim a trim no log could have had.
+pub const MAX_TRIM: usize = 1_000_000_000;
 
 impl Default for Processing {
     fn default() -> Self {
@@ -576,6 +582,15 @@ impl Processing {
             f.cutoff_hz.check(dof)?;
         }
         advance::check_delays(&self.delay_s, dof)?;
+        if self.trim > MAX_TRIM {
+            return Err(SignalError::InvalidSetting {
+                name: "trim",
+                reason: format!(
+                    "{} samples at each end, more than the {MAX_TRIM} accepted",
+                    self.trim
+                ),
+            });
+        }
         if self.decimate == 0 {
             return Err(SignalError::InvalidSetting {
                 name: "decimate",
@@ -1050,6 +1065,22 @@ mod tests {
         )
         .unwrap_err();
         assert!(matches!(e, SignalError::TrimTooLong { trim: 50, len: 100 }));
+        // Beyond the bound: refused as a setting, before any sample is counted (2·trim
+        // of usize::MAX would overflow).
+        for trim in [MAX_TRIM + 1, usize::MAX] {
+            let e = process(
+                &traj,
+                &Processing {
+                    trim,
+                    ..base.clone()
+                },
+            )
+            .unwrap_err();
+            assert!(
+                matches!(e, SignalError::InvalidSetting { name: "trim", .. }),
+                "{e}"
+            );
+        }
         let e = process(
             &traj,
             &Processing {

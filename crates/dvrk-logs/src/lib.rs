@@ -44,6 +44,7 @@ pub mod median;
 pub mod names;
 pub mod output;
 pub mod resample;
+pub mod temporary;
 
 pub use joint_log::{Coordinates, JointLog, JointLogError};
 pub use log::LogError;

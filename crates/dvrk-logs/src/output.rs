@@ -276,6 +276,9 @@ fn temp_beside(target: &Path) -> std::io::Result<(PathBuf, File)> {
         std::process::id(),
         TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
+    // Removed by a signal handler if the run is interrupted (its name is unique, so
+    // once renamed it is gone, and removing it then does nothing).
+    crate::temporary::register(&tmp);
     let file = OpenOptions::new().write(true).create_new(true).open(&tmp)?;
     if let Ok(m) = std::fs::metadata(target) {
         if let Err(e) = file.set_permissions(m.permissions()) {

@@ -489,3 +489,62 @@ fn sqlite3_without_primary_key_null_ids_and_journals() {
         "{e}"
     );
 }
+
+/// Decompression bombs (`tests/fixtures/hostile/make_bombs.py`) fail before they
+/// expand, naming the file and the bound: MCAP chunks stating 120 MiB in all, 100 MiB
+/// or 1 TiB in one, a chunk holding far more than it states (never decompressed
+/// beyond what it states), an MCAP compressed as a whole into
+/// 300 MB of zeros, ROS 1 bz2 chunks stating 4 GB in one or 120 MiB in all, an lz4
+/// chunk holding more than it states. `max_unpacked_mib` sets the bound of the whole
+/// file (not the 256 MiB of a chunk). A real recording with compressed chunks reads
+/// within the default bound and is refused below its size.
+#[test]
+fn decompression_bombs_fail_naming_the_file_and_the_bound() {
+    let hostile = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../tests/fixtures/hostile");
+    let read = |name: &str, bound: Option<u64>| {
+        let options = McapOptions {
+            max_unpacked_mib: bound,
+            ..Default::default()
+        };
+        read_mcap_log(hostile.join(name), &options)
+            .expect_err(name)
+            .to_string()
+    };
+    let chunks = "its compressed chunks decompress to more than";
+    for (name, bound, expected) in [
+        ("chunks_total.mcap", Some(1), format!("{chunks} 1 MiB")),
+        ("chunk_100mib.mcap", None, format!("chunk_100mib.mcap: invalid MCAP file: {chunks} 64 MiB")),
+        ("chunk_100mib.mcap", Some(50), format!("{chunks} 50 MiB")),
+        ("chunk_huge.mcap", Some(1 << 30), "states 1099511627776 bytes decompressed, more than the 256 MiB a chunk may hold".into()),
+        // Decompressed no further than the 900 bytes it states: no message in them.
+        ("chunk_lying.mcap", None, "chunk_lying.mcap: no sensor_msgs/msg/JointState topic".into()),
+        ("whole.mcap.zst", None, "whole.mcap.zst: invalid compressed file: it decompresses to more than 64 MiB".into()),
+        ("whole.mcap.zst", Some(2), "it decompresses to more than 2 MiB".into()),
+        ("bz2_4gb.bag", Some(1 << 20), "bz2_4gb.bag: invalid ROS 1 bag: the chunk at byte 4109 states 4294967295 bytes decompressed, more than the 256 MiB a chunk may hold".into()),
+        ("bz2_total.bag", None, format!("bz2_total.bag: invalid ROS 1 bag: {chunks} 64 MiB")),
+        ("bz2_total.bag", Some(100), format!("{chunks} 100 MiB")),
+        ("lz4_lying.bag", None, "chunk at byte 4109: its lz4 data decompresses to more than the 1000 bytes its header states".into()),
+    ] {
+        let e = read(name, bound);
+        assert!(e.contains(&expected), "{name} {bound:?}: {e}");
+        if expected.contains("MiB (") || e.contains("decompression bomb") {
+            assert!(e.contains("--max-unpacked-mib"), "{e}");
+        }
+    }
+    // official.mcap has zstd chunks: read within the default bound, refused below.
+    let options = McapOptions {
+        joints: psm_joints(),
+        ..Default::default()
+    };
+    read_mcap_log(fixture("official.mcap"), &options).unwrap();
+    let e = read_mcap_log(
+        fixture("official.mcap"),
+        &McapOptions {
+            max_unpacked_mib: Some(0),
+            ..options
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains(&format!("{chunks} 0 MiB")), "{e}");
+}

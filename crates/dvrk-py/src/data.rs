@@ -632,7 +632,9 @@ pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
 /// jaw topic when the robot's joints need both), ``time_source`` (``"header"`` stamps,
 /// default, ``"log"`` or ``"publish"`` times). ``resample`` (Hz, any format): resample
 /// to a uniform rate by linear interpolation; otherwise a log with gaps or jitter is
-/// refused by the processing.
+/// refused by the processing. ``max_unpacked_mib``: the most a compressed recording may
+/// decompress to, MiB (``--max-unpacked-mib``; default 100 times its size, at least 64
+/// MiB and at most 16 GiB): beyond it the file is refused as a decompression bomb.
 ///
 /// With ``robot``, the log is checked against it (its measured joints present, or the
 /// right number of model coordinates; the 2019 layout's number of joints is the
@@ -644,7 +646,7 @@ pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
 ///     >>> data.coordinates, data.q.shape
 ///     ('model', (17921, 7))
 #[pyfunction]
-#[pyo3(signature = (path, robot = None, format = None, rate = None, topic = None, time_source = None, resample = None))]
+#[pyo3(signature = (path, robot = None, format = None, rate = None, topic = None, time_source = None, resample = None, max_unpacked_mib = None))]
 #[allow(clippy::too_many_arguments)]
 pub fn read_log(
     py: Python<'_>,
@@ -655,6 +657,7 @@ pub fn read_log(
     topic: Option<&Bound<'_, PyAny>>,
     time_source: Option<&str>,
     resample: Option<f64>,
+    max_unpacked_mib: Option<u64>,
 ) -> PyResult<JointLogPy> {
     let topics: Vec<String> = match topic.filter(|t| !t.is_none()) {
         None => Vec::new(),
@@ -673,6 +676,7 @@ pub fn read_log(
             .map(|s| crate::convert::named("time_source", s))
             .transpose()?,
         resample_hz: resample,
+        max_unpacked_mib,
         ..ReadOptions::default()
     };
     let model = robot.map(|r| r.get().model.clone());

@@ -343,10 +343,13 @@ def read_log(
     topic: Optional[Union[str, Sequence[str]]] = None,
     time_source: Optional[str] = None,
     resample: Optional[float] = None,
+    max_unpacked_mib: Optional[int] = None,
 ) -> JointLog:
     """Reads a log recognized by content: a rosbag2 folder (or its metadata.yaml), an
     MCAP, sqlite3 .db3 or ROS 1 .bag file (zstd/lz4 compressed too), a 2019 CSV
-    (``rate`` required) or a headered CSV; ``resample`` (Hz) resamples any format."""
+    (``rate`` required) or a headered CSV; ``resample`` (Hz) resamples any format;
+    ``max_unpacked_mib`` bounds what a compressed recording may decompress to (MiB;
+    default 100 times its size within 64 MiB and 16 GiB)."""
 
 def list_topics(path: PathLike) -> List[Dict[str, Any]]:
     """The topics of a recording (MCAP, sqlite3, ROS 1 bag or rosbag2 folder)."""

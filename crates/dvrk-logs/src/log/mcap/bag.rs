@@ -20,6 +20,9 @@ pub(crate) struct BagFile {
     pub path: PathBuf,
     pub storage: Storage,
     pub packing: Packing,
+    /// Most bytes the file may decompress to ([`unpack_limit`] of its size): as a
+    /// whole, and separately what its compressed chunks or messages decompress to.
+    pub unpack_limit: u64,
     /// A compressed sqlite3 or ROS 1 file decompressed into a temporary file: those
     /// formats need random access. (A compressed MCAP is decompressed as it is read.)
     unpacked: Option<TempCopy>,
@@ -61,14 +64,17 @@ impl Bag {
                 Content::Rosbag2Metadata => return Err(not_a_recording(&p, "a metadata.yaml")),
                 Content::Other(what) => return Err(not_a_recording(&p, &what)),
             };
+            let size = std::fs::metadata(&p).map_err(io_error(&p))?.len();
+            let limit = unpack_limit(size, max_unpacked_mib);
             let unpacked = match (storage, packing) {
                 (_, Packing::None) | (Storage::Mcap, _) => None,
-                _ => Some(TempCopy::unpack(&p, packing, max_unpacked_mib)?),
+                _ => Some(TempCopy::unpack(&p, packing, limit)?),
             };
             files.push(BagFile {
                 path: p,
                 storage,
                 packing,
+                unpack_limit: limit,
                 unpacked,
             });
         }
@@ -384,6 +390,19 @@ pub fn unpack_limit(compressed: u64, max_unpacked_mib: Option<u64>) -> u64 {
     }
 }
 
+/// Why a file of `compressed` bytes is refused when `what` (e.g. "it", "its compressed
+/// chunks") decompresses to more than `limit` bytes.
+pub(crate) fn unpack_bound_exceeded(what: &str, limit: u64, compressed: u64) -> String {
+    format!(
+        "{what} decompress{} to more than {} MiB ({} times its {compressed} bytes): a \
+         decompression bomb, or a recording larger than the bound; raise it with \
+         --max-unpacked-mib",
+        if what == "it" { "es" } else { "" },
+        limit >> 20,
+        limit / compressed.max(1)
+    )
+}
+
 /// A decompressed copy of a file in the temporary folder, removed when dropped.
 #[derive(Debug)]
 struct TempCopy {
@@ -391,11 +410,8 @@ struct TempCopy {
 }
 
 impl TempCopy {
-    fn unpack(
-        src: &Path,
-        packing: Packing,
-        max_unpacked_mib: Option<u64>,
-    ) -> Result<TempCopy, LogError> {
+    /// Decompresses `src` into the temporary folder, refusing more than `limit` bytes.
+    fn unpack(src: &Path, packing: Packing, limit: u64) -> Result<TempCopy, LogError> {
         let name = src
             .file_name()
             .map(|n| n.to_string_lossy().to_string())
@@ -407,9 +423,9 @@ impl TempCopy {
                 TEMP_COUNTER.fetch_add(1, Ordering::Relaxed)
             )),
         };
+        crate::temporary::register(&copy.path);
         let file = std::fs::File::open(src).map_err(io_error(src))?;
         let compressed = file.metadata().map_err(io_error(src))?.len();
-        let limit = unpack_limit(compressed, max_unpacked_mib);
         let mut out = std::fs::OpenOptions::new()
             .write(true)
             .create_new(true)
@@ -433,13 +449,7 @@ impl TempCopy {
                 None,
                 McapProblem::Damaged {
                     kind: "compressed file",
-                    reason: format!(
-                        "it decompresses to more than {} MiB ({} times its {compressed} \
-                         bytes): a decompression bomb, or a recording larger than the \
-                         bound; raise it with --max-unpacked-mib",
-                        limit >> 20,
-                        limit / compressed.max(1)
-                    ),
+                    reason: unpack_bound_exceeded("it", limit, compressed),
                 },
             ));
         }
@@ -460,6 +470,7 @@ impl TempCopy {
 impl Drop for TempCopy {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
+        crate::temporary::forget(&self.path);
     }
 }
 
@@ -476,18 +487,25 @@ pub(crate) struct Unpacker {
 impl Unpacker {
     /// Largest decompressed message, bytes: bounds what a corrupted frame can allocate.
     const LIMIT: u64 = 1 << 28;
+    /// The bounds of a message, said in errors.
+    const BOUNDS: &'static str = "256 MiB a message, and what is left of the file's \
+                                  bound, which --max-unpacked-mib raises";
 
     /// Decompresses `data` into [`Unpacker::out`]; `None` if it is not compressed. Only
     /// for CDR and JSON payloads, which cannot start with a zstd or lz4 frame magic.
-    pub(crate) fn unpack(&mut self, data: &[u8]) -> Option<Result<(), String>> {
-        let limit = Self::LIMIT;
+    /// More than `budget` bytes (or [`Unpacker::LIMIT`]) is an error, found before
+    /// decompressing when the frame states its size.
+    pub(crate) fn unpack(&mut self, data: &[u8], budget: u64) -> Option<Result<(), String>> {
+        let limit = Self::LIMIT.min(budget);
         let fail = |e: std::io::Error| format!("a compressed message does not decompress: {e}");
         self.out.clear();
         if data.starts_with(ZSTD_MAGIC) {
             if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
                 if size > limit {
                     return Some(Err(format!(
-                        "a compressed message of {size} bytes is larger than {limit}"
+                        "a compressed message of {size} bytes is larger than the {limit} \
+                         bytes it may decompress to ({})",
+                        Self::BOUNDS
                     )));
                 }
                 let decompressor = match &mut self.zstd {
@@ -519,7 +537,11 @@ impl Unpacker {
                 .map_err(fail)
                 .and_then(|n| {
                     if n as u64 > limit {
-                        Err(format!("a compressed message is larger than {limit} bytes"))
+                        Err(format!(
+                            "a compressed message is larger than the {limit} bytes it may \
+                             decompress to ({})",
+                            Self::BOUNDS
+                        ))
                     } else {
                         Ok(())
                     }
@@ -589,27 +611,27 @@ mod tests {
         let payload = b"\x00\x01\x00\x00some CDR bytes".repeat(20);
         let z = zstd::bulk::compress(&payload, 3).unwrap();
         let mut u = Unpacker::default();
-        u.unpack(&z).unwrap().unwrap();
+        u.unpack(&z, u64::MAX).unwrap().unwrap();
         assert_eq!(u.out, payload);
         // A frame without its content size (streamed): the streaming decoder.
         let mut streamed = Vec::new();
         let mut enc = zstd::stream::write::Encoder::new(&mut streamed, 3).unwrap();
         std::io::Write::write_all(&mut enc, &payload).unwrap();
         enc.finish().unwrap();
-        u.unpack(&streamed).unwrap().unwrap();
+        u.unpack(&streamed, u64::MAX).unwrap().unwrap();
         assert_eq!(u.out, payload);
         let mut enc = lz4::EncoderBuilder::new().build(Vec::new()).unwrap();
         std::io::Write::write_all(&mut enc, &payload).unwrap();
         let (l, r) = enc.finish();
         r.unwrap();
-        u.unpack(&l).unwrap().unwrap();
+        u.unpack(&l, u64::MAX).unwrap().unwrap();
         assert_eq!(u.out, payload);
-        assert!(u.unpack(&payload).is_none());
+        assert!(u.unpack(&payload, u64::MAX).is_none());
         let mut bad = z.clone();
         bad.truncate(z.len() / 2);
-        assert!(u.unpack(&bad).unwrap().is_err());
+        assert!(u.unpack(&bad, u64::MAX).unwrap().is_err());
         // Twice the same context: the second message is right too.
-        u.unpack(&z).unwrap().unwrap();
+        u.unpack(&z, u64::MAX).unwrap().unwrap();
         assert_eq!(u.out, payload);
     }
 }

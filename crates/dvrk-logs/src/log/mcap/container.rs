@@ -7,8 +7,17 @@
 //!
 //! The file is read through a buffered reader and the `mcap` crate's sans-io
 //! [`LinearReader`] (mcap 0.26: a streaming reader over any `Read`, so no memory map),
-//! which decompresses one chunk at a time (zstd or lz4) and checks the chunk,
-//! data-section and summary CRCs; memory is bounded by the largest chunk, not the file.
+//! which checks the data-section and summary CRCs. It hands each chunk over whole
+//! (`emit_chunks`): the chunk's header states its decompressed size, which is checked
+//! against the bounds before a byte is decompressed (at most [`RECORD_LENGTH_LIMIT`] per
+//! chunk, and all compressed chunks of a file together at most
+//! [`super::bag::unpack_limit`]: 100 times the file, within 64 MiB and 16 GiB, or
+//! `--max-unpacked-mib`); a second reader of the same crate then reads the chunk's
+//! records, decompressing (zstd or lz4) and checking its CRC, and refuses a chunk that
+//! decompresses to more than its header states. Memory is bounded by the largest chunk,
+//! not the file; time by the bound: a decompression bomb fails in a fraction of a second
+//! instead of expanding for minutes. A file compressed as a whole is bounded the same
+//! way.
 //! A [`Scanner`] hands the messages one at a time, on demand, to a callback as borrowed
 //! slices (each payload copied once out of its chunk), so a log can be read block by
 //! block and read again.
@@ -32,7 +41,7 @@ use super::sqlite::SqliteFile;
 /// allocations a corrupted length field can cause (the reader reserves a chunk's
 /// uncompressed size before decompressing). rosbag2 writes chunks of under 1 MiB and the
 /// `mcap` tool 4 MiB; a camera image is tens of MiB.
-const RECORD_LENGTH_LIMIT: usize = 256 << 20;
+pub(crate) const RECORD_LENGTH_LIMIT: usize = 256 << 20;
 
 /// Most bytes handed to the reader per read: it grows its buffer by what it is given,
 /// so a record's claimed length is only allocated as its bytes really arrive (a 7 kB
@@ -69,7 +78,8 @@ pub(crate) fn scan(
 
 /// One file of a recording being read.
 enum Backend {
-    Mcap(McapFile),
+    /// Boxed: it holds two readers, the file's and its current chunk's.
+    Mcap(Box<McapFile>),
     Sqlite(SqliteFile),
     Ros1(Ros1File),
 }
@@ -77,7 +87,7 @@ enum Backend {
 impl Backend {
     fn open(file: &BagFile, channels: &mut Channels) -> Result<Backend, LogError> {
         Ok(match file.storage {
-            Storage::Mcap => Backend::Mcap(McapFile::open(file)?),
+            Storage::Mcap => Backend::Mcap(Box::new(McapFile::open(file)?)),
             Storage::Sqlite3 => Backend::Sqlite(SqliteFile::open(file, channels)?),
             Storage::Ros1 => Backend::Ros1(Ros1File::open(file, channels)?),
         })
@@ -101,6 +111,8 @@ pub(crate) struct Scanner {
     channels: Channels,
     /// Messages compressed on their own, decompressed.
     unpacker: Unpacker,
+    /// What the current file's messages decompressed to so far, bytes.
+    unpacked: u64,
 }
 
 impl Scanner {
@@ -111,6 +123,7 @@ impl Scanner {
             backend: None,
             channels: Channels::default(),
             unpacker: Unpacker::default(),
+            unpacked: 0,
         })
     }
 
@@ -127,6 +140,7 @@ impl Scanner {
                 };
                 self.backend = Some(Backend::open(file, &mut self.channels)?);
                 self.next_file += 1;
+                self.unpacked = 0;
             }
             let Scanner {
                 bag,
@@ -134,6 +148,7 @@ impl Scanner {
                 backend,
                 channels,
                 unpacker,
+                unpacked,
             } = self;
             let raw = backend.as_mut().expect("opened above").next(channels)?;
             let Some(raw) = raw else {
@@ -145,15 +160,18 @@ impl Scanner {
             let mut data = raw.data;
             // ROS 1 messages carry no encapsulation header: never compressed alone.
             if channel.message_encoding != "ros1" {
-                if let Some(r) = unpacker.unpack(data) {
+                let file = &bag.files[*next_file - 1];
+                let budget = file.unpack_limit.saturating_sub(*unpacked);
+                if let Some(r) = unpacker.unpack(data, budget) {
                     r.map_err(|reason| {
                         mcap_error(
-                            &bag.files[*next_file - 1].path,
+                            &file.path,
                             Some(&channel.topic),
                             McapProblem::Container { reason },
                         )
                     })?;
                     data = unpacker.out.as_slice();
+                    *unpacked += data.len() as u64;
                 }
             }
             return f(MessageRef {
@@ -190,13 +208,19 @@ struct McapFile {
     packed: bool,
     src: Box<dyn Read>,
     reader: LinearReader,
-    schemas: BTreeMap<u16, String>,
-    /// Channel id to the index in [`Channels`].
-    channels: BTreeMap<u16, usize>,
-    past_data_end: bool,
+    records: Records,
+    /// Bytes handed to the reader: the file's, or what it decompressed to when it is
+    /// compressed as a whole.
     bytes_read: u64,
-    /// The last message's payload.
-    current: Vec<u8>,
+    /// Most bytes the file (compressed as a whole) and, separately, its compressed
+    /// chunks together may decompress to ([`super::bag::unpack_limit`]).
+    unpack_limit: u64,
+    /// The decompressed sizes of the compressed chunks so far, as their headers state.
+    chunks_unpacked: u64,
+    /// The reader of the current chunk's records, fed the chunk record alone.
+    chunk: Option<LinearReader>,
+    /// The file's size on disk, bytes.
+    compressed_len: u64,
 }
 
 impl McapFile {
@@ -206,8 +230,9 @@ impl McapFile {
             path: path.to_path_buf(),
             source,
         };
-        let raw =
-            std::io::BufReader::with_capacity(1 << 16, std::fs::File::open(path).map_err(io)?);
+        let raw = std::fs::File::open(path).map_err(io)?;
+        let compressed_len = raw.metadata().map_err(io)?.len();
+        let raw = std::io::BufReader::with_capacity(1 << 16, raw);
         let src: Box<dyn Read> = match file.packing {
             Packing::None => Box::new(raw),
             Packing::Zstd => Box::new(zstd::stream::read::Decoder::with_buffer(raw).map_err(io)?),
@@ -217,17 +242,22 @@ impl McapFile {
             .with_validate_chunk_crcs(true)
             .with_validate_data_section_crc(true)
             .with_validate_summary_section_crc(true)
-            .with_record_length_limit(RECORD_LENGTH_LIMIT);
+            .with_record_length_limit(RECORD_LENGTH_LIMIT)
+            .with_emit_chunks(true);
         Ok(McapFile {
             path: file.path.clone(),
             packed: file.packing != Packing::None,
             src,
             reader: LinearReader::new_with_options(options),
-            schemas: BTreeMap::new(),
-            channels: BTreeMap::new(),
-            past_data_end: false,
+            records: Records {
+                path: file.path.clone(),
+                ..Records::default()
+            },
             bytes_read: 0,
-            current: Vec::new(),
+            unpack_limit: file.unpack_limit,
+            chunks_unpacked: 0,
+            chunk: None,
+            compressed_len,
         })
     }
 
@@ -258,12 +288,50 @@ impl McapFile {
             }
         };
         self.bytes_read += n as u64;
+        if self.packed && self.bytes_read > self.unpack_limit {
+            return Err(mcap_error(
+                path,
+                None,
+                McapProblem::Damaged {
+                    kind: "compressed file",
+                    reason: super::bag::unpack_bound_exceeded(
+                        "it",
+                        self.unpack_limit,
+                        self.compressed_len,
+                    ),
+                },
+            ));
+        }
         self.reader.notify_read(n);
         Ok(())
     }
 
     fn next(&mut self, registry: &mut Channels) -> Result<Option<RawMessage<'_>>, LogError> {
         let found = loop {
+            // The current chunk's records first.
+            if let Some(chunk) = self.chunk.as_mut() {
+                match chunk.next_event() {
+                    None => self.chunk = None,
+                    // The chunk record is all the reader gets: the end of its input.
+                    Some(Ok(LinearReadEvent::ReadRequest(_))) => chunk.notify_read(0),
+                    Some(Ok(LinearReadEvent::Record { opcode, data })) => {
+                        if let Some(found) =
+                            self.records
+                                .record(opcode, data, self.bytes_read, registry)?
+                        {
+                            break found;
+                        }
+                    }
+                    Some(Err(e)) => {
+                        return Err(mcap_error(
+                            &self.path,
+                            None,
+                            container_problem(e, self.bytes_read),
+                        ))
+                    }
+                }
+                continue;
+            }
             let Some(event) = self.reader.next_event() else {
                 return Ok(None);
             };
@@ -271,80 +339,48 @@ impl McapFile {
                 .map_err(|e| mcap_error(&self.path, None, container_problem(e, self.bytes_read)))?
             {
                 LinearReadEvent::ReadRequest(need) => self.read_more(need)?,
-                LinearReadEvent::Record { opcode, data } => match opcode {
-                    op::DATA_END => self.past_data_end = true,
-                    op::SCHEMA | op::CHANNEL | op::MESSAGE => {
-                        if !lengths_fit(opcode, data) {
-                            return Err(mcap_error(
-                                &self.path,
-                                None,
-                                McapProblem::Container {
-                                    reason: format!(
-                                        "corrupted file: a length inside a {} record runs \
-                                         past its end (about byte {})",
-                                        if opcode == op::SCHEMA {
-                                            "schema"
-                                        } else {
-                                            "channel"
-                                        },
-                                        self.bytes_read
-                                    ),
-                                },
-                            ));
-                        }
-                        let record = ::mcap::parse_record(opcode, data).map_err(|e| {
-                            mcap_error(&self.path, None, container_problem(e, self.bytes_read))
-                        })?;
-                        match record {
-                            Record::Schema { header, .. } => {
-                                self.schemas.entry(header.id).or_insert(header.name);
+                LinearReadEvent::Record {
+                    opcode: op::CHUNK,
+                    data,
+                } => {
+                    if let Some((size, compression)) = chunk_header(data) {
+                        if !compression.is_empty() {
+                            let reason = if size > RECORD_LENGTH_LIMIT as u64 {
+                                Some(format!(
+                                    "a chunk (about byte {}) states {size} bytes decompressed, \
+                                     more than the {} MiB a chunk may hold",
+                                    self.bytes_read,
+                                    RECORD_LENGTH_LIMIT >> 20
+                                ))
+                            } else {
+                                self.chunks_unpacked += size;
+                                (self.chunks_unpacked > self.unpack_limit).then(|| {
+                                    super::bag::unpack_bound_exceeded(
+                                        "its compressed chunks",
+                                        self.unpack_limit,
+                                        self.compressed_len,
+                                    )
+                                })
+                            };
+                            if let Some(reason) = reason {
+                                return Err(mcap_error(
+                                    &self.path,
+                                    None,
+                                    McapProblem::Container { reason },
+                                ));
                             }
-                            Record::Channel(c) => {
-                                if self.channels.contains_key(&c.id) {
-                                    continue;
-                                }
-                                let schema_name = if c.schema_id == 0 {
-                                    String::new()
-                                } else {
-                                    self.schemas.get(&c.schema_id).cloned().ok_or_else(|| {
-                                        mcap_error(
-                                            &self.path,
-                                            Some(&c.topic),
-                                            McapProblem::Container {
-                                                reason: format!(
-                                                    "channel {} refers to schema {}, which is not defined before it",
-                                                    c.id, c.schema_id
-                                                ),
-                                            },
-                                        )
-                                    })?
-                                };
-                                let k = registry.index(&c.topic, &schema_name, &c.message_encoding);
-                                self.channels.insert(c.id, k);
-                            }
-                            Record::Message { header, data } if !self.past_data_end => {
-                                let &channel =
-                                    self.channels.get(&header.channel_id).ok_or_else(|| {
-                                        mcap_error(
-                                            &self.path,
-                                            None,
-                                            McapProblem::Container {
-                                                reason: format!(
-                                                    "a message refers to channel {}, which is not defined before it",
-                                                    header.channel_id
-                                                ),
-                                            },
-                                        )
-                                    })?;
-                                self.current.clear();
-                                self.current.extend_from_slice(&data);
-                                break (channel, header.log_time, header.publish_time);
-                            }
-                            _ => {}
                         }
                     }
-                    _ => {}
-                },
+                    self.chunk = Some(chunk_reader(data));
+                }
+                LinearReadEvent::Record { opcode, data } => {
+                    if let Some(found) =
+                        self.records
+                            .record(opcode, data, self.bytes_read, registry)?
+                    {
+                        break found;
+                    }
+                }
             }
         };
         let (channel, log_time, publish_time) = found;
@@ -352,8 +388,134 @@ impl McapFile {
             channel,
             log_time,
             publish_time,
-            data: &self.current,
+            data: &self.records.current,
         }))
+    }
+}
+
+/// A reader of one chunk's records: the chunk record (`data`, without its opcode and
+/// length) is its whole input. It decompresses the chunk (its sizes and its CRC
+/// checked by the `mcap` crate, which refuses output beyond the stated size).
+fn chunk_reader(data: &[u8]) -> LinearReader {
+    let options = LinearReaderOptions::default()
+        .with_skip_start_magic(true)
+        .with_skip_end_magic(true)
+        .with_validate_chunk_crcs(true)
+        .with_record_length_limit(RECORD_LENGTH_LIMIT);
+    let mut reader = LinearReader::new_with_options(options);
+    let buf = reader.insert(9 + data.len());
+    buf[0] = op::CHUNK;
+    buf[1..9].copy_from_slice(&(data.len() as u64).to_le_bytes());
+    buf[9..].copy_from_slice(data);
+    reader.notify_read(9 + data.len());
+    reader
+}
+
+/// A chunk record's stated decompressed size and compression (empty: none), read
+/// without allocating; `None` for a header too short to hold them (the chunk's reader
+/// then reports it).
+fn chunk_header(data: &[u8]) -> Option<(u64, &[u8])> {
+    // start time, end time (8 bytes each), uncompressed size, CRC (4), compression
+    let size = u64::from_le_bytes(data.get(16..24)?.try_into().ok()?);
+    let n = u32::from_le_bytes(data.get(28..32)?.try_into().ok()?) as usize;
+    Some((size, data.get(32..32usize.checked_add(n)?)?))
+}
+
+/// What the records of a file define and the last message, as they are read.
+#[derive(Default)]
+struct Records {
+    path: std::path::PathBuf,
+    schemas: BTreeMap<u16, String>,
+    /// Channel id to the index in [`Channels`].
+    channels: BTreeMap<u16, usize>,
+    past_data_end: bool,
+    /// The last message's payload.
+    current: Vec<u8>,
+}
+
+impl Records {
+    /// Takes in one record (of the file or of a chunk); a message's channel and times
+    /// when it is one (its payload in [`Records::current`]). `offset` (bytes read)
+    /// places errors.
+    fn record(
+        &mut self,
+        opcode: u8,
+        data: &[u8],
+        offset: u64,
+        registry: &mut Channels,
+    ) -> Result<Option<(usize, u64, u64)>, LogError> {
+        match opcode {
+            op::DATA_END => self.past_data_end = true,
+            op::SCHEMA | op::CHANNEL | op::MESSAGE => {
+                if !lengths_fit(opcode, data) {
+                    return Err(mcap_error(
+                        &self.path,
+                        None,
+                        McapProblem::Container {
+                            reason: format!(
+                                "corrupted file: a length inside a {} record runs past its \
+                                 end (about byte {offset})",
+                                if opcode == op::SCHEMA {
+                                    "schema"
+                                } else {
+                                    "channel"
+                                },
+                            ),
+                        },
+                    ));
+                }
+                let record = ::mcap::parse_record(opcode, data)
+                    .map_err(|e| mcap_error(&self.path, None, container_problem(e, offset)))?;
+                match record {
+                    Record::Schema { header, .. } => {
+                        self.schemas.entry(header.id).or_insert(header.name);
+                    }
+                    Record::Channel(c) => {
+                        if self.channels.contains_key(&c.id) {
+                            return Ok(None);
+                        }
+                        let schema_name = if c.schema_id == 0 {
+                            String::new()
+                        } else {
+                            self.schemas.get(&c.schema_id).cloned().ok_or_else(|| {
+                                mcap_error(
+                                    &self.path,
+                                    Some(&c.topic),
+                                    McapProblem::Container {
+                                        reason: format!(
+                                            "channel {} refers to schema {}, which is not defined before it",
+                                            c.id, c.schema_id
+                                        ),
+                                    },
+                                )
+                            })?
+                        };
+                        let k = registry.index(&c.topic, &schema_name, &c.message_encoding);
+                        self.channels.insert(c.id, k);
+                    }
+                    Record::Message { header, data } if !self.past_data_end => {
+                        let &channel = self.channels.get(&header.channel_id).ok_or_else(|| {
+                            mcap_error(
+                                &self.path,
+                                None,
+                                McapProblem::Container {
+                                    reason: format!(
+                                        "a message refers to channel {}, which is not defined before it",
+                                        header.channel_id
+                                    ),
+                                },
+                            )
+                        })?;
+                        self.current.clear();
+                        self.current.extend_from_slice(&data);
+                        return Ok(Some((channel, header.log_time, header.publish_time)));
+                    }
+                    _ => {}
+                }
+            }
+            _ => {}
+        }
+        Ok(None)
     }
 }
 

@@ -3,6 +3,14 @@
 //! file order, one at a time (bz2 or lz4 chunks decompressed by the crate), their
 //! messages handed out in record order. Messages are in ROS 1 serialization
 //! (`ros1` encoding), their time the record's (when the recorder received them).
+//!
+//! The crate decompresses a chunk into memory sized by the chunk's `size` field (a 7 kB
+//! bag whose bz2 chunk claimed 4 GB took 3.8 GB), and an lz4 chunk without any bound.
+//! So every chunk's header is read first, when the bag is opened: a compressed chunk
+//! may state at most 256 MiB, and all of them together at most the file's bound
+//! ([`super::bag::unpack_limit`], `--max-unpacked-mib`); bz2 output stops at the stated
+//! size, and an lz4 chunk is decoded once, output discarded, to check that it does not
+//! exceed it before the crate decodes it.
 
 use std::collections::{HashMap, VecDeque};
 use std::io::Read;
@@ -19,9 +27,13 @@ use crate::log::LogError;
 /// A ROS 1 bag being read.
 pub(crate) struct Ros1File {
     path: PathBuf,
+    /// The file read (the decompressed copy of a compressed bag).
+    bag_path: PathBuf,
     bag: RosBag,
     /// Chunk record positions, in file order.
     chunks: Vec<u64>,
+    /// The lz4 chunks' data (position, length) and stated size, by chunk position.
+    lz4: HashMap<u64, (u64, u64, u64)>,
     next_chunk: usize,
     /// Connection id to the index in [`Channels`].
     connections: HashMap<u32, usize>,
@@ -64,10 +76,14 @@ impl Ros1File {
             }
         }
         chunks.sort_unstable();
+        let lz4 = check_chunk_sizes(readable, &chunks, file.unpack_limit)
+            .map_err(|reason| container(&path, reason))?;
         Ok(Ros1File {
             path,
+            bag_path: readable.to_path_buf(),
             bag,
             chunks,
+            lz4,
             next_chunk: 0,
             connections,
             queue: VecDeque::new(),
@@ -81,6 +97,10 @@ impl Ros1File {
         self.next_chunk += 1;
         let path = &self.path;
         let fail = |e: rosbag::Error| container(path, format!("chunk at byte {pos}: {e}"));
+        if let Some(&(data_pos, data_len, size)) = self.lz4.get(&pos) {
+            check_lz4_size(&self.bag_path, data_pos, data_len, size)
+                .map_err(|reason| container(path, format!("chunk at byte {pos}: {reason}")))?;
+        }
         let mut records = self.bag.chunk_records();
         records.seek(pos).map_err(fail)?;
         let chunk = match records.next() {
@@ -177,4 +197,103 @@ fn check_header(path: &Path) -> Result<(), String> {
         )),
         Some(_) => Ok(()),
     }
+}
+
+/// Largest decompressed size a compressed chunk may state, bytes (`rosbag record` writes
+/// chunks of 768 KiB).
+const MAX_CHUNK_BYTES: u64 = 256 << 20;
+
+/// Reads the header of every chunk at `chunks` (positions in `path`): a compressed
+/// chunk's stated `size` at most [`MAX_CHUNK_BYTES`], all of them together at most
+/// `limit`. Returns the lz4 chunks' data position, length and stated size. A header
+/// that cannot be read is left to the crate, which reports it.
+fn check_chunk_sizes(
+    path: &Path,
+    chunks: &[u64],
+    limit: u64,
+) -> Result<HashMap<u64, (u64, u64, u64)>, String> {
+    use std::io::{Seek, SeekFrom};
+    let io = |e: std::io::Error| e.to_string();
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    let len = file.metadata().map_err(io)?.len();
+    let mut total = 0u64;
+    let mut lz4 = HashMap::new();
+    for &pos in chunks {
+        let mut n = [0u8; 4];
+        if pos.checked_add(4).is_none_or(|end| end > len)
+            || file.seek(SeekFrom::Start(pos)).is_err()
+            || file.read_exact(&mut n).is_err()
+        {
+            continue;
+        }
+        let header_len = u64::from(u32::from_le_bytes(n));
+        if header_len > 1 << 20 || pos + 4 + header_len + 4 > len {
+            continue;
+        }
+        let mut header = vec![0u8; header_len as usize];
+        file.read_exact(&mut header).map_err(io)?;
+        file.read_exact(&mut n).map_err(io)?;
+        let data_len = u64::from(u32::from_le_bytes(n));
+        let (mut op, mut compression, mut size) = (None, None, None);
+        let mut fields = header.as_slice();
+        while fields.len() >= 4 {
+            let n = u32::from_le_bytes(fields[..4].try_into().expect("4 bytes")) as usize;
+            let Some(field) = fields.get(4..4 + n) else {
+                break;
+            };
+            if let Some(v) = field.strip_prefix(b"op=") {
+                op = v.first().copied();
+            } else if let Some(v) = field.strip_prefix(b"compression=") {
+                compression = Some(v);
+            } else if let Some(v) = field.strip_prefix(b"size=") {
+                size = <[u8; 4]>::try_from(v).ok().map(u32::from_le_bytes);
+            }
+            fields = &fields[4 + n..];
+        }
+        let (Some(0x05), Some(compression), Some(size)) = (op, compression, size) else {
+            continue;
+        };
+        if compression == b"none" {
+            continue;
+        }
+        let size = u64::from(size);
+        if size > MAX_CHUNK_BYTES {
+            return Err(format!(
+                "the chunk at byte {pos} states {size} bytes decompressed, more than the {} \
+                 MiB a chunk may hold",
+                MAX_CHUNK_BYTES >> 20
+            ));
+        }
+        total += size;
+        if total > limit {
+            return Err(super::bag::unpack_bound_exceeded(
+                "its compressed chunks",
+                limit,
+                len,
+            ));
+        }
+        if compression == b"lz4" {
+            lz4.insert(pos, (pos + 4 + header_len + 4, data_len, size));
+        }
+    }
+    Ok(lz4)
+}
+
+/// Decodes the lz4 data of a chunk (`data_len` bytes at `data_pos` of `path`), output
+/// discarded, refusing more than its stated `size`.
+fn check_lz4_size(path: &Path, data_pos: u64, data_len: u64, size: u64) -> Result<(), String> {
+    use std::io::{Seek, SeekFrom};
+    let io = |e: std::io::Error| e.to_string();
+    let mut file = std::fs::File::open(path).map_err(io)?;
+    file.seek(SeekFrom::Start(data_pos)).map_err(io)?;
+    let decoder = lz4::Decoder::new(file.take(data_len))
+        .map_err(|e| format!("its lz4 data does not decompress: {e}"))?;
+    let n = std::io::copy(&mut decoder.take(size + 1), &mut std::io::sink())
+        .map_err(|e| format!("its lz4 data does not decompress: {e}"))?;
+    if n > size {
+        return Err(format!(
+            "its lz4 data decompresses to more than the {size} bytes its header states"
+        ));
+    }
+    Ok(())
 }
