@@ -333,8 +333,8 @@ pub(crate) fn fit_stream_logs(
     )
 }
 
-/// The training logs of a streamed fit reduced, without the estimator: what
-/// [`fit_stream_logs`] builds before it, for an observation state
+/// The training logs of a streamed fit reduced, without the estimator: what the
+/// streamed fit builds before it, for an observation state
 /// ([`crate::state::ObservationState`]). `model` is the model of the settings
 /// ([`FitSettings::model`]).
 pub fn observe_stream_logs(
