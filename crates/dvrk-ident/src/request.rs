@@ -73,6 +73,9 @@ pub struct Overrides {
     pub sdp_regularization: Option<f64>,
     /// A Stribeck term with this velocity (rad/s or m/s) on every friction element.
     pub stribeck_velocity: Option<f64>,
+    /// Dahl friction of this stiffness σ (1/rad or 1/m) on every friction element
+    /// ([`FitSettings::dahl_sigma`]).
+    pub dahl_sigma: Option<f64>,
     /// The arm's mounting pitch, degrees (gravity `(0, −9.81·sin p, −9.81·cos p)` in the
     /// base frame, [`FitSettings::mounting_pitch_deg`]).
     pub mounting_pitch_deg: Option<f64>,
@@ -274,6 +277,7 @@ impl Overrides {
         o.irls_iterations = o.irls_iterations.or(p.irls_iterations);
         o.sdp_regularization = o.sdp_regularization.or(p.sdp_regularization);
         o.stribeck_velocity = o.stribeck_velocity.or(p.stribeck_velocity);
+        o.dahl_sigma = o.dahl_sigma.or(p.dahl_sigma);
         o.mounting_pitch_deg = o.mounting_pitch_deg.or(p.mounting_pitch_deg);
         o.bounds = o.bounds.or(p.bounds);
         o.ellipsoids = o.ellipsoids.or(p.ellipsoids);
@@ -329,6 +333,9 @@ impl Overrides {
         }
         if let Some(v) = self.stribeck_velocity {
             s.stribeck_velocity = Some(v);
+        }
+        if let Some(v) = self.dahl_sigma {
+            s.dahl_sigma = Some(v);
         }
         if let Some(p) = self.mounting_pitch_deg {
             s.mounting_pitch_deg = Some(p);
@@ -410,6 +417,7 @@ impl Overrides {
             ("min_speed", self.min_speed.is_some()),
             ("resample", self.resample_hz.is_some()),
             ("stribeck", self.stribeck_velocity.is_some()),
+            ("dahl", self.dahl_sigma.is_some()),
             ("mounting_pitch", self.mounting_pitch_deg.is_some()),
             ("delay", self.delay.is_some()),
         ];

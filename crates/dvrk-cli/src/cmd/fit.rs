@@ -34,7 +34,7 @@ pub struct Args {
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
     #[arg(long, alias = "from", num_args = 1.., value_name = "STATE", help_heading = INPUT,
-          conflicts_with_all = ["logs", "stream", "report", "stribeck", "mounting_pitch", "delay"])]
+          conflicts_with_all = ["logs", "stream", "report", "stribeck", "dahl", "mounting_pitch", "delay"])]
     pub states: Vec<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG", help_heading = INPUT)]
@@ -62,6 +62,12 @@ pub struct Args {
     /// or m/s) to every friction element (parameters Fs<frame>) [default: none]
     #[arg(long, value_name = "VS", help_heading = MODEL)]
     pub stribeck: Option<f64>,
+    /// Add Dahl friction Fd·z (rate-independent hysteresis: z follows dz/ds =
+    /// SIGMA·(1 − z·sign(ds)) along the joint value, integrated from the processed
+    /// positions in time order) with this stiffness (1/rad or 1/m) to every friction
+    /// element (parameters Fd<frame>, Fd ≥ 0 in the semidefinite fit) [default: none]
+    #[arg(long, value_name = "SIGMA", help_heading = MODEL)]
+    pub dahl: Option<f64>,
     #[command(flatten)]
     pub mounting: MountingArgs,
     /// Lower bounds of the semidefinite fit on friction and motor inertias, in place of
@@ -177,6 +183,7 @@ fn request(args: &Args) -> Result<FitRequest> {
     overrides.preset = args.preset;
     overrides.test_window = args.test_window;
     overrides.stribeck_velocity = args.stribeck;
+    overrides.dahl_sigma = args.dahl;
     overrides.mounting_pitch_deg = args.mounting.mounting_pitch;
     overrides.irls_iterations = args.irls_iterations;
     overrides.sdp_regularization = args.sdp_regularization;
