@@ -149,10 +149,13 @@ impl Preset {
     /// The settings the preset stands for.
     pub fn overrides(self) -> Overrides {
         match self {
+            // Dahl friction replaced the delay search (issue 28): the wrist's lag is
+            // hysteresis over a displacement, which holds at another speed where a delay
+            // fitted at one does not (docs/book/src/generalization.md).
             Preset::Dvrk => Overrides {
                 method: Some(Method::Sdp),
-                delay: Some(DelayOption::Auto),
                 stribeck_velocity: Some(0.3),
+                dahl_sigma: Some(20.0),
                 ..Overrides::default()
             },
         }
@@ -290,6 +293,9 @@ impl Overrides {
             let given = self.observation_fields();
             if !given.contains(&"stribeck") {
                 o.stribeck_velocity = self.stribeck_velocity;
+            }
+            if !given.contains(&"dahl") {
+                o.dahl_sigma = self.dahl_sigma;
             }
             if !given.contains(&"delay") {
                 o.delay = self.delay.clone();

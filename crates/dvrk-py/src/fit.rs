@@ -85,7 +85,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
 ///   ``resample`` (Hz, of the samples given), ``irls_iterations``,
 ///   ``sdp_regularization``, ``stribeck`` (adds a Stribeck term with this velocity,
-///   rad/s or m/s, to every friction element);
+///   rad/s or m/s, to every friction element), ``dahl`` (adds Dahl friction, a
+///   hysteresis over the displacement, with this stiffness, 1/rad or 1/m, to every
+///   friction element, as ``--dahl``);
 /// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
 ///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
 ///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every
@@ -107,7 +109,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
 ///   ``result.settings["prior"]``;
 /// - ``preset``: ``"dvrk"``, the settings recommended for the dVRK arms for every
-///   keyword not given (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3``, as
+///   keyword not given (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, as
 ///   ``--preset dvrk``); the result records what it expanded to;
 /// - ``joints``: ``"model"`` (the default) or ``"measured"``: the metrics in the model
 ///   coordinates or in the arm's measured joints by name (``--joints``); the fit is the
@@ -134,7 +136,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///     ...                 test_window=1111)
 ///     >>> result.metrics["test"]["relative_error"]
 #[pyfunction]
-#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, bounds = None, ellipsoids = None, mounting_pitch = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
+#[pyo3(signature = (robot, data, method = None, *, cutoff = None, filter_torque = None, test = None, test_window = None, excitation = None, trim = None, decimate = None, min_speed = None, resample = None, irls_iterations = None, sdp_regularization = None, stribeck = None, dahl = None, bounds = None, ellipsoids = None, mounting_pitch = None, delay = None, prior = None, prior_weight = None, prior_metric = None, preset = None, joints = None, settings = None, allow_unconverged = false))]
 #[allow(clippy::too_many_arguments)]
 pub fn fit(
     py: Python<'_>,
@@ -153,6 +155,7 @@ pub fn fit(
     irls_iterations: Option<usize>,
     sdp_regularization: Option<f64>,
     stribeck: Option<f64>,
+    dahl: Option<f64>,
     bounds: Option<&str>,
     ellipsoids: Option<bool>,
     mounting_pitch: Option<f64>,
@@ -179,6 +182,7 @@ pub fn fit(
         irls_iterations,
         sdp_regularization,
         stribeck,
+        dahl,
         bounds,
         ellipsoids,
         mounting_pitch,

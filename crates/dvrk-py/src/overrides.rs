@@ -70,6 +70,7 @@ pub(crate) struct Overrides<'a, 'py> {
     pub irls_iterations: Option<usize>,
     pub sdp_regularization: Option<f64>,
     pub stribeck: Option<f64>,
+    pub dahl: Option<f64>,
     pub bounds: Option<&'a str>,
     pub ellipsoids: Option<bool>,
     pub mounting_pitch: Option<f64>,
@@ -129,6 +130,7 @@ impl Overrides<'_, '_> {
             irls_iterations: self.irls_iterations,
             sdp_regularization: self.sdp_regularization,
             stribeck_velocity: self.stribeck,
+            dahl_sigma: self.dahl,
             bounds: self
                 .bounds
                 .map(|b| crate::convert::named("bounds", b))

@@ -89,7 +89,7 @@ pub struct Args {
     #[arg(long, value_name = "auto|D|D1,D2,...", help_heading = PROCESSING)]
     pub delay: Option<String>,
     /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
+    /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20). The result records the
     /// settings it expanded to [default: none]
     #[arg(long, value_parser = super::named::<Preset>(), value_name = "PRESET", help_heading = ESTIMATOR)]
     pub preset: Option<Preset>,
