@@ -245,7 +245,10 @@ impl Model {
     }
 
     /// The elements' torques (friction, springs, motor inertias...), added into `tau`.
+    /// `hysteresis`: the workspace's Dahl states (the workspace itself is borrowed
+    /// mutably by the callers' other buffers).
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn add_elements(
         &self,
         hysteresis: &[f64],
