@@ -166,7 +166,7 @@ fn preset_dvrk_records_what_it_expands_to() {
     fit_example_to(&preset, &["--preset", "dvrk"]);
     fit_example_to(
         &spelled,
-        &["--method", "sdp", "--delay", "auto", "--stribeck", "0.3"],
+        &["--method", "sdp", "--stribeck", "0.3", "--dahl", "20"],
     );
     let a = dvrk_test_support::read_json(&preset);
     let b = dvrk_test_support::read_json(&spelled);
@@ -174,7 +174,11 @@ fn preset_dvrk_records_what_it_expands_to() {
     assert_eq!(a["parameters"], b["parameters"]);
     assert_eq!(a["settings"]["method"], "sdp");
     assert_eq!(a["settings"]["stribeck_velocity"], 0.3);
-    assert!(a["delay"].is_object(), "the delays were estimated");
+    assert_eq!(a["settings"]["dahl_sigma"], 20.0);
+    assert!(
+        a["parameters"]["Fd1"].as_f64().unwrap() >= 0.0,
+        "Dahl friction fitted"
+    );
     // A flag given beside the preset wins over it.
     let ols = dir.join("ols.json");
     fit_example_to(&ols, &["--preset", "dvrk", "--method", "ols"]);

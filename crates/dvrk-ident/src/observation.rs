@@ -263,6 +263,11 @@ pub struct PerCoordinate {
     ended: bool,
     /// The rows of the chunks in flight, reused.
     blocks: Vec<Vec<f64>>,
+    /// The hysteresis (Dahl) states carried from batch to batch in time order (`None`
+    /// for a model without Dahl elements), and their columns.
+    hysteresis: Option<(Workspace, Vec<usize>)>,
+    /// Each sample's hysteresis states of the batch in flight, `columns` per sample.
+    states: Vec<f64>,
 }
 
 impl PerCoordinate {
@@ -284,6 +289,11 @@ impl PerCoordinate {
             chunks: 0,
             ended: false,
             blocks: Vec::new(),
+            hysteresis: {
+                let columns = model.hysteresis_columns();
+                (!columns.is_empty()).then(|| (Workspace::new(model), columns))
+            },
+            states: Vec::new(),
         }
     }
 
@@ -303,6 +313,26 @@ impl PerCoordinate {
             .map(|s| (s, (s + CHUNK_SAMPLES).min(count)))
             .collect();
         self.ended = count % CHUNK_SAMPLES != 0;
+        // The hysteresis states depend on the path: integrated here in time order (from
+        // the state the previous batch ended in), then read by the chunks in parallel.
+        let m = self.hysteresis.as_ref().map_or(0, |(_, c)| c.len());
+        if let Some((carry, columns)) = &mut self.hysteresis {
+            self.states.clear();
+            self.states.reserve(count * m);
+            let mut q = vec![0.0; n];
+            for k in 0..count {
+                for (j, x) in q.iter_mut().enumerate() {
+                    *x = samples.q[(k, j)];
+                }
+                model.advance_hysteresis(carry, &q);
+                let z = carry.hysteresis();
+                self.states.extend(columns.iter().map(|&c| z[c]));
+            }
+        }
+        let (states, columns) = (
+            &self.states,
+            self.hysteresis.as_ref().map(|(_, c)| c.as_slice()),
+        );
         let in_flight = (2 * rayon::current_num_threads()).clamp(2 * LANES, 16);
         for group in chunks.chunks(in_flight) {
             // The rows [H | τ] of each chunk, row k·n + j for coordinate j of sample k.
@@ -325,6 +355,11 @@ impl PerCoordinate {
                     block.resize((end - start) * n * width, 0.0);
                     for k in start..end {
                         samples.read(k, q, dq, ddq);
+                        if let Some(columns) = columns {
+                            for (i, &c) in columns.iter().enumerate() {
+                                ws.set_hysteresis(c, states[k * m + i]);
+                            }
+                        }
                         model.regressor_into(ws, q, dq, ddq, h);
                         for j in 0..n {
                             let row = &mut block[((k - start) * n + j) * width..][..width];
@@ -559,6 +594,7 @@ mod tests {
         let mut rows = DMatrix::zeros(s.len(), p + 1);
         for k in 0..s.len() {
             s.read(k, &mut a, &mut b, &mut c);
+            model.advance_hysteresis(&mut ws, &a);
             model.regressor_into(&mut ws, &a, &b, &c, &mut h);
             for col in 0..p {
                 rows[(k, col)] = h[j * p + col];
@@ -589,7 +625,16 @@ mod tests {
 
     #[test]
     fn per_coordinate_parts_hold_their_coordinates_rows() {
-        let model = Model::builtin("mtm").unwrap();
+        let mtm = Model::builtin("mtm").unwrap();
+        // With Dahl friction the states integrated in time order before the parallel
+        // chunks equal those of the sample-by-sample rows.
+        for model in [mtm.clone(), mtm.with_dahl(20.0).unwrap()] {
+            per_coordinate_parts_of(&model);
+        }
+    }
+
+    fn per_coordinate_parts_of(model: &Model) {
+        let model = model.clone();
         let n = model.dof();
         let mut m = random_samples(&model, 2 * CHUNK_SAMPLES + 700, 11);
         // At rest for a chunk and a half: the Coulomb, viscous and motor-inertia columns
@@ -630,7 +675,15 @@ mod tests {
 
     #[test]
     fn batches_of_whole_chunks_give_the_same_factors_to_the_bit() {
-        let model = Model::builtin("psm").unwrap();
+        let psm = Model::builtin("psm").unwrap();
+        // The Dahl states carried from batch to batch: streamed == in memory, to the bit.
+        for model in [psm.clone(), psm.with_dahl(20.0).unwrap()] {
+            batches_of(&model);
+        }
+    }
+
+    fn batches_of(model: &Model) {
+        let model = model.clone();
         let m = random_samples(&model, 4 * CHUNK_SAMPLES + 123, 5);
         let once = Observation::assemble_per_coordinate(&model, samples(&m), &Silent);
         let mut reduction = PerCoordinate::new(&model);

@@ -299,6 +299,9 @@ fn options(settings: &FitSettings) -> Options {
     if let Some(v) = settings.stribeck_velocity {
         given.push(("stribeck", Value::Num(v)));
     }
+    if let Some(v) = settings.dahl_sigma {
+        given.push(("dahl", Value::Num(v)));
+    }
     if let Some(b) = settings.bounds {
         given.push(("bounds", Value::Name(b.name().into())));
     }

@@ -72,10 +72,13 @@ impl Preset {
     /// The settings the preset stands for.
     pub fn overrides(self) -> Overrides {
         match self {
+            // Dahl friction replaced the delay search (issue 28): the wrist's lag is
+            // hysteresis over a displacement, which holds at another speed where a delay
+            // fitted at one does not (docs/book/src/generalization.md).
             Preset::Dvrk => Overrides {
                 method: Some(Method::Sdp),
-                delay: Some(DelayOption::Auto),
                 stribeck_velocity: Some(0.3),
+                dahl_sigma: Some(20.0),
                 ..Overrides::default()
             },
         }
@@ -218,6 +221,9 @@ impl Overrides {
             if !given.contains(&Setting::Stribeck) {
                 o.stribeck_velocity = self.stribeck_velocity;
             }
+            if !given.contains(&Setting::Dahl) {
+                o.dahl_sigma = self.dahl_sigma;
+            }
             if !given.contains(&Setting::Delay) {
                 o.delay = self.delay.clone();
             }
@@ -265,6 +271,9 @@ impl Overrides {
         }
         if let Some(v) = self.stribeck_velocity {
             s.stribeck_velocity = Some(v);
+        }
+        if let Some(v) = self.dahl_sigma {
+            s.dahl_sigma = Some(v);
         }
         if let Some(p) = self.mounting_pitch_deg {
             s.mounting_pitch_deg = Some(p);
@@ -340,7 +349,7 @@ impl Overrides {
     fn observation_fields(&self) -> Vec<Setting> {
         self.given()
             .into_iter()
-            .filter(|s| Setting::OBSERVE.contains(s) || *s == Setting::Delay)
+            .filter(|s| Setting::OBSERVE.contains(s) || matches!(s, Setting::Delay | Setting::Dahl))
             .collect()
     }
 }

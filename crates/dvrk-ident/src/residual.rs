@@ -165,6 +165,7 @@ pub fn external_torque(
                 ),
             });
         }
+        model.advance_hysteresis(&mut ws, &q);
         let r = observer.update(model, &mut ws, params, &q, &dq, &tau, dt);
         observed.row_mut(k).copy_from_slice(r);
     }

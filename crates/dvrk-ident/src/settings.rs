@@ -180,6 +180,12 @@ pub struct FitSettings {
     /// m/s) to every friction element of the model that has none (see
     /// [`FitSettings::model`]). `None`: the model as described.
     pub stribeck_velocity: Option<f64>,
+    /// Adds Dahl friction `Fd·z` (rate-independent hysteresis, [`dvrk_model::Dahl`]) of
+    /// this stiffness `σ` (1/rad or 1/m) to every frame with friction and no Dahl element
+    /// (see [`FitSettings::model`]); its state is integrated from the processed positions
+    /// in time order. `None`: the model as described.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dahl_sigma: Option<f64>,
     /// The arm's mounting pitch, degrees: gravity in the base frame becomes
     /// `(0, −9.81·sin p, −9.81·cos p)` m/s² (as the dVRK's `mounting_pitch`, see
     /// [`dvrk_model::Model::mounting_pitch_gravity`]) in the model of the fit and of every
@@ -256,7 +262,8 @@ impl FitSettings {
     }
 
     /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
-    /// of [`FitSettings::stribeck_velocity`], the gravity of
+    /// of [`FitSettings::stribeck_velocity`], the Dahl friction of
+    /// [`FitSettings::dahl_sigma`], the gravity of
     /// [`FitSettings::mounting_pitch_deg`] and the bounds of [`FitSettings::bounds`].
     /// Everything that reads a result back (validate, report, export) goes through here
     /// so the parameters line up.
@@ -272,6 +279,13 @@ impl FitSettings {
             },
             None => std::borrow::Cow::Borrowed(model),
         };
+        if let Some(sigma) = self.dahl_sigma {
+            // As for Stribeck: a model with its Dahl elements already is kept.
+            let extended = m.with_dahl(sigma)?;
+            if extended.n_params() != m.n_params() {
+                m = std::borrow::Cow::Owned(extended);
+            }
+        }
         if let Some(pitch) = self.mounting_pitch_deg {
             let gravity =
                 Model::mounting_pitch_gravity(pitch).map_err(|message| IdentError::Setting {
@@ -401,6 +415,7 @@ impl Default for FitSettings {
             irls_iterations: 5,
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
+            dahl_sigma: None,
             mounting_pitch_deg: None,
             bounds: None,
             ellipsoids: true,

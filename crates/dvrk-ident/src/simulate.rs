@@ -331,6 +331,7 @@ pub fn motion_torques(
             dqk[j] = dq[(k, j)];
             ddqk[j] = ddq[(k, j)];
         }
+        model.advance_hysteresis(&mut ws, &qk);
         model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
         model.add_known_forces(&qk, &mut tk);
         tau.row_mut(k).copy_from_slice(&tk);

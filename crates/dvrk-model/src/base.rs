@@ -76,7 +76,8 @@ impl BaseParameters {
 
 impl Model {
     /// Random samples of the full regressor, stacked row-major `(samples·n) × p`, from
-    /// a seeded generator (deterministic).
+    /// a seeded generator (deterministic), taken in order as a path (the hysteresis
+    /// states of Dahl elements follow it).
     pub fn random_regressor(&self, samples: usize, seed: u64) -> DMatrix<f64> {
         let (n, p) = (self.dof(), self.n_params());
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -90,6 +91,8 @@ impl Model {
                 dq[k] = uniform(&mut rng, -2.0, 2.0);
                 ddq[k] = uniform(&mut rng, -2.0, 2.0);
             }
+            // The samples as a path: the hysteresis (Dahl) states move along it.
+            self.advance_hysteresis(&mut ws, &q);
             self.regressor_into(&mut ws, &q, &dq, &ddq, &mut buf);
             for r in 0..n {
                 for c in 0..p {

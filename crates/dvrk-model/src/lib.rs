@@ -58,7 +58,7 @@ pub use base::BaseParameters;
 pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
-    sign0, BoundOrigin, BoundRow, BoundsContext, Deflection, Element, ElementSpec, Friction,
+    sign0, BoundOrigin, BoundRow, BoundsContext, Dahl, Deflection, Element, ElementSpec, Friction,
     KnownForce, MonotoneFriction, MotorInertia, Note, QuadraticViscous, Sample, Side, Spring,
     Stribeck,
 };

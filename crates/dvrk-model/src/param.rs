@@ -29,6 +29,8 @@ pub enum ParamKind {
     /// A weight of monotone friction (N·m or N; see
     /// [`MonotoneFriction`](crate::MonotoneFriction)).
     MonotoneFriction,
+    /// Dahl friction `Fd` (N·m or N; see [`Dahl`](crate::Dahl)).
+    Dahl,
 }
 
 impl ParamKind {
@@ -41,7 +43,8 @@ impl ParamKind {
             ParamKind::Coulomb
             | ParamKind::Offset
             | ParamKind::Stribeck
-            | ParamKind::MonotoneFriction => UnitClass::Force,
+            | ParamKind::MonotoneFriction
+            | ParamKind::Dahl => UnitClass::Force,
             ParamKind::Viscous => UnitClass::Viscous,
             ParamKind::QuadraticViscous => UnitClass::QuadraticViscous,
             ParamKind::MotorInertia => UnitClass::MotorInertia,

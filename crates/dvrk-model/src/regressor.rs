@@ -137,7 +137,13 @@ impl Model {
             }
         }
         for (value, e) in &self.element_plan.all {
-            let s = crate::element::Sample { value, q, dq, ddq };
+            let s = crate::element::Sample {
+                value,
+                q,
+                dq,
+                ddq,
+                hysteresis: &ws.hysteresis,
+            };
             e.add_regressor(&s, p, out);
         }
     }

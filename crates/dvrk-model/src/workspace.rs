@@ -24,6 +24,13 @@ pub struct Workspace {
     pub(crate) body: BodyBuffers,
     /// n×n mass matrix (column-major) and its Cholesky factor, for forward dynamics.
     pub(crate) mass: Vec<f64>,
+    /// Hysteresis states by parameter column (dimensionless; a [`Dahl`](crate::Dahl)
+    /// element's at its `Fd`'s index, 0 elsewhere), read by the regressor and the
+    /// dynamics; [`Model::advance_hysteresis`] moves them along the positions.
+    pub(crate) hysteresis: Vec<f64>,
+    /// The joint value each state was last advanced to (rad or m), by parameter column;
+    /// NaN before the first sample.
+    pub(crate) hysteresis_at: Vec<f64>,
 }
 
 /// Body-indexed buffers (index 0 = base).
@@ -66,6 +73,8 @@ impl Workspace {
             world: vec![Transform::identity(); nf],
             body: BodyBuffers::new(model.bodies.len() + 1, model.n_params()),
             mass: vec![0.0; n * n],
+            hysteresis: vec![0.0; model.n_params()],
+            hysteresis_at: vec![f64::NAN; model.n_params()],
         }
     }
 
@@ -74,11 +83,33 @@ impl Workspace {
         &self.world[i]
     }
 
+    /// The hysteresis states by parameter column (dimensionless, in `[−1, 1]`; 0 for
+    /// columns that are not a [`Dahl`](crate::Dahl) element's).
+    pub fn hysteresis(&self) -> &[f64] {
+        &self.hysteresis
+    }
+
+    /// Sets the hysteresis state of the Dahl element whose `Fd` is column `column`, e.g.
+    /// from states computed in time order before samples are evaluated out of order.
+    /// Values outside `[−1, 1]` are clamped onto it; a column out of range is ignored.
+    pub fn set_hysteresis(&mut self, column: usize, z: f64) {
+        if let Some(h) = self.hysteresis.get_mut(column) {
+            *h = z.clamp(-1.0, 1.0);
+        }
+    }
+
+    /// Forgets the path: every hysteresis state back to 0, as before the first sample.
+    pub fn reset_hysteresis(&mut self) {
+        self.hysteresis.fill(0.0);
+        self.hysteresis_at.fill(f64::NAN);
+    }
+
     pub(crate) fn check(&self, model: &Model) {
         assert!(
             self.n_frames == model.frames.len() + 1
                 && self.dof == model.dof()
-                && self.body.x.len() == model.bodies.len() + 1,
+                && self.body.x.len() == model.bodies.len() + 1
+                && self.hysteresis.len() == model.n_params(),
             "workspace was created for another model"
         );
     }

@@ -301,3 +301,136 @@ fn element_description_round_trip_and_columns() {
     }
     assert!(checked > 30, "{checked} elements checked");
 }
+
+/// `|a − b| ≤ tol`.
+fn near(a: f64, b: f64, tol: f64, what: &str) {
+    assert!((a - b).abs() <= tol, "{what}: {a} vs {b}");
+}
+
+/// A pendulum with friction and Dahl friction of stiffness 20 /rad (`Fd1` after
+/// `Fc1 Fv1 Fo1`).
+fn dahl_pendulum() -> Model {
+    load(&support::models::one_link_with(
+        "friction = true\ndahl = { sigma = 20 }\n",
+    ))
+}
+
+/// The state follows the closed form of `dz/ds = σ·(1 − z·sign(ṡ))`: from rest (`z = 0`)
+/// down by `d`, `z = −1 + e^(−σd)`; then up by `Δ` after the reversal,
+/// `z = 1 − (1 − z_r)·e^(−σΔ)`, whatever the number of samples the path is cut into.
+#[test]
+fn dahl_state_follows_the_closed_form_along_a_path() {
+    let model = dahl_pendulum();
+    assert_eq!(model.param_names()[13], "Fd1");
+    assert_eq!(model.params[13].kind, ParamKind::Dahl);
+    let sigma = 20.0;
+    for steps in [1usize, 7, 100] {
+        let mut ws = Workspace::new(&model);
+        model.advance_hysteresis(&mut ws, &[0.3]);
+        assert_eq!(
+            ws.hysteresis()[13],
+            0.0,
+            "the first sample only starts the path"
+        );
+        for k in 1..=steps {
+            model.advance_hysteresis(&mut ws, &[0.3 - 0.1 * k as f64 / steps as f64]);
+        }
+        let zr = -1.0 + (-sigma * 0.1f64).exp();
+        near(ws.hysteresis()[13], zr, 1e-12, "after 0.1 rad down");
+        for k in 1..=steps {
+            model.advance_hysteresis(&mut ws, &[0.2 + 0.05 * k as f64 / steps as f64]);
+        }
+        let z = 1.0 - (1.0 - zr) * (-sigma * 0.05f64).exp();
+        near(ws.hysteresis()[13], z, 1e-12, "0.05 rad after the reversal");
+        ws.reset_hysteresis();
+        assert_eq!(ws.hysteresis()[13], 0.0);
+    }
+    // Any step keeps z within [−1, 1].
+    let mut ws = Workspace::new(&model);
+    for q in [0.0, 1e6, -1e6, 3.0, 3.0 + 1e-12] {
+        model.advance_hysteresis(&mut ws, &[q]);
+        assert!(ws.hysteresis()[13].abs() <= 1.0);
+    }
+}
+
+/// `H·π` equals the inverse dynamics along a path (the state read by both), the force is
+/// `Fd·z`, and `Fd ≥ 0` is the element's bound and consistency condition.
+#[test]
+fn dahl_regressor_torque_and_bound() {
+    let model = dahl_pendulum();
+    let p = model.n_params();
+    let mut rng = Rng::new(3);
+    let pi = random_params(&model, &mut rng);
+    let mut ws = Workspace::new(&model);
+    let (mut h, mut tau) = (vec![0.0; p], [0.0]);
+    for k in 0..50 {
+        let q = [(0.2 * k as f64).sin()];
+        let (dq, ddq) = ([(0.2 * k as f64).cos()], [rng.uniform(-1.0, 1.0)]);
+        model.advance_hysteresis(&mut ws, &q);
+        model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+        let z = ws.hysteresis()[13];
+        assert_eq!(h[13], z, "the Fd1 column is z");
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
+        near(hp, tau[0], 1e-10, "H·π = τ");
+        let mut without = pi.clone();
+        without[13] = 0.0;
+        let mut tau0 = [0.0];
+        model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
+        near(tau[0] - tau0[0], pi[13] * z, 1e-12, "force Fd·z");
+    }
+    let e = model.frame(1).elements.last().unwrap().clone();
+    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
+    let ctx = BoundsContext {
+        global: &global,
+        frame: &frame,
+        use_frame: true,
+    };
+    let mut rows = Vec::new();
+    e.bound_rows(&ctx, &mut rows);
+    assert_eq!(
+        rows,
+        [BoundRow::at_least(
+            13,
+            0.0,
+            BoundOrigin::Physical("Dahl friction Fd ≥ 0")
+        )]
+    );
+    let mut x = vec![0.0; p];
+    x[13] = -1e-3;
+    assert!(!e.consistent(&x, 0.0));
+    x[13] = 0.5;
+    assert!(e.consistent(&x, 0.0));
+    assert_eq!(e.description(&model.coordinates), "dahl = { sigma = 20.0 }");
+}
+
+/// Bad stiffnesses are refused with the file and the field named; `with_dahl` likewise.
+#[test]
+fn dahl_refuses_bad_sigma() {
+    for (sigma, says) in [
+        ("0", "must be positive"),
+        ("-3", "must be positive"),
+        ("nan", "must be a finite number"),
+        ("inf", "must be a finite number"),
+        ("1e300", "beyond the accepted"),
+    ] {
+        let text = support::models::one_link_with(&format!(
+            "friction = true\ndahl = {{ sigma = {sigma} }}\n"
+        ));
+        let err = Model::from_toml_str(&text, "bad.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.toml") && err.contains("dahl.sigma") && err.contains(says),
+            "{sigma}: {err}"
+        );
+    }
+    let psm = Model::builtin("psm").unwrap();
+    for sigma in [0.0, -1.0, f64::NAN, f64::INFINITY, 1e300] {
+        let err = psm.with_dahl(sigma).unwrap_err().to_string();
+        assert!(err.contains("Dahl stiffness sigma"), "{sigma}: {err}");
+    }
+    // Twice: the second adds nothing.
+    let once = psm.with_dahl(20.0).unwrap();
+    assert_eq!(once.with_dahl(5.0).unwrap().n_params(), once.n_params());
+}

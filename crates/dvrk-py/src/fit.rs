@@ -84,7 +84,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 /// - ``trim`` (default 200), ``decimate``, ``min_speed`` (rad/s or m/s),
 ///   ``resample`` (Hz, of the samples given), ``irls_iterations``,
 ///   ``sdp_regularization``, ``stribeck`` (adds a Stribeck term with this velocity,
-///   rad/s or m/s, to every friction element);
+///   rad/s or m/s, to every friction element), ``dahl`` (adds Dahl friction, a
+///   hysteresis over the displacement, with this stiffness, 1/rad or 1/m, to every
+///   friction element, as ``--dahl``);
 /// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
 ///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
 ///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every
@@ -106,7 +108,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
 ///   ``result.settings["prior"]``;
 /// - ``preset``: ``"dvrk"``, the settings recommended for the dVRK arms for every
-///   keyword not given (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3``, as
+///   keyword not given (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, as
 ///   ``--preset dvrk``); the result records what it expanded to;
 /// - ``joints``: ``"model"`` (the default) or ``"measured"``: the metrics in the model
 ///   coordinates or in the arm's measured joints by name (``--joints``); the fit is the

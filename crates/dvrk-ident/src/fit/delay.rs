@@ -268,6 +268,8 @@ fn gram_matrices(
         let motion = &all[0];
         let len = motion.time.len();
         rows += len;
+        // Each log's hysteresis states start from rest.
+        ws.reset_hysteresis();
         let mut start = 0;
         while start < len {
             let end = (start + CHUNK).min(len);
@@ -278,6 +280,7 @@ fn gram_matrices(
                     dq[j] = motion.dq[(i, j)];
                     ddq[j] = motion.ddq[(i, j)];
                 }
+                model.advance_hysteresis(&mut ws, &q);
                 model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
                 for (j, xj) in x.iter_mut().enumerate() {
                     let w = weights[j];

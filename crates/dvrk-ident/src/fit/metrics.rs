@@ -23,6 +23,7 @@ pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
     let s = data.samples();
     for k in 0..data.len() {
         s.read(k, &mut q, &mut dq, &mut ddq);
+        model.advance_hysteresis(&mut ws, &q);
         model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
         for j in 0..n {
             out[(k, j)] = tau[j];
@@ -61,6 +62,9 @@ pub struct MetricSums {
     /// Whether the off-diagonal sums are there (every part came from a pass).
     cross: bool,
     samples: usize,
+    /// The workspace of the passes, which carries the hysteresis (Dahl) states from one
+    /// block of the log to the next (`None` before the first).
+    ws: Option<Workspace>,
 }
 
 impl MetricSums {
@@ -72,6 +76,7 @@ impl MetricSums {
             t2: DMatrix::zeros(n, n),
             cross: true,
             samples: 0,
+            ws: None,
         }
     }
 
@@ -108,6 +113,7 @@ impl MetricSums {
             )),
             cross: false,
             samples: parts.first().map_or(0, Observation::rows),
+            ws: None,
         }
     }
 
@@ -124,13 +130,14 @@ impl MetricSums {
             samples.len().min(w.saturating_sub(self.samples))
         });
         let n = model.dof();
-        let mut ws = Workspace::new(model);
+        let ws = self.ws.get_or_insert_with(|| Workspace::new(model));
         let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let mut err = DMatrix::zeros(rows, n);
         let mut tau = vec![0.0; n];
         for k in 0..rows {
             samples.read(k, &mut q, &mut dq, &mut ddq);
-            model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
+            model.advance_hysteresis(ws, &q);
+            model.inverse_dynamics(ws, params, &q, &dq, &ddq, &mut tau);
             for j in 0..n {
                 err[(k, j)] = samples.tau[(k, j)] - tau[j];
             }

@@ -166,6 +166,11 @@ overrides! {
     /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
     /// or m/s) to every friction element (parameters Fs<frame>)
     stribeck_velocity: f64 => Stribeck("stribeck") with "text_or_value";
+    /// Add Dahl friction Fd·z (rate-independent hysteresis: z follows dz/ds =
+    /// SIGMA·(1 − z·sign(ds)) along the joint value, integrated from the processed
+    /// positions in time order) with this stiffness (1/rad or 1/m) to every friction
+    /// element (parameters Fd<frame>, Fd ≥ 0 in the semidefinite fit)
+    dahl_sigma: f64 => Dahl("dahl") with "text_or_value";
     /// The arm's mounting pitch, degrees, as the dVRK's `mounting_pitch` (which is in
     /// radians): gravity in the base frame becomes (0, −9.81·sin p, −9.81·cos p) m/s²
     /// (the dVRK mounts PSM1 and PSM2 at −45°, PSM3 at −15°, the ECM at −70° (Si) or
@@ -194,7 +199,7 @@ overrides! {
     /// link's pseudo-inertia from the prior's) or `euclidean`
     prior_metric: PriorMetric => PriorMetric("prior_metric") with "text_or_value";
     /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-    /// dVRK arms: --method sdp --delay auto --stribeck 0.3). The result records the
+    /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20). The result records the
     /// settings it expanded to
     preset: Preset => Preset("preset") with "text_or_value";
     /// Show the errors and figures in the `model` coordinates (q1..qn, the estimator's)
@@ -283,6 +288,7 @@ impl Setting {
             Setting::IrlsIterations => fit.irls_iterations.to_string(),
             Setting::SdpRegularization => format!("{:e}", fit.sdp_regularization),
             Setting::Stribeck => "none".into(),
+            Setting::Dahl => "none".into(),
             Setting::MountingPitch => "the description's gravity (a result's: its own)".into(),
             Setting::Bounds => "the description's; the built-in robots': physical".into(),
             Setting::Delay => "0".into(),

@@ -1,6 +1,6 @@
 //! A frame's element fields in a description file (`robots/README.md`): `friction`,
 //! `stribeck_velocity`, `motor_inertia`, `spring`, `known_force`, `quadratic_viscous`,
-//! `monotone_friction`.
+//! `monotone_friction`, `dahl`.
 //! Their expressions and constants are resolved here, then each element is built by the
 //! numeric constructor's [`ElementSpec`], so a description and a model built from numbers
 //! are checked by the same code and their errors read the same.
@@ -28,6 +28,14 @@ pub(super) struct ElementsDesc {
     known_force: Option<KnownForceDesc>,
     quadratic_viscous: Option<QuadraticViscousDesc>,
     monotone_friction: Option<MonotoneFrictionDesc>,
+    dahl: Option<DahlDesc>,
+}
+
+/// `dahl = { sigma = 20 }` (1/rad or 1/m).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DahlDesc {
+    sigma: f64,
 }
 
 /// `monotone_friction = { velocities = [v1, ...] }` (rad/s or m/s).
@@ -64,7 +72,7 @@ struct QuadraticViscousTable {
 impl ElementsDesc {
     /// Reads the elements, pushing their parameters onto `params`, in the order of the
     /// parameter vector: friction, motor inertia, spring, quadratic viscous friction,
-    /// monotone friction.
+    /// monotone friction, Dahl friction.
     pub(super) fn build(
         &self,
         ctx: &Ctx,
@@ -106,6 +114,9 @@ impl ElementsDesc {
                 velocities: m.velocities.clone(),
             }
             .build(fx, params, &mut out)?;
+        }
+        if let Some(d) = &self.dahl {
+            ElementSpec::Dahl { sigma: d.sigma }.build(fx, params, &mut out)?;
         }
         Ok(out)
     }

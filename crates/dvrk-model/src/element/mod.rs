@@ -1,6 +1,6 @@
 //! A frame's elements: what acts on its joint value besides the links — friction (with
 //! an optional Stribeck term), a motor inertia, a spring, a known force, a quadratic viscous
-//! friction, a monotone friction. Each is a value of [`Element`], and each variant's module holds everything
+//! friction, a monotone friction, a Dahl friction. Each is a value of [`Element`], and each variant's module holds everything
 //! about it: its parameters (names, kinds, unit classes), its regressor columns, its
 //! torque, its share of the mass matrix, its nominal values, its bounds for the
 //! physically consistent fit, its consistency test and its export notes. Its description
@@ -16,6 +16,7 @@
 //! (and the `each!` dispatch below), its variant in [`ElementSpec`] (the numeric
 //! constructor's) and its description field in `description/elements.rs`.
 
+mod dahl;
 mod friction;
 mod known_force;
 mod monotone_friction;
@@ -28,6 +29,7 @@ use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
 
+pub use dahl::Dahl;
 pub use friction::Friction;
 pub use known_force::KnownForce;
 pub use monotone_friction::MonotoneFriction;
@@ -49,6 +51,11 @@ pub struct Sample<'a> {
     pub dq: &'a [f64],
     /// Coordinate accelerations (rad/s² or m/s²).
     pub ddq: &'a [f64],
+    /// Hysteresis states (dimensionless) indexed by parameter column: a
+    /// [`Dahl`] element reads its `z` at its `Fd`'s index (the
+    /// [`Workspace`](crate::Workspace)'s, advanced by
+    /// [`Model::advance_hysteresis`](crate::Model::advance_hysteresis)).
+    pub hysteresis: &'a [f64],
 }
 
 /// What an export's note on an element names: the parameter values and names, the
@@ -262,6 +269,8 @@ pub enum Element {
     QuadraticViscous(QuadraticViscous),
     /// Monotone friction: saturating steps of several widths, forward and backward.
     MonotoneFriction(MonotoneFriction),
+    /// Dahl friction: rate-independent hysteresis with a state carried along the path.
+    Dahl(Dahl),
 }
 
 /// Runs `$body` with `$e` bound to the variant's value.
@@ -274,13 +283,14 @@ macro_rules! each {
             Element::KnownForce($e) => $body,
             Element::QuadraticViscous($e) => $body,
             Element::MonotoneFriction($e) => $body,
+            Element::Dahl($e) => $body,
         }
     };
 }
 
 impl Element {
     /// Names in summaries: `friction` (and `stribeck`), `motor_inertia`, `spring`,
-    /// `known_force`, `quadratic_viscous`, `monotone_friction`.
+    /// `known_force`, `quadratic_viscous`, `monotone_friction`, `dahl`.
     pub fn labels(&self) -> &'static [&'static str] {
         each!(self, e => e.labels())
     }
@@ -440,6 +450,11 @@ pub enum ElementSpec {
         /// The steps' velocities (rad/s or m/s).
         velocities: Vec<f64>,
     },
+    /// Dahl friction `Fd` with this stiffness `σ` (1/rad or 1/m, positive).
+    Dahl {
+        /// `σ` (1/rad or 1/m).
+        sigma: f64,
+    },
 }
 
 /// The frame an element is built for.
@@ -526,6 +541,10 @@ impl ElementSpec {
             ElementSpec::MonotoneFriction { velocities } => {
                 let f = MonotoneFriction::on(fx, velocities, params.len())?;
                 out.push(fx, Element::MonotoneFriction(f), params);
+            }
+            ElementSpec::Dahl { sigma } => {
+                let d = Dahl::on(fx, *sigma, params.len())?;
+                out.push(fx, Element::Dahl(d), params);
             }
         }
         Ok(())

@@ -22,6 +22,9 @@ pub(crate) struct ElementPlan {
     pub forces: Vec<(Affine, Element)>,
     /// The acceleration terms alone (`Element::inertial`), for the mass matrix.
     pub inertial: Vec<Element>,
+    /// The hysteresis (Dahl) elements: their frame's joint value, their state's column
+    /// and their `σ` (1/rad or 1/m), for [`Model::advance_hysteresis`].
+    pub hysteresis: Vec<(Affine, usize, f64)>,
 }
 
 /// Where the link columns of the regressor come from: each link `j` adds `a·S_kᵀ·Y_j`
@@ -242,6 +245,11 @@ impl Model {
             plan.forces
                 .extend(forces.clone().map(|e| (f.value.clone(), e.clone())));
             plan.inertial.extend(inertial.cloned());
+            plan.hysteresis
+                .extend(f.elements.iter().filter_map(|e| match e {
+                    Element::Dahl(d) => Some((f.value.clone(), d.param, d.sigma)),
+                    _ => None,
+                }));
         }
         plan
     }

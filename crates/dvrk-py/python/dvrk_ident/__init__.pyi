@@ -416,6 +416,7 @@ def fit(
     irls_iterations: Optional[int] = None,
     sdp_regularization: Optional[float] = None,
     stribeck: Optional[float] = None,
+    dahl: Optional[float] = None,
     mounting_pitch: Optional[float] = None,
     bounds: Optional[str] = None,
     ellipsoids: Optional[bool] = None,
@@ -432,7 +433,8 @@ def fit(
     ``"2019"``; ``ellipsoids=False``: ignore the links' bounding ellipsoids of the
     description (``--no-ellipsoids``); ``mounting_pitch``: degrees, gravity
     ``(0, -9.81 sin p, -9.81 cos p)`` in the base frame (``--mounting-pitch``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
-    ``preset``: ``"dvrk"`` (``method="sdp"``, ``delay="auto"``, ``stribeck=0.3`` for
+    ``dahl``: Dahl friction of this stiffness (1/rad or 1/m) on every friction element (``--dahl``);
+    ``preset``: ``"dvrk"`` (``method="sdp"``, ``stribeck=0.3``, ``dahl=20`` for
     the keywords not given); ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
     ``"entropic"`` (default) or ``"euclidean"``."""
