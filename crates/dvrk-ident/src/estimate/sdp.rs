@@ -74,9 +74,9 @@
 //! gives its mass (but not all ten) by the divergence of the pseudo-inertia's mass
 //! entry alone, `x − log x − 1` with `x = m/m₀` (the 1×1 case), to second order
 //! `(x − 1)²/2`: scale free, so every such mass is pulled toward the same ratio to its
-//! prior; the Euclidean term
-//! takes every other parameter with a value (and, with the Euclidean metric, all of
-//! them); the rest keep only the regularization toward zero, as without a prior. A mass whose column the data do not see (a link on a joint axis)
+//! prior; the Euclidean term takes every other parameter with a value (and, with the
+//! Euclidean metric, all of them); the rest keep only the regularization toward zero,
+//! as without a prior. A mass whose column the data do not see (a link on a joint axis)
 //! lies in the regressor's null space, so a weak weight moves it (and the parameters it
 //! trades with along the null space) without moving the base parameters beyond the
 //! noise: the book's identification chapter, §6.5, measures it on the dVRK.
@@ -109,7 +109,7 @@
 //! lower-triangular `Z`: `[[J̃, Z], [Zᵀ, diag(Z)]] ⪰ 0` (one `PSDTriangleConeT(8)`) and
 //! `τᵢ ≤ log Zᵢᵢ` (`(τᵢ, 1, Zᵢᵢ)` in an `ExponentialConeT`); the objective adds
 //! `w·Σ_links (tr(J̃) − Σᵢ τᵢ)`. A mass-only prior link adds the row `√(w/2)·(m/m₀ − 1)`
-//! to the data cone.
+//! to the data cone (times `ρ/γ` in the plain cone when no link has a log-det block).
 //!
 //! After a `Solved` status the friction, motor inertia and spring parameters (which
 //! appear in no other constraint) are clamped into their bounds, and each Stribeck term
@@ -229,7 +229,8 @@ pub struct SdpSolution {
     /// squares, without the regularization term).
     pub objective: f64,
     /// With an entropic prior: `Σ_links d(J‖J₀)` at `params` over the links the prior
-    /// gives all ten values (no units; 0 at the prior); `None` without such a link.
+    /// gives all ten values, plus `(m/m₀ − 1)²/2` of those it gives a mass alone (no
+    /// units; 0 at the prior); `None` without such links.
     pub divergence: Option<f64>,
 }
 
