@@ -109,7 +109,10 @@ pub struct Prior {
     pub metric: PriorMetric,
     /// Weight relative to the data term, which is scaled to at most 1 (no units).
     pub weight: f64,
-    /// The values, every parameter of the fitted model by name (model units).
+    /// The values by parameter name (model units): every parameter of the fitted model,
+    /// or, for a partial prior (e.g. `nominal` on a robot whose maker publishes only
+    /// link masses), those it has a value for; the others are left free (see
+    /// `estimate::sdp`, "Priors").
     pub parameters: indexmap::IndexMap<String, f64>,
 }
 
@@ -118,20 +121,40 @@ impl Prior {
     /// measurements behind it.
     pub const DEFAULT_WEIGHT: f64 = 1e-3;
 
-    /// The values in `model`'s parameter order; `None` without a prior. Errors name
-    /// the prior's source and the parameters that do not match.
+    /// The values in `model`'s parameter order, NaN where a partial prior has none;
+    /// `None` without a prior. Errors name the prior's source and the parameters that
+    /// are not `model`'s or not finite.
     pub fn values_for(
         prior: Option<&Prior>,
         model: &Model,
     ) -> Result<Option<Vec<f64>>, IdentError> {
-        prior
-            .map(|p| {
-                Ok(model.params_from_named(
-                    p.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
-                    &format!("prior {}", p.source),
-                )?)
-            })
-            .transpose()
+        let Some(p) = prior else { return Ok(None) };
+        let setting = |message: String| IdentError::Setting {
+            name: "prior".into(),
+            message: format!("prior {}: {message}", p.source),
+        };
+        let mut values = vec![f64::NAN; model.n_params()];
+        let mut unknown = Vec::new();
+        for (name, &v) in &p.parameters {
+            match model.param_index(name) {
+                Some(_) if !v.is_finite() => {
+                    return Err(setting(format!("parameter {name} is {v}")))
+                }
+                Some(k) => values[k] = v,
+                None => unknown.push(name.as_str()),
+            }
+        }
+        if !unknown.is_empty() {
+            return Err(setting(format!(
+                "parameters not in model {}: {}",
+                model.name,
+                unknown.join(", ")
+            )));
+        }
+        if values.iter().all(|v| v.is_nan()) {
+            return Err(setting("it has no value for any parameter".into()));
+        }
+        Ok(Some(values))
     }
 
     /// Checks what a fit needs of a prior: a finite, non-negative weight and the

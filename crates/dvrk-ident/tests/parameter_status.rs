@@ -245,3 +245,72 @@ fn a_result_written_before_parameter_statuses_still_loads() {
         .unwrap();
     assert!(exported.undetermined.is_empty());
 }
+
+/// A partial prior (`--prior nominal` on a description that gives a nominal mass to
+/// link 1 only, as the dVRK's publishes link masses and nothing else) moves the mass the
+/// data cannot see (`m1`: link 1's origin is on the fixed joint axis) to its nominal
+/// value and leaves the base parameters where the data put them.
+#[test]
+fn a_partial_prior_moves_an_unidentified_mass_and_not_the_base_parameters() {
+    use dvrk_ident::request::PriorSource;
+    use dvrk_ident::Overrides;
+    let truth_model = arm();
+    let log = simulate(&truth_model, &truth(&truth_model), 30.0, 100.0, 0.001);
+    // The truth has m1 = 1.5 kg; the nominal says 3 kg.
+    let described = ARM.replacen(
+        "theta = \"q1\"\n",
+        "theta = \"q1\"\nnominal = { mass = 3.0 }\n",
+        1,
+    );
+    let model = Model::from_toml_str(&described, "planar2r_nominal.toml").unwrap();
+    let plain = fit(&model, &log, None, &settings(Method::Sdp)).unwrap();
+    let with_prior = Overrides {
+        prior: Some(PriorSource::Nominal),
+        prior_weight: Some(1e-2),
+        ..Overrides::default()
+    }
+    .settings_for(settings(Method::Sdp), &model)
+    .unwrap();
+    let prior = with_prior.prior.as_ref().unwrap();
+    // Partial: link 1's mass and nothing else (link 2 has no nominal mass, and the
+    // friction's zero defaults are no published value).
+    assert_eq!(prior.parameters.keys().collect::<Vec<_>>(), ["m1"]);
+    assert!(
+        prior.source.starts_with("nominal (partial"),
+        "{}",
+        prior.source
+    );
+    let r = fit(&model, &log, None, &with_prior).unwrap();
+    assert!(r.solver.converged, "{}", r.solver.status);
+    let (m0, m) = (plain.parameters["m1"], r.parameters["m1"]);
+    println!("m1: {m0} kg without the prior, {m} kg with it (nominal 3)");
+    assert!((m0 - 3.0).abs() > 0.5, "without the prior m1 = {m0}");
+    assert!((m - 3.0).abs() < 0.03, "with the prior m1 = {m}");
+    // The base parameters (module documentation), with and without the prior.
+    let a = 0.3;
+    let base = |p: &indexmap::IndexMap<String, f64>| {
+        vec![
+            p["L1zz"] + a * a * p["m2"],
+            p["l1x"] + a * p["m2"],
+            p["l1y"],
+            p["L2zz"],
+            p["l2x"],
+            p["l2y"],
+        ]
+    };
+    for (k, (b0, b)) in base(&plain.parameters)
+        .into_iter()
+        .zip(base(&r.parameters))
+        .enumerate()
+    {
+        // 1e-4 kg·m or kg·m²: the noise (1 mN·m on 3000 samples) moves them by ~1e-5.
+        assert!((b - b0).abs() < 1e-4, "base parameter {k}: {b0} -> {b}");
+    }
+    let (e0, e) = (
+        plain.metrics.train.relative_error.clone(),
+        r.metrics.train.relative_error.clone(),
+    );
+    for (x0, x) in e0.iter().zip(&e) {
+        assert!((x - x0).abs() <= 0.01 * x0 + 1e-6, "{e0:?} -> {e:?}");
+    }
+}

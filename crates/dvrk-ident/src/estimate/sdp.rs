@@ -67,6 +67,20 @@
 //!   semidefinite fit leaves its links at `J ⪰ eps·I`) are conditioned first (see
 //!   [`PRIOR_CONDITION`]).
 //!
+//! A **partial prior** has values for some parameters only (NaN for the others in
+//! [`SdpOptions::prior`]), e.g. the link masses a robot's maker publishes and nothing
+//! else. The prior term covers only the parameters with a value: the entropic metric
+//! takes the links whose ten parameters all have one as above, and a link whose prior
+//! gives its mass (but not all ten) by the divergence of the pseudo-inertia's mass
+//! entry alone, `x − log x − 1` with `x = m/m₀` (the 1×1 case), to second order
+//! `(x − 1)²/2`: scale free, so every such mass is pulled toward the same ratio to its
+//! prior; the Euclidean term takes every other parameter with a value (and, with the
+//! Euclidean metric, all of them); the rest keep only the regularization toward zero,
+//! as without a prior. A mass whose column the data do not see (a link on a joint axis)
+//! lies in the regressor's null space, so a weak weight moves it (and the parameters it
+//! trades with along the null space) without moving the base parameters beyond the
+//! noise: the book's identification chapter, §6.5, measures it on the dVRK.
+//!
 //! Both read as `‖W·H·π − W·τ‖²/ρ² + w·distance`, with `ρ` the least-squares residual
 //! (at least 0.1 % of `‖W·τ‖`): the data term is about 1 at the solution whatever the
 //! noise, and a weight `w` makes a divergence of 1 cost `w` times the best residual (for
@@ -94,7 +108,8 @@
 //! rows; per link, `Σᵢ τᵢ ≤ log det J̃` is the standard construction with a
 //! lower-triangular `Z`: `[[J̃, Z], [Zᵀ, diag(Z)]] ⪰ 0` (one `PSDTriangleConeT(8)`) and
 //! `τᵢ ≤ log Zᵢᵢ` (`(τᵢ, 1, Zᵢᵢ)` in an `ExponentialConeT`); the objective adds
-//! `w·Σ_links (tr(J̃) − Σᵢ τᵢ)`.
+//! `w·Σ_links (tr(J̃) − Σᵢ τᵢ)`. A mass-only prior link adds the row `√(w/2)·(m/m₀ − 1)`
+//! to the data cone (times `ρ/γ` in the plain cone when no link has a log-det block).
 //!
 //! After a `Solved` status the friction, motor inertia and spring parameters (which
 //! appear in no other constraint) are clamped into their bounds, and each Stribeck term
@@ -119,7 +134,9 @@ pub struct SdpOptions {
     pub regularization: f64,
     /// Values the regularization and the prior term pull toward, one per parameter
     /// (model units); `None` means zero. E.g. the model's nominal (CAD) parameters or
-    /// an earlier fit.
+    /// an earlier fit. NaN: the prior has no value for that parameter (a partial prior,
+    /// see the module documentation): the prior term leaves it free and only the
+    /// regularization pulls it, toward zero.
     pub prior: Option<Vec<f64>>,
     /// Weight of the prior term (no units, relative to the data term scaled to at most 1;
     /// see the module documentation). 0: no prior term, only the regularization.
@@ -211,7 +228,9 @@ pub struct SdpSolution {
     /// `‖R11·π − r1‖² + ρ² = ‖W·H·π − W·τ‖²` at `params` (the weighted residual sum of
     /// squares, without the regularization term).
     pub objective: f64,
-    /// With an entropic prior: `Σ_links d(J‖J₀)` at `params` (no units; 0 at the prior).
+    /// With an entropic prior: `Σ_links d(J‖J₀)` at `params` over the links the prior
+    /// gives all ten values, plus `(m/m₀ − 1)²/2` of those it gives a mass alone (no
+    /// units; 0 at the prior); `None` without such links.
     pub divergence: Option<f64>,
 }
 
@@ -426,18 +445,39 @@ pub fn solve_sdp(
     let p = model.n_params();
     let eps = model.bounds.pseudo_inertia_eps;
     let (s, gamma) = scaling(model, r);
-    let penalty = Penalty {
-        lambda: options.regularization,
-        w: options.prior_weight,
-        entropic: options.prior_weight > 0.0 && options.prior_metric == PriorMetric::Entropic,
-    };
-    let entropic = penalty.entropic;
+    let entropic_metric =
+        options.prior_weight > 0.0 && options.prior_metric == PriorMetric::Entropic;
     // Per link: the Lxx index and the whitening `L₀⁻¹` of the prior's pseudo-inertia.
-    let whitening: Vec<(usize, Matrix4<f64>)> = if entropic {
+    let whitening: Vec<(usize, Matrix4<f64>)> = if entropic_metric {
         whitenings(model, &prior, options.override_bounds)?
     } else {
         Vec::new()
     };
+    // A partial prior's links with a mass but not all ten values: the mass's own
+    // divergence (index of m, prior mass).
+    let masses: Vec<(usize, f64)> = if entropic_metric {
+        mass_priors(model, &prior, &whitening)
+    } else {
+        Vec::new()
+    };
+    // The log-det cones need the squared residual (the rotated cone, see the module
+    // documentation); mass-only divergences are quadratic and fit the plain cone, which
+    // Clarabel solves with its own equilibration (the rotated cone without log-det
+    // blocks stopped at `AlmostSolved` on a planar two-link arm).
+    let penalty = Penalty {
+        lambda: options.regularization,
+        w: options.prior_weight,
+        entropic: !whitening.is_empty(),
+    };
+    let entropic = penalty.entropic;
+    // The parameters the entropic terms cover (the others with a value: Euclidean).
+    let mut covered = vec![false; p];
+    for (p0, _) in &whitening {
+        covered[*p0..*p0 + 10].iter_mut().for_each(|x| *x = true);
+    }
+    for (k, _) in &masses {
+        covered[*k] = true;
+    }
 
     // --- Variables x = [u (p); t; per entropic link: Z (10, lower triangle), τ (4)].
     // Without an entropic prior: minimize t subject to
@@ -449,7 +489,14 @@ pub fn solve_sdp(
     let mut q = vec![0.0; n];
     q[p] = 1.0;
     let mut rows = Rows::default();
-    objective_rows(&mut rows, r, (&s, gamma), &prior, &penalty, &whitening);
+    objective_rows(
+        &mut rows,
+        r,
+        (&s, gamma),
+        &prior,
+        &penalty,
+        (&covered, &masses),
+    );
     linear_rows(&mut rows, model, &s, options)?;
     lmi_rows_of_links(&mut rows, model, &s, eps, options.override_bounds);
     entropic_rows(&mut rows, &mut q, &whitening, &s, penalty.w);
@@ -486,11 +533,16 @@ pub fn solve_sdp(
         clamp_element_bounds(model, &mut params, options.override_bounds);
     }
     let objective = residual_sum_of_squares(r, &params);
-    let divergence = entropic.then(|| {
-        whitening
+    let divergence = (entropic_metric && !(whitening.is_empty() && masses.is_empty())).then(|| {
+        let links: f64 = whitening
             .iter()
             .map(|(p0, wh)| log_det_divergence(wh, &params[*p0..*p0 + 10]))
-            .sum()
+            .sum();
+        let alone: f64 = masses
+            .iter()
+            .map(|&(k, m0)| mass_divergence(params[k], m0))
+            .sum();
+        links + alone
     });
     Ok(SdpSolution {
         params,
@@ -567,9 +619,15 @@ fn check_inputs(
                 expected: p,
             })
         }
-        Some(v) if v.iter().any(|x| !x.is_finite()) => {
+        Some(v) if v.iter().any(|x| x.is_infinite()) => {
             return Err(SdpError::NonFinite {
                 what: "the prior".into(),
+            })
+        }
+        Some(v) if options.prior_weight > 0.0 && v.iter().all(|x| x.is_nan()) => {
+            return Err(SdpError::Option {
+                name: "prior",
+                message: "the prior has no value for any parameter".into(),
             })
         }
         Some(v) => v.clone(),
@@ -638,8 +696,9 @@ fn objective_rows(
     scaled: (&[f64], f64),
     prior: &[f64],
     penalty: &Penalty,
-    whitening: &[(usize, Matrix4<f64>)],
+    entropic_terms: (&[bool], &[(usize, f64)]),
 ) {
+    let (covered, masses) = entropic_terms;
     let (s, gamma) = scaled;
     let (p, np1) = (r.ncols() - 1, r.ncols());
     let Penalty {
@@ -647,13 +706,6 @@ fn objective_rows(
         w,
         entropic,
     } = *penalty;
-    let is_link_param = {
-        let mut v = vec![false; p];
-        for (p0, _) in whitening {
-            v[*p0..*p0 + 10].iter_mut().for_each(|x| *x = true);
-        }
-        v
-    };
     // Cone rows s = b − A·x: the epigraph row(s) of t, then the residual R̃·u − r̃, then
     // the Tikhonov rows.
     if entropic {
@@ -671,11 +723,12 @@ fn objective_rows(
     // The entropic objective adds a divergence to the squared residual, so the residual's
     // currency matters: it is measured against the least-squares residual (the rows of
     // the cone × γ/ρ), so that it is about 1 at the solution whatever the noise.
-    let currency = if entropic {
+    let ratio = if entropic || !masses.is_empty() {
         gamma / least_squares_residual(r, gamma)
     } else {
         1.0
     };
+    let currency = if entropic { ratio } else { 1.0 };
     for row in 0..np1 {
         let at = rows.b.len();
         for c in 0..p {
@@ -688,19 +741,32 @@ fn objective_rows(
         }
         rows.b.push(-r[(row, p)] / gamma * currency);
     }
+    // A parameter without a prior value (NaN: a partial prior) keeps only the
+    // regularization, toward zero.
     let tikhonov = |i: usize| {
-        let euclidean = if entropic { !is_link_param[i] } else { true };
-        lambda + if euclidean { w } else { 0.0 }
+        let euclidean = !covered[i];
+        let has_value = !prior[i].is_nan();
+        lambda + if euclidean && has_value { w } else { 0.0 }
     };
     for i in 0..p {
         let weight = tikhonov(i);
         if weight > 0.0 {
             let sl = weight.sqrt() * currency;
+            let target = if prior[i].is_nan() { 0.0 } else { prior[i] };
             rows.ai.push(rows.b.len());
             rows.aj.push(i);
             rows.av.push(-sl);
-            rows.b.push(-sl * prior[i] / s[i]);
+            rows.b.push(-sl * target / s[i]);
         }
+    }
+    // Mass-only prior links: √(w/2)·(m/m₀ − 1) in the currency of the divergences (the
+    // data term ‖·‖²/ρ²); in the plain cone, whose data rows are scaled by γ, × ρ/γ.
+    for &(k, m0) in masses {
+        let c = (w / 2.0).sqrt() * currency / ratio;
+        rows.ai.push(rows.b.len());
+        rows.aj.push(k);
+        rows.av.push(-c * s[k] / m0);
+        rows.b.push(-c);
     }
     rows.cones
         .push(SupportedConeT::SecondOrderConeT(rows.b.len()));
@@ -834,6 +900,34 @@ fn entropic_rows(
     }
 }
 
+/// A partial prior's links that have a positive prior mass but not all ten values
+/// (they have no prior pseudo-inertia to whiten by): `(index of m, prior mass)`.
+fn mass_priors(
+    model: &Model,
+    prior: &[f64],
+    whitening: &[(usize, Matrix4<f64>)],
+) -> Vec<(usize, f64)> {
+    model
+        .frames
+        .iter()
+        .filter_map(|f| f.inertia)
+        .filter(|p0| !whitening.iter().any(|(w0, _)| w0 == p0))
+        .map(|p0| (p0 + 9, prior[p0 + 9]))
+        .filter(|&(_, m0)| m0 > 0.0)
+        .collect()
+}
+
+/// The entropic metric of a link whose prior gives its mass alone: the log-det
+/// divergence of the pseudo-inertia's mass entry, `x − log x − 1` with `x = m/m₀` (the
+/// 1×1 case of `d(J‖J₀)`), to second order: `(x − 1)²/2`. Zero at the prior mass,
+/// independent of the units, so every such mass is pulled toward the same ratio to its
+/// prior. (The exact form, an exponential cone per link, left 4 of 7 real PSM fits at
+/// `AlmostSolved`, weights 1e-3 to 1e-1; the quadratic is a row of the objective's
+/// second-order cone.)
+fn mass_divergence(m: f64, m0: f64) -> f64 {
+    (m / m0 - 1.0).powi(2) / 2.0
+}
+
 /// `ρ = min ‖R[:, 0..p]·π − R[:, p]‖` over all π (by SVD: `R11` is rank deficient),
 /// at least `1e-3·γ`: data fitted more closely than 0.1 % are weighed as if they were
 /// not, so a noise-free fit does not make the residual term unbounded.
@@ -872,9 +966,9 @@ pub const MAX_PRIOR_WEIGHT: f64 = 1e6;
 /// entropic metric, relative to its largest.
 pub const PRIOR_CONDITION: f64 = 1e-4;
 
-/// Per link of `model`: its Lxx index and `L₀⁻¹` for the Cholesky factor of the prior's
-/// pseudo-inertia `J₀ = L₀·L₀ᵀ`, conditioned; an error names a link whose `J₀` is not
-/// positive definite.
+/// Per link of `model` whose ten parameters all have a prior value: its Lxx index and
+/// `L₀⁻¹` for the Cholesky factor of the prior's pseudo-inertia `J₀ = L₀·L₀ᵀ`,
+/// conditioned; an error names a link whose `J₀` is not positive definite.
 ///
 /// Conditioned: the eigenvalues of `T·J₀·T` (`T = diag(1, 1, 1, τ)` as in the LMI, so
 /// the kg·m² and kg entries compare) are raised to at least [`PRIOR_CONDITION`] times
@@ -893,6 +987,10 @@ fn whitenings(
     let mut out = Vec::new();
     for (fi, f) in model.frames.iter().enumerate() {
         let Some(p0) = f.inertia else { continue };
+        if prior[p0..p0 + 10].iter().any(|x| x.is_nan()) {
+            // A partial prior's link: the Euclidean term on the values it has.
+            continue;
+        }
         let j0 = pseudo_inertia(&prior[p0..p0 + 10]);
         let eig = j0.symmetric_eigen();
         let inconsistent = || SdpError::PriorInconsistent {
