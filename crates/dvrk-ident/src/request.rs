@@ -11,7 +11,6 @@ use std::sync::Arc;
 use dvrk_model::Model;
 
 use crate::excite::FourierTrajectory;
-use crate::fit::delay::DelayOption;
 use crate::fit::stream::{fit_stream_logs, BLOCK_SAMPLES};
 use crate::fit::{fit_logs, LogData};
 use crate::log::{self, LogReader, ReadOptions};

@@ -263,7 +263,10 @@ fn a_partial_prior_moves_an_unidentified_mass_and_not_the_base_parameters() {
         1,
     );
     let model = Model::from_toml_str(&described, "planar2r_nominal.toml").unwrap();
-    let plain = fit(&model, &log, None, &settings(Method::Sdp)).unwrap();
+    let plain = FitRequest::of_samples([&log], None, settings(Method::Sdp))
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     let with_prior = Overrides {
         prior: Some(PriorSource::Nominal),
         prior_weight: Some(1e-2),
@@ -280,7 +283,10 @@ fn a_partial_prior_moves_an_unidentified_mass_and_not_the_base_parameters() {
         "{}",
         prior.source
     );
-    let r = fit(&model, &log, None, &with_prior).unwrap();
+    let r = FitRequest::of_samples([&log], None, with_prior.clone())
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result;
     assert!(r.solver.converged, "{}", r.solver.status);
     let (m0, m) = (plain.parameters["m1"], r.parameters["m1"]);
     println!("m1: {m0} kg without the prior, {m} kg with it (nominal 3)");
