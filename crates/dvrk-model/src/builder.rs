@@ -48,6 +48,8 @@ use crate::spatial::Transform;
 mod check;
 mod joint;
 use check::{check_frame_bounds, check_frame_count, check_nominal, check_range};
+// For the description loader; the builder uses it inside `joint`.
+#[cfg(feature = "description")]
 pub(crate) use joint::dh_geometry;
 
 /// How a DH frame's `a`, `alpha`, `theta`, `d` compose into the transform from the
