@@ -121,6 +121,15 @@ struct ResultDocument {
 struct ResultSettings {
     #[serde(default)]
     stribeck_velocity: Option<f64>,
+    /// Dahl friction of the fit (`--dahl`): its elements are part of the parameter
+    /// vector. Their hysteresis state is not carried by this ABI: it stays at zero in
+    /// a workspace, so Dahl friction adds nothing to the torques here (as in a fresh
+    /// workspace of dvrk-model, and in `dvrk-ident model --torque`).
+    #[serde(default)]
+    dahl_sigma: Option<f64>,
+    /// The arm's mounting pitch (degrees), which sets gravity in the base frame.
+    #[serde(default)]
+    mounting_pitch_deg: Option<f64>,
 }
 
 impl DvrkModel {
@@ -150,6 +159,15 @@ impl DvrkModel {
             model = model
                 .with_stribeck(v)
                 .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if let Some(sigma) = doc.settings.dahl_sigma {
+            model = model
+                .with_dahl(sigma)
+                .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if let Some(pitch) = doc.settings.mounting_pitch_deg {
+            model.gravity =
+                Model::mounting_pitch_gravity(pitch).map_err(|e| format!("{shown}: {e}"))?;
         }
         let mut params = model
             .params_from_named(
