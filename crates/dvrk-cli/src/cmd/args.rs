@@ -5,7 +5,7 @@
 use anyhow::Result;
 use clap::builder::StyledStr;
 use dvrk_ident::log::mcap::TimeSource;
-use dvrk_ident::log::{LogFormat, ReadOptions};
+use dvrk_ident::log::{LogFormat, ReadOptions, Resampling};
 use dvrk_ident::names::Named;
 use dvrk_ident::request::Setting;
 use dvrk_ident::settings::Joints;
@@ -94,6 +94,21 @@ impl LogArgs {
             resample_hz: None,
             ..read_options(self.format, self.rate, &self.mcap)
         }
+    }
+
+    /// How the commands that evaluate a result on logs (validate, report, residual,
+    /// payload) read them: these flags, the model's measured joints, the processing's
+    /// resampling, and the checks across the files (`ReadOptions::for_logs`).
+    pub fn read_options_for<'a>(
+        &self,
+        model: &dvrk_model::Model,
+        processing: &impl Resampling,
+        logs: impl IntoIterator<Item = &'a str>,
+    ) -> ReadOptions {
+        self.read_options()
+            .for_model(model)
+            .for_processing(processing)
+            .for_logs(logs.into_iter().map(std::path::Path::new))
     }
 }
 

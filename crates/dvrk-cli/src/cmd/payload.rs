@@ -65,12 +65,11 @@ pub fn run(args: Args) -> Result<()> {
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
     result.settings = args.settings.settings(result.settings.clone())?;
-    let read = args
-        .log_args
-        .read_options()
-        .for_model(&model)
-        .for_processing(&result.settings.processing)
-        .for_logs(args.logs.iter().map(Path::new));
+    let read = args.log_args.read_options_for(
+        &model,
+        &result.settings.processing,
+        args.logs.iter().map(String::as_str),
+    );
     let logs = args
         .logs
         .iter()

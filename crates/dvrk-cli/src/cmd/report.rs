@@ -136,12 +136,11 @@ pub fn run(args: Args) -> Result<()> {
     for (_, p) in &sources {
         inputs.add_log(Path::new(p));
     }
-    let read = args
-        .log_args
-        .read_options()
-        .for_model(&model)
-        .for_processing(&settings.processing)
-        .for_logs(sources.iter().map(|(_, p)| std::path::Path::new(p)));
+    let read = args.log_args.read_options_for(
+        &model,
+        &settings.processing,
+        sources.iter().map(|(_, p)| p.as_str()),
+    );
     let mut trajectories = Vec::new();
     for (role, path) in &sources {
         trajectories.push((role.clone(), super::args::read(&read, path)?));

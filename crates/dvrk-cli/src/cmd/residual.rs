@@ -106,12 +106,11 @@ pub fn run(args: Args) -> Result<()> {
         joints: args.joints.joints,
         observer_gain: args.observer_gain,
     };
-    let read = args
-        .log_args
-        .read_options()
-        .for_model(&model)
-        .for_processing(&result.settings.processing)
-        .for_logs(args.logs.iter().map(Path::new));
+    let read = args.log_args.read_options_for(
+        &model,
+        &result.settings.processing,
+        args.logs.iter().map(String::as_str),
+    );
     let (mut text, mut reports, mut outputs) = (String::new(), Vec::new(), Outputs::new());
     let mut residuals = Vec::new();
     for path in &args.logs {

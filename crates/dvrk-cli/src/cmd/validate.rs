@@ -63,12 +63,11 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(note) = super::settings_note(&changed) {
         let _ = writeln!(text, "{note}");
     }
-    let read = args
-        .log_args
-        .read_options()
-        .for_model(&model)
-        .for_processing(&settings.processing)
-        .for_logs(args.logs.iter().map(std::path::Path::new));
+    let read = args.log_args.read_options_for(
+        &model,
+        &settings.processing,
+        args.logs.iter().map(String::as_str),
+    );
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
