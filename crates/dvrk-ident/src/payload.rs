@@ -275,14 +275,7 @@ pub fn identify_payload(
     }
     let std = standard_deviations(&base, &obs, &estimate, &status, &pi, determined);
     let beta = base.project(&pi);
-    let base_parameters = (0..base.rank())
-        .map(|i| BaseParameterResult {
-            name: base.names[i].clone(),
-            expression: base.expressions[i].clone(),
-            value: beta[i],
-            std: estimate.std[i],
-        })
-        .collect();
+    let base_parameters = BaseParameterResult::all(&base, &beta, &estimate.std);
     let rms = |p: &[f64]| -> Vec<f64> {
         parts
             .iter()

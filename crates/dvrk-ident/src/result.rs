@@ -136,6 +136,26 @@ pub struct BaseParameterResult {
     pub std: f64,
 }
 
+impl BaseParameterResult {
+    /// Every base parameter of `base`, with its value (`values[i]`, the projection of
+    /// the parameters) and standard deviation (`std[i]`): the rows a fit's result and a
+    /// payload's identification write.
+    pub(crate) fn all(
+        base: &dvrk_model::BaseParameters,
+        values: &[f64],
+        std: &[f64],
+    ) -> Vec<BaseParameterResult> {
+        (0..base.rank())
+            .map(|i| BaseParameterResult {
+                name: base.names[i].clone(),
+                expression: base.expressions[i].clone(),
+                value: values[i],
+                std: std[i],
+            })
+            .collect()
+    }
+}
+
 pub use crate::estimate::SolverInfo;
 
 /// Per-joint errors on one trajectory (model coordinates).

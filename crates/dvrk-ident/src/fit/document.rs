@@ -70,14 +70,7 @@ pub(crate) fn build_result(
             consistent: min_eig > 0.0,
         });
     }
-    let base_parameters = (0..base.rank())
-        .map(|i| BaseParameterResult {
-            name: base.names[i].clone(),
-            expression: base.expressions[i].clone(),
-            value: beta[i],
-            std: estimate.std[i],
-        })
-        .collect();
+    let base_parameters = BaseParameterResult::all(base, &beta, &estimate.std);
     // Sign conditions hold up to rounding (see `ELEMENT_TOLERANCE`).
     let tol = -ELEMENT_TOLERANCE;
     let elements_ok = params.iter().all(|v| v.is_finite())
