@@ -3,7 +3,8 @@
 //! `crates/dvrk-ident/tests/fuzz_seeds.rs` includes this file and runs every committed
 //! seed and crash reproducer (`fuzz/seeds/<target>/`) through the same functions.
 //!
-//! Uses only `dvrk_model`, `dvrk_ident` and `mcap`, so that it builds in both places.
+//! Uses only `dvrk_model`, `dvrk_ident`, `mcap` and `zstd`, so that it builds in both
+//! places.
 
 use std::path::PathBuf;
 
@@ -159,20 +160,36 @@ pub fn csv_2019(data: &[u8]) {
     }
 }
 
-/// MCAP files (container, chunks, CRCs, schemas, JointState messages) and their topic
-/// listing: never a panic; an accepted log is valid.
+/// What a compressed input may expand to in the `mcap` target, MiB
+/// (`--max-unpacked-mib`): small, so that a bomb reaches the bound in milliseconds (the
+/// default for a small file is 64 MiB, and the bound's logic is the same).
+pub const MAX_UNPACKED_MIB: u64 = 16;
+
+/// Recordings read by content, as `fit` reads them: MCAP files (container, chunks and
+/// their zstd/lz4 compression, CRCs, schemas, JointState messages), sqlite3 and ROS 1
+/// bags (bz2/lz4 chunks), any of them in a whole-file zstd or lz4 frame (the seeds hold
+/// each kind, and two zstd bombs), and their topic listing. The input is read as it is,
+/// and again inside a zstd frame, so that every mutation also reaches the whole-file
+/// decompression with a valid frame around it. Never a panic; an accepted log is valid.
 pub fn mcap(data: &[u8]) {
-    let path = scratch(data, "mcap");
-    let _ = dvrk_ident::log::mcap::list_topics(&path);
-    let options = dvrk_ident::log::mcap::McapOptions::default();
-    if let Ok(t) = dvrk_ident::log::mcap::read_mcap(&path, &options) {
-        check_log(&t);
+    let options = dvrk_ident::log::mcap::McapOptions {
+        max_unpacked_mib: Some(MAX_UNPACKED_MIB),
+        ..Default::default()
+    };
+    let framed = zstd::bulk::compress(data, 1).expect("zstd compresses any input");
+    for input in [data, &framed] {
+        let path = scratch(input, "mcap");
+        let _ = dvrk_ident::log::mcap::list_topics(&path);
+        if let Ok(t) = dvrk_ident::log::mcap::read_mcap(&path, &options) {
+            check_log(&t);
+        }
     }
 }
 
 /// CDR payloads of sensor_msgs/msg/JointState, wrapped in a valid MCAP container so that
 /// every input reaches the message decoder: the input is split at 0xFF 0x00 0xFF into up
-/// to 16 messages, 5 ms apart. Never a panic; an accepted log is valid.
+/// to 16 messages, 5 ms apart, in chunks stored or compressed (zstd, lz4). Never a panic;
+/// an accepted log is valid.
 pub fn cdr(data: &[u8]) {
     let mut messages: Vec<&[u8]> = Vec::new();
     let mut rest = data;
@@ -186,11 +203,18 @@ pub fn cdr(data: &[u8]) {
         }
     }
     messages.push(rest);
+    // The container's chunks are stored, zstd- or lz4-compressed by the input's length,
+    // so that the messages also reach the decoder through each chunk decompression.
+    let compression = match data.len() % 3 {
+        0 => None,
+        1 => Some(mcap::Compression::Zstd),
+        _ => Some(mcap::Compression::Lz4),
+    };
     let mut bytes = std::io::Cursor::new(Vec::new());
     {
         let mut w = mcap::WriteOptions::new()
             .profile("ros2")
-            .compression(None)
+            .compression(compression)
             .create(&mut bytes)
             .expect("writer");
         let schema = w

@@ -82,3 +82,36 @@ fn every_seed_and_reproducer_passes_its_target() {
     }
     eprintln!("{total} seeds");
 }
+
+/// The compressed seeds of the `mcap` target (`fuzz/seeds/gen_compressed.py`) start the
+/// fuzzer where they are meant to: each recording is read through its decompression
+/// (the four samples it holds), and each zstd bomb is refused at the target's bound.
+/// The target ignores errors, so without this a seed refused for an unrelated reason
+/// would pass and leave its decompressor unfuzzed.
+#[test]
+fn compressed_seeds_are_read_and_bombs_refused() {
+    use dvrk_ident::log::mcap::{read_mcap, McapOptions};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds/mcap");
+    let options = McapOptions {
+        max_unpacked_mib: Some(fuzz::MAX_UNPACKED_MIB),
+        ..Default::default()
+    };
+    for name in [
+        "compressed-lz4-chunks.mcap",
+        "compressed-file.mcap.zst",
+        "compressed-file.mcap.lz4",
+        "compressed-file.db3.zst",
+        "compressed-bz2-chunks.bag",
+        "compressed-lz4-chunks.bag",
+    ] {
+        let log = read_mcap(dir.join(name), &options).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_eq!((log.time.len(), log.dof()), (4, 7), "{name}");
+        // position of joint j at sample k: ((k (j + 1)) mod 17 − 8) / 32 (exact)
+        assert_eq!(log.q[(3, 1)], ((3 * 2) % 17 - 8) as f64 / 32.0, "{name}");
+    }
+    for name in ["bomb-declared.db3.zst", "bomb-streamed.bag.zst"] {
+        let error = read_mcap(dir.join(name), &options).unwrap_err().to_string();
+        let bound = format!("more than {} MiB", fuzz::MAX_UNPACKED_MIB);
+        assert!(error.contains(&bound), "{name}: {error}");
+    }
+}
