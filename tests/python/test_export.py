@@ -13,6 +13,7 @@
 """
 
 import json
+import pickle
 import shutil
 import subprocess
 import warnings
@@ -278,6 +279,25 @@ def test_dvrk_kinematic_gc_matches_cli(run_cli, cli, tmp_path):
     result = di.fit(robot, di.read_log(log, robot), mounting_pitch=-45.0)
     path = tmp_path / "psm_si.json"
     result.write(path)
+    # The result's model carries the fit's gravity, as `model psm_si --json
+    # --mounting-pitch -45` prints it: fitted in memory, read back, pickled.
+    level = subprocess.run([cli, "model", "psm_si", "--json"], check=True,
+                           capture_output=True, text=True)
+    mounted = subprocess.run([cli, "model", "psm_si", "--json", "--mounting-pitch", "-45"],
+                             check=True, capture_output=True, text=True)
+    gravity = json.loads(mounted.stdout)["gravity"]
+    assert gravity != json.loads(level.stdout)["gravity"]
+    assert list(robot.gravity_vector) == json.loads(level.stdout)["gravity"]
+    fitted = result.load_robot()
+    for model in (fitted, di.FitResult.from_json(path.read_text()).load_robot(),
+                  pickle.loads(pickle.dumps(fitted))):
+        assert list(model.gravity_vector) == gravity
+        assert model.summary()["gravity"] == gravity
+    # A `--preset dvrk` result's model has its Stribeck and Dahl terms too.
+    preset = di.fit(robot, di.read_log(log, robot), preset="dvrk", mounting_pitch=-45.0)
+    for model in (preset.load_robot(), di.FitResult.from_json(preset.to_json()).load_robot()):
+        assert model.parameter_names == list(preset.parameters)
+        assert list(model.gravity_vector) == gravity
     out = tmp_path / "gc.json"
     subprocess.run([cli, "export", path, "--dvrk-kinematic-gc", out, "--quiet"], check=True,
                    capture_output=True)

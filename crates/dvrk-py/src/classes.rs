@@ -5,7 +5,7 @@
 
 use std::sync::{Arc, OnceLock};
 
-use dvrk_ident::FitResult;
+use dvrk_ident::{FitResult, FitSettings, IdentError};
 use dvrk_model::{BaseParameters, Model};
 use pyo3::prelude::*;
 
@@ -31,10 +31,11 @@ use pyo3::prelude::*;
 pub struct ModelPy {
     pub model: Arc<Model>,
     pub(crate) base: OnceLock<Arc<BaseParameters>>,
-    /// What the model was built from, and the Stribeck velocity a fit added to it
-    /// (rad/s or m/s), for pickling.
+    /// What the model was built from, and the settings of the fit whose model options
+    /// (Stribeck and Dahl terms, mounting pitch, bounds: `FitSettings::model`) were
+    /// applied to it, for pickling.
     pub(crate) origin: Origin,
-    pub(crate) stribeck: Option<f64>,
+    pub(crate) fit: Option<Box<FitSettings>>,
 }
 
 /// What a robot was built from: enough to build it again in another process (a file
@@ -47,15 +48,16 @@ pub enum Origin {
 }
 
 impl Origin {
-    /// The model it describes, with Stribeck terms of velocity `stribeck` if given.
-    pub(crate) fn build(&self, stribeck: Option<f64>) -> Result<Model, dvrk_model::ModelError> {
+    /// The model it describes, with the model options of the fit `fit` if given
+    /// (`FitSettings::model`: Stribeck and Dahl terms, mounting pitch, bounds).
+    pub(crate) fn build(&self, fit: Option<&FitSettings>) -> Result<Model, IdentError> {
         let model = match self {
             Origin::Builtin(name) => Model::builtin(name)?,
             Origin::Toml { text, source } => Model::from_toml_str(text, source)?,
             Origin::Urdf { text, source } => Model::from_urdf_str(text, source)?,
         };
-        match stribeck {
-            Some(v) => model.with_stribeck(v),
+        match fit {
+            Some(s) => Ok(s.model(&model)?.into_owned()),
             None => Ok(model),
         }
     }

@@ -478,21 +478,28 @@ impl FitResultPy {
     }
 
     /// The :class:`Model` of this result, whose parameters are this result's: the one it
-    /// was fitted (or read) with, else loaded from ``robot_source``, with the Stribeck
-    /// terms of its fit.
+    /// was fitted (or read) with, else loaded from ``robot_source``, with the model
+    /// options of its fit (Stribeck and Dahl terms, mounting pitch: its gravity).
     fn load_robot(&self, py: Python<'_>) -> PyResult<Py<ModelPy>> {
-        let stribeck = self.inner.settings.stribeck_velocity;
+        let settings = self.inner.settings.clone();
         if let Some(r) = &self.robot {
             let given = r.get();
-            // The robot given to the fit, with the Stribeck terms the fit added to it.
-            if self.model(py, None)?.n_params() == given.model.n_params() {
-                return Ok(r.clone_ref(py));
-            }
-            return Py::new(py, ModelPy::build(py, given.origin.clone(), stribeck)?);
+            // The robot given to the fit when the fit's options change nothing in it,
+            // else a copy with them.
+            return match self
+                .inner
+                .model_for(&given.model, "FitResult")
+                .map_err(from_ident)?
+            {
+                std::borrow::Cow::Borrowed(_) => Ok(r.clone_ref(py)),
+                std::borrow::Cow::Owned(m) => {
+                    Py::new(py, ModelPy::fitted(m, given.origin.clone(), Some(settings)))
+                }
+            };
         }
         Py::new(
             py,
-            ModelPy::of_result(py, &self.inner.robot_source, stribeck)?,
+            ModelPy::of_result(py, &self.inner.robot_source, settings)?,
         )
     }
 

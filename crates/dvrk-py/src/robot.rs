@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::sync::{Arc, OnceLock};
 
+use dvrk_ident::FitSettings;
 use dvrk_model::{BaseParameters, Model, Workspace};
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
@@ -20,46 +21,43 @@ impl ModelPy {
             model: Arc::new(model),
             base: OnceLock::new(),
             origin,
-            stribeck: None,
+            fit: None,
         }
     }
 
-    /// The model `origin` describes, with Stribeck terms of velocity `stribeck` if given
+    /// The model `origin` describes, with the model options of the fit `fit` if given
     /// (built without the GIL).
     pub(crate) fn build(
         py: Python<'_>,
         origin: Origin,
-        stribeck: Option<f64>,
+        fit: Option<FitSettings>,
     ) -> PyResult<ModelPy> {
-        let model = py.detach(|| origin.build(stribeck)).map_err(from_model)?;
-        Ok(ModelPy {
-            stribeck,
+        let model = py
+            .detach(|| origin.build(fit.as_ref()))
+            .map_err(from_ident)?;
+        Ok(ModelPy::fitted(model, origin, fit))
+    }
+
+    /// `model`, built from `origin` with the model options of the fit `fit`.
+    pub(crate) fn fitted(model: Model, origin: Origin, fit: Option<FitSettings>) -> ModelPy {
+        ModelPy {
+            fit: fit.map(Box::new),
             ..ModelPy::new(model, origin)
-        })
+        }
     }
 
     /// The robot of a fit result: its robot (built-in name or file) with the fit's
-    /// Stribeck terms.
-    pub fn of_result(
-        py: Python<'_>,
-        robot_source: &str,
-        stribeck: Option<f64>,
-    ) -> PyResult<ModelPy> {
+    /// model options (Stribeck and Dahl terms, mounting pitch, bounds).
+    pub fn of_result(py: Python<'_>, robot_source: &str, fit: FitSettings) -> PyResult<ModelPy> {
         let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
-        let (model, origin) = py
+        let (model, origin, fit) = py
             .detach(move || {
                 let (model, origin) = Origin::load(&name)?;
-                let model = match stribeck {
-                    Some(v) => model.with_stribeck(v)?,
-                    None => model,
-                };
-                Ok::<_, dvrk_model::ModelError>((model, origin))
+                let model = fit.model(&model)?.into_owned();
+                Ok::<_, dvrk_ident::IdentError>((model, origin, fit))
             })
-            .map_err(from_model)?;
-        Ok(ModelPy {
-            stribeck,
-            ..ModelPy::new(model, origin)
-        })
+            .map_err(from_ident)?;
+        Ok(ModelPy::fitted(model, origin, Some(fit)))
     }
 
     /// The base parameters, computed once (about 10 ms for the PSM) without the GIL.
@@ -265,8 +263,12 @@ impl ModelPy {
             Origin::Toml { text, source } => ("toml", text.clone(), source.clone()),
             Origin::Urdf { text, source } => ("urdf", text.clone(), source.clone()),
         };
-        let stribeck = r.stribeck;
-        let args = (kind, text, source, stribeck).into_pyobject(py)?.into_any();
+        // The fit's settings as their JSON document (the result's `settings`).
+        let fit = r
+            .fit
+            .as_ref()
+            .map(|s| serde_json::to_string(s).expect("serializable"));
+        let args = (kind, text, source, fit).into_pyobject(py)?.into_any();
         Ok((slf.get_type().getattr("_restore")?, args))
     }
 
@@ -277,7 +279,7 @@ impl ModelPy {
         kind: &str,
         text: String,
         source: String,
-        stribeck: Option<f64>,
+        fit: Option<String>,
     ) -> PyResult<Self> {
         let origin = match kind {
             "builtin" => Origin::Builtin(text),
@@ -285,7 +287,11 @@ impl ModelPy {
             "urdf" => Origin::Urdf { text, source },
             other => return Err(input(format!("Model: unknown pickled kind {other:?}"))),
         };
-        ModelPy::build(py, origin, stribeck)
+        let fit = fit
+            .map(|text| serde_json::from_str::<FitSettings>(&text))
+            .transpose()
+            .map_err(|e| input(format!("Model: pickled fit settings: {e}")))?;
+        ModelPy::build(py, origin, fit)
     }
 
     /// Names of the built-in robots.
