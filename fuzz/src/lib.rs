@@ -303,6 +303,7 @@ pub fn limits(data: &[u8]) {
         a: vec![vec![0.2], vec![0.1]],
         b: vec![vec![0.0], vec![0.3]],
         coordinates: Vec::new(),
+        robot: None,
     };
     if let Ok(f) = optimize::check_feasibility(model, &traj, &limits, 1000.0) {
         if let Some(w) = f.worst {

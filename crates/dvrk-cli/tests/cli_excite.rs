@@ -44,6 +44,7 @@ fn optimize_writes_trajectory_setpoints_and_plot_then_evaluate_agrees() {
         assert!(rows.iter().all(|r| r.as_array().unwrap().len() == 2));
     }
     assert_eq!(doc["coordinates"][2], "q3");
+    assert_eq!(doc["robot"], "psm");
     assert_eq!(doc["criterion"]["name"], "condition");
     let value = doc["criterion"]["value"].as_f64().unwrap();
     assert!(value > 1.0 && value.is_finite());
@@ -72,12 +73,48 @@ fn optimize_writes_trajectory_setpoints_and_plot_then_evaluate_agrees() {
         dir.join("again.svg").to_str().unwrap(),
     ]);
     assert!(ok, "{err}");
+    assert!(!err.contains("warning"), "{err}");
     let ev: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(ev["feasible"], true);
     let again = ev["criterion"]["value"].as_f64().unwrap();
     assert!((again - value).abs() < 1e-9 * value, "{again} vs {value}");
     let svg = std::fs::read_to_string(dir.join("again.svg")).unwrap();
     assert!(svg.contains("excitation trajectory") && svg.contains("q7"));
+
+    // Every robot's coordinates are q1..qn: the recorded robot is what tells another
+    // arm's trajectory (issue 32 class 9), in evaluate and in simulate alike.
+    let t = traj.to_str().unwrap();
+    let warning = format!("warning: {t} was designed for robot psm, not psm_simplified");
+    let (ok, _, err) = run(&["excite", "--robot", "psm_simplified", "--evaluate", t]);
+    assert!(ok && err.contains(&warning), "{err}");
+    let log = dir.join("sim.csv");
+    let (ok, _, err) = run(&[
+        "simulate",
+        "psm_simplified",
+        "--params",
+        "nominal",
+        "--excitation",
+        t,
+        "--duration",
+        "0.1",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    assert!(err.contains(&warning), "{err}");
+    let (ok2, _, err2) = run(&[
+        "simulate",
+        "psm",
+        "--params",
+        &example("psm_params.json"),
+        "--excitation",
+        t,
+        "--duration",
+        "0.1",
+        "--out",
+        log.to_str().unwrap(),
+    ]);
+    assert!(ok2 && !err2.contains("warning"), "{err2}");
+    let _ = ok;
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

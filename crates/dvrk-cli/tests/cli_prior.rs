@@ -144,7 +144,7 @@ fn prior_errors_name_the_flag_and_write_nothing() {
     write_arm_log(&urdf, &log);
     let out = dir.join("out.json");
     let missing = dir.join("missing.json");
-    let cases: [(&[&str], &str); 7] = [
+    let cases: [(&[&str], &str); 9] = [
         (&["--prior-weight", "0.1"], "--prior-weight: needs a prior"),
         (
             &["--prior-metric", "euclidean"],
@@ -152,11 +152,21 @@ fn prior_errors_name_the_flag_and_write_nothing() {
         ),
         (
             &["--prior", "nominal", "--prior-weight", "-1"],
-            "--prior-weight: must be in [0, 1e6]",
+            "--prior-weight: must be 0 or in [1e-9, 1e6], got -1",
         ),
         (
             &["--prior", "nominal", "--prior-weight", "1e9"],
-            "--prior-weight: must be in [0, 1e6], got 1000000000",
+            "--prior-weight: must be 0 or in [1e-9, 1e6], got 1000000000",
+        ),
+        // a pull below what the solver resolves (issue 32 class 9), and a huge one shown
+        // in exponent form rather than 301 digits
+        (
+            &["--prior", "nominal", "--prior-weight", "1e-300"],
+            "--prior-weight: must be 0 or in [1e-9, 1e6], got 1e-300",
+        ),
+        (
+            &["--prior", "nominal", "--prior-weight", "1e300"],
+            "--prior-weight: must be 0 or in [1e-9, 1e6], got 1e300",
         ),
         (
             &["--prior", "nominal", "--method", "ols"],

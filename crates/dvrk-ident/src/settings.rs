@@ -157,19 +157,15 @@ impl Prior {
         Ok(Some(values))
     }
 
-    /// Checks what a fit needs of a prior: a finite, non-negative weight and the
+    /// Checks what a fit needs of a prior: a weight the solver resolves and the
     /// semidefinite estimator (the least-squares estimators have no prior term).
     pub fn check(&self, method: Method) -> Result<(), IdentError> {
         let setting = |name: &str, message: String| IdentError::Setting {
             name: name.into(),
             message,
         };
-        let max = crate::estimate::sdp::MAX_PRIOR_WEIGHT;
-        if !(self.weight >= 0.0 && self.weight <= max) {
-            return Err(setting(
-                "prior_weight",
-                format!("must be in [0, {max:e}], got {}", self.weight),
-            ));
+        if let Some(message) = crate::estimate::sdp::prior_weight_problem(self.weight) {
+            return Err(setting("prior_weight", message));
         }
         if method != Method::Sdp {
             return Err(setting(

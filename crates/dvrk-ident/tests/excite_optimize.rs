@@ -50,6 +50,7 @@ fn some_trajectory(n: usize, order: usize, f0: f64) -> FourierTrajectory {
             .map(|_| (0..order).map(|_| 0.6 * next()).collect())
             .collect(),
         coordinates: vec![],
+        robot: None,
     }
 }
 

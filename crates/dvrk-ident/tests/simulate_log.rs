@@ -25,6 +25,7 @@ fn trajectory(n: usize) -> FourierTrajectory {
             .collect(),
         b: (0..n).map(|j| vec![0.1, 0.03, -0.02 * j as f64]).collect(),
         coordinates: Vec::new(),
+        robot: None,
     }
 }
 

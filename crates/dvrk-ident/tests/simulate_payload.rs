@@ -18,6 +18,7 @@ fn trajectory(n: usize) -> FourierTrajectory {
         a: (0..n).map(|j| vec![0.2, -0.1 + 0.01 * j as f64]).collect(),
         b: (0..n).map(|j| vec![0.1, -0.02 * j as f64]).collect(),
         coordinates: Vec::new(),
+        robot: None,
     }
 }
 

@@ -168,6 +168,7 @@ fn excitation(n: usize, phase: f64) -> FourierTrajectory {
             .map(|j| vec![0.2, 0.1 - phase, -0.1 * j as f64])
             .collect(),
         coordinates: Vec::new(),
+        robot: None,
     }
 }
 

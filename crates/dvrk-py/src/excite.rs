@@ -103,6 +103,7 @@ impl FourierTrajectoryPy {
             a: coefficient_rows(py, a, order, "a")?,
             b: coefficient_rows(py, b, order, "b")?,
             coordinates: coordinates.unwrap_or_default(),
+            robot: None,
         };
         inner.validate("FourierTrajectory").map_err(from_fourier)?;
         Ok(FourierTrajectoryPy { inner })
@@ -427,6 +428,9 @@ pub fn evaluate_trajectory<'py>(
     let limits = limits_of(&model, limits)?;
     let criterion = parse_criterion(criterion)?;
     let traj = trajectory.get().inner.clone();
+    if let Some(warning) = traj.robot_mismatch(&model, "the trajectory") {
+        crate::fit::warn_all(py, &[warning])?;
+    }
     let ev = background(py, move || {
         optimize::evaluate(
             &model,

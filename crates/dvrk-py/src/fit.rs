@@ -689,7 +689,7 @@ impl FitResultPy {
 }
 
 /// Each line as a Python ``UserWarning`` (what the command line prints as `warning:`).
-fn warn_all(py: Python<'_>, lines: &[String]) -> PyResult<()> {
+pub(crate) fn warn_all(py: Python<'_>, lines: &[String]) -> PyResult<()> {
     for line in lines {
         PyErr::warn(
             py,

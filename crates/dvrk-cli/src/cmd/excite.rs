@@ -226,6 +226,9 @@ fn evaluate(
         Some(name) => FourierTrajectory::from_wpi_file(path, name)?,
         None => FourierTrajectory::from_json_file(path)?,
     };
+    if let Some(warning) = traj.robot_mismatch(model, path) {
+        eprintln!("dvrk-ident: warning: {warning}");
+    }
     let ev = optimize::evaluate(
         model,
         base,

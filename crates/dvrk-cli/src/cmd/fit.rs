@@ -414,7 +414,7 @@ fn delays_and_prior(s: &mut String, r: &FitResult) {
             "prior {} ({} metric, weight {}){divergence}",
             p.source,
             p.metric.name(),
-            p.weight
+            dvrk_model::input::show(p.weight)
         );
     }
 }

@@ -125,16 +125,19 @@ pub fn run(args: Args) -> Result<()> {
     );
     let stdout_taken = super::check_outputs(&[("--out", Some(&args.out))], &[], &inputs)?;
     let robot = Model::load(&args.robot)?;
+    let traj = match &args.pick {
+        Some(name) => FourierTrajectory::from_wpi_file(&args.excitation, name)?,
+        None => FourierTrajectory::from_json_file(&args.excitation)?,
+    };
+    if let Some(warning) = traj.robot_mismatch(&robot, &args.excitation) {
+        eprintln!("dvrk-ident: warning: {warning}");
+    }
     // A result is simulated with the model it was fitted with (e.g. its Stribeck terms).
     let (mut model, params) = read_params(&robot, &args.params)?;
     if args.mounting.mounting_pitch.is_some() {
         args.mounting.apply(model.to_mut())?;
     }
     let model: &Model = &model;
-    let traj = match &args.pick {
-        Some(name) => FourierTrajectory::from_wpi_file(&args.excitation, name)?,
-        None => FourierTrajectory::from_json_file(&args.excitation)?,
-    };
     let noise: Vec<f64> = args
         .noise
         .split(',')

@@ -584,13 +584,10 @@ fn check_inputs(
             message: format!("must be finite and >= 0, got {}", options.regularization),
         });
     }
-    if !(options.prior_weight >= 0.0 && options.prior_weight <= MAX_PRIOR_WEIGHT) {
+    if let Some(message) = prior_weight_problem(options.prior_weight) {
         return Err(SdpError::Option {
             name: "prior_weight",
-            message: format!(
-                "must be in [0, {MAX_PRIOR_WEIGHT:e}], got {}",
-                options.prior_weight
-            ),
+            message,
         });
     }
     if options.prior_weight > 0.0 && options.prior.is_none() {
@@ -961,6 +958,33 @@ fn lower_index(i: usize, c: usize) -> usize {
 /// data have no say, and on the bundled example a weight of 1e9 left the solver a
 /// point outside the cone of its own divergence (1e6 solves).
 pub const MAX_PRIOR_WEIGHT: f64 = 1e6;
+
+/// Smallest positive prior weight: the pull of a smaller one is below what the solver
+/// resolves (its gap tolerance is 1e-8 of a data term about 1), and on the bundled example
+/// a weight of 1e-12 left it at AlmostSolved where 1e-9 solves.
+pub const MIN_PRIOR_WEIGHT: f64 = 1e-9;
+
+/// Why `weight` is not a prior weight, if it is not: 0 (no pull) or within
+/// [[`MIN_PRIOR_WEIGHT`], [`MAX_PRIOR_WEIGHT`]].
+///
+/// ```
+/// use dvrk_ident::estimate::sdp::prior_weight_problem;
+/// assert!(prior_weight_problem(0.0).is_none() && prior_weight_problem(10.0).is_none());
+/// assert_eq!(
+///     prior_weight_problem(1e-300).unwrap(),
+///     "must be 0 or in [1e-9, 1e6], got 1e-300"
+/// );
+/// ```
+pub fn prior_weight_problem(weight: f64) -> Option<String> {
+    if weight == 0.0 || (MIN_PRIOR_WEIGHT..=MAX_PRIOR_WEIGHT).contains(&weight) {
+        None
+    } else {
+        Some(format!(
+            "must be 0 or in [{MIN_PRIOR_WEIGHT:e}, {MAX_PRIOR_WEIGHT:e}], got {}",
+            dvrk_model::input::show(weight)
+        ))
+    }
+}
 
 /// Smallest eigenvalue of a prior's balanced pseudo-inertia `T·J₀·T` kept by the
 /// entropic metric, relative to its largest.

@@ -38,6 +38,11 @@ use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
+/// Highest base frequency of a trajectory, Hz: far above any arm's bandwidth (the dVRK's
+/// trajectories use 0.1 to 0.2 Hz), low enough that the accelerations of coefficients
+/// within range stay finite.
+pub const MAX_BASE_FREQUENCY_HZ: f64 = 1e3;
+
 /// Why a Fourier trajectory could not be read or is not usable. Messages name the file
 /// (or source) and the offending field.
 #[derive(Debug, Error)]
@@ -97,6 +102,12 @@ pub struct FourierTrajectory {
     /// Coordinate names (optional; empty: unnamed).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub coordinates: Vec<String>,
+    /// The robot the trajectory was designed for (`excite` records its model's name;
+    /// `None`: unknown, as in the 2019 files). Every robot's coordinates are named
+    /// `q1..qn`, so this is what tells a PSM trajectory given to the MTM
+    /// ([`FourierTrajectory::robot_mismatch`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<String>,
 }
 
 /// One trajectory of the 2019 package's coefficient file.
@@ -137,8 +148,9 @@ impl FourierTrajectory {
     }
 
     /// Checks sizes (`q0`, `a`, `b`, `coordinates`), that the order is at least 1, the
-    /// base frequency positive and every value finite. `source` names the input in the
-    /// message.
+    /// base frequency in (0, [`MAX_BASE_FREQUENCY_HZ`]] and every coefficient finite and
+    /// at most [`dvrk_model::input::MAX_ANGLE_RAD`] in magnitude. `source` names the input
+    /// in the message.
     pub fn validate(&self, source: &str) -> Result<(), FourierError> {
         let bad = |message: String| {
             Err(FourierError::Invalid {
@@ -153,12 +165,27 @@ impl FourierTrajectory {
         if self.order == 0 {
             return bad("order must be at least 1".into());
         }
-        if !(self.base_frequency_hz.is_finite() && self.base_frequency_hz > 0.0) {
+        if !(self.base_frequency_hz.is_finite()
+            && self.base_frequency_hz > 0.0
+            && self.base_frequency_hz <= MAX_BASE_FREQUENCY_HZ)
+        {
             return bad(format!(
-                "base_frequency_hz must be positive and finite, got {}",
-                self.base_frequency_hz
+                "base_frequency_hz must be positive and at most {MAX_BASE_FREQUENCY_HZ:e} Hz, \
+                 got {}",
+                dvrk_model::input::show(self.base_frequency_hz)
             ));
         }
+        // A coefficient is a position (rad or m) or a velocity amplitude (rad/s or m/s):
+        // beyond MAX_ANGLE_RAD the positions it gives are no arm's, and their criterion
+        // and feasibility overflow (q0 = 1e308 was evaluated to a condition number of inf).
+        let magnitude = |name: String, v: f64| {
+            dvrk_model::input::check_magnitude(v, dvrk_model::input::MAX_ANGLE_RAD, "").map_err(
+                |m| FourierError::Invalid {
+                    source_name: source.to_string(),
+                    message: format!("{name} {m}"),
+                },
+            )
+        };
         for (name, m) in [("a", &self.a), ("b", &self.b)] {
             if m.len() != n {
                 return bad(format!(
@@ -174,13 +201,13 @@ impl FourierTrajectory {
                         self.order
                     ));
                 }
-                if let Some((l, v)) = row.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-                    return bad(format!("{name}[{j}][{l}] = {v} is not finite"));
+                for (l, &v) in row.iter().enumerate() {
+                    magnitude(format!("{name}[{j}][{l}]"), v)?;
                 }
             }
         }
-        if let Some((j, v)) = self.q0.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return bad(format!("q0[{j}] = {v} is not finite"));
+        for (j, &v) in self.q0.iter().enumerate() {
+            magnitude(format!("q0[{j}]"), v)?;
         }
         if !self.coordinates.is_empty() && self.coordinates.len() != n {
             return bad(format!(
@@ -189,6 +216,36 @@ impl FourierTrajectory {
             ));
         }
         Ok(())
+    }
+
+    /// A warning when the trajectory was designed for another robot than `model` (its
+    /// limits, its coordinates' meaning: the PSM's q3 is an insertion in m, the MTM's an
+    /// angle), naming both; `None` when it is `model`'s or its robot is unknown.
+    ///
+    /// ```
+    /// use dvrk_ident::excite::FourierTrajectory;
+    /// let mut f = FourierTrajectory::from_json_str(
+    ///     r#"{"order": 1, "base_frequency_hz": 0.1, "q0": [0.0], "a": [[0.1]], "b": [[0.0]],
+    ///        "robot": "psm"}"#,
+    ///     "t.json",
+    /// )
+    /// .unwrap();
+    /// let model = dvrk_model::Model::builtin("mtm").unwrap();
+    /// assert_eq!(
+    ///     f.robot_mismatch(&model, "t.json").unwrap(),
+    ///     "t.json was designed for robot psm, not mtm"
+    /// );
+    /// f.robot = None;
+    /// assert!(f.robot_mismatch(&model, "t.json").is_none());
+    /// ```
+    pub fn robot_mismatch(&self, model: &dvrk_model::Model, source: &str) -> Option<String> {
+        match &self.robot {
+            Some(robot) if *robot != model.name => Some(format!(
+                "{source} was designed for robot {robot}, not {}",
+                model.name
+            )),
+            _ => None,
+        }
     }
 
     /// Position (rad or m), velocity and acceleration of every coordinate at time `t`
@@ -203,7 +260,7 @@ impl FourierTrajectory {
     /// use dvrk_ident::excite::FourierTrajectory;
     /// let f = FourierTrajectory {
     ///     order: 1, base_frequency_hz: 0.5, q0: vec![0.2],
-    ///     a: vec![vec![1.0]], b: vec![vec![0.0]], coordinates: vec![],
+    ///     a: vec![vec![1.0]], b: vec![vec![0.0]], coordinates: vec![], robot: None,
     /// };
     /// let (mut q, mut dq, mut ddq) = ([0.0], [0.0], [0.0]);
     /// f.eval(0.0, &mut q, &mut dq, &mut ddq);
@@ -326,6 +383,7 @@ impl FourierTrajectory {
                 .map(|d| block(d)[e.order + 1..].to_vec())
                 .collect(),
             coordinates: (1..=e.dof).map(|j| format!("q{j}")).collect(),
+            robot: None,
         };
         f.validate(&source)?;
         Ok(f)
@@ -351,6 +409,7 @@ mod tests {
             a: vec![vec![0.3, -0.1, 0.05], vec![0.0, 0.2, -0.07]],
             b: vec![vec![0.1, 0.02, -0.04], vec![0.15, 0.0, 0.03]],
             coordinates: vec!["q1".into(), "q2".into()],
+            robot: None,
         }
     }
 

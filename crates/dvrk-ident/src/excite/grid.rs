@@ -134,6 +134,7 @@ pub(crate) fn from_x(
             .map(|j| x[n + n * order + j * order..][..order].to_vec())
             .collect(),
         coordinates: names.to_vec(),
+        robot: None,
     }
 }
 

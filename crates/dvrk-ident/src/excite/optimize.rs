@@ -475,7 +475,10 @@ pub fn optimize(
     let Some((obj, x)) = best else {
         return Err(no_motion(&setup));
     };
-    let trajectory = from_x(&x, n, order, f0, &model.coordinates);
+    let trajectory = FourierTrajectory {
+        robot: Some(model.name.clone()),
+        ..from_x(&x, n, order, f0, &model.coordinates)
+    };
     let mut ws = Workspace::new(model);
     let feasibility = cons.check(model, &mut ws, &x, &dense, opts.check_rate_hz);
     if !feasibility.feasible {
@@ -570,6 +573,7 @@ mod tests {
             a: vec![vec![0.3, -0.1], vec![0.2, 0.05]],
             b: vec![vec![0.1, 0.02], vec![-0.15, 0.0]],
             coordinates: vec![],
+            robot: None,
         };
         let grid = Grid::uniform(17, 2, 0.3);
         let x = to_x(&traj);

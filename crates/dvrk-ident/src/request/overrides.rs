@@ -193,7 +193,7 @@ overrides! {
     /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
     /// values are recorded in the result's settings)
     prior: PriorSource => Prior("prior") with "text_or_value";
-    /// Weight of the prior, relative to the data term scaled to at most 1
+    /// Weight of the prior, relative to the data term scaled to at most 1 (0, or 1e-9 to 1e6)
     prior_weight: f64 => PriorWeight("prior_weight") with "text_or_value";
     /// How the prior's distance is measured: `entropic` (the log-det divergence of each
     /// link's pseudo-inertia from the prior's) or `euclidean`
