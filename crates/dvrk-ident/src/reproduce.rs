@@ -16,7 +16,7 @@
 //! let mut settings = FitSettings { method: Method::Ols, ..FitSettings::default() };
 //! settings.stribeck_velocity = Some(0.3);
 //! let train = InputInfo { role: "train".into(), path: "one.csv".into(), sha256: String::new(),
-//!     bytes: 0, source: String::new(), metrics: None };
+//!     bytes: 0, source: String::new(), metrics: None, offset: None };
 //! let read = ReadOptions { rate_hz: Some(200.0), ..ReadOptions::default() };
 //! let r = cli_command("psm", &settings, &[train], Some(&read));
 //! assert_eq!(r.text, "dvrk-ident fit one.csv --robot psm --rate 200 --method ols --stribeck 0.3");
@@ -560,6 +560,7 @@ mod tests {
             bytes: 1,
             source: String::new(),
             metrics: None,
+            offset: None,
         }
     }
 
