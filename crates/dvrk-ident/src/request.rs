@@ -673,7 +673,7 @@ impl FitRequest {
                 ),
             );
         }
-        if o.select.is_some() {
+        if o.select.is_some() || self.settings.select.is_some() {
             if let Some(given) = [
                 ("stribeck", o.stribeck_velocity.is_some()),
                 ("dahl", o.dahl_sigma.is_some()),

@@ -256,7 +256,11 @@ fn pendulum_log(model: &Model, params: &[f64], seconds: f64, noise: f64, seed: u
 /// The held-out mean of candidate `name` in a result's selection.
 fn held_out(r: &dvrk_ident::FitResult, name: &str) -> f64 {
     let s = r.selection.as_ref().unwrap();
-    s.candidates.iter().find(|c| c.candidate == name).unwrap().mean
+    s.candidates
+        .iter()
+        .find(|c| c.candidate == name)
+        .unwrap()
+        .mean
 }
 
 /// `select` on one simulated log (4 blocks in time): with Dahl friction in the
@@ -282,12 +286,19 @@ fn select_chooses_the_friction_law_of_the_torques_by_held_out_error() {
         .result;
     let s = r.selection.as_ref().unwrap();
     print!("{}", s.table());
-    assert!(matches!(s.folds, Folds::Blocked { folds: 4, .. }), "{:?}", s.folds);
+    assert!(
+        matches!(s.folds, Folds::Blocked { folds: 4, .. }),
+        "{:?}",
+        s.folds
+    );
     let (coulomb, with_dahl) = (held_out(&r, "coulomb"), held_out(&r, "dahl"));
     assert_eq!(s.chosen, "dahl");
     assert!(coulomb > 1.5 * with_dahl, "{coulomb} vs {with_dahl}");
     assert_eq!(r.settings.dahl_sigma, Some(20.0));
-    assert_eq!(r.settings.select.as_ref().unwrap().to_string(), "coulomb,dahl");
+    assert_eq!(
+        r.settings.select.as_ref().unwrap().to_string(),
+        "coulomb,dahl"
+    );
     let fd = r.parameters["Fd1"];
     assert!((fd - 0.06).abs() < 0.006, "Fd1 {fd}");
 
@@ -302,6 +313,15 @@ fn select_chooses_the_friction_law_of_the_torques_by_held_out_error() {
     // terms too many may fit a little of it, never a tenth of it.
     assert!(rich > 0.9 * simple, "{rich} vs {simple}");
     assert!(simple < 0.02, "{simple}");
+
+    // The candidates give the friction terms: one given beside them is refused.
+    let mut request = FitRequest::of_samples([&log], None, settings("coulomb,dahl"));
+    request.overrides.stribeck_velocity = Some(0.3);
+    let e = request.run(Some(&plain), &Silent).unwrap_err().to_string();
+    assert!(
+        e.contains("the candidates give the friction terms, and stribeck"),
+        "{e}"
+    );
 }
 
 /// `log_offsets`: two simulated logs of the pendulum re-homed between them (Fo 0.02
@@ -325,13 +345,21 @@ fn log_offsets_recover_each_logs_offset() {
             .result
     };
     let (with, without) = (fit(true), fit(false));
-    let offsets: Vec<_> = with.inputs.iter().map(|i| i.offset.clone().unwrap()).collect();
+    let offsets: Vec<_> = with
+        .inputs
+        .iter()
+        .map(|i| i.offset.clone().unwrap())
+        .collect();
     println!("offsets {offsets:?}, Fo1 {}", with.parameters["Fo1"]);
     assert_eq!(offsets[0], [0.0]);
     assert!((offsets[1][0] - 0.15).abs() < 0.002, "{offsets:?}");
     assert!((with.parameters["Fo1"] - 0.02).abs() < 0.002);
     assert!(without.inputs.iter().all(|i| i.offset.is_none()));
     let mean = |r: &dvrk_ident::FitResult| r.metrics.train.relative_error[0];
-    println!("train error with {} without {}", mean(&with), mean(&without));
+    println!(
+        "train error with {} without {}",
+        mean(&with),
+        mean(&without)
+    );
     assert!(mean(&without) > 3.0 * mean(&with));
 }

@@ -471,7 +471,11 @@ fn logs(s: &mut String, r: &FitResult) {
         }
         if let Some(o) = &i.offset {
             let o: Vec<String> = o.iter().map(|v| format!("{v:+.4}")).collect();
-            let _ = writeln!(s, "        own torque offset over the model's {}", o.join(" "));
+            let _ = writeln!(
+                s,
+                "        own torque offset over the model's {}",
+                o.join(" ")
+            );
         }
     }
 }

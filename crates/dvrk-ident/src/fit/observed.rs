@@ -146,7 +146,9 @@ pub(crate) fn fit_observed(
             .logs
             .iter()
             .zip(&fitted.logs)
-            .map(|(log, f)| MetricSums::from_fitted_factors(&log.parts, &f.parts, &estimated.params))
+            .map(|(log, f)| {
+                MetricSums::from_fitted_factors(&log.parts, &f.parts, &estimated.params)
+            })
             .collect()
     } else {
         match passes.train {

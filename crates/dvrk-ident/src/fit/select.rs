@@ -167,12 +167,7 @@ impl Candidates {
             dahl_sigma: d,
         };
         let (s, d) = (Some(DEFAULT_STRIBECK), Some(DEFAULT_DAHL));
-        Candidates(vec![
-            c(None, None),
-            c(s, None),
-            c(None, d),
-            c(s, d),
-        ])
+        Candidates(vec![c(None, None), c(s, None), c(None, d), c(s, d)])
     }
 }
 
@@ -255,6 +250,18 @@ pub enum Folds {
     },
 }
 
+impl Folds {
+    /// In words: `leave one log out, 2 folds`, `4 blocks in time, guard band 0.245 s`.
+    pub fn describe(&self) -> String {
+        match self {
+            Folds::LeaveOneLogOut { logs } => format!("leave one log out, {logs} folds"),
+            Folds::Blocked { folds, guard_s } => {
+                format!("{folds} blocks in time, guard band {guard_s:.3} s")
+            }
+        }
+    }
+}
+
 /// One candidate's held-out errors.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateScore {
@@ -284,14 +291,11 @@ impl Selection {
     /// each joint's held-out relative error, the chosen one marked.
     pub fn table(&self) -> String {
         let mut out = String::new();
-        let how = match &self.folds {
-            Folds::LeaveOneLogOut { logs } => format!("leave one log out, {logs} folds"),
-            Folds::Blocked { folds, guard_s } => format!(
-                "{folds} blocks in time, guard band {:.3} s",
-                guard_s
-            ),
-        };
-        let _ = writeln!(out, "held-out relative error by candidate ({how}):");
+        let _ = writeln!(
+            out,
+            "held-out relative error by candidate ({}):",
+            self.folds.describe()
+        );
         let width = self
             .candidates
             .iter()
@@ -435,13 +439,14 @@ pub(crate) fn select(
     candidates: &Candidates,
     progress: &dyn Progress,
 ) -> Result<(Selection, Candidate), IdentError> {
-    crate::fit::no_delay_search(settings, "the selection's folds")
-        .map_err(|_| IdentError::Setting {
+    crate::fit::no_delay_search(settings, "the selection's folds").map_err(|_| {
+        IdentError::Setting {
             name: "select".into(),
             message: "the delay search (delay auto) would see the held-out samples: \
                       estimate the delays first and give them fixed"
                 .into(),
-        })?;
+        }
+    })?;
     progress.stage("processing (selection)", None);
     let prepared = train
         .iter()
@@ -468,11 +473,9 @@ pub(crate) fn select(
         let model = s.model(robot)?.into_owned();
         let mut held_out = MetricSums::new(&model);
         for (f, fold) in folds.iter().enumerate() {
-            let params = fit_pieces(&model, &fold.train, &s).map_err(|e| {
-                IdentError::Setting {
-                    name: "select".into(),
-                    message: format!("candidate {}, fold {}: {e}", c.name(), f + 1),
-                }
+            let params = fit_pieces(&model, &fold.train, &s).map_err(|e| IdentError::Setting {
+                name: "select".into(),
+                message: format!("candidate {}, fold {}: {e}", c.name(), f + 1),
             })?;
             for t in &fold.test {
                 // Each piece's own sums (the Dahl states start at zero in each).
@@ -511,7 +514,11 @@ pub(crate) fn select(
 
 /// The parameters fitted on the pieces `train` (each reduced as a log of its own), by
 /// the fit's own estimator end ([`fit_observed`]).
-fn fit_pieces(model: &Model, train: &[Prepared], settings: &FitSettings) -> Result<Vec<f64>, IdentError> {
+fn fit_pieces(
+    model: &Model,
+    train: &[Prepared],
+    settings: &FitSettings,
+) -> Result<Vec<f64>, IdentError> {
     let mut observed: Option<Observed> = None;
     for p in train {
         let mut range = super::metrics::TorqueRange::new(model.dof());
@@ -553,4 +560,56 @@ fn fit_pieces(model: &Model, train: &[Prepared], settings: &FitSettings) -> Resu
         result.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
         "the fold's fit",
     )?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::LowPass;
+
+    /// The guard band covers the filter's reach: an impulse through the 2019 PSM filter
+    /// (zero-phase, 6th order, 16.965 Hz effective, 200 Hz) has decayed below 10⁻³ of
+    /// its peak beyond the guard (0.24 s), and not at a third of it.
+    #[test]
+    fn the_guard_band_outlasts_the_filters_impulse_response() {
+        let mut settings = FitSettings::default();
+        settings.processing.filter = Some(LowPass::wpi(5.4));
+        let dt = 1.0 / 200.0;
+        let guard = guard_s(&settings, dt);
+        assert!((guard - 0.2445).abs() < 1e-3, "{guard}");
+        let n = 401;
+        let mut x = vec![0.0; n];
+        x[n / 2] = 1.0;
+        let y = LowPass::wpi(5.4).apply_slice(&x, 5.4, 200.0).unwrap();
+        let peak = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let beyond = |s: f64| {
+            let k = (s / dt).round() as usize;
+            y.iter()
+                .enumerate()
+                .filter(|(i, _)| i.abs_diff(n / 2) >= k)
+                .fold(0.0f64, |m, (_, v)| m.max(v.abs()))
+                / peak
+        };
+        assert!(beyond(guard) < 1e-3, "{}", beyond(guard));
+        assert!(beyond(guard / 3.0) > 1e-3, "{}", beyond(guard / 3.0));
+    }
+
+    #[test]
+    fn candidate_names_read_back() {
+        for name in [
+            "coulomb",
+            "stribeck",
+            "dahl:10",
+            "stribeck:0.2+dahl",
+            "stribeck+dahl",
+        ] {
+            assert_eq!(name.parse::<Candidate>().unwrap().name(), name);
+        }
+        let e = "coulomb,viscous".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("unknown candidate term `viscous`"), "{e}");
+        let e = "stribeck:-1,coulomb".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("`-1` is not a positive number"), "{e}");
+        let e = "dahl+dahl:5,coulomb".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("gives dahl twice"), "{e}");
+    }
 }
