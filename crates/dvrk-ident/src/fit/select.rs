@@ -251,7 +251,7 @@ pub enum Folds {
 }
 
 impl Folds {
-    /// In words: `leave one log out, 2 folds`, `4 blocks in time, guard band 0.245 s`.
+    /// In words: `leave one log out, 2 folds`, `4 blocks in time, guard band 0.260 s`.
     pub fn describe(&self) -> String {
         match self {
             Folds::LeaveOneLogOut { logs } => format!("leave one log out, {logs} folds"),
@@ -331,8 +331,8 @@ fn truncate(s: &str, n: usize) -> &str {
 /// The guard band of the blocked folds, s: the time the slowest pole of the motion's
 /// Butterworth low-pass (order N, effective cut-off fc; the lowest of per-joint
 /// cut-offs) takes to decay to 10⁻³, `ln(1000) / (2π·fc·sin(π/2N))`, plus the largest
-/// torque delay, plus two samples (`dt`, s) of the difference stencils. 0.24 s for the
-/// PSM's 2019 filter (6th order, 16.965 Hz).
+/// torque delay, plus two samples (`dt`, s) of the difference stencils. 0.26 s for the
+/// PSM's 2019 filter (6th order, 16.965 Hz) and 200 Hz.
 pub fn guard_s(settings: &FitSettings, dt: f64) -> f64 {
     let p = &settings.processing;
     let filter = p.filter.as_ref().map_or(0.0, |lp| {
@@ -569,14 +569,14 @@ mod tests {
 
     /// The guard band covers the filter's reach: an impulse through the 2019 PSM filter
     /// (zero-phase, 6th order, 16.965 Hz effective, 200 Hz) has decayed below 10⁻³ of
-    /// its peak beyond the guard (0.24 s), and not at a third of it.
+    /// its peak beyond the guard (0.26 s), and not at a third of it.
     #[test]
     fn the_guard_band_outlasts_the_filters_impulse_response() {
         let mut settings = FitSettings::default();
         settings.processing.filter = Some(LowPass::wpi(5.4));
         let dt = 1.0 / 200.0;
         let guard = guard_s(&settings, dt);
-        assert!((guard - 0.2445).abs() < 1e-3, "{guard}");
+        assert!((guard - 0.2604).abs() < 1e-3, "{guard}");
         let n = 401;
         let mut x = vec![0.0; n];
         x[n / 2] = 1.0;
