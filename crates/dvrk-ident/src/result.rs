@@ -231,6 +231,28 @@ pub struct InputInfo {
     pub offset: Option<Vec<f64>>,
 }
 
+impl FitResult {
+    /// With per-log offsets (`settings.log_offsets`): which offsets a use of the result
+    /// on a log applies, the model's `Fo`, those of the first training log (the other
+    /// training logs' own, in `inputs[].offset`, belong to those recordings). `None`
+    /// without them.
+    pub fn offset_note(&self) -> Option<String> {
+        if !self.settings.log_offsets {
+            return None;
+        }
+        let first = self.inputs.iter().find(|i| i.role == "train")?;
+        let name = if first.path.is_empty() {
+            &first.source
+        } else {
+            &first.path
+        };
+        Some(format!(
+            "torque offsets: the model's Fo, fitted on the first training log ({name}); the \
+             other training logs' own offsets (the result's inputs[].offset) are not applied"
+        ))
+    }
+}
+
 /// A result's `robot_source` (`builtin:psm`, or a path) as [`dvrk_model::Model::load`]
 /// takes it.
 pub fn loadable_robot(robot_source: &str) -> &str {
