@@ -97,9 +97,8 @@ OPTIONS = [
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
     ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
     ({"method": "ols", "filter_order": 2}, ["--method", "ols", "--filter-order", "2"]),
-    ({"method": "ols", "select": True}, ["--method", "ols", "--select"]),
-    ({"method": "ols", "select": ["coulomb", "dahl:10"]},
-     ["--method", "ols", "--select", "coulomb,dahl:10"]),
+    ({"method": "ols", "select": ["coulomb", "dahl"]},
+     ["--method", "ols", "--select", "coulomb,dahl"]),
     ({"method": "ols", "log_offsets": True}, ["--method", "ols", "--log-offsets"]),
 ]
 

@@ -461,6 +461,22 @@ mod tests {
         .unwrap();
         assert_eq!(text, values);
         assert_eq!(text.bounds, Some(BoundsSet::Wang2019));
+        // The candidates of a selection: the flag's text, a list of names, or true.
+        let listed = Overrides::from_values([(Setting::Select, json!(["coulomb", "dahl:10"]))]);
+        let text = Overrides::from_values([(Setting::Select, json!("coulomb,dahl:10"))]);
+        assert_eq!(listed.unwrap(), text.unwrap());
+        let all = Overrides::from_values([(Setting::Select, json!(true))]).unwrap();
+        assert_eq!(
+            all.select.unwrap().to_string(),
+            "coulomb,stribeck,dahl,stribeck+dahl"
+        );
+        let e = Overrides::from_values([(Setting::Select, json!(["coulomb"]))]).unwrap_err();
+        assert_eq!(e.setting, Setting::Select);
+        assert!(
+            e.message.contains("at least two candidates"),
+            "{}",
+            e.message
+        );
         let none = Overrides::from_values([(Setting::Cutoff, json!(false))]).unwrap();
         assert_eq!(none.cutoff, Some(None));
         let e = Overrides::from_values([(Setting::Trim, json!(-1))]).unwrap_err();
