@@ -329,7 +329,10 @@ class FitResult:
     def validate(
         self, data: JointLog, test_window: Optional[int] = None, robot: Optional[Model] = None,
         *, joints: Optional[str] = None,
-    ) -> Dict[str, Any]: ...
+    ) -> Dict[str, Any]:
+        """The errors on ``data`` with the result's model and processing; with
+        ``log_offsets`` the model's ``Fo`` (the first training log's) apply, not the
+        other training logs' own offsets."""
     def wpi_params(self, robot: Optional[Model] = None) -> Dict[str, Any]: ...
     def dvrk_gc(self, robot: Optional[Model] = None, points: int = 7) -> Dict[str, Any]:
         """The dVRK controller's MTM gravity-compensation file (version "2.0")."""
