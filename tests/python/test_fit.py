@@ -97,6 +97,9 @@ OPTIONS = [
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
     ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
     ({"method": "ols", "filter_order": 2}, ["--method", "ols", "--filter-order", "2"]),
+    ({"method": "ols", "select": ["coulomb", "dahl"]},
+     ["--method", "ols", "--select", "coulomb,dahl"]),
+    ({"method": "ols", "log_offsets": True}, ["--method", "ols", "--log-offsets"]),
 ]
 
 
@@ -123,9 +126,20 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             "sdp_regularization": settings["sdp_regularization"],
             "ellipsoids": settings.get("ellipsoids", True),
             "mounting_pitch": settings.get("mounting_pitch_deg"),
+            "log_offsets": settings.get("log_offsets"),
         }.get(key)
         if recorded is not None:
             assert recorded == value, key
+    if "select" in kwargs:
+        # The table, as the command line's document holds it, and the winner's terms.
+        assert result.selection == cli["selection"]
+        chosen = result.selection["chosen"]
+        names = [c["candidate"] for c in result.selection["candidates"]]
+        assert chosen in names and settings["select"] == ",".join(names)
+        assert result.selection["folds"] == {"kind": "blocked", "folds": 4,
+                                             "guard_s": result.selection["folds"]["guard_s"]}
+    if "log_offsets" in kwargs:
+        assert result.inputs[0]["offset"] == [0.0] * 7
 
 
 @pytest.mark.parametrize("metric", ["entropic", "euclidean"])

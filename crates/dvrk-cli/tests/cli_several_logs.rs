@@ -123,6 +123,31 @@ fn several_logs_of_mixed_formats() {
     ] {
         assert_eq!(sdoc[key], doc[key], "{key}");
     }
+
+    // Each log's own offset (--log-offsets): the same in memory and streamed, the
+    // first log's zero; validate on another log says which offsets it applies.
+    let (own, own_streamed) = (dir.join("o.json"), dir.join("os.json"));
+    let stdout = fit(&own, &["--log-offsets"]);
+    assert!(
+        stdout.contains("own torque offset over the model's"),
+        "{stdout}"
+    );
+    fit(&own_streamed, &["--log-offsets", "--stream"]);
+    let (odoc, osdoc) = (read_json(&own), read_json(&own_streamed));
+    assert_eq!(odoc["inputs"], osdoc["inputs"]);
+    assert_eq!(odoc["parameters"], osdoc["parameters"]);
+    let offsets = |i: usize| dvrk_test_support::f64s(&odoc["inputs"][i]["offset"]);
+    assert_eq!(offsets(0), [0.0; 7]);
+    assert!(offsets(1).iter().any(|v| *v != 0.0));
+    assert!(
+        odoc["inputs"][2].get("offset").is_none(),
+        "a test log has none"
+    );
+    let stdout = run_ok(&["validate", &s(&own), &s(&c)]);
+    assert!(
+        stdout.contains("torque offsets: the model's Fo, fitted on the first training log"),
+        "{stdout}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

@@ -495,6 +495,28 @@ impl Observation {
         }
     }
 
+    /// The factor of the rows with column `col`'s direction projected out:
+    /// `A (I − e e ᵀAᵀA / ‖A e‖²)` for `e` the unit vector of `col`, so column `col`
+    /// becomes zero and every other column (and the torque) loses its least-squares
+    /// component along it (exact up to rounding, from the factor alone since
+    /// `A e = Q·R e`). For a column that is constant over the rows (a coordinate's
+    /// torque offset `Fo`), this removes each column's mean: a fit of the result is the
+    /// fit with one free offset for these rows, eliminated (Frisch–Waugh–Lovell). A
+    /// column that is zero over the rows leaves the factor as it is.
+    pub fn project_out(&self, col: usize) -> Observation {
+        let u = self.r.column(col).into_owned();
+        let uu = u.norm_squared();
+        if uu == 0.0 {
+            return self.clone();
+        }
+        let proj = &self.r - &u * (u.transpose() * &self.r) / uu;
+        let m = Mat::from_fn(proj.nrows(), proj.ncols(), |i, j| proj[(i, j)]);
+        Observation {
+            r: r_factor(&m),
+            rows: self.rows,
+        }
+    }
+
     /// Observation of `samples` with per-coordinate row weights `weights` (1/N·m or
     /// 1/N): the per-coordinate reduction, weighted.
     pub fn assemble(model: &Model, samples: Samples<'_>, weights: &[f64]) -> Observation {

@@ -16,7 +16,7 @@
 //! let mut settings = FitSettings { method: Method::Ols, ..FitSettings::default() };
 //! settings.stribeck_velocity = Some(0.3);
 //! let train = InputInfo { role: "train".into(), path: "one.csv".into(), sha256: String::new(),
-//!     bytes: 0, source: String::new(), metrics: None };
+//!     bytes: 0, source: String::new(), metrics: None, offset: None };
 //! let read = ReadOptions { rate_hz: Some(200.0), ..ReadOptions::default() };
 //! let r = cli_command("psm", &settings, &[train], Some(&read));
 //! assert_eq!(r.text, "dvrk-ident fit one.csv --robot psm --rate 200 --method ols --stribeck 0.3");
@@ -296,11 +296,20 @@ fn options(settings: &FitSettings) -> Options {
             Value::Num(settings.sdp_regularization),
         ));
     }
-    if let Some(v) = settings.stribeck_velocity {
-        given.push(("stribeck", Value::Num(v)));
+    match &settings.select {
+        // The selection repeats itself and chooses the same friction terms.
+        Some(candidates) => given.push(("select", Value::Name(candidates.to_string()))),
+        None => {
+            if let Some(v) = settings.stribeck_velocity {
+                given.push(("stribeck", Value::Num(v)));
+            }
+            if let Some(v) = settings.dahl_sigma {
+                given.push(("dahl", Value::Num(v)));
+            }
+        }
     }
-    if let Some(v) = settings.dahl_sigma {
-        given.push(("dahl", Value::Num(v)));
+    if settings.log_offsets {
+        given.push(("log_offsets", Value::Switch));
     }
     if let Some(b) = settings.bounds {
         given.push(("bounds", Value::Name(b.name().into())));
@@ -560,6 +569,7 @@ mod tests {
             bytes: 1,
             source: String::new(),
             metrics: None,
+            offset: None,
         }
     }
 
@@ -653,6 +663,34 @@ mod tests {
         // Unknown reading options are said, not guessed.
         let unknown = cli_command("psm", &s, &inputs, None);
         assert!(unknown.unrendered[0].contains("--format, --rate"));
+    }
+
+    /// A selection's result repeats the selection (which chooses the same terms), not
+    /// the winner's terms; per-log offsets are a switch.
+    #[test]
+    fn a_selection_is_repeated_not_its_winner() {
+        let s = FitSettings {
+            method: crate::Method::Ols,
+            stribeck_velocity: Some(0.3),
+            select: Some(crate::fit::select::Candidates::builtin()),
+            log_offsets: true,
+            ..FitSettings::default()
+        };
+        let inputs = [input("train", "a.csv"), input("train", "b.csv")];
+        let cli = cli_command("psm", &s, &inputs, Some(&ReadOptions::default()));
+        assert_eq!(
+            cli.text,
+            "dvrk-ident fit a.csv b.csv --robot psm --method ols \
+             --select coulomb,stribeck,dahl,stribeck+dahl --log-offsets"
+        );
+        let py = python_call("psm", &s, &inputs, Some(&ReadOptions::default()));
+        assert!(
+            py.text.contains(
+                "method=\"ols\", select=\"coulomb,stribeck,dahl,stribeck+dahl\", log_offsets=True)"
+            ),
+            "{}",
+            py.text
+        );
     }
 
     /// A raised decompression bound is part of how the logs were read: a compressed

@@ -263,6 +263,11 @@ impl Overrides {
             return o;
         };
         o = o.or(preset.overrides());
+        if self.select.is_some() {
+            // The candidates give the friction terms; the preset gives the rest.
+            o.stribeck_velocity = self.stribeck_velocity;
+            o.dahl_sigma = self.dahl_sigma;
+        }
         if from_states {
             let given = self.observation_fields();
             if !given.contains(&Setting::Stribeck) {
@@ -333,6 +338,12 @@ impl Overrides {
         }
         if let Some(j) = self.joints {
             s.joints = j;
+        }
+        if let Some(b) = self.log_offsets {
+            s.log_offsets = b;
+        }
+        if let Some(c) = &self.select {
+            s.select = Some(c.clone());
         }
         s
     }
@@ -662,6 +673,38 @@ impl FitRequest {
                 ),
             );
         }
+        if o.select.is_some() || self.settings.select.is_some() {
+            if let Some(given) = [
+                ("stribeck", o.stribeck_velocity.is_some()),
+                ("dahl", o.dahl_sigma.is_some()),
+            ]
+            .iter()
+            .find(|(_, given)| *given)
+            {
+                return refuse(
+                    "select",
+                    format!(
+                        "the candidates give the friction terms, and {} is given too: name it \
+                         in a candidate (e.g. select coulomb,stribeck:0.2)",
+                        given.0
+                    ),
+                );
+            }
+            let why = match &self.train {
+                Training::Observations(_) => Some("observation states"),
+                Training::Logs(_) if self.streams() => Some("streamed logs"),
+                Training::Logs(_) => None,
+            };
+            if let Some(why) = why {
+                return refuse(
+                    "select",
+                    format!(
+                        "the folds cut the processed samples in memory, which {why} do not \
+                         hold"
+                    ),
+                );
+            }
+        }
         if o.test_window.is_some() && self.test.is_empty() {
             return refuse(
                 "test_window",
@@ -733,14 +776,34 @@ impl FitRequest {
         }
         let train_data = read_all(&read, train, progress)?;
         let train_logs = log_data(&train_data, train);
-        self.fit_with_test(
+        let Some(candidates) = &settings.select else {
+            return self.fit_with_test(
+                model,
+                settings,
+                &read,
+                Some(&train_data),
+                progress,
+                |m, s, test| fit_logs(m, &train_logs, test, s, progress),
+            );
+        };
+        let (selection, chosen) =
+            crate::fit::select::select(robot, &train_logs, &settings, candidates, progress)?;
+        // The winner on all the data; the settings keep the candidates asked for.
+        let settings = FitSettings {
+            select: settings.select.clone(),
+            ..chosen.settings(&settings)
+        };
+        let model = settings.model(robot)?.into_owned();
+        let mut outcome = self.fit_with_test(
             model,
             settings,
             &read,
             Some(&train_data),
             progress,
             |m, s, test| fit_logs(m, &train_logs, test, s, progress),
-        )
+        )?;
+        outcome.result.selection = Some(selection);
+        Ok(outcome)
     }
 
     fn run_observations(

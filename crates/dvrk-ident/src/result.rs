@@ -223,6 +223,34 @@ pub struct InputInfo {
     /// This log's own metrics.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub metrics: Option<JointMetrics>,
+    /// A training log's own torque offset over the model's, per model coordinate (N·m
+    /// or N), with `log_offsets` (`FitSettings::log_offsets`): what this log's torques
+    /// add to the model's prediction, the first log's zero (its offsets are the model's
+    /// `Fo`). `None` without the option.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub offset: Option<Vec<f64>>,
+}
+
+impl FitResult {
+    /// With per-log offsets (`settings.log_offsets`): which offsets a use of the result
+    /// on a log applies, the model's `Fo`, those of the first training log (the other
+    /// training logs' own, in `inputs[].offset`, belong to those recordings). `None`
+    /// without them.
+    pub fn offset_note(&self) -> Option<String> {
+        if !self.settings.log_offsets {
+            return None;
+        }
+        let first = self.inputs.iter().find(|i| i.role == "train")?;
+        let name = if first.path.is_empty() {
+            &first.source
+        } else {
+            &first.path
+        };
+        Some(format!(
+            "torque offsets: the model's Fo, fitted on the first training log ({name}); the \
+             other training logs' own offsets (the result's inputs[].offset) are not applied"
+        ))
+    }
 }
 
 /// A result's `robot_source` (`builtin:psm`, or a path) as [`dvrk_model::Model::load`]
@@ -254,6 +282,7 @@ impl InputInfo {
             bytes,
             source: String::new(),
             metrics: None,
+            offset: None,
         })
     }
 
@@ -283,6 +312,7 @@ impl InputInfo {
             bytes,
             source: String::new(),
             metrics: None,
+            offset: None,
         }
     }
 }
@@ -340,6 +370,11 @@ pub struct FitResult {
     /// `settings.processing.delay_s`, which holds them for validate, report, export).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delay: Option<DelayEstimate>,
+    /// The friction model chosen by held-out error (`select`, see
+    /// [`crate::fit::select`]): the folds, every candidate's held-out errors and the
+    /// one chosen, whose terms `settings` holds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub selection: Option<crate::fit::select::Selection>,
     /// With an entropic prior (`settings.prior`): the sum over links of the log-det
     /// divergence of the fitted pseudo-inertia from the prior's (no units; 0 at the
     /// prior).

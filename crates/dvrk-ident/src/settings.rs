@@ -234,6 +234,19 @@ pub struct FitSettings {
     /// the fit itself is the same ([`Joints`]).
     #[serde(skip_serializing_if = "Joints::is_model")]
     pub joints: Joints,
+    /// Give every training log after the first its own torque offset per model
+    /// coordinate (the arm is re-homed between recordings): eliminated from the fit
+    /// exactly (`Observation::project_out`), recorded in each log's `inputs[].offset`;
+    /// the model's `Fo` are the first log's, which every use of the result (validate,
+    /// residual on a new log) applies.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub log_offsets: bool,
+    /// Choose the friction model among these candidates by cross-validated (held-out)
+    /// error before fitting (`crate::fit::select`): the result's `selection` holds the
+    /// table, `stribeck_velocity` and `dahl_sigma` the winner's terms. `None`: no
+    /// selection.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub select: Option<crate::fit::select::Candidates>,
 }
 
 impl FitSettings {
@@ -441,6 +454,8 @@ impl Default for FitSettings {
             delay_search_s: None,
             prior: None,
             joints: Joints::Model,
+            log_offsets: false,
+            select: None,
         }
     }
 }

@@ -208,3 +208,158 @@ fn streamed_logs_of_mixed_formats_equal_the_in_memory_fit() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The pendulum of the element tests with Coulomb, viscous and offset friction
+/// (`Fc1 Fv1 Fo1` after its ten inertial parameters).
+fn pendulum() -> Model {
+    let text = dvrk_test_support::models::one_link_with("friction = true\n");
+    Model::from_toml_str(&text, "pendulum.toml").unwrap()
+}
+
+/// The pendulum's parameters: a 1.2 kg link, `Fc1 = 0.08` N·m, `Fv1 = 0.05` N·m·s/rad,
+/// `Fo1 = fo`, and `extra` (e.g. `Fd1`) after them.
+fn pendulum_truth(fo: f64, extra: &[f64]) -> Vec<f64> {
+    let mut pi = dvrk_model::inertia::barycentric_from_standard(
+        1.2,
+        [0.1, 0.02, 0.0],
+        [0.01, 0.0, 0.0, 0.012, 0.0, 0.008],
+    )
+    .to_vec();
+    pi.extend([0.08, 0.05, fo]);
+    pi.extend(extra);
+    pi
+}
+
+/// A simulated pendulum log: three harmonics of 0.1 Hz (velocity reversals of a few
+/// hundredths to half a radian), `seconds` at 100 Hz, torque noise `noise` N·m.
+fn pendulum_log(model: &Model, params: &[f64], seconds: f64, noise: f64, seed: u64) -> JointLog {
+    use dvrk_ident::excite::FourierTrajectory;
+    use dvrk_ident::simulate::{simulate, Simulation};
+    let traj = FourierTrajectory {
+        order: 3,
+        base_frequency_hz: 0.1,
+        q0: vec![0.2],
+        a: vec![vec![0.25, 0.1, 0.3]],
+        b: vec![vec![0.1, -0.2, 0.05]],
+        coordinates: Vec::new(),
+    };
+    let sim = Simulation {
+        duration_s: Some(seconds),
+        rate_hz: 100.0,
+        noise_std: vec![noise],
+        seed,
+        ..Simulation::default()
+    };
+    simulate(model, params, &traj, &sim).unwrap()
+}
+
+/// The held-out mean of candidate `name` in a result's selection.
+fn held_out(r: &dvrk_ident::FitResult, name: &str) -> f64 {
+    let s = r.selection.as_ref().unwrap();
+    s.candidates
+        .iter()
+        .find(|c| c.candidate == name)
+        .unwrap()
+        .mean
+}
+
+/// `select` on one simulated log (4 blocks in time): with Dahl friction in the
+/// torques (Fd = 0.06 N·m, noise 5 mN·m), the candidate without it has the higher
+/// held-out error and loses, and the winner refitted on all the data recovers Fd;
+/// without Dahl friction in the torques, the richer candidate (Stribeck + Dahl) does
+/// not beat Coulomb + viscous by more than the noise's share of the error.
+#[test]
+fn select_chooses_the_friction_law_of_the_torques_by_held_out_error() {
+    use dvrk_ident::fit::select::{Candidates, Folds};
+    let plain = pendulum();
+    let settings = |cands: &str| FitSettings {
+        method: Method::Ols,
+        select: Some(cands.parse::<Candidates>().unwrap()),
+        ..FitSettings::default()
+    };
+    let dahl = plain.with_dahl(20.0).unwrap();
+    assert_eq!(dahl.param_names()[13], "Fd1");
+    let log = pendulum_log(&dahl, &pendulum_truth(0.02, &[0.06]), 40.0, 0.005, 3);
+    let r = FitRequest::of_samples([&log], None, settings("coulomb,dahl"))
+        .run(Some(&plain), &Silent)
+        .unwrap()
+        .result;
+    let s = r.selection.as_ref().unwrap();
+    print!("{}", s.table());
+    assert!(
+        matches!(s.folds, Folds::Blocked { folds: 4, .. }),
+        "{:?}",
+        s.folds
+    );
+    let (coulomb, with_dahl) = (held_out(&r, "coulomb"), held_out(&r, "dahl"));
+    assert_eq!(s.chosen, "dahl");
+    assert!(coulomb > 1.5 * with_dahl, "{coulomb} vs {with_dahl}");
+    assert_eq!(r.settings.dahl_sigma, Some(20.0));
+    assert_eq!(
+        r.settings.select.as_ref().unwrap().to_string(),
+        "coulomb,dahl"
+    );
+    let fd = r.parameters["Fd1"];
+    assert!((fd - 0.06).abs() < 0.006, "Fd1 {fd}");
+
+    let log = pendulum_log(&plain, &pendulum_truth(0.02, &[]), 40.0, 0.005, 4);
+    let r = FitRequest::of_samples([&log], None, settings("coulomb,stribeck+dahl"))
+        .run(Some(&plain), &Silent)
+        .unwrap()
+        .result;
+    print!("{}", r.selection.as_ref().unwrap().table());
+    let (simple, rich) = (held_out(&r, "coulomb"), held_out(&r, "stribeck+dahl"));
+    // Noise of 5 mN·m on torques of about 1 N·m: both errors are the noise's; the two
+    // terms too many may fit a little of it, never a tenth of it.
+    assert!(rich > 0.9 * simple, "{rich} vs {simple}");
+    assert!(simple < 0.02, "{simple}");
+
+    // The candidates give the friction terms: one given beside them is refused.
+    let mut request = FitRequest::of_samples([&log], None, settings("coulomb,dahl"));
+    request.overrides.stribeck_velocity = Some(0.3);
+    let e = request.run(Some(&plain), &Silent).unwrap_err().to_string();
+    assert!(
+        e.contains("the candidates give the friction terms, and stribeck"),
+        "{e}"
+    );
+}
+
+/// `log_offsets`: two simulated logs of the pendulum re-homed between them (Fo 0.02
+/// then 0.17 N·m, noise 5 mN·m). With the option, the second log's own offset is
+/// recovered within noise and the model's Fo is the first log's; without it the common
+/// Fo sits between them and the training error is several times larger.
+#[test]
+fn log_offsets_recover_each_logs_offset() {
+    let model = pendulum();
+    let a = pendulum_log(&model, &pendulum_truth(0.02, &[]), 20.0, 0.005, 5);
+    let b = pendulum_log(&model, &pendulum_truth(0.17, &[]), 20.0, 0.005, 6);
+    let fit = |offsets: bool| {
+        let s = FitSettings {
+            method: Method::Ols,
+            log_offsets: offsets,
+            ..FitSettings::default()
+        };
+        FitRequest::of_samples([&a, &b], None, s)
+            .run(Some(&model), &Silent)
+            .unwrap()
+            .result
+    };
+    let (with, without) = (fit(true), fit(false));
+    let offsets: Vec<_> = with
+        .inputs
+        .iter()
+        .map(|i| i.offset.clone().unwrap())
+        .collect();
+    println!("offsets {offsets:?}, Fo1 {}", with.parameters["Fo1"]);
+    assert_eq!(offsets[0], [0.0]);
+    assert!((offsets[1][0] - 0.15).abs() < 0.002, "{offsets:?}");
+    assert!((with.parameters["Fo1"] - 0.02).abs() < 0.002);
+    assert!(without.inputs.iter().all(|i| i.offset.is_none()));
+    let mean = |r: &dvrk_ident::FitResult| r.metrics.train.relative_error[0];
+    println!(
+        "train error with {} without {}",
+        mean(&with),
+        mean(&without)
+    );
+    assert!(mean(&without) > 3.0 * mean(&with));
+}

@@ -423,6 +423,13 @@ impl FitResultPy {
         to_python(py, &self.inner.delay)
     }
 
+    /// The friction model chosen by held-out error (``select=``): ``{folds, joints,
+    /// candidates: [{candidate, relative_error, mean}], chosen}``, or ``None``.
+    #[getter]
+    fn selection<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        to_python(py, &self.inner.selection)
+    }
+
     /// The payload the arm carries (:func:`identify_payload`): ``{frame, mass, com,
     /// inertia, identification}`` (kg, m in the frame, kg·m² about the centre of mass
     /// ``xx yy zz xy xz yz``), or ``None``. :attr:`parameters` stay the arm's own; every

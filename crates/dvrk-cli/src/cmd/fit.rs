@@ -263,6 +263,9 @@ pub fn table(r: &FitResult) -> String {
     parameters(&mut s, r);
     solver(&mut s, r);
     delays_and_prior(&mut s, r);
+    if let Some(sel) = &r.selection {
+        s.push_str(&sel.table());
+    }
     errors(&mut s, r);
     logs(&mut s, r);
     s
@@ -465,6 +468,14 @@ fn logs(s: &mut String, r: &FitResult) {
         if let (true, Some(m)) = (logs.len() > 1, &i.metrics) {
             let errors: Vec<String> = m.relative_error.iter().map(|e| format!("{e:.4}")).collect();
             let _ = writeln!(s, "        relative error {}", errors.join(" "));
+        }
+        if let Some(o) = &i.offset {
+            let o: Vec<String> = o.iter().map(|v| format!("{v:+.4}")).collect();
+            let _ = writeln!(
+                s,
+                "        own torque offset over the model's {}",
+                o.join(" ")
+            );
         }
     }
 }

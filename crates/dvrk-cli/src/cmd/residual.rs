@@ -112,6 +112,9 @@ pub fn run(args: Args) -> Result<()> {
         args.logs.iter().map(String::as_str),
     );
     let (mut text, mut reports, mut outputs) = (String::new(), Vec::new(), Outputs::new());
+    if let Some(note) = result.offset_note() {
+        let _ = writeln!(text, "{note}");
+    }
     let mut residuals = Vec::new();
     for path in &args.logs {
         let traj = super::args::read(&read, path)?;

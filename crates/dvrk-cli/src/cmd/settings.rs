@@ -33,7 +33,7 @@ pub fn setting_error(e: SettingError) -> anyhow::Error {
 /// Whether the flag is a switch (given or not), and the value it gives.
 fn switch(s: Setting) -> Option<bool> {
     match s {
-        Setting::FilterTorque => Some(true),
+        Setting::FilterTorque | Setting::LogOffsets => Some(true),
         Setting::Ellipsoids => Some(false),
         _ => None,
     }
@@ -110,6 +110,12 @@ pub fn arg(s: Setting) -> Arg {
             .value_parser(named::<Preset>())
             .value_name("PRESET")
             .help_heading(ESTIMATOR),
+        Setting::LogOffsets => a.help_heading(MODEL),
+        Setting::Select => a
+            .num_args(0..=1)
+            .default_missing_value("builtin")
+            .value_name("builtin|CANDIDATE,...")
+            .help_heading(MODEL),
         Setting::Joints => a
             .value_parser(named::<Joints>())
             .value_name("model|measured")
@@ -244,7 +250,7 @@ mod tests {
                 assert!(help.starts_with(&s.doc()), "{command} {}: {help}", flag(*s));
             }
         }
-        assert_eq!(Setting::ALL.len(), 22);
+        assert_eq!(Setting::ALL.len(), 24);
     }
 
     /// `--resample`, declared with the reading flags, is read as the fit option in

@@ -63,6 +63,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(note) = super::settings_note(&changed) {
         let _ = writeln!(text, "{note}");
     }
+    if let Some(note) = result.offset_note() {
+        let _ = writeln!(text, "{note}");
+    }
     let read = args.log_args.read_options_for(
         &model,
         &settings.processing,

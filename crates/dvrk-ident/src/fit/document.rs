@@ -104,6 +104,7 @@ pub(crate) fn build_result(
         sigma2: estimate.sigma2,
         metrics,
         delay: None,
+        selection: None,
         prior_divergence,
         payload: None,
     };

@@ -117,6 +117,20 @@ impl MetricSums {
         }
     }
 
+    /// The sums of [`MetricSums::from_factors`] with the errors of `fitted`, the same
+    /// rows' factors with some columns projected out ([`Observation::project_out`]: the
+    /// log's own torque offsets eliminated), and the torques of `parts`, the rows as
+    /// measured: the relative error stays relative to the measured torques.
+    pub(crate) fn from_fitted_factors(
+        parts: &[Observation],
+        fitted: &[Observation],
+        params: &[f64],
+    ) -> MetricSums {
+        let mut sums = MetricSums::from_factors(parts, params);
+        sums.e2 = MetricSums::from_factors(fitted, params).e2;
+        sums
+    }
+
     /// Adds the errors of `params` on the next samples, up to `window` samples in all
     /// (`None`: no limit).
     pub fn add(

@@ -14,6 +14,7 @@ mod memory;
 mod metrics;
 mod observed;
 mod prepare;
+pub mod select;
 pub mod status;
 pub mod stream;
 

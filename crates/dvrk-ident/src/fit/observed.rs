@@ -127,8 +127,15 @@ pub(crate) fn fit_observed(
         irls_iterations: settings.irls_iterations,
         sdp: &sdp,
     };
+    // With per-log offsets, every log after the first has its coordinates' offsets
+    // projected out of its factors; the estimator and the training errors see those.
+    let offsets = match settings.log_offsets {
+        true => Some(LogOffsets::new(model, observed, &joints)?),
+        false => None,
+    };
+    let fitted: &Observed = offsets.as_ref().map_or(observed, |o| &o.observed);
     let estimated =
-        estimate(model, &base, &observed.parts, weights, &how, &run).map_err(|e| match e {
+        estimate(model, &base, &fitted.parts, weights, &how, &run).map_err(|e| match e {
             EstimateError::NotExcited(e) => not_excited(&source, e),
             EstimateError::Sdp(e) => e.into(),
         })?;
@@ -138,7 +145,10 @@ pub(crate) fn fit_observed(
         observed
             .logs
             .iter()
-            .map(|log| MetricSums::from_factors(&log.parts, &estimated.params))
+            .zip(&fitted.logs)
+            .map(|(log, f)| {
+                MetricSums::from_fitted_factors(&log.parts, &f.parts, &estimated.params)
+            })
             .collect()
     } else {
         match passes.train {
@@ -159,9 +169,12 @@ pub(crate) fn fit_observed(
     let tested = (passes.test)(&estimated.params)?;
     let test_sums: Vec<MetricSums> = tested.iter().map(|(_, s)| s.clone()).collect();
     let mut inputs = Vec::with_capacity(observed.logs.len() + tested.len());
-    for (log, sums) in observed.logs.iter().zip(&train_sums) {
+    for (k, (log, sums)) in observed.logs.iter().zip(&train_sums).enumerate() {
         let mut info = log.info.clone();
         info.metrics = Some(sums.metrics(&joints)?);
+        if let Some(o) = &offsets {
+            info.offset = Some(o.offset(k, &log.parts, &estimated.params));
+        }
         inputs.push(info);
     }
     for (mut info, sums) in tested {
@@ -185,6 +198,90 @@ pub(crate) fn fit_observed(
     result.inputs = inputs;
     result.check_finite()?;
     Ok(result)
+}
+
+/// The per-log torque offsets of a fit (`FitSettings::log_offsets`): each coordinate's
+/// offset column, and the training logs with the offsets of every log after the first
+/// projected out of their factors ([`Observation::project_out`]), which is the fit with
+/// one free offset per coordinate and log, those eliminated exactly.
+struct LogOffsets {
+    /// Per coordinate, an `Fo` column and its constant entry `a` in that coordinate's
+    /// rows (`None` for a coordinate without an offset parameter: it gets no per-log
+    /// offset).
+    columns: Vec<Option<(usize, f64)>>,
+    /// The training logs, offsets projected out after the first, merged.
+    observed: Observed,
+}
+
+impl LogOffsets {
+    fn new(model: &Model, observed: &Observed, joints: &JointMap) -> Result<Self, IdentError> {
+        if !joints.is_identity() {
+            return Err(IdentError::Setting {
+                name: "log_offsets".into(),
+                message: format!(
+                    "the per-log offsets are in model coordinates, and the training errors in                      {}'s measured joints would leave them out: fit in model coordinates                      (joints model)",
+                    model.name
+                ),
+            });
+        }
+        let n = model.dof();
+        let mut ws = dvrk_model::Workspace::new(model);
+        let zero = vec![0.0; n];
+        // The offset columns are constant: any sample shows their entries.
+        let y = model.regressor(&mut ws, &zero, &zero, &zero);
+        let columns: Vec<Option<(usize, f64)>> = (0..n)
+            .map(|c| {
+                model
+                    .params
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, p)| p.kind == dvrk_model::ParamKind::Offset)
+                    .map(|(k, _)| (k, y[(c, k)]))
+                    .find(|(_, a)| *a != 0.0)
+            })
+            .collect();
+        let mut logs = observed.logs.clone();
+        for log in logs.iter_mut().skip(1) {
+            for (part, col) in log.parts.iter_mut().zip(&columns) {
+                if let Some((k, _)) = col {
+                    *part = part.project_out(*k);
+                }
+            }
+        }
+        let mut parts = logs[0].parts.clone();
+        for log in &logs[1..] {
+            merge_parts(&mut parts, &log.parts);
+        }
+        Ok(LogOffsets {
+            columns,
+            observed: Observed {
+                logs,
+                parts,
+                range: observed.range.clone(),
+            },
+        })
+    }
+
+    /// Log `k`'s own offset over the model's per coordinate, N·m or N (zero for the
+    /// first log, whose offsets are the model's): the mean residual of `params` on the
+    /// log's rows, `−(R·e_o)ᵀ·R·[π; −1] / (a·rows)` from its factors `parts` (as
+    /// measured) since `A·e_o = a·1`.
+    fn offset(&self, k: usize, parts: &[Observation], params: &[f64]) -> Vec<f64> {
+        let mut x = params.to_vec();
+        x.push(-1.0);
+        let x = nalgebra::DVector::from_vec(x);
+        parts
+            .iter()
+            .zip(&self.columns)
+            .map(|(o, col)| match col {
+                Some((c, a)) if k > 0 && o.rows() > 0 => {
+                    let rx = o.r() * &x;
+                    -o.r().column(*c).dot(&rx) / (a * o.rows() as f64)
+                }
+                _ => 0.0,
+            })
+            .collect()
+    }
 }
 
 /// The passes over the samples a fit's metrics may need, given the parameters: the

@@ -225,6 +225,46 @@ fn summary(o: &mut String, result: &FitResult) {
             ms.join(" ")
         );
     }
+    if let Some(sel) = &result.selection {
+        let rows: Vec<String> = sel
+            .candidates
+            .iter()
+            .map(|c| {
+                let mark = if c.candidate == sel.chosen {
+                    " (chosen)"
+                } else {
+                    ""
+                };
+                let per: Vec<String> = c.relative_error.iter().map(|e| format!("{e:.4}")).collect();
+                format!(
+                    "{}{mark}: mean {:.4} [{}]",
+                    escape(&c.candidate),
+                    c.mean,
+                    per.join(" ")
+                )
+            })
+            .collect();
+        let _ = write!(
+            o,
+            "<tr><th class=l>friction model by held-out error ({})</th><td class=l>{}</td></tr>",
+            sel.folds.describe(),
+            rows.join("<br>")
+        );
+    }
+    for i in result.inputs.iter().filter(|i| i.offset.is_some()) {
+        let values: Vec<String> = i
+            .offset
+            .iter()
+            .flatten()
+            .map(|v| format!("{v:+.4}"))
+            .collect();
+        let _ = write!(
+            o,
+            "<tr><th class=l>own torque offset of {} (over the model's)</th><td class=l>{}</td></tr>",
+            escape(if i.path.is_empty() { &i.source } else { &i.path }),
+            values.join(" ")
+        );
+    }
     if let Some(p) = &result.settings.prior {
         let divergence = result.prior_divergence.map_or(String::new(), |d| {
             format!(", divergence from it {}", number(d))

@@ -17,6 +17,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use super::{Preset, PriorSource};
 use crate::fit::delay::DelayOption;
+use crate::fit::select::Candidates;
 use crate::settings::{Joints, PriorMetric};
 use crate::signal::Cutoff;
 use crate::{BoundsSet, Method};
@@ -202,6 +203,18 @@ overrides! {
     /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20). The result records the
     /// settings it expanded to
     preset: Preset => Preset("preset") with "text_or_value";
+    /// Give every training log after the first its own torque offset per coordinate
+    /// (the arm is re-homed between recordings): fitted with the parameters, recorded
+    /// in the result's inputs (`offset`, N·m or N over the model's); the model's Fo are
+    /// the first log's, which validate and residual apply to any other log
+    log_offsets: bool => LogOffsets("log_offsets");
+    /// Choose the friction model by held-out error: fit each candidate on part of the
+    /// training logs and score it on the rest (leave one log out with several logs,
+    /// else 4 blocks in time with a guard band), then fit the lowest mean held-out
+    /// error on all of them. `builtin` (coulomb,stribeck,dahl,stribeck+dahl) or names
+    /// joined by commas: `coulomb`, or terms `stribeck[:VS]` and `dahl[:SIGMA]` joined
+    /// by `+` (defaults 0.3 and 20). The result records the table and the choice
+    select: Candidates => Select("select");
     /// Show the errors and figures in the `model` coordinates (q1..qn, the estimator's)
     /// or in the arm's `measured` joints by name (the PSM's outer_wrist_pitch,
     /// outer_wrist_yaw and jaw rather than its motor-side q5..q7); the fit is the same
@@ -297,6 +310,8 @@ impl Setting {
             Setting::PriorMetric => PriorMetric::default().name().into(),
             Setting::Preset => "none".into(),
             Setting::Joints => fit.joints.name().into(),
+            Setting::LogOffsets => return None,
+            Setting::Select => "none (with the flag alone: builtin)".into(),
         })
     }
 }
@@ -446,6 +461,22 @@ mod tests {
         .unwrap();
         assert_eq!(text, values);
         assert_eq!(text.bounds, Some(BoundsSet::Wang2019));
+        // The candidates of a selection: the flag's text, a list of names, or true.
+        let listed = Overrides::from_values([(Setting::Select, json!(["coulomb", "dahl:10"]))]);
+        let text = Overrides::from_values([(Setting::Select, json!("coulomb,dahl:10"))]);
+        assert_eq!(listed.unwrap(), text.unwrap());
+        let all = Overrides::from_values([(Setting::Select, json!(true))]).unwrap();
+        assert_eq!(
+            all.select.unwrap().to_string(),
+            "coulomb,stribeck,dahl,stribeck+dahl"
+        );
+        let e = Overrides::from_values([(Setting::Select, json!(["coulomb"]))]).unwrap_err();
+        assert_eq!(e.setting, Setting::Select);
+        assert!(
+            e.message.contains("at least two candidates"),
+            "{}",
+            e.message
+        );
         let none = Overrides::from_values([(Setting::Cutoff, json!(false))]).unwrap();
         assert_eq!(none.cutoff, Some(None));
         let e = Overrides::from_values([(Setting::Trim, json!(-1))]).unwrap_err();

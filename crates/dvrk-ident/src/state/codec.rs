@@ -504,6 +504,7 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
                 bytes: l.bytes,
                 source: l.source.clone(),
                 metrics: None,
+                offset: None,
             },
             parts,
         });

@@ -279,6 +279,10 @@ class FitResult:
     def delay(self) -> Optional[Dict[str, Any]]:
         """``{delay_s, std_s, max_s, residual, sweeps}`` of ``delay="auto"``, or None."""
     @property
+    def selection(self) -> Optional[Dict[str, Any]]:
+        """The friction model chosen by held-out error (``select=``): ``{folds, joints,
+        candidates: [{candidate, relative_error, mean}], chosen}``, or None."""
+    @property
     def prior_divergence(self) -> Optional[float]:
         """With an entropic prior: the links' summed log-det divergence from it, or None."""
     @property
@@ -325,7 +329,10 @@ class FitResult:
     def validate(
         self, data: JointLog, test_window: Optional[int] = None, robot: Optional[Model] = None,
         *, joints: Optional[str] = None,
-    ) -> Dict[str, Any]: ...
+    ) -> Dict[str, Any]:
+        """The errors on ``data`` with the result's model and processing; with
+        ``log_offsets`` the model's ``Fo`` (the first training log's) apply, not the
+        other training logs' own offsets."""
     def wpi_params(self, robot: Optional[Model] = None) -> Dict[str, Any]: ...
     def dvrk_gc(self, robot: Optional[Model] = None, points: int = 7) -> Dict[str, Any]:
         """The dVRK controller's MTM gravity-compensation file (version "2.0")."""
@@ -425,6 +432,8 @@ def fit(
     prior_weight: Optional[float] = None,
     prior_metric: Optional[str] = None,
     preset: Optional[str] = None,
+    log_offsets: Optional[bool] = None,
+    select: Optional[Union[str, bool, Sequence[str]]] = None,
     joints: Optional[str] = None,
 ) -> FitResult:
     """Identifies the parameters from one log or a list of logs, each processed on its
@@ -435,7 +444,11 @@ def fit(
     ``(0, -9.81 sin p, -9.81 cos p)`` in the base frame (``--mounting-pitch``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
     ``dahl``: Dahl friction of this stiffness (1/rad or 1/m) on every friction element (``--dahl``);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``stribeck=0.3``, ``dahl=20`` for
-    the keywords not given); ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
+    the keywords not given); ``log_offsets=True``: every log after the first gets its own
+    torque offset per coordinate (``inputs[k]["offset"]``; the model's ``Fo`` are the
+    first log's); ``select``: ``True``/``"builtin"`` or candidate names
+    (``["coulomb", "stribeck:0.2+dahl"]``): the friction model chosen by held-out error
+    (leave one log out, or 4 blocks in time), the table in :attr:`FitResult.selection`; ``prior``: ``"nominal"``, a result file or a :class:`FitResult` to regularize the
     semidefinite fit toward, ``prior_weight`` (default 0.001), ``prior_metric``:
     ``"entropic"`` (default) or ``"euclidean"``."""
 

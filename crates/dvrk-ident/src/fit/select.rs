@@ -1,0 +1,615 @@
+//! Choosing the friction model by held-out error (`--select`, Python `select=`): each
+//! candidate is fitted on part of the training logs and scored on the rest, over folds
+//! that cover every sample once, and the candidate with the lowest mean held-out error
+//! is fitted on all of them. A richer friction law always lowers the training error;
+//! only data it was not fitted on tell whether it describes the arm or the noise.
+//!
+//! **Folds.** With several training logs, leave one log out: each log is held out in
+//! turn and the candidates are fitted on the others (what a model must do: hold on a
+//! recording it has not seen, at another speed or load). With one log,
+//! [`BLOCKED_FOLDS`] contiguous blocks in time, each held out in turn: never shuffled
+//! samples, whose neighbours (a few milliseconds away, through the filter nearly the
+//! same sample) would sit in the training data and score a model that memorizes noise
+//! as if it generalized.
+//!
+//! **Processing once, and the guard band.** Every log is processed (filtered,
+//! differentiated, trimmed) once, as the fit processes it; the folds cut the processed
+//! samples. The zero-phase low-pass filter spreads each raw sample over its neighbours
+//! in both directions, so processed training samples next to a held-out block carry
+//! some of that block's raw data: the training side drops the samples within
+//! [`guard_s`] of the block (the time the filter's slowest pole takes to decay to 10⁻³,
+//! plus the largest torque delay and two samples of the difference stencils). Each
+//! contiguous piece is reduced on its own, so the Dahl states restart at zero at a cut,
+//! as they do at the start of a log.
+//!
+//! **Score.** Each fold's held-out sums of squared errors and torques are added over the
+//! folds ([`MetricSums`]): per joint `‖τ − τ̂‖ / ‖τ‖` over every held-out sample, the
+//! metric of a result's test logs, and their mean over the joints ranks the candidates
+//! (ties go to the candidate listed first: list the simpler first).
+
+use std::fmt::Write as _;
+
+use dvrk_model::Model;
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use super::joints::JointMap;
+use super::metrics::MetricSums;
+use super::observed::{fit_observed, MetricPasses, Observed, ObservedLog};
+use super::prepare::{prepare, LogData, Prepared};
+use crate::error::IdentError;
+use crate::observation::Observation;
+use crate::progress::{Progress, Silent};
+use crate::result::InputInfo;
+use crate::settings::FitSettings;
+use crate::signal::Cutoff;
+
+/// Folds in time when a single log is given.
+pub const BLOCKED_FOLDS: usize = 4;
+
+/// The Stribeck velocity of a candidate named `stribeck` without a value, rad/s or m/s
+/// (the dVRK preset's).
+pub const DEFAULT_STRIBECK: f64 = 0.3;
+
+/// The Dahl stiffness of a candidate named `dahl` without a value, 1/rad or 1/m (the
+/// dVRK preset's).
+pub const DEFAULT_DAHL: f64 = 20.0;
+
+/// One candidate friction model: the description's Coulomb, viscous and offset friction
+/// (`coulomb`), with a Stribeck term, Dahl friction, or both. Every other setting is the
+/// fit's own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// The Stribeck velocity (rad/s or m/s), as `stribeck_velocity`.
+    pub stribeck_velocity: Option<f64>,
+    /// The Dahl stiffness (1/rad or 1/m), as `dahl_sigma`.
+    pub dahl_sigma: Option<f64>,
+}
+
+impl Candidate {
+    /// The candidate's name: `coulomb`, or its terms joined by `+` (`stribeck`,
+    /// `dahl:10`, `stribeck:0.2+dahl`), a value shown when it is not the default.
+    pub fn name(&self) -> String {
+        let term = |what: &str, v: Option<f64>, default: f64| {
+            v.map(|v| match v == default {
+                true => what.to_string(),
+                false => format!("{what}:{v}"),
+            })
+        };
+        let terms: Vec<String> = [
+            term("stribeck", self.stribeck_velocity, DEFAULT_STRIBECK),
+            term("dahl", self.dahl_sigma, DEFAULT_DAHL),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        match terms.is_empty() {
+            true => "coulomb".into(),
+            false => terms.join("+"),
+        }
+    }
+
+    /// `settings` with this candidate's friction terms (and no selection).
+    pub fn settings(&self, settings: &FitSettings) -> FitSettings {
+        FitSettings {
+            stribeck_velocity: self.stribeck_velocity,
+            dahl_sigma: self.dahl_sigma,
+            select: None,
+            ..settings.clone()
+        }
+    }
+}
+
+impl std::str::FromStr for Candidate {
+    type Err = String;
+
+    /// `coulomb`, or `+`-joined terms `stribeck[:VS]` and `dahl[:SIGMA]`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut c = Candidate {
+            stribeck_velocity: None,
+            dahl_sigma: None,
+        };
+        if s == "coulomb" {
+            return Ok(c);
+        }
+        for term in s.split('+') {
+            let (what, value) = match term.split_once(':') {
+                Some((w, v)) => (w, Some(v)),
+                None => (term, None),
+            };
+            let value = |default: f64| -> Result<f64, String> {
+                let Some(v) = value else { return Ok(default) };
+                match v.parse::<f64>() {
+                    Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                    _ => Err(format!(
+                        "candidate `{s}`: `{v}` is not a positive number ({what}'s value)"
+                    )),
+                }
+            };
+            let slot = match what {
+                "stribeck" => (&mut c.stribeck_velocity, value(DEFAULT_STRIBECK)?),
+                "dahl" => (&mut c.dahl_sigma, value(DEFAULT_DAHL)?),
+                _ => {
+                    return Err(format!(
+                        "unknown candidate term `{term}` in `{s}`: expected coulomb, or terms \
+                         stribeck[:VS] and dahl[:SIGMA] joined by +"
+                    ))
+                }
+            };
+            if slot.0.replace(slot.1).is_some() {
+                return Err(format!("candidate `{s}` gives {what} twice"));
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// The candidates of a selection, in the order given (ties go to the earlier).
+///
+/// ```rust
+/// use dvrk_ident::fit::select::Candidates;
+///
+/// let builtin: Candidates = "builtin".parse().unwrap();
+/// assert_eq!(builtin.to_string(), "coulomb,stribeck,dahl,stribeck+dahl");
+/// let mine: Candidates = "coulomb,stribeck:0.2+dahl:10".parse().unwrap();
+/// assert_eq!(mine.0[1].stribeck_velocity, Some(0.2));
+/// assert!("coulomb".parse::<Candidates>().is_err()); // nothing to choose from
+/// assert!("coulomb,coulomb".parse::<Candidates>().is_err());
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidates(pub Vec<Candidate>);
+
+impl Candidates {
+    /// The built-in list: Coulomb + viscous, + Stribeck (0.3 rad/s), + Dahl (20/rad),
+    /// + both (the dVRK preset's friction), simplest first.
+    pub fn builtin() -> Candidates {
+        let c = |s: Option<f64>, d: Option<f64>| Candidate {
+            stribeck_velocity: s,
+            dahl_sigma: d,
+        };
+        let (s, d) = (Some(DEFAULT_STRIBECK), Some(DEFAULT_DAHL));
+        Candidates(vec![c(None, None), c(s, None), c(None, d), c(s, d)])
+    }
+}
+
+impl std::str::FromStr for Candidates {
+    type Err = String;
+
+    /// `builtin`, or candidate names separated by commas (at least two, distinct).
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "builtin" {
+            return Ok(Candidates::builtin());
+        }
+        let list = s
+            .split(',')
+            .map(|c| c.trim().parse())
+            .collect::<Result<Vec<Candidate>, String>>()?;
+        if list.len() < 2 {
+            return Err(format!(
+                "`{s}`: give at least two candidates to choose from (or `builtin`)"
+            ));
+        }
+        for (i, c) in list.iter().enumerate() {
+            if list[..i].contains(c) {
+                return Err(format!("`{s}`: candidate {} is given twice", c.name()));
+            }
+        }
+        Ok(Candidates(list))
+    }
+}
+
+impl std::fmt::Display for Candidates {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<String> = self.0.iter().map(Candidate::name).collect();
+        f.write_str(&names.join(","))
+    }
+}
+
+/// As the flag reads: the names joined by commas.
+impl Serialize for Candidates {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// The flag's text, a list of names, or `true` (the built-in list).
+impl<'de> Deserialize<'de> for Candidates {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::String(s) => s.parse().map_err(D::Error::custom),
+            serde_json::Value::Bool(true) => Ok(Candidates::builtin()),
+            serde_json::Value::Array(a) => {
+                let names: Option<Vec<&str>> = a.iter().map(|v| v.as_str()).collect();
+                match names {
+                    Some(n) => n.join(",").parse().map_err(D::Error::custom),
+                    None => Err(D::Error::custom("expected candidate names")),
+                }
+            }
+            _ => Err(D::Error::custom(
+                "expected `builtin` (or true), or candidate names (a list, or joined by commas)",
+            )),
+        }
+    }
+}
+
+/// How the samples were split.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum Folds {
+    /// Each training log held out in turn.
+    LeaveOneLogOut {
+        /// Logs (folds).
+        logs: usize,
+    },
+    /// One log cut into contiguous blocks in time, each held out in turn.
+    Blocked {
+        /// Blocks (folds).
+        folds: usize,
+        /// Training samples dropped on each side of a held-out block, s ([`guard_s`]).
+        guard_s: f64,
+    },
+}
+
+impl Folds {
+    /// In words: `leave one log out, 2 folds`, `4 blocks in time, guard band 0.260 s`.
+    pub fn describe(&self) -> String {
+        match self {
+            Folds::LeaveOneLogOut { logs } => format!("leave one log out, {logs} folds"),
+            Folds::Blocked { folds, guard_s } => {
+                format!("{folds} blocks in time, guard band {guard_s:.3} s")
+            }
+        }
+    }
+}
+
+/// One candidate's held-out errors.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    /// The candidate ([`Candidate::name`]).
+    pub candidate: String,
+    /// Per joint `‖τ − τ̂‖ / ‖τ‖` over every held-out sample of every fold.
+    pub relative_error: Vec<f64>,
+    /// Their mean over the joints: the score.
+    pub mean: f64,
+}
+
+/// A selection's record in the result document (`selection`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Selection {
+    /// How the samples were split.
+    pub folds: Folds,
+    /// The joints of the errors (the fit's `joints`).
+    pub joints: Vec<String>,
+    /// Each candidate's held-out errors, in the order given.
+    pub candidates: Vec<CandidateScore>,
+    /// The candidate chosen: the lowest mean held-out error.
+    pub chosen: String,
+}
+
+impl Selection {
+    /// The table as the command line prints it: one row per candidate, the mean and
+    /// each joint's held-out relative error, the chosen one marked.
+    pub fn table(&self) -> String {
+        let mut out = String::new();
+        let _ = writeln!(
+            out,
+            "held-out relative error by candidate ({}):",
+            self.folds.describe()
+        );
+        let width = self
+            .candidates
+            .iter()
+            .map(|c| c.candidate.len())
+            .max()
+            .unwrap_or(0)
+            .max(9);
+        let _ = write!(out, "  {:<width$} {:>7}", "candidate", "mean");
+        for j in &self.joints {
+            let _ = write!(out, " {:>7}", truncate(j, 7));
+        }
+        out.push('\n');
+        for c in &self.candidates {
+            let mark = if c.candidate == self.chosen { '*' } else { ' ' };
+            let _ = write!(out, "{mark} {:<width$} {:>7.4}", c.candidate, c.mean);
+            for e in &c.relative_error {
+                let _ = write!(out, " {e:>7.4}");
+            }
+            out.push('\n');
+        }
+        let _ = writeln!(out, "chosen: {} (refitted on all the data)", self.chosen);
+        out
+    }
+}
+
+fn truncate(s: &str, n: usize) -> &str {
+    match s.char_indices().nth(n) {
+        Some((i, _)) => &s[..i],
+        None => s,
+    }
+}
+
+/// The guard band of the blocked folds, s: the time the slowest pole of the motion's
+/// Butterworth low-pass (order N, effective cut-off fc; the lowest of per-joint
+/// cut-offs) takes to decay to 10⁻³, `ln(1000) / (2π·fc·sin(π/2N))`, plus the largest
+/// torque delay, plus two samples (`dt`, s) of the difference stencils. 0.26 s for the
+/// PSM's 2019 filter (6th order, 16.965 Hz) and 200 Hz.
+pub fn guard_s(settings: &FitSettings, dt: f64) -> f64 {
+    let p = &settings.processing;
+    let filter = p.filter.as_ref().map_or(0.0, |lp| {
+        let fc = match &lp.cutoff_hz {
+            Cutoff::All(v) => *v,
+            Cutoff::PerJoint(v) => v.iter().copied().fold(f64::INFINITY, f64::min),
+        };
+        let fc = lp.convention.effective_cutoff_hz(fc);
+        let n = lp.order.max(1) as f64;
+        1000f64.ln() / (2.0 * std::f64::consts::PI * fc * (std::f64::consts::PI / (2.0 * n)).sin())
+    });
+    let delay = p.delay_s.iter().copied().fold(0.0, f64::max);
+    filter + delay + 2.0 * dt
+}
+
+/// Rows `rows` of a prepared log (a fold's piece).
+fn piece(p: &Prepared, rows: std::ops::Range<usize>) -> Prepared {
+    let n = rows.len();
+    let cut = |m: &nalgebra::DMatrix<f64>| m.rows(rows.start, n).into_owned();
+    Prepared {
+        source: p.source.clone(),
+        time: p.time[rows.clone()].to_vec(),
+        q: cut(&p.q),
+        dq: cut(&p.dq),
+        ddq: cut(&p.ddq),
+        tau: cut(&p.tau),
+    }
+}
+
+/// One fold: the training pieces and the held-out pieces.
+struct Fold {
+    train: Vec<Prepared>,
+    test: Vec<Prepared>,
+}
+
+/// The folds of `logs` (processed): leave one log out for several, else
+/// [`BLOCKED_FOLDS`] blocks with the guard band of [`guard_s`].
+fn folds(logs: &[Prepared], settings: &FitSettings) -> Result<(Folds, Vec<Fold>), IdentError> {
+    if logs.len() > 1 {
+        let folds = (0..logs.len())
+            .map(|k| Fold {
+                train: logs
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, _)| *i != k)
+                    .map(|(_, l)| l.clone())
+                    .collect(),
+                test: vec![logs[k].clone()],
+            })
+            .collect();
+        return Ok((Folds::LeaveOneLogOut { logs: logs.len() }, folds));
+    }
+    let log = &logs[0];
+    let n = log.len();
+    let dt = match n {
+        0 | 1 => 0.0,
+        _ => (log.time[n - 1] - log.time[0]) / (n - 1) as f64,
+    };
+    let guard = guard_s(settings, dt);
+    let k = BLOCKED_FOLDS;
+    let mut out = Vec::with_capacity(k);
+    for b in 0..k {
+        let (lo, hi) = (b * n / k, (b + 1) * n / k);
+        let (t_lo, t_hi) = (log.time[lo], log.time[hi - 1]);
+        // Training rows before the block end `guard` s before its first sample; after
+        // it, start `guard` s after its last.
+        let before = log.time[..lo].partition_point(|&t| t < t_lo - guard);
+        let after = hi + log.time[hi..].partition_point(|&t| t <= t_hi + guard);
+        let train: Vec<Prepared> = [0..before, after..n]
+            .into_iter()
+            .filter(|r| !r.is_empty())
+            .map(|r| piece(log, r))
+            .collect();
+        if train.is_empty() {
+            return Err(IdentError::Mismatch {
+                source_name: log.source.clone(),
+                message: format!(
+                    "too short for {k} folds in time with a guard band of {guard:.3} s \
+                     ({n} processed samples): give a longer log, or several logs"
+                ),
+            });
+        }
+        out.push(Fold {
+            train,
+            test: vec![piece(log, lo..hi)],
+        });
+    }
+    Ok((
+        Folds::Blocked {
+            folds: k,
+            guard_s: guard,
+        },
+        out,
+    ))
+}
+
+/// The held-out errors of every candidate on the training logs `train` of `robot` (the
+/// model as described: each candidate adds its terms), `settings` the fit's with its
+/// delays fixed; the candidate chosen.
+pub(crate) fn select(
+    robot: &Model,
+    train: &[LogData<'_>],
+    settings: &FitSettings,
+    candidates: &Candidates,
+    progress: &dyn Progress,
+) -> Result<(Selection, Candidate), IdentError> {
+    crate::fit::no_delay_search(settings, "the selection's folds").map_err(|_| {
+        IdentError::Setting {
+            name: "select".into(),
+            message: "the delay search (delay auto) would see the held-out samples: \
+                      estimate the delays first and give them fixed"
+                .into(),
+        }
+    })?;
+    progress.stage("processing (selection)", None);
+    let prepared = train
+        .iter()
+        .map(|l| prepare(robot, l.samples, &settings.processing))
+        .collect::<Result<Vec<_>, _>>()?;
+    progress.finish();
+    let (how, folds) = folds(&prepared, settings)?;
+    let joints = JointMap::new(robot, settings.joints)?;
+    let mut scores = Vec::with_capacity(candidates.0.len());
+    for (i, c) in candidates.0.iter().enumerate() {
+        progress.stage(
+            &format!(
+                "candidate {} of {} ({}), {} folds",
+                i + 1,
+                candidates.0.len(),
+                c.name(),
+                folds.len()
+            ),
+            None,
+        );
+        let mut s = c.settings(settings);
+        // Pieces of one log are no separate recordings.
+        s.log_offsets &= matches!(how, Folds::LeaveOneLogOut { .. });
+        let model = s.model(robot)?.into_owned();
+        let mut held_out = MetricSums::new(&model);
+        for (f, fold) in folds.iter().enumerate() {
+            let params = fit_pieces(&model, &fold.train, &s).map_err(|e| IdentError::Setting {
+                name: "select".into(),
+                message: format!("candidate {}, fold {}: {e}", c.name(), f + 1),
+            })?;
+            for t in &fold.test {
+                // Each piece's own sums (the Dahl states start at zero in each).
+                let mut sums = MetricSums::new(&model);
+                sums.add(&model, &params, t.samples(), None);
+                held_out.merge(&sums);
+            }
+        }
+        progress.finish();
+        let m = held_out.metrics(&joints)?;
+        m.check_finite(&format!("candidate {}'s held-out samples", c.name()))
+            .map_err(|message| IdentError::Setting {
+                name: "select".into(),
+                message,
+            })?;
+        let mean = m.relative_error.iter().sum::<f64>() / m.relative_error.len().max(1) as f64;
+        scores.push(CandidateScore {
+            candidate: c.name(),
+            relative_error: m.relative_error,
+            mean,
+        });
+    }
+    let best = (0..scores.len())
+        .min_by(|&a, &b| scores[a].mean.total_cmp(&scores[b].mean))
+        .unwrap_or(0);
+    Ok((
+        Selection {
+            folds: how,
+            joints: joints.names.clone(),
+            candidates: scores.clone(),
+            chosen: scores[best].candidate.clone(),
+        },
+        candidates.0[best],
+    ))
+}
+
+/// The parameters fitted on the pieces `train` (each reduced as a log of its own), by
+/// the fit's own estimator end ([`fit_observed`]).
+fn fit_pieces(
+    model: &Model,
+    train: &[Prepared],
+    settings: &FitSettings,
+) -> Result<Vec<f64>, IdentError> {
+    let mut observed: Option<Observed> = None;
+    for p in train {
+        let mut range = super::metrics::TorqueRange::new(model.dof());
+        range.add(&p.tau);
+        let parts = Observation::assemble_per_coordinate(model, p.samples(), &Silent);
+        let info = InputInfo {
+            role: "train".into(),
+            path: String::new(),
+            sha256: String::new(),
+            bytes: 0,
+            source: p.source.clone(),
+            metrics: None,
+            offset: None,
+        };
+        Observed::push(&mut observed, ObservedLog { info, parts }, range);
+    }
+    let observed = observed.ok_or_else(super::observed::no_training_log)?;
+    let train_pass = |params: &[f64]| {
+        Ok(train
+            .iter()
+            .map(|p| {
+                let mut sums = MetricSums::new(model);
+                sums.add(model, params, p.samples(), None);
+                sums
+            })
+            .collect())
+    };
+    let result = fit_observed(
+        model,
+        &observed,
+        settings,
+        MetricPasses {
+            train: Some(&train_pass),
+            test: &|_| Ok(Vec::new()),
+        },
+        &Silent,
+    )?;
+    Ok(model.params_from_named(
+        result.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
+        "the fold's fit",
+    )?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::signal::LowPass;
+
+    /// The guard band covers the filter's reach: an impulse through the 2019 PSM filter
+    /// (zero-phase, 6th order, 16.965 Hz effective, 200 Hz) has decayed below 10⁻³ of
+    /// its peak beyond the guard (0.26 s), and not at a third of it.
+    #[test]
+    fn the_guard_band_outlasts_the_filters_impulse_response() {
+        let mut settings = FitSettings::default();
+        settings.processing.filter = Some(LowPass::wpi(5.4));
+        let dt = 1.0 / 200.0;
+        let guard = guard_s(&settings, dt);
+        assert!((guard - 0.2604).abs() < 1e-3, "{guard}");
+        let n = 401;
+        let mut x = vec![0.0; n];
+        x[n / 2] = 1.0;
+        let y = LowPass::wpi(5.4).apply_slice(&x, 5.4, 200.0).unwrap();
+        let peak = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        let beyond = |s: f64| {
+            let k = (s / dt).round() as usize;
+            y.iter()
+                .enumerate()
+                .filter(|(i, _)| i.abs_diff(n / 2) >= k)
+                .fold(0.0f64, |m, (_, v)| m.max(v.abs()))
+                / peak
+        };
+        assert!(beyond(guard) < 1e-3, "{}", beyond(guard));
+        assert!(beyond(guard / 3.0) > 1e-3, "{}", beyond(guard / 3.0));
+    }
+
+    #[test]
+    fn candidate_names_read_back() {
+        for name in [
+            "coulomb",
+            "stribeck",
+            "dahl:10",
+            "stribeck:0.2+dahl",
+            "stribeck+dahl",
+        ] {
+            assert_eq!(name.parse::<Candidate>().unwrap().name(), name);
+        }
+        let e = "coulomb,viscous".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("unknown candidate term `viscous`"), "{e}");
+        let e = "stribeck:-1,coulomb".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("`-1` is not a positive number"), "{e}");
+        let e = "dahl+dahl:5,coulomb".parse::<Candidates>().unwrap_err();
+        assert!(e.contains("gives dahl twice"), "{e}");
+    }
+}
