@@ -242,6 +242,7 @@ fn pendulum_log(model: &Model, params: &[f64], seconds: f64, noise: f64, seed: u
         a: vec![vec![0.25, 0.1, 0.3]],
         b: vec![vec![0.1, -0.2, 0.05]],
         coordinates: Vec::new(),
+        robot: None,
     };
     let sim = Simulation {
         duration_s: Some(seconds),
