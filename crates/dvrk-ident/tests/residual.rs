@@ -383,7 +383,8 @@ fn tip_wrench_inverts_the_jacobian_transpose() {
 
 /// Where the joints sense fewer than six wrench directions the unsensed ones are
 /// reported and the wrench is the minimum-norm one: the ECM (four coordinates: two
-/// directions at its roll frame) against the closed form `J·(JᵀJ)⁻¹·τ`, and the PSM
+/// directions at its roll frame) against the closed form `J·(JᵀJ)⁻¹·τ`, the PSM Si
+/// without its instrument (three coordinates: three directions), and the PSM
 /// with its tool tip at the remote centre of motion (insertion l_RCC − l_tool = 1.56
 /// cm), where the yaw and pitch do not move the tip and one force across the shaft is
 /// lost.
@@ -414,6 +415,14 @@ fn unsensed_directions_are_reported_not_estimated() {
             assert!((j.transpose() * &v).norm() < 1e-12, "sensed: {v}");
         }
     }
+    // The PSM Si without its instrument: three coordinates, three directions at the end
+    // of its insertion stage.
+    let si = Model::builtin("psm_si").unwrap();
+    let end = wrench_frame(&si, "insertion").unwrap();
+    let q = DMatrix::from_row_slice(1, 3, &[0.3, -0.4, 0.12]);
+    let tau = torques_of_wrench(&si, end, &q, &f);
+    let w = tip_wrench(&si, "insertion", &q, &tau, DEFAULT_WRENCH_RCOND).unwrap();
+    assert_eq!((w.rank[0], w.unsensed_in_tip[0].len()), (3, 3));
     // The PSM at its singular pose: rank 5; the wrench has no component along the lost
     // direction and explains τ.
     let psm = Model::builtin("psm").unwrap();
