@@ -172,7 +172,11 @@ fn a_tip_force_comes_back_out_of_residual_wrench(dir: &std::path::Path, fit: &st
     use dvrk_ident::excite::FourierTrajectory;
     use dvrk_model::{Model, Workspace};
     let model = Model::builtin("psm").unwrap();
-    let tip = model.frame_names().iter().position(|f| f == "tool_tip").unwrap();
+    let tip = model
+        .frame_names()
+        .iter()
+        .position(|f| f == "tool_tip")
+        .unwrap();
     let traj = FourierTrajectory::from_json_file(support::example("psm_trajectory.json")).unwrap();
     let force = [0.5, -0.3, 0.8, 0.0, 0.0, 0.0]; // N, base frame; no moment
     let time: Vec<f64> = (0..=2400).map(|k| k as f64 / 200.0).collect();
@@ -182,8 +186,8 @@ fn a_tip_force_comes_back_out_of_residual_wrench(dir: &std::path::Path, fit: &st
     for (k, t) in time.iter().enumerate() {
         let qk: Vec<f64> = q.row(k).iter().copied().collect();
         model.forward_kinematics(&mut ws, &qk);
-        let tau = model.frame_jacobian(&ws, tip).transpose()
-            * nalgebra::DVector::from_row_slice(&force);
+        let tau =
+            model.frame_jacobian(&ws, tip).transpose() * nalgebra::DVector::from_row_slice(&force);
         csv.push_str(&t.to_string());
         for v in tau.iter() {
             csv.push_str(&format!(",{v}"));
@@ -240,9 +244,14 @@ fn a_tip_force_comes_back_out_of_residual_wrench(dir: &std::path::Path, fit: &st
         }
         let n = rows.len() as f64;
         let (err, floor) = ((err / n).sqrt(), (floor / n).sqrt());
-        eprintln!("wrench {c}: largest difference {diff:.2e}, RMS error {err:.4}, floor {floor:.4}");
+        eprintln!(
+            "wrench {c}: largest difference {diff:.2e}, RMS error {err:.4}, floor {floor:.4}"
+        );
         assert!(diff < 1e-4, "component {c}: {diff}");
-        assert!(err < 1.2 * floor + 1e-3, "component {c}: {err} against {floor}");
+        assert!(
+            err < 1.2 * floor + 1e-3,
+            "component {c}: {err} against {floor}"
+        );
     }
     // A wrong frame: named, the frames listed, nothing written.
     let never = dir.join("never.csv");

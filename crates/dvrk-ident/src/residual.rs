@@ -224,10 +224,8 @@ pub fn tip_wrench(
     let mut ws = Workspace::new(model);
     let (mut in_base, mut in_tip) = (DMatrix::zeros(samples, 6), DMatrix::zeros(samples, 6));
     let mut rank = Vec::with_capacity(samples);
-    let (mut unsensed_in_base, mut unsensed_in_tip) = (
-        Vec::with_capacity(samples),
-        Vec::with_capacity(samples),
-    );
+    let (mut unsensed_in_base, mut unsensed_in_tip) =
+        (Vec::with_capacity(samples), Vec::with_capacity(samples));
     let mut qk = vec![0.0; n];
     // Jᵀ with zero rows below it up to six: the thin SVD then has six singular values
     // and all of V, so the unsensed directions of an arm with fewer coordinates too.

@@ -382,9 +382,12 @@ fn forged_headers_are_refused_with_the_file_named() {
 #[test]
 fn frames_without_parameters_leave_the_hash() {
     let text = include_str!("../../dvrk-model/robots/psm.toml");
-    let rule = "# ---------------------------------------------------------------------------------\n";
+    let rule =
+        "# ---------------------------------------------------------------------------------\n";
     let start = text.find(&format!("{rule}# The tool tip")).unwrap();
-    let end = text.find(&format!("{rule}# 2019 excitation limits")).unwrap();
+    let end = text
+        .find(&format!("{rule}# 2019 excitation limits"))
+        .unwrap();
     let without = format!("{}{}", &text[..start], &text[end..]);
     let psm = Model::builtin("psm").unwrap();
     let before = Model::from_toml_str(&without, "psm.toml").unwrap();

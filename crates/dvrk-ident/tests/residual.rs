@@ -14,8 +14,8 @@ use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::FitRequest;
 use dvrk_ident::{FitResult, FitSettings, Joints};
 use dvrk_model::{Model, Payload, Workspace};
-use nalgebra::{DMatrix, DVector, Vector3};
 use dvrk_test_support::{example, fixtures::example_params};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 fn psm_fit() -> (Model, FitResult, FourierTrajectory, Vec<f64>) {
     let model = Model::builtin("psm").unwrap();
@@ -356,8 +356,12 @@ fn tip_wrench_inverts_the_jacobian_transpose() {
     assert!(w.unsensed_in_base.iter().all(Vec::is_empty));
     let mut ws = Workspace::new(&model);
     for k in 0..6 {
-        for c in 0..6 {
-            assert!((w.in_base[(k, c)] - f[c]).abs() < 1e-9, "{k} {c}: {}", w.in_base);
+        for (c, fc) in f.iter().enumerate() {
+            assert!(
+                (w.in_base[(k, c)] - fc).abs() < 1e-9,
+                "{k} {c}: {}",
+                w.in_base
+            );
         }
         let qk: Vec<f64> = q.row(k).iter().copied().collect();
         model.forward_kinematics(&mut ws, &qk);
@@ -370,14 +374,20 @@ fn tip_wrench_inverts_the_jacobian_transpose() {
         }
     }
     // Bad frames and thresholds: errors that name them (and list the frames).
-    let e = tip_wrench(&model, "nowhere", &q, &tau, 1e-6).unwrap_err().to_string();
+    let e = tip_wrench(&model, "nowhere", &q, &tau, 1e-6)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("robot psm has no frame `nowhere`") && e.contains("tool_tip"),
         "{e}"
     );
-    let e = tip_wrench(&model, "base", &q, &tau, 1e-6).unwrap_err().to_string();
+    let e = tip_wrench(&model, "base", &q, &tau, 1e-6)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("the base frame does not move"), "{e}");
-    let e = tip_wrench(&model, "tool_tip", &q, &tau, f64::NAN).unwrap_err().to_string();
+    let e = tip_wrench(&model, "tool_tip", &q, &tau, f64::NAN)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("wrench_rcond"), "{e}");
 }
 
@@ -407,7 +417,11 @@ fn unsensed_directions_are_reported_not_estimated() {
         let t = DVector::from_iterator(4, tau.row(k).iter().copied());
         let closed = &j * (j.transpose() * &j).try_inverse().unwrap() * t;
         for c in 0..6 {
-            assert!((w.in_base[(k, c)] - closed[c]).abs() < 1e-9, "{k}: {}", w.in_base);
+            assert!(
+                (w.in_base[(k, c)] - closed[c]).abs() < 1e-9,
+                "{k}: {}",
+                w.in_base
+            );
         }
         for v in &w.unsensed_in_base[k] {
             let v = DVector::from_row_slice(v);
@@ -444,7 +458,10 @@ fn unsensed_directions_are_reported_not_estimated() {
     assert!(v.rows(3, 3).norm() <= 0.0091 * force.norm() + 1e-12, "{v}");
     let roll = wrench_frame(&psm, "tool_roll").unwrap();
     let shaft = ws.pose(roll).rotation.column(2).into_owned();
-    assert!(force.dot(&shaft).abs() < 1e-9, "across the shaft: {force} {shaft}");
+    assert!(
+        force.dot(&shaft).abs() < 1e-9,
+        "across the shaft: {force} {shaft}"
+    );
     let got = DVector::from_iterator(6, w.in_base.row(0).iter().copied());
     assert!(got.dot(&v).abs() < 1e-9);
     let t = DVector::from_iterator(7, tau.row(0).iter().copied());

@@ -407,7 +407,11 @@ fn psm_tool_tip_is_the_dvrks() {
     let h = std::f64::consts::FRAC_PI_2;
     for name in ["psm", "psm_simplified"] {
         let model = builtin(name);
-        let tip = model.frame_names().iter().position(|f| f == "tool_tip").unwrap();
+        let tip = model
+            .frame_names()
+            .iter()
+            .position(|f| f == "tool_tip")
+            .unwrap();
         let mut rng = Rng::new(11);
         let mut ws = Workspace::new(&model);
         for _ in 0..10 {
@@ -434,9 +438,15 @@ fn psm_tool_tip_is_the_dvrks() {
             let p = ws.pose(tip);
             for r in 0..3 {
                 for c in 0..3 {
-                    assert!((p.rotation[(r, c)] - dvrk[(r, c)]).abs() < 1e-12, "{name} {q:?}");
+                    assert!(
+                        (p.rotation[(r, c)] - dvrk[(r, c)]).abs() < 1e-12,
+                        "{name} {q:?}"
+                    );
                 }
-                assert!((p.translation[r] - dvrk[(r, 3)]).abs() < 1e-12, "{name} {q:?}");
+                assert!(
+                    (p.translation[r] - dvrk[(r, 3)]).abs() < 1e-12,
+                    "{name} {q:?}"
+                );
             }
         }
     }

@@ -151,7 +151,11 @@ pub fn external_torque<'py>(
     out.set_item("rms", array(py, res.rms, &[n]))?;
     out.set_item("noise_floor", res.noise_floor.map(|f| array(py, f, &[n])))?;
     out.set_item("observer_gain", observer_gain)?;
-    let wrench = res.wrench.as_ref().map(|w| wrench_dict(py, w)).transpose()?;
+    let wrench = res
+        .wrench
+        .as_ref()
+        .map(|w| wrench_dict(py, w))
+        .transpose()?;
     out.set_item("wrench", wrench)?;
     Ok(out.into_any())
 }

@@ -241,11 +241,7 @@ pub fn run(args: Args) -> Result<()> {
 
 /// The wrench's RMS per component in both frames' axes and where it was not fully sensed.
 fn wrench_text(text: &mut String, w: &TipWrench) {
-    let _ = writeln!(
-        text,
-        "wrench at {} (RMS; force N, moment N·m):",
-        w.frame
-    );
+    let _ = writeln!(text, "wrench at {} (RMS; force N, moment N·m):", w.frame);
     let _ = writeln!(
         text,
         "{:<6} {}",
