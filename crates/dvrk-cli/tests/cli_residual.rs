@@ -253,6 +253,21 @@ fn a_tip_force_comes_back_out_of_residual_wrench(dir: &std::path::Path, fit: &st
             "component {c}: {err} against {floor}"
         );
     }
+    // The report: the wrench's table and figure beside the residual's.
+    let report = dir.join("wrench_report");
+    run_ok(&[
+        "residual",
+        &s(fit),
+        &s(&with),
+        "--wrench",
+        "tool_tip",
+        "--report",
+        &s(&report),
+    ]);
+    let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(page.contains("wrench at <code>tool_tip</code>") && page.contains("RMS, base axes"));
+    let svg = std::fs::read_to_string(report.join("wrench_1.svg")).unwrap();
+    assert!(svg.contains("force at tool_tip in its own axes"));
     // A wrong frame: named, the frames listed, nothing written.
     let never = dir.join("never.csv");
     let (ok, _, err) = run(&[

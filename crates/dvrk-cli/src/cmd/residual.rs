@@ -73,7 +73,8 @@ pub struct Args {
     #[arg(long, value_name = "FILE.csv", requires = "wrench", help_heading = OUTPUT)]
     pub wrench_out: Option<String>,
     /// Write a report into this folder: report.html with each log's residual and
-    /// observer per joint against the fit's noise floor, and the figures as SVG and PNG
+    /// observer per joint against the fit's noise floor (and the --wrench over time),
+    /// and the figures as SVG and PNG
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub report: Option<String>,
     /// Print JSON
