@@ -218,8 +218,20 @@ pub fn tip_wrench(
 ) -> Result<TipWrench, IdentError> {
     let index = check_wrench(model, frame, rcond)?;
     let n = model.dof();
-    assert_eq!(q.ncols(), n, "q: one column per model coordinate");
-    assert_eq!(tau_ext.shape(), q.shape(), "tau_ext: the shape of q");
+    if q.ncols() != n || tau_ext.shape() != q.shape() {
+        return Err(IdentError::Setting {
+            name: "wrench".into(),
+            message: format!(
+                "q is {}×{} and the external torque {}×{}: both need one row per sample and \
+                 one column per coordinate of robot {} ({n})",
+                q.nrows(),
+                q.ncols(),
+                tau_ext.nrows(),
+                tau_ext.ncols(),
+                model.name
+            ),
+        });
+    }
     let samples = q.nrows();
     let mut ws = Workspace::new(model);
     let (mut in_base, mut in_tip) = (DMatrix::zeros(samples, 6), DMatrix::zeros(samples, 6));

@@ -389,6 +389,16 @@ fn tip_wrench_inverts_the_jacobian_transpose() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("wrench_rcond"), "{e}");
+    let e = tip_wrench(
+        &model,
+        "tool_tip",
+        &q,
+        &tau.columns(0, 6).into_owned(),
+        1e-6,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("q is 6×7 and the external torque 6×6"), "{e}");
 }
 
 /// Where the joints sense fewer than six wrench directions the unsensed ones are
