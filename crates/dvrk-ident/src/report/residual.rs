@@ -7,7 +7,7 @@ use std::fmt::Write as _;
 
 use super::html::{escape, inline_svg, number, STYLE};
 use super::plot::{colors, Panel, PanelGrid, Series};
-use super::{render_both, Report, ReportError};
+use super::{render_both, RenderedFigure, Report, ReportError};
 use crate::fit::JointMap;
 use crate::residual::{Residual, TipWrench, WRENCH_COMPONENTS};
 
@@ -19,8 +19,7 @@ pub const FLOOR_MULTIPLE: f64 = 2.0;
 /// sample): `τ_measured − τ_model`, the observer's estimate, and the noise floor as
 /// dashed lines at `±floor` (none without one).
 pub fn residual_figure(joints: &JointMap, label: &str, r: &Residual, gain: f64) -> PanelGrid {
-    let t0 = r.time.first().copied().unwrap_or(0.0);
-    let t: Vec<f64> = r.time.iter().map(|t| t - t0).collect();
+    let t = since_start(&r.time);
     let panels = (0..r.joints.len())
         .map(|j| {
             let floor = r.noise_floor.as_ref().map(|f| f[j]);
@@ -63,10 +62,25 @@ pub fn residual_figure(joints: &JointMap, label: &str, r: &Residual, gain: f64) 
             }
         })
         .collect();
+    one_column(
+        format!("{}: τ_measured − τ_model, {label}", joints.robot),
+        200,
+        panels,
+    )
+}
+
+/// Times (s) from the first one: the figures' x axis.
+fn since_start(time: &[f64]) -> Vec<f64> {
+    let t0 = time.first().copied().unwrap_or(0.0);
+    time.iter().map(|t| t - t0).collect()
+}
+
+/// The panels one below the other, each 1100 px wide and `height` px high.
+fn one_column(title: String, height: u32, panels: Vec<Panel>) -> PanelGrid {
     PanelGrid {
-        title: format!("{}: τ_measured − τ_model, {label}", joints.robot),
+        title,
         columns: 1,
-        panel_size: (1100, 200),
+        panel_size: (1100, height),
         column_weights: Vec::new(),
         panels,
     }
@@ -75,8 +89,7 @@ pub fn residual_figure(joints: &JointMap, label: &str, r: &Residual, gain: f64) 
 /// The wrench of one log over time (s from the first processed sample) in the tip
 /// frame's axes: the force (N) and the moment (N·m), x, y, z each.
 pub fn wrench_figure(robot: &str, label: &str, time: &[f64], w: &TipWrench) -> PanelGrid {
-    let t0 = time.first().copied().unwrap_or(0.0);
-    let t: Vec<f64> = time.iter().map(|t| t - t0).collect();
+    let t = since_start(time);
     let axes = [colors::AXIS_X, colors::AXIS_Y, colors::AXIS_Z];
     let panels = [("force", "N", 0), ("moment", "N·m", 3)]
         .into_iter()
@@ -98,13 +111,11 @@ pub fn wrench_figure(robot: &str, label: &str, time: &[f64], w: &TipWrench) -> P
             vspans: Vec::new(),
         })
         .collect();
-    PanelGrid {
-        title: format!("{robot}: wrench at {}, {label}", w.frame),
-        columns: 1,
-        panel_size: (1100, 240),
-        column_weights: Vec::new(),
+    one_column(
+        format!("{robot}: wrench at {}, {label}", w.frame),
+        240,
         panels,
-    }
+    )
 }
 
 /// The report of `residuals` (one per log, in `joints`): a figure per log (SVG and PNG,
@@ -198,13 +209,7 @@ pub fn residual_report(
                  joint, {label}; dashed: ± the fit's noise floor."
             ),
         )?;
-        let _ = write!(
-            o,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            inline_svg(&figure.svg),
-            escape(&figure.caption)
-        );
-        figures.push(figure);
+        embed(&mut o, &mut figures, figure);
         if let Some(w) = &r.wrench {
             let (base, tip) = (TipWrench::rms(&w.in_base), TipWrench::rms(&w.in_tip));
             let _ = write!(
@@ -242,13 +247,7 @@ pub fn residual_report(
                     w.frame
                 ),
             )?;
-            let _ = write!(
-                o,
-                "<figure>{}<figcaption>{}</figcaption></figure>",
-                inline_svg(&figure.svg),
-                escape(&figure.caption)
-            );
-            figures.push(figure);
+            embed(&mut o, &mut figures, figure);
         }
     }
     o.push_str("</body></html>\n");
@@ -257,4 +256,15 @@ pub fn residual_report(
         logs: Vec::new(),
         html: o,
     })
+}
+
+/// Writes `figure` into the page `o` (inline SVG and caption) and keeps it for the files.
+fn embed(o: &mut String, figures: &mut Vec<RenderedFigure>, figure: RenderedFigure) {
+    let _ = write!(
+        o,
+        "<figure>{}<figcaption>{}</figcaption></figure>",
+        inline_svg(&figure.svg),
+        escape(&figure.caption)
+    );
+    figures.push(figure);
 }
