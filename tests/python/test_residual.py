@@ -164,3 +164,46 @@ def test_observer_refuses_bad_input(psm, pushed):
         obs.update(z, z + np.nan, z, 1e-3)
     with pytest.raises(di.InputError, match="shape"):
         obs.update(np.zeros((3, psm.dof)), z, z, 1e-3)
+
+
+def test_wrench_is_the_cli_wrench(pushed, cli):
+    """`external_torque(..., wrench=)` and `residual --wrench --wrench-out` on the same
+    log: one library function, the same numbers; an unknown frame is refused naming the
+    robot's frames."""
+    import subprocess
+
+    d = pushed["dir"]
+    out = d / "wrench.csv"
+    args = [cli, "residual", d / "fit.json", d / "pushed.csv", "--trim", "50",
+            "--wrench", "tool_tip", "--wrench-out", out, "--json"]
+    run = subprocess.run([str(a) for a in args], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+    summary = json.loads(run.stdout)["residuals"][0]["wrench"]
+    r = di.external_torque(pushed["result"], di.read_log(d / "pushed.csv"), trim=50,
+                           wrench="tool_tip")
+    w = r["wrench"]
+    lines = out.read_text().splitlines()
+    header = lines[0].split(",")
+    values = np.array([[float(x) for x in line.split(",")] for line in lines[1:]])
+    assert header[1:7] == [f"{c}_base" for c in w["components"]]
+    assert header[7:13] == [f"{c}_tip" for c in w["components"]] and header[13] == "rank"
+    assert w["frame"] == "tool_tip" and w["rcond"] == 1e-6
+    np.testing.assert_allclose(values[:, 0], r["time"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(values[:, 1:7], w["base"], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(values[:, 7:13], w["tip"], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(values[:, 13], w["rank"])
+    assert summary["min_rank"] == w["rank"].min() == 6
+    np.testing.assert_allclose(np.sqrt(np.mean(w["base"] ** 2, axis=0)), summary["rms_base"],
+                               rtol=1e-12)
+    assert all(u.shape == (6 - k, 6) for u, k in zip(w["unsensed_base"], w["rank"]))
+    # The tip's axes turn the force and the moment alike: their norms are the base's.
+    for a, b in ((0, 3), (3, 6)):
+        np.testing.assert_allclose(np.linalg.norm(w["tip"][:, a:b], axis=1),
+                                   np.linalg.norm(w["base"][:, a:b], axis=1), rtol=1e-9)
+    df = di.external_torque(pushed["result"], di.read_log(d / "pushed.csv"), trim=50,
+                            wrench="tool_tip", as_dataframe=True)
+    np.testing.assert_array_equal(df["wrench_tip.fz"].to_numpy(), w["tip"][:, 2])
+    assert df.attrs["wrench_frame"] == "tool_tip"
+    assert di.external_torque(pushed["result"], pushed["plain"])["wrench"] is None
+    with pytest.raises(di.InputError, match=r"no frame `nowhere`.*tool_tip"):
+        di.external_torque(pushed["result"], pushed["plain"], wrench="nowhere")

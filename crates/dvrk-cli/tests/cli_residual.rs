@@ -158,6 +158,132 @@ fn a_simulated_push_comes_back_out_of_residual() {
     let svg = std::fs::read_to_string(report.join("residual_1.svg")).unwrap();
     assert!(svg.contains("momentum observer (20 /s)") && svg.contains("τ_measured − τ_model"));
     assert!(report.join("residual_1.png").exists());
+    // The same fit, with a force at the tool tip (one fit per test binary's run).
+    a_tip_force_comes_back_out_of_residual_wrench(&dir, &fit);
+}
+
+/// `residual --wrench tool_tip` on a log simulated with the joint torques `J(q)ᵀ·F` of a
+/// constant force at the PSM's tool tip (computed here from the model along the
+/// trajectory, on the simulation's own time grid): the force comes back, to the
+/// processing's rounding against the same log without it (the same noise), and within
+/// the wrench's noise floor (its RMS on that log) of the force; a wrong frame is
+/// refused naming it and listing the robot's, with nothing written.
+fn a_tip_force_comes_back_out_of_residual_wrench(dir: &std::path::Path, fit: &std::path::Path) {
+    use dvrk_ident::excite::FourierTrajectory;
+    use dvrk_model::{Model, Workspace};
+    let model = Model::builtin("psm").unwrap();
+    let tip = model
+        .frame_names()
+        .iter()
+        .position(|f| f == "tool_tip")
+        .unwrap();
+    let traj = FourierTrajectory::from_json_file(support::example("psm_trajectory.json")).unwrap();
+    let force = [0.5, -0.3, 0.8, 0.0, 0.0, 0.0]; // N, base frame; no moment
+    let time: Vec<f64> = (0..=2400).map(|k| k as f64 / 200.0).collect();
+    let (q, _, _) = traj.sample(&time);
+    let mut ws = Workspace::new(&model);
+    let mut csv = String::new();
+    for (k, t) in time.iter().enumerate() {
+        let qk: Vec<f64> = q.row(k).iter().copied().collect();
+        model.forward_kinematics(&mut ws, &qk);
+        let tau =
+            model.frame_jacobian(&ws, tip).transpose() * nalgebra::DVector::from_row_slice(&force);
+        csv.push_str(&t.to_string());
+        for v in tau.iter() {
+            csv.push_str(&format!(",{v}"));
+        }
+        csv.push('\n');
+    }
+    let file = dir.join("tip_force.csv");
+    std::fs::write(&file, csv).unwrap();
+    let (with, without) = (dir.join("tip_force.mcap"), dir.join("no_force.mcap"));
+    let noise = ["--periods", "2", "--noise", "0.002", "--seed", "5"];
+    let mut pushed = noise.to_vec();
+    let file_s = s(&file);
+    pushed.extend(["--external-torque", &file_s]);
+    simulate_example(&with, &pushed);
+    simulate_example(&without, &noise);
+    let wrench = |log: &std::path::Path, out: &std::path::Path| {
+        let doc = run_json(&[
+            "residual",
+            &s(fit),
+            &s(log),
+            "--wrench",
+            "tool_tip",
+            "--wrench-out",
+            &s(out),
+            "--json",
+        ]);
+        let text = std::fs::read_to_string(out).unwrap();
+        let mut lines = text.lines();
+        let header = lines.next().unwrap();
+        assert!(
+            header.starts_with("time,fx_base,fy_base,fz_base,mx_base,my_base,mz_base,fx_tip,")
+                && header.ends_with(",mz_tip,rank"),
+            "{header}"
+        );
+        let rows: Vec<Vec<f64>> = lines
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect();
+        (doc, rows)
+    };
+    let (doc, rows) = wrench(&with, &dir.join("tip_wrench.csv"));
+    let (_, floor_rows) = wrench(&without, &dir.join("no_wrench.csv"));
+    let w = &doc["residuals"][0]["wrench"];
+    assert_eq!(w["frame"], "tool_tip");
+    assert_eq!(w["min_rank"], 6, "{w}");
+    assert_eq!(rows.len(), floor_rows.len());
+    for c in 0..6 {
+        let (mut diff, mut err, mut floor) = (0.0f64, 0.0, 0.0);
+        for (r, f) in rows.iter().zip(&floor_rows) {
+            assert_eq!(r[0], f[0]);
+            assert_eq!(r[13], 6.0);
+            diff = diff.max((r[c + 1] - f[c + 1] - force[c]).abs());
+            err += (r[c + 1] - force[c]).powi(2);
+            floor += f[c + 1].powi(2);
+        }
+        let n = rows.len() as f64;
+        let (err, floor) = ((err / n).sqrt(), (floor / n).sqrt());
+        eprintln!(
+            "wrench {c}: largest difference {diff:.2e}, RMS error {err:.4}, floor {floor:.4}"
+        );
+        assert!(diff < 1e-4, "component {c}: {diff}");
+        assert!(
+            err < 1.2 * floor + 1e-3,
+            "component {c}: {err} against {floor}"
+        );
+    }
+    // The report: the wrench's table and figure beside the residual's.
+    let report = dir.join("wrench_report");
+    run_ok(&[
+        "residual",
+        &s(fit),
+        &s(&with),
+        "--wrench",
+        "tool_tip",
+        "--report",
+        &s(&report),
+    ]);
+    let page = std::fs::read_to_string(report.join("report.html")).unwrap();
+    assert!(page.contains("wrench at <code>tool_tip</code>") && page.contains("RMS, base axes"));
+    let svg = std::fs::read_to_string(report.join("wrench_1.svg")).unwrap();
+    assert!(svg.contains("force at tool_tip in its own axes"));
+    // A wrong frame: named, the frames listed, nothing written.
+    let never = dir.join("never.csv");
+    let (ok, _, err) = run(&[
+        "residual",
+        &s(fit),
+        &s(&with),
+        "--wrench",
+        "nowhere",
+        "--wrench-out",
+        &s(&never),
+    ]);
+    assert!(
+        !ok && err.contains("robot psm has no frame `nowhere`") && err.contains("tool_tip"),
+        "{err}"
+    );
+    assert!(!never.exists());
 }
 
 #[test]

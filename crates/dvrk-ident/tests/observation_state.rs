@@ -375,3 +375,32 @@ fn forged_headers_are_refused_with_the_file_named() {
     let e = good.merge(&state).unwrap_err().to_string();
     expect(e, &["factors of width"]);
 }
+
+/// The tool tip's frames (massless, no element: kinematics only) leave the model's hash
+/// as it was without them, so states observed before they were described still merge;
+/// a frame that carries a parameter changes it.
+#[test]
+fn frames_without_parameters_leave_the_hash() {
+    let text = include_str!("../../dvrk-model/robots/psm.toml");
+    let rule =
+        "# ---------------------------------------------------------------------------------\n";
+    let start = text.find(&format!("{rule}# The tool tip")).unwrap();
+    let end = text
+        .find(&format!("{rule}# 2019 excitation limits"))
+        .unwrap();
+    let without = format!("{}{}", &text[..start], &text[end..]);
+    let psm = Model::builtin("psm").unwrap();
+    let before = Model::from_toml_str(&without, "psm.toml").unwrap();
+    assert_eq!(psm.frames.len(), before.frames.len() + 2);
+    let hash = dvrk_ident::state::model_hash;
+    assert_eq!(hash(&psm), hash(&before));
+    let tip = text.find("name = \"tool_tip\"").unwrap();
+    // Friction on the tip (turning with q4): a parameter, another hash.
+    let tip_friction = format!(
+        "{}{}",
+        &text[..tip],
+        text[tip..].replacen("theta = \"pi/2\"\n", "theta = \"q4\"\nfriction = true\n", 1)
+    );
+    let moved = Model::from_toml_str(&tip_friction, "psm.toml").unwrap();
+    assert_ne!(hash(&moved), hash(&psm));
+}

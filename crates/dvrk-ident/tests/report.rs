@@ -346,7 +346,8 @@ fn kinematic_drawing_flags_closed_chain_frames_and_draws_every_frame() {
         .collect();
     // In the 2019 PSM tree the tool hangs from the parallelogram's far end
     // (pitch_end); the parallelogram's other links, the insertion stage carried by the
-    // pitch frame, the virtual motor frames are branches.
+    // pitch frame, the virtual motor frames and the two jaws (beside the wrist yaw, the
+    // jaws' mean, that carries the tool tip) are branches.
     assert_eq!(
         chain,
         [
@@ -359,9 +360,11 @@ fn kinematic_drawing_flags_closed_chain_frames_and_draws_every_frame() {
             "pitch_end",
             "tool_roll",
             "wrist_pitch",
-            "wrist_yaw_2"
+            "wrist_yaw",
+            "tool_tip"
         ]
     );
+    assert!(branch.contains(&"wrist_yaw_1") && branch.contains(&"wrist_yaw_2"));
     assert!(branch.contains(&"pitch_top") && branch.contains(&"main_insertion"));
     assert!(branch.contains(&"motor_6") && branch.contains(&"pitch_front_ext"));
     let svg = String::from_utf8(render(&d, ImageFormat::Svg).unwrap()).unwrap();

@@ -7,12 +7,15 @@
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::fit::{predict, prepare};
 use dvrk_ident::progress::Silent;
-use dvrk_ident::residual::{external_torque, ResidualOptions};
+use dvrk_ident::residual::{
+    external_torque, tip_wrench, wrench_frame, ResidualOptions, DEFAULT_WRENCH_RCOND,
+};
 use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::FitRequest;
 use dvrk_ident::{FitResult, FitSettings, Joints};
-use dvrk_model::{Model, Payload};
+use dvrk_model::{Model, Payload, Workspace};
 use dvrk_test_support::{example, fixtures::example_params};
+use nalgebra::{DMatrix, DVector, Vector3};
 
 fn psm_fit() -> (Model, FitResult, FourierTrajectory, Vec<f64>) {
     let model = Model::builtin("psm").unwrap();
@@ -309,4 +312,174 @@ fn payload_that_the_logs_cannot_show_is_reported() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("was fitted for psm, not mtm"), "{err}");
+}
+
+/// The joint torques `Jᵀ·F` of a wrench `F` at frame `frame` for the rows of `q`.
+fn torques_of_wrench(model: &Model, frame: usize, q: &DMatrix<f64>, f: &[f64; 6]) -> DMatrix<f64> {
+    let mut ws = Workspace::new(model);
+    let mut tau = DMatrix::zeros(q.nrows(), q.ncols());
+    for k in 0..q.nrows() {
+        let qk: Vec<f64> = q.row(k).iter().copied().collect();
+        model.forward_kinematics(&mut ws, &qk);
+        let t = model.frame_jacobian(&ws, frame).transpose() * DVector::from_row_slice(f);
+        tau.row_mut(k).copy_from_slice(t.as_slice());
+    }
+    tau
+}
+
+/// `tip_wrench` inverts `τ = J(q)ᵀ·F` at the PSM's tool tip: a known wrench comes back
+/// to 1e-9 in the base frame's axes at every configuration, and in the tip's axes as
+/// `R_tipᵀ` times it; the frame's name is checked against the robot's.
+#[test]
+fn tip_wrench_inverts_the_jacobian_transpose() {
+    let model = Model::builtin("psm").unwrap();
+    let tip = wrench_frame(&model, "tool_tip").unwrap();
+    // Configurations over the arm's range (model coordinates, insertion 5 to 23 cm).
+    let mut q = DMatrix::zeros(6, 7);
+    for k in 0..6 {
+        let s = k as f64 / 5.0;
+        let row = [
+            -1.2 + 2.4 * s,
+            0.7 - 1.3 * s,
+            0.05 + 0.18 * s,
+            2.0 - 3.5 * s,
+            -0.9 + 1.6 * s,
+            0.4 - 0.9 * s,
+            0.6 - 0.5 * s,
+        ];
+        q.row_mut(k).copy_from_slice(&row);
+    }
+    let f = [1.5, -0.7, 2.2, 0.03, -0.05, 0.011];
+    let tau = torques_of_wrench(&model, tip, &q, &f);
+    let w = tip_wrench(&model, "tool_tip", &q, &tau, DEFAULT_WRENCH_RCOND).unwrap();
+    assert_eq!(w.rank, vec![6; 6]);
+    assert!(w.unsensed_in_base.iter().all(Vec::is_empty));
+    let mut ws = Workspace::new(&model);
+    for k in 0..6 {
+        for (c, fc) in f.iter().enumerate() {
+            assert!(
+                (w.in_base[(k, c)] - fc).abs() < 1e-9,
+                "{k} {c}: {}",
+                w.in_base
+            );
+        }
+        let qk: Vec<f64> = q.row(k).iter().copied().collect();
+        model.forward_kinematics(&mut ws, &qk);
+        let r = ws.pose(tip).rotation;
+        let force = r.transpose() * Vector3::new(f[0], f[1], f[2]);
+        let moment = r.transpose() * Vector3::new(f[3], f[4], f[5]);
+        for c in 0..3 {
+            assert!((w.in_tip[(k, c)] - force[c]).abs() < 1e-9);
+            assert!((w.in_tip[(k, c + 3)] - moment[c]).abs() < 1e-9);
+        }
+    }
+    // Bad frames and thresholds: errors that name them (and list the frames).
+    let e = tip_wrench(&model, "nowhere", &q, &tau, 1e-6)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("robot psm has no frame `nowhere`") && e.contains("tool_tip"),
+        "{e}"
+    );
+    let e = tip_wrench(&model, "base", &q, &tau, 1e-6)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("the base frame does not move"), "{e}");
+    let e = tip_wrench(&model, "tool_tip", &q, &tau, f64::NAN)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("wrench_rcond"), "{e}");
+    let e = tip_wrench(
+        &model,
+        "tool_tip",
+        &q,
+        &tau.columns(0, 6).into_owned(),
+        1e-6,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("q is 6×7 and the external torque 6×6"), "{e}");
+}
+
+/// Where the joints sense fewer than six wrench directions the unsensed ones are
+/// reported and the wrench is the minimum-norm one: the ECM (four coordinates: two
+/// directions at its roll frame) against the closed form `J·(JᵀJ)⁻¹·τ`, the PSM Si
+/// without its instrument (three coordinates: three directions), and the PSM
+/// with its tool tip at the remote centre of motion (insertion l_RCC − l_tool = 1.56
+/// cm), where the yaw and pitch do not move the tip and one force across the shaft is
+/// lost.
+#[test]
+fn unsensed_directions_are_reported_not_estimated() {
+    let f = [1.5, -0.7, 2.2, 0.03, -0.05, 0.011];
+    // ECM.
+    let ecm = Model::builtin("ecm").unwrap();
+    let roll = wrench_frame(&ecm, "roll").unwrap();
+    let q = DMatrix::from_row_slice(2, 4, &[0.3, -0.2, 0.1, 0.5, -0.6, 0.4, 0.2, -1.0]);
+    let tau = torques_of_wrench(&ecm, roll, &q, &f);
+    let w = tip_wrench(&ecm, "roll", &q, &tau, DEFAULT_WRENCH_RCOND).unwrap();
+    let mut ws = Workspace::new(&ecm);
+    for k in 0..2 {
+        assert_eq!(w.rank[k], 4);
+        assert_eq!(w.unsensed_in_base[k].len(), 2);
+        let qk: Vec<f64> = q.row(k).iter().copied().collect();
+        ecm.forward_kinematics(&mut ws, &qk);
+        let j = ecm.frame_jacobian(&ws, roll);
+        let t = DVector::from_iterator(4, tau.row(k).iter().copied());
+        let closed = &j * (j.transpose() * &j).try_inverse().unwrap() * t;
+        for c in 0..6 {
+            assert!(
+                (w.in_base[(k, c)] - closed[c]).abs() < 1e-9,
+                "{k}: {}",
+                w.in_base
+            );
+        }
+        for v in &w.unsensed_in_base[k] {
+            let v = DVector::from_row_slice(v);
+            assert!((v.norm() - 1.0).abs() < 1e-12);
+            assert!((j.transpose() * &v).norm() < 1e-12, "sensed: {v}");
+        }
+    }
+    // The PSM Si without its instrument: three coordinates, three directions at the end
+    // of its insertion stage.
+    let si = Model::builtin("psm_si").unwrap();
+    let end = wrench_frame(&si, "insertion").unwrap();
+    let q = DMatrix::from_row_slice(1, 3, &[0.3, -0.4, 0.12]);
+    let tau = torques_of_wrench(&si, end, &q, &f);
+    let w = tip_wrench(&si, "insertion", &q, &tau, DEFAULT_WRENCH_RCOND).unwrap();
+    assert_eq!((w.rank[0], w.unsensed_in_tip[0].len()), (3, 3));
+    // The PSM at its singular pose: rank 5; the wrench has no component along the lost
+    // direction and explains τ.
+    let psm = Model::builtin("psm").unwrap();
+    let tip = wrench_frame(&psm, "tool_tip").unwrap();
+    let q = DMatrix::from_row_slice(1, 7, &[0.4, -0.3, 0.4318 - 0.4162, 0.7, 0.2, -0.1, 0.3]);
+    let tau = torques_of_wrench(&psm, tip, &q, &f);
+    let w = tip_wrench(&psm, "tool_tip", &q, &tau, DEFAULT_WRENCH_RCOND).unwrap();
+    assert_eq!(w.rank, [5]);
+    let v = DVector::from_row_slice(&w.unsensed_in_base[0][0]);
+    let mut ws = Workspace::new(&psm);
+    let qk: Vec<f64> = q.row(0).iter().copied().collect();
+    psm.forward_kinematics(&mut ws, &qk);
+    let j = psm.frame_jacobian(&ws, tip);
+    assert!((j.transpose() * &v).norm() < 1e-9, "sensed: {v}");
+    // A force with at most the moment of the wrist's lever l_p2y = 9.1 mm (which the
+    // wrist pitch would feel otherwise), across the shaft (the insertion feels along
+    // it): tool_roll's z.
+    let force = Vector3::new(v[0], v[1], v[2]);
+    assert!(v.rows(3, 3).norm() <= 0.0091 * force.norm() + 1e-12, "{v}");
+    let roll = wrench_frame(&psm, "tool_roll").unwrap();
+    let shaft = ws.pose(roll).rotation.column(2).into_owned();
+    assert!(
+        force.dot(&shaft).abs() < 1e-9,
+        "across the shaft: {force} {shaft}"
+    );
+    let got = DVector::from_iterator(6, w.in_base.row(0).iter().copied());
+    assert!(got.dot(&v).abs() < 1e-9);
+    let t = DVector::from_iterator(7, tau.row(0).iter().copied());
+    assert!((j.transpose() * &got - t).norm() < 1e-9);
+    // In the tip's axes, the same direction rotated.
+    let r = ws.pose(tip).rotation;
+    let in_tip = r.transpose() * force;
+    for c in 0..3 {
+        assert!((w.unsensed_in_tip[0][0][c] - in_tip[c]).abs() < 1e-12);
+    }
 }

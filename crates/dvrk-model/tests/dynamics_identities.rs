@@ -377,13 +377,88 @@ fn frame_poses_match_forward_kinematics() {
     }
 }
 
+/// The PSM's `tool_tip` frame is the dVRK's own tool tip (jhu-dvrk/sawIntuitiveResearchKit
+/// at 9e535e6: share/kinematic/PSM.json for yaw, pitch and insertion, share/tool/
+/// LARGE_NEEDLE_DRIVER_400006.json for roll, wrist pitch, wrist yaw and its
+/// tooltip_offset), transcribed here as the controller computes it: the six modified-DH
+/// frames from the measured joints, times tooltip_offset. The model's base lies l_2L2
+/// along the yaw axis (base y) from the dVRK's, the remote centre of motion.
+#[test]
+fn psm_tool_tip_is_the_dvrks() {
+    use nalgebra::Matrix4;
+    let mdh = |alpha: f64, a: f64, theta: f64, d: f64| -> Matrix4<f64> {
+        let (sa, ca, st, ct) = (alpha.sin(), alpha.cos(), theta.sin(), theta.cos());
+        #[rustfmt::skip]
+        let m = Matrix4::new(
+            ct, -st, 0.0, a,
+            st * ca, ct * ca, -sa, -sa * d,
+            st * sa, ct * sa, ca, ca * d,
+            0.0, 0.0, 0.0, 1.0,
+        );
+        m
+    };
+    #[rustfmt::skip]
+    let tooltip_offset = Matrix4::<f64>::new(
+        0.0, -1.0, 0.0, 0.0,
+        0.0, 0.0, 1.0, 0.0,
+        -1.0, 0.0, 0.0, 0.0,
+        0.0, 0.0, 0.0, 1.0,
+    );
+    let h = std::f64::consts::FRAC_PI_2;
+    for name in ["psm", "psm_simplified"] {
+        let model = builtin(name);
+        let tip = model
+            .frame_names()
+            .iter()
+            .position(|f| f == "tool_tip")
+            .unwrap();
+        let mut rng = Rng::new(11);
+        let mut ws = Workspace::new(&model);
+        for _ in 0..10 {
+            let (q, _, _) = random_state(&model, &mut rng);
+            let qd = &model.measured.coupling * DVector::from_column_slice(&q);
+            // (alpha, A, theta, D) per joint: yaw, pitch, insertion, roll, wrist pitch,
+            // wrist yaw (the JSON's 1.5708 is pi/2).
+            let chain = [
+                (h, 0.0, qd[0] + h, 0.0),
+                (-h, 0.0, qd[1] - h, 0.0),
+                (h, 0.0, 0.0, qd[2] - 0.4318),
+                (0.0, 0.0, qd[3], 0.4162),
+                (-h, 0.0, qd[4] - h, 0.0),
+                (-h, 0.0091, qd[5] - h, 0.0),
+            ];
+            let mut dvrk: Matrix4<f64> = chain
+                .iter()
+                .fold(Matrix4::<f64>::identity(), |t, &(al, a, th, d)| {
+                    t * mdh(al, a, th, d)
+                })
+                * tooltip_offset;
+            dvrk[(1, 3)] += 0.516; // l_2L2
+            model.forward_kinematics(&mut ws, &q);
+            let p = ws.pose(tip);
+            for r in 0..3 {
+                for c in 0..3 {
+                    assert!(
+                        (p.rotation[(r, c)] - dvrk[(r, c)]).abs() < 1e-12,
+                        "{name} {q:?}"
+                    );
+                }
+                assert!(
+                    (p.translation[r] - dvrk[(r, 3)]).abs() < 1e-12,
+                    "{name} {q:?}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn psm_constraint_jacobian() {
     let model = builtin("psm");
     let a = model.constraint_jacobian();
-    assert_eq!(a.shape(), (16, 7));
+    assert_eq!(a.shape(), (18, 7));
     #[rustfmt::skip]
-    let expect = DMatrix::from_row_slice(16, 7, &[
+    let expect = DMatrix::from_row_slice(18, 7, &[
         1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,       // 1 yaw
         0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0,       // 2 pitch_intermediate
         0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,       // 3 pitch_back (fixed)
@@ -400,6 +475,8 @@ fn psm_constraint_jacobian() {
         0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0,       // 14 motor_6
         0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,       // 15 motor_7
         0.0, 0.0, 0.0, 0.0, 0.0, -1.2178, 1.2178, // 16 jaw_coupling_friction
+        0.0, 0.0, 0.0, 0.0, -0.8306, 0.6089, 0.6089, // 17 wrist_yaw (the jaws' mean)
+        0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0,       // 18 tool_tip (fixed)
     ]);
     let err = (&a - &expect).abs().max();
     assert!(err < 1e-14, "A =\n{a}\nexpected\n{expect}");

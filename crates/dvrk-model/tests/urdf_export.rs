@@ -331,11 +331,11 @@ fn generate_mode_psm() {
     let (urdf, robot) = generate_round_trip(&model, 31);
     // No frame is driven by q5 alone (1.0186*q5) and the parallelogram mimics q2 outside
     // the subtree of the frame that turns by q2: every coordinate is a massless
-    // `qk_coordinate` link at the root, every moving frame a mimic. 16 frames + base,
+    // `qk_coordinate` link at the root, every moving frame a mimic. 18 frames + base,
     // wrist_yaw_1, wrist_yaw_2 and jaw_coupling_friction depend on two coordinates (+1
-    // massless link each), 7 coordinate links, base_frames; pitch_back and q7_frames
-    // are fixed.
-    assert_counts(&robot, 28, 27, 18, 2);
+    // massless link each) and wrist_yaw on three (+2), 7 coordinate links, base_frames;
+    // pitch_back, tool_tip and q7_frames are fixed.
+    assert_counts(&robot, 32, 31, 21, 3);
     for k in 1..=7 {
         let j = joint(&robot, &format!("q{k}"));
         assert_eq!(j.child.link, format!("q{k}_coordinate"));
@@ -372,9 +372,9 @@ fn generate_mode_psm() {
 fn generate_mode_psm_simplified() {
     let model = Model::builtin("psm_simplified").unwrap();
     let (_, robot) = generate_round_trip(&model, 41);
-    // 14 frames + base, the same three two-coordinate frames, 7 coordinate links and
-    // base_frames.
-    assert_counts(&robot, 26, 25, 16, 2);
+    // 16 frames + base, the same three two-coordinate frames and three-coordinate one,
+    // 7 coordinate links and base_frames.
+    assert_counts(&robot, 30, 29, 19, 3);
 }
 
 #[test]

@@ -5,7 +5,8 @@
 use std::sync::Arc;
 
 use dvrk_ident::residual::{
-    external_torque as residual_of, ResidualOptions, DEFAULT_OBSERVER_GAIN,
+    external_torque as residual_of, ResidualOptions, TipWrench, DEFAULT_OBSERVER_GAIN,
+    DEFAULT_WRENCH_RCOND, WRENCH_COMPONENTS,
 };
 use dvrk_model::{Model, MomentumObserver, Workspace};
 use numpy::PyArrayDyn;
@@ -22,6 +23,7 @@ use crate::robot::{params_of, Params};
 // The signatures' defaults are written out (Python's signature shows a literal, not a
 // constant's name): the library's default gain.
 const _: () = assert!(DEFAULT_OBSERVER_GAIN == 20.0);
+const _: () = assert!(DEFAULT_WRENCH_RCOND == 1e-6);
 
 /// The joint torques the identified model does not explain in ``data`` (a
 /// :class:`JointLog`), as ``dvrk-ident residual RESULT LOG``: per processed sample
@@ -38,7 +40,12 @@ const _: () = assert!(DEFAULT_OBSERVER_GAIN == 20.0);
 /// - ``**options``: the processing options of :func:`prepare` (``cutoff``,
 ///   ``filter_order``, ``filter_torque``, ``trim``, ``decimate``, ``min_speed``,
 ///   ``resample``) replace the result's, as the command's processing flags;
-/// - ``robot``: the :class:`Model` to evaluate (default: the result's).
+/// - ``robot``: the :class:`Model` to evaluate (default: the result's);
+/// - ``wrench``: a frame of the robot (the PSM's ``"tool_tip"``), as ``--wrench``: the
+///   residual also as a Cartesian wrench at the frame's origin, the least-squares
+///   solution of ``tau_ext = J(q)ᵀ·F`` (model coordinates), the directions the joints
+///   cannot sense at a pose reported, not estimated; ``wrench_rcond`` (default 1e-6) its
+///   relative threshold on the singular values of ``Jᵀ``, as ``--wrench-rcond``.
 ///
 /// Returns a dict: ``source``, ``joints`` (names), ``time`` (s, ``(N,)``),
 /// ``residual`` and ``observer`` (``(N, dof)``), ``rms`` (of ``residual`` per joint),
@@ -48,12 +55,21 @@ const _: () = assert!(DEFAULT_OBSERVER_GAIN == 20.0);
 /// ``observer.<joint>`` columns whose ``attrs`` hold ``source``, ``joints``, ``rms``,
 /// ``noise_floor`` and ``observer_gain``.
 ///
+/// With ``wrench``, the dict's ``wrench`` is a dict: ``frame``, ``rcond``, ``components``
+/// (``fx fy fz mx my mz``: force N, moment N·m about the frame's origin), ``base``
+/// ``(N, 6)`` in the base frame's axes, ``tip`` ``(N, 6)`` in the frame's own axes,
+/// ``rank`` ``(N,)`` (directions sensed, out of 6), ``unsensed_base`` and
+/// ``unsensed_tip`` (per sample a ``(6 − rank, 6)`` array of unit directions along which
+/// the wrench is unknown; ``wrench["base"]`` has no component along them); without it,
+/// ``None``. The DataFrame adds ``wrench_base.<c>``, ``wrench_tip.<c>`` and
+/// ``wrench_rank`` columns and ``attrs["wrench_frame"]``.
+///
 /// Example::
 ///
 ///     >>> r = di.external_torque(result, di.read_log("loaded.mcap", psm))
 ///     >>> r["rms"] / r["noise_floor"]   # well above 1: something the fit did not see
 #[pyfunction]
-#[pyo3(signature = (result, data, robot = None, *, observer_gain = 20.0, joints = None, as_dataframe = false, **options))]
+#[pyo3(signature = (result, data, robot = None, *, observer_gain = 20.0, joints = None, wrench = None, wrench_rcond = 1e-6, as_dataframe = false, **options))]
 #[allow(clippy::too_many_arguments)]
 pub fn external_torque<'py>(
     py: Python<'py>,
@@ -62,6 +78,8 @@ pub fn external_torque<'py>(
     robot: Option<&Bound<'py, ModelPy>>,
     observer_gain: f64,
     joints: Option<&str>,
+    wrench: Option<String>,
+    wrench_rcond: f64,
     as_dataframe: bool,
     options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
@@ -73,6 +91,8 @@ pub fn external_torque<'py>(
     let options = ResidualOptions {
         joints: joints.map(parse_joints).transpose()?,
         observer_gain,
+        wrench,
+        wrench_rcond,
     };
     let traj = data.get().traj.clone();
     let res = background(py, move || {
@@ -91,6 +111,23 @@ pub fn external_torque<'py>(
             &res.joints,
             &res.observer,
         ));
+        let components: Vec<String> = WRENCH_COMPONENTS.map(String::from).into();
+        if let Some(w) = &res.wrench {
+            cols.extend(crate::frame::matrix_columns(
+                "wrench_base",
+                &components,
+                &w.in_base,
+            ));
+            cols.extend(crate::frame::matrix_columns(
+                "wrench_tip",
+                &components,
+                &w.in_tip,
+            ));
+            cols.push((
+                "wrench_rank".into(),
+                w.rank.iter().map(|&r| r as f64).collect(),
+            ));
+        }
         let df = crate::frame::dataframe(py, cols)?;
         let attrs = df.getattr("attrs")?;
         attrs.set_item("source", &res.source)?;
@@ -101,6 +138,7 @@ pub fn external_torque<'py>(
             res.noise_floor.clone().map(|f| array(py, f, &[n])),
         )?;
         attrs.set_item("observer_gain", observer_gain)?;
+        attrs.set_item("wrench_frame", res.wrench.as_ref().map(|w| w.frame.clone()))?;
         return Ok(df);
     }
     let out = PyDict::new(py);
@@ -113,7 +151,39 @@ pub fn external_torque<'py>(
     out.set_item("rms", array(py, res.rms, &[n]))?;
     out.set_item("noise_floor", res.noise_floor.map(|f| array(py, f, &[n])))?;
     out.set_item("observer_gain", observer_gain)?;
+    let wrench = res
+        .wrench
+        .as_ref()
+        .map(|w| wrench_dict(py, w))
+        .transpose()?;
+    out.set_item("wrench", wrench)?;
     Ok(out.into_any())
+}
+
+/// The `wrench` entry of [`external_torque`]'s dict.
+fn wrench_dict<'py>(py: Python<'py>, w: &TipWrench) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("frame", &w.frame)?;
+    d.set_item("rcond", w.rcond)?;
+    d.set_item("components", WRENCH_COMPONENTS.to_vec())?;
+    d.set_item("base", matrix(py, &w.in_base))?;
+    d.set_item("tip", matrix(py, &w.in_tip))?;
+    let rank: Vec<usize> = w.rank.clone();
+    d.set_item("rank", numpy::PyArray1::from_vec(py, rank))?;
+    let directions = |all: &[Vec<[f64; 6]>]| {
+        all.iter()
+            .map(|dirs| {
+                array(
+                    py,
+                    dirs.iter().flatten().copied().collect(),
+                    &[dirs.len(), 6],
+                )
+            })
+            .collect::<Vec<_>>()
+    };
+    d.set_item("unsensed_base", directions(&w.unsensed_in_base))?;
+    d.set_item("unsensed_tip", directions(&w.unsensed_in_tip))?;
+    Ok(d)
 }
 
 /// The generalized-momentum observer of ``dvrk_model`` (De Luca & Mattone 2003), as a

@@ -11,7 +11,10 @@ use dvrk_ident::joint_log::Coordinates;
 use dvrk_ident::log::mcap;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::residual::residual_report;
-use dvrk_ident::residual::{external_torque, ResidualOptions, DEFAULT_OBSERVER_GAIN};
+use dvrk_ident::residual::{
+    external_torque, ResidualOptions, TipWrench, DEFAULT_OBSERVER_GAIN, DEFAULT_WRENCH_RCOND,
+    WRENCH_COMPONENTS,
+};
 use dvrk_ident::settings::Joints;
 use serde_json::json;
 
@@ -33,6 +36,17 @@ pub struct Args {
     /// Gain of the momentum observer (1/s, every joint; its time constant is 1/gain)
     #[arg(long, default_value_t = DEFAULT_OBSERVER_GAIN, value_name = "PER_S", help_heading = MODEL)]
     pub observer_gain: f64,
+    /// Also express the residual as a Cartesian wrench (force N, moment N·m) at this
+    /// frame's origin (the PSM's `tool_tip`), in the base frame's and in its own axes:
+    /// the least-squares solution of τ_ext = Jᵀ·F, the directions the joints cannot
+    /// sense at a pose reported, not estimated
+    #[arg(long, value_name = "FRAME", help_heading = MODEL)]
+    pub wrench: Option<String>,
+    /// Relative threshold of --wrench: a wrench direction whose joint torques are below
+    /// this fraction of the best-sensed direction's is unsensed (raise it to drop the
+    /// weakly sensed ones near a singular pose)
+    #[arg(long, default_value_t = DEFAULT_WRENCH_RCOND, value_name = "RATIO", help_heading = MODEL)]
+    pub wrench_rcond: f64,
     // The processing flags default to the result's own settings, as for validate.
     // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
     // `log_args`: they read `--resample`, which `log_args` declares and takes.
@@ -53,8 +67,14 @@ pub struct Args {
     /// /residual_observer); one log only
     #[arg(long, value_name = "FILE.csv|FILE.mcap", help_heading = OUTPUT)]
     pub observer_out: Option<String>,
+    /// Write the --wrench per processed sample as CSV: time, fx_base … mz_base (base
+    /// frame axes), fx_tip … mz_tip (the frame's own axes), rank (the directions sensed,
+    /// out of 6); one log only
+    #[arg(long, value_name = "FILE.csv", requires = "wrench", help_heading = OUTPUT)]
+    pub wrench_out: Option<String>,
     /// Write a report into this folder: report.html with each log's residual and
-    /// observer per joint against the fit's noise floor, and the figures as SVG and PNG
+    /// observer per joint against the fit's noise floor (and the --wrench over time),
+    /// and the figures as SVG and PNG
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub report: Option<String>,
     /// Print JSON
@@ -67,6 +87,7 @@ pub fn run(args: Args) -> Result<()> {
         &[
             ("--out", args.out.as_deref()),
             ("--observer-out", args.observer_out.as_deref()),
+            ("--wrench-out", args.wrench_out.as_deref()),
         ],
         &[("--report", args.report.as_deref())],
         &super::inputs(
@@ -77,11 +98,18 @@ pub fn run(args: Args) -> Result<()> {
             ],
         ),
     )?;
-    if (args.out.is_some() || args.observer_out.is_some()) && args.logs.len() != 1 {
+    if (args.out.is_some() || args.observer_out.is_some() || args.wrench_out.is_some())
+        && args.logs.len() != 1
+    {
         bail!(
-            "--out and --observer-out take one log ({} given)",
+            "--out, --observer-out and --wrench-out take one log ({} given)",
             args.logs.len()
         );
+    }
+    if let Some(path) = &args.wrench_out {
+        if is_mcap(path) {
+            bail!("--wrench-out {path}: the wrench is written as CSV (FILE.csv)");
+        }
     }
     let LoadedResult {
         result,
@@ -105,6 +133,8 @@ pub fn run(args: Args) -> Result<()> {
     let options = ResidualOptions {
         joints: args.joints.joints,
         observer_gain: args.observer_gain,
+        wrench: args.wrench.clone(),
+        wrench_rcond: args.wrench_rcond,
     };
     let read = args.log_args.read_options_for(
         &model,
@@ -149,6 +179,12 @@ pub fn run(args: Args) -> Result<()> {
                 result.settings.joints.name()
             );
         }
+        if let Some(w) = &r.wrench {
+            wrench_text(&mut text, w);
+            if let Some(out) = &args.wrench_out {
+                outputs.add(Path::new(out), w.to_csv(&r.time).into_bytes())?;
+            }
+        }
         for (out, observer, topic) in [
             (&args.out, false, "/residual"),
             (&args.observer_out, true, "/residual_observer"),
@@ -170,6 +206,15 @@ pub fn run(args: Args) -> Result<()> {
             "rms": r.rms,
             "observer_rms": observer_rms,
             "noise_floor": r.noise_floor,
+            "wrench": r.wrench.as_ref().map(|w| json!({
+                "frame": w.frame,
+                "rcond": w.rcond,
+                "components": WRENCH_COMPONENTS,
+                "rms_base": TipWrench::rms(&w.in_base),
+                "rms_tip": TipWrench::rms(&w.in_tip),
+                "min_rank": w.min_rank(),
+                "rank_deficient_samples": w.rank_deficient_samples(),
+            })),
         }));
         residuals.push(r);
     }
@@ -195,6 +240,42 @@ pub fn run(args: Args) -> Result<()> {
         )
     } else {
         emit_summary(&text, stdout_taken)
+    }
+}
+
+/// The wrench's RMS per component in both frames' axes and where it was not fully sensed.
+fn wrench_text(text: &mut String, w: &TipWrench) {
+    let _ = writeln!(text, "wrench at {} (RMS; force N, moment N·m):", w.frame);
+    let _ = writeln!(
+        text,
+        "{:<6} {}",
+        "axes",
+        WRENCH_COMPONENTS.map(|c| format!("{c:>10}")).join(" ")
+    );
+    for (axes, m) in [("base", &w.in_base), ("tip", &w.in_tip)] {
+        let rms = TipWrench::rms(m);
+        let _ = writeln!(
+            text,
+            "{axes:<6} {}",
+            rms.iter()
+                .map(|v| format!("{v:>10.5}"))
+                .collect::<Vec<_>>()
+                .join(" ")
+        );
+    }
+    match w.rank_deficient_samples() {
+        0 => {
+            let _ = writeln!(text, "all six directions sensed at every sample");
+        }
+        k => {
+            let _ = writeln!(
+                text,
+                "{k} of {} samples sense fewer than six directions (fewest: {}); the \
+                 wrench there has no component along the unsensed ones",
+                w.rank.len(),
+                w.min_rank()
+            );
+        }
     }
 }
 

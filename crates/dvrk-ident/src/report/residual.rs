@@ -1,14 +1,15 @@
 //! The page of `dvrk-ident residual --report DIR`: per log, the torque the model does not
 //! explain per joint over time (`τ_measured − τ_model` and the momentum observer's
-//! estimate) against the fit's noise floor, and a table of their RMS.
+//! estimate) against the fit's noise floor, and a table of their RMS; with `--wrench`,
+//! the wrench at the frame over time in the frame's own axes and its RMS per component.
 
 use std::fmt::Write as _;
 
 use super::html::{escape, inline_svg, number, STYLE};
 use super::plot::{colors, Panel, PanelGrid, Series};
-use super::{render_both, Report, ReportError};
+use super::{render_both, RenderedFigure, Report, ReportError};
 use crate::fit::JointMap;
-use crate::residual::Residual;
+use crate::residual::{Residual, TipWrench, WRENCH_COMPONENTS};
 
 /// Multiple of the noise floor the page counts samples beyond: about 5 % of a Gaussian
 /// residual whose RMS is the floor lies beyond twice it.
@@ -18,8 +19,7 @@ pub const FLOOR_MULTIPLE: f64 = 2.0;
 /// sample): `τ_measured − τ_model`, the observer's estimate, and the noise floor as
 /// dashed lines at `±floor` (none without one).
 pub fn residual_figure(joints: &JointMap, label: &str, r: &Residual, gain: f64) -> PanelGrid {
-    let t0 = r.time.first().copied().unwrap_or(0.0);
-    let t: Vec<f64> = r.time.iter().map(|t| t - t0).collect();
+    let t = since_start(&r.time);
     let panels = (0..r.joints.len())
         .map(|j| {
             let floor = r.noise_floor.as_ref().map(|f| f[j]);
@@ -62,13 +62,60 @@ pub fn residual_figure(joints: &JointMap, label: &str, r: &Residual, gain: f64) 
             }
         })
         .collect();
+    one_column(
+        format!("{}: τ_measured − τ_model, {label}", joints.robot),
+        200,
+        panels,
+    )
+}
+
+/// Times (s) from the first one: the figures' x axis.
+fn since_start(time: &[f64]) -> Vec<f64> {
+    let t0 = time.first().copied().unwrap_or(0.0);
+    time.iter().map(|t| t - t0).collect()
+}
+
+/// The panels one below the other, each 1100 px wide and `height` px high.
+fn one_column(title: String, height: u32, panels: Vec<Panel>) -> PanelGrid {
     PanelGrid {
-        title: format!("{}: τ_measured − τ_model, {label}", joints.robot),
+        title,
         columns: 1,
-        panel_size: (1100, 200),
+        panel_size: (1100, height),
         column_weights: Vec::new(),
         panels,
     }
+}
+
+/// The wrench of one log over time (s from the first processed sample) in the tip
+/// frame's axes: the force (N) and the moment (N·m), x, y, z each.
+pub fn wrench_figure(robot: &str, label: &str, time: &[f64], w: &TipWrench) -> PanelGrid {
+    let t = since_start(time);
+    let axes = [colors::AXIS_X, colors::AXIS_Y, colors::AXIS_Z];
+    let panels = [("force", "N", 0), ("moment", "N·m", 3)]
+        .into_iter()
+        .map(|(what, unit, first)| Panel {
+            title: format!("{what} at {} in its own axes", w.frame),
+            x_label: "time (s)".into(),
+            y_label: format!("{what} ({unit})"),
+            series: (0..3)
+                .map(|c| {
+                    Series::line(
+                        WRENCH_COMPONENTS[first + c],
+                        axes[c],
+                        t.clone(),
+                        w.in_tip.column(first + c).iter().copied().collect(),
+                    )
+                })
+                .collect(),
+            hlines: Vec::new(),
+            vspans: Vec::new(),
+        })
+        .collect();
+    one_column(
+        format!("{robot}: wrench at {}, {label}", w.frame),
+        240,
+        panels,
+    )
 }
 
 /// The report of `residuals` (one per log, in `joints`): a figure per log (SVG and PNG,
@@ -162,13 +209,46 @@ pub fn residual_report(
                  joint, {label}; dashed: ± the fit's noise floor."
             ),
         )?;
-        let _ = write!(
-            o,
-            "<figure>{}<figcaption>{}</figcaption></figure>",
-            inline_svg(&figure.svg),
-            escape(&figure.caption)
-        );
-        figures.push(figure);
+        embed(&mut o, &mut figures, figure);
+        if let Some(w) = &r.wrench {
+            let (base, tip) = (TipWrench::rms(&w.in_base), TipWrench::rms(&w.in_tip));
+            let _ = write!(
+                o,
+                "<p>The residual as a wrench at <code>{frame}</code> (least squares of \
+                 τ_ext = Jᵀ·F; force N, moment N·m about the frame's origin): {sensed}</p>\
+                 <table><tr><th class=l>component</th><th>RMS, base axes</th>\
+                 <th>RMS, {frame} axes</th><th class=l>unit</th></tr>",
+                frame = escape(&w.frame),
+                sensed = match w.rank_deficient_samples() {
+                    0 => "all six directions sensed at every sample.".to_string(),
+                    n => format!(
+                        "{n} of {} samples sense fewer than six directions (fewest {}); the \
+                         wrench has no component along the others there.",
+                        w.rank.len(),
+                        w.min_rank()
+                    ),
+                },
+            );
+            for (c, name) in WRENCH_COMPONENTS.iter().enumerate() {
+                let _ = write!(
+                    o,
+                    "<tr><td class=l>{name}</td><td>{}</td><td>{}</td><td class=l>{}</td></tr>",
+                    number(base[c]),
+                    number(tip[c]),
+                    if c < 3 { "N" } else { "N·m" }
+                );
+            }
+            o.push_str("</table>");
+            let figure = render_both(
+                &wrench_figure(&joints.robot, &label, &r.time, w),
+                &format!("wrench_{}", k + 1),
+                &format!(
+                    "The wrench at {} in its own axes (x red, y green, z blue), {label}.",
+                    w.frame
+                ),
+            )?;
+            embed(&mut o, &mut figures, figure);
+        }
     }
     o.push_str("</body></html>\n");
     Ok(Report {
@@ -176,4 +256,15 @@ pub fn residual_report(
         logs: Vec::new(),
         html: o,
     })
+}
+
+/// Writes `figure` into the page `o` (inline SVG and caption) and keeps it for the files.
+fn embed(o: &mut String, figures: &mut Vec<RenderedFigure>, figure: RenderedFigure) {
+    let _ = write!(
+        o,
+        "<figure>{}<figcaption>{}</figcaption></figure>",
+        inline_svg(&figure.svg),
+        escape(&figure.caption)
+    );
+    figures.push(figure);
 }

@@ -61,9 +61,23 @@ pub struct ObservationState {
 /// coupling, gravity, every frame's name, parent, joint, joint value, fixed transforms
 /// and elements (friction with its Stribeck velocity, motor inertia, spring deflection,
 /// known force), and the parameter names. Bounds, limits and nominal values are left
-/// out: they do not change an observation. Two loads of the same description hash the
-/// same on any machine that parses numbers and evaluates `sin`/`cos` alike.
+/// out: they do not change an observation, and so are the frames with no parameter in
+/// their subtree (a tool tip: kinematics only), so that adding one keeps the states
+/// observed before. Two loads of the same description hash the same on any machine
+/// that parses numbers and evaluates `sin`/`cos` alike.
 pub fn model_hash(model: &Model) -> String {
+    // Frames (1-based) with a parameter in their subtree: those with a link or an
+    // element, and their ancestors.
+    let mut carries = vec![false; model.frames.len() + 1];
+    for (i, f) in model.frames.iter().enumerate() {
+        if f.inertia.is_some() || !f.elements.is_empty() {
+            let mut k = i + 1;
+            while k != 0 && !carries[k] {
+                carries[k] = true;
+                k = model.frames[k - 1].parent;
+            }
+        }
+    }
     let mut h = Sha256::new();
     let mut text = |t: &str| {
         h.update((t.len() as u64).to_le_bytes());
@@ -79,7 +93,7 @@ pub fn model_hash(model: &Model) -> String {
     let mut numbers: Vec<f64> = model.measured.coupling.iter().copied().collect();
     numbers.extend(model.gravity.iter());
     let mut words: Vec<String> = Vec::new();
-    for f in &model.frames {
+    for (f, _) in model.frames.iter().zip(&carries[1..]).filter(|(_, &c)| c) {
         words.push(f.name.clone());
         words.push(format!("{}:{:?}", f.parent, f.kind));
         f.value.push_numbers(&mut numbers);

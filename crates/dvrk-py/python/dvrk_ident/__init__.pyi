@@ -499,6 +499,8 @@ def external_torque(
     *,
     observer_gain: float = 20.0,
     joints: Optional[str] = None,
+    wrench: Optional[str] = None,
+    wrench_rcond: float = 1e-6,
     as_dataframe: bool = False,
     # The fit options (dvrk_ident._options["external_torque"], the library's order).
     cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
@@ -514,7 +516,13 @@ def external_torque(
     it). A dict ``{source, joints, time (N,), residual (N, dof), observer (N, dof),
     rms (dof,), noise_floor (dof,) or None, observer_gain}``; with ``as_dataframe``, a
     DataFrame of ``time``, ``residual.<joint>``, ``observer.<joint>`` (the rest in its
-    ``attrs``)."""
+    ``attrs``). With ``wrench`` (a frame, e.g. ``"tool_tip"``; ``--wrench``), its
+    ``wrench`` entry is ``{frame, rcond, components, base (N, 6), tip (N, 6), rank (N,),
+    unsensed_base, unsensed_tip}``: the least-squares wrench of ``tau_ext = Jᵀ·F`` at the
+    frame's origin (force N, moment N·m) in the base frame's and the frame's own axes,
+    the directions sensed per sample, and per sample the ``(6 − rank, 6)`` unsensed
+    directions (``None`` without ``wrench``); the DataFrame adds ``wrench_base.<c>``,
+    ``wrench_tip.<c>`` and ``wrench_rank``."""
 
 class MomentumObserver:
     """The generalized-momentum observer (real time): ``update(q, dq, tau, dt)`` returns
