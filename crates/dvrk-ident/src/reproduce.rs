@@ -302,6 +302,9 @@ fn options(settings: &FitSettings) -> Options {
     if let Some(v) = settings.dahl_sigma {
         given.push(("dahl", Value::Num(v)));
     }
+    if let Some(k) = settings.position_torque_order {
+        given.push(("position_torque", Value::Int(k)));
+    }
     if let Some(b) = settings.bounds {
         given.push(("bounds", Value::Name(b.name().into())));
     }

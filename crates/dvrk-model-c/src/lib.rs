@@ -127,6 +127,10 @@ struct ResultSettings {
     /// workspace of dvrk-model, and in `dvrk-ident model --torque`).
     #[serde(default)]
     dahl_sigma: Option<f64>,
+    /// The position-dependent torques of the fit (`--position-torque`): their
+    /// coefficients are part of the parameter vector.
+    #[serde(default)]
+    position_torque_order: Option<usize>,
     /// The arm's mounting pitch (degrees), which sets gravity in the base frame.
     #[serde(default)]
     mounting_pitch_deg: Option<f64>,
@@ -163,6 +167,11 @@ impl DvrkModel {
         if let Some(sigma) = doc.settings.dahl_sigma {
             model = model
                 .with_dahl(sigma)
+                .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if let Some(order) = doc.settings.position_torque_order {
+            model = model
+                .with_position_torque(order)
                 .map_err(|e| format!("{shown}: {e}"))?;
         }
         if let Some(pitch) = doc.settings.mounting_pitch_deg {

@@ -31,6 +31,9 @@ pub enum ParamKind {
     MonotoneFriction,
     /// Dahl friction `Fd` (N·m or N; see [`Dahl`](crate::Dahl)).
     Dahl,
+    /// A coefficient of a position-dependent torque (N·m or N; see
+    /// [`PositionTorque`](crate::PositionTorque)).
+    PositionTorque,
 }
 
 impl ParamKind {
@@ -44,7 +47,8 @@ impl ParamKind {
             | ParamKind::Offset
             | ParamKind::Stribeck
             | ParamKind::MonotoneFriction
-            | ParamKind::Dahl => UnitClass::Force,
+            | ParamKind::Dahl
+            | ParamKind::PositionTorque => UnitClass::Force,
             ParamKind::Viscous => UnitClass::Viscous,
             ParamKind::QuadraticViscous => UnitClass::QuadraticViscous,
             ParamKind::MotorInertia => UnitClass::MotorInertia,

@@ -89,6 +89,10 @@ pub fn arg(s: Setting) -> Arg {
         Setting::SdpRegularization => a.value_parser(f64).value_name("W").help_heading(ESTIMATOR),
         Setting::Stribeck => a.value_parser(f64).value_name("VS").help_heading(MODEL),
         Setting::Dahl => a.value_parser(f64).value_name("SIGMA").help_heading(MODEL),
+        Setting::PositionTorque => a
+            .value_parser(usize)
+            .value_name("ORDER")
+            .help_heading(MODEL),
         Setting::MountingPitch => a
             .value_parser(f64)
             .value_name("DEG")
