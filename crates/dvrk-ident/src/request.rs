@@ -274,6 +274,9 @@ impl Overrides {
             if !given.contains(&Setting::PositionTorque) {
                 o.position_torque_order = self.position_torque_order;
             }
+            if !given.contains(&Setting::LoadFriction) {
+                o.load_friction = self.load_friction;
+            }
             if !given.contains(&Setting::Delay) {
                 o.delay = self.delay.clone();
             }
@@ -327,6 +330,9 @@ impl Overrides {
         }
         if let Some(k) = self.position_torque_order {
             s.position_torque_order = Some(k);
+        }
+        if let Some(l) = self.load_friction {
+            s.load_friction = l;
         }
         if let Some(p) = self.mounting_pitch_deg {
             s.mounting_pitch_deg = Some(p);
@@ -404,7 +410,13 @@ impl Overrides {
             .into_iter()
             .filter(|s| {
                 Setting::OBSERVE.contains(s)
-                    || matches!(s, Setting::Delay | Setting::Dahl | Setting::PositionTorque)
+                    || matches!(
+                        s,
+                        Setting::Delay
+                            | Setting::Dahl
+                            | Setting::PositionTorque
+                            | Setting::LoadFriction
+                    )
             })
             .collect()
     }

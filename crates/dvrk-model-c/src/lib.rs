@@ -131,6 +131,10 @@ struct ResultSettings {
     /// coefficients are part of the parameter vector.
     #[serde(default)]
     position_torque_order: Option<usize>,
+    /// The load friction of the fit (`--load-friction`): predicted with its load, as the
+    /// fit's metrics do ([`Model::loaded_inverse_dynamics`]).
+    #[serde(default)]
+    load_friction: bool,
     /// The arm's mounting pitch (degrees), which sets gravity in the base frame.
     #[serde(default)]
     mounting_pitch_deg: Option<f64>,
@@ -173,6 +177,9 @@ impl DvrkModel {
             model = model
                 .with_position_torque(order)
                 .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if doc.settings.load_friction {
+            model = model.with_load_friction();
         }
         if let Some(pitch) = doc.settings.mounting_pitch_deg {
             model.gravity =
@@ -684,8 +691,9 @@ unsafe fn dynamics(
             Dynamics::Whole => &m.params,
             Dynamics::Links => &m.link_params,
         };
+        // Load friction (if the fit had it) with its load predicted, as in the metrics.
         m.model
-            .inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
+            .loaded_inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
         if which == Dynamics::Whole {
             m.model.add_known_forces(q, &mut w.vector);
         }

@@ -34,6 +34,9 @@ pub enum ParamKind {
     /// A coefficient of a position-dependent torque (N·m or N; see
     /// [`PositionTorque`](crate::PositionTorque)).
     PositionTorque,
+    /// Load-dependent Coulomb friction `Fl`, the ratio of friction to the coordinate's
+    /// torque (dimensionless; see [`LoadFriction`](crate::LoadFriction)).
+    LoadFriction,
 }
 
 impl ParamKind {
@@ -53,6 +56,7 @@ impl ParamKind {
             ParamKind::QuadraticViscous => UnitClass::QuadraticViscous,
             ParamKind::MotorInertia => UnitClass::MotorInertia,
             ParamKind::Spring => UnitClass::Stiffness,
+            ParamKind::LoadFriction => UnitClass::Ratio,
         }
     }
 }
@@ -220,4 +224,6 @@ pub enum UnitClass {
     MotorInertia,
     /// Spring stiffness, N·m/rad or N/m (per unit of deflection).
     Stiffness,
+    /// A dimensionless ratio: load-dependent friction per unit of load.
+    Ratio,
 }

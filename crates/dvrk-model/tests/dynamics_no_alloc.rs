@@ -114,6 +114,11 @@ fn check_model(model: &Model, name: &str, params: Vec<f64>) {
     report.push(("inverse_dynamics, new parameters", a));
     let a = allocations(|| model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h));
     report.push(("regressor_into", a));
+    let a = allocations(|| model.set_load(&mut ws, &ddq));
+    report.push(("set_load", a));
+    let a =
+        allocations(|| model.loaded_inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau));
+    report.push(("loaded_inverse_dynamics", a));
     let a = allocations(|| model.add_known_forces(&q, &mut tau));
     report.push(("add_known_forces", a));
     let a = allocations(|| model.forward_kinematics(&mut ws, &q));
@@ -145,7 +150,7 @@ fn psm_real_time_calls_do_not_allocate() {
 }
 
 /// The PSM with every element the fit's flags add (Stribeck, Dahl, position torque of
-/// order 2): their parameters appended after the built-in ones.
+/// order 2, load friction): their parameters appended after the built-in ones.
 #[test]
 fn psm_with_the_flags_elements_does_not_allocate() {
     let psm = Model::builtin("psm").unwrap();
@@ -154,7 +159,8 @@ fn psm_with_the_flags_elements_does_not_allocate() {
         .with_stribeck(0.3)
         .and_then(|m| m.with_dahl(20.0))
         .and_then(|m| m.with_position_torque(2))
-        .unwrap();
+        .unwrap()
+        .with_load_friction();
     params.resize(model.n_params(), 0.05);
     check_model(&model, "psm with elements", params);
 }

@@ -639,3 +639,101 @@ fn position_torque_refuses_bad_input() {
         once.n_params()
     );
 }
+
+/// A pendulum with friction and load friction (`Fl1` after `Fc1 Fv1 Fo1`).
+fn load_pendulum() -> Model {
+    load(&support::models::one_link_with(
+        "friction = true\nload_friction = true\n",
+    ))
+}
+
+/// The column is `|τ_measured|·sign(q̇)` with the load given (`Model::set_load`), and
+/// `H·π` equals the inverse dynamics with that load; the prediction
+/// (`Model::loaded_inverse_dynamics`) solves `τ = τ₀ + μ·|τ|·sign(q̇)` exactly and leaves
+/// its `|τ|` as the load, so the inverse dynamics then gives the same torque; the bounds
+/// are `0 ≤ Fl ≤ 1/2`; the description line reads back.
+#[test]
+fn load_friction_closed_form() {
+    let model = load_pendulum();
+    assert_eq!(model.param_names()[13], "Fl1");
+    assert_eq!(model.params[13].kind, ParamKind::LoadFriction);
+    assert_eq!(model.params[13].kind.unit_class(), UnitClass::Ratio);
+    let p = model.n_params();
+    let mut rng = Rng::new(4);
+    let mut pi = random_params(&model, &mut rng);
+    pi[13] = 0.2;
+    let mut ws = Workspace::new(&model);
+    let (mut h, mut tau, mut tau0) = (vec![0.0; p], [0.0], [0.0]);
+    for _ in 0..20 {
+        let q = [rng.uniform(-3.0, 3.0)];
+        let (dq, ddq) = ([rng.uniform(-2.0, 2.0)], [rng.uniform(-2.0, 2.0)]);
+        let measured = [rng.uniform(-2.0, 2.0)];
+        model.set_load(&mut ws, &measured);
+        assert_eq!(ws.load(), [measured[0].abs()]);
+        model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+        near(
+            h[13],
+            measured[0].abs() * dq[0].signum(),
+            1e-15,
+            "column |τ|·sign(q̇)",
+        );
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
+        near(hp, tau[0], 1e-10, "H·π = τ with the measured load");
+        // The prediction: a fixed point of τ = τ₀ + μ·|τ|·sign(q̇).
+        model.loaded_inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let mut without = pi.clone();
+        without[13] = 0.0;
+        model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
+        let fixed = tau0[0] + 0.2 * tau[0].abs() * dq[0].signum();
+        near(tau[0], fixed, 1e-12, "τ = τ₀ + μ|τ|sign(q̇)");
+        let predicted = tau[0];
+        model.loaded_inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        assert_eq!(ws.load(), [predicted.abs()]);
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        near(
+            tau[0],
+            predicted,
+            1e-12,
+            "the predicted load reproduces the prediction",
+        );
+    }
+    let e = model.frame(1).elements.last().unwrap().clone();
+    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
+    let ctx = BoundsContext {
+        global: &global,
+        frame: &frame,
+        use_frame: true,
+    };
+    let mut rows = Vec::new();
+    e.bound_rows(&ctx, &mut rows);
+    assert_eq!(
+        rows,
+        [
+            BoundRow::at_least(13, 0.0, BoundOrigin::Physical("load friction Fl ≥ 0")),
+            BoundRow::at_most(13, 0.5, BoundOrigin::Physical("load friction Fl ≤ 1/2")),
+        ]
+    );
+    let mut x = vec![0.0; p];
+    for (fl, ok) in [(-1e-3, false), (0.1, true), (0.6, false)] {
+        x[13] = fl;
+        assert_eq!(e.consistent(&x, 0.0), ok, "Fl {fl}");
+    }
+    assert_eq!(e.description(&model.coordinates), "load_friction = true");
+    // A coupled joint value has no one coordinate whose torque is the load.
+    let coupled = "name = \"c\"\nconvention = \"modified\"\ncoordinates = [\"q1\", \"q2\"]\n\
+                   [[frames]]\nname = \"j\"\nparent = \"base\"\ntheta = \"q1 - q2\"\n\
+                   inertia = true\nload_friction = true\n";
+    let err = Model::from_toml_str(coupled, "coupled.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("coupled.toml")
+            && err.contains("load_friction")
+            && err.contains("exactly one coordinate"),
+        "{err}"
+    );
+    // Added once per coordinate.
+    let psm = Model::builtin("psm").unwrap().with_load_friction();
+    assert_eq!(psm.with_load_friction().n_params(), psm.n_params());
+}
