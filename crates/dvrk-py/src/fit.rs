@@ -88,7 +88,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   hysteresis over the displacement, with this stiffness, 1/rad or 1/m, to every
 ///   friction element, as ``--dahl``), ``position_torque`` (adds a position-dependent
 ///   torque, a Fourier series of this order, 1 to 3, in the joint angle, to every
-///   revolute friction element, as ``--position-torque``);
+///   revolute friction element, as ``--position-torque``), ``load_friction``
+///   (``True`` adds Coulomb friction in proportion to each coordinate's torque, as
+///   ``--load-friction``);
 /// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
 ///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
 ///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every

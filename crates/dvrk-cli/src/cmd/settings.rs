@@ -249,7 +249,7 @@ mod tests {
                 assert!(help.starts_with(&s.doc()), "{command} {}: {help}", flag(*s));
             }
         }
-        assert_eq!(Setting::ALL.len(), 22);
+        assert_eq!(Setting::ALL.len(), 24);
     }
 
     /// `--resample`, declared with the reading flags, is read as the fit option in

@@ -228,8 +228,8 @@ impl Model {
     /// let psm = dvrk_model::Model::builtin("psm").unwrap();
     /// let with = psm.with_load_friction();
     /// // One per coordinate: yaw, pitch, insertion, roll, and the wrist motors q5-q7.
-    /// let names: Vec<&str> = with.param_names()[psm.n_params()..].iter().map(|s| s.as_str()).collect();
-    /// assert_eq!(names, ["Fl1", "Fl2", "Fl8", "Fl10", "Fl11", "Fl14", "Fl15"]);
+    /// let names = with.param_names();
+    /// assert_eq!(names[psm.n_params()..], ["Fl1", "Fl2", "Fl8", "Fl10", "Fl11", "Fl14", "Fl15"]);
     /// ```
     pub fn with_load_friction(&self) -> Model {
         let mut m = self.clone();
