@@ -38,6 +38,12 @@ ROWS=(
   "SDP, Stribeck 0.3, Dahl 10|--method sdp --stribeck 0.3 --dahl 10"
   "SDP, Stribeck 0.3, Dahl 50|--method sdp --stribeck 0.3 --dahl 50"
   "SDP, delays, Stribeck 0.3, Dahl 20|--method sdp --delay auto --stribeck 0.3 --dahl 20"
+  "--preset dvrk, position torque 1|--preset dvrk --position-torque 1"
+  "--preset dvrk, position torque 2|--preset dvrk --position-torque 2"
+  "--preset dvrk, load friction|--preset dvrk --load-friction"
+  "--preset dvrk, load friction, position torque 1|--preset dvrk --load-friction --position-torque 1"
+  "SDP, load friction|--method sdp --load-friction"
+  "WLS, load friction|--method wls --load-friction"
 )
 for r in "${ROWS[@]}"; do
   IFS='|' read -r label flags <<< "$r"
@@ -54,4 +60,21 @@ ROBOT=psm_mono.toml row "SDP, delays, monotone_friction 0.05 0.2" x x --method s
 for t in full half; do
   echo -n "both speeds, --preset dvrk --resample 200, test $t: "
   $B fit full.csv half.csv --robot psm --cutoff 16.965 --filter-torque --preset dvrk --resample 200 --test $t.csv --json 2>/dev/null | python3 -c "$show" || echo FAIL
+done
+# The position torque on q1, q2 and the load friction on q1-q3 (or q2) only, from a description.
+python3 - "$ROOT/robots/psm.toml" <<'PY'
+import sys
+parts = open(sys.argv[1]).read().split("[[frames]]")
+def variant(name, adds):
+    p = list(parts)
+    for frame, line in adds:  # parts[0] is the header, whose comment names [[frames]]
+        p[frame + 1] = p[frame + 1].replace("friction = true\n", "friction = true\n" + line + "\n", 1)
+    open(name, "w").write("[[frames]]".join(p))
+variant("psm_pt1.toml", [(1, "position_torque = { order = 1 }"), (2, "position_torque = { order = 1 }")])
+variant("psm_pt2.toml", [(1, "position_torque = { order = 2 }"), (2, "position_torque = { order = 2 }")])
+variant("psm_load123.toml", [(f, "load_friction = true") for f in (1, 2, 8)])
+variant("psm_load2.toml", [(2, "load_friction = true")])
+PY
+for d in pt1 pt2 load123 load2; do
+  ROBOT=psm_$d.toml row "--preset dvrk, psm_$d.toml" x x --preset dvrk
 done

@@ -97,6 +97,8 @@ OPTIONS = [
      ["--method", "ols", "--delay", "0.01,0.02,0,0,0,0,0.005"]),
     ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
     ({"method": "ols", "filter_order": 2}, ["--method", "ols", "--filter-order", "2"]),
+    ({"method": "ols", "position_torque": 1}, ["--method", "ols", "--position-torque", "1"]),
+    ({"method": "ols", "load_friction": True}, ["--method", "ols", "--load-friction"]),
     ({"method": "ols", "select": ["coulomb", "dahl"]},
      ["--method", "ols", "--select", "coulomb,dahl"]),
     ({"method": "ols", "log_offsets": True}, ["--method", "ols", "--log-offsets"]),
@@ -126,6 +128,8 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             "sdp_regularization": settings["sdp_regularization"],
             "ellipsoids": settings.get("ellipsoids", True),
             "mounting_pitch": settings.get("mounting_pitch_deg"),
+            "position_torque": settings.get("position_torque_order"),
+            "load_friction": settings.get("load_friction"),
             "log_offsets": settings.get("log_offsets"),
         }.get(key)
         if recorded is not None:

@@ -348,9 +348,10 @@ impl PerCoordinate {
                         vec![0.0; n],
                         vec![0.0; n],
                         vec![0.0; n],
+                        vec![0.0; n],
                     )
                 },
-                |(ws, h, q, dq, ddq), (&(start, end), block)| {
+                |(ws, h, q, dq, ddq, tau), (&(start, end), block)| {
                     // Every entry is written below.
                     block.resize((end - start) * n * width, 0.0);
                     for k in start..end {
@@ -360,6 +361,11 @@ impl PerCoordinate {
                                 ws.set_hysteresis(c, states[k * m + i]);
                             }
                         }
+                        // Load friction's load: the measured torque of the sample.
+                        for (j, t) in tau.iter_mut().enumerate() {
+                            *t = samples.tau[(k, j)];
+                        }
+                        model.set_load(ws, tau);
                         model.regressor_into(ws, q, dq, ddq, h);
                         for j in 0..n {
                             let row = &mut block[((k - start) * n + j) * width..][..width];
@@ -617,6 +623,8 @@ mod tests {
         for k in 0..s.len() {
             s.read(k, &mut a, &mut b, &mut c);
             model.advance_hysteresis(&mut ws, &a);
+            let tau: Vec<f64> = (0..n).map(|j| s.tau[(k, j)]).collect();
+            model.set_load(&mut ws, &tau);
             model.regressor_into(&mut ws, &a, &b, &c, &mut h);
             for col in 0..p {
                 rows[(k, col)] = h[j * p + col];

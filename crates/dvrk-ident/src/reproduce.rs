@@ -311,6 +311,12 @@ fn options(settings: &FitSettings) -> Options {
     if settings.log_offsets {
         given.push(("log_offsets", Value::Switch));
     }
+    if let Some(k) = settings.position_torque_order {
+        given.push(("position_torque", Value::Int(k)));
+    }
+    if settings.load_friction {
+        given.push(("load_friction", Value::Switch));
+    }
     if let Some(b) = settings.bounds {
         given.push(("bounds", Value::Name(b.name().into())));
     }

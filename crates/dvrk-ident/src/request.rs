@@ -276,6 +276,12 @@ impl Overrides {
             if !given.contains(&Setting::Dahl) {
                 o.dahl_sigma = self.dahl_sigma;
             }
+            if !given.contains(&Setting::PositionTorque) {
+                o.position_torque_order = self.position_torque_order;
+            }
+            if !given.contains(&Setting::LoadFriction) {
+                o.load_friction = self.load_friction;
+            }
             if !given.contains(&Setting::Delay) {
                 o.delay = self.delay.clone();
             }
@@ -326,6 +332,12 @@ impl Overrides {
         }
         if let Some(v) = self.dahl_sigma {
             s.dahl_sigma = Some(v);
+        }
+        if let Some(k) = self.position_torque_order {
+            s.position_torque_order = Some(k);
+        }
+        if let Some(l) = self.load_friction {
+            s.load_friction = l;
         }
         if let Some(p) = self.mounting_pitch_deg {
             s.mounting_pitch_deg = Some(p);
@@ -407,7 +419,16 @@ impl Overrides {
     fn observation_fields(&self) -> Vec<Setting> {
         self.given()
             .into_iter()
-            .filter(|s| Setting::OBSERVE.contains(s) || matches!(s, Setting::Delay | Setting::Dahl))
+            .filter(|s| {
+                Setting::OBSERVE.contains(s)
+                    || matches!(
+                        s,
+                        Setting::Delay
+                            | Setting::Dahl
+                            | Setting::PositionTorque
+                            | Setting::LoadFriction
+                    )
+            })
             .collect()
     }
 }

@@ -386,6 +386,8 @@ pub fn external_torque(
             dq[j] = data.dq[(k, j)];
             tau[j] = data.tau[(k, j)];
         }
+        // Load friction's load: the measured torque, as in the fit.
+        model.set_load(&mut ws, &tau);
         model.add_known_forces(&q, &mut tau);
         let dt = if k == 0 {
             1.0 // not used: the first update only starts the observer

@@ -205,6 +205,18 @@ pub struct FitSettings {
     /// in time order. `None`: the model as described.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub dahl_sigma: Option<f64>,
+    /// Adds a position-dependent torque, a Fourier series of this order in the joint
+    /// angle ([`dvrk_model::PositionTorque`], period one turn, no constant term: that is
+    /// the offset `Fo`), to every revolute frame with friction and none yet (see
+    /// [`FitSettings::model`]). `None`: the model as described.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position_torque_order: Option<usize>,
+    /// Adds load-dependent Coulomb friction `Fl·|τ|·sign(q̇)` ([`dvrk_model::LoadFriction`],
+    /// the load the coordinate's measured torque in the fit, the predicted one in the
+    /// metrics) to every frame with friction whose joint value is one coordinate's
+    /// multiple, one per coordinate (see [`FitSettings::model`]).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub load_friction: bool,
     /// The arm's mounting pitch, degrees: gravity in the base frame becomes
     /// `(0, −9.81·sin p, −9.81·cos p)` m/s² (as the dVRK's `mounting_pitch`, see
     /// [`dvrk_model::Model::mounting_pitch_gravity`]) in the model of the fit and of every
@@ -295,7 +307,9 @@ impl FitSettings {
 
     /// The model these settings fit: `model` itself, or a copy with the Stribeck terms
     /// of [`FitSettings::stribeck_velocity`], the Dahl friction of
-    /// [`FitSettings::dahl_sigma`], the gravity of
+    /// [`FitSettings::dahl_sigma`], the position torques of
+    /// [`FitSettings::position_torque_order`], the load friction of
+    /// [`FitSettings::load_friction`], the gravity of
     /// [`FitSettings::mounting_pitch_deg`] and the bounds of [`FitSettings::bounds`].
     /// Everything that reads a result back (validate, report, export) goes through here
     /// so the parameters line up.
@@ -314,6 +328,20 @@ impl FitSettings {
         if let Some(sigma) = self.dahl_sigma {
             // As for Stribeck: a model with its Dahl elements already is kept.
             let extended = m.with_dahl(sigma)?;
+            if extended.n_params() != m.n_params() {
+                m = std::borrow::Cow::Owned(extended);
+            }
+        }
+        if let Some(order) = self.position_torque_order {
+            // As for Stribeck: a model with its position torques already is kept.
+            let extended = m.with_position_torque(order)?;
+            if extended.n_params() != m.n_params() {
+                m = std::borrow::Cow::Owned(extended);
+            }
+        }
+        if self.load_friction {
+            // As for Stribeck: a model with its load friction already is kept.
+            let extended = m.with_load_friction();
             if extended.n_params() != m.n_params() {
                 m = std::borrow::Cow::Owned(extended);
             }
@@ -448,6 +476,8 @@ impl Default for FitSettings {
             sdp_regularization: SdpOptions::default().regularization,
             stribeck_velocity: None,
             dahl_sigma: None,
+            position_torque_order: None,
+            load_friction: false,
             mounting_pitch_deg: None,
             bounds: None,
             ellipsoids: true,

@@ -332,7 +332,7 @@ pub fn motion_torques(
             ddqk[j] = ddq[(k, j)];
         }
         model.advance_hysteresis(&mut ws, &qk);
-        model.inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
+        model.loaded_inverse_dynamics(&mut ws, params, &qk, &dqk, &ddqk, &mut tk);
         model.add_known_forces(&qk, &mut tk);
         tau.row_mut(k).copy_from_slice(&tk);
     }

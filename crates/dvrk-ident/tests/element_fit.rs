@@ -3,7 +3,9 @@
 //! friction `Fq·ṡ·|ṡ|`, is fitted with no change here. Noise-free synthetic torques of a
 //! pendulum: least squares and the semidefinite fit recover `Fq`; torques asking for a
 //! a negative `Fq` (or one above its `max`) get the bound from the SDP, never beyond. The
-//! monotone friction of issue 28 likewise: weights recovered, and held at 0.
+//! monotone friction of issue 28 likewise: weights recovered, and held at 0; Dahl
+//! friction and the position-dependent torque recovered within noise (the latter through
+//! the fit's `position_torque` setting).
 
 use dvrk_test_support as support;
 
@@ -275,4 +277,142 @@ fn sdp_keeps_dahl_friction_nonnegative() {
         .elements
         .iter()
         .all(|e| e.consistent(&sol.params, -1e-9)));
+}
+
+/// A link turning about the vertical (no gravity torque, so no first-order alias of the
+/// series) with friction: `Pca1 Psa1 Pcb1 Psb1` come from the fit's setting.
+const VERTICAL_LINK: &str = "name = \"vertical\"\nconvention = \"modified\"\n\
+    coordinates = [\"q1\"]\ngravity = [0.0, 0.0, -9.81]\n[[frames]]\nname = \"link\"\n\
+    parent = \"base\"\ntheta = \"q1\"\ninertia = true\nfriction = true\n";
+
+/// A log of `model` with parameters `pi` swinging over most of a turn, 20 s at 100 Hz,
+/// `q = 2.5·sin(0.5t) + 0.5·sin(1.7t)`, its torques simulated (`simulate::motion_torques`,
+/// load friction with its load solved for) plus noise of standard deviation `noise`
+/// (N·m).
+fn swing_log(model: &Model, pi: &[f64], noise: f64) -> dvrk_ident::JointLog {
+    use dvrk_ident::joint_log::uniform_time;
+    use dvrk_ident::simulate::{model_log, motion_torques};
+    let (count, rate) = (2000, 100.0);
+    let time = uniform_time(count, rate);
+    let wave = |t: f64| {
+        let (a, b) = ((0.5 * t).sin_cos(), (1.7 * t).sin_cos());
+        (
+            2.5 * a.0 + 0.5 * b.0,
+            1.25 * a.1 + 0.85 * b.1,
+            -0.625 * a.0 - 1.445 * b.0,
+        )
+    };
+    let col = |f: &dyn Fn((f64, f64, f64)) -> f64| {
+        DMatrix::from_iterator(count, 1, time.iter().map(|&t| f(wave(t))))
+    };
+    let (q, dq, ddq) = (col(&|w| w.0), col(&|w| w.1), col(&|w| w.2));
+    let mut tau = motion_torques(model, pi, &q, &dq, &ddq);
+    let mut rng = Rng::new(5);
+    for v in tau.iter_mut() {
+        *v += noise * (0..12).map(|_| rng.uniform(-0.5, 0.5)).sum::<f64>();
+    }
+    model_log(model, time, q, dq, tau)
+}
+
+/// The fit of `log` from the description `plain` through the fit's request, exact
+/// signals (no filter, no trim), `method` and the setting `set` applied.
+fn fit_swing(
+    plain: &Model,
+    log: &dvrk_ident::JointLog,
+    method: dvrk_ident::Method,
+    set: impl FnOnce(&mut dvrk_ident::FitSettings),
+) -> dvrk_ident::FitResult {
+    let mut settings = dvrk_ident::FitSettings {
+        method,
+        ..dvrk_ident::FitSettings::default()
+    };
+    settings.processing.filter = None;
+    settings.processing.trim = 0;
+    set(&mut settings);
+    dvrk_ident::FitRequest::of_samples([log], None, settings)
+        .run(Some(plain), &dvrk_ident::progress::Silent)
+        .unwrap()
+        .result
+}
+
+/// Synthetic recovery through the fit's request: a log simulated with a position torque
+/// of order 2 (known coefficients, N·m) and noise of 2 mN·m, fitted from the description
+/// without it and `position_torque_order = 2` (`--position-torque 2`): the semidefinite
+/// fit recovers every coefficient within a few standard errors of the noise, and the
+/// offset `Fo1` apart from them.
+#[test]
+fn fit_recovers_a_position_torque_within_noise() {
+    let plain = Model::from_toml_str(VERTICAL_LINK, "vertical.toml").unwrap();
+    let model = plain.with_position_torque(2).unwrap();
+    let names = model.param_names();
+    assert_eq!(&names[13..], ["Pca1", "Psa1", "Pcb1", "Psb1"]);
+    let mut pi = truth(&pendulum(), 0.0)[..10].to_vec();
+    let want = [0.08, 0.03, -0.05, 0.04, -0.03, 0.02, 0.01];
+    pi.extend(want);
+    let log = swing_log(&model, &pi, 0.002);
+    let r = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
+        s.position_torque_order = Some(2)
+    });
+    for (name, want) in names[10..].iter().zip(want) {
+        let got = r.parameters[name.as_str()];
+        assert!((got - want).abs() < 0.002, "{name} {got} vs {want}");
+    }
+}
+
+/// The pendulum with friction, whose gravity torque (about 1.2 N·m) loads its joint,
+/// and its truth with load friction `Fl1 = fl` after `Fc1 Fv1 Fo1`.
+fn loaded_pendulum(fl: f64) -> (Model, Model, Vec<f64>) {
+    let plain = Model::from_toml_str(&one_link_with("friction = true\n"), "one.toml").unwrap();
+    let model = plain.with_load_friction();
+    assert_eq!(model.param_names()[13], "Fl1");
+    let mut pi = truth(&pendulum(), 0.0)[..13].to_vec();
+    pi.push(fl);
+    (plain, model, pi)
+}
+
+/// Synthetic recovery: a log whose Coulomb friction grows with the joint's torque,
+/// `Fl1 = 0.08` (the torque solved for, `Model::loaded_inverse_dynamics`), noise of
+/// 2 mN·m, fitted with `load_friction` (`--load-friction`, the load the measured
+/// torque): `Fl1` within noise (the errors in variables of a 2 mN·m noise on a torque of
+/// about 1 N·m bias it by far less), and the constant Coulomb `Fc1` told apart from it.
+#[test]
+fn fit_recovers_load_friction_within_noise() {
+    let (plain, model, pi) = loaded_pendulum(0.08);
+    let log = swing_log(&model, &pi, 0.002);
+    let r = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
+        s.load_friction = true
+    });
+    let (fl, fc) = (r.parameters["Fl1"], r.parameters["Fc1"]);
+    assert!((fl - 0.08).abs() < 0.003, "Fl1 {fl} vs 0.08");
+    assert!((fc - 0.08).abs() < 0.003, "Fc1 {fc} vs 0.08");
+    // The metrics predict the load (no measured torque in the prediction): the
+    // training error is the noise's.
+    let err = r.metrics.train.relative_error[0];
+    assert!(err < 0.01, "relative training error {err}");
+}
+
+/// Torques whose friction falls as the load grows (`Fl1 = −0.05`, noise-free): least
+/// squares follows them, the semidefinite fit holds `Fl1` at its bound 0 and stays
+/// consistent.
+#[test]
+fn sdp_keeps_load_friction_nonnegative() {
+    let (plain, _, pi) = loaded_pendulum(-0.05);
+    let model = plain.with_load_friction();
+    let log = swing_log(&model, &pi, 0.0);
+    let ols = fit_swing(&plain, &log, dvrk_ident::Method::Ols, |s| {
+        s.load_friction = true
+    });
+    let fl = ols.parameters["Fl1"];
+    assert!((fl + 0.05).abs() < 1e-6, "least squares Fl1 {fl}");
+    let sdp = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
+        s.load_friction = true
+    });
+    let fl = sdp.parameters["Fl1"];
+    assert!((0.0..1e-6).contains(&fl), "semidefinite Fl1 {fl}");
+    let values: Vec<f64> = sdp.parameters.values().copied().collect();
+    assert!(model
+        .frame(1)
+        .elements
+        .iter()
+        .all(|e| e.consistent(&values, -1e-9)));
 }

@@ -127,6 +127,14 @@ struct ResultSettings {
     /// workspace of dvrk-model, and in `dvrk-ident model --torque`).
     #[serde(default)]
     dahl_sigma: Option<f64>,
+    /// The position-dependent torques of the fit (`--position-torque`): their
+    /// coefficients are part of the parameter vector.
+    #[serde(default)]
+    position_torque_order: Option<usize>,
+    /// The load friction of the fit (`--load-friction`): predicted with its load, as the
+    /// fit's metrics do ([`Model::loaded_inverse_dynamics`]).
+    #[serde(default)]
+    load_friction: bool,
     /// The arm's mounting pitch (degrees), which sets gravity in the base frame.
     #[serde(default)]
     mounting_pitch_deg: Option<f64>,
@@ -164,6 +172,14 @@ impl DvrkModel {
             model = model
                 .with_dahl(sigma)
                 .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if let Some(order) = doc.settings.position_torque_order {
+            model = model
+                .with_position_torque(order)
+                .map_err(|e| format!("{shown}: {e}"))?;
+        }
+        if doc.settings.load_friction {
+            model = model.with_load_friction();
         }
         if let Some(pitch) = doc.settings.mounting_pitch_deg {
             model.gravity =
@@ -595,8 +611,9 @@ pub unsafe extern "C" fn dvrk_gravity(
 
 /// Inverse dynamics (N·m or N per model coordinate): the torque the result's model
 /// predicts at `q`, `dq`, `ddq` — links, friction (with the Stribeck term of a fit that
-/// had one), springs, motor inertias and known forces (e.g. the MTM's cable), i.e. the
-/// measured torque mapped to model coordinates. On a robot without known forces (the
+/// had one, its position torques, its load friction with the load predicted as
+/// `Model::loaded_inverse_dynamics` does), springs, motor inertias and known forces (e.g.
+/// the MTM's cable), i.e. the measured torque mapped to model coordinates. On a robot without known forces (the
 /// PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. Real-time: no
 /// allocation, no lock. 0, or a negative code with `tau` untouched.
 ///
@@ -675,8 +692,9 @@ unsafe fn dynamics(
             Dynamics::Whole => &m.params,
             Dynamics::Links => &m.link_params,
         };
+        // Load friction (if the fit had it) with its load predicted, as in the metrics.
         m.model
-            .inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
+            .loaded_inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
         if which == Dynamics::Whole {
             m.model.add_known_forces(q, &mut w.vector);
         }

@@ -487,3 +487,64 @@ fn readme_cpp_example_runs() {
     assert!(stdout.contains(&line), "{stdout}\nexpected: {line}");
     println!("{stdout}");
 }
+
+/// A result fitted with `--position-torque 1 --load-friction` loads (its `Pca`, `Psa`
+/// and `Fl` parameters are part of the model, in dvrk-ident's order), and the ABI's
+/// inverse dynamics is the prediction with the load solved for
+/// (`Model::loaded_inverse_dynamics`), to the bit. No compiler needed.
+#[test]
+fn a_result_with_position_torque_and_load_friction_loads() {
+    let psm = dvrk_model::Model::builtin("psm").unwrap();
+    let model = psm.with_position_torque(1).unwrap().with_load_friction();
+    let names = model.param_names();
+    let params: Vec<f64> = (0..model.n_params())
+        .map(|k| 0.01 * ((k % 7) as f64 + 1.0))
+        .collect();
+    let named: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .zip(&params)
+        .map(|(n, v)| (n.to_string(), (*v).into()))
+        .collect();
+    let doc = serde_json::json!({
+        "robot": "psm",
+        "robot_source": "builtin:psm",
+        "settings": { "position_torque_order": 1, "load_friction": true },
+        "parameters": named,
+    });
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_elements");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("result.json");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let loaded = dvrk_model_c::DvrkModel::from_result(&path).unwrap();
+    assert_eq!(loaded.model().param_names(), names);
+    let (q, dq, ddq) = ([0.1, -0.2, 0.12, 0.3, -0.1, 0.2, 0.4], [0.5; 7], [-0.3; 7]);
+    let mut want = [0.0; 7];
+    let mut ws = Workspace::new(&model);
+    model.loaded_inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut want);
+    let mut got = [0.0; 7];
+    // SAFETY: live model and workspace of this thread, arrays of the model's dof.
+    unsafe {
+        let w = dvrk_model_c::dvrk_workspace_new(&loaded);
+        let rc = dvrk_model_c::dvrk_inverse_dynamics(
+            &loaded,
+            w,
+            q.as_ptr(),
+            dq.as_ptr(),
+            ddq.as_ptr(),
+            got.as_mut_ptr(),
+        );
+        dvrk_model_c::dvrk_workspace_free(w);
+        assert_eq!(rc, 0);
+    }
+    assert_eq!(got, want, "the PSM has no known forces");
+    // The load friction did something: with every `Fl` at 0 the torques differ by more
+    // than rounding.
+    let without: Vec<f64> = names
+        .iter()
+        .zip(&params)
+        .map(|(n, &v)| if n.starts_with("Fl") { 0.0 } else { v })
+        .collect();
+    let mut plain = [0.0; 7];
+    model.loaded_inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut plain);
+    assert!(got.iter().zip(&plain).any(|(a, b)| (a - b).abs() > 1e-4));
+}

@@ -85,11 +85,21 @@ impl Model {
         let mut h = DMatrix::zeros(samples * n, p);
         let mut buf = vec![0.0; n * p];
         let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let mut load = vec![0.0; n];
         for s in 0..samples {
             for k in 0..n {
                 q[k] = uniform(&mut rng, -std::f64::consts::PI, std::f64::consts::PI);
                 dq[k] = uniform(&mut rng, -2.0, 2.0);
                 ddq[k] = uniform(&mut rng, -2.0, 2.0);
+            }
+            // Load friction's load, a signal of its own (the measured torque in a fit);
+            // drawn only for a model with load friction, so every other model's samples
+            // stay those they always were.
+            if !self.element_plan.load.is_empty() {
+                for l in load.iter_mut() {
+                    *l = uniform(&mut rng, 0.0, 2.0);
+                }
+                self.set_load(&mut ws, &load);
             }
             // The samples as a path: the hysteresis (Dahl) states move along it.
             self.advance_hysteresis(&mut ws, &q);

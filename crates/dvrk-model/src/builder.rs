@@ -472,6 +472,7 @@ impl ModelBuilder {
             index: idx,
             value: &value,
             moving: kind != JointKind::Fixed,
+            revolute: kind == JointKind::Revolute,
             n_coordinates: self.coordinates.len(),
         };
         let FrameElements {

@@ -245,13 +245,14 @@ impl Model {
     }
 
     /// The elements' torques (friction, springs, motor inertias...), added into `tau`.
-    /// `hysteresis`: the workspace's Dahl states (the workspace itself is borrowed
-    /// mutably by the callers' other buffers).
+    /// `hysteresis`, `load`: the workspace's Dahl states and coordinate loads (the
+    /// workspace itself is borrowed mutably by the callers' other buffers).
     #[inline]
     #[allow(clippy::too_many_arguments)]
     fn add_elements(
         &self,
         hysteresis: &[f64],
+        load: &[f64],
         params: &[f64],
         q: &[f64],
         dq: &[f64],
@@ -271,6 +272,7 @@ impl Model {
                 dq,
                 ddq,
                 hysteresis,
+                load,
             };
             e.add_torque(&s, params, tau);
         }
@@ -301,7 +303,7 @@ impl Model {
         self.check_state(ws, params, &[q, dq, ddq, tau]);
         self.bodies_at(ws, params, q);
         self.body_rnea(ws, dq, ddq, Motion::FULL, true, tau);
-        self.add_elements(&ws.hysteresis, params, q, dq, ddq, ALL, tau);
+        self.add_elements(&ws.hysteresis, &ws.load, params, q, dq, ddq, ALL, tau);
     }
 
     /// Gravity torque `g(q)` of the links alone (N·m or N), as Pinocchio's
@@ -589,7 +591,7 @@ impl Model {
         self.bodies_at(ws, params, q);
         self.body_rnea(ws, dq, dq, Motion::COASTING, true, bias);
         let terms = Terms { inertial: false };
-        self.add_elements(&ws.hysteresis, params, q, dq, dq, terms, bias);
+        self.add_elements(&ws.hysteresis, &ws.load, params, q, dq, dq, terms, bias);
         self.add_known_forces(q, bias);
         self.mass_from_positions(ws, params, mass);
     }

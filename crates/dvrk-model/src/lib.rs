@@ -59,8 +59,8 @@ pub use builder::{Convention, FrameSpec, Joint, ModelBuilder};
 pub use dynamics::NotPositiveDefinite;
 pub use element::{
     sign0, BoundOrigin, BoundRow, BoundsContext, Dahl, Deflection, Element, ElementSpec, Friction,
-    KnownForce, MonotoneFriction, MotorInertia, Note, QuadraticViscous, Sample, Side, Spring,
-    Stribeck,
+    KnownForce, LoadFriction, MonotoneFriction, MotorInertia, Note, PositionTorque,
+    QuadraticViscous, Sample, Side, Spring, Stribeck, MAX_LOAD_RATIO,
 };
 pub use error::ModelError;
 pub use expr::{Affine, NumOrExpr};

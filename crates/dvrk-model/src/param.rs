@@ -31,6 +31,12 @@ pub enum ParamKind {
     MonotoneFriction,
     /// Dahl friction `Fd` (N·m or N; see [`Dahl`](crate::Dahl)).
     Dahl,
+    /// A coefficient of a position-dependent torque (N·m or N; see
+    /// [`PositionTorque`](crate::PositionTorque)).
+    PositionTorque,
+    /// Load-dependent Coulomb friction `Fl`, the ratio of friction to the coordinate's
+    /// torque (dimensionless; see [`LoadFriction`](crate::LoadFriction)).
+    LoadFriction,
 }
 
 impl ParamKind {
@@ -44,11 +50,13 @@ impl ParamKind {
             | ParamKind::Offset
             | ParamKind::Stribeck
             | ParamKind::MonotoneFriction
-            | ParamKind::Dahl => UnitClass::Force,
+            | ParamKind::Dahl
+            | ParamKind::PositionTorque => UnitClass::Force,
             ParamKind::Viscous => UnitClass::Viscous,
             ParamKind::QuadraticViscous => UnitClass::QuadraticViscous,
             ParamKind::MotorInertia => UnitClass::MotorInertia,
             ParamKind::Spring => UnitClass::Stiffness,
+            ParamKind::LoadFriction => UnitClass::Ratio,
         }
     }
 }
@@ -216,4 +224,6 @@ pub enum UnitClass {
     MotorInertia,
     /// Spring stiffness, N·m/rad or N/m (per unit of deflection).
     Stiffness,
+    /// A dimensionless ratio: load-dependent friction per unit of load.
+    Ratio,
 }

@@ -143,6 +143,7 @@ impl Model {
                 dq,
                 ddq,
                 hysteresis: &ws.hysteresis,
+                load: &ws.load,
             };
             e.add_regressor(&s, p, out);
         }

@@ -31,6 +31,10 @@ pub struct Workspace {
     /// The joint value each state was last advanced to (rad or m), by parameter column;
     /// NaN before the first sample.
     pub(crate) hysteresis_at: Vec<f64>,
+    /// Each coordinate's load (N·m or N, `≥ 0`), read by load friction
+    /// ([`LoadFriction`](crate::LoadFriction)): set by [`Model::set_load`] or
+    /// [`Model::loaded_inverse_dynamics`]; 0 in a new workspace.
+    pub(crate) load: Vec<f64>,
 }
 
 /// Body-indexed buffers (index 0 = base).
@@ -75,6 +79,7 @@ impl Workspace {
             mass: vec![0.0; n * n],
             hysteresis: vec![0.0; model.n_params()],
             hysteresis_at: vec![f64::NAN; model.n_params()],
+            load: vec![0.0; n],
         }
     }
 
@@ -96,6 +101,12 @@ impl Workspace {
         if let Some(h) = self.hysteresis.get_mut(column) {
             *h = z.clamp(-1.0, 1.0);
         }
+    }
+
+    /// Each coordinate's load (N·m or N) as last set ([`Model::set_load`],
+    /// [`Model::loaded_inverse_dynamics`]).
+    pub fn load(&self) -> &[f64] {
+        &self.load
     }
 
     /// Forgets the path: every hysteresis state back to 0, as before the first sample.

@@ -70,10 +70,16 @@ fn the_counter_counts() {
 
 fn check(name: &str) {
     let model = Model::builtin(name).unwrap();
-    let (n, p) = (model.dof(), model.n_params());
-    let mut ws = Workspace::new(&model);
     // Physical parameters: forward dynamics needs a positive definite mass matrix.
     let params = support::physical_params(&model, &mut support::Rng::new(5));
+    check_model(&model, name, params);
+}
+
+/// The real-time calls of `model` with `params` allocate nothing.
+fn check_model(model: &Model, name: &str, params: Vec<f64>) {
+    let model = model.clone();
+    let (n, p) = (model.dof(), model.n_params());
+    let mut ws = Workspace::new(&model);
     let q: Vec<f64> = (0..n).map(|k| 0.1 + 0.13 * k as f64).collect();
     let dq: Vec<f64> = (0..n).map(|k| -0.3 + 0.11 * k as f64).collect();
     let ddq: Vec<f64> = (0..n).map(|k| 0.5 - 0.07 * k as f64).collect();
@@ -108,6 +114,11 @@ fn check(name: &str) {
     report.push(("inverse_dynamics, new parameters", a));
     let a = allocations(|| model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h));
     report.push(("regressor_into", a));
+    let a = allocations(|| model.set_load(&mut ws, &ddq));
+    report.push(("set_load", a));
+    let a =
+        allocations(|| model.loaded_inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau));
+    report.push(("loaded_inverse_dynamics", a));
     let a = allocations(|| model.add_known_forces(&q, &mut tau));
     report.push(("add_known_forces", a));
     let a = allocations(|| model.forward_kinematics(&mut ws, &q));
@@ -136,6 +147,22 @@ fn check(name: &str) {
 #[test]
 fn psm_real_time_calls_do_not_allocate() {
     check("psm");
+}
+
+/// The PSM with every element the fit's flags add (Stribeck, Dahl, position torque of
+/// order 2, load friction): their parameters appended after the built-in ones.
+#[test]
+fn psm_with_the_flags_elements_does_not_allocate() {
+    let psm = Model::builtin("psm").unwrap();
+    let mut params = support::physical_params(&psm, &mut support::Rng::new(5));
+    let model = psm
+        .with_stribeck(0.3)
+        .and_then(|m| m.with_dahl(20.0))
+        .and_then(|m| m.with_position_torque(2))
+        .unwrap()
+        .with_load_friction();
+    params.resize(model.n_params(), 0.05);
+    check_model(&model, "psm with elements", params);
 }
 
 #[test]

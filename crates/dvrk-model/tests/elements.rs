@@ -434,3 +434,306 @@ fn dahl_refuses_bad_sigma() {
     let once = psm.with_dahl(20.0).unwrap();
     assert_eq!(once.with_dahl(5.0).unwrap().n_params(), once.n_params());
 }
+
+/// A pendulum (horizontal axis) with friction and a position torque of order 2
+/// (`Pca1 Psa1 Pcb1 Psb1` after `Fc1 Fv1 Fo1`).
+fn position_pendulum() -> Model {
+    load(&support::models::one_link_with(
+        "friction = true\nposition_torque = { order = 2 }\n",
+    ))
+}
+
+/// The torque is `Σ Aₖ·cos(k·q) + Bₖ·sin(k·q)` against its closed form, in `H·π`, the
+/// inverse dynamics (`H·π = τ`) and the static torque (a torque of the position, held at
+/// rest); no bound (neither dissipative nor signed); the description line reads back.
+#[test]
+fn position_torque_closed_form() {
+    let model = position_pendulum();
+    let names = model.param_names();
+    assert_eq!(
+        &names[10..17],
+        ["Fc1", "Fv1", "Fo1", "Pca1", "Psa1", "Pcb1", "Psb1"]
+    );
+    assert!(model.params[13..17]
+        .iter()
+        .all(|p| p.kind == ParamKind::PositionTorque && p.kind.unit_class() == UnitClass::Force));
+    let p = model.n_params();
+    let mut rng = Rng::new(8);
+    let pi = random_params(&model, &mut rng);
+    let mut ws = Workspace::new(&model);
+    let (mut h, mut tau, mut tau0, mut rest) = (vec![0.0; p], [0.0], [0.0], [0.0]);
+    for k in 0..20 {
+        let q = [rng.uniform(-3.0, 3.0)];
+        let (dq, ddq) = ([rng.uniform(-2.0, 2.0)], [rng.uniform(-2.0, 2.0)]);
+        model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+        let expected = [
+            q[0].cos(),
+            q[0].sin(),
+            (2.0 * q[0]).cos(),
+            (2.0 * q[0]).sin(),
+        ];
+        assert_close(
+            "columns cos q, sin q, cos 2q, sin 2q",
+            &h[13..17],
+            &expected,
+            1e-14,
+        );
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
+        near(hp, tau[0], 1e-10, "H·π = τ");
+        let mut without = pi.clone();
+        without[13..17].fill(0.0);
+        model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
+        let force: f64 = expected.iter().zip(&pi[13..17]).map(|(a, b)| a * b).sum();
+        near(tau[0] - tau0[0], force, 1e-12, "force Σ A·cos + B·sin");
+        // At rest the static torque holds the series too (no friction at onset 0).
+        let mut with_static = [0.0];
+        model.static_torque(&mut ws, &pi, &q, &[0.0], &mut with_static);
+        model.static_torque(&mut ws, &without, &q, &[0.0], &mut rest);
+        near(
+            with_static[0] - rest[0],
+            force,
+            1e-12,
+            &format!("static torque {k}"),
+        );
+    }
+    let e = model.frame(1).elements.last().unwrap().clone();
+    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
+    let ctx = BoundsContext {
+        global: &global,
+        frame: &frame,
+        use_frame: true,
+    };
+    let mut rows = Vec::new();
+    e.bound_rows(&ctx, &mut rows);
+    assert!(rows.is_empty(), "no bound on a position torque: {rows:?}");
+    assert!(e.consistent(&vec![-5.0; p], 0.0));
+    assert_eq!(
+        e.description(&model.coordinates),
+        format!(
+            "position_torque = {{ order = 2, period = {:?} }}",
+            std::f64::consts::TAU
+        )
+    );
+    // A prismatic frame's series in its period (m): cos(2π·s/P).
+    let slide = load(
+        "name = \"s\"\nconvention = \"modified\"\ncoordinates = [\"q1\"]\n[[frames]]\n\
+         name = \"slide\"\nparent = \"base\"\nd = \"q1\"\ninertia = true\nfriction = true\n\
+         position_torque = { order = 1, period = 0.5 }\n",
+    );
+    let mut ws = Workspace::new(&slide);
+    let mut h = vec![0.0; slide.n_params()];
+    slide.regressor_into(&mut ws, &[0.1], &[0.0], &[0.0], &mut h);
+    let phase = std::f64::consts::TAU * 0.1 / 0.5;
+    assert_close("prismatic", &h[13..15], &[phase.cos(), phase.sin()], 1e-14);
+}
+
+/// No column of the series aliases the offset `Fo` (no constant term) or a spring (affine
+/// in the joint value): on a link turning about a vertical axis (no gravity torque) with a
+/// spring, every coefficient is a base parameter. On the pendulum, whose gravity torque
+/// `g·(lₓ·cos q − l_y·sin q)` is the first order's columns, the base parameters fold
+/// `Pca1`, `Psa1` into the link's first moments and keep the second order and `Fo1`.
+#[test]
+fn position_torque_identifiability() {
+    let vertical = |extra: &str| {
+        load(&format!(
+            "name = \"v\"\nconvention = \"modified\"\ncoordinates = [\"q1\"]\n[[frames]]\n\
+             name = \"link\"\nparent = \"base\"\ntheta = \"q1\"\ninertia = true\n\
+             friction = true\nspring = \"q1\"\n{extra}"
+        ))
+    };
+    let kept = |m: &Model| -> Vec<String> {
+        let base = m.base_parameters().unwrap();
+        base.independent
+            .iter()
+            .map(|&c| m.param_names()[c].to_string())
+            .collect()
+    };
+    let without = kept(&vertical(""));
+    let with = kept(&vertical("position_torque = { order = 2 }\n"));
+    assert_eq!(with.len(), without.len() + 4, "{with:?}");
+    for name in ["Fo1", "K1", "Pca1", "Psa1", "Pcb1", "Psb1"] {
+        assert!(with.iter().any(|n| n == name), "{name} in {with:?}");
+    }
+    let plain = kept(&load(&support::models::one_link_with("friction = true\n")));
+    let pendulum = kept(&position_pendulum());
+    assert_eq!(pendulum.len(), plain.len() + 2, "{pendulum:?}");
+    for name in ["Fo1", "Pcb1", "Psb1"] {
+        assert!(pendulum.iter().any(|n| n == name), "{name} in {pendulum:?}");
+    }
+    for name in ["Pca1", "Psa1"] {
+        assert!(
+            !pendulum.iter().any(|n| n == name),
+            "{name} folded: {pendulum:?}"
+        );
+    }
+}
+
+/// Bad orders and periods are refused with the file and the field named; a prismatic
+/// frame needs a period; `with_position_torque` refuses a bad order, adds the series to
+/// the revolute friction frames only, and once.
+#[test]
+fn position_torque_refuses_bad_input() {
+    for (fields, field, says) in [
+        ("order = 0", "position_torque.order", "must be 1 to 3"),
+        ("order = 4", "position_torque.order", "must be 1 to 3"),
+        (
+            "order = 1, period = 0",
+            "position_torque.period",
+            "must be positive",
+        ),
+        (
+            "order = 1, period = -1",
+            "position_torque.period",
+            "must be positive",
+        ),
+        (
+            "order = 1, period = nan",
+            "position_torque.period",
+            "must be a finite number",
+        ),
+        (
+            "order = 1, period = 1e300",
+            "position_torque.period",
+            "beyond the accepted",
+        ),
+    ] {
+        let text = support::models::one_link_with(&format!(
+            "friction = true\nposition_torque = {{ {fields} }}\n"
+        ));
+        let err = Model::from_toml_str(&text, "bad.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("bad.toml") && err.contains(field) && err.contains(says),
+            "{fields}: {err}"
+        );
+    }
+    let slide = "name = \"s\"\nconvention = \"modified\"\ncoordinates = [\"q1\"]\n[[frames]]\n\
+                 name = \"slide\"\nparent = \"base\"\nd = \"q1\"\ninertia = true\n\
+                 position_torque = { order = 1 }\n";
+    let err = Model::from_toml_str(slide, "slide.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("slide.toml") && err.contains("needs the series' period"),
+        "{err}"
+    );
+    let psm = Model::builtin("psm").unwrap();
+    for order in [0, 4] {
+        let err = psm.with_position_torque(order).unwrap_err().to_string();
+        assert!(err.contains("must be 1 to 3"), "{order}: {err}");
+    }
+    let once = psm.with_position_torque(1).unwrap();
+    let frames: Vec<usize> = once.params[psm.n_params()..]
+        .iter()
+        .map(|p| p.frame)
+        .collect();
+    // Every revolute friction frame (not the insertion, frame 8), two columns each.
+    assert_eq!(
+        frames,
+        [1, 1, 2, 2, 10, 10, 11, 11, 12, 12, 13, 13, 14, 14, 15, 15, 16, 16]
+    );
+    assert_eq!(
+        once.with_position_torque(2).unwrap().n_params(),
+        once.n_params()
+    );
+}
+
+/// A pendulum with friction and load friction (`Fl1` after `Fc1 Fv1 Fo1`).
+fn load_pendulum() -> Model {
+    load(&support::models::one_link_with(
+        "friction = true\nload_friction = true\n",
+    ))
+}
+
+/// The column is `|τ_measured|·sign(q̇)` with the load given (`Model::set_load`), and
+/// `H·π` equals the inverse dynamics with that load; the prediction
+/// (`Model::loaded_inverse_dynamics`) solves `τ = τ₀ + μ·|τ|·sign(q̇)` exactly and leaves
+/// its `|τ|` as the load, so the inverse dynamics then gives the same torque; the bounds
+/// are `0 ≤ Fl ≤ 1/2`; the description line reads back.
+#[test]
+fn load_friction_closed_form() {
+    let model = load_pendulum();
+    assert_eq!(model.param_names()[13], "Fl1");
+    assert_eq!(model.params[13].kind, ParamKind::LoadFriction);
+    assert_eq!(model.params[13].kind.unit_class(), UnitClass::Ratio);
+    let p = model.n_params();
+    let mut rng = Rng::new(4);
+    let mut pi = random_params(&model, &mut rng);
+    pi[13] = 0.2;
+    let mut ws = Workspace::new(&model);
+    let (mut h, mut tau, mut tau0) = (vec![0.0; p], [0.0], [0.0]);
+    for _ in 0..20 {
+        let q = [rng.uniform(-3.0, 3.0)];
+        let (dq, ddq) = ([rng.uniform(-2.0, 2.0)], [rng.uniform(-2.0, 2.0)]);
+        let measured = [rng.uniform(-2.0, 2.0)];
+        model.set_load(&mut ws, &measured);
+        assert_eq!(ws.load(), [measured[0].abs()]);
+        model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
+        near(
+            h[13],
+            measured[0].abs() * dq[0].signum(),
+            1e-15,
+            "column |τ|·sign(q̇)",
+        );
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
+        near(hp, tau[0], 1e-10, "H·π = τ with the measured load");
+        // The prediction: a fixed point of τ = τ₀ + μ·|τ|·sign(q̇).
+        model.loaded_inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        let mut without = pi.clone();
+        without[13] = 0.0;
+        model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
+        let fixed = tau0[0] + 0.2 * tau[0].abs() * dq[0].signum();
+        near(tau[0], fixed, 1e-12, "τ = τ₀ + μ|τ|sign(q̇)");
+        let predicted = tau[0];
+        model.loaded_inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        assert_eq!(ws.load(), [predicted.abs()]);
+        model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
+        near(
+            tau[0],
+            predicted,
+            1e-12,
+            "the predicted load reproduces the prediction",
+        );
+    }
+    let e = model.frame(1).elements.last().unwrap().clone();
+    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
+    let ctx = BoundsContext {
+        global: &global,
+        frame: &frame,
+        use_frame: true,
+    };
+    let mut rows = Vec::new();
+    e.bound_rows(&ctx, &mut rows);
+    assert_eq!(
+        rows,
+        [
+            BoundRow::at_least(13, 0.0, BoundOrigin::Physical("load friction Fl ≥ 0")),
+            BoundRow::at_most(13, 0.5, BoundOrigin::Physical("load friction Fl ≤ 1/2")),
+        ]
+    );
+    let mut x = vec![0.0; p];
+    for (fl, ok) in [(-1e-3, false), (0.1, true), (0.6, false)] {
+        x[13] = fl;
+        assert_eq!(e.consistent(&x, 0.0), ok, "Fl {fl}");
+    }
+    assert_eq!(e.description(&model.coordinates), "load_friction = true");
+    // A coupled joint value has no one coordinate whose torque is the load.
+    let coupled = "name = \"c\"\nconvention = \"modified\"\ncoordinates = [\"q1\", \"q2\"]\n\
+                   [[frames]]\nname = \"j\"\nparent = \"base\"\ntheta = \"q1 - q2\"\n\
+                   inertia = true\nload_friction = true\n";
+    let err = Model::from_toml_str(coupled, "coupled.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("coupled.toml")
+            && err.contains("load_friction")
+            && err.contains("exactly one coordinate"),
+        "{err}"
+    );
+    // Added once per coordinate.
+    let psm = Model::builtin("psm").unwrap().with_load_friction();
+    assert_eq!(psm.with_load_friction().n_params(), psm.n_params());
+}

@@ -86,7 +86,11 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   ``sdp_regularization``, ``stribeck`` (adds a Stribeck term with this velocity,
 ///   rad/s or m/s, to every friction element), ``dahl`` (adds Dahl friction, a
 ///   hysteresis over the displacement, with this stiffness, 1/rad or 1/m, to every
-///   friction element, as ``--dahl``);
+///   friction element, as ``--dahl``), ``position_torque`` (adds a position-dependent
+///   torque, a Fourier series of this order, 1 to 3, in the joint angle, to every
+///   revolute friction element, as ``--position-torque``), ``load_friction``
+///   (``True`` adds Coulomb friction in proportion to each coordinate's torque, as
+///   ``--load-friction``);
 /// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
 ///   ``"auto"`` (estimated per coordinate within 0–0.150 s, in ``result.delay`` and
 ///   applied through ``result.settings["processing"]["delay_s"]``), seconds for every

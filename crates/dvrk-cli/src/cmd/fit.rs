@@ -31,7 +31,7 @@ pub struct Args {
     /// fitted, with their processing settings and robot; the same document as the fit
     /// of their logs
     #[arg(long, alias = "from", num_args = 1.., value_name = "STATE", help_heading = INPUT,
-          conflicts_with_all = ["logs", "stream", "report", "stribeck", "dahl", "mounting_pitch", "delay"])]
+          conflicts_with_all = ["logs", "stream", "report", "stribeck", "dahl", "position_torque", "load_friction", "mounting_pitch", "delay"])]
     pub states: Vec<String>,
     /// Test (validation) logs: `--test a b` or `--test a --test b`
     #[arg(long, num_args = 1.., value_name = "LOG", help_heading = INPUT)]

@@ -161,7 +161,9 @@ fn evaluate(model: &Model, args: &Args) -> Result<()> {
     // A result with Stribeck terms has more parameters, and its own workspace.
     let mut ws = Workspace::new(&model);
     let mut tau = vec![0.0; n];
-    model.inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
+    // Load friction (a result fitted with --load-friction) with its load predicted, as
+    // the fit's metrics and the C library do.
+    model.loaded_inverse_dynamics(&mut ws, &params, &q, &dq, &ddq, &mut tau);
     if let Some(t) = tau.iter().find(|t| !t.is_finite()) {
         bail!("the torque at these coordinates is {t}: the parameters and motion overflow");
     }

@@ -33,7 +33,7 @@ pub fn setting_error(e: SettingError) -> anyhow::Error {
 /// Whether the flag is a switch (given or not), and the value it gives.
 fn switch(s: Setting) -> Option<bool> {
     match s {
-        Setting::FilterTorque | Setting::LogOffsets => Some(true),
+        Setting::FilterTorque | Setting::LogOffsets | Setting::LoadFriction => Some(true),
         Setting::Ellipsoids => Some(false),
         _ => None,
     }
@@ -89,6 +89,11 @@ pub fn arg(s: Setting) -> Arg {
         Setting::SdpRegularization => a.value_parser(f64).value_name("W").help_heading(ESTIMATOR),
         Setting::Stribeck => a.value_parser(f64).value_name("VS").help_heading(MODEL),
         Setting::Dahl => a.value_parser(f64).value_name("SIGMA").help_heading(MODEL),
+        Setting::LoadFriction => a.help_heading(MODEL),
+        Setting::PositionTorque => a
+            .value_parser(usize)
+            .value_name("ORDER")
+            .help_heading(MODEL),
         Setting::MountingPitch => a
             .value_parser(f64)
             .value_name("DEG")
@@ -250,7 +255,7 @@ mod tests {
                 assert!(help.starts_with(&s.doc()), "{command} {}: {help}", flag(*s));
             }
         }
-        assert_eq!(Setting::ALL.len(), 24);
+        assert_eq!(Setting::ALL.len(), 26);
     }
 
     /// `--resample`, declared with the reading flags, is read as the fit option in

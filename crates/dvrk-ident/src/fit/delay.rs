@@ -264,6 +264,7 @@ fn gram_matrices(
     let mut ws = Workspace::new(model);
     let mut h = vec![0.0; n * p];
     let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut load = vec![0.0; n];
     for all in shifted {
         let motion = &all[0];
         let len = motion.time.len();
@@ -279,8 +280,12 @@ fn gram_matrices(
                     q[j] = motion.q[(i, j)];
                     dq[j] = motion.dq[(i, j)];
                     ddq[j] = motion.ddq[(i, j)];
+                    // Load friction's load: the first candidate's torques (the regressor
+                    // is shared by every candidate delay).
+                    load[j] = motion.tau[(i, j)];
                 }
                 model.advance_hysteresis(&mut ws, &q);
+                model.set_load(&mut ws, &load);
                 model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
                 for (j, xj) in x.iter_mut().enumerate() {
                     let w = weights[j];

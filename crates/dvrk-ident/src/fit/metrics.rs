@@ -13,7 +13,8 @@ use crate::observation::{Observation, Samples};
 use crate::result::JointMetrics;
 
 /// Predicted torques `H(q, q̇, q̈)·π` for every sample (known forces excluded, as the
-/// prepared torques).
+/// prepared torques); load friction's load is the predicted torque, not the measured one
+/// ([`Model::loaded_inverse_dynamics`]).
 pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
     let n = model.dof();
     let mut ws = Workspace::new(model);
@@ -24,7 +25,7 @@ pub fn predict(model: &Model, params: &[f64], data: &Prepared) -> DMatrix<f64> {
     for k in 0..data.len() {
         s.read(k, &mut q, &mut dq, &mut ddq);
         model.advance_hysteresis(&mut ws, &q);
-        model.inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
+        model.loaded_inverse_dynamics(&mut ws, params, &q, &dq, &ddq, &mut tau);
         for j in 0..n {
             out[(k, j)] = tau[j];
         }
@@ -151,7 +152,7 @@ impl MetricSums {
         for k in 0..rows {
             samples.read(k, &mut q, &mut dq, &mut ddq);
             model.advance_hysteresis(ws, &q);
-            model.inverse_dynamics(ws, params, &q, &dq, &ddq, &mut tau);
+            model.loaded_inverse_dynamics(ws, params, &q, &dq, &ddq, &mut tau);
             for j in 0..n {
                 err[(k, j)] = samples.tau[(k, j)] - tau[j];
             }

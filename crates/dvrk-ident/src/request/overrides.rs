@@ -172,6 +172,19 @@ overrides! {
     /// positions in time order) with this stiffness (1/rad or 1/m) to every friction
     /// element (parameters Fd<frame>, Fd ≥ 0 in the semidefinite fit)
     dahl_sigma: f64 => Dahl("dahl") with "text_or_value";
+    /// Add a position-dependent torque Σ Pcₖ·cos(k·q) + Psₖ·sin(k·q), k = 1..ORDER (1 to
+    /// 3), in the joint angle to every revolute friction element (parameters
+    /// Pca<frame>, Psa<frame>, Pcb<frame>...; no constant term, that is the offset Fo;
+    /// unbounded): the cables' and counterweights' torques of a cable-driven joint.
+    /// Prismatic frames take it from a description (`position_torque = { order,
+    /// period }`)
+    position_torque_order: usize => PositionTorque("position_torque") with "text_or_value";
+    /// Add load-dependent Coulomb friction Fl·|τ|·sign(q̇) to every friction element whose
+    /// joint value is one coordinate's multiple, one per coordinate (parameters
+    /// Fl<frame>, 0 ≤ Fl ≤ 1/2 in the semidefinite fit): friction in proportion to the
+    /// torque the joint transmits, the load its measured torque in the fit and its
+    /// predicted torque in the metrics
+    load_friction: bool => LoadFriction("load_friction");
     /// The arm's mounting pitch, degrees, as the dVRK's `mounting_pitch` (which is in
     /// radians): gravity in the base frame becomes (0, −9.81·sin p, −9.81·cos p) m/s²
     /// (the dVRK mounts PSM1 and PSM2 at −45°, PSM3 at −15°, the ECM at −70° (Si) or
@@ -284,7 +297,7 @@ impl Setting {
                 Some(f) => f.order.to_string(),
                 None => "none".into(),
             },
-            Setting::FilterTorque | Setting::Ellipsoids => return None,
+            Setting::FilterTorque | Setting::Ellipsoids | Setting::LoadFriction => return None,
             Setting::Trim => p.trim.to_string(),
             Setting::Decimate => p.decimate.to_string(),
             Setting::MinSpeed => match p.min_speed {
@@ -302,6 +315,7 @@ impl Setting {
             Setting::SdpRegularization => format!("{:e}", fit.sdp_regularization),
             Setting::Stribeck => "none".into(),
             Setting::Dahl => "none".into(),
+            Setting::PositionTorque => "none".into(),
             Setting::MountingPitch => "the description's gravity (a result's: its own)".into(),
             Setting::Bounds => "the description's; the built-in robots': physical".into(),
             Setting::Delay => "0".into(),

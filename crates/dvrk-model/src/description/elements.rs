@@ -1,6 +1,6 @@
 //! A frame's element fields in a description file (`robots/README.md`): `friction`,
 //! `stribeck_velocity`, `motor_inertia`, `spring`, `known_force`, `quadratic_viscous`,
-//! `monotone_friction`, `dahl`.
+//! `monotone_friction`, `dahl`, `position_torque`, `load_friction`.
 //! Their expressions and constants are resolved here, then each element is built by the
 //! numeric constructor's [`ElementSpec`], so a description and a model built from numbers
 //! are checked by the same code and their errors read the same.
@@ -29,6 +29,18 @@ pub(super) struct ElementsDesc {
     quadratic_viscous: Option<QuadraticViscousDesc>,
     monotone_friction: Option<MonotoneFrictionDesc>,
     dahl: Option<DahlDesc>,
+    position_torque: Option<PositionTorqueDesc>,
+    #[serde(default)]
+    load_friction: bool,
+}
+
+/// `position_torque = { order = 2, period = 6.283 }` (period in rad or m; optional on a
+/// revolute frame).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PositionTorqueDesc {
+    order: usize,
+    period: Option<f64>,
 }
 
 /// `dahl = { sigma = 20 }` (1/rad or 1/m).
@@ -72,7 +84,7 @@ struct QuadraticViscousTable {
 impl ElementsDesc {
     /// Reads the elements, pushing their parameters onto `params`, in the order of the
     /// parameter vector: friction, motor inertia, spring, quadratic viscous friction,
-    /// monotone friction, Dahl friction.
+    /// monotone friction, Dahl friction, position-dependent torque, load friction.
     pub(super) fn build(
         &self,
         ctx: &Ctx,
@@ -117,6 +129,16 @@ impl ElementsDesc {
         }
         if let Some(d) = &self.dahl {
             ElementSpec::Dahl { sigma: d.sigma }.build(fx, params, &mut out)?;
+        }
+        if let Some(t) = &self.position_torque {
+            ElementSpec::PositionTorque {
+                order: t.order,
+                period: t.period,
+            }
+            .build(fx, params, &mut out)?;
+        }
+        if self.load_friction {
+            ElementSpec::LoadFriction.build(fx, params, &mut out)?;
         }
         Ok(out)
     }

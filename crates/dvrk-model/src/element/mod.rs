@@ -1,6 +1,6 @@
 //! A frame's elements: what acts on its joint value besides the links — friction (with
 //! an optional Stribeck term), a motor inertia, a spring, a known force, a quadratic viscous
-//! friction, a monotone friction, a Dahl friction. Each is a value of [`Element`], and each variant's module holds everything
+//! friction, a monotone friction, a Dahl friction, a position-dependent torque, a load-dependent Coulomb friction. Each is a value of [`Element`], and each variant's module holds everything
 //! about it: its parameters (names, kinds, unit classes), its regressor columns, its
 //! torque, its share of the mass matrix, its nominal values, its bounds for the
 //! physically consistent fit, its consistency test and its export notes. Its description
@@ -19,8 +19,10 @@
 mod dahl;
 mod friction;
 mod known_force;
+mod load_friction;
 mod monotone_friction;
 mod motor_inertia;
+mod position_torque;
 mod quadratic_viscous;
 mod spring;
 mod stribeck;
@@ -32,8 +34,10 @@ use crate::param::{FrameBounds, GlobalBounds, Nominal, Param, ParamKind};
 pub use dahl::Dahl;
 pub use friction::Friction;
 pub use known_force::KnownForce;
+pub use load_friction::{LoadFriction, MAX_LOAD_RATIO};
 pub use monotone_friction::MonotoneFriction;
 pub use motor_inertia::MotorInertia;
+pub use position_torque::PositionTorque;
 pub use quadratic_viscous::QuadraticViscous;
 pub use spring::{Deflection, Spring};
 pub use stribeck::Stribeck;
@@ -56,6 +60,11 @@ pub struct Sample<'a> {
     /// [`Workspace`](crate::Workspace)'s, advanced by
     /// [`Model::advance_hysteresis`](crate::Model::advance_hysteresis)).
     pub hysteresis: &'a [f64],
+    /// Each coordinate's load (N·m or N, `≥ 0`): the magnitude of its measured torque
+    /// ([`Model::set_load`](crate::Model::set_load)) or of the predicted one
+    /// ([`Model::loaded_inverse_dynamics`](crate::Model::loaded_inverse_dynamics)), read
+    /// by a [`LoadFriction`] element.
+    pub load: &'a [f64],
 }
 
 /// What an export's note on an element names: the parameter values and names, the
@@ -271,6 +280,10 @@ pub enum Element {
     MonotoneFriction(MonotoneFriction),
     /// Dahl friction: rate-independent hysteresis with a state carried along the path.
     Dahl(Dahl),
+    /// A position-dependent torque: a Fourier series in the joint value.
+    PositionTorque(PositionTorque),
+    /// Coulomb friction proportional to the coordinate's measured torque (its load).
+    LoadFriction(LoadFriction),
 }
 
 /// Runs `$body` with `$e` bound to the variant's value.
@@ -284,13 +297,15 @@ macro_rules! each {
             Element::QuadraticViscous($e) => $body,
             Element::MonotoneFriction($e) => $body,
             Element::Dahl($e) => $body,
+            Element::PositionTorque($e) => $body,
+            Element::LoadFriction($e) => $body,
         }
     };
 }
 
 impl Element {
     /// Names in summaries: `friction` (and `stribeck`), `motor_inertia`, `spring`,
-    /// `known_force`, `quadratic_viscous`, `monotone_friction`, `dahl`.
+    /// `known_force`, `quadratic_viscous`, `monotone_friction`, `dahl`, `position_torque`, `load_friction`.
     pub fn labels(&self) -> &'static [&'static str] {
         each!(self, e => e.labels())
     }
@@ -455,6 +470,17 @@ pub enum ElementSpec {
         /// `σ` (1/rad or 1/m).
         sigma: f64,
     },
+    /// A position-dependent torque: a Fourier series of this order (1 to 3) and period
+    /// (rad or m; `None`: one turn, 2π, on a revolute frame) in the joint value.
+    PositionTorque {
+        /// The series' order.
+        order: usize,
+        /// The series' period (rad or m).
+        period: Option<f64>,
+    },
+    /// Load-dependent Coulomb friction `Fl`: the frame's joint value must be one
+    /// coordinate's multiple, whose measured torque is the load.
+    LoadFriction,
 }
 
 /// The frame an element is built for.
@@ -466,6 +492,8 @@ pub(crate) struct FrameContext<'a> {
     pub index: usize,
     pub value: &'a Affine,
     pub moving: bool,
+    /// Whether the frame turns (its joint value is an angle, rad) rather than slides (m).
+    pub revolute: bool,
     /// Number of coordinates of the model.
     pub n_coordinates: usize,
 }
@@ -545,6 +573,14 @@ impl ElementSpec {
             ElementSpec::Dahl { sigma } => {
                 let d = Dahl::on(fx, *sigma, params.len())?;
                 out.push(fx, Element::Dahl(d), params);
+            }
+            ElementSpec::PositionTorque { order, period } => {
+                let t = PositionTorque::on(fx, *order, *period, params.len())?;
+                out.push(fx, Element::PositionTorque(t), params);
+            }
+            ElementSpec::LoadFriction => {
+                let l = LoadFriction::on(fx, params.len())?;
+                out.push(fx, Element::LoadFriction(l), params);
             }
         }
         Ok(())

@@ -25,6 +25,9 @@ pub(crate) struct ElementPlan {
     /// The hysteresis (Dahl) elements: their frame's joint value, their state's column
     /// and their `σ` (1/rad or 1/m), for [`Model::advance_hysteresis`].
     pub hysteresis: Vec<(Affine, usize, f64)>,
+    /// The load friction elements: their `Fl`'s column and their coordinate, for
+    /// [`Model::loaded_inverse_dynamics`].
+    pub load: Vec<(usize, usize)>,
 }
 
 /// Where the link columns of the regressor come from: each link `j` adds `a·S_kᵀ·Y_j`
@@ -250,6 +253,10 @@ impl Model {
                     Element::Dahl(d) => Some((f.value.clone(), d.param, d.sigma)),
                     _ => None,
                 }));
+            plan.load.extend(f.elements.iter().filter_map(|e| match e {
+                Element::LoadFriction(l) => Some((l.param, l.coordinate)),
+                _ => None,
+            }));
         }
         plan
     }

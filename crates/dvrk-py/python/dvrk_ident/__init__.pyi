@@ -424,6 +424,8 @@ def fit(
     sdp_regularization: Optional[float] = None,
     stribeck: Optional[float] = None,
     dahl: Optional[float] = None,
+    position_torque: Optional[int] = None,
+    load_friction: Optional[bool] = None,
     mounting_pitch: Optional[float] = None,
     bounds: Optional[str] = None,
     ellipsoids: Optional[bool] = None,
@@ -443,6 +445,9 @@ def fit(
     description (``--no-ellipsoids``); ``mounting_pitch``: degrees, gravity
     ``(0, -9.81 sin p, -9.81 cos p)`` in the base frame (``--mounting-pitch``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
     ``dahl``: Dahl friction of this stiffness (1/rad or 1/m) on every friction element (``--dahl``);
+    ``position_torque``: a Fourier series of this order (1 to 3) in the joint angle on every revolute
+    friction element (``--position-torque``); ``load_friction=True``: Coulomb friction in proportion to
+    each coordinate's torque (``--load-friction``);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``stribeck=0.3``, ``dahl=20`` for
     the keywords not given); ``log_offsets=True``: every log after the first gets its own
     torque offset per coordinate (``inputs[k]["offset"]``; the model's ``Fo`` are the
