@@ -206,8 +206,9 @@ int dvrk_gravity(const DvrkModel *model, DvrkWorkspace *ws, const double *q, dou
 /*
  Inverse dynamics (N·m or N per model coordinate): the torque the result's model
  predicts at `q`, `dq`, `ddq` — links, friction (with the Stribeck term of a fit that
- had one), springs, motor inertias and known forces (e.g. the MTM's cable), i.e. the
- measured torque mapped to model coordinates. On a robot without known forces (the
+ had one, its position torques, its load friction with the load predicted as
+ `Model::loaded_inverse_dynamics` does), springs, motor inertias and known forces (e.g.
+ the MTM's cable), i.e. the measured torque mapped to model coordinates. On a robot without known forces (the
  PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. Real-time: no
  allocation, no lock. 0, or a negative code with `tau` untouched.
 

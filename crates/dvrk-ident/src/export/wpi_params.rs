@@ -9,7 +9,15 @@
 /// `Im` the motor inertia and `K` the spring stiffness.
 pub fn wpi_params_json(model: &dvrk_model::Model, params: &[f64]) -> serde_json::Value {
     let mut out = serde_json::Map::new();
-    for (i, f) in model.frames.iter().enumerate() {
+    // Frames after the last one with parameters (the PSM's tool-tip frames 17-18, added
+    // for wrenches) are not in the 2019 layout, which numbers the dynamic frames only;
+    // an empty frame between two with parameters (the PSM's frame 3) is.
+    let dynamic = model
+        .frames
+        .iter()
+        .rposition(|f| f.inertia.is_some() || !f.elements.is_empty())
+        .map_or(0, |last| last + 1);
+    for (i, f) in model.frames.iter().take(dynamic).enumerate() {
         let (mut inertia, mut com, mut mass) = ([0.0; 6], [0.0; 3], 0.0);
         if let Some(p0) = f.inertia {
             let s = dvrk_model::inertia::standard_from_barycentric(&params[p0..p0 + 10]);
