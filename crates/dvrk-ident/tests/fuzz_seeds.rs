@@ -106,8 +106,9 @@ fn compressed_seeds_are_read_and_bombs_refused() {
     ] {
         let log = read_mcap(dir.join(name), &options).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!((log.time.len(), log.dof()), (4, 7), "{name}");
-        // position of joint j at sample k: ((k (j + 1)) mod 17 − 8) / 32 (exact)
-        assert_eq!(log.q[(3, 1)], ((3 * 2) % 17 - 8) as f64 / 32.0, "{name}");
+        // position of joint j at sample k: ((k (j + 1)) mod 17 − 8) / 32 (exact); k = 3,
+        // j = 1: (6 − 8) / 32
+        assert_eq!(log.q[(3, 1)], -2.0 / 32.0, "{name}");
     }
     for name in ["bomb-declared.db3.zst", "bomb-streamed.bag.zst"] {
         let error = read_mcap(dir.join(name), &options).unwrap_err().to_string();
