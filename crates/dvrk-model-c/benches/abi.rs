@@ -124,7 +124,7 @@ fn bench_robot(c: &mut Criterion, robot: &str, source: &str) {
             Paths {
                 algorithm: "inverse dynamics",
                 rust: Box::new(move || {
-                    model.inverse_dynamics(&mut ws1, params, black_box(q), dq, ddq, &mut t1);
+                    model.loaded_inverse_dynamics(&mut ws1, params, black_box(q), dq, ddq, &mut t1);
                     model.add_known_forces(q, &mut t1);
                     black_box(&t1);
                 }),
