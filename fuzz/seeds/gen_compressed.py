@@ -18,28 +18,16 @@ import sys
 import tempfile
 from pathlib import Path
 
-import numpy as np
-
 ROOT = Path(__file__).resolve().parents[2]
 OUT = ROOT / "fuzz" / "seeds" / "mcap"
-sys.path.insert(0, str(ROOT / "tests" / "python"))
-import bags  # noqa: E402
-
-N = 4
-T0_NS = 1_700_000_000 * 1_000_000_000
-NAMES = ["outer_yaw", "outer_pitch", "outer_insertion", "outer_roll",
-         "outer_wrist_pitch", "outer_wrist_yaw", "jaw"]
+sys.path.insert(0, str(ROOT / "crates" / "dvrk-logs" / "tests" / "fixtures" / "bags"))
+import gen_bags  # noqa: E402
+import bags  # noqa: E402  (put on the path by gen_bags)
 
 
 def topics():
-    k = np.arange(N)[:, None]
-    j = np.arange(7)[None, :]
-    position = ((k * (j + 1)) % 17 - 8) / 32.0
-    velocity = ((k + j) % 5 - 2) / 8.0
-    effort = ((3 * k + 2 * j) % 11 - 5) / 16.0
-    stamps = T0_NS + np.arange(N, dtype=np.int64) * 5_000_000
     # all seven joints on one topic: the target reads with the automatic topic choice
-    return bags.psm_topics(NAMES, stamps, position, velocity, effort, jaw_topic=False)
+    return gen_bags.samples(4, jaw_topic=False)
 
 
 def only_file(folder: Path, pattern: str) -> Path:
