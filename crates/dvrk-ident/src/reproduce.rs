@@ -180,17 +180,19 @@ fn options(settings: &FitSettings) -> Options {
         }
     };
 
-    // The low-pass filter: `--cutoff` sets the cut-off of a filter of the default
-    // order, form and convention.
+    // The low-pass filter: `--cutoff` and `--filter-order` set the cut-off and the order
+    // of a filter of the default form and convention.
     match &p.filter {
         None => given.push(("cutoff", Value::Name("none".into()))),
         Some(lp) => {
+            let default = LowPass::default();
             let default_shape = LowPass {
                 cutoff_hz: lp.cutoff_hz.clone(),
+                order: lp.order,
                 ..LowPass::default()
             };
             if *lp == default_shape {
-                if *lp != LowPass::default() {
+                if lp.cutoff_hz != default.cutoff_hz {
                     given.push((
                         "cutoff",
                         match &lp.cutoff_hz {
@@ -199,13 +201,16 @@ fn options(settings: &FitSettings) -> Options {
                         },
                     ));
                 }
+                if lp.order != default.order {
+                    given.push(("filter_order", Value::Int(lp.order)));
+                }
             } else {
                 let json = serde_json::to_value(lp).unwrap_or_default();
                 note(
                     format!(
-                        "the low-pass filter {} (only its cut-off has a flag, --cutoff, for a \
-                         filter of order 6, second-order sections, standard convention, \
-                         default padding)",
+                        "the low-pass filter {} (only its cut-off and order have flags, \
+                         --cutoff and --filter-order, for a filter of second-order sections, \
+                         standard convention, default padding)",
                         serde_json::to_string(lp).unwrap_or_default()
                     ),
                     "filter",
@@ -631,6 +636,9 @@ mod tests {
         s.processing
             .set_cutoff(Some(Cutoff::PerJoint(vec![5.0, 3.5])));
         s.processing.filter_torque = true;
+        if let Some(f) = s.processing.filter.as_mut() {
+            f.order = 4;
+        }
         s.processing.trim = 150;
         s.processing.decimate = 2;
         s.processing.min_speed = Some(0.01);
@@ -650,7 +658,7 @@ mod tests {
         assert_eq!(
             cli.text,
             "dvrk-ident fit 'my one.csv' --robot psm --format wpi --rate 200 --method sdp \
-             --test two.csv --cutoff 5,3.5 --filter-torque --trim 150 --decimate 2 \
+             --test two.csv --cutoff 5,3.5 --filter-order 4 --filter-torque --trim 150 --decimate 2 \
              --min-speed 0.01 --delay 0.01,0.02 --test-window 300 --sdp-regularization 1e-9 \
              --stribeck 0.3 --bounds 2019 --no-ellipsoids"
         );
@@ -662,7 +670,7 @@ mod tests {
              train = [di.read_log(\"my one.csv\", robot, format=\"wpi\", rate=200)]\n\
              test = [di.read_log(\"two.csv\", robot, format=\"wpi\", rate=200)]\n\
              result = di.fit(robot, train, method=\"sdp\", test=test, cutoff=[5, 3.5], \
-             filter_torque=True, trim=150, decimate=2, min_speed=0.01, delay=[0.01, 0.02], \
+             filter_order=4, filter_torque=True, trim=150, decimate=2, min_speed=0.01, delay=[0.01, 0.02], \
              test_window=300, sdp_regularization=1e-9, stribeck=0.3, bounds=\"2019\", \
              ellipsoids=False)\n"
         );
