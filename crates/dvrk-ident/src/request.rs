@@ -797,24 +797,25 @@ impl FitRequest {
         }
         let train_data = read_all(&read, train, progress)?;
         let train_logs = log_data(&train_data, train);
-        let Some(candidates) = &settings.select else {
-            return self.fit_with_test(
-                model,
-                settings,
-                &read,
-                Some(&train_data),
-                progress,
-                |m, s, test| fit_logs(m, &train_logs, test, s, progress),
-            );
+        let (model, settings, selection) = match &settings.select {
+            None => (model, settings, None),
+            Some(candidates) => {
+                let (selection, chosen) = crate::fit::select::select(
+                    robot,
+                    &train_logs,
+                    &settings,
+                    candidates,
+                    progress,
+                )?;
+                // The winner on all the data; the settings keep the candidates asked for.
+                let settings = FitSettings {
+                    select: settings.select.clone(),
+                    ..chosen.settings(&settings)
+                };
+                let model = settings.model(robot)?.into_owned();
+                (model, settings, Some(selection))
+            }
         };
-        let (selection, chosen) =
-            crate::fit::select::select(robot, &train_logs, &settings, candidates, progress)?;
-        // The winner on all the data; the settings keep the candidates asked for.
-        let settings = FitSettings {
-            select: settings.select.clone(),
-            ..chosen.settings(&settings)
-        };
-        let model = settings.model(robot)?.into_owned();
         let mut outcome = self.fit_with_test(
             model,
             settings,
@@ -823,7 +824,7 @@ impl FitRequest {
             progress,
             |m, s, test| fit_logs(m, &train_logs, test, s, progress),
         )?;
-        outcome.result.selection = Some(selection);
+        outcome.result.selection = selection;
         Ok(outcome)
     }
 
