@@ -548,3 +548,77 @@ fn a_result_with_position_torque_and_load_friction_loads() {
     model.loaded_inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut plain);
     assert!(got.iter().zip(&plain).any(|(a, b)| (a - b).abs() > 1e-4));
 }
+
+/// `dvrk_gravity` and `dvrk_mass_matrix` write straight into the caller's buffer when
+/// the model's bounds prove the result finite (`|q| ≤ 1e6`), and check their result
+/// otherwise: both paths give dvrk-model's numbers to the bit (within the bound, and at
+/// an insertion of 1e7 m, beyond it but finite), and an insertion of 1e300 m, whose
+/// mass matrix overflows, is `DVRK_ERR_OVERFLOW` with the output untouched. No compiler
+/// needed.
+#[test]
+fn gravity_and_mass_matrix_are_bit_exact_on_both_paths_and_refuse_overflow() {
+    use dvrk_model_c::*;
+    let model = dvrk_model::Model::builtin("psm").unwrap();
+    let names = model.param_names();
+    let params: Vec<f64> = (0..model.n_params())
+        .map(|k| 0.02 * ((k % 5) as f64 + 1.0))
+        .collect();
+    let named: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .zip(&params)
+        .map(|(n, v)| (n.to_string(), (*v).into()))
+        .collect();
+    let doc = serde_json::json!({
+        "robot": "psm",
+        "robot_source": "builtin:psm",
+        "settings": {},
+        "parameters": named,
+    });
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_bounded");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("result.json");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    let loaded = DvrkModel::from_result(&path).unwrap();
+    let mut ws = Workspace::new(&model);
+    for insertion in [0.12, -3e5, 1e7, 1e300] {
+        let q = [0.1, -0.2, insertion, 0.3, -0.1, 0.2, 0.4];
+        let (mut g, mut m) = ([0.0; 7], [0.0; 49]);
+        model.gravity_torque(&mut ws, &params, &q, &mut g);
+        model.mass_matrix_into(&mut ws, &params, &q, &mut m);
+        let (mut got_g, mut got_m) = ([-1.5; 7], [-1.5; 49]);
+        // SAFETY: a live model and a workspace of this thread, arrays of 7 and 49.
+        let (rc_g, rc_m) = unsafe {
+            let w = dvrk_workspace_new(&loaded);
+            let rc = (
+                dvrk_gravity(&loaded, w, q.as_ptr(), got_g.as_mut_ptr()),
+                dvrk_mass_matrix(&loaded, w, q.as_ptr(), got_m.as_mut_ptr()),
+            );
+            dvrk_workspace_free(w);
+            rc
+        };
+        // At 1e300 m the mass matrix (m·t²) overflows; the gravity torque (m·g·t) may.
+        assert_eq!(
+            m.iter().all(|x| x.is_finite()),
+            insertion != 1e300,
+            "insertion {insertion}"
+        );
+        for (what, rc, got, want, sentinel) in [
+            ("gravity", rc_g, &got_g[..], &g[..], [-1.5; 7].as_slice()),
+            (
+                "mass matrix",
+                rc_m,
+                &got_m[..],
+                &m[..],
+                [-1.5; 49].as_slice(),
+            ),
+        ] {
+            if want.iter().all(|x| x.is_finite()) {
+                assert_eq!(rc, DVRK_OK, "{what} at insertion {insertion}");
+                assert_eq!(got, want, "{what} at insertion {insertion}");
+            } else {
+                assert_eq!(rc, DVRK_ERR_OVERFLOW, "{what} at insertion {insertion}");
+                assert_eq!(got, sentinel, "{what}: untouched");
+            }
+        }
+    }
+}

@@ -282,6 +282,59 @@ fn gravity_torque_is_static_inverse_dynamics() {
     }
 }
 
+/// `gravity_torque_bound` and `mass_matrix_bound` bound the gravity torque and the mass
+/// matrix at every position within their range
+/// (random positions and the corners of the box, where the prismatic strokes are longest),
+/// for random parameters of every sign, from a unit range to one of 1e6 (rad or m); and it
+/// is +∞ when the parameters overflow it. The C ABI skips its output checks on these bounds.
+#[test]
+fn gravity_and_mass_matrix_stay_within_their_bounds() {
+    for (r, name) in ROBOTS.iter().enumerate() {
+        let model = builtin(name);
+        let n = model.dof();
+        let mut ws = Workspace::new(&model);
+        let mut rng = Rng::new(650 + r as u64);
+        let (mut g, mut m) = (vec![0.0; n], vec![0.0; n * n]);
+        for q_max in [1.0, 1e6] {
+            for sample in 0..SAMPLES {
+                let pi = random_params(&model, &mut rng);
+                let bound = model.gravity_torque_bound(&pi, q_max);
+                assert!(bound.is_finite() && bound > 0.0, "{name}: bound {bound}");
+                let q: Vec<f64> = (0..n)
+                    .map(|_| {
+                        let u = rng.uniform(-1.0, 1.0);
+                        q_max * if sample % 2 == 0 { u } else { u.signum() }
+                    })
+                    .collect();
+                model.gravity_torque(&mut ws, &pi, &q, &mut g);
+                let largest = g.iter().fold(0.0f64, |a, t| a.max(t.abs()));
+                assert!(
+                    largest <= bound,
+                    "{name}: |g| = {largest} above its bound {bound} at q_max {q_max}"
+                );
+                let mass_bound = model.mass_matrix_bound(&pi, q_max);
+                assert!(mass_bound.is_finite(), "{name}: mass bound {mass_bound}");
+                model.mass_matrix_into(&mut ws, &pi, &q, &mut m);
+                let largest = m.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+                assert!(
+                    largest <= mass_bound,
+                    "{name}: |M| = {largest} above its bound {mass_bound} at q_max {q_max}"
+                );
+            }
+        }
+        let huge: Vec<f64> = random_params(&model, &mut rng)
+            .iter()
+            .map(|p| p * 1e306)
+            .collect();
+        assert_eq!(
+            model.gravity_torque_bound(&huge, 1.0),
+            f64::INFINITY,
+            "{name}"
+        );
+        assert_eq!(model.mass_matrix_bound(&huge, 1.0), f64::INFINITY, "{name}");
+    }
+}
+
 /// Rotation-vector of `R(q + h e_k) R(q − h e_k)ᵀ`-style finite differences: ω from the
 /// skew part of Ṙ·Rᵀ.
 fn angular_rate(dr: &nalgebra::Matrix3<f64>, r: &nalgebra::Matrix3<f64>) -> Vector3<f64> {
