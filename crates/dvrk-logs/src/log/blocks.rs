@@ -137,7 +137,7 @@ impl LogReader {
 
     /// Every sample in memory: the blocks of one pass, collected.
     pub fn read_all(&self) -> Result<JointLog, LogError> {
-        let mut all = super::TrajectoryBuilder::default();
+        let mut all = super::JointLogBuilder::default();
         for block in self.blocks(super::BLOCK_SAMPLES)? {
             all.push(&block?);
         }

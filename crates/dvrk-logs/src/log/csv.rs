@@ -4,7 +4,7 @@
 //! row into blocks of samples, and [`read_wpi`] / [`read_headered`] collect every block,
 //! so a log too long for memory and a short one go through the same parsing and checks.
 
-use super::{fmt_f64, open_text, write_atomic, LogError, TrajectoryBuilder};
+use super::{fmt_f64, open_text, write_atomic, JointLogBuilder, LogError};
 use crate::columns::{are_model_coordinate_names, ColumnKind, ColumnLayout};
 use crate::joint_log::{Coordinates, JointLog, Signal};
 use csv::{ReaderBuilder, StringRecord, Trim, WriterBuilder};
@@ -248,7 +248,7 @@ pub fn read_wpi(
     dof: Option<usize>,
 ) -> Result<JointLog, LogError> {
     let mut blocks = WpiBlocks::open(path, rate_hz, dof)?;
-    let mut all = TrajectoryBuilder::default();
+    let mut all = JointLogBuilder::default();
     while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
         all.push(&b);
     }
@@ -479,7 +479,7 @@ impl HeaderedBlocks {
 /// ```
 pub fn read_headered(path: impl AsRef<Path>) -> Result<JointLog, LogError> {
     let mut blocks = HeaderedBlocks::open(path)?;
-    let mut all = TrajectoryBuilder::default();
+    let mut all = JointLogBuilder::default();
     while let Some(b) = blocks.next_block(super::BLOCK_SAMPLES)? {
         all.push(&b);
     }

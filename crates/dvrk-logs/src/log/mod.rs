@@ -391,7 +391,7 @@ pub fn resample(path: &Path, traj: JointLog, hz: f64) -> Result<JointLog, LogErr
         source,
     })?;
     let mut r = blocks::BlockResampler::new(path, hz, traj.dof(), traj.dq.is_some())?;
-    let mut all = TrajectoryBuilder::default();
+    let mut all = JointLogBuilder::default();
     all.push(&r.push(&traj)?);
     all.push(&r.finish(&traj)?);
     Ok(all.build())
@@ -544,14 +544,14 @@ pub(crate) fn open_text(path: &Path) -> Result<Box<dyn BufRead>, LogError> {
 /// Blocks of one log appended into a whole trajectory (the first block gives the
 /// names, coordinates and source).
 #[derive(Default)]
-pub(crate) struct TrajectoryBuilder {
+pub(crate) struct JointLogBuilder {
     first: Option<JointLog>,
     time: Vec<f64>,
     /// Row-major `q`, `dq` and `tau`.
     values: [Vec<f64>; 3],
 }
 
-impl TrajectoryBuilder {
+impl JointLogBuilder {
     pub(crate) fn push(&mut self, block: &JointLog) {
         if self.first.is_none() {
             let dof = block.dof();

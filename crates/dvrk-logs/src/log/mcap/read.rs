@@ -77,7 +77,7 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointL
 /// ```
 pub fn read_mcap_log(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapLog, LogError> {
     let reader = McapReader::open(path, options)?;
-    let mut all = crate::log::TrajectoryBuilder::default();
+    let mut all = crate::log::JointLogBuilder::default();
     for block in reader.blocks(crate::log::BLOCK_SAMPLES)? {
         all.push(&block?);
     }
