@@ -191,13 +191,17 @@ fn psm_si_tool_tip_matches_the_controllers_arm_and_tool_dh() {
         .map(|n| frame_index(&model, n));
     let mut links = virtual_dh(-0.4826, false);
     links.extend(large_needle_driver_420006());
-    let to_model = model.measured_to_model_matrix().expect("invertible coupling");
+    let to_model = model
+        .measured_to_model_matrix()
+        .expect("invertible coupling");
     let mut ws = Workspace::new(&model);
     let mut rng = Rng::new(590);
     let mut worst = 0.0f64;
     for _ in 0..POSES {
         let measured = random_pose(&model, &mut rng);
-        let q = (&to_model * nalgebra::DVector::from_vec(measured)).as_slice().to_vec();
+        let q = (&to_model * nalgebra::DVector::from_vec(measured))
+            .as_slice()
+            .to_vec();
         model.forward_kinematics(&mut ws, &q);
         let joints = psm_si_tool_joints(&q);
         let mut theirs = cisst::forward_kinematics(&links, &joints[..6]);
@@ -223,7 +227,15 @@ fn psm_si_tool_coupling_is_the_instrument_files() {
     let model = builtin("psm_si_tool");
     assert_eq!(
         model.measured.joints,
-        ["yaw", "pitch", "insertion", "roll", "wrist_pitch", "wrist_yaw", "jaw"]
+        [
+            "yaw",
+            "pitch",
+            "insertion",
+            "roll",
+            "wrist_pitch",
+            "wrist_yaw",
+            "jaw"
+        ]
     );
     let m = &model.measured.coupling;
     for r in 0..7 {
@@ -236,16 +248,25 @@ fn psm_si_tool_coupling_is_the_instrument_files() {
             assert_eq!(m[(r, c)], expected, "coupling ({r}, {c})");
         }
     }
-    let to_model = model.measured_to_model_matrix().expect("invertible coupling");
-    let round_trip = (m * &to_model - nalgebra::DMatrix::<f64>::identity(7, 7)).abs().max();
-    assert!(round_trip < 1e-12, "measured -> model -> measured: {round_trip:e}");
+    let to_model = model
+        .measured_to_model_matrix()
+        .expect("invertible coupling");
+    let round_trip = (m * &to_model - nalgebra::DMatrix::<f64>::identity(7, 7))
+        .abs()
+        .max();
+    assert!(
+        round_trip < 1e-12,
+        "measured -> model -> measured: {round_trip:e}"
+    );
     // Each instrument frame's angle (theta, rad) minus its DH offset, as the file's joint.
     let angle = |frame: &str, q: &[f64]| model.frame(frame_index(&model, frame)).value.eval(q);
     let mut rng = Rng::new(591);
     for _ in 0..50 {
         let q: Vec<f64> = (0..7).map(|_| rng.uniform(-2.0, 2.0)).collect();
         let j = psm_si_tool_joints(&q);
-        let measured = (m * nalgebra::DVector::from_column_slice(&q)).as_slice().to_vec();
+        let measured = (m * nalgebra::DVector::from_column_slice(&q))
+            .as_slice()
+            .to_vec();
         let back = (&to_model * nalgebra::DVector::from_column_slice(&measured))
             .as_slice()
             .to_vec();

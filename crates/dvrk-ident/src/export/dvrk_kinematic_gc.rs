@@ -424,8 +424,7 @@ fn check_model(model: &Model, arm: &Arm) -> Result<Vec<usize>, IdentError> {
     let mut moved_by_extra = vec![false; model.frames.len() + 1];
     for i in 1..=model.frames.len() {
         let f = model.frame(i);
-        moved_by_extra[i] =
-            moved_by_extra[f.parent] || f.value.terms.iter().any(|&(k, _)| k >= na);
+        moved_by_extra[i] = moved_by_extra[f.parent] || f.value.terms.iter().any(|&(k, _)| k >= na);
         if moved_by_extra[i] && f.inertia.is_some() {
             return Err(mismatch(
                 model,
