@@ -290,6 +290,31 @@ fn psm_si_tool_coupling_is_the_instrument_files() {
     }
 }
 
+/// psm_si_tool.toml repeats psm_si.toml's arm (the description format has no include):
+/// its first frames, parameters, measured joints, ranges, limits, gravity and bounds are
+/// psm_si's, so the two cannot drift apart.
+#[test]
+fn psm_si_tool_arm_is_psm_si() {
+    let (arm, tool) = (builtin("psm_si"), builtin("psm_si_tool"));
+    for i in 1..=arm.frames.len() {
+        assert_eq!(
+            format!("{:?}", arm.frame(i)),
+            format!("{:?}", tool.frame(i)),
+            "frame {i}"
+        );
+    }
+    let names = |m: &Model| m.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&arm), names(&tool)[..arm.n_params()]);
+    assert_eq!(arm.measured.joints, tool.measured.joints[..3]);
+    assert_eq!(arm.measured.ranges, tool.measured.ranges[..3]);
+    assert_eq!(
+        format!("{:?}", arm.limits),
+        format!("{:?}", &tool.limits[..3])
+    );
+    assert_eq!(arm.gravity, tool.gravity);
+    assert_eq!(format!("{:?}", arm.bounds), format!("{:?}", tool.bounds));
+}
+
 /// Every frame of the Si descriptions that carries mass is the physical DH's frame of the
 /// same link (so a centre of mass means the same in both), up to the file's rounding: its
 /// parallelogram angles have 6 digits and its insertion `theta` is written 3.14159625
