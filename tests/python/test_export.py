@@ -342,6 +342,8 @@ def physical_params(robot, rng):
 ROBOTS = {
     "psm": lambda: di.Model.load("psm"),
     "mtm": lambda: di.Model.load("mtm"),
+    # The PSM Si's parallelogram and two-stage insertion, its instrument's coupled joints.
+    "psm_si_tool": lambda: di.Model.load("psm_si_tool"),
     "dh_2w": lambda: di.Model.from_toml(DH, "dh_odd.toml"),
     "dh_chain": lambda: di.Model.from_toml(DH.replace('theta = "2*w"', 'theta = "w"'),
                                            "dh_odd.toml"),
@@ -375,7 +377,8 @@ def test_exported_urdf_loads_everywhere_with_its_mimics(name, tmp_path, capsys):
     assert model.nv == robot.dof
     joints = [model.joints[model.getJointId(c)] for c in robot.coordinates]
     assert sorted(j.idx_v for j in joints) == list(range(robot.dof))
-    worst = 0.0
+    worst = pose_worst = 0.0
+    posed = set()
     for _ in range(20):
         q, dq, ddq = (rng.uniform(-1, 1, robot.dof) for _ in range(3))
         ours = robot.inverse_dynamics(params, q, dq, ddq)
@@ -389,5 +392,17 @@ def test_exported_urdf_loads_everywhere_with_its_mimics(name, tmp_path, capsys):
         tau = pin.rnea(model, data, qp, vp, ap)
         theirs = np.array([tau[j.idx_v] for j in joints])
         worst = max(worst, np.abs(ours - theirs).max())
-    print(f"{name}: max |ours - Pinocchio RNEA| = {worst:.2e} N·m")
+        # Every frame's pose in the base frame: the generated URDF's link of the same
+        # name, from its link "base" (below which a rotated root may turn gravity).
+        pin.framesForwardKinematics(model, data, qp)
+        poses = robot.forward_kinematics(q)
+        base = data.oMf[model.getFrameId("base")].inverse()
+        for k, frame in enumerate(robot.frame_names[1:], start=1):
+            if model.existFrame(frame):
+                theirs = (base * data.oMf[model.getFrameId(frame)]).homogeneous
+                pose_worst = max(pose_worst, np.abs(poses[k] - theirs).max())
+                posed.add(frame)
+    print(f"{name}: max |ours - Pinocchio RNEA| = {worst:.2e} N·m, frame poses "
+          f"{pose_worst:.2e} over {len(posed)} frames")
     assert worst < 1e-9
+    assert pose_worst < 1e-9 and len(posed) >= 3, (pose_worst, posed)

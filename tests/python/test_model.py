@@ -26,7 +26,8 @@ def state(robot, n, seed=3):
 
 
 def test_builtin_names_and_properties(psm):
-    assert di.Model.builtin_names() == ["psm", "psm_simplified", "mtm", "ecm", "psm_si", "ecm_si"]
+    assert di.Model.builtin_names() == ["psm", "psm_simplified", "mtm", "ecm", "psm_si", "psm_si_tool",
+                                      "ecm_si"]
     assert psm.name == "psm"
     assert psm.source == "builtin:psm"
     assert psm.dof == 7

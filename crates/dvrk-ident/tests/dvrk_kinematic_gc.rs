@@ -12,11 +12,17 @@ use dvrk_test_support::{physical_params, Rng};
 
 const POSES: usize = 200;
 
-/// The controller's efforts from the exported file at the arm's joints `j`.
+/// The controller's efforts from the exported file at the arm's joints `j`. With an
+/// instrument (psm_si_tool), the controller's effort vector has one entry per joint and
+/// `GravityCompensationPSM::compute` leaves the instrument's at 0.
 fn controller(robot: &str, file: &serde_json::Value, j: &[f64], up: [f64; 3]) -> Vec<f64> {
     let links = cisst::links_of(file);
     match robot {
-        "psm_si" => cisst::psm_si_gc(&links, &[j[0], j[1], j[2]], up).to_vec(),
+        "psm_si" | "psm_si_tool" => {
+            let mut e = cisst::psm_si_gc(&links, &[j[0], j[1], j[2]], up).to_vec();
+            e.resize(j.len(), 0.0);
+            e
+        }
         "ecm_si" => cisst::ecm_si_gc(&links, &[j[0], j[1], j[2], j[3]], up).to_vec(),
         "ecm" => cisst::ecm_classic_gc(&links, &[j[0], j[1], j[2], j[3]], up).to_vec(),
         _ => unreachable!(),
@@ -79,16 +85,29 @@ fn endoscope(robot: &str) -> Option<&'static str> {
 /// and the Classic ECM files represent them exactly (the PSM Si's first insertion stage,
 /// which the controller leaves out of the insertion effort, moved onto the others; the
 /// Classic ECM's extra insertion mass onto the roll link), the ECM Si's cannot (its
-/// insertion mass is the endoscope's, its roll is not compensated), and says so.
+/// insertion mass is the endoscope's, its roll is not compensated), and says so. The PSM
+/// Si with its instrument gives the file of its arm (the instrument moves no link) and no
+/// gravity on the instrument's joints, as the controller.
 #[test]
 fn export_is_the_model_in_the_controllers_computation() {
-    for (k, robot) in ["psm_si", "ecm", "ecm_si"].into_iter().enumerate() {
+    for (k, robot) in ["psm_si", "ecm", "ecm_si", "psm_si_tool"]
+        .into_iter()
+        .enumerate()
+    {
         for (i, pitch_deg) in [0.0f64, -45.0, 70.0].into_iter().enumerate() {
             let mut model = Model::builtin(robot).unwrap();
             model.set_mounting_pitch(pitch_deg).unwrap();
             let mut rng = Rng::new(7000 + 10 * k as u64 + i as u64);
             let params = physical_params(&model, &mut rng);
             let gc = dvrk_kinematic_gc(&model, &params, endoscope(robot)).unwrap();
+            if robot == "psm_si_tool" {
+                // The same arm parameters (the arm's frames and parameters come first).
+                let mut arm = Model::builtin("psm_si").unwrap();
+                arm.set_mounting_pitch(pitch_deg).unwrap();
+                let alone = dvrk_kinematic_gc(&arm, &params[..arm.n_params()], None).unwrap();
+                assert_eq!(gc.links, alone.links, "{robot} at {pitch_deg}°");
+                assert_eq!(gc.joints, ["yaw", "pitch", "insertion"]);
+            }
             assert!(
                 (gc.mounting_pitch_rad() - pitch_deg.to_radians()).abs() < 1e-12,
                 "{robot}: mounting pitch {} rad",
@@ -178,6 +197,21 @@ fn other_arms_and_bad_endoscopes_are_refused() {
     );
     let psm_si = message("psm_si", Some("Si_HD_UP"));
     assert!(psm_si.contains("carries no endoscope"), "{psm_si}");
+    // An instrument link with mass: the controller's file has no link for it.
+    let text = include_str!("../../dvrk-model/robots/psm_si_tool.toml").replace(
+        "theta = \"c_roll*q4\"\nfriction = true",
+        "theta = \"c_roll*q4\"\ninertia = true\nfriction = true",
+    );
+    let heavy = Model::from_toml_str(&text, "psm_si_tool with a heavy roll").unwrap();
+    let mut rng = Rng::new(11);
+    let params = physical_params(&heavy, &mut rng);
+    let err = dvrk_kinematic_gc(&heavy, &params, None)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("frame roll carries a link moved by coordinate(s) beyond the arm's 3"),
+        "{err}"
+    );
     // The settings right, parameters of no rigid body (0.1 everywhere: principal
     // moments of −0.3 kg·m²) are refused, as the MTM's file and a URDF refuse them.
     let not_rigid = message("ecm", Some("Classic_HD_STRAIGHT"));

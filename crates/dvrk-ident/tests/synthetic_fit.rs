@@ -218,10 +218,12 @@ fn mtm_synthetic_fit_recovers_base_parameters() {
 }
 
 /// The arms the dVRK controller's kinematic gravity compensation is for, mounted as the
-/// dVRK mounts them (PSM1 −45°, ECM Si −70°, Classic ECM −45°).
+/// dVRK mounts them (PSM1 −45°, ECM Si −70°, Classic ECM −45°), and the PSM Si with its
+/// instrument (its motor inertias, friction and roll spring identified with the arm).
 #[test]
 fn ecm_and_si_arms_mounted_synthetic_fit_recovers_base_parameters() {
     check_at("psm_si", Some(-45.0));
+    check_at("psm_si_tool", Some(-45.0));
     check_at("ecm_si", Some(-70.0));
     check_at("ecm", Some(-45.0));
 }

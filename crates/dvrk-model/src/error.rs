@@ -45,7 +45,7 @@ pub enum ModelError {
         message: String,
     },
     /// A built-in robot name that does not exist.
-    #[error("unknown robot `{0}` (built-in robots: psm, psm_simplified, mtm, ecm, psm_si, ecm_si; or give a path to a .toml or .urdf file)")]
+    #[error("unknown robot `{0}` (built-in robots: psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si; or give a path to a .toml or .urdf file)")]
     UnknownRobot(String),
     /// A numerical problem while building the model (e.g. no identifiable parameter).
     #[error("{model}: {message}")]

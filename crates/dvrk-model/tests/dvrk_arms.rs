@@ -1,7 +1,9 @@
-//! The ECM, PSM Si and ECM Si descriptions against the dVRK controller's own files and
-//! code (jhu-dvrk/sawIntuitiveResearchKit share/kinematic/*.json, read by jhu-cisst/cisst
-//! cisstRobot), transcribed in `dvrk_test_support::cisst` independently of dvrk-model:
-//! forward kinematics against the virtual DH the controller uses for the arm's pose,
+//! The ECM, PSM Si (with and without its instrument) and ECM Si descriptions against the
+//! dVRK controller's own files and code (jhu-dvrk/sawIntuitiveResearchKit
+//! share/kinematic/*.json and share/tool/*.json, read by jhu-cisst/cisst cisstRobot),
+//! transcribed in `dvrk_test_support::cisst` independently of dvrk-model: forward
+//! kinematics against the virtual DH the controller uses for the arm's pose (and, for the
+//! PSM Si's instrument, the tool's DH, tool tip and actuator-to-joint coupling),
 //! every physical-DH frame against the gravity-compensation chain, and the nominal
 //! masses' gravity torque against the controller's gravity compensation at several
 //! mounting pitches.
@@ -32,6 +34,47 @@ fn virtual_dh(insertion_offset: f64, roll: bool) -> Vec<Link> {
         links.push(Link::new(0.0, 0.0, 0.0, 0.3829, false, 0.0));
     }
     links
+}
+
+/// share/tool/LARGE_NEEDLE_DRIVER_420006.json (sawIntuitiveResearchKit commit 0fcfe53):
+/// the links the controller appends to the first three of PSM_Si.json (roll, wrist_pitch,
+/// wrist_yaw; offsets −1.5708 as π/2, see [`virtual_dh`]) ...
+fn large_needle_driver_420006() -> Vec<Link> {
+    vec![
+        Link::new(0.0, 0.0, 0.0, 0.4670, false, 0.0),
+        Link::new(-1.5708, 0.0, 0.0, 0.0, false, -FRAC_PI_2),
+        Link::new(-1.5708, 0.0091, 0.0, 0.0, false, -FRAC_PI_2),
+    ]
+}
+
+/// ... its `tooltip_offset`, appended after the last link ...
+#[rustfmt::skip]
+fn tooltip_offset() -> Matrix4<f64> {
+    Matrix4::new(
+         0.0, -1.0, 0.0, 0.0,
+         0.0,  0.0, 1.0, 0.0,
+        -1.0,  0.0, 0.0, 0.0,
+         0.0,  0.0, 0.0, 1.0,
+    )
+}
+
+/// ... and its `coupling.ActuatorToJointPosition` (roll, wrist pitch, wrist yaw, jaw from
+/// the instrument's four actuators), which the controller places at joints 4..7 of an
+/// identity (`ConfigureTool`: the arm's joints are their actuators).
+const LND_420006_COUPLING: [[f64; 4]; 4] = [
+    [-1.5632, 0.0, 0.0, 0.0],
+    [0.0, 1.0186, 0.0, 0.0],
+    [0.0, -0.8306, 0.6089, 0.6089],
+    [0.0, 0.0, -1.2177, 1.2177],
+];
+
+/// The controller's joints of the PSM Si with the instrument from its 7 actuators.
+fn psm_si_tool_joints(actuators: &[f64]) -> Vec<f64> {
+    let mut j = actuators[..3].to_vec();
+    for row in LND_420006_COUPLING {
+        j.push((0..4).map(|k| row[k] * actuators[3 + k]).sum());
+    }
+    j
 }
 
 /// PSM_Si_physical.json, as written (masses and centres of mass included).
@@ -134,6 +177,142 @@ fn forward_kinematics_matches_the_controllers_virtual_dh() {
             "{robot}: frame {tip} differs from the virtual DH by {worst:e}"
         );
     }
+}
+
+/// The PSM Si with its instrument: the tool tip, wrist pitch and wrist yaw frames against
+/// the controller's chain (PSM_Si.json's three links, the instrument's three, its
+/// tooltip_offset) at the joints the controller computes from the actuators with the
+/// file's coupling, on random poses within the description's measured ranges (the model's
+/// coordinates from them through the description's coupling).
+#[test]
+fn psm_si_tool_tip_matches_the_controllers_arm_and_tool_dh() {
+    let model = builtin("psm_si_tool");
+    let frames = ["insertion", "roll", "wrist_pitch", "wrist_yaw", "tool_tip"]
+        .map(|n| frame_index(&model, n));
+    let mut links = virtual_dh(-0.4826, false);
+    links.extend(large_needle_driver_420006());
+    let to_model = model
+        .measured_to_model_matrix()
+        .expect("invertible coupling");
+    let mut ws = Workspace::new(&model);
+    let mut rng = Rng::new(590);
+    let mut worst = 0.0f64;
+    for _ in 0..POSES {
+        let measured = random_pose(&model, &mut rng);
+        let q = (&to_model * nalgebra::DVector::from_vec(measured))
+            .as_slice()
+            .to_vec();
+        model.forward_kinematics(&mut ws, &q);
+        let joints = psm_si_tool_joints(&q);
+        let mut theirs = cisst::forward_kinematics(&links, &joints[..6]);
+        theirs.push(theirs[5] * tooltip_offset());
+        // PSM_Si.json's insertion (link 3), the tool's links 4..6, the tool tip.
+        for (f, t) in frames.iter().zip(&theirs[2..]) {
+            worst = worst.max(max_abs_diff(&pose_of(&ws, *f), t));
+        }
+    }
+    println!("psm_si_tool: tool DH and tool tip, largest difference {worst:e}");
+    assert!(
+        worst < 1e-9,
+        "psm_si_tool: the instrument's frames differ from the controller's by {worst:e}"
+    );
+}
+
+/// The description's coupling is the controller's: the instrument block is the file's
+/// `ActuatorToJointPosition` exactly (the arm's joints are its coordinates), measured →
+/// model → measured round-trips, and every instrument frame turns by the file's joint
+/// (the jaw blades by wrist_yaw ∓ jaw/2), for random actuator angles.
+#[test]
+fn psm_si_tool_coupling_is_the_instrument_files() {
+    let model = builtin("psm_si_tool");
+    assert_eq!(
+        model.measured.joints,
+        [
+            "yaw",
+            "pitch",
+            "insertion",
+            "roll",
+            "wrist_pitch",
+            "wrist_yaw",
+            "jaw"
+        ]
+    );
+    let m = &model.measured.coupling;
+    for r in 0..7 {
+        for c in 0..7 {
+            let expected = match (r, c) {
+                (r, c) if r >= 3 && c >= 3 => LND_420006_COUPLING[r - 3][c - 3],
+                (r, c) if r == c => 1.0,
+                _ => 0.0,
+            };
+            assert_eq!(m[(r, c)], expected, "coupling ({r}, {c})");
+        }
+    }
+    let to_model = model
+        .measured_to_model_matrix()
+        .expect("invertible coupling");
+    let round_trip = (m * &to_model - nalgebra::DMatrix::<f64>::identity(7, 7))
+        .abs()
+        .max();
+    assert!(
+        round_trip < 1e-12,
+        "measured -> model -> measured: {round_trip:e}"
+    );
+    // Each instrument frame's angle (theta, rad) minus its DH offset, as the file's joint.
+    let angle = |frame: &str, q: &[f64]| model.frame(frame_index(&model, frame)).value.eval(q);
+    let mut rng = Rng::new(591);
+    for _ in 0..50 {
+        let q: Vec<f64> = (0..7).map(|_| rng.uniform(-2.0, 2.0)).collect();
+        let j = psm_si_tool_joints(&q);
+        let measured = (m * nalgebra::DVector::from_column_slice(&q))
+            .as_slice()
+            .to_vec();
+        let back = (&to_model * nalgebra::DVector::from_column_slice(&measured))
+            .as_slice()
+            .to_vec();
+        for k in 0..7 {
+            assert!((measured[k] - j[k]).abs() < 1e-12, "joint {k}");
+            assert!((back[k] - q[k]).abs() < 1e-12, "actuator {k}");
+        }
+        let cases = [
+            ("roll", j[3]),
+            ("wrist_pitch", j[4] - FRAC_PI_2),
+            ("wrist_yaw", j[5] - FRAC_PI_2),
+            ("wrist_yaw_1", j[5] - j[6] / 2.0 - FRAC_PI_2),
+            ("wrist_yaw_2", j[5] + j[6] / 2.0 - FRAC_PI_2),
+            ("jaw_coupling_friction", j[6]),
+            ("motor_4", q[3]),
+        ];
+        for (frame, expected) in cases {
+            let a = angle(frame, &q);
+            assert!((a - expected).abs() < 1e-12, "{frame}: {a} vs {expected}");
+        }
+    }
+}
+
+/// psm_si_tool.toml repeats psm_si.toml's arm (the description format has no include):
+/// its first frames, parameters, measured joints, ranges, limits, gravity and bounds are
+/// psm_si's, so the two cannot drift apart.
+#[test]
+fn psm_si_tool_arm_is_psm_si() {
+    let (arm, tool) = (builtin("psm_si"), builtin("psm_si_tool"));
+    for i in 1..=arm.frames.len() {
+        assert_eq!(
+            format!("{:?}", arm.frame(i)),
+            format!("{:?}", tool.frame(i)),
+            "frame {i}"
+        );
+    }
+    let names = |m: &Model| m.params.iter().map(|p| p.name.clone()).collect::<Vec<_>>();
+    assert_eq!(names(&arm), names(&tool)[..arm.n_params()]);
+    assert_eq!(arm.measured.joints, tool.measured.joints[..3]);
+    assert_eq!(arm.measured.ranges, tool.measured.ranges[..3]);
+    assert_eq!(
+        format!("{:?}", arm.limits),
+        format!("{:?}", &tool.limits[..3])
+    );
+    assert_eq!(arm.gravity, tool.gravity);
+    assert_eq!(format!("{:?}", arm.bounds), format!("{:?}", tool.bounds));
 }
 
 /// Every frame of the Si descriptions that carries mass is the physical DH's frame of the

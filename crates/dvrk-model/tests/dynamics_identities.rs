@@ -14,7 +14,15 @@ use support::{
     random_state, Rng,
 };
 
-const ROBOTS: [&str; 6] = ["psm", "psm_simplified", "mtm", "ecm", "psm_si", "ecm_si"];
+const ROBOTS: [&str; 7] = [
+    "psm",
+    "psm_simplified",
+    "mtm",
+    "ecm",
+    "psm_si",
+    "psm_si_tool",
+    "ecm_si",
+];
 const SAMPLES: usize = 30;
 
 fn builtin(name: &str) -> Model {

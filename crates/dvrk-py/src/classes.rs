@@ -9,7 +9,7 @@ use dvrk_ident::{FitResult, FitSettings, IdentError};
 use dvrk_model::{BaseParameters, Model};
 use pyo3::prelude::*;
 
-/// A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``, ``"mtm"``, ``"ecm"``, ``"psm_si"``, ``"ecm_si"``), a
+/// A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``, ``"mtm"``, ``"ecm"``, ``"psm_si"``, ``"psm_si_tool"``, ``"ecm_si"``), a
 /// ``.toml`` description or a ``.urdf`` file.
 ///
 /// Arrays are float64. Functions of the state take one sample as 1-D arrays of

@@ -660,7 +660,7 @@ impl FitResultPy {
     }
 
     /// The dVRK controller's kinematic gravity-compensation file of an ``ecm``,
-    /// ``psm_si`` or ``ecm_si`` result (``dvrk-ident export --dvrk-kinematic-gc``) as a
+    /// ``psm_si`` (``psm_si_tool``) or ``ecm_si`` result (``dvrk-ident export --dvrk-kinematic-gc``) as a
     /// dict: the physical DH its ``kinematic_gc`` key names, with masses and centres of
     /// mass whose gravity, through the controller's position and effort maps, is this
     /// result's. ``endoscope``: the ECM's endoscope type (its configuration's

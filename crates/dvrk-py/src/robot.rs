@@ -227,7 +227,7 @@ impl ModelPy {
         load(py, name_or_path)
     }
 
-    /// Loads a robot: a built-in name (``"psm"``, ``"psm_simplified"``, ``"mtm"``, ``"ecm"``, ``"psm_si"``, ``"ecm_si"``) or a
+    /// Loads a robot: a built-in name (``"psm"``, ``"psm_simplified"``, ``"mtm"``, ``"ecm"``, ``"psm_si"``, ``"psm_si_tool"``, ``"ecm_si"``) or a
     /// path to a ``.toml`` description or a ``.urdf`` file.
     ///
     /// Raises ``InputError`` (a ``ValueError``) for an unknown name or a wrong

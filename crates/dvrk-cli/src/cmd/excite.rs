@@ -28,7 +28,7 @@ const EVALUATION: &str = "Evaluation";
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si) or a description/URDF path
     #[arg(long, help_heading = MODEL)]
     pub robot: String,
     #[command(flatten)]

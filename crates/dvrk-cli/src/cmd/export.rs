@@ -49,7 +49,8 @@ pub struct Args {
     #[arg(long, value_name = "N", default_value_t = dvrk_gc::DEFAULT_POINTS, requires = "dvrk_gc", help_heading = OUTPUT)]
     pub gc_points: usize,
     /// Write the dVRK controller's kinematic gravity-compensation file (the physical DH
-    /// its `kinematic_gc` key names) of an ecm, psm_si or ecm_si result here (atomically)
+    /// its `kinematic_gc` key names) of an ecm, psm_si (psm_si_tool) or ecm_si result here
+    /// (atomically)
     #[arg(long, value_name = "GC.json", help_heading = OUTPUT)]
     pub dvrk_kinematic_gc: Option<String>,
     /// The ECM's endoscope type, as its configuration's `endoscope` (Classic_SD_STRAIGHT,

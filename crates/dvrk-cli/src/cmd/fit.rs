@@ -46,7 +46,7 @@ pub struct Args {
     /// Automatic for a log larger than 256 MiB
     #[arg(long, help_heading = INPUT)]
     pub stream: bool,
-    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path (with
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si) or a description/URDF path (with
     /// --states: default the states' robot, and it must be the robot they were observed
     /// with)
     #[arg(long, required_unless_present = "states", help_heading = MODEL)]

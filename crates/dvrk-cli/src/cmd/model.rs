@@ -19,7 +19,7 @@ const EVALUATION: &str = "Evaluation";
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a path to a .toml description or .urdf
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si) or a path to a .toml description or .urdf
     pub robot: String,
     #[command(flatten)]
     pub mounting: MountingArgs,

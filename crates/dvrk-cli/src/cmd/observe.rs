@@ -22,7 +22,7 @@ pub struct Args {
     /// Read the logs block by block, as `fit --stream` (automatic above 256 MiB)
     #[arg(long, help_heading = INPUT)]
     pub stream: bool,
-    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si) or a description/URDF path
     #[arg(long, help_heading = MODEL)]
     pub robot: String,
     // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before

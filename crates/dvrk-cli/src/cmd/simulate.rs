@@ -19,7 +19,7 @@ use super::{emit_summary, read_params};
 // message, not an unknown flag.
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, ecm_si) or a description/URDF path
+    /// Built-in robot (psm, psm_simplified, mtm, ecm, psm_si, psm_si_tool, ecm_si) or a description/URDF path
     pub robot: String,
     /// Parameters: a result file ({"parameters": {name: value}}), a {name: value} object,
     /// or `nominal` (the description's nominal parameters)

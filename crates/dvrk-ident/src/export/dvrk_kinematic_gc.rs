@@ -10,6 +10,8 @@
 //! `mtsIntuitiveResearchKitArm.cpp`; jhu-cisst/cisst `robManipulator::LoadRobot`,
 //! `CCG_MDH`):
 //!
+//! - the controller's file ignores the PSM's instrument (psm_si_tool: its coordinates
+//!   after the arm's three, which move no link with mass), whose efforts it leaves at 0;
 //! - `LoadRobot` reads `DH.joints` (or `links`): per link the modified-DH `alpha`, `A`,
 //!   `theta`, `D`, `type`, `offset`, and a point mass `mass` at `cx cy cz` (link frame);
 //!   other keys are ignored. The PSM needs 7 links, the ECM 6 (Si) or 4 (Classic);
@@ -65,8 +67,9 @@ pub const POINTS: usize = 9;
 
 /// One arm the controller has a kinematic gravity compensation for.
 struct Arm {
-    /// The built-in description's name.
-    robot: &'static str,
+    /// The built-in descriptions of the arm: the arm alone, then the arm with its
+    /// instrument (whose extra coordinates the controller's file ignores).
+    robots: &'static [&'static str],
     /// The file's links: (the description's frame, the name the dVRK's file gives it).
     links: &'static [(&'static str, &'static str)],
     /// Each link's joint value as `(coordinate, coefficient)` pairs (the controller's
@@ -91,7 +94,7 @@ const SI_LINKS: [(&str, &str); 5] = [
 
 const ARMS: [Arm; 3] = [
     Arm {
-        robot: "psm_si",
+        robots: &["psm_si", "psm_si_tool"],
         links: &[
             SI_LINKS[0],
             SI_LINKS[1],
@@ -115,7 +118,7 @@ const ARMS: [Arm; 3] = [
         shipped: "kinematic/PSM_Si_physical.json",
     },
     Arm {
-        robot: "ecm_si",
+        robots: &["ecm_si"],
         links: &[
             SI_LINKS[0],
             SI_LINKS[1],
@@ -142,7 +145,7 @@ const ARMS: [Arm; 3] = [
         shipped: "kinematic/ECM_Si_physical.json",
     },
     Arm {
-        robot: "ecm",
+        robots: &["ecm"],
         links: &[
             ("yaw", "yaw"),
             ("pitch", "pitch"),
@@ -308,7 +311,10 @@ pub fn dvrk_kinematic_gc(
     params: &[f64],
     endoscope: Option<&str>,
 ) -> Result<KinematicGc, IdentError> {
-    let arm = ARMS.iter().find(|a| a.robot == model.name).ok_or_else(|| {
+    let arm = ARMS
+        .iter()
+        .find(|a| a.robots.contains(&model.name.as_str()))
+        .ok_or_else(|| {
         let which = match model.name.as_str() {
             "mtm" => "the MTM's gravity compensation is its own file: export --dvrk-gc \
                       (Python FitResult.dvrk_gc())"
@@ -322,7 +328,7 @@ pub fn dvrk_kinematic_gc(
         mismatch(
             model,
             format!(
-                "the dVRK's kinematic gravity-compensation file is for psm_si, ecm_si and ecm{}{which}",
+                "the dVRK's kinematic gravity-compensation file is for psm_si (psm_si_tool), ecm_si and ecm{}{which}",
                 if which.is_empty() { "" } else { "; " }
             ),
         )
@@ -392,19 +398,42 @@ fn endoscope_names() -> String {
 }
 
 /// The model's frame of each link, after checking that the model is the controller's
-/// arm: measured joints are the coordinates, each link's joint value moves as the
-/// controller's position map.
+/// arm: its first coordinates are the arm's measured joints, each link's joint value
+/// moves as the controller's position map, and any further coordinate (an instrument's,
+/// which the controller's gravity compensation leaves out) is coupled to none of them and
+/// moves no link with inertia, so that the arm's gravity does not depend on it.
 fn check_model(model: &Model, arm: &Arm) -> Result<Vec<usize>, IdentError> {
-    let n = model.dof();
-    if model.measured.coupling != DMatrix::identity(n, n) || n != arm.effort.len() {
+    let (n, na) = (model.dof(), arm.effort.len());
+    let m = &model.measured.coupling;
+    // Rows and columns of the arm's joints are the identity's; the instrument's block is
+    // free (psm_si_tool: its actuator-to-joint coupling).
+    let arm_joints_are_coordinates = n >= na
+        && (0..n).all(|r| {
+            (0..n).all(|c| (r >= na && c >= na) || m[(r, c)] == f64::from(u8::from(r == c)))
+        });
+    if !arm_joints_are_coordinates {
         return Err(mismatch(
             model,
             format!(
-                "expected {} coordinates that are the measured joints, as the built-in {}",
-                arm.effort.len(),
-                arm.robot
+                "expected its first {na} coordinates to be the measured joints, as the built-in {}",
+                arm.robots.join(" and ")
             ),
         ));
+    }
+    // Every frame whose pose depends on an extra coordinate must carry no link.
+    let mut moved_by_extra = vec![false; model.frames.len() + 1];
+    for i in 1..=model.frames.len() {
+        let f = model.frame(i);
+        moved_by_extra[i] = moved_by_extra[f.parent] || f.value.terms.iter().any(|&(k, _)| k >= na);
+        if moved_by_extra[i] && f.inertia.is_some() {
+            return Err(mismatch(
+                model,
+                format!(
+                    "frame {} carries a link moved by coordinate(s) beyond the arm's {na},                      whose gravity the controller's file cannot hold",
+                    f.name
+                ),
+            ));
+        }
     }
     let names = model.frame_names();
     let mut frames = Vec::with_capacity(arm.links.len());
@@ -557,7 +586,9 @@ fn fit(
     ranges: &[[f64; 2]],
     endoscope: Option<(String, f64)>,
 ) -> Result<KinematicGc, IdentError> {
-    let n = model.dof();
+    // The controller's joints: the model's first n coordinates (check_model); the
+    // instrument's, if any, at 0 (they move no link with inertia).
+    let n = arm.effort.len();
     let nl = frames.len();
     let up = -model.gravity;
     // The identified links' own numbers, the solution the fit stays closest to.
@@ -586,9 +617,10 @@ fn fit(
     let mut rhs = DVector::zeros(rows);
     let mut target = DVector::zeros(rows);
     let mut ws = Workspace::new(model);
-    let mut tau = vec![0.0; n];
+    let mut tau = vec![0.0; model.dof()];
     for c in 0..configurations {
-        let q = grid_point(ranges, c);
+        let mut q = grid_point(&ranges[..n], c);
+        q.resize(model.dof(), 0.0);
         model.gravity_torque(&mut ws, params, &q, &mut tau);
         let full = columns(model, arm, frames, &q, &up);
         for j in 0..n {
@@ -697,7 +729,7 @@ fn fit(
         links,
         endoscope,
         gravity: [model.gravity.x, model.gravity.y, model.gravity.z],
-        joints: model.measured.joints.clone(),
+        joints: model.measured.joints[..n].to_vec(),
         residual_max,
         residual_rms,
         torque_max,

@@ -6,7 +6,7 @@ use crate::error::ModelError;
 use crate::model::Model;
 
 /// Built-in robot descriptions: (name, TOML text).
-pub const BUILTIN: [(&str, &str); 6] = [
+pub const BUILTIN: [(&str, &str); 7] = [
     ("psm", include_str!("../../robots/psm.toml")),
     (
         "psm_simplified",
@@ -15,11 +15,13 @@ pub const BUILTIN: [(&str, &str); 6] = [
     ("mtm", include_str!("../../robots/mtm.toml")),
     ("ecm", include_str!("../../robots/ecm.toml")),
     ("psm_si", include_str!("../../robots/psm_si.toml")),
+    ("psm_si_tool", include_str!("../../robots/psm_si_tool.toml")),
     ("ecm_si", include_str!("../../robots/ecm_si.toml")),
 ];
 
 impl Model {
-    /// A built-in robot: `psm`, `psm_simplified`, `mtm`, `ecm`, `psm_si` or `ecm_si`.
+    /// A built-in robot: `psm`, `psm_simplified`, `mtm`, `ecm`, `psm_si`, `psm_si_tool` or
+    /// `ecm_si`.
     pub fn builtin(name: &str) -> Result<Model, ModelError> {
         let (_, text) = BUILTIN
             .iter()

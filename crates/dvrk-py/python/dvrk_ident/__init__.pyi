@@ -340,7 +340,7 @@ class FitResult:
         self, robot: Optional[Model] = None, *, endoscope: Optional[str] = None
     ) -> Dict[str, Any]:
         """The dVRK controller's kinematic gravity-compensation file (the physical DH
-        of its ``kinematic_gc`` key) of an ecm, psm_si or ecm_si result."""
+        of its ``kinematic_gc`` key) of an ecm, psm_si (psm_si_tool) or ecm_si result."""
 
 def read_log(
     path: PathLike,
