@@ -448,9 +448,16 @@ fn preset_is_plausible(case: &Case, preset_mean: f64) {
         if let Some(m0) = model.frame(l.frame).nominal.mass {
             let ratio = l.mass / m0;
             println!("  {} {:.3} kg, {ratio:.2} x nominal", l.link, l.mass);
-            assert!((0.25..=4.0).contains(&ratio), "{robot} {}: {ratio:.2}", l.link);
+            assert!(
+                (0.25..=4.0).contains(&ratio),
+                "{robot} {}: {ratio:.2}",
+                l.link
+            );
         } else if held {
-            println!("  {} {:.3} kg: on its mass bound {bounds:?}", l.link, l.mass);
+            println!(
+                "  {} {:.3} kg: on its mass bound {bounds:?}",
+                l.link, l.mass
+            );
         }
     }
 }

@@ -153,7 +153,11 @@ fn check_at(robot: &str, pitch_deg: Option<f64>) {
     for &j in model.link_frames() {
         let f = model.frame(j);
         if let (Some(e), Some(c)) = (f.bounds.ellipsoid.as_ref(), f.nominal.com) {
-            assert!(e.contains(c), "{robot} {}: nominal centre of mass {c:?} outside", f.name);
+            assert!(
+                e.contains(c),
+                "{robot} {}: nominal centre of mass {c:?} outside",
+                f.name
+            );
             nominal_inside += 1;
         }
     }
