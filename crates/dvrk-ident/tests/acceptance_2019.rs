@@ -295,6 +295,12 @@ fn mtm_2019_protocol() {
     run(&case(protocol_2019::MTM));
 }
 
+/// The mean over the joints of a result's test relative errors.
+fn mean_test_error(r: &FitResult) -> f64 {
+    let e = &r.metrics.test.as_ref().unwrap().relative_error;
+    e.iter().sum::<f64>() / e.len() as f64
+}
+
 /// Rows `a..b` of a log.
 fn rows(t: &JointLog, a: usize, b: usize) -> JointLog {
     JointLog {
@@ -329,10 +335,7 @@ fn priors_on_a_short_log(case: &Case) {
     let mut s = protocol_2019::delay_settings(&case.protocol);
     s.delay_search_s = None;
     s.processing.delay_s = prior_fit.settings.processing.delay_s.clone();
-    let mean = |r: &FitResult| {
-        let e = &r.metrics.test.as_ref().unwrap().relative_error;
-        e.iter().sum::<f64>() / e.len() as f64
-    };
+    let mean = mean_test_error;
     let none = FitRequest::of_samples([&short], Some(&two), s.clone())
         .run(Some(&model), &Silent)
         .unwrap()
@@ -419,10 +422,7 @@ fn preset_is_plausible(case: &Case, preset_mean: f64) {
         .unwrap()
         .result
     };
-    let mean = |r: &FitResult| {
-        let e = &r.metrics.test.as_ref().unwrap().relative_error;
-        e.iter().sum::<f64>() / e.len() as f64
-    };
+    let mean = mean_test_error;
     let preset = fit(Overrides::default());
     let plain = fit(Overrides {
         ellipsoids: Some(false),
