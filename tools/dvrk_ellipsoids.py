@@ -1,30 +1,35 @@
 #!/usr/bin/env python3
 """Bounding ellipsoids of the built-in dVRK arms' links from the dVRK's own meshes.
 
-Recomputes the `ellipsoid = {...}` entries of robots/mtm.toml; `--arm psm` prints the
-PSM's, which robots/psm.toml does not carry (they contradict its 2019 centre-of-mass
-boxes and cost 22 % in test error: docs/book/src/identification.md, section 6.5). Not
-run in CI:
+Recomputes the `ellipsoid = {...}` entries of robots/mtm.toml, robots/psm.toml
+(pitch_front only: the others' reasons are in psm.toml) and robots/ecm.toml. Not run
+in CI:
 
     fetch jhu-dvrk/dvrk_model (any checkout with urdf/ and meshes/), then
-    python tools/dvrk_ellipsoids.py /path/to/dvrk_model [--commit SHA] --arm mtm|psm
+    python tools/dvrk_ellipsoids.py /path/to/dvrk_model [--commit SHA] --arm mtm|psm|ecm
 
-Needs numpy, pinocchio (`pin`) and the dvrk_ident Python module (for our frames).
+(the ECM's STL meshes are Git LFS pointers from dvrk_model 70998aa on: give
+--commit 736b90fc3e5fd5e170170425687a3ec22c715838, the commit before, or an LFS
+checkout). Needs numpy, pinocchio (`pin`) and the dvrk_ident Python module (for our
+frames).
 
 Method:
 1. The URDF: the xacro macros of urdf/Classic/MTM.urdf.xacro (`mtm` and both
-   platforms, right and left) or urdf/Classic/PSM_base.urdf.xacro (`base`), expanded
-   here (only `${...}` expressions of PI and the macro parameters occur), loaded with
-   Pinocchio.
-2. Each link's mesh (the MTM's <collision>, the PSM's <visual> .dae: Collada positions,
-   metres; the instanced node's transform is the identity in every file used) placed by
-   its origin in the URDF link frame.
+   platforms, right and left), urdf/Classic/PSM_base.urdf.xacro (`base`) or
+   urdf/Classic/ECM_base.urdf.xacro (`ecm_base`, with the default endoscope of
+   urdf/common/endoscopes/Classic_SD_straight.urdf.xacro), expanded here (only `${...}`
+   expressions of PI and the macro parameters occur), loaded with Pinocchio.
+2. Each link's mesh (the MTM's and the ECM's <collision>, the PSM's <visual>; Collada
+   positions or binary STL, metres; the instanced node's transform is the identity in
+   every file used) placed by its origin in the URDF link frame.
 3. The URDF link frame in our (modified DH) frame: the constant transform
    X = T_ours(q)^-1 * T_b^-1 * T_urdf(q), with T_b (our base in the URDF world) from
    a point registration of corresponding joint points over random configurations
-   (MTM) or the identity (PSM: both at the remote centre of motion); the URDF joints
-   are the dVRK's measured joints (coupling * q), mimic joints follow theirs. X must be the same
-   at every configuration: the script checks it (the FK verification) and stops if not.
+   (MTM), the identity (PSM: both at the remote centre of motion) or a given rotation
+   (ECM); the URDF joints are the dVRK's measured joints (coupling * q; the ECM's with
+   the signs of its entry), mimic joints follow theirs. X must be the same at every
+   configuration: the script checks it (the FK verification, printed per link) and
+   stops if not.
 4. The ellipsoid: Khachiyan's minimum-volume enclosing ellipsoid of the mesh vertices
    in our frame (tolerance 1e-4), of the right- and left-arm meshes together (the
    platforms differ by a visual rotation), then grown by MARGIN (m) on every semi-axis
@@ -48,19 +53,19 @@ MARGIN = 0.01
 TOLERANCE = 3e-3
 
 
-def git_show(repo, commit, path):
+def read_bytes(root, commit, path):
+    if commit is None:
+        with open(f"{root}/{path}", "rb") as f:
+            return f.read()
     return subprocess.run(
-        ["git", "--git-dir", repo, "show", f"{commit}:{path}"],
+        ["git", "--git-dir", root, "show", f"{commit}:{path}"],
         check=True,
         capture_output=True,
-    ).stdout.decode()
+    ).stdout
 
 
 def read(root, commit, path):
-    if commit is None:
-        with open(f"{root}/{path}") as f:
-            return f.read()
-    return git_show(root, commit, path)
+    return read_bytes(root, commit, path).decode()
 
 
 def expand_macro(xacro_text, macro, params):
@@ -84,6 +89,20 @@ def expand_macro(xacro_text, macro, params):
     # Sub-macro calls (xacro:...) and plugins are not geometry.
     body = re.sub(r"<ns0:[^>]*/>", "", body)
     return body
+
+
+def stl_vertices(data):
+    """Vertices (N, 3) of a binary STL document (the dVRK's STL meshes are in metres)."""
+    if data.startswith(b"version https://git-lfs"):
+        raise SystemExit(
+            "the mesh is a Git LFS pointer: give --commit 736b90f (the last dvrk_model commit "
+            "before 70998aa converted the meshes to LFS pointers) or an LFS checkout"
+        )
+    n = int.from_bytes(data[80:84], "little")
+    if len(data) != 84 + 50 * n:
+        raise SystemExit("only binary STL meshes are handled")
+    rec = np.dtype([("normal", "<f4", 3), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    return np.frombuffer(data[84:], dtype=rec)["v"].reshape(-1, 3).astype(float)
 
 
 def collada_vertices(text, any_up_axis=False):
@@ -235,10 +254,52 @@ PSM = {
 }
 
 
+ECM = {
+    "xacro": "urdf/Classic/ECM_base.urdf.xacro",
+    "robot": "ecm",
+    "macros": [],
+    "variants": ["ecm_base"],
+    # The endoscope (ECM.urdf.xacro's default, Classic_SD_straight) on the adaptor link.
+    "more": [("urdf/common/endoscopes/Classic_SD_straight.urdf.xacro", "endoscope",
+              {"parent_link": "adaptor_link"})],
+    # Only the links whose URDF frame is fixed in one of our frames: our pitch link lumps
+    # the parallelogram (the URDF's pitch_link, pitch_2..5), whose links turn about other
+    # axes or only translate, into one link turning about the remote centre of motion.
+    "links": {
+        "yaw_link": "yaw",
+        "insertion_link": "insertion",
+        "endoscope_link": "roll",
+    },
+    # The insertion frame carries the endoscope's mass in our description (as in the
+    # dVRK's controller: robots/ecm.toml), so its ellipsoid encloses the endoscope over
+    # the roll range of ECM.json (q4 in [-1.552, 1.552] rad) too.
+    "carries": {"insertion": {"endoscope_link": (3, -1.552, 1.552)}},
+    "joints": ["yaw", "pitch", "insertion", "roll"],
+    # The URDF's yaw and roll joints turn opposite to ECM.json's (robots/ecm.toml): with
+    # the URDF joints equal to the measured ones no base rotation keeps its links fixed
+    # in our frames. Searched over the 24 axis-aligned base rotations and the 16 joint
+    # sign patterns, four keep all three fixed (to 6e-5 m), in two pairs that differ only
+    # by the insertion axis's direction in the world (up or down); of the two that move
+    # the endoscope down toward the remote centre of motion as the URDF does, this one
+    # (yaw and roll reversed, our base turned -90 degrees about the URDF's z) puts the yaw
+    # link's body on the same side of the remote centre of motion along the yaw axis
+    # (z 0.27-0.54 m in our yaw frame) as the PSM's mesh in the same DH frame (the PSM
+    # and the ECM share their first two DH rows); the other (pitch reversed, +90
+    # degrees) would put it at z -0.54 to -0.27 m. Its insertion and endoscope
+    # ellipsoids are the same up to a half turn about the insertion axis.
+    "signs": [-1, 1, 1, -1],
+    "base": [[0, 1, 0, 0], [-1, 0, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]],
+    "geometry": "collision",
+    "any_up_axis": False,
+}
+
+
 def urdf_document(root, commit, arm, variant):
     text = read(root, commit, arm["xacro"])
     params = {"prefix": "", "parent_link": "world", "xyz": "0 0 0", "rpy": "0 0 0"}
     body = "".join(expand_macro(text, m, params) for m in arm["macros"] + [variant])
+    for path, macro, extra in arm.get("more", []):
+        body += expand_macro(read(root, commit, path), macro, {**params, **extra})
     return f'<robot name="{arm["robot"]}"><link name="world"/>{body}</robot>'
 
 
@@ -275,20 +336,20 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("dvrk_model", help="dvrk_model checkout, or bare git dir with --commit")
     ap.add_argument("--commit")
-    ap.add_argument("--arm", choices=["mtm", "psm"], default="mtm")
+    ap.add_argument("--arm", choices=["mtm", "psm", "ecm"], default="mtm")
     args = ap.parse_args()
     import pinocchio as pin
     import dvrk_ident as di
 
-    arm = {"mtm": MTM, "psm": PSM}[args.arm]
+    arm = {"mtm": MTM, "psm": PSM, "ecm": ECM}[args.arm]
     ours = di.Model.load(arm["robot"])
     names = ours.frame_names
     meas = np.asarray(ours.coupling)
     rng = np.random.default_rng(1)
     dof = meas.shape[0]
     configs = [np.zeros(dof)] + [rng.uniform(-0.5, 0.5, dof) for _ in range(5)]
-    if args.arm == "psm":
-        # The insertion is a length within [0, 0.24] m.
+    if args.arm in ("psm", "ecm"):
+        # The insertion is a length within [0, 0.24] m (PSM), [0, 0.255] m (ECM).
         for q in configs[1:]:
             q[2] = rng.uniform(0.02, 0.2)
     points = {}
@@ -297,7 +358,8 @@ def main():
         model = pin.buildModelFromXML(doc)
         data = model.createData()
         xml = ET.fromstring(doc)
-        poses = [urdf_poses(pin, model, data, xml, arm, meas @ q) for q in configs]
+        signs = np.asarray(arm.get("signs", np.ones(dof)))
+        poses = [urdf_poses(pin, model, data, xml, arm, signs * (meas @ q)) for q in configs]
         ours_poses = [ours.forward_kinematics(q) for q in configs]
         if arm["base"] == "register":
             a = np.array([o[names.index(f)][:3, 3] for o in ours_poses for f in arm["links"].values()])
@@ -305,8 +367,10 @@ def main():
             t_b = kabsch(a, b)
             res = np.abs((t_b @ np.c_[a, np.ones(len(a))].T).T[:, :3] - b).max()
             print(f"# base registration: largest joint-origin mismatch {res:.2e} m", file=sys.stderr)
-        else:
+        elif arm["base"] == "identity":
             t_b = np.eye(4)
+        else:
+            t_b = np.asarray(arm["base"], dtype=float)
         for link, frame in arm["links"].items():
             xs = [np.linalg.inv(o[names.index(frame)]) @ np.linalg.inv(t_b) @ u[link]
                   for o, u in zip(ours_poses, poses)]
@@ -319,14 +383,31 @@ def main():
             el = [l for l in xml.iter("link") if l.get("name") == link][0]
             geo = el.find(arm["geometry"])
             mesh = geo.find("geometry/mesh").get("filename").replace("package://dvrk_model/", "")
-            v = collada_vertices(read(args.dvrk_model, args.commit, mesh), arm["any_up_axis"])
+            if mesh.lower().endswith(".stl"):
+                v = stl_vertices(read_bytes(args.dvrk_model, args.commit, mesh))
+            else:
+                v = collada_vertices(read(args.dvrk_model, args.commit, mesh), arm["any_up_axis"])
             v = (origin(geo) @ np.c_[v, np.ones(len(v))].T).T
             points[(variant, link)] = ((xs[0] @ v.T).T[:, :3], mesh)
     for link, frame in arm["links"].items():
         v = np.vstack([points[(p, link)][0] for p in arm["variants"]])
+        meshes = sorted({points[(p, link)][1] for p in arm["variants"]})
+        for carried, (k, lo, hi) in arm.get("carries", {}).get(frame, {}).items():
+            # A link this frame carries through our joint k (ECM: the endoscope, which
+            # rolls): its mesh in our carried frame, placed at 25 values of q_k over
+            # [lo, hi] (the joint's range).
+            fi, fc = names.index(frame), names.index(arm["links"][carried])
+            for qk in np.linspace(lo, hi, 25):
+                q = np.zeros(dof)
+                q[k] = qk
+                t = ours.forward_kinematics(q)
+                t = np.linalg.inv(t[fi]) @ t[fc]
+                w = np.vstack([points[(p, carried)][0] for p in arm["variants"]])
+                v = np.vstack([v, (t[:3, :3] @ w.T).T + t[:3, 3]])
+            meshes += [f"{m} (over q{k + 1} in [{lo}, {hi}])" for p in arm["variants"]
+                       for m in [points[(p, carried)][1]]]
         c, a = mvee(v)
         c, semi, rpy = ellipsoid_fields(c, a, MARGIN)
-        meshes = sorted({points[(p, link)][1] for p in arm["variants"]})
         print(f"# {frame}: {', '.join(meshes)}")
         print(
             f"ellipsoid = {{ center = [{c[0]:.4f}, {c[1]:.4f}, {c[2]:.4f}], "

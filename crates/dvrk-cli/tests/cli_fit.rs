@@ -437,6 +437,19 @@ fn new_arms_round_trip_through_excite_simulate_fit_preset_and_report() {
         let result = dvrk_ident::FitResult::read(&fit).unwrap();
         assert_eq!(result.settings.mounting_pitch_deg, Some(pitch));
         assert!(result.physically_consistent, "{robot}");
+        // The preset's prior toward the nominal masses (the simulated truth) holds the
+        // masses the data do not determine near them: without it the Si ECM's yaw link
+        // came out at 1002 kg (nominal 1.003) and its pitch3 at 161 kg (1.845).
+        assert!(
+            result.settings.prior.is_some(),
+            "{robot}: the preset's prior"
+        );
+        for l in &result.links {
+            if let Some(m0) = model.frame(l.frame).nominal.mass.filter(|m| *m > 0.0) {
+                let ratio = l.mass / m0;
+                assert!((0.5..=2.0).contains(&ratio), "{robot} {}: {ratio}", l.link);
+            }
+        }
         // The fitted model: the description with Stribeck and Dahl terms on each joint
         // with friction; their true values (nominal) are zero.
         let fitted = result.model(None).unwrap();

@@ -295,6 +295,12 @@ fn mtm_2019_protocol() {
     run(&case(protocol_2019::MTM));
 }
 
+/// The mean over the joints of a result's test relative errors.
+fn mean_test_error(r: &FitResult) -> f64 {
+    let e = &r.metrics.test.as_ref().unwrap().relative_error;
+    e.iter().sum::<f64>() / e.len() as f64
+}
+
 /// Rows `a..b` of a log.
 fn rows(t: &JointLog, a: usize, b: usize) -> JointLog {
     JointLog {
@@ -329,10 +335,7 @@ fn priors_on_a_short_log(case: &Case) {
     let mut s = protocol_2019::delay_settings(&case.protocol);
     s.delay_search_s = None;
     s.processing.delay_s = prior_fit.settings.processing.delay_s.clone();
-    let mean = |r: &FitResult| {
-        let e = &r.metrics.test.as_ref().unwrap().relative_error;
-        e.iter().sum::<f64>() / e.len() as f64
-    };
+    let mean = mean_test_error;
     let none = FitRequest::of_samples([&short], Some(&two), s.clone())
         .run(Some(&model), &Silent)
         .unwrap()
@@ -389,4 +392,82 @@ fn psm_priors_on_a_short_log() {
 #[test]
 fn mtm_priors_on_a_short_log() {
     priors_on_a_short_log(&case(protocol_2019::MTM));
+}
+
+/// Project issue 27 on real data: `--preset dvrk` (with the 2019 protocol's processing)
+/// against the same preset without the bounding ellipsoids and the prior toward the
+/// dVRK's nominal masses (`--no-ellipsoids --prior-weight 0`). The price in prediction
+/// is at most 2 % of the mean test error (measured: PSM 0.1265 both, the PSM has no
+/// nominal masses and its one ellipsoid moves nothing the data see; MTM 0.1799 against
+/// 0.1770, +1.6 %); every MTM link with a dVRK mass ends within 0.25–4 times it
+/// (measured 0.38–1.80; without: the upper arm at its 15 kg bound, 16.7 times). Prints
+/// the masses a bound holds (the book's identification chapter, §6.5, says why the PSM's
+/// and the MTM's parallelogram links stay there).
+fn preset_is_plausible(case: &Case, preset_mean: f64) {
+    use dvrk_ident::request::{Overrides, Preset};
+    let Some((model, train, test)) = protocol_2019::load(&case.protocol) else {
+        return;
+    };
+    let base = protocol_2019::processing(&case.protocol);
+    let fit = |extra: Overrides| {
+        let overrides = Overrides {
+            preset: Some(Preset::Dvrk),
+            ..extra
+        };
+        FitRequest {
+            overrides,
+            ..FitRequest::of_samples([&train], Some(&test), base.clone())
+        }
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result
+    };
+    let mean = mean_test_error;
+    let preset = fit(Overrides::default());
+    let plain = fit(Overrides {
+        ellipsoids: Some(false),
+        prior_weight: Some(0.0),
+        ..Overrides::default()
+    });
+    let robot = case.protocol.robot;
+    assert!(preset.physically_consistent && plain.physically_consistent);
+    // The prior is the preset's where the description has nominal masses (the MTM).
+    assert_eq!(preset.settings.prior.is_some(), robot == "mtm", "{robot}");
+    let (m, p) = (mean(&preset), mean(&plain));
+    println!(
+        "{robot} --preset dvrk: mean test error {m:.4}, without ellipsoids and prior {p:.4} ({:+.1} %)",
+        100.0 * (m / p - 1.0)
+    );
+    assert!((m - preset_mean).abs() < 5e-4, "{robot}: {m:.4}");
+    assert!(m <= 1.02 * p, "{robot}: {m:.4} vs {p:.4}");
+    for l in &preset.links {
+        let bounds = model.frame(l.frame).bounds.mass.unwrap();
+        let held = [bounds[0], bounds[1]]
+            .iter()
+            .any(|b| (l.mass - b).abs() <= 1e-3 * (bounds[1] - bounds[0]));
+        if let Some(m0) = model.frame(l.frame).nominal.mass {
+            let ratio = l.mass / m0;
+            println!("  {} {:.3} kg, {ratio:.2} x nominal", l.link, l.mass);
+            assert!(
+                (0.25..=4.0).contains(&ratio),
+                "{robot} {}: {ratio:.2}",
+                l.link
+            );
+        } else if held {
+            println!(
+                "  {} {:.3} kg: on its mass bound {bounds:?}",
+                l.link, l.mass
+            );
+        }
+    }
+}
+
+#[test]
+fn psm_preset_is_plausible() {
+    preset_is_plausible(&case(protocol_2019::PSM), 0.1265);
+}
+
+#[test]
+fn mtm_preset_is_plausible() {
+    preset_is_plausible(&case(protocol_2019::MTM), 0.1799);
 }

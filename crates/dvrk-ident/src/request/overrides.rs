@@ -213,8 +213,9 @@ overrides! {
     /// link's pseudo-inertia from the prior's) or `euclidean`
     prior_metric: PriorMetric => PriorMetric("prior_metric") with "text_or_value";
     /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-    /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20). The result records the
-    /// settings it expanded to
+    /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20, and --prior nominal
+    /// --prior-weight 0.05 for an sdp fit of a robot with nominal masses). The result
+    /// records the settings it expanded to
     preset: Preset => Preset("preset") with "text_or_value";
     /// Give every training log after the first its own torque offset per coordinate
     /// (the arm is re-homed between recordings): fitted with the parameters, recorded

@@ -51,24 +51,32 @@ pub fn load(protocol: &Protocol) -> Option<(Model, JointLog, JointLog)> {
     Some((model, train, test))
 }
 
-/// The fit settings of the protocol for `method`, with the 2019 lower bounds
-/// (Fc, Fv, Ia ≥ 0.001) and, as in 2019, without the links' bounding ellipsoids
-/// (`--no-ellipsoids`: the MTM's cost its 2019-bounds SDP 0.014 on joint 3).
-pub fn settings(protocol: &Protocol, method: Method) -> FitSettings {
+/// The protocol's processing alone (the 6th-order filter at its cut-off on the motion
+/// and the torques, the test window), the rest the defaults: the base the command
+/// line's `--cutoff C --filter-torque --test-window N` gives, for `--preset dvrk`.
+pub fn processing(protocol: &Protocol) -> FitSettings {
     let mut s = FitSettings {
-        method,
         test_window: Some(protocol.window),
-        bounds: Some(BoundsSet::Wang2019),
-        ellipsoids: false,
         ..FitSettings::default()
     };
     s.processing.filter = Some(LowPass {
         cutoff_hz: Cutoff::All(protocol.cutoff_hz),
         ..LowPass::default()
     });
-    // The 2019 protocol filters the torques too.
     s.processing.filter_torque = true;
     s
+}
+
+/// The fit settings of the protocol for `method`, with the 2019 lower bounds
+/// (Fc, Fv, Ia ≥ 0.001) and, as in 2019, without the links' bounding ellipsoids
+/// (`--no-ellipsoids`: the MTM's cost its 2019-bounds SDP 0.014 on joint 3).
+pub fn settings(protocol: &Protocol, method: Method) -> FitSettings {
+    FitSettings {
+        method,
+        bounds: Some(BoundsSet::Wang2019),
+        ellipsoids: false,
+        ..processing(protocol)
+    }
 }
 
 /// What helped beyond the 2019 models: a Stribeck term (vs = 0.3 rad/s or m/s) on every
