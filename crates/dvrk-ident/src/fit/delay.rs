@@ -124,7 +124,7 @@ pub fn estimate_delays(
 ) -> Result<DelayEstimate, IdentError> {
     if !(max_s.is_finite() && max_s > 0.0 && max_s <= crate::signal::advance::MAX_DELAY_S) {
         return Err(IdentError::Setting {
-            name: "delay".into(),
+            name: crate::options::Setting::Delay.into(),
             message: format!(
                 "the delay search range must be within (0, {}] s, got {max_s}",
                 crate::signal::advance::MAX_DELAY_S
@@ -212,7 +212,7 @@ fn shifted_logs(
             }
             Some(f) if (f - first.rate_hz).abs() > 1e-9 * f => {
                 return Err(IdentError::Setting {
-                    name: "delay".into(),
+                    name: crate::options::Setting::Delay.into(),
                     message: format!(
                         "the delay search needs the training logs at one rate: {} is at {} Hz, \
                          the first log at {f} Hz (resample them to one rate)",
