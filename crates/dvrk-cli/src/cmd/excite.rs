@@ -197,7 +197,7 @@ fn evaluate(
         None => FourierTrajectory::from_json_file(path)?,
     };
     if let Some(warning) = traj.robot_mismatch(model, path) {
-        eprintln!("dvrk-ident: warning: {warning}");
+        super::warn(warning);
     }
     let opts = args.options.options()?;
     let ev = optimize::evaluate(
@@ -249,7 +249,7 @@ fn options(args: &Args) -> Result<ExciteOptions> {
 /// The search for a new trajectory, its outputs and a one-line summary on stderr.
 fn search(args: &Args, model: &Model, base: &BaseParameters, limits: &LimitsOf) -> Result<()> {
     if limits.limits.is_empty() {
-        eprintln!("dvrk-ident: warning: no limits (the motion is unconstrained)");
+        super::warn("no limits (the motion is unconstrained)");
     }
     let opts = options(args)?;
     if args.rate <= 0.0 || !args.rate.is_finite() {

@@ -222,11 +222,11 @@ pub fn run(args: Args) -> Result<()> {
             eprintln!("{note}");
         }
         for warning in export_warnings {
-            eprintln!("warning: {warning}");
+            super::warn(warning);
         }
     }
     for warning in result.repeated_inputs() {
-        eprintln!("warning: {warning}");
+        super::warn(warning);
     }
     if args.json {
         emit(&result.to_json())?;
