@@ -369,11 +369,7 @@ impl Overrides {
     ) -> Result<FitSettings, IdentError> {
         let mut s = self.apply(base);
         if let Some(d) = &self.delay {
-            d.apply(&mut s, model.dof())
-                .map_err(|message| IdentError::Setting {
-                    name: crate::options::Setting::Delay.into(),
-                    message,
-                })?;
+            d.apply(&mut s, model.dof())?;
         }
         let fitted = s.model(model)?.into_owned();
         self.set_prior(&mut s, &fitted)?;

@@ -487,9 +487,9 @@ pub(crate) fn select(
         progress.finish();
         let m = held_out.metrics(&joints)?;
         m.check_finite(&format!("candidate {}'s held-out samples", c.name()))
-            .map_err(|message| IdentError::Setting {
+            .map_err(|e| IdentError::Setting {
                 name: crate::options::Setting::Select.into(),
-                message,
+                message: e.to_string(),
             })?;
         let mean = m.relative_error.iter().sum::<f64>() / m.relative_error.len().max(1) as f64;
         scores.push(CandidateScore {
