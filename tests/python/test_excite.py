@@ -232,6 +232,17 @@ def test_2019_trajectories_evaluated_as_by_the_command_line(run_cli):
     assert ev == cli
 
 
+def test_excite_keywords_take_numpy_values(arm):
+    """The keywords go through the library's one conversion: NumPy's integers, floats
+    and booleans are their values (an int is not a boolean)."""
+    plain = di.excite(arm, **QUICK, rest=True)
+    numpy = di.excite(arm, **{**QUICK, "order": np.int64(3), "f0": np.float64(0.25)},
+                      rest=np.bool_(True))
+    assert numpy.to_json() == plain.to_json()
+    with pytest.raises(TypeError, match="^rest: invalid type: integer"):
+        di.excite(arm, **QUICK, rest=1)
+
+
 def test_excite_defaults_are_the_librarys(cli):
     """The excitation options are declared once, in the library (``ExciteOptions``):
     Python converts its keywords through the library's list (``_excite_options``: each

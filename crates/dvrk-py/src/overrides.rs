@@ -12,7 +12,7 @@ use dvrk_ident::settings::Joints;
 use dvrk_ident::FitSettings;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyString};
+use pyo3::types::{PyDict, PyString};
 
 use crate::classes::FitResultPy;
 use crate::errors::input;
@@ -123,8 +123,10 @@ pub(crate) fn options(
 /// sequences of them. `keyword` names the argument in errors.
 pub(crate) fn json(value: &Bound<'_, PyAny>, keyword: &str) -> PyResult<serde_json::Value> {
     use serde_json::Value;
-    if value.is_instance_of::<PyBool>() {
-        return Ok(Value::Bool(value.extract()?));
+    // Python's bool and NumPy's (`numpy.bool_`, which has no `__index__` but reads as
+    // a number); not an int.
+    if let Ok(b) = value.extract::<bool>() {
+        return Ok(Value::Bool(b));
     }
     if value.is_instance_of::<PyString>() {
         return Ok(Value::String(value.extract()?));
