@@ -2,6 +2,7 @@
 the command line (`dvrk-ident excite`, same seed and options), the robot's own forward
 kinematics (Cartesian boxes) and the 2019 trajectories (skipped without ../shared)."""
 
+import ast
 import csv
 import json
 import subprocess
@@ -231,38 +232,73 @@ def test_2019_trajectories_evaluated_as_by_the_command_line(run_cli):
     assert ev == cli
 
 
-def test_excite_defaults_are_the_librarys(cli):
-    """Python's ``excite``/``evaluate_trajectory`` defaults are written in their
-    signatures; the command line takes its defaults from the library
-    (``ExciteOptions::default()``) and prints them in ``--help``: each keyword's default
-    must be the flag's, so that the library's defaults are changed in one place."""
-    import inspect
-    import re
-    import subprocess
+def test_excite_keywords_take_numpy_values(arm):
+    """The keywords go through the library's one conversion: NumPy's integers, floats
+    and booleans are their values (an int is not a boolean)."""
+    plain = di.excite(arm, **QUICK, rest=True)
+    numpy = di.excite(arm, **{**QUICK, "order": np.int64(3), "f0": np.float64(0.25)},
+                      rest=np.bool_(True))
+    assert numpy.to_json() == plain.to_json()
+    with pytest.raises(TypeError, match="^rest: invalid type: integer"):
+        di.excite(arm, **QUICK, rest=1)
 
+
+def test_excite_defaults_are_the_librarys(cli):
+    """The excitation options are declared once, in the library (``ExciteOptions``):
+    Python converts its keywords through the library's list (``_excite_options``: each
+    function's options, in order, with the library's defaults), the command line makes
+    its flags from it and prints the defaults in ``--help``, and the type stub writes
+    them literally: each must be the library's, so that a default is changed in one
+    place and a stub or flag left behind fails here."""
+    import re
+    from pathlib import Path
+
+    table = di._excite_options
+    assert list(table) == ["excite", "evaluate_trajectory"]
+    assert list(table["evaluate_trajectory"]) == ["criterion", "samples_per_harmonic",
+                                                  "check_rate"]
+    assert table["excite"]["order"] == 6 and table["excite"]["smooth"] is True
+    stub = ast.parse((Path(di.__file__).parent / "__init__.pyi").read_text())
+    stubs = {n.name: n for n in stub.body if isinstance(n, ast.FunctionDef)}
+    for function, defaults in table.items():
+        args = stubs[function].args
+        given = list(zip(args.args[len(args.args) - len(args.defaults):], args.defaults))
+        given += list(zip(args.kwonlyargs, args.kw_defaults))
+        listed = {a.arg: d.value for a, d in given if a.arg in defaults}
+        assert list(listed) == list(defaults), function
+        for name, default in defaults.items():
+            # Equal and of the same type (6 is not 6.0, True is not 1).
+            assert (listed[name], type(listed[name])) == (default, type(default)), \
+                (function, name)
     text = subprocess.run([cli, "excite", "--help"], capture_output=True, text=True,
                           check=True).stdout
     flags = dict(re.findall(r"--([a-z0-9-]+) <[^>]+>\s+.*?\[default: ([^\]]+)\]", text))
-    keyword_flag = {"order": "order", "f0": "f0", "criterion": "criterion", "seed": "seed",
-                    "starts": "starts", "refine": "refine", "iterations": "iterations",
-                    "refine_iterations": "refine-iterations",
-                    "samples_per_harmonic": "samples-per-harmonic",
-                    "check_rate": "check-rate"}
-    for fn in (di.excite, di.evaluate_trajectory):
-        params = inspect.signature(fn).parameters
-        checked = 0
-        for keyword, flag in keyword_flag.items():
-            if keyword not in params:
-                continue
-            default = params[keyword].default
-            cli_default = flags[flag]
-            if isinstance(default, str):
-                assert default == cli_default, (fn.__name__, keyword)
-            else:
-                assert float(default) == float(cli_default), (fn.__name__, keyword)
-            checked += 1
-        assert checked >= (10 if fn is di.excite else 3)
-    # The switches: smooth by default, not at rest.
-    assert inspect.signature(di.excite).parameters["smooth"].default is True
-    assert "--no-smooth" in text
-    assert inspect.signature(di.excite).parameters["rest"].default is False
+    for name, default in table["excite"].items():
+        if isinstance(default, bool):
+            # The switches: `--rest` turns rest on, `--no-smooth` smoothing off.
+            flag = f"--{name}" if default is False else f"--no-{name}"
+            assert re.search(rf"^\s+{flag}\s", text, re.M), flag
+            continue
+        shown = flags[name.replace("_", "-")]
+        if isinstance(default, str):
+            assert shown == default, name
+        else:
+            assert float(shown) == float(default), name
+    # The setpoints' rate: the library's constant, in the stub and the help.
+    trajectory = next(n for n in stub.body
+                      if isinstance(n, ast.ClassDef) and n.name == "FourierTrajectory")
+    setpoints = next(n for n in trajectory.body
+                     if isinstance(n, ast.FunctionDef) and n.name == "setpoints")
+    assert setpoints.args.defaults[-1].value == float(flags["rate"]) == 200.0
+    # Keywords are the library's, each function's own.
+    with pytest.raises(TypeError, match="unexpected keyword argument 'draws'"):
+        di.excite(di.Model.load("psm_simplified"), draws=2)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'seed'"):
+        trajectory = di.FourierTrajectory(order=1, base_frequency_hz=0.5, q0=[0.0] * 7,
+                                          a=[[0.1]] * 7, b=[[0.0]] * 7)
+        di.evaluate_trajectory(di.Model.load("psm_simplified"), trajectory, seed=1)
+    with pytest.raises(TypeError, match="^starts: invalid type"):
+        di.excite(di.Model.load("psm_simplified"), starts=2.5)
+    with pytest.raises(di.InputError, match="^criterion: unknown criterion"):
+        di.excite(di.Model.load("psm_simplified"), criterion="trace")
+

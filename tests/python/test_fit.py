@@ -175,6 +175,31 @@ def test_prior_matches_cli(psm, psm_logs, run_cli, tmp_path, metric):
         di.fit(psm, train, prior=path, prior_metric="cosine")
 
 
+@pytest.mark.parametrize("kwargs,flags,name", [
+    (dict(method="ols", irls_iterations=3), ["--method", "ols", "--irls-iterations", "3"],
+     ("--irls-iterations", "irls_iterations")),
+    (dict(method="ols", ellipsoids=False), ["--method", "ols", "--no-ellipsoids"],
+     ("--no-ellipsoids", "ellipsoids")),
+    (dict(prior_weight=0.1), ["--prior-weight", "0.1"], ("--prior-weight", "prior_weight")),
+])
+def test_refused_setting_is_spelled_by_each_front_end(psm, psm_logs, cli, kwargs, flags,
+                                                       name):
+    """The library refuses the setting once, naming it by identity; the command line
+    spells it as its flag, Python as its keyword, in front of the same message."""
+    import subprocess
+
+    flag, keyword = name
+    r = subprocess.run([cli, "fit", psm_logs["csv"], "--robot", "psm", *flags],
+                       capture_output=True, text=True)
+    assert r.returncode == 1, r.stderr
+    prefix = f"dvrk-ident: error: {flag}: "
+    assert r.stderr.startswith(prefix), r.stderr
+    message = r.stderr[len(prefix):].strip()
+    with pytest.raises(di.InputError) as e:
+        di.fit(psm, di.read_log(psm_logs["csv"], psm), **kwargs)
+    assert str(e.value) == f"{keyword}: {message}"
+
+
 def test_excitation_window_matches_cli(psm, psm_logs, run_cli, tmp_path):
     """--excitation with a test log and no --test-window: the metrics cover one period
     of the excitation (the 2019 rule), in both front ends."""

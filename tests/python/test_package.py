@@ -70,11 +70,13 @@ def stub_parameters(fn):
 
 def module_parameters(obj):
     """The same list from the compiled signature (pyo3's ``__text_signature__``), a
-    function's ``**options`` (the fit options, ``dvrk_ident._options``) written out."""
+    function's ``**options`` (the fit options, ``dvrk_ident._options``, or the
+    excitation options, ``dvrk_ident._excite_options``) written out."""
     names, star = [], False
     for p in inspect.signature(obj).parameters.values():
         if p.kind == p.VAR_KEYWORD and p.name == "options":
-            names += [n for n in di._options[obj.__name__] if n not in names]
+            table = di._options if obj.__name__ in di._options else di._excite_options
+            names += [n for n in table[obj.__name__] if n not in names]
             continue
         if p.kind == p.VAR_POSITIONAL:
             names.append("*" + p.name)

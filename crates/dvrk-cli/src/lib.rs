@@ -123,7 +123,7 @@ where
 fn message(e: &anyhow::Error) -> String {
     let mut text = String::new();
     for cause in e.chain() {
-        let c = cause.to_string();
+        let c = cmd::settings::error_text(cause);
         if text.contains(&c) {
             continue;
         }

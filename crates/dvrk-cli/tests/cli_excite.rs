@@ -84,7 +84,8 @@ fn optimize_writes_trajectory_setpoints_and_plot_then_evaluate_agrees() {
     // Every robot's coordinates are q1..qn: the recorded robot is what tells another
     // arm's trajectory (issue 32 class 9), in evaluate and in simulate alike.
     let t = traj.to_str().unwrap();
-    let warning = format!("warning: {t} was designed for robot psm, not psm_simplified");
+    let warning =
+        format!("dvrk-ident: warning: {t} was designed for robot psm, not psm_simplified");
     let (ok, _, err) = run(&["excite", "--robot", "psm_simplified", "--evaluate", t]);
     assert!(ok && err.contains(&warning), "{err}");
     let log = dir.join("sim.csv");

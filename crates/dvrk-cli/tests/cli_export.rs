@@ -330,7 +330,7 @@ fn summary_and_export_say_what_the_data_did_not_determine() {
         assert!(!d.inertia_com(), "{}", l.link);
         let line = format!("link {}: ", l.link);
         assert!(
-            warnings.contains(&format!("warning: {}: {line}", s(&urdf))),
+            warnings.contains(&format!("dvrk-ident: warning: {}: {line}", s(&urdf))),
             "{warnings}"
         );
         assert!(text.contains(&line), "{text}");

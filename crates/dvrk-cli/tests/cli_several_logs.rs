@@ -197,7 +197,10 @@ fn the_same_data_twice_is_named_in_a_warning() {
         &log,
     ]);
     assert!(ok, "{err}");
-    let warnings: Vec<&str> = err.lines().filter(|l| l.starts_with("warning:")).collect();
+    let warnings: Vec<&str> = err
+        .lines()
+        .filter(|l| l.starts_with("dvrk-ident: warning:"))
+        .collect();
     assert_eq!(warnings.len(), 2, "{err}");
     assert!(
         warnings[0].contains("train log")
@@ -207,7 +210,7 @@ fn the_same_data_twice_is_named_in_a_warning() {
         warnings[0]
     );
     assert!(
-        warnings[1].starts_with("warning: test log")
+        warnings[1].starts_with("dvrk-ident: warning: test log")
             && warnings[1].contains("not a test of generalization"),
         "{}",
         warnings[1]

@@ -292,7 +292,7 @@ fn errors(
         .map_err(|e| fail(e.to_string()))?;
     let joints = JointMap::new(side.model, joints)?;
     let m = joint_metrics(side.model, &params, &data, window, &joints)?;
-    m.check_finite(name).map_err(fail)?;
+    m.check_finite(name).map_err(|e| fail(e.to_string()))?;
     Ok(m)
 }
 

@@ -3,6 +3,38 @@
 
 use thiserror::Error;
 
+use crate::options::Setting;
+
+/// What a refused setting is: fit options by identity (several when they are refused
+/// together), or another argument of a call by its name (`wrench`, `observer_gain`).
+/// The message names it neutrally (`cutoff`); each front end spells it its own way
+/// (`--cutoff`, `cutoff`) from this.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SettingName {
+    /// Fit options.
+    Options(Vec<Setting>),
+    /// Another argument, by its name (Python's keyword).
+    Argument(&'static str),
+}
+
+impl From<Setting> for SettingName {
+    fn from(s: Setting) -> SettingName {
+        SettingName::Options(vec![s])
+    }
+}
+
+impl std::fmt::Display for SettingName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SettingName::Options(settings) => {
+                let names: Vec<&str> = settings.iter().map(|s| s.name()).collect();
+                f.write_str(&names.join(", "))
+            }
+            SettingName::Argument(name) => f.write_str(name),
+        }
+    }
+}
+
 /// Error of the identification pipeline.
 #[derive(Debug, Error)]
 pub enum IdentError {
@@ -62,8 +94,8 @@ pub enum IdentError {
     /// A setting is out of range.
     #[error("invalid setting {name}: {message}")]
     Setting {
-        /// The setting's name (e.g. `delay`, `prior`, `cutoff_hz`).
-        name: String,
+        /// The setting (e.g. the option `delay`, the argument `wrench`).
+        name: SettingName,
         /// The value and the range it should be in.
         message: String,
     },

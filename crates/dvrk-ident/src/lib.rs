@@ -65,6 +65,7 @@ pub mod export;
 pub mod external;
 pub mod fit;
 pub mod observation;
+mod options;
 pub mod payload;
 pub mod progress;
 #[cfg(feature = "report")]

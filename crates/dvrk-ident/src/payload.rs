@@ -164,7 +164,7 @@ pub fn identify_payload(
     result.check_robot(model, "the result")?;
     if let Some(p) = &result.payload {
         return Err(IdentError::Setting {
-            name: "payload".into(),
+            name: crate::error::SettingName::Argument("payload"),
             message: format!(
                 "the result already carries a payload (on frame `{}`): identify a payload \
                  from the result without one",
@@ -176,7 +176,7 @@ pub fn identify_payload(
     let n = model.dof();
     if logs.is_empty() {
         return Err(IdentError::Setting {
-            name: "logs".into(),
+            name: crate::error::SettingName::Argument("logs"),
             message: "a payload needs at least one log of the arm carrying it".into(),
         });
     }

@@ -229,7 +229,7 @@ fn partial_nominal(model: &Model) -> Result<Prior, IdentError> {
     }
     if links == 0 {
         return Err(IdentError::Setting {
-            name: "prior".into(),
+            name: crate::options::Setting::Prior.into(),
             message: format!(
                 "robot {} has no nominal values (no link has a positive nominal mass): give an \
                  earlier result file instead",
@@ -404,11 +404,7 @@ impl Overrides {
     ) -> Result<FitSettings, IdentError> {
         let mut s = self.apply(base);
         if let Some(d) = &self.delay {
-            d.apply(&mut s, model.dof())
-                .map_err(|message| IdentError::Setting {
-                    name: "delay".into(),
-                    message,
-                })?;
+            d.apply(&mut s, model.dof())?;
         }
         let fitted = s.model(model)?.into_owned();
         self.set_prior(&mut s, &fitted)?;
@@ -434,12 +430,12 @@ impl Overrides {
             }
             None => {
                 let given = [
-                    ("prior_weight", self.prior_weight.is_some()),
-                    ("prior_metric", self.prior_metric.is_some()),
+                    (Setting::PriorWeight, self.prior_weight.is_some()),
+                    (Setting::PriorMetric, self.prior_metric.is_some()),
                 ];
                 match given.iter().find(|(_, set)| *set) {
                     Some((name, _)) => Err(IdentError::Setting {
-                        name: name.to_string(),
+                        name: (*name).into(),
                         message: "needs a prior (nominal, or an earlier result file)".into(),
                     }),
                     None => Ok(()),
@@ -685,7 +681,7 @@ impl FitRequest {
         let mut outcome = match &self.train {
             Training::Logs(train) => {
                 let robot = robot.ok_or_else(|| IdentError::Setting {
-                    name: "robot".into(),
+                    name: crate::error::SettingName::Argument("robot"),
                     message: "a fit of logs needs the robot".into(),
                 })?;
                 self.run_logs(robot, train, progress)?
@@ -707,7 +703,7 @@ impl FitRequest {
     fn check_applicable(&self) -> Result<(), IdentError> {
         let o = &self.overrides;
         let method = o.method.unwrap_or(self.settings.method);
-        let refuse = |name: &str, message: String| {
+        let refuse = |name: Setting, message: String| {
             Err(IdentError::Setting {
                 name: name.into(),
                 message,
@@ -715,7 +711,7 @@ impl FitRequest {
         };
         if o.irls_iterations.is_some() && method != Method::Irls {
             return refuse(
-                "irls_iterations",
+                Setting::IrlsIterations,
                 format!(
                     "only the irls method re-weights, and this fit's method is {}",
                     method.name()
@@ -724,7 +720,7 @@ impl FitRequest {
         }
         if o.sdp_regularization.is_some() && method != Method::Sdp {
             return refuse(
-                "sdp_regularization",
+                Setting::SdpRegularization,
                 format!(
                     "only the semidefinite fit (method sdp) is regularized, and this fit's \
                      method is {}",
@@ -734,7 +730,7 @@ impl FitRequest {
         }
         if o.bounds.is_some() && method != Method::Sdp {
             return refuse(
-                "bounds",
+                Setting::Bounds,
                 format!(
                     "the bounds are the semidefinite fit's (method sdp); method {} has none",
                     method.name()
@@ -743,7 +739,7 @@ impl FitRequest {
         }
         if o.ellipsoids.is_some() && method != Method::Sdp {
             return refuse(
-                "ellipsoids",
+                Setting::Ellipsoids,
                 format!(
                     "the bounding ellipsoids are the semidefinite fit's (method sdp); method {} \
                      has none",
@@ -753,18 +749,18 @@ impl FitRequest {
         }
         if o.select.is_some() || self.settings.select.is_some() {
             if let Some(given) = [
-                ("stribeck", o.stribeck_velocity.is_some()),
-                ("dahl", o.dahl_sigma.is_some()),
+                (Setting::Stribeck, o.stribeck_velocity.is_some()),
+                (Setting::Dahl, o.dahl_sigma.is_some()),
             ]
             .iter()
             .find(|(_, given)| *given)
             {
                 return refuse(
-                    "select",
+                    Setting::Select,
                     format!(
                         "the candidates give the friction terms, and {} is given too: name it \
                          in a candidate (e.g. select coulomb,stribeck:0.2)",
-                        given.0
+                        given.0.name()
                     ),
                 );
             }
@@ -775,7 +771,7 @@ impl FitRequest {
             };
             if let Some(why) = why {
                 return refuse(
-                    "select",
+                    Setting::Select,
                     format!(
                         "the folds cut the processed samples in memory, which {why} do not \
                          hold"
@@ -785,7 +781,7 @@ impl FitRequest {
         }
         if o.test_window.is_some() && self.test.is_empty() {
             return refuse(
-                "test_window",
+                Setting::TestWindow,
                 "the test window is counted in the test logs, and none is given (test)".into(),
             );
         }
@@ -795,14 +791,14 @@ impl FitRequest {
         };
         if o.filter_order.is_some() && !filtered {
             return refuse(
-                "filter_order",
+                Setting::FilterOrder,
                 "the order is the motion's low-pass filter's, and there is none (cutoff none)"
                     .into(),
             );
         }
         if o.filter_torque == Some(true) && !filtered {
             return refuse(
-                "filter_torque",
+                Setting::FilterTorque,
                 "the torques get the motion's low-pass filter, and there is none (cutoff none)"
                     .into(),
             );
@@ -830,7 +826,7 @@ impl FitRequest {
             if self.excitation.is_some() && !self.test.is_empty() && settings.test_window.is_none()
             {
                 return Err(IdentError::Setting {
-                    name: "test_window".into(),
+                    name: crate::options::Setting::TestWindow.into(),
                     message: "a streamed fit with an excitation needs a test window \
                               (samples of one period)"
                         .into(),
@@ -894,11 +890,7 @@ impl FitRequest {
         let fields = self.overrides.observation_fields();
         if !fields.is_empty() {
             return Err(IdentError::Setting {
-                name: fields
-                    .iter()
-                    .map(|s| s.name())
-                    .collect::<Vec<_>>()
-                    .join(", "),
+                name: crate::error::SettingName::Options(fields.to_vec()),
                 message: "the processing (and the Stribeck terms) of observation states are \
                           their own, set when they were observed: give these options to observe"
                     .into(),
@@ -986,7 +978,7 @@ impl FitRequest {
         if let (None, Some(traj), Some(t)) = (settings.test_window, &self.excitation, test.first())
         {
             let rate = t.rate_hz().ok_or_else(|| IdentError::Setting {
-                name: "excitation".into(),
+                name: crate::error::SettingName::Argument("excitation"),
                 message: format!(
                     "{}: the test log has no usable time stamps for one period of the excitation",
                     self.test

@@ -175,7 +175,7 @@ pub const WRENCH_COMPONENTS: [&str; 6] = ["fx", "fy", "fz", "mx", "my", "mz"];
 pub fn wrench_frame(model: &Model, frame: &str) -> Result<usize, IdentError> {
     let names = model.frame_names();
     let error = |message: String| IdentError::Setting {
-        name: "wrench".into(),
+        name: crate::error::SettingName::Argument("wrench"),
         message,
     };
     match names.iter().position(|n| n == frame) {
@@ -197,7 +197,7 @@ pub fn wrench_frame(model: &Model, frame: &str) -> Result<usize, IdentError> {
 fn check_wrench(model: &Model, frame: &str, rcond: f64) -> Result<usize, IdentError> {
     if !(rcond.is_finite() && (0.0..1.0).contains(&rcond)) {
         return Err(IdentError::Setting {
-            name: "wrench_rcond".into(),
+            name: crate::error::SettingName::Argument("wrench_rcond"),
             message: format!("must be in [0, 1), got {rcond}"),
         });
     }
@@ -220,7 +220,7 @@ pub fn tip_wrench(
     let n = model.dof();
     if q.ncols() != n || tau_ext.shape() != q.shape() {
         return Err(IdentError::Setting {
-            name: "wrench".into(),
+            name: crate::error::SettingName::Argument("wrench"),
             message: format!(
                 "q is {}×{} and the external torque {}×{}: both need one row per sample and \
                  one column per coordinate of robot {} ({n})",
@@ -278,7 +278,7 @@ pub fn tip_wrench(
         }
         if let Some(c) = f.iter().position(|x| !x.is_finite()) {
             return Err(IdentError::Setting {
-                name: "wrench".into(),
+                name: crate::error::SettingName::Argument("wrench"),
                 message: format!(
                     "sample {k}: wrench component {c} is not finite (external torque {:?})",
                     tau.iter().collect::<Vec<_>>()
@@ -370,7 +370,7 @@ pub fn external_torque(
     let observer_gains = vec![options.observer_gain; n];
     let mut observer =
         MomentumObserver::new(model, &observer_gains).map_err(|e| IdentError::Setting {
-            name: "observer_gain".into(),
+            name: crate::error::SettingName::Argument("observer_gain"),
             message: e.to_string(),
         })?;
     let data = prepare(model, log, &result.settings.processing)?;

@@ -175,24 +175,48 @@ impl JointMetrics {
     /// Refuses metrics that are not numbers (no sample in the window, a joint whose
     /// torques are all zero) rather than printing NaN: the message names `log`, and the
     /// joint and why.
-    pub fn check_finite(&self, log: &str) -> Result<(), String> {
+    pub fn check_finite(&self, log: &str) -> Result<(), MetricsError> {
         if self.samples == 0 {
-            return Err(format!(
-                "{log}: no processed sample is left for the metrics"
-            ));
+            return Err(MetricsError::NoSample { log: log.into() });
         }
         for (j, name) in self.joints.iter().enumerate() {
             if !self.relative_error[j].is_finite() || !self.rms[j].is_finite() {
-                return Err(format!(
-                    "{log}: joint {name}: relative error {} and RMS {} are not finite (the \
-                     torques of the joint are all zero, so an error relative to them is \
-                     undefined)",
-                    self.relative_error[j], self.rms[j]
-                ));
+                return Err(MetricsError::NotFinite {
+                    log: log.into(),
+                    joint: name.clone(),
+                    relative_error: self.relative_error[j],
+                    rms: self.rms[j],
+                });
             }
         }
         Ok(())
     }
+}
+
+/// Metrics that are not numbers ([`JointMetrics::check_finite`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MetricsError {
+    /// No processed sample in the window.
+    #[error("{log}: no processed sample is left for the metrics")]
+    NoSample {
+        /// The log (or what stands for it).
+        log: String,
+    },
+    /// A joint whose errors are not finite.
+    #[error(
+        "{log}: joint {joint}: relative error {relative_error} and RMS {rms} are not finite (the \
+         torques of the joint are all zero, so an error relative to them is undefined)"
+    )]
+    NotFinite {
+        /// The log (or what stands for it).
+        log: String,
+        /// The joint's name.
+        joint: String,
+        /// Its relative error.
+        relative_error: f64,
+        /// Its RMS error, N·m or N.
+        rms: f64,
+    },
 }
 
 /// Train and test errors of a fit, per joint (the result's `metrics`).

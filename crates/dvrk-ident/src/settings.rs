@@ -10,6 +10,7 @@ use crate::error::IdentError;
 pub use crate::estimate::sdp::PriorMetric;
 use crate::estimate::sdp::SdpOptions;
 pub use crate::estimate::Method;
+use crate::options::Setting;
 use crate::signal::Processing;
 
 /// Which joints a fit's errors, figures and predictions are reported in: the model's
@@ -130,7 +131,7 @@ impl Prior {
     ) -> Result<Option<Vec<f64>>, IdentError> {
         let Some(p) = prior else { return Ok(None) };
         let setting = |message: String| IdentError::Setting {
-            name: "prior".into(),
+            name: crate::options::Setting::Prior.into(),
             message: format!("prior {}: {message}", p.source),
         };
         let mut values = vec![f64::NAN; model.n_params()];
@@ -160,16 +161,16 @@ impl Prior {
     /// Checks what a fit needs of a prior: a weight the solver resolves and the
     /// semidefinite estimator (the least-squares estimators have no prior term).
     pub fn check(&self, method: Method) -> Result<(), IdentError> {
-        let setting = |name: &str, message: String| IdentError::Setting {
+        let setting = |name: Setting, message: String| IdentError::Setting {
             name: name.into(),
             message,
         };
         if let Some(message) = crate::estimate::sdp::prior_weight_problem(self.weight) {
-            return Err(setting("prior_weight", message));
+            return Err(setting(Setting::PriorWeight, message));
         }
         if method != Method::Sdp {
             return Err(setting(
-                "prior",
+                Setting::Prior,
                 format!(
                     "only the semidefinite fit (method sdp) has a prior term, not method {}",
                     method.name()
@@ -275,7 +276,7 @@ impl FitSettings {
     /// Refuses estimator settings outside their ranges, naming the setting (the
     /// processing and the prior check their own).
     pub fn check_estimator(&self) -> Result<(), IdentError> {
-        let setting = |name: &str, message: String| {
+        let setting = |name: Setting, message: String| {
             Err(IdentError::Setting {
                 name: name.into(),
                 message,
@@ -283,7 +284,7 @@ impl FitSettings {
         };
         if self.irls_iterations > Self::MAX_IRLS_ITERATIONS {
             return setting(
-                "irls_iterations",
+                Setting::IrlsIterations,
                 format!(
                     "at most {} re-weighting passes, got {} (the weights settle in a handful)",
                     Self::MAX_IRLS_ITERATIONS,
@@ -294,7 +295,7 @@ impl FitSettings {
         let r = self.sdp_regularization;
         if !(r.is_finite() && (0.0..=Self::MAX_SDP_REGULARIZATION).contains(&r)) {
             return setting(
-                "sdp_regularization",
+                Setting::SdpRegularization,
                 format!(
                     "must be in [0, {}] (relative to the data), got {}",
                     Self::MAX_SDP_REGULARIZATION,
@@ -349,7 +350,7 @@ impl FitSettings {
         if let Some(pitch) = self.mounting_pitch_deg {
             let gravity =
                 Model::mounting_pitch_gravity(pitch).map_err(|message| IdentError::Setting {
-                    name: "mounting_pitch".into(),
+                    name: crate::options::Setting::MountingPitch.into(),
                     message,
                 })?;
             if m.gravity != gravity {

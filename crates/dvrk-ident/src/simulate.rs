@@ -111,9 +111,9 @@ impl Gaussian {
     }
 }
 
-fn setting(name: &str, message: String) -> IdentError {
+fn setting(name: &'static str, message: String) -> IdentError {
     IdentError::Setting {
-        name: name.into(),
+        name: crate::error::SettingName::Argument(name),
         message,
     }
 }
@@ -263,7 +263,7 @@ fn check_simulation(
 
 /// One value per coordinate of `n` from the setting `name`'s `values`: none gives 0 to
 /// every coordinate, else [`crate::signal::per_coordinate`]'s rule.
-fn per_coordinate(name: &str, values: &[f64], n: usize) -> Result<Vec<f64>, IdentError> {
+fn per_coordinate(name: &'static str, values: &[f64], n: usize) -> Result<Vec<f64>, IdentError> {
     if values.is_empty() {
         return Ok(vec![0.0; n]);
     }

@@ -14,7 +14,7 @@ use pyo3::types::{PySlice, PyTuple};
 
 use crate::classes::ModelPy;
 use crate::convert::{array, background, float_array, fmt_shape, matrix, py_str, Failure};
-use crate::errors::{from_ident, from_log, ident_kind, input, log_kind};
+use crate::errors::{from_ident, from_log, input, log_kind};
 use crate::frame;
 use crate::json::to_python;
 
@@ -612,7 +612,7 @@ fn fail_log(e: log::LogError) -> Failure {
 }
 
 pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {
-    (ident_kind(&e), e.to_string())
+    crate::errors::ident_failure(&e)
 }
 
 /// Reads a log into :class:`JointLog`.

@@ -12,6 +12,7 @@
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
 //! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `FitResult` |
 
+use dvrk_ident::error::SettingName;
 use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;
 use dvrk_ident::IdentError;
@@ -250,6 +251,30 @@ pub fn from_log(e: LogError) -> PyErr {
     error(log_kind(&e), e.to_string())
 }
 
+/// How Python spells a setting the library refuses: each fit option and any other
+/// argument as its keyword (`cutoff`, `wrench`).
+pub fn spelled(name: &SettingName) -> String {
+    match name {
+        SettingName::Options(settings) => settings
+            .iter()
+            .map(|s| crate::overrides::keyword(*s))
+            .collect::<Vec<_>>()
+            .join(", "),
+        SettingName::Argument(n) => (*n).into(),
+    }
+}
+
+/// A library error's class and its text as Python shows it: a refused setting named as
+/// its keyword ([`spelled`]), any other as the library's message.
+pub fn ident_failure(e: &IdentError) -> (Kind, String) {
+    let text = match e {
+        IdentError::Setting { name, message } => format!("{}: {message}", spelled(name)),
+        e => e.to_string(),
+    };
+    (ident_kind(e), text)
+}
+
 pub fn from_ident(e: IdentError) -> PyErr {
-    error(ident_kind(&e), e.to_string())
+    let (kind, text) = ident_failure(&e);
+    error(kind, text)
 }

@@ -3,17 +3,19 @@
 
 use std::path::PathBuf;
 
-use dvrk_ident::excite::optimize::{self, Criterion, Excitation, ExciteError, ExciteOptions};
+use dvrk_ident::excite::optimize::{self, Excitation, ExciteError, ExciteOption, ExciteOptions};
 use dvrk_ident::excite::{FourierError, FourierTrajectory};
 use dvrk_ident::progress::Silent;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
+use pyo3::types::PyDict;
 
 use crate::classes::ModelPy;
 use crate::convert::{array, background, matrix, rows, vector, Failure};
 use crate::errors::{error, excite_kind, fourier_kind, input};
 use crate::json::{to_python, write_document};
 use crate::limits::limits_of;
+use crate::overrides::{json, refused, unexpected};
 
 /// A float64 numpy array.
 type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
@@ -30,8 +32,55 @@ fn from_fourier(e: FourierError) -> PyErr {
     error(fourier_kind(&e), e.to_string())
 }
 
-fn parse_criterion(text: &str) -> PyResult<Criterion> {
-    crate::convert::named("criterion", text)
+/// The functions that take excitation options as keywords, and which.
+const FUNCTIONS: [(&str, &[ExciteOption]); 2] = [
+    ("excite", ExciteOption::ALL),
+    ("evaluate_trajectory", ExciteOption::EVALUATE),
+];
+
+/// `dvrk_ident._excite_options`: `{function: {keyword: default}}` in the library's
+/// order (the stub's test checks the stub's defaults against it).
+pub(crate) fn options_table<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+    let table = PyDict::new(py);
+    for (function, options) in FUNCTIONS {
+        let defaults = PyDict::new(py);
+        for o in options {
+            defaults.set_item(o.name(), to_python(py, &o.default_value())?)?;
+        }
+        table.set_item(function, defaults)?;
+    }
+    Ok(table)
+}
+
+/// The library's excitation options from `function`'s arguments: those it takes by
+/// position (`given`) and its keyword arguments (`None`: the default), converted by
+/// the library's one conversion ([`ExciteOptions::from_values`]). A keyword that is not
+/// one of `function`'s options is a `TypeError`, as Python's own.
+fn excite_options(
+    function: &str,
+    given: &[(ExciteOption, Option<&Bound<'_, PyAny>>)],
+    kwargs: Option<&Bound<'_, PyDict>>,
+) -> PyResult<ExciteOptions> {
+    let scope = FUNCTIONS
+        .iter()
+        .find(|(f, _)| *f == function)
+        .map_or(&[][..], |(_, s)| *s);
+    let mut values = Vec::new();
+    for (option, value) in given {
+        if let Some(value) = value.filter(|v| !v.is_none()) {
+            values.push((*option, json(value, option.name())?));
+        }
+    }
+    for (key, value) in kwargs.into_iter().flatten() {
+        let name: String = key.extract()?;
+        let option = ExciteOption::from_name(&name)
+            .filter(|o| scope.contains(o) && !given.iter().any(|(g, _)| g == o))
+            .ok_or_else(|| unexpected(function, &name))?;
+        if !value.is_none() {
+            values.push((option, json(&value, option.name())?));
+        }
+    }
+    ExciteOptions::from_values(values).map_err(|e| refused(e.option.name(), &e.message))
 }
 
 /// Coefficients `a` or `b`: a 2-D array of `order` columns, one row per coordinate.
@@ -216,7 +265,7 @@ impl FourierTrajectoryPy {
     /// dVRK script plays back, the CSV of ``excite --csv``): ``(time, positions)`` with
     /// ``time`` of shape ``(N,)`` (s, from 0) and ``positions`` ``(N,
     /// len(robot.measured_joints))`` (rad or m).
-    #[pyo3(signature = (robot, rate = 200.0))]
+    #[pyo3(signature = (robot, rate = dvrk_ident::excite::setpoints::DEFAULT_RATE_HZ))]
     fn setpoints<'py>(
         &self,
         py: Python<'py>,
@@ -354,45 +403,24 @@ impl ExcitationPy {
 ///     >>> ex.criterion["value"], ex.feasible
 ///     >>> ex.trajectory.write("traj.json")
 #[pyfunction]
-#[pyo3(signature = (robot, order = 6, f0 = 0.18, *, limits = None, criterion = "condition", seed = 0, starts = 8, refine = 3, iterations = 110, refine_iterations = 180, samples_per_harmonic = 15, rest = false, smooth = true, init = None, check_rate = 1000.0))]
-#[allow(clippy::too_many_arguments)]
+#[pyo3(signature = (robot, order = None, f0 = None, *, limits = None, init = None, **options))]
 pub fn excite(
     py: Python<'_>,
     robot: &Bound<'_, ModelPy>,
-    order: usize,
-    f0: f64,
+    order: Option<&Bound<'_, PyAny>>,
+    f0: Option<&Bound<'_, PyAny>>,
     limits: Option<&Bound<'_, PyAny>>,
-    criterion: &str,
-    seed: u64,
-    starts: usize,
-    refine: usize,
-    iterations: usize,
-    refine_iterations: usize,
-    samples_per_harmonic: usize,
-    rest: bool,
-    smooth: bool,
     init: Option<&Bound<'_, FourierTrajectoryPy>>,
-    check_rate: f64,
+    options: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<ExcitationPy> {
+    let given = [(ExciteOption::Order, order), (ExciteOption::F0, f0)];
+    let opts = ExciteOptions {
+        init: init.map(|t| t.get().inner.clone()),
+        ..excite_options("excite", &given, options)?
+    };
     let model = robot.get().model.clone();
     let base = robot.get().base_parameters(py)?;
     let limits = limits_of(&model, limits)?;
-    let opts = ExciteOptions {
-        order,
-        base_frequency_hz: f0,
-        criterion: parse_criterion(criterion)?,
-        samples_per_harmonic,
-        starts,
-        refine,
-        seed,
-        iterations_per_stage: iterations,
-        refine_iterations_per_stage: refine_iterations,
-        rest,
-        smooth,
-        init: init.map(|t| t.get().inner.clone()),
-        check_rate_hz: check_rate,
-        ..ExciteOptions::default()
-    };
     let inner = background(py, move || {
         optimize::optimize(&model, &base, &limits, &opts, &Silent).map_err(fail_excite)
     })?;
@@ -413,20 +441,18 @@ pub fn excite(
 ///     >>> di.evaluate_trajectory(di.Model.load("psm_simplified"), old)["feasible"]
 ///     False
 #[pyfunction]
-#[pyo3(signature = (robot, trajectory, *, limits = None, criterion = "condition", samples_per_harmonic = 15, check_rate = 1000.0))]
+#[pyo3(signature = (robot, trajectory, *, limits = None, **options))]
 pub fn evaluate_trajectory<'py>(
     py: Python<'py>,
     robot: &Bound<'py, ModelPy>,
     trajectory: &Bound<'py, FourierTrajectoryPy>,
     limits: Option<&Bound<'py, PyAny>>,
-    criterion: &str,
-    samples_per_harmonic: usize,
-    check_rate: f64,
+    options: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyAny>> {
+    let opts = excite_options("evaluate_trajectory", &[], options)?;
     let model = robot.get().model.clone();
     let base = robot.get().base_parameters(py)?;
     let limits = limits_of(&model, limits)?;
-    let criterion = parse_criterion(criterion)?;
     let traj = trajectory.get().inner.clone();
     if let Some(warning) = traj.robot_mismatch(&model, "the trajectory") {
         crate::fit::warn_all(py, &[warning])?;
@@ -437,9 +463,9 @@ pub fn evaluate_trajectory<'py>(
             &base,
             &traj,
             &limits,
-            criterion,
-            samples_per_harmonic,
-            check_rate,
+            opts.criterion,
+            opts.samples_per_harmonic,
+            opts.check_rate_hz,
         )
         .map_err(fail_excite)
     })?;

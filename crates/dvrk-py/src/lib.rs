@@ -91,6 +91,7 @@ mod dvrk_ident_module {
         crate::errors::register(m)?;
         m.add("__version__", env!("CARGO_PKG_VERSION"))?;
         m.add("_options", crate::overrides::options_table(m.py())?)?;
+        m.add("_excite_options", crate::excite::options_table(m.py())?)?;
         Ok(())
     }
 }

@@ -12,7 +12,7 @@ use dvrk_ident::settings::Joints;
 use dvrk_ident::FitSettings;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyString};
+use pyo3::types::{PyDict, PyString};
 
 use crate::classes::FitResultPy;
 use crate::errors::input;
@@ -50,12 +50,25 @@ pub(crate) fn keyword(s: Setting) -> &'static str {
 /// An option's value refused, named as its keyword: a value of the wrong type is
 /// Python's `TypeError`, any other `InputError`.
 fn setting_error(e: SettingError) -> PyErr {
-    let message = format!("{}: {}", keyword(e.setting), e.message);
-    if e.message.starts_with("invalid type") {
-        PyTypeError::new_err(message)
+    refused(keyword(e.setting), &e.message)
+}
+
+/// The value of `keyword` refused by the library's conversion with `message`: a value
+/// of the wrong type is Python's `TypeError`, any other `InputError`.
+pub(crate) fn refused(keyword: &str, message: &str) -> PyErr {
+    let text = format!("{keyword}: {message}");
+    if message.starts_with("invalid type") {
+        PyTypeError::new_err(text)
     } else {
-        input(message)
+        input(text)
     }
+}
+
+/// `function() got an unexpected keyword argument 'name'`, as Python's own.
+pub(crate) fn unexpected(function: &str, name: &str) -> PyErr {
+    PyTypeError::new_err(format!(
+        "{function}() got an unexpected keyword argument '{name}'"
+    ))
 }
 
 /// The fit options among `function`'s keyword arguments (`None`: not given) as the
@@ -75,11 +88,7 @@ pub(crate) fn options(
         let name: String = key.extract()?;
         let setting = Setting::from_name(&name)
             .filter(|s| scope.contains(s))
-            .ok_or_else(|| {
-                PyTypeError::new_err(format!(
-                    "{function}() got an unexpected keyword argument '{name}'"
-                ))
-            })?;
+            .ok_or_else(|| unexpected(function, &name))?;
         if value.is_none() {
             continue;
         }
@@ -100,7 +109,7 @@ pub(crate) fn options(
                 continue;
             }
         }
-        values.push((setting, json(&value, setting)?));
+        values.push((setting, json(&value, keyword(setting))?));
     }
     let mut overrides = request::Overrides::from_values(values).map_err(setting_error)?;
     if in_memory.is_some() {
@@ -111,17 +120,22 @@ pub(crate) fn options(
 
 /// A keyword's value as the option's value: booleans, text, numbers (Python's and
 /// NumPy's; a non-finite number as its text, which the option's own check refuses) and
-/// sequences of them.
-fn json(value: &Bound<'_, PyAny>, setting: Setting) -> PyResult<serde_json::Value> {
+/// sequences of them. `keyword` names the argument in errors.
+pub(crate) fn json(value: &Bound<'_, PyAny>, keyword: &str) -> PyResult<serde_json::Value> {
     use serde_json::Value;
-    if value.is_instance_of::<PyBool>() {
-        return Ok(Value::Bool(value.extract()?));
+    // Python's bool and NumPy's (`numpy.bool_`, which has no `__index__` but reads as
+    // a number); not an int.
+    if let Ok(b) = value.extract::<bool>() {
+        return Ok(Value::Bool(b));
     }
     if value.is_instance_of::<PyString>() {
         return Ok(Value::String(value.extract()?));
     }
     if value.hasattr("__index__")? {
         if let Ok(n) = value.extract::<i64>() {
+            return Ok(Value::from(n));
+        }
+        if let Ok(n) = value.extract::<u64>() {
             return Ok(Value::from(n));
         }
     }
@@ -131,13 +145,12 @@ fn json(value: &Bound<'_, PyAny>, setting: Setting) -> PyResult<serde_json::Valu
     }
     if let Ok(items) = value.try_iter() {
         return items
-            .map(|item| json(&item?, setting))
+            .map(|item| json(&item?, keyword))
             .collect::<PyResult<Vec<_>>>()
             .map(Value::Array);
     }
     Err(PyTypeError::new_err(format!(
-        "{}: unexpected {}",
-        keyword(setting),
+        "{keyword}: unexpected {}",
         value.get_type().name()?
     )))
 }

@@ -6,7 +6,11 @@
 //! positions in the MEASURED joint space (`q_meas = M q`; rad or m), no effort columns.
 
 use anyhow::{bail, Context, Result};
-use dvrk_ident::excite::optimize::{self, Criterion, Evaluation, ExciteOptions, Limits};
+use clap::parser::ValueSource;
+use clap::{Arg, ArgAction, ArgMatches, Command};
+use dvrk_ident::excite::optimize::{
+    self, Criterion, Evaluation, ExciteOption, ExciteOptions, Limits,
+};
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::output::Outputs;
 use dvrk_ident::report::figure_bytes;
@@ -16,7 +20,6 @@ use std::path::Path;
 
 use super::args::{MountingArgs, MODEL, OUTPUT};
 use super::{emit, emit_summary};
-use dvrk_ident::names::Named;
 
 /// Help headings of `excite`'s own groups.
 const TRAJECTORY: &str = "Trajectory";
@@ -33,45 +36,15 @@ pub struct Args {
     pub robot: String,
     #[command(flatten)]
     pub mounting: MountingArgs,
-    /// Number of harmonics L
-    #[arg(long, value_name = "L", default_value_t = ExciteOptions::default().order, help_heading = TRAJECTORY)]
-    pub order: usize,
-    /// Base frequency f0 (Hz)
-    #[arg(long, value_name = "HZ", default_value_t = ExciteOptions::default().base_frequency_hz, help_heading = TRAJECTORY)]
-    pub f0: f64,
     /// Limits file, replacing the description's ([[limits]] tables: expr of model
     /// coordinates or measured joints, position, velocity, acceleration;
     /// [[cartesian_limits]] tables: frame, min = [x, y, z], max = [x, y, z] in metres, base
     /// frame) [default: the description's]
     #[arg(long, value_name = "FILE", help_heading = MODEL)]
     pub limits: Option<String>,
-    /// Optimality criterion
-    #[arg(long, value_parser = super::named::<Criterion>(), default_value = ExciteOptions::default().criterion.name(), help_heading = OPTIMIZER)]
-    pub criterion: Criterion,
-    /// Seed of the random starts
-    #[arg(long, value_name = "SEED", default_value_t = ExciteOptions::default().seed, help_heading = OPTIMIZER)]
-    pub seed: u64,
-    /// Number of random starts (each explored with a weak limit penalty)
-    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().starts, help_heading = OPTIMIZER)]
-    pub starts: usize,
-    /// Number of explored starts (the best) refined to a feasible trajectory
-    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().refine, help_heading = OPTIMIZER)]
-    pub refine: usize,
-    /// L-BFGS iterations of each of the 2 exploring stages
-    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().iterations_per_stage, help_heading = OPTIMIZER)]
-    pub iterations: usize,
-    /// L-BFGS iterations of each of the 5 refining stages
-    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().refine_iterations_per_stage, help_heading = OPTIMIZER)]
-    pub refine_iterations: usize,
-    /// Regressor samples per period per harmonic for the criterion
-    #[arg(long, value_name = "N", default_value_t = ExciteOptions::default().samples_per_harmonic, help_heading = OPTIMIZER)]
-    pub samples_per_harmonic: usize,
-    /// Zero velocity and acceleration at the start and end of the period
-    #[arg(long, help_heading = TRAJECTORY)]
-    pub rest: bool,
-    /// Optimize the exact condition number from the start (no smooth surrogate stages)
-    #[arg(long, help_heading = OPTIMIZER)]
-    pub no_smooth: bool,
+    /// The optimizer's and the evaluation's options (the library's list).
+    #[command(flatten)]
+    pub options: ExciteFlags,
     /// Output trajectory JSON [default: stdout]
     #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub out: Option<String>,
@@ -79,11 +52,8 @@ pub struct Args {
     #[arg(long, value_name = "FILE", help_heading = OUTPUT)]
     pub csv: Option<String>,
     /// Setpoint rate (Hz)
-    #[arg(long, default_value_t = 200.0, value_name = "HZ", help_heading = OUTPUT)]
+    #[arg(long, default_value_t = dvrk_ident::excite::setpoints::DEFAULT_RATE_HZ, value_name = "HZ", help_heading = OUTPUT)]
     pub rate: f64,
-    /// Rate of the dense feasibility check (Hz; at least 1000)
-    #[arg(long, default_value_t = ExciteOptions::default().check_rate_hz, value_name = "HZ", help_heading = OPTIMIZER)]
-    pub check_rate: f64,
     /// Warm start: refine this trajectory (Fourier JSON; with --init-pick, a 2019 file)
     #[arg(long, value_name = "TRAJ.json", help_heading = OPTIMIZER)]
     pub init: Option<String>,
@@ -227,16 +197,17 @@ fn evaluate(
         None => FourierTrajectory::from_json_file(path)?,
     };
     if let Some(warning) = traj.robot_mismatch(model, path) {
-        eprintln!("dvrk-ident: warning: {warning}");
+        super::warn(warning);
     }
+    let opts = args.options.options()?;
     let ev = optimize::evaluate(
         model,
         base,
         &traj,
         &limits.limits,
-        args.criterion,
-        args.samples_per_harmonic,
-        args.check_rate,
+        opts.criterion,
+        opts.samples_per_harmonic,
+        opts.check_rate_hz,
     )
     .map_err(|e| limits.name(e))?;
     if let Some(path) = &args.plot {
@@ -263,34 +234,22 @@ fn inputs(args: &Args) -> super::Inputs {
     )
 }
 
-/// The optimizer's settings from the flags.
+/// The optimizer's settings from the flags (the warm start read from its file).
 fn options(args: &Args) -> Result<ExciteOptions> {
     Ok(ExciteOptions {
-        order: args.order,
-        base_frequency_hz: args.f0,
-        criterion: args.criterion,
-        samples_per_harmonic: args.samples_per_harmonic,
-        starts: args.starts,
-        refine: args.refine,
-        seed: args.seed,
-        iterations_per_stage: args.iterations,
-        refine_iterations_per_stage: args.refine_iterations,
-        rest: args.rest,
-        smooth: !args.no_smooth,
         init: match (&args.init, &args.init_pick) {
             (Some(path), Some(name)) => Some(FourierTrajectory::from_wpi_file(path, name)?),
             (Some(path), None) => Some(FourierTrajectory::from_json_file(path)?),
             _ => None,
         },
-        check_rate_hz: args.check_rate,
-        ..ExciteOptions::default()
+        ..args.options.options()?
     })
 }
 
 /// The search for a new trajectory, its outputs and a one-line summary on stderr.
 fn search(args: &Args, model: &Model, base: &BaseParameters, limits: &LimitsOf) -> Result<()> {
     if limits.limits.is_empty() {
-        eprintln!("dvrk-ident: warning: no limits (the motion is unconstrained)");
+        super::warn("no limits (the motion is unconstrained)");
     }
     let opts = options(args)?;
     if args.rate <= 0.0 || !args.rate.is_finite() {
@@ -361,4 +320,115 @@ fn summary(result: &optimize::Excitation, seconds: f64) -> String {
 fn plot(model: &Model, traj: &FourierTrajectory, limits: &[Limit], path: &str) -> Result<Vec<u8>> {
     let figure = excitation_figure(model, traj, limits, 500.0);
     Ok(figure_bytes(&figure, Path::new(path))?)
+}
+
+/// How the command line spells an excitation option: its flag (`--check-rate`,
+/// `--no-smooth`).
+pub fn flag(o: ExciteOption) -> String {
+    match o {
+        ExciteOption::Smooth => "--no-smooth".into(),
+        o => format!("--{}", o.name().replace('_', "-")),
+    }
+}
+
+/// The flag of an excitation option: name, help and default from the library's list
+/// ([`ExciteOption`]), the heading, value name and parser here.
+fn arg(o: ExciteOption) -> Arg {
+    // clap takes a flag's name as a `&'static str`; the command is built once per
+    // process (a dozen short names and defaults).
+    let long: &'static str = Box::leak(flag(o)[2..].to_string().into_boxed_str());
+    let a = Arg::new(o.name()).long(long).help(o.doc());
+    let a = match o.default_text() {
+        Some(default) => {
+            let default: &'static str = Box::leak(default.into_boxed_str());
+            a.action(ArgAction::Set).default_value(default)
+        }
+        None => a.action(ArgAction::SetTrue),
+    };
+    let usize = clap::value_parser!(usize);
+    let f64 = clap::value_parser!(f64);
+    match o {
+        ExciteOption::Order => a
+            .value_parser(usize)
+            .value_name("L")
+            .help_heading(TRAJECTORY),
+        ExciteOption::F0 => a
+            .value_parser(f64)
+            .value_name("HZ")
+            .help_heading(TRAJECTORY),
+        ExciteOption::Criterion => a
+            .value_parser(super::named::<Criterion>())
+            .value_name("CRITERION")
+            .help_heading(OPTIMIZER),
+        ExciteOption::Seed => a
+            .value_parser(clap::value_parser!(u64))
+            .value_name("SEED")
+            .help_heading(OPTIMIZER),
+        ExciteOption::Starts
+        | ExciteOption::Refine
+        | ExciteOption::Iterations
+        | ExciteOption::RefineIterations
+        | ExciteOption::SamplesPerHarmonic => a
+            .value_parser(usize)
+            .value_name("N")
+            .help_heading(OPTIMIZER),
+        ExciteOption::Rest => a.help_heading(TRAJECTORY),
+        ExciteOption::Smooth => a.help_heading(OPTIMIZER),
+        ExciteOption::CheckRate => a.value_parser(f64).value_name("HZ").help_heading(OPTIMIZER),
+    }
+}
+
+/// `excite`'s option flags (`#[command(flatten)]`), one per [`ExciteOption`], and the
+/// values given.
+#[derive(Clone, Debug, Default)]
+pub struct ExciteFlags {
+    values: Vec<(ExciteOption, serde_json::Value)>,
+}
+
+impl ExciteFlags {
+    /// The library's defaults with the flags given, through its one conversion
+    /// ([`ExciteOptions::from_values`]); an error names the flag.
+    pub fn options(&self) -> Result<ExciteOptions> {
+        ExciteOptions::from_values(self.values.iter().cloned())
+            .map_err(|e| anyhow::anyhow!("{}: {}", flag(e.option), e.message))
+    }
+}
+
+impl clap::FromArgMatches for ExciteFlags {
+    fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
+        let mut values = Vec::new();
+        for &o in ExciteOption::ALL {
+            if m.value_source(o.name()) != Some(ValueSource::CommandLine) {
+                continue;
+            }
+            let value = match o {
+                ExciteOption::Smooth => serde_json::Value::Bool(false),
+                ExciteOption::Rest => serde_json::Value::Bool(true),
+                _ => match m.try_get_raw(o.name()) {
+                    Ok(Some(mut raw)) => match raw.next_back() {
+                        Some(text) => serde_json::Value::String(text.to_string_lossy().into()),
+                        None => continue,
+                    },
+                    _ => continue,
+                },
+            };
+            values.push((o, value));
+        }
+        Ok(ExciteFlags { values })
+    }
+
+    fn update_from_arg_matches(&mut self, m: &ArgMatches) -> Result<(), clap::Error> {
+        *self = Self::from_arg_matches(m)?;
+        Ok(())
+    }
+}
+
+impl clap::Args for ExciteFlags {
+    fn augment_args(cmd: Command) -> Command {
+        cmd.args(ExciteOption::ALL.iter().map(|o| arg(*o)))
+    }
+
+    fn augment_args_for_update(cmd: Command) -> Command {
+        Self::augment_args(cmd)
+    }
 }

@@ -137,7 +137,7 @@ pub fn run(args: Args) -> Result<()> {
     outputs.commit()?;
     for (out, e) in &built {
         for line in &e.undetermined {
-            eprintln!("warning: {out}: {line}");
+            super::warn(format_args!("{out}: {line}"));
         }
     }
     emit_summary(&report, stdout_taken)

@@ -10,7 +10,7 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
 use dvrk_ident::result::{LinkResult, ParameterStatus};
 use dvrk_ident::state::ObservationState;
-use dvrk_ident::{FitResult, IdentError, JointLog};
+use dvrk_ident::{FitResult, JointLog};
 use dvrk_model::Model;
 
 use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
@@ -164,7 +164,7 @@ pub fn run(args: Args) -> Result<()> {
         settings,
         result,
         logs,
-    } = request.run(robot.as_ref(), &bars).map_err(flag_error)?;
+    } = request.run(robot.as_ref(), &bars)?;
     if result.solver.converged {
         // Every output built and staged before the first is put in place.
         let mut outputs = Outputs::protecting(inputs(&args));
@@ -222,11 +222,11 @@ pub fn run(args: Args) -> Result<()> {
             eprintln!("{note}");
         }
         for warning in export_warnings {
-            eprintln!("warning: {warning}");
+            super::warn(warning);
         }
     }
     for warning in result.repeated_inputs() {
-        eprintln!("warning: {warning}");
+        super::warn(warning);
     }
     if args.json {
         emit(&result.to_json())?;
@@ -240,21 +240,6 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
-}
-
-/// A setting the library refuses, named as the command line's flag (`--delay: ...`;
-/// Python names its keyword).
-fn flag_error(e: IdentError) -> anyhow::Error {
-    match e {
-        IdentError::Setting { name, message } => {
-            let flags: Vec<String> = name
-                .split(", ")
-                .map(|n| format!("--{}", n.replace('_', "-")))
-                .collect();
-            anyhow::anyhow!("{}: {message}", flags.join(", "))
-        }
-        e => e.into(),
-    }
 }
 
 /// The human summary: solver, consistency and per-joint errors.

@@ -113,6 +113,12 @@ pub fn joint_width(names: &[String]) -> usize {
         .max(8)
 }
 
+/// Prints a warning on stderr: every command's warnings with the one prefix, as its
+/// errors have theirs (`dvrk-ident: error:`).
+pub fn warn(text: impl std::fmt::Display) {
+    eprintln!("dvrk-ident: warning: {text}");
+}
+
 /// The summary of a command: on stdout, or on stderr when an output (`-`) has stdout.
 pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
     if stdout_taken {

@@ -121,7 +121,7 @@ fn draw(model: &Model, args: &Args) -> Result<()> {
     let out = args.out.as_deref().context("--draw needs --out")?;
     let inputs = super::inputs(&[], &[("the robot", Some(&args.robot))]);
     let stdout_taken = super::check_outputs(&[("--out", Some(out))], &[], &inputs)?;
-    let drawing = kinematic_drawing(model, &q).map_err(anyhow::Error::msg)?;
+    let drawing = kinematic_drawing(model, &q)?;
     write_figure(&drawing, std::path::Path::new(out))?;
     super::emit_summary(out, stdout_taken)
 }

@@ -10,9 +10,10 @@ use std::marker::PhantomData;
 use anyhow::Result;
 use clap::parser::ValueSource;
 use clap::{Arg, ArgAction, ArgMatches, Command};
+use dvrk_ident::error::SettingName;
 use dvrk_ident::request::{Overrides, Preset, Setting, SettingError};
 use dvrk_ident::settings::{FitSettings, Joints, PriorMetric};
-use dvrk_ident::{BoundsSet, Method};
+use dvrk_ident::{BoundsSet, IdentError, Method};
 
 use super::args::{ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::{at_least_one, named};
@@ -22,6 +23,33 @@ pub fn flag(s: Setting) -> String {
     match s {
         Setting::Ellipsoids => "--no-ellipsoids".into(),
         s => format!("--{}", s.name().replace('_', "-")),
+    }
+}
+
+/// How the command line spells a setting the library refuses
+/// ([`IdentError::Setting`]): each fit option as its flag, another argument as the flag
+/// of that name (`--wrench`), or by its name where the command line has no such flag.
+pub fn spelled(name: &SettingName) -> String {
+    match name {
+        SettingName::Options(settings) => settings
+            .iter()
+            .map(|s| flag(*s))
+            .collect::<Vec<_>>()
+            .join(", "),
+        // Python's `points=` of the gravity-compensation export.
+        SettingName::Argument("points") => "--gc-points".into(),
+        // The payload's result and logs are positional arguments.
+        SettingName::Argument(n @ ("payload" | "logs")) => format!("invalid setting {n}"),
+        SettingName::Argument(n) => format!("--{}", n.replace('_', "-")),
+    }
+}
+
+/// A library error as the command line shows it: a refused setting named as its flag
+/// ([`spelled`]), any other as the library's message.
+pub fn error_text(e: &(dyn std::error::Error + 'static)) -> String {
+    match e.downcast_ref::<IdentError>() {
+        Some(IdentError::Setting { name, message }) => format!("{}: {message}", spelled(name)),
+        _ => e.to_string(),
     }
 }
 
@@ -256,6 +284,29 @@ mod tests {
             }
         }
         assert_eq!(Setting::ALL.len(), 26);
+    }
+
+    /// A setting the library refuses is named as the command line's flag: the fit
+    /// options by [`flag`] (`--no-ellipsoids`, not `--ellipsoids`), several together,
+    /// and the other arguments as their flags.
+    #[test]
+    fn refused_settings_are_named_as_flags() {
+        let e = IdentError::Setting {
+            name: SettingName::Options(vec![Setting::Ellipsoids, Setting::FilterOrder]),
+            message: "m".into(),
+        };
+        assert_eq!(error_text(&e), "--no-ellipsoids, --filter-order: m");
+        assert_eq!(
+            spelled(&SettingName::Argument("wrench_rcond")),
+            "--wrench-rcond"
+        );
+        assert_eq!(spelled(&SettingName::Argument("points")), "--gc-points");
+        // Through anyhow, as a command returns it.
+        let e = anyhow::Error::from(IdentError::Setting {
+            name: Setting::Delay.into(),
+            message: "m".into(),
+        });
+        assert_eq!(crate::message(&e), "--delay: m");
     }
 
     /// `--resample`, declared with the reading flags, is read as the fit option in

@@ -130,7 +130,7 @@ pub fn run(args: Args) -> Result<()> {
         None => FourierTrajectory::from_json_file(&args.excitation)?,
     };
     if let Some(warning) = traj.robot_mismatch(&robot, &args.excitation) {
-        eprintln!("dvrk-ident: warning: {warning}");
+        super::warn(warning);
     }
     // A result is simulated with the model it was fitted with (e.g. its Stribeck terms).
     let (mut model, params) = read_params(&robot, &args.params)?;

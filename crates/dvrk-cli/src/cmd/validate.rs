@@ -75,7 +75,7 @@ pub fn run(args: Args) -> Result<()> {
         let traj = super::args::read(&read, path)?;
         let data = prepare(&model, &traj, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window, &joints)?;
-        m.check_finite(path).map_err(anyhow::Error::msg)?;
+        m.check_finite(path)?;
         // Beside the fit's own training (and test) errors, so a held-out log reads
         // against them joint by joint (when they are in the same joints).
         let mut sets = vec![("fit train", &result.metrics.train)];

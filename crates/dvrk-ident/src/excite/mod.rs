@@ -10,6 +10,7 @@ mod grid;
 mod lbfgs;
 pub mod limits;
 pub mod optimize;
+mod options;
 mod rng;
 pub mod setpoints;
 

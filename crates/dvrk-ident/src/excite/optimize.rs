@@ -71,95 +71,11 @@ pub use super::error::ExciteError;
 use super::grid::{from_x, to_x, Grid};
 use super::limits::{Constraints, Enforced, Multipliers};
 pub use super::limits::{Feasibility, Limits, Violation};
+pub use super::options::{ExciteOption, ExciteOptionError, ExciteOptions};
 use super::{check_dof, FourierTrajectory};
 use search::{coordinate_room, explore_and_refine, hop_from_best, no_motion, Setup};
 
 mod search;
-
-/// Options of [`optimize`].
-#[derive(Clone, Debug)]
-pub struct ExciteOptions {
-    /// Number of harmonics `L`.
-    pub order: usize,
-    /// Base frequency `f0`, Hz.
-    pub base_frequency_hz: f64,
-    /// What the search optimizes (default: the condition number).
-    pub criterion: Criterion,
-    /// Regressor samples per period per harmonic (criterion grid: this × `order`).
-    pub samples_per_harmonic: usize,
-    /// Independent random starts, each explored with a weak limit penalty.
-    pub starts: usize,
-    /// Random oscillations drawn per start: each runs the first exploring stage and the
-    /// best by merit continues as the start. Where a start ends is chaotic (the last
-    /// bits of a sum change the MTM's basin), so the best of few samples is luck:
-    /// more draws per start is the cheap way to more samples, since a draw's first stage
-    /// costs a fifteenth of a refinement.
-    pub draws: usize,
-    /// How many of the explored starts (the best by their merit) are refined to a
-    /// feasible trajectory.
-    pub refine: usize,
-    /// Seed of the starts.
-    pub seed: u64,
-    /// L-BFGS iterations of each of the 2 exploring stages (every start). Longer
-    /// exploration is not better: the starts sink into their infeasible basins and
-    /// their merits rank the basins worse (MTM: 150 gives a worse best-of-3 than 110).
-    pub iterations_per_stage: usize,
-    /// L-BFGS iterations of each of the 5 refining stages (the `refine` best starts).
-    pub refine_iterations_per_stage: usize,
-    /// Perturbations of the best refined trajectory, each refined again and kept when
-    /// better (basin hopping, two at a time from the best so far). Refining the same
-    /// point again barely moves it; a hop lands in a nearby basin, often a better one
-    /// (MTM seed 1: 220.7 to 216.2 in four hops).
-    pub hops: usize,
-    /// Size of a hop: the standard deviation of each harmonic coefficient's change, in
-    /// units of its coordinate's room (a unit moves the coordinate's position by its
-    /// room). 0.3 scatters the MTM into worse basins; 0.1 finds better ones.
-    pub hop_size: f64,
-    /// Zero velocity and acceleration at the start (and so the end) of the period.
-    pub rest: bool,
-    /// Bounds moved inward by this fraction of their range while optimizing.
-    pub margin: f64,
-    /// Rate of the dense feasibility check, Hz (at least 1000).
-    pub check_rate_hz: f64,
-    /// Condition criterion: optimize a smooth surrogate (soft-max/soft-min of the
-    /// eigenvalues, sharpened stage by stage) before the exact criterion.
-    pub smooth: bool,
-    /// Warm start: the first start refines this trajectory (same order and base
-    /// frequency), first pulled inside the limits toward a static pose if needed.
-    pub init: Option<FourierTrajectory>,
-    /// While optimizing, the Coulomb friction columns use `tanh(ṡ/ε)` instead of
-    /// `sign(ṡ)`, with `ε` this value in rad/s (a tenth of it in m/s for prismatic
-    /// joints); 0 keeps the sign. The sign jumps when a joint's velocity crosses zero at
-    /// a criterion sample, a jump the gradient cannot see: without smoothing, the
-    /// optimizer parks velocities at zero on the side where the jump would cost and
-    /// stalls there. Reported criteria always use the exact sign.
-    pub coulomb_smoothing: f64,
-}
-
-impl Default for ExciteOptions {
-    fn default() -> Self {
-        ExciteOptions {
-            order: 6,
-            base_frequency_hz: 0.18,
-            criterion: Criterion::Condition,
-            samples_per_harmonic: 15,
-            starts: 8,
-            draws: 4,
-            refine: 3,
-            seed: 0,
-            iterations_per_stage: 110,
-            refine_iterations_per_stage: 180,
-            hops: 4,
-            hop_size: 0.1,
-            rest: false,
-            margin: 0.001,
-            check_rate_hz: 1000.0,
-            smooth: true,
-            init: None,
-            coulomb_smoothing: 0.01,
-        }
-    }
-}
 
 /// Criterion and feasibility of a trajectory.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

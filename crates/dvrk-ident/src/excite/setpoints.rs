@@ -6,6 +6,10 @@ use nalgebra::DMatrix;
 
 use super::{check_dof, ExciteError, FourierTrajectory};
 
+/// The setpoints' rate when none is given (`excite --rate`, Python's
+/// `FourierTrajectory.setpoints(rate=)`), Hz: the dVRK's 2019 logs' rate.
+pub const DEFAULT_RATE_HZ: f64 = 200.0;
+
 /// Setpoints of one period at `rate_hz` in the MEASURED joint space (`q_meas = M q`,
 /// what a dVRK script plays back): the times (s, from 0, `round(period · rate)` of
 /// them) and one row of measured joint positions (rad or m) per time, columns in

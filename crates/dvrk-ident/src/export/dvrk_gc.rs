@@ -512,7 +512,7 @@ fn mismatch(model: &Model, message: String) -> IdentError {
 fn check_inputs(model: &Model, params: &[f64], points: usize) -> Result<DMatrix<f64>, IdentError> {
     if !(6..=10).contains(&points) {
         return Err(IdentError::Setting {
-            name: "points".into(),
+            name: crate::error::SettingName::Argument("points"),
             message: format!(
                 "grid points per joint must be 6 to 10 (10⁶ configurations), got {points}"
             ),

@@ -347,7 +347,7 @@ pub fn dvrk_kinematic_gc(
         match (arm.endoscope_link, endoscope) {
             (Some(_), None) => {
                 return Err(IdentError::Setting {
-                    name: "endoscope".into(),
+                    name: crate::error::SettingName::Argument("endoscope"),
                     message: format!(
                         "the ECM's controller sets its insertion link's mass from the endoscope \
                      type: give the one the arm carries ({})",
@@ -358,7 +358,7 @@ pub fn dvrk_kinematic_gc(
             (Some(_), Some(t)) => {
                 let (name, mass) = ENDOSCOPES.iter().find(|(n, _)| *n == t).ok_or_else(|| {
                     IdentError::Setting {
-                        name: "endoscope".into(),
+                        name: crate::error::SettingName::Argument("endoscope"),
                         message: format!(
                             "unknown endoscope type {t:?}: expected {}",
                             endoscope_names()
@@ -369,7 +369,7 @@ pub fn dvrk_kinematic_gc(
             }
             (None, Some(_)) => {
                 return Err(IdentError::Setting {
-                    name: "endoscope".into(),
+                    name: crate::error::SettingName::Argument("endoscope"),
                     message: format!("robot {} carries no endoscope", model.name),
                 })
             }

@@ -82,8 +82,13 @@ impl std::str::FromStr for DelayOption {
 }
 
 impl DelayOption {
-    /// Sets the delay of `settings` for a model of `dof` coordinates.
-    pub fn apply(&self, settings: &mut FitSettings, dof: usize) -> Result<(), String> {
+    /// Sets the delay of `settings` for a model of `dof` coordinates; an error names
+    /// the option (`delay`).
+    pub fn apply(&self, settings: &mut FitSettings, dof: usize) -> Result<(), IdentError> {
+        let refuse = |message: String| IdentError::Setting {
+            name: crate::options::Setting::Delay.into(),
+            message,
+        };
         match self {
             DelayOption::Auto => {
                 settings.delay_search_s = Some(DEFAULT_MAX_DELAY_S);
@@ -91,15 +96,17 @@ impl DelayOption {
             }
             DelayOption::Fixed(d) => {
                 let all = crate::signal::per_coordinate(d, dof).ok_or_else(|| {
-                    format!(
+                    refuse(format!(
                         "{} delays for {dof} coordinates: give one for all or one per \
                          coordinate",
                         d.len()
-                    )
+                    ))
                 })?;
-                crate::signal::advance::check_delays(&all, dof).map_err(|e| match e {
-                    crate::signal::SignalError::InvalidSetting { reason, .. } => reason,
-                    e => e.to_string(),
+                crate::signal::advance::check_delays(&all, dof).map_err(|e| {
+                    refuse(match e {
+                        crate::signal::SignalError::InvalidSetting { reason, .. } => reason,
+                        e => e.to_string(),
+                    })
                 })?;
                 settings.delay_search_s = None;
                 settings.processing.delay_s = if all.iter().all(|&v| v == 0.0) {
@@ -124,7 +131,7 @@ pub fn estimate_delays(
 ) -> Result<DelayEstimate, IdentError> {
     if !(max_s.is_finite() && max_s > 0.0 && max_s <= crate::signal::advance::MAX_DELAY_S) {
         return Err(IdentError::Setting {
-            name: "delay".into(),
+            name: crate::options::Setting::Delay.into(),
             message: format!(
                 "the delay search range must be within (0, {}] s, got {max_s}",
                 crate::signal::advance::MAX_DELAY_S
@@ -212,7 +219,7 @@ fn shifted_logs(
             }
             Some(f) if (f - first.rate_hz).abs() > 1e-9 * f => {
                 return Err(IdentError::Setting {
-                    name: "delay".into(),
+                    name: crate::options::Setting::Delay.into(),
                     message: format!(
                         "the delay search needs the training logs at one rate: {} is at {} Hz, \
                          the first log at {f} Hz (resample them to one rate)",

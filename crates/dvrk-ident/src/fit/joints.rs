@@ -79,7 +79,7 @@ impl JointMap {
                         model
                             .measured_to_model_matrix()
                             .ok_or_else(|| IdentError::Setting {
-                                name: "joints".into(),
+                                name: crate::options::Setting::Joints.into(),
                                 message: format!(
                                     "robot {}'s coupling matrix is singular: its measured \
                                      joints cannot be shown",

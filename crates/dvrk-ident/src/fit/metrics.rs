@@ -190,7 +190,7 @@ impl MetricSums {
             )
         } else {
             return Err(IdentError::Setting {
-                name: "joints".into(),
+                name: crate::options::Setting::Joints.into(),
                 message: format!(
                     "the errors in {}'s measured joints need a pass over the samples, and                      these sums come from the observation's factors",
                     joints.robot

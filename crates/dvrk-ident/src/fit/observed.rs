@@ -21,7 +21,7 @@ use crate::settings::{FitSettings, Method, Prior};
 pub(crate) fn no_delay_search(settings: &FitSettings, what: &str) -> Result<(), IdentError> {
     match settings.delay_search_s {
         Some(_) => Err(IdentError::Setting {
-            name: "delay".into(),
+            name: crate::options::Setting::Delay.into(),
             message: format!(
                 "the delay search (delay auto) needs the logs in memory, which {what} does \
                  not hold: estimate the delays on a shorter log and give them fixed"
@@ -155,7 +155,7 @@ pub(crate) fn fit_observed(
             Some(pass) => pass(&estimated.params)?,
             None => {
                 return Err(IdentError::Setting {
-                    name: "joints".into(),
+                    name: crate::options::Setting::Joints.into(),
                     message: format!(
                         "the training errors in {}'s measured joints need the logs' \
                          samples, which observation states do not hold: fit the states in \
@@ -217,7 +217,7 @@ impl LogOffsets {
     fn new(model: &Model, observed: &Observed, joints: &JointMap) -> Result<Self, IdentError> {
         if !joints.is_identity() {
             return Err(IdentError::Setting {
-                name: "log_offsets".into(),
+                name: crate::options::Setting::LogOffsets.into(),
                 message: format!(
                     "the per-log offsets are in model coordinates, and the training errors in                      {}'s measured joints would leave them out: fit in model coordinates                      (joints model)",
                     model.name

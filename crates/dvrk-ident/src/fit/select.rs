@@ -441,7 +441,7 @@ pub(crate) fn select(
 ) -> Result<(Selection, Candidate), IdentError> {
     crate::fit::no_delay_search(settings, "the selection's folds").map_err(|_| {
         IdentError::Setting {
-            name: "select".into(),
+            name: crate::options::Setting::Select.into(),
             message: "the delay search (delay auto) would see the held-out samples: \
                       estimate the delays first and give them fixed"
                 .into(),
@@ -474,7 +474,7 @@ pub(crate) fn select(
         let mut held_out = MetricSums::new(&model);
         for (f, fold) in folds.iter().enumerate() {
             let params = fit_pieces(&model, &fold.train, &s).map_err(|e| IdentError::Setting {
-                name: "select".into(),
+                name: crate::options::Setting::Select.into(),
                 message: format!("candidate {}, fold {}: {e}", c.name(), f + 1),
             })?;
             for t in &fold.test {
@@ -487,9 +487,9 @@ pub(crate) fn select(
         progress.finish();
         let m = held_out.metrics(&joints)?;
         m.check_finite(&format!("candidate {}'s held-out samples", c.name()))
-            .map_err(|message| IdentError::Setting {
-                name: "select".into(),
-                message,
+            .map_err(|e| IdentError::Setting {
+                name: crate::options::Setting::Select.into(),
+                message: e.to_string(),
             })?;
         let mean = m.relative_error.iter().sum::<f64>() / m.relative_error.len().max(1) as f64;
         scores.push(CandidateScore {

@@ -85,6 +85,27 @@ pub struct KinematicDrawing {
     pub view_size: (u32, u32),
 }
 
+/// Coordinates a kinematic drawing refuses.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum DrawingError {
+    /// Not one value per coordinate of the robot.
+    #[error("{given} values given for the {} coordinates of {robot} ({})", coordinates.len(), coordinates.join(", "))]
+    Count {
+        /// Values given.
+        given: usize,
+        /// The robot's name.
+        robot: String,
+        /// Its coordinates' names.
+        coordinates: Vec<String>,
+    },
+    /// A value that is NaN or infinite.
+    #[error("coordinate {coordinate} is not finite")]
+    NotFinite {
+        /// The coordinate's name.
+        coordinate: String,
+    },
+}
+
 /// The drawing of `model` at coordinates `q` (rad or m, model coordinates).
 ///
 /// ```
@@ -95,18 +116,18 @@ pub struct KinematicDrawing {
 /// assert_eq!(drawing.frames.len(), model.frames.len() + 1);
 /// assert!(drawing.frames.iter().any(|f| f.branch));
 /// ```
-pub fn kinematic_drawing(model: &Model, q: &[f64]) -> Result<KinematicDrawing, String> {
+pub fn kinematic_drawing(model: &Model, q: &[f64]) -> Result<KinematicDrawing, DrawingError> {
     if q.len() != model.dof() {
-        return Err(format!(
-            "{} values given for the {} coordinates of {} ({})",
-            q.len(),
-            model.dof(),
-            model.name,
-            model.coordinates.join(", ")
-        ));
+        return Err(DrawingError::Count {
+            given: q.len(),
+            robot: model.name.clone(),
+            coordinates: model.coordinates.clone(),
+        });
     }
     if let Some(j) = q.iter().position(|v| !v.is_finite()) {
-        return Err(format!("coordinate {} is not finite", model.coordinates[j]));
+        return Err(DrawingError::NotFinite {
+            coordinate: model.coordinates[j].clone(),
+        });
     }
     let poses = model.frame_poses(q);
     let count = model.frames.len() + 1;

@@ -294,11 +294,10 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
             "Excitation trajectory over one period, with the position limits (dashed).",
         )?);
     }
-    let drawing =
-        draw::kinematic_drawing(model, &q_draw).map_err(|message| ReportError::Format {
-            file: "kinematic drawing".into(),
-            message,
-        })?;
+    let drawing = draw::kinematic_drawing(model, &q_draw).map_err(|e| ReportError::Format {
+        file: "kinematic drawing".into(),
+        message: e.to_string(),
+    })?;
     figures.push(render_both(
         &drawing,
         "kinematics",

@@ -636,6 +636,9 @@ def excite(
     f0: float = 0.18,
     *,
     limits: LimitsArg = None,
+    init: Optional[FourierTrajectory] = None,
+    # The excitation options (dvrk_ident._excite_options["excite"]: the library's order
+    # and defaults, which a test checks these against).
     criterion: str = "condition",
     seed: int = 0,
     starts: int = 8,
@@ -645,7 +648,6 @@ def excite(
     samples_per_harmonic: int = 15,
     rest: bool = False,
     smooth: bool = True,
-    init: Optional[FourierTrajectory] = None,
     check_rate: float = 1000.0,
 ) -> Excitation:
     """Optimizes an excitation trajectory (``dvrk-ident excite``): condition number
@@ -657,6 +659,7 @@ def evaluate_trajectory(
     trajectory: FourierTrajectory,
     *,
     limits: LimitsArg = None,
+    # dvrk_ident._excite_options["evaluate_trajectory"].
     criterion: str = "condition",
     samples_per_harmonic: int = 15,
     check_rate: float = 1000.0,
