@@ -67,20 +67,29 @@ def test_readme_signatures_match_the_module():
         written = re.search(r"`" + re.escape(name) + r"(\([^`]*\))`", text)
         assert written, f"{name}: no `{name}(...)` in the README"
         params = [p for p in inspect.signature(obj).parameters.values() if p.name != "self"]
+        # The excitation options (`dvrk_ident._excite_options`) are written with the
+        # library's defaults, also those the signature takes positionally as None.
+        excite = di._excite_options.get(name, {})
+
+        def shown(key, default):
+            if isinstance(default, float) and default.is_integer():
+                default = int(default)
+            return f"{key}={default!r}".replace("'", '"')
+
         expected = []
         for p in params:
             if p.kind == p.VAR_KEYWORD and p.name == "options":
-                # The fit options (`dvrk_ident._options`), each None unless given.
                 given = {q.name for q in params}
-                expected += [f"{n}=None" for n in di._options[name] if n not in given]
+                if excite:
+                    expected += [shown(n, d) for n, d in excite.items() if n not in given]
+                else:
+                    # The fit options (`dvrk_ident._options`), each None unless given.
+                    expected += [f"{n}=None" for n in di._options[name] if n not in given]
                 continue
             if p.kind == p.KEYWORD_ONLY and "*" not in expected:
                 expected.append("*")
             if p.default is p.empty:
                 expected.append(p.name)
             else:
-                default = p.default
-                if isinstance(default, float) and default.is_integer():
-                    default = int(default)
-                expected.append(f"{p.name}={default!r}".replace("'", '"'))
+                expected.append(shown(p.name, excite.get(p.name, p.default)))
         assert written.group(1) == "(" + ", ".join(expected) + ")", name
