@@ -488,6 +488,33 @@ fn readme_cpp_example_runs() {
     println!("{stdout}");
 }
 
+/// A result document of the built-in PSM with these parameters (by name) and fit
+/// settings, written into a folder `label` of the test's scratch space (what the loader
+/// reads of a result).
+fn psm_result(
+    label: &str,
+    names: &[String],
+    params: &[f64],
+    settings: serde_json::Value,
+) -> PathBuf {
+    let named: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .zip(params)
+        .map(|(n, v)| (n.to_string(), (*v).into()))
+        .collect();
+    let doc = serde_json::json!({
+        "robot": "psm",
+        "robot_source": "builtin:psm",
+        "settings": settings,
+        "parameters": named,
+    });
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(label);
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("result.json");
+    std::fs::write(&path, doc.to_string()).unwrap();
+    path
+}
+
 /// A result fitted with `--position-torque 1 --load-friction` loads (its `Pca`, `Psa`
 /// and `Fl` parameters are part of the model, in dvrk-ident's order), and the ABI's
 /// inverse dynamics is the prediction with the load solved for
@@ -500,21 +527,8 @@ fn a_result_with_position_torque_and_load_friction_loads() {
     let params: Vec<f64> = (0..model.n_params())
         .map(|k| 0.01 * ((k % 7) as f64 + 1.0))
         .collect();
-    let named: serde_json::Map<String, serde_json::Value> = names
-        .iter()
-        .zip(&params)
-        .map(|(n, v)| (n.to_string(), (*v).into()))
-        .collect();
-    let doc = serde_json::json!({
-        "robot": "psm",
-        "robot_source": "builtin:psm",
-        "settings": { "position_torque_order": 1, "load_friction": true },
-        "parameters": named,
-    });
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_elements");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("result.json");
-    std::fs::write(&path, doc.to_string()).unwrap();
+    let settings = serde_json::json!({ "position_torque_order": 1, "load_friction": true });
+    let path = psm_result("c_abi_elements", &names, &params, settings);
     let loaded = dvrk_model_c::DvrkModel::from_result(&path).unwrap();
     assert_eq!(loaded.model().param_names(), names);
     let (q, dq, ddq) = ([0.1, -0.2, 0.12, 0.3, -0.1, 0.2, 0.4], [0.5; 7], [-0.3; 7]);
@@ -563,21 +577,7 @@ fn gravity_and_mass_matrix_are_bit_exact_on_both_paths_and_refuse_overflow() {
     let params: Vec<f64> = (0..model.n_params())
         .map(|k| 0.02 * ((k % 5) as f64 + 1.0))
         .collect();
-    let named: serde_json::Map<String, serde_json::Value> = names
-        .iter()
-        .zip(&params)
-        .map(|(n, v)| (n.to_string(), (*v).into()))
-        .collect();
-    let doc = serde_json::json!({
-        "robot": "psm",
-        "robot_source": "builtin:psm",
-        "settings": {},
-        "parameters": named,
-    });
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_bounded");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("result.json");
-    std::fs::write(&path, doc.to_string()).unwrap();
+    let path = psm_result("c_abi_bounded", &names, &params, serde_json::json!({}));
     let loaded = DvrkModel::from_result(&path).unwrap();
     let mut ws = Workspace::new(&model);
     for insertion in [0.12, -3e5, 1e7, 1e300] {
