@@ -45,7 +45,7 @@ pub struct LinkResult {
 /// constraints or the representative of a least-squares fit: `unidentified`. A
 /// semidefinite fit's parameter that sits on one of its linear bounds (mass range,
 /// centre-of-mass box, friction and motor-inertia bounds, `Fc + Fs ≥ 0`; to
-/// `1e-5·max(1, |bound|)`, [`crate::fit::status::BOUND_TOLERANCE`]) is `at_lower_bound` or
+/// `1e-4·max(1, |bound|)`, [`crate::fit::status::BOUND_TOLERANCE`]) is `at_lower_bound` or
 /// `at_upper_bound` whatever the data say: the bound, not the data, set it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -31,7 +31,7 @@
 //! Bounds come first: a parameter of a semidefinite fit sitting on one of the fit's
 //! linear bounds ([`dvrk_model::Model::bound_rows`]: mass range, centre-of-mass box,
 //! friction and motor-inertia bounds, `Fc + Fs ≥ 0`) to
-//! `BOUND_TOLERANCE·max(1, |bound|)` ([`BOUND_TOLERANCE`] = 1e-5) is
+//! `BOUND_TOLERANCE·max(1, |bound|)` ([`BOUND_TOLERANCE`] = 1e-4) is
 //! `at_lower_bound` / `at_upper_bound`, whether or not the data would determine it: the
 //! bound, not the data, set its value. Least-squares fits have no bounds.
 
@@ -46,12 +46,15 @@ use crate::result::{LinkDetermined, ParameterStatus};
 pub const DETERMINED_FRACTION: f64 = 0.1;
 
 /// A parameter within `BOUND_TOLERANCE·max(1, |bound|)` of a bound sits on it (in the
-/// bound's unit; ten times the tolerance the fit clamps element parameters onto their
-/// bounds with, [`dvrk_model::Element::clamp`]). The semidefinite
-/// fit meets its link bounds only to Clarabel's tolerance (1e-8) in variables scaled
-/// by each parameter's plausible magnitude, so a link parameter on its bound misses it
-/// by more than 1e-6: the real MTM's `m4 = 9.99998968` kg on its 10 kg bound.
-pub const BOUND_TOLERANCE: f64 = 1e-5;
+/// bound's unit; a hundred times the tolerance the fit clamps element parameters onto
+/// their bounds with, [`dvrk_model::Element::clamp`]). The semidefinite fit meets its
+/// link bounds only to Clarabel's tolerance (1e-8) in variables scaled by each
+/// parameter's plausible magnitude, so a link parameter on its bound misses it by more:
+/// on the real 2019 logs with the dVRK preset, the MTM's `back_parallel` mass ends
+/// 4e-4 kg below its 10 kg bound and the PSM's `pitch_top` 1.4e-5 kg below its 0.5 kg
+/// one, both held there by the bound alone (1e-5 missed them; 1e-6 missed the MTM's
+/// `m4 = 9.99998968` kg of an earlier preset).
+pub const BOUND_TOLERANCE: f64 = 1e-4;
 
 /// What the fit had to decide each parameter's status from.
 pub(crate) struct StatusInputs<'a> {
