@@ -14,7 +14,8 @@ use crate::fit::delay::DelayOption;
 use crate::fit::select::Candidates;
 use crate::settings::{Joints, PriorMetric};
 use crate::signal::Cutoff;
-use crate::{BoundsSet, Method};
+use crate::{BoundsSet, FitSettings, IdentError, Method};
+use dvrk_model::Model;
 
 macro_rules! overrides {
     ($(
@@ -248,6 +249,183 @@ fn delay<'de, D: Deserializer<'de>>(d: D) -> Result<Option<DelayOption>, D::Erro
         v @ Value::Array(_) => DelayOption::Fixed(Vec::<f64>::deserialize(v).map_err(|_| bad())?),
         _ => return Err(bad()),
     }))
+}
+
+impl Overrides {
+    /// These overrides with the fields they do not give taken from their preset (and no
+    /// preset left). `from_states`: the fit reads observation states, which carry their
+    /// own processing, so the preset's processing fields (delays, Stribeck terms) are
+    /// left to `observe`.
+    pub fn expanded(&self, from_states: bool) -> Overrides {
+        let mut o = self.clone();
+        let Some(preset) = o.preset.take() else {
+            return o;
+        };
+        o = o.or(preset.overrides());
+        if self.select.is_some() {
+            // The candidates give the friction terms; the preset gives the rest.
+            o.stribeck_velocity = self.stribeck_velocity;
+            o.dahl_sigma = self.dahl_sigma;
+        }
+        if from_states {
+            let given = self.observation_fields();
+            if !given.contains(&Setting::Stribeck) {
+                o.stribeck_velocity = self.stribeck_velocity;
+            }
+            if !given.contains(&Setting::Dahl) {
+                o.dahl_sigma = self.dahl_sigma;
+            }
+            if !given.contains(&Setting::PositionTorque) {
+                o.position_torque_order = self.position_torque_order;
+            }
+            if !given.contains(&Setting::LoadFriction) {
+                o.load_friction = self.load_friction;
+            }
+            if !given.contains(&Setting::Delay) {
+                o.delay = self.delay.clone();
+            }
+        }
+        o
+    }
+
+    /// `base` with every given field replaced.
+    pub fn apply(&self, base: FitSettings) -> FitSettings {
+        let mut s = base;
+        if let Some(m) = self.method {
+            s.method = m;
+        }
+        if let Some(c) = &self.cutoff {
+            s.processing.set_cutoff(c.clone());
+        }
+        if let Some(n) = self.filter_order {
+            if let Some(f) = &mut s.processing.filter {
+                f.order = n;
+            }
+        }
+        if let Some(f) = self.filter_torque {
+            s.processing.filter_torque = f;
+        }
+        if let Some(t) = self.trim {
+            s.processing.trim = t;
+        }
+        if let Some(d) = self.decimate {
+            s.processing.decimate = d;
+        }
+        if let Some(v) = self.min_speed {
+            s.processing.min_speed = Some(v);
+        }
+        if let Some(r) = self.resample_hz {
+            s.processing.resample_hz = Some(r);
+        }
+        if let Some(w) = self.test_window {
+            s.test_window = Some(w);
+        }
+        if let Some(i) = self.irls_iterations {
+            s.irls_iterations = i;
+        }
+        if let Some(r) = self.sdp_regularization {
+            s.sdp_regularization = r;
+        }
+        if let Some(v) = self.stribeck_velocity {
+            s.stribeck_velocity = Some(v);
+        }
+        if let Some(v) = self.dahl_sigma {
+            s.dahl_sigma = Some(v);
+        }
+        if let Some(k) = self.position_torque_order {
+            s.position_torque_order = Some(k);
+        }
+        if let Some(l) = self.load_friction {
+            s.load_friction = l;
+        }
+        if let Some(p) = self.mounting_pitch_deg {
+            s.mounting_pitch_deg = Some(p);
+        }
+        if let Some(b) = self.bounds {
+            s.bounds = Some(b);
+        }
+        if let Some(e) = self.ellipsoids {
+            s.ellipsoids = e;
+        }
+        if let Some(j) = self.joints {
+            s.joints = j;
+        }
+        if let Some(b) = self.log_offsets {
+            s.log_offsets = b;
+        }
+        if let Some(c) = &self.select {
+            s.select = Some(c.clone());
+        }
+        s
+    }
+
+    /// [`Overrides::apply`], the delays for `model`'s coordinates and the prior for its
+    /// parameters.
+    pub fn settings_for(
+        &self,
+        base: FitSettings,
+        model: &Model,
+    ) -> Result<FitSettings, IdentError> {
+        let mut s = self.apply(base);
+        if let Some(d) = &self.delay {
+            d.apply(&mut s, model.dof())?;
+        }
+        let fitted = s.model(model)?.into_owned();
+        self.set_prior(&mut s, &fitted)?;
+        Ok(s)
+    }
+
+    /// The prior of `s` for `fitted` (the model with the settings' Stribeck terms):
+    /// read from [`Overrides::prior`], or the base's with the weight and metric
+    /// overridden, then checked.
+    pub(super) fn set_prior(&self, s: &mut FitSettings, fitted: &Model) -> Result<(), IdentError> {
+        if let Some(source) = &self.prior {
+            s.prior = Some(source.parameters(fitted)?);
+        }
+        match &mut s.prior {
+            Some(p) => {
+                if let Some(w) = self.prior_weight {
+                    p.weight = w;
+                }
+                if let Some(m) = self.prior_metric {
+                    p.metric = m;
+                }
+                p.check(s.method)
+            }
+            None => {
+                let given = [
+                    (Setting::PriorWeight, self.prior_weight.is_some()),
+                    (Setting::PriorMetric, self.prior_metric.is_some()),
+                ];
+                match given.iter().find(|(_, set)| *set) {
+                    Some((name, _)) => Err(IdentError::Setting {
+                        name: (*name).into(),
+                        message: "needs a prior (nominal, or an earlier result file)".into(),
+                    }),
+                    None => Ok(()),
+                }
+            }
+        }
+    }
+
+    /// The overrides that change how logs are processed or which model is fitted
+    /// (the delays shift the torques before the reduction): observation states carry
+    /// their own, so these are refused with them.
+    pub(super) fn observation_fields(&self) -> Vec<Setting> {
+        self.given()
+            .into_iter()
+            .filter(|s| {
+                Setting::OBSERVE.contains(s)
+                    || matches!(
+                        s,
+                        Setting::Delay
+                            | Setting::Dahl
+                            | Setting::PositionTorque
+                            | Setting::LoadFriction
+                    )
+            })
+            .collect()
+    }
 }
 
 #[cfg(test)]
