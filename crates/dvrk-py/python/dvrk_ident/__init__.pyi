@@ -43,8 +43,9 @@ class NotConvergedError(SolverError):
     result: "FitResult"
 
 class Model:
-    """A robot model: a built-in dVRK arm (``"psm"``, ``"psm_simplified"``,
-    ``"mtm"``), a ``.toml`` description or a ``.urdf`` file."""
+    """A robot model: a built-in dVRK arm (``Model.builtin_names()``: ``"psm"``,
+    ``"psm_simplified"``, ``"mtm"``, ``"ecm"``, ``"psm_si"``, ``"psm_si_tool"``,
+    ``"ecm_si"``), a ``.toml`` description or a ``.urdf`` file."""
 
     def __init__(self, name_or_path: PathLike) -> None: ...
     @staticmethod
