@@ -194,3 +194,18 @@ impl Setting {
         Setting::ALL.iter().copied().find(|s| s.name() == name)
     }
 }
+
+/// An option's value as a front end gives it: text is parsed as its flag's text
+/// ([`FromStr`](std::str::FromStr), whose error names the accepted values), any other
+/// value is read as the value itself. The one reading of the fit options'
+/// (`request/overrides.rs`) and the excitation options' (`excite/options.rs`) values.
+pub(crate) fn parse_text_or_value<T>(value: serde_json::Value) -> Result<T, String>
+where
+    T: std::str::FromStr + serde::de::DeserializeOwned,
+    T::Err: std::fmt::Display,
+{
+    match value {
+        serde_json::Value::String(text) => text.parse().map_err(|e: T::Err| e.to_string()),
+        value => T::deserialize(value).map_err(|e| e.to_string()),
+    }
+}

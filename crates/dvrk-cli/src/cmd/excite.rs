@@ -6,7 +6,6 @@
 //! positions in the MEASURED joint space (`q_meas = M q`; rad or m), no effort columns.
 
 use anyhow::{bail, Context, Result};
-use clap::parser::ValueSource;
 use clap::{Arg, ArgAction, ArgMatches, Command};
 use dvrk_ident::excite::optimize::{
     self, Criterion, Evaluation, ExciteOption, ExciteOptions, Limits,
@@ -396,24 +395,15 @@ impl ExciteFlags {
 
 impl clap::FromArgMatches for ExciteFlags {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
-        let mut values = Vec::new();
-        for &o in ExciteOption::ALL {
-            if m.value_source(o.name()) != Some(ValueSource::CommandLine) {
-                continue;
-            }
-            let value = match o {
-                ExciteOption::Smooth => serde_json::Value::Bool(false),
-                ExciteOption::Rest => serde_json::Value::Bool(true),
-                _ => match m.try_get_raw(o.name()) {
-                    Ok(Some(mut raw)) => match raw.next_back() {
-                        Some(text) => serde_json::Value::String(text.to_string_lossy().into()),
-                        None => continue,
-                    },
-                    _ => continue,
-                },
-            };
-            values.push((o, value));
-        }
+        let switch = |o| match o {
+            ExciteOption::Smooth => Some(false),
+            ExciteOption::Rest => Some(true),
+            _ => None,
+        };
+        let values = ExciteOption::ALL
+            .iter()
+            .filter_map(|&o| super::settings::given(m, o.name(), switch(o)).map(|v| (o, v)))
+            .collect();
         Ok(ExciteFlags { values })
     }
 

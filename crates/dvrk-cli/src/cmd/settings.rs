@@ -58,6 +58,23 @@ pub fn setting_error(e: SettingError) -> anyhow::Error {
     anyhow::anyhow!("{}: {}", flag(e.setting), e.message)
 }
 
+/// The value of flag `id` if the command line gave it (not a default): `switch`'s value
+/// for a switch (`Some(on)`: the value the flag stands for), else the flag's last text,
+/// which the library's one conversion reads. Shared by the fit's and `excite`'s option
+/// flags.
+pub fn given(m: &ArgMatches, id: &str, switch: Option<bool>) -> Option<serde_json::Value> {
+    if m.value_source(id) != Some(ValueSource::CommandLine) {
+        return None;
+    }
+    match switch {
+        Some(on) => Some(serde_json::Value::Bool(on)),
+        None => {
+            let text = m.try_get_raw(id).ok().flatten()?.next_back()?;
+            Some(serde_json::Value::String(text.to_string_lossy().into()))
+        }
+    }
+}
+
 /// Whether the flag is a switch (given or not), and the value it gives.
 fn switch(s: Setting) -> Option<bool> {
     match s {
@@ -206,23 +223,10 @@ impl<S: Scope> SettingFlags<S> {
 
 impl<S: Scope> clap::FromArgMatches for SettingFlags<S> {
     fn from_arg_matches(m: &ArgMatches) -> Result<Self, clap::Error> {
-        let mut values = Vec::new();
-        for &s in S::SETTINGS {
-            if m.value_source(s.name()) != Some(ValueSource::CommandLine) {
-                continue;
-            }
-            let value = match switch(s) {
-                Some(on) => serde_json::Value::Bool(on),
-                None => match m.try_get_raw(s.name()) {
-                    Ok(Some(mut raw)) => match raw.next_back() {
-                        Some(text) => serde_json::Value::String(text.to_string_lossy().into()),
-                        None => continue,
-                    },
-                    _ => continue,
-                },
-            };
-            values.push((s, value));
-        }
+        let values = S::SETTINGS
+            .iter()
+            .filter_map(|&s| given(m, s.name(), switch(s)).map(|v| (s, v)))
+            .collect();
         Ok(SettingFlags {
             values,
             scope: PhantomData,

@@ -11,12 +11,9 @@
 //! Python takes it as a keyword with no edit but the type stub, which a test checks
 //! against [`ExciteOption::ALL`] and the defaults.
 
-use std::str::FromStr;
-
-use serde::de::DeserializeOwned;
-
 use super::criterion::Criterion;
 use super::FourierTrajectory;
+use crate::options::parse_text_or_value;
 
 macro_rules! excite_options {
     (
@@ -120,7 +117,7 @@ macro_rules! excite_options {
             ) -> Result<(), ExciteOptionError> {
                 let error = |message| ExciteOptionError { option, message };
                 match option {
-                    $(ExciteOption::$variant => self.$field = value_of(value).map_err(error)?,)*
+                    $(ExciteOption::$variant => self.$field = parse_text_or_value(value).map_err(error)?,)*
                 }
                 Ok(())
             }
@@ -249,19 +246,6 @@ pub struct ExciteOptionError {
     pub option: ExciteOption,
     /// What is wrong with the value given.
     pub message: String,
-}
-
-/// A value given as text is parsed as its flag's text ([`FromStr`]); any other as the
-/// value itself.
-fn value_of<T>(value: serde_json::Value) -> Result<T, String>
-where
-    T: FromStr + DeserializeOwned,
-    T::Err: std::fmt::Display,
-{
-    match value {
-        serde_json::Value::String(text) => text.parse().map_err(|e: T::Err| e.to_string()),
-        value => T::deserialize(value).map_err(|e| e.to_string()),
-    }
 }
 
 /// How the help shows a default: a number or name as its text, a switch not at all.

@@ -213,10 +213,9 @@ where
     T: FromStr + DeserializeOwned,
     T::Err: std::fmt::Display,
 {
-    match serde_json::Value::deserialize(d)? {
-        serde_json::Value::String(text) => text.parse().map(Some).map_err(D::Error::custom),
-        value => T::deserialize(value).map(Some).map_err(D::Error::custom),
-    }
+    crate::options::parse_text_or_value(serde_json::Value::deserialize(d)?)
+        .map(Some)
+        .map_err(D::Error::custom)
 }
 
 /// `cutoff`: the flag's text ([`Cutoff::parse_flag`]), `false` (no filter), Hz, or a
