@@ -686,7 +686,7 @@ mod tests {
         let s = FitSettings {
             method: crate::Method::Ols,
             stribeck_velocity: Some(0.3),
-            select: Some(crate::fit::select::Candidates::builtin()),
+            select: Some(crate::settings::Candidates::builtin()),
             log_offsets: true,
             ..FitSettings::default()
         };

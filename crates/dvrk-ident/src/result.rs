@@ -14,6 +14,11 @@ use sha2::{Digest, Sha256};
 use crate::error::IdentError;
 use crate::settings::FitSettings;
 
+mod payload;
+mod selection;
+pub use payload::{PayloadIdentification, PayloadStd};
+pub use selection::{CandidateScore, Folds, Selection};
+
 /// Standard parameters of one link (frame axes).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct LinkResult {
@@ -398,7 +403,7 @@ pub struct FitResult {
     /// [`crate::fit::select`]): the folds, every candidate's held-out errors and the
     /// one chosen, whose terms `settings` holds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub selection: Option<crate::fit::select::Selection>,
+    pub selection: Option<Selection>,
     /// With an entropic prior (`settings.prior`): the sum over links of the log-det
     /// divergence of the fitted pseudo-inertia from the prior's (no units; 0 at the
     /// prior).
@@ -423,7 +428,7 @@ pub struct ResultPayload {
     pub body: dvrk_model::Payload,
     /// How it was identified; `None` for a payload written by hand.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub identification: Option<crate::payload::PayloadIdentification>,
+    pub identification: Option<PayloadIdentification>,
 }
 
 impl FitResult {

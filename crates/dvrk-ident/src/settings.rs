@@ -4,7 +4,7 @@
 //! reads none of them.
 
 use dvrk_model::Model;
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::error::IdentError;
 pub use crate::estimate::sdp::PriorMetric;
@@ -259,7 +259,7 @@ pub struct FitSettings {
     /// table, `stribeck_velocity` and `dahl_sigma` the winner's terms. `None`: no
     /// selection.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub select: Option<crate::fit::select::Candidates>,
+    pub select: Option<Candidates>,
 }
 
 impl FitSettings {
@@ -494,4 +494,192 @@ impl Default for FitSettings {
 /// Serde's `skip_serializing_if` for a field whose default is `true`.
 fn is_true(b: &bool) -> bool {
     *b
+}
+
+// The friction models `--select` chooses from (fit::select runs the choice).
+
+/// The Stribeck velocity of a candidate named `stribeck` without a value, rad/s or m/s
+/// (the dVRK preset's).
+pub const DEFAULT_STRIBECK: f64 = 0.3;
+
+/// The Dahl stiffness of a candidate named `dahl` without a value, 1/rad or 1/m (the
+/// dVRK preset's).
+pub const DEFAULT_DAHL: f64 = 20.0;
+
+/// One candidate friction model: the description's Coulomb, viscous and offset friction
+/// (`coulomb`), with a Stribeck term, Dahl friction, or both. Every other setting is the
+/// fit's own.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Candidate {
+    /// The Stribeck velocity (rad/s or m/s), as `stribeck_velocity`.
+    pub stribeck_velocity: Option<f64>,
+    /// The Dahl stiffness (1/rad or 1/m), as `dahl_sigma`.
+    pub dahl_sigma: Option<f64>,
+}
+
+impl Candidate {
+    /// The candidate's name: `coulomb`, or its terms joined by `+` (`stribeck`,
+    /// `dahl:10`, `stribeck:0.2+dahl`), a value shown when it is not the default.
+    pub fn name(&self) -> String {
+        let term = |what: &str, v: Option<f64>, default: f64| {
+            v.map(|v| match v == default {
+                true => what.to_string(),
+                false => format!("{what}:{v}"),
+            })
+        };
+        let terms: Vec<String> = [
+            term("stribeck", self.stribeck_velocity, DEFAULT_STRIBECK),
+            term("dahl", self.dahl_sigma, DEFAULT_DAHL),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        match terms.is_empty() {
+            true => "coulomb".into(),
+            false => terms.join("+"),
+        }
+    }
+
+    /// `settings` with this candidate's friction terms (and no selection).
+    pub fn settings(&self, settings: &FitSettings) -> FitSettings {
+        FitSettings {
+            stribeck_velocity: self.stribeck_velocity,
+            dahl_sigma: self.dahl_sigma,
+            select: None,
+            ..settings.clone()
+        }
+    }
+}
+
+impl std::str::FromStr for Candidate {
+    type Err = String;
+
+    /// `coulomb`, or `+`-joined terms `stribeck[:VS]` and `dahl[:SIGMA]`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let mut c = Candidate {
+            stribeck_velocity: None,
+            dahl_sigma: None,
+        };
+        if s == "coulomb" {
+            return Ok(c);
+        }
+        for term in s.split('+') {
+            let (what, value) = match term.split_once(':') {
+                Some((w, v)) => (w, Some(v)),
+                None => (term, None),
+            };
+            let value = |default: f64| -> Result<f64, String> {
+                let Some(v) = value else { return Ok(default) };
+                match v.parse::<f64>() {
+                    Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                    _ => Err(format!(
+                        "candidate `{s}`: `{v}` is not a positive number ({what}'s value)"
+                    )),
+                }
+            };
+            let slot = match what {
+                "stribeck" => (&mut c.stribeck_velocity, value(DEFAULT_STRIBECK)?),
+                "dahl" => (&mut c.dahl_sigma, value(DEFAULT_DAHL)?),
+                _ => {
+                    return Err(format!(
+                        "unknown candidate term `{term}` in `{s}`: expected coulomb, or terms \
+                         stribeck[:VS] and dahl[:SIGMA] joined by +"
+                    ))
+                }
+            };
+            if slot.0.replace(slot.1).is_some() {
+                return Err(format!("candidate `{s}` gives {what} twice"));
+            }
+        }
+        Ok(c)
+    }
+}
+
+/// The candidates of a selection, in the order given (ties go to the earlier).
+///
+/// ```rust
+/// use dvrk_ident::settings::Candidates;
+///
+/// let builtin: Candidates = "builtin".parse().unwrap();
+/// assert_eq!(builtin.to_string(), "coulomb,stribeck,dahl,stribeck+dahl");
+/// let mine: Candidates = "coulomb,stribeck:0.2+dahl:10".parse().unwrap();
+/// assert_eq!(mine.0[1].stribeck_velocity, Some(0.2));
+/// assert!("coulomb".parse::<Candidates>().is_err()); // nothing to choose from
+/// assert!("coulomb,coulomb".parse::<Candidates>().is_err());
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct Candidates(pub Vec<Candidate>);
+
+impl Candidates {
+    /// The built-in list: Coulomb + viscous, + Stribeck (0.3 rad/s), + Dahl (20/rad),
+    /// + both (the dVRK preset's friction), simplest first.
+    pub fn builtin() -> Candidates {
+        let c = |s: Option<f64>, d: Option<f64>| Candidate {
+            stribeck_velocity: s,
+            dahl_sigma: d,
+        };
+        let (s, d) = (Some(DEFAULT_STRIBECK), Some(DEFAULT_DAHL));
+        Candidates(vec![c(None, None), c(s, None), c(None, d), c(s, d)])
+    }
+}
+
+impl std::str::FromStr for Candidates {
+    type Err = String;
+
+    /// `builtin`, or candidate names separated by commas (at least two, distinct).
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "builtin" {
+            return Ok(Candidates::builtin());
+        }
+        let list = s
+            .split(',')
+            .map(|c| c.trim().parse())
+            .collect::<Result<Vec<Candidate>, String>>()?;
+        if list.len() < 2 {
+            return Err(format!(
+                "`{s}`: give at least two candidates to choose from (or `builtin`)"
+            ));
+        }
+        for (i, c) in list.iter().enumerate() {
+            if list[..i].contains(c) {
+                return Err(format!("`{s}`: candidate {} is given twice", c.name()));
+            }
+        }
+        Ok(Candidates(list))
+    }
+}
+
+impl std::fmt::Display for Candidates {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<String> = self.0.iter().map(Candidate::name).collect();
+        f.write_str(&names.join(","))
+    }
+}
+
+/// As the flag reads: the names joined by commas.
+impl Serialize for Candidates {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+/// The flag's text, a list of names, or `true` (the built-in list).
+impl<'de> Deserialize<'de> for Candidates {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::Error;
+        match serde_json::Value::deserialize(d)? {
+            serde_json::Value::String(s) => s.parse().map_err(D::Error::custom),
+            serde_json::Value::Bool(true) => Ok(Candidates::builtin()),
+            serde_json::Value::Array(a) => {
+                let names: Option<Vec<&str>> = a.iter().map(|v| v.as_str()).collect();
+                match names {
+                    Some(n) => n.join(",").parse().map_err(D::Error::custom),
+                    None => Err(D::Error::custom("expected candidate names")),
+                }
+            }
+            _ => Err(D::Error::custom(
+                "expected `builtin` (or true), or candidate names (a list, or joined by commas)",
+            )),
+        }
+    }
 }

@@ -271,7 +271,8 @@ fn held_out(r: &dvrk_ident::FitResult, name: &str) -> f64 {
 /// not beat Coulomb + viscous by more than the noise's share of the error.
 #[test]
 fn select_chooses_the_friction_law_of_the_torques_by_held_out_error() {
-    use dvrk_ident::fit::select::{Candidates, Folds};
+    use dvrk_ident::result::Folds;
+    use dvrk_ident::settings::Candidates;
     let plain = pendulum();
     let settings = |cands: &str| FitSettings {
         method: Method::Ols,

@@ -11,7 +11,7 @@ pub use crate::options::Setting;
 
 use super::{Preset, PriorSource};
 use crate::fit::delay::DelayOption;
-use crate::fit::select::Candidates;
+use crate::settings::Candidates;
 use crate::settings::{Joints, PriorMetric};
 use crate::signal::Cutoff;
 use crate::{BoundsSet, FitSettings, IdentError, Method};
