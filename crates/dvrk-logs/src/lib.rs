@@ -38,6 +38,7 @@
 #![forbid(unsafe_code)]
 
 pub mod columns;
+mod destination;
 pub mod joint_log;
 pub mod log;
 pub mod median;

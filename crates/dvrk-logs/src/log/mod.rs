@@ -621,7 +621,7 @@ pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> Result<(), LogError> {
-    crate::output::write_with(path, fill).map_err(|source| LogError::Io {
+    crate::destination::write_with(path, fill).map_err(|source| LogError::Io {
         path: path.to_path_buf(),
         source,
     })

@@ -244,7 +244,7 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
             .ok_or_else(|| bad(format!("relative_file_paths: {entry:?} is not a file name")))?;
         let file = member(dir, &root, name)
             .map_err(|reason| bad(format!("relative_file_paths entry `{name}`: {reason}")))?;
-        let id = crate::output::FileId::of(&file)
+        let id = crate::destination::FileId::of(&file)
             .ok()
             .flatten()
             .ok_or_else(|| {
