@@ -21,7 +21,8 @@ pub(crate) fn register(path: &Path) {
     paths().push(path.to_path_buf());
 }
 
-/// Forgets `path` (removed or renamed by its owner).
+/// Forgets `path` (removed or renamed by its owner: the rosbag2 writer of `recordings`).
+#[cfg(feature = "recordings")]
 pub(crate) fn forget(path: &Path) {
     let mut paths = paths();
     if let Some(k) = paths.iter().rposition(|p| p == path) {
