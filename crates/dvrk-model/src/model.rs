@@ -14,6 +14,7 @@ pub use crate::spatial::Transform;
 use crate::ModelError;
 
 mod plan;
+mod position_torque;
 pub(crate) use plan::{Axis, Body, ElementPlan, RegressorPlan};
 
 /// How a frame moves relative to its parent.

@@ -30,11 +30,10 @@
 
 use std::f64::consts::TAU;
 
-use super::{Element, FrameContext, Law, Note, Sample};
+use super::{FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::input;
-use crate::model::{JointKind, Model};
 use crate::param::{Nominal, ParamKind};
 
 /// Highest order of one element (the parameter names have a letter per order; a higher
@@ -206,51 +205,5 @@ impl Law for PositionTorque {
             "position_torque = {{ order = {}, period = {:?} }}",
             self.order, self.period
         )
-    }
-}
-
-/// The model's side of the position-dependent torque: adding it to the frames with
-/// friction (`--position-torque`).
-impl Model {
-    /// This model with a position-dependent torque of order `order` (1 to
-    /// [`MAX_ORDER`]) and period one turn (2π rad) on every revolute frame with friction
-    /// and no position torque yet (e.g. `dvrk-ident fit --position-torque 2`), its
-    /// coefficients appended in frame order. Prismatic frames are left out: their series
-    /// needs a period in metres, which only a description gives
-    /// (`position_torque = { order = 1, period = 0.5 }`).
-    ///
-    /// ```
-    /// let psm = dvrk_model::Model::builtin("psm").unwrap();
-    /// let with = psm.with_position_torque(2).unwrap();
-    /// // Nine revolute friction frames (the insertion slides), four coefficients each.
-    /// assert_eq!(with.n_params(), psm.n_params() + 36);
-    /// assert_eq!(with.param_names()[psm.n_params()..][..4], ["Pca1", "Psa1", "Pcb1", "Psb1"]);
-    /// assert!(psm.with_position_torque(0).is_err() && psm.with_position_torque(4).is_err());
-    /// ```
-    pub fn with_position_torque(&self, order: usize) -> Result<Model, ModelError> {
-        PositionTorque::check_order(order).map_err(|message| ModelError::Numeric {
-            model: self.name.clone(),
-            message,
-        })?;
-        let mut m = self.clone();
-        for (i, f) in m.frames.iter_mut().enumerate() {
-            let has = f
-                .elements
-                .iter()
-                .any(|e| matches!(e, Element::PositionTorque(_)));
-            if f.kind != JointKind::Revolute || f.friction().is_none() || has {
-                continue;
-            }
-            let t = PositionTorque {
-                param: m.params.len(),
-                order,
-                period: TAU,
-            };
-            m.params
-                .extend(Element::PositionTorque(t.clone()).params(i + 1));
-            f.elements.push(Element::PositionTorque(t));
-        }
-        m.element_plan = m.derive_element_plan();
-        Ok(m)
     }
 }
