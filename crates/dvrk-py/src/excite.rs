@@ -455,7 +455,7 @@ pub fn evaluate_trajectory<'py>(
     let limits = limits_of(&model, limits)?;
     let traj = trajectory.get().inner.clone();
     if let Some(warning) = traj.robot_mismatch(&model, "the trajectory") {
-        crate::fit::warn_all(py, &[warning])?;
+        crate::warnings::warn_all(py, &[warning])?;
     }
     let ev = background(py, move || {
         optimize::evaluate(

@@ -23,6 +23,7 @@ use crate::errors::{error, fourier_kind, from_ident, from_io, from_model, input,
 use crate::excite::FourierTrajectoryPy;
 use crate::json::{to_python, write_document};
 use crate::observe::observations_arg;
+use crate::warnings::warn_all;
 
 /// A :class:`JointLog` or a list of them: the samples and the files they were read from.
 pub(crate) fn logs_arg(
@@ -697,17 +698,4 @@ impl FitResultPy {
             py_bool(self.inner.physically_consistent)
         )
     }
-}
-
-/// Each line as a Python ``UserWarning`` (what the command line prints as `warning:`).
-pub(crate) fn warn_all(py: Python<'_>, lines: &[String]) -> PyResult<()> {
-    for line in lines {
-        PyErr::warn(
-            py,
-            &py.get_type::<pyo3::exceptions::PyUserWarning>(),
-            &std::ffi::CString::new(line.as_str())?,
-            1,
-        )?;
-    }
-    Ok(())
 }

@@ -26,6 +26,7 @@ mod overrides;
 mod payload;
 mod residual;
 mod robot;
+mod warnings;
 
 use pyo3::prelude::*;
 
