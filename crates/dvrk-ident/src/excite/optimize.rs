@@ -72,7 +72,8 @@ use super::grid::{from_x, to_x, Grid};
 use super::limits::{Constraints, Enforced, Multipliers};
 pub use super::limits::{Feasibility, Limits, Violation};
 pub use super::options::{ExciteOption, ExciteOptionError, ExciteOptions};
-use super::{check_dof, FourierTrajectory};
+use super::setpoints::check_dof;
+use super::FourierTrajectory;
 use search::{coordinate_room, explore_and_refine, hop_from_best, no_motion, Setup};
 
 mod search;

@@ -4,7 +4,7 @@
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 
-use super::{check_dof, ExciteError, FourierTrajectory};
+use super::{ExciteError, FourierTrajectory};
 
 /// The setpoints' rate when none is given (`excite --rate`, Python's
 /// `FourierTrajectory.setpoints(rate=)`), Hz: the dVRK's 2019 logs' rate.
@@ -52,4 +52,19 @@ pub fn setpoints_csv(
         out.push('\n');
     }
     Ok(out)
+}
+
+/// `traj` is a valid trajectory with one coordinate per coordinate of `model`: the
+/// check every entry point of the optimizer and the setpoints start with.
+pub(crate) fn check_dof(model: &Model, traj: &FourierTrajectory) -> Result<(), ExciteError> {
+    traj.validate("trajectory")?;
+    if traj.dof() != model.dof() {
+        return Err(ExciteError::Invalid(format!(
+            "the trajectory has {} coordinates, model {} has {}",
+            traj.dof(),
+            model.name,
+            model.dof()
+        )));
+    }
+    Ok(())
 }

@@ -24,7 +24,7 @@ use crate::joint_log::JointLog;
 use crate::log::ReadOptions;
 use crate::result::{FitResult, JointMetrics};
 use crate::settings::FitSettings;
-use plot::{render, Figure, ImageFormat};
+pub use plot::{figure_bytes, render_both, write_figure, RenderedFigure};
 
 /// Errors of figure and report output.
 #[derive(Debug, Error)]
@@ -80,19 +80,6 @@ pub struct ReportInput<'a> {
     pub settings: Option<&'a FitSettings>,
 }
 
-/// A figure of the report, rendered in both formats.
-#[derive(Clone, Debug)]
-pub struct RenderedFigure {
-    /// File stem, e.g. `torque_1_training`.
-    pub stem: String,
-    /// The caption under the figure in the page.
-    pub caption: String,
-    /// The SVG document.
-    pub svg: String,
-    /// The PNG file's bytes.
-    pub png: Vec<u8>,
-}
-
 /// Per-log numbers computed for the report.
 #[derive(Clone, Debug)]
 pub struct LogSummary {
@@ -113,34 +100,6 @@ pub struct Report {
     pub logs: Vec<LogSummary>,
     /// The self-contained page `report.html`: tables, and the figures inlined as SVG.
     pub html: String,
-}
-
-/// Renders `figure` in both formats under `stem`.
-pub fn render_both(
-    figure: &impl Figure,
-    stem: &str,
-    caption: &str,
-) -> Result<RenderedFigure, ReportError> {
-    let svg = String::from_utf8(render(figure, ImageFormat::Svg)?)
-        .map_err(|e| ReportError::Draw(format!("SVG is not UTF-8: {e}")))?;
-    Ok(RenderedFigure {
-        stem: stem.into(),
-        caption: caption.into(),
-        svg,
-        png: render(figure, ImageFormat::Png)?,
-    })
-}
-
-/// Renders one figure for `path` (SVG or PNG by its extension).
-pub fn figure_bytes(figure: &impl Figure, path: &Path) -> Result<Vec<u8>, ReportError> {
-    render(figure, ImageFormat::from_path(path)?)
-}
-
-/// Renders one figure to `path` (SVG or PNG by extension), atomically.
-pub fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), ReportError> {
-    let bytes = figure_bytes(figure, path)?;
-    crate::log::write_atomic(path, |w| w.write_all(&bytes))
-        .map_err(|e| ReportError::Ident(e.into()))
 }
 
 /// A file-name-safe version of a role (`test 2` → `test_2`).

@@ -591,3 +591,44 @@ mod tests {
         assert_eq!(padded(None, 0.0), (0.0, 1.0));
     }
 }
+
+/// A figure of the report, rendered in both formats.
+#[derive(Clone, Debug)]
+pub struct RenderedFigure {
+    /// File stem, e.g. `torque_1_training`.
+    pub stem: String,
+    /// The caption under the figure in the page.
+    pub caption: String,
+    /// The SVG document.
+    pub svg: String,
+    /// The PNG file's bytes.
+    pub png: Vec<u8>,
+}
+
+/// Renders `figure` in both formats under `stem`.
+pub fn render_both(
+    figure: &impl Figure,
+    stem: &str,
+    caption: &str,
+) -> Result<RenderedFigure, ReportError> {
+    let svg = String::from_utf8(render(figure, ImageFormat::Svg)?)
+        .map_err(|e| ReportError::Draw(format!("SVG is not UTF-8: {e}")))?;
+    Ok(RenderedFigure {
+        stem: stem.into(),
+        caption: caption.into(),
+        svg,
+        png: render(figure, ImageFormat::Png)?,
+    })
+}
+
+/// Renders one figure for `path` (SVG or PNG by its extension).
+pub fn figure_bytes(figure: &impl Figure, path: &Path) -> Result<Vec<u8>, ReportError> {
+    render(figure, ImageFormat::from_path(path)?)
+}
+
+/// Renders one figure to `path` (SVG or PNG by extension), atomically.
+pub fn write_figure(figure: &impl Figure, path: &Path) -> Result<(), ReportError> {
+    let bytes = figure_bytes(figure, path)?;
+    crate::log::write_atomic(path, |w| w.write_all(&bytes))
+        .map_err(|e| ReportError::Ident(e.into()))
+}

@@ -7,7 +7,8 @@ use std::fmt::Write as _;
 
 use super::html::{escape, inline_svg, number, STYLE};
 use super::plot::{colors, Panel, PanelGrid, Series};
-use super::{render_both, RenderedFigure, Report, ReportError};
+use super::plot::{render_both, RenderedFigure};
+use super::{Report, ReportError};
 use crate::fit::JointMap;
 use crate::residual::{Residual, TipWrench, WRENCH_COMPONENTS};
 

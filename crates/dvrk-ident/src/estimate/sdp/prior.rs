@@ -6,7 +6,8 @@ use clarabel::solver::SupportedConeT;
 use dvrk_model::Model;
 use nalgebra::Matrix4;
 
-use super::{link_length, pseudo_inertia, Rows, SdpError};
+use super::constraints::link_length;
+use super::{pseudo_inertia, Rows, SdpError};
 
 /// The entropic prior's cones and objective terms (nothing without it).
 pub(super) fn entropic_rows(

@@ -3,6 +3,7 @@
 //! ellipsoid), synthetic PSM/MTM fits that recover their base parameters, infeasible
 //! bounds and bad input; the priors' in `prior`.
 
+use super::constraints::lmi_rows;
 use super::*;
 use dvrk_model::inertia::{
     barycentric_from_standard, pseudo_inertia, pseudo_inertia_min_eigenvalue, sym6,
