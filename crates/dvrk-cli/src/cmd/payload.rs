@@ -10,9 +10,8 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::payload::identify_payload;
 use serde_json::json;
 
-use super::args::{LogArgs, MODEL, OUTPUT};
-use super::settings::{Processing, SettingFlags};
-use super::{emit_summary, load_result, LoadedResult};
+use super::args::{ResultOnLogs, MODEL, OUTPUT};
+use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
@@ -25,16 +24,8 @@ pub struct Args {
     /// The frame the payload is fixed to (a frame with link parameters)
     #[arg(long, value_name = "NAME", help_heading = MODEL)]
     pub frame: String,
-    /// Robot [default: the one the result was fitted for]
-    #[arg(long, help_heading = MODEL)]
-    pub robot: Option<String>,
-    // The processing flags default to the result's own settings, as for validate.
-    // The fit options (`--cutoff`, ...: every processing `Setting`), before `log_args`:
-    // they read `--resample`, which `log_args` declares and takes.
     #[command(flatten)]
-    pub settings: SettingFlags<Processing>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
+    pub on_logs: ResultOnLogs,
     /// Write the result with the payload added (a `payload` section: validate, residual,
     /// report and export then use the arm with its load)
     #[arg(long, value_name = "FILE.json", help_heading = OUTPUT)]
@@ -52,20 +43,23 @@ pub fn run(args: Args) -> Result<()> {
             &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
             &[
                 ("the result", Some(&args.result)),
-                ("the robot", args.robot.as_deref()),
+                ("the robot", args.on_logs.robot.as_deref()),
             ],
         ),
     )?;
-    let LoadedResult {
-        mut result,
-        model,
-        params,
-        ..
-    } = load_result(&args.result, args.robot.as_deref())?;
+    let (
+        LoadedResult {
+            mut result,
+            model,
+            params,
+            ..
+        },
+        settings,
+    ) = args.on_logs.load(&args.result)?;
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
-    result.settings = args.settings.settings(result.settings.clone())?;
-    let read = args.log_args.read_options_for(
+    result.settings = settings;
+    let read = args.on_logs.read_options(
         &model,
         &result.settings.processing,
         args.logs.iter().map(String::as_str),

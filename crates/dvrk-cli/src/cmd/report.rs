@@ -12,9 +12,8 @@ use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, FitSettings, JointLog};
 use dvrk_model::Model;
 
-use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
+use super::args::{JointsArgs, ResultOnLogs, INPUT, OUTPUT};
 use super::emit;
-use super::settings::{Processing, SettingFlags};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -30,15 +29,8 @@ pub struct Args {
     /// Excitation trajectory (JSON of `dvrk-ident excite`) to plot against the limits
     #[arg(long, value_name = "TRAJ.json", help_heading = INPUT)]
     pub excitation: Option<String>,
-    /// Robot [default: the one the result was fitted for]
-    #[arg(long, help_heading = MODEL)]
-    pub robot: Option<String>,
-    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
-    // `log_args`: they read `--resample`, which `log_args` declares and takes.
     #[command(flatten)]
-    pub settings: SettingFlags<Processing>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
+    pub on_logs: ResultOnLogs,
     /// Folder to write report.html and the figures (SVG and PNG) into
     #[arg(long, value_name = "DIR", help_heading = OUTPUT)]
     pub out: String,
@@ -82,13 +74,12 @@ pub fn run(args: Args) -> Result<()> {
         &[
             ("the result", Some(&args.result)),
             ("the excitation", args.excitation.as_deref()),
-            ("the robot", args.robot.as_deref()),
+            ("the robot", args.on_logs.robot.as_deref()),
         ],
     );
     super::check_outputs(&[], &[("--out", Some(&args.out))], &inputs)?;
-    let super::LoadedResult { result, model, .. } =
-        super::load_result(&args.result, args.robot.as_deref())?;
-    let mut settings = args.settings.settings(result.settings.clone())?;
+    let (super::LoadedResult { result, model, .. }, mut settings) =
+        args.on_logs.load(&args.result)?;
     settings.test_window = result.settings.test_window;
     if let Some(note) = super::settings_note(&settings.differences(&result.settings)) {
         eprintln!("{note}");
@@ -136,7 +127,7 @@ pub fn run(args: Args) -> Result<()> {
     for (_, p) in &sources {
         inputs.add_log(Path::new(p));
     }
-    let read = args.log_args.read_options_for(
+    let read = args.on_logs.read_options(
         &model,
         &settings.processing,
         sources.iter().map(|(_, p)| p.as_str()),
@@ -168,7 +159,7 @@ pub fn run(args: Args) -> Result<()> {
         &settings,
         &logs,
         excitation.as_ref(),
-        &args.log_args.read_options(),
+        &args.on_logs.log_args.read_options(),
     )?;
     let mut outputs = Outputs::protecting(inputs);
     let written = built.stage(&mut outputs, Path::new(&args.out))?;

@@ -18,9 +18,8 @@ use dvrk_ident::residual::{
 use dvrk_ident::settings::Joints;
 use serde_json::json;
 
-use super::args::{JointsArgs, LogArgs, MODEL, OUTPUT};
-use super::settings::{Processing, SettingFlags};
-use super::{emit_summary, load_result, LoadedResult};
+use super::args::{JointsArgs, ResultOnLogs, MODEL, OUTPUT};
+use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]
 #[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
@@ -30,9 +29,8 @@ pub struct Args {
     /// Logs whose external torques to estimate
     #[arg(required = true, value_name = "LOG")]
     pub logs: Vec<String>,
-    /// Robot [default: the one the result was fitted for]
-    #[arg(long, help_heading = MODEL)]
-    pub robot: Option<String>,
+    #[command(flatten)]
+    pub on_logs: ResultOnLogs,
     /// Gain of the momentum observer (1/s, every joint; its time constant is 1/gain)
     #[arg(long, default_value_t = DEFAULT_OBSERVER_GAIN, value_name = "PER_S", help_heading = MODEL)]
     pub observer_gain: f64,
@@ -47,13 +45,6 @@ pub struct Args {
     /// weakly sensed ones near a singular pose)
     #[arg(long, default_value_t = DEFAULT_WRENCH_RCOND, value_name = "RATIO", help_heading = MODEL)]
     pub wrench_rcond: f64,
-    // The processing flags default to the result's own settings, as for validate.
-    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
-    // `log_args`: they read `--resample`, which `log_args` declares and takes.
-    #[command(flatten)]
-    pub settings: SettingFlags<Processing>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
     #[command(flatten)]
     pub joints: JointsArgs,
     /// Write the residual per processed sample: CSV (time, then one column per joint:
@@ -94,7 +85,7 @@ pub fn run(args: Args) -> Result<()> {
             &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
             &[
                 ("the result", Some(&args.result)),
-                ("the robot", args.robot.as_deref()),
+                ("the robot", args.on_logs.robot.as_deref()),
             ],
         ),
     )?;
@@ -111,14 +102,16 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--wrench-out {path}: the wrench is written as CSV (FILE.csv)");
         }
     }
-    let LoadedResult {
-        result,
-        model,
-        params,
-        ..
-    } = load_result(&args.result, args.robot.as_deref())?;
-    let mut result = result;
-    result.settings = args.settings.settings(result.settings.clone())?;
+    let (
+        LoadedResult {
+            mut result,
+            model,
+            params,
+            ..
+        },
+        settings,
+    ) = args.on_logs.load(&args.result)?;
+    result.settings = settings;
     let joints = args.joints.joints.unwrap_or(result.settings.joints);
     for (flag, path) in [("--out", &args.out), ("--observer-out", &args.observer_out)] {
         if let Some(path) = path {
@@ -136,7 +129,7 @@ pub fn run(args: Args) -> Result<()> {
         wrench: args.wrench.clone(),
         wrench_rcond: args.wrench_rcond,
     };
-    let read = args.log_args.read_options_for(
+    let read = args.on_logs.read_options(
         &model,
         &result.settings.processing,
         args.logs.iter().map(String::as_str),

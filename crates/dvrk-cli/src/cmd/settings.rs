@@ -340,7 +340,7 @@ mod tests {
             let o = match cli.command {
                 crate::Command::Fit(a) => a.settings.overrides(),
                 crate::Command::Observe(a) => a.settings.overrides(),
-                crate::Command::Validate(a) => a.settings.overrides(),
+                crate::Command::Validate(a) => a.on_logs.settings.overrides(),
                 _ => unreachable!(),
             }
             .unwrap();

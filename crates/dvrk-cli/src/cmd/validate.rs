@@ -6,9 +6,8 @@ use anyhow::Result;
 use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
 use serde_json::json;
 
-use super::args::{JointsArgs, LogArgs, INPUT, MODEL, OUTPUT};
-use super::settings::{Processing, SettingFlags};
-use super::{emit, load_result, LoadedResult};
+use super::args::{JointsArgs, ResultOnLogs, INPUT, OUTPUT};
+use super::{emit, LoadedResult};
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
@@ -23,17 +22,8 @@ pub struct Args {
     /// Metrics on the first N processed samples only (N ≥ 1) [default: every sample]
     #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = INPUT)]
     pub test_window: Option<usize>,
-    /// Robot [default: the one the result was fitted for]
-    #[arg(long, help_heading = MODEL)]
-    pub robot: Option<String>,
-    // The processing flags (--cutoff, --trim, ...) default to the result's own settings;
-    // given, they replace them, and the output says which differ from the fit's.
-    // The fit options (`--method`, `--cutoff`, ...: every library `Setting`), before
-    // `log_args`: they read `--resample`, which `log_args` declares and takes.
     #[command(flatten)]
-    pub settings: SettingFlags<Processing>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
+    pub on_logs: ResultOnLogs,
     #[command(flatten)]
     pub joints: JointsArgs,
     /// Print JSON
@@ -42,14 +32,16 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let LoadedResult {
-        result,
-        model,
-        params,
-        ..
-    } = load_result(&args.result, args.robot.as_deref())?;
     // The processing the result was fitted with, unless overridden on the command line.
-    let mut settings = args.settings.settings(result.settings.clone())?;
+    let (
+        LoadedResult {
+            result,
+            model,
+            params,
+            ..
+        },
+        mut settings,
+    ) = args.on_logs.load(&args.result)?;
     // Flags that change the processing make this log's column differ from the fit's
     // columns beside it for a reason other than the model: said first. (Other joints
     // only leave the fit's columns out.)
@@ -66,7 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(note) = result.offset_note() {
         let _ = writeln!(text, "{note}");
     }
-    let read = args.log_args.read_options_for(
+    let read = args.on_logs.read_options(
         &model,
         &settings.processing,
         args.logs.iter().map(String::as_str),
