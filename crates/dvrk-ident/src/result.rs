@@ -316,16 +316,16 @@ impl InputInfo {
     }
 
     /// Hashes samples that were not read from a file (see [`InputInfo::sha256`]).
-    pub fn from_samples(role: &str, traj: &crate::JointLog) -> InputInfo {
+    pub fn from_samples(role: &str, log: &crate::JointLog) -> InputInfo {
         let mut hash = Sha256::new();
         let mut bytes = 0u64;
         let mut put = |v: f64| {
             hash.update(v.to_le_bytes());
             bytes += 8;
         };
-        for k in 0..traj.len() {
-            put(traj.time[k]);
-            for m in [Some(&traj.q), traj.dq.as_ref(), Some(&traj.tau)]
+        for k in 0..log.len() {
+            put(log.time[k]);
+            for m in [Some(&log.q), log.dq.as_ref(), Some(&log.tau)]
                 .into_iter()
                 .flatten()
             {

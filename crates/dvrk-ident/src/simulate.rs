@@ -389,19 +389,19 @@ fn add_noise(tau: &mut DMatrix<f64>, noise: &[f64], seed: u64) {
 /// mapped to the robot's measured joints, `q_meas = M q`, `q̇_meas = M q̇`,
 /// `τ_meas = M⁻ᵀ τ` (`M` = `model.measured.coupling`), named by the measured joint
 /// names. A trajectory already in measured coordinates is returned as it is.
-pub fn to_measured_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, IdentError> {
-    if traj.coordinates == Coordinates::Measured {
-        return Ok(traj.clone());
+pub fn to_measured_coordinates(model: &Model, log: &JointLog) -> Result<JointLog, IdentError> {
+    if log.coordinates == Coordinates::Measured {
+        return Ok(log.clone());
     }
     let n = model.dof();
     let mismatch = |message: String| IdentError::Mismatch {
-        source_name: traj.source.clone(),
+        source_name: log.source.clone(),
         message,
     };
-    if traj.dof() != n {
+    if log.dof() != n {
         return Err(mismatch(format!(
             "the log has {} joints in model coordinates but robot {} has {n} coordinates",
-            traj.dof(),
+            log.dof(),
             model.name
         )));
     }
@@ -411,13 +411,13 @@ pub fn to_measured_coordinates(model: &Model, traj: &JointLog) -> Result<JointLo
         .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
     let mt = m.transpose();
     Ok(JointLog {
-        time: traj.time.clone(),
-        q: &traj.q * &mt,
-        dq: traj.dq.as_ref().map(|d| d * &mt),
-        tau: &traj.tau * minv,
+        time: log.time.clone(),
+        q: &log.q * &mt,
+        dq: log.dq.as_ref().map(|d| d * &mt),
+        tau: &log.tau * minv,
         joint_names: model.measured.joints.clone(),
         coordinates: Coordinates::Measured,
-        source: traj.source.clone(),
+        source: log.source.clone(),
     })
 }
 

@@ -84,7 +84,7 @@ proptest! {
         cutoff in 0.5f64..60.0,
         trim in 0usize..150,
     ) {
-        let traj = trajectory(n, &waves, step, with_dq);
+        let log = trajectory(n, &waves, step, with_dq);
         let settings = Processing {
             filter: Some(LowPass { cutoff_hz: Cutoff::All(cutoff), ..LowPass::default() }),
             filter_torque,
@@ -92,7 +92,7 @@ proptest! {
             ..Processing::default()
         };
         // Both refuse, or both give the same samples.
-        match (process(&traj, &settings), process_in_blocks(std::slice::from_ref(&traj), &settings)) {
+        match (process(&log, &settings), process_in_blocks(std::slice::from_ref(&log), &settings)) {
             (Ok(whole), Ok(blocks)) => {
                 prop_assert_eq!(whole.len(), blocks.len());
                 prop_assert_eq!(&whole.time, &blocks.time);

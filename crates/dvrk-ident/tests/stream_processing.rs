@@ -46,20 +46,20 @@ fn synthetic(n: usize, with_dq: bool) -> JointLog {
     }
 }
 
-fn block(traj: &JointLog, start: usize, len: usize) -> JointLog {
-    traj.select_rows(&(start..start + len).collect::<Vec<_>>())
+fn block(log: &JointLog, start: usize, len: usize) -> JointLog {
+    log.select_rows(&(start..start + len).collect::<Vec<_>>())
 }
 
-fn blocks(traj: &JointLog, size: usize) -> Vec<JointLog> {
-    (0..traj.len())
+fn blocks(log: &JointLog, size: usize) -> Vec<JointLog> {
+    (0..log.len())
         .step_by(size)
-        .map(|s| block(traj, s, size.min(traj.len() - s)))
+        .map(|s| block(log, s, size.min(log.len() - s)))
         .collect()
 }
 
-/// The streamed processing of `traj` in blocks of `size`, concatenated.
-fn streamed(traj: &JointLog, settings: &Processing, size: usize) -> Result<Processed, SignalError> {
-    process_in_blocks(&blocks(traj, size), settings)
+/// The streamed processing of `log` in blocks of `size`, concatenated.
+fn streamed(log: &JointLog, settings: &Processing, size: usize) -> Result<Processed, SignalError> {
+    process_in_blocks(&blocks(log, size), settings)
 }
 
 fn variants() -> Vec<(&'static str, Processing, bool)> {
@@ -117,11 +117,11 @@ fn variants() -> Vec<(&'static str, Processing, bool)> {
 fn streamed_processing_equals_whole_log_processing() {
     let n = 30_000;
     for (name, settings, with_dq) in variants() {
-        let traj = synthetic(n, with_dq);
-        let whole = process(&traj, &settings).unwrap();
+        let log = synthetic(n, with_dq);
+        let whole = process(&log, &settings).unwrap();
         let mut worst: f64 = 0.0;
         for size in [1, 7, 500, 4096, n + 1] {
-            let s = streamed(&traj, &settings, size).unwrap();
+            let s = streamed(&log, &settings, size).unwrap();
             assert_eq!(s.time, whole.time, "{name}, blocks of {size}: kept samples");
             assert_eq!(s.rate_hz, whole.rate_hz);
             let e = worst_relative(&s, &whole);
@@ -134,21 +134,21 @@ fn streamed_processing_equals_whole_log_processing() {
 
 #[test]
 fn streamed_errors_are_the_whole_log_errors() {
-    let traj = synthetic(1000, true);
+    let log = synthetic(1000, true);
     let cases: Vec<(Processing, JointLog)> = vec![
         (
             Processing {
                 trim: 500,
                 ..Processing::default()
             },
-            traj.clone(),
+            log.clone(),
         ),
         (
             Processing {
                 decimate: 0,
                 ..Processing::default()
             },
-            traj.clone(),
+            log.clone(),
         ),
         (
             Processing {
@@ -158,21 +158,21 @@ fn streamed_errors_are_the_whole_log_errors() {
                 }),
                 ..Processing::default()
             },
-            traj.clone(),
+            log.clone(),
         ),
         (
             Processing {
                 trim: 5,
                 ..Processing::default()
             },
-            block(&traj, 0, 20),
+            block(&log, 0, 20),
         ),
         (
             Processing {
                 min_speed: Some(100.0),
                 ..Processing::default()
             },
-            traj.clone(),
+            log.clone(),
         ),
     ];
     for (settings, t) in cases {
@@ -184,11 +184,11 @@ fn streamed_errors_are_the_whole_log_errors() {
         println!("{whole}");
     }
     // A gap, a NaN: named at the same sample.
-    let mut gap = traj.clone();
+    let mut gap = log.clone();
     for t in &mut gap.time[600..] {
         *t += 0.02;
     }
-    let mut nan = traj.clone();
+    let mut nan = log.clone();
     nan.tau[(777, 2)] = f64::NAN;
     for t in [gap, nan] {
         let whole = process(&t, &Processing::default()).unwrap_err();

@@ -298,7 +298,7 @@ impl JointLog {
     /// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
     /// use nalgebra::DMatrix;
     /// let n = 5;
-    /// let traj = JointLog {
+    /// let log = JointLog {
     ///     time: uniform_time(n, 200.0),
     ///     q: DMatrix::zeros(n, 1),
     ///     dq: None,
@@ -307,7 +307,7 @@ impl JointLog {
     ///     coordinates: Coordinates::Model,
     ///     source: "example".into(),
     /// };
-    /// assert!((traj.rate_hz().unwrap() - 200.0).abs() < 1e-9);
+    /// assert!((log.rate_hz().unwrap() - 200.0).abs() < 1e-9);
     /// ```
     pub fn rate_hz(&self) -> Option<f64> {
         let step = median_step(&self.time)?;
@@ -474,7 +474,7 @@ pub(crate) fn median_step(time: &[f64]) -> Option<f64> {
 mod tests {
     use super::*;
 
-    fn traj(n: usize, dof: usize) -> JointLog {
+    fn log(n: usize, dof: usize) -> JointLog {
         JointLog {
             time: uniform_time(n, 100.0),
             q: DMatrix::from_fn(n, dof, |i, j| (i + j) as f64),
@@ -488,7 +488,7 @@ mod tests {
 
     #[test]
     fn valid_trajectory_passes() {
-        let t = traj(10, 3);
+        let t = log(10, 3);
         t.validate().unwrap();
         assert_eq!(t.len(), 10);
         assert_eq!(t.dof(), 3);
@@ -499,7 +499,7 @@ mod tests {
 
     #[test]
     fn empty_is_rejected() {
-        let t = traj(0, 3);
+        let t = log(0, 3);
         let e = t.validate().unwrap_err();
         assert!(matches!(e, JointLogError::Empty { samples: 0, .. }));
         assert!(e.to_string().contains("unit-test"));
@@ -508,7 +508,7 @@ mod tests {
 
     #[test]
     fn nan_names_source_column_row() {
-        let mut t = traj(10, 3);
+        let mut t = log(10, 3);
         t.tau[(4, 1)] = f64::NAN;
         let e = t.validate().unwrap_err();
         match &e {
@@ -536,14 +536,14 @@ mod tests {
 
     #[test]
     fn inf_in_velocity_and_time() {
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.dq.as_mut().unwrap()[(7, 0)] = f64::INFINITY;
         let e = t.validate().unwrap_err();
         assert!(matches!(
             e,
             JointLogError::NonFinite { signal: Signal::Velocity, row: 7, ref column, .. } if column == "q1"
         ));
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.time[3] = f64::NAN;
         assert!(matches!(
             t.validate().unwrap_err(),
@@ -557,7 +557,7 @@ mod tests {
 
     #[test]
     fn non_monotonic_time() {
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.time[5] = t.time[4];
         let e = t.validate().unwrap_err();
         assert!(matches!(e, JointLogError::NonMonotonicTime { row: 5, .. }));
@@ -566,13 +566,13 @@ mod tests {
 
     #[test]
     fn shape_mismatch() {
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.tau = DMatrix::zeros(9, 2);
         assert!(matches!(
             t.validate().unwrap_err(),
             JointLogError::Shape { what: "tau", .. }
         ));
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.joint_names.pop();
         assert!(matches!(
             t.validate().unwrap_err(),
@@ -581,13 +581,13 @@ mod tests {
                 ..
             }
         ));
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.time.push(1.0);
         assert!(matches!(
             t.validate().unwrap_err(),
             JointLogError::Shape { what: "time", .. }
         ));
-        let mut t = traj(10, 2);
+        let mut t = log(10, 2);
         t.dq = Some(DMatrix::zeros(10, 3));
         assert!(matches!(
             t.validate().unwrap_err(),
@@ -597,7 +597,7 @@ mod tests {
 
     #[test]
     fn gap_is_detected_and_rate_is_robust() {
-        let mut t = traj(20, 1);
+        let mut t = log(20, 1);
         for k in 10..20 {
             t.time[k] += 0.05; // a 5-sample gap between samples 9 and 10
         }

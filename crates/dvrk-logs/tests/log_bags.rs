@@ -81,7 +81,7 @@ fn every_format_reads_the_same_samples_exactly() {
             "{name}"
         );
         assert_eq!(log.start_time_ns, T0_NS, "{name}");
-        let t = &log.trajectory;
+        let t = &log.samples;
         assert_eq!(t.joint_names, psm_joints(), "{name}");
         assert_eq!(t.len(), N, "{name}");
         let dq = t.dq.as_ref().expect("velocities");
@@ -161,14 +161,14 @@ fn without_the_robot_the_single_measured_topic_is_read() {
     };
     let log = read_mcap_log(fixture("noetic.bag"), &arm_only).unwrap();
     assert_eq!(log.topics, ["/PSM1/measured_js"]);
-    assert_eq!(log.trajectory.dof(), 6);
+    assert_eq!(log.samples.dof(), 6);
     // Explicit topics are read as given.
     let explicit = McapOptions {
         topics: vec!["/PSM1/jaw/measured_js".into()],
         ..Default::default()
     };
     let log = read_mcap_log(fixture("rosbag2_sqlite"), &explicit).unwrap();
-    assert_eq!(log.trajectory.joint_names, ["jaw"]);
+    assert_eq!(log.samples.joint_names, ["jaw"]);
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -199,7 +199,7 @@ fn split_folder_without_metadata_and_bad_metadata() {
     // An interrupted recording has no metadata.yaml: the files by their split index.
     std::fs::remove_file(bag.join("metadata.yaml")).unwrap();
     let found = read_mcap_log(&bag, &options).unwrap();
-    assert_eq!(found.trajectory.q, whole.trajectory.q);
+    assert_eq!(found.samples.q, whole.samples.q);
     // metadata.yaml naming a missing file, or not rosbag2's.
     std::fs::write(
         bag.join("metadata.yaml"),
@@ -222,10 +222,10 @@ fn split_folder_without_metadata_and_bad_metadata() {
     );
     // One file of a split recording is a log of its own, its first half.
     let first = read_mcap_log(bag.join("split_0.mcap"), &options).unwrap();
-    assert!(first.trajectory.len() < N && !first.trajectory.is_empty());
+    assert!(first.samples.len() < N && !first.samples.is_empty());
     assert_eq!(
-        first.trajectory.q,
-        whole.trajectory.q.rows(0, first.trajectory.len())
+        first.samples.q,
+        whole.samples.q.rows(0, first.samples.len())
     );
 }
 
@@ -457,8 +457,8 @@ fn sqlite3_without_primary_key_null_ids_and_journals() {
     let plain = copy("plain.db3", 0);
     let bytes = std::fs::read(&plain).unwrap();
     let log = read_mcap_log(&plain, &options).unwrap();
-    assert_eq!(log.trajectory.q, reference.trajectory.q);
-    assert_eq!(log.trajectory.tau, reference.trajectory.tau);
+    assert_eq!(log.samples.q, reference.samples.q);
+    assert_eq!(log.samples.tau, reference.samples.tau);
     assert_eq!(
         std::fs::read(&plain).unwrap(),
         bytes,

@@ -59,9 +59,9 @@ fn blocks_of_any_size_are_the_whole_log() {
             log(2500, false, Coordinates::Model),
         ),
     ];
-    for (name, format, traj) in cases {
+    for (name, format, log) in cases {
         let path = temp(name);
-        write(&path, &traj, format).unwrap();
+        write(&path, &log, format).unwrap();
         for resample_hz in [None, Some(130.0)] {
             let opts = ReadOptions {
                 resample_hz,
@@ -76,7 +76,7 @@ fn blocks_of_any_size_are_the_whole_log() {
             .read(&path)
             .unwrap();
             if resample_hz.is_none() {
-                assert_eq!((&whole.q, &whole.tau), (&traj.q, &traj.tau));
+                assert_eq!((&whole.q, &whole.tau), (&log.q, &log.tau));
             } else {
                 whole.check_uniform(1e-9).unwrap();
             }
@@ -88,8 +88,8 @@ fn blocks_of_any_size_are_the_whole_log() {
             .unwrap();
             assert_eq!(reader.format(), format);
             assert_eq!(reader.joint_names(), &whole.joint_names[..]);
-            assert_eq!(reader.coordinates(), traj.coordinates);
-            assert_eq!(reader.has_velocity(), traj.dq.is_some());
+            assert_eq!(reader.coordinates(), log.coordinates);
+            assert_eq!(reader.has_velocity(), log.dq.is_some());
             for size in [1, 7, 4000] {
                 assert_eq!(read_blocks(&reader, size), whole, "{name} blocks of {size}");
             }

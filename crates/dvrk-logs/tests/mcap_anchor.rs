@@ -82,7 +82,7 @@ fn mcap_anchor_auto_topic_values_and_time() {
     assert_eq!(log.trimmed, (0, 0));
     assert_eq!(log.timing.gaps + log.timing.jittered, 0);
     assert_eq!(log.timing.resampled_hz, None);
-    let tr = &log.trajectory;
+    let tr = &log.samples;
     assert_eq!(tr.len(), 2000);
     assert_eq!(tr.joint_names, f.names);
     assert_eq!(tr.coordinates, dvrk_logs::Coordinates::Measured);
@@ -131,7 +131,7 @@ fn mcap_anchor_log_time_has_the_250_us_offset() {
     assert_eq!(log.time_source, TimeSource::LogTime);
     // The offset is constant, so relative times are still k / 200.
     assert!(log
-        .trajectory
+        .samples
         .time
         .iter()
         .enumerate()

@@ -224,26 +224,26 @@ fn mcap_round_trip_is_exact() {
     .enumerate()
     {
         for with_dq in [true, false] {
-            let traj = trajectory(1500, with_dq);
+            let written = trajectory(1500, with_dq);
             let path = dir.path(format!("rt-{k}-{with_dq}.mcap"));
             let opts = McapWriteOptions {
                 start_time_ns: T0,
                 frame_id: "PSM1_base".into(),
                 compression,
             };
-            write_mcap(&path, &traj, "/PSM1/measured_js", &opts).unwrap();
+            write_mcap(&path, &written, "/PSM1/measured_js", &opts).unwrap();
             let log = read_mcap_log(&path, &McapOptions::default()).unwrap();
             assert_eq!(log.start_time_ns, T0);
             assert_eq!(log.topics, ["/PSM1/measured_js"]);
-            let back = &log.trajectory;
-            assert_eq!(back.time, traj.time, "time is exactly k / 200");
-            assert_eq!(back.joint_names, traj.joint_names);
+            let back = &log.samples;
+            assert_eq!(back.time, written.time, "time is exactly k / 200");
+            assert_eq!(back.joint_names, written.joint_names);
             assert_eq!(back.coordinates, Coordinates::Measured);
             // Bit for bit (assert_eq would let -0.0 == 0.0 pass).
             let bits = |m: &DMatrix<f64>| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&back.q), bits(&traj.q));
-            assert_eq!(bits(&back.tau), bits(&traj.tau));
-            assert_eq!(back.dq.as_ref().map(bits), traj.dq.as_ref().map(bits));
+            assert_eq!(bits(&back.q), bits(&written.q));
+            assert_eq!(bits(&back.tau), bits(&written.tau));
+            assert_eq!(back.dq.as_ref().map(bits), written.dq.as_ref().map(bits));
             // The header stamps, log and publish times agree.
             for ts in [TimeSource::LogTime, TimeSource::PublishTime] {
                 let o = McapOptions {
@@ -252,7 +252,7 @@ fn mcap_round_trip_is_exact() {
                 };
                 let l = read_mcap_log(&path, &o).unwrap();
                 assert_eq!(l.start_time_ns, T0);
-                assert_eq!(l.trajectory.time, traj.time);
+                assert_eq!(l.samples.time, written.time);
             }
             let series = read_joint_states(
                 &path,
@@ -265,12 +265,15 @@ fn mcap_round_trip_is_exact() {
         }
     }
     // The generic entry points: extension detection, default topic.
-    let traj = trajectory(10, true);
+    let written = trajectory(10, true);
     let path = dir.path("generic.mcap");
-    write(&path, &traj, LogFormat::Mcap).unwrap();
+    write(&path, &written, LogFormat::Mcap).unwrap();
     assert_eq!(detect_format(&path).unwrap(), LogFormat::Mcap);
     let back = read(&path, None, None).unwrap();
-    assert_eq!((back.q, back.dq, back.tau), (traj.q, traj.dq, traj.tau));
+    assert_eq!(
+        (back.q, back.dq, back.tau),
+        (written.q, written.dq, written.tau)
+    );
     // Only the finished files are left (the temporary files were renamed).
     let names: Vec<String> = std::fs::read_dir(dir.dir())
         .unwrap()
@@ -405,7 +408,7 @@ fn mcap_two_topics_are_merged_on_the_first_clock() {
         ..Default::default()
     };
     let log = read_mcap_log(&path, &opts).unwrap();
-    let tr = &log.trajectory;
+    let tr = &log.samples;
     let mut names: Vec<&str> = ARM.to_vec();
     names.push("jaw");
     assert_eq!(tr.joint_names, names);
@@ -697,7 +700,7 @@ fn mcap_gaps_are_refused_or_resampled() {
         ..Default::default()
     };
     let log = read_mcap_log(&path, &opts).unwrap();
-    let tr = &log.trajectory;
+    let tr = &log.samples;
     assert_eq!(tr.len(), 304, "1.515 s at 200 Hz");
     assert_eq!(log.timing.gaps, 1);
     assert_eq!(log.timing.resampled_hz, Some(200.0));
@@ -1063,11 +1066,11 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
     for opts in [arm, merged, resampled] {
         let whole = read_mcap_log(&path, &opts).unwrap();
         let reader = McapReader::open(&path, &opts).unwrap();
-        assert_eq!(reader.samples(), whole.trajectory.len());
+        assert_eq!(reader.samples(), whole.samples.len());
         assert_eq!(reader.timing(), &whole.timing);
         for size in [1, 777, 100_000] {
             let b = concatenated(&reader, size);
-            let w = &whole.trajectory;
+            let w = &whole.samples;
             assert_eq!(b.time, w.time, "blocks of {size}");
             assert_eq!(bits(&b.q), bits(&w.q));
             assert_eq!(b.dq.as_ref().map(bits), w.dq.as_ref().map(bits));
@@ -1090,7 +1093,7 @@ fn mcap_blocks_of_any_size_are_the_whole_log() {
         println!(
             "{:?}: {} samples, trimmed {:?}, median step {} s",
             opts.topics,
-            whole.trajectory.len(),
+            whole.samples.len(),
             whole.trimmed,
             whole.timing.median_step_s
         );

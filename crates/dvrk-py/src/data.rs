@@ -47,7 +47,7 @@ use crate::json::to_python;
 /// are copies.
 #[pyclass(name = "JointLog", module = "dvrk_ident", frozen)]
 pub struct JointLogPy {
-    pub traj: Arc<JointLog>,
+    pub log: Arc<JointLog>,
     /// The file it was read from (for the result's provenance).
     pub path: Option<PathBuf>,
 }
@@ -83,9 +83,9 @@ pub fn parse_format(text: Option<&str>) -> PyResult<Option<LogFormat>> {
 }
 
 impl JointLogPy {
-    pub fn new(traj: JointLog, path: Option<PathBuf>) -> Self {
+    pub fn new(log: JointLog, path: Option<PathBuf>) -> Self {
         JointLogPy {
-            traj: Arc::new(traj),
+            log: Arc::new(log),
             path,
         }
     }
@@ -170,7 +170,7 @@ impl JointLogPy {
             Some(d) => Some(with_names(d, "dq")?),
             None => None,
         };
-        let traj = JointLog {
+        let log = JointLog {
             time: frame::times(py, time, "time")?,
             q: dof_q,
             dq,
@@ -179,8 +179,8 @@ impl JointLogPy {
             coordinates,
             source: source.to_string(),
         };
-        traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(JointLogPy::new(traj, None))
+        log.validate().map_err(|e| input(e.to_string()))?;
+        Ok(JointLogPy::new(log, None))
     }
 
     /// A log from a pandas DataFrame laid out as the headered CSV: a ``time`` column
@@ -203,7 +203,7 @@ impl JointLogPy {
         let c = frame::read_frame(py, df, time)?;
         let model = robot.map(|r| r.get().model.clone());
         let coordinates = frame::infer_coordinates(&c.joints, model.as_deref())?;
-        let traj = JointLog {
+        let log = JointLog {
             time: frame::times(py, &c.time, "time")?,
             q: c.q,
             dq: c.dq,
@@ -212,15 +212,15 @@ impl JointLogPy {
             coordinates,
             source: source.to_string(),
         };
-        traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(JointLogPy::new(traj, None))
+        log.validate().map_err(|e| input(e.to_string()))?;
+        Ok(JointLogPy::new(log, None))
     }
 
     /// The samples as a pandas DataFrame: ``time`` (s), ``position.<joint>``,
     /// ``velocity.<joint>`` (when measured), ``effort.<joint>``, the headered CSV's
     /// layout (:meth:`from_dataframe` reads it back).
     fn to_dataframe<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
-        let t = &self.traj;
+        let t = &self.log;
         let mut cols = vec![("time".to_string(), t.time.clone())];
         cols.extend(frame::matrix_columns("position", &t.joint_names, &t.q));
         if let Some(dq) = &t.dq {
@@ -235,7 +235,7 @@ impl JointLogPy {
         let slice = index
             .cast::<PySlice>()
             .map_err(|_| input("JointLog: index with a slice of samples, e.g. data[100:500]"))?;
-        let ind = slice.indices(self.traj.len() as isize)?;
+        let ind = slice.indices(self.log.len() as isize)?;
         if ind.step <= 0 {
             return Err(input(
                 "JointLog: a slice must keep the time order (positive step)",
@@ -245,7 +245,7 @@ impl JointLogPy {
             .step_by(ind.step as usize)
             .map(|k| k as usize)
             .collect();
-        Ok(JointLogPy::new(self.traj.select_rows(&rows), None))
+        Ok(JointLogPy::new(self.log.select_rows(&rows), None))
     }
 
     /// The samples of several logs as one (same joints, coordinates and velocities;
@@ -258,12 +258,12 @@ impl JointLogPy {
         let Some(first) = logs.first() else {
             return Err(input("concat: no logs"));
         };
-        let f = first.get().traj.clone();
+        let f = first.get().log.clone();
         let mut time = Vec::new();
         let (mut q, mut dq, mut tau) = (Vec::new(), Vec::new(), Vec::new());
         let mut sources = Vec::new();
         for (k, d) in logs.iter().enumerate() {
-            let t = &d.get().traj;
+            let t = &d.get().log;
             if t.joint_names != f.joint_names || t.coordinates != f.coordinates {
                 return Err(input(format!(
                     "concat: log {k} has joints {:?} ({} coordinates), log 0 {:?} ({})",
@@ -295,7 +295,7 @@ impl JointLogPy {
             sources.push(t.source.clone());
         }
         let (n, dof) = (time.len(), f.dof());
-        let traj = JointLog {
+        let log = JointLog {
             time,
             q: DMatrix::from_row_slice(n, dof, &q),
             dq: f.dq.as_ref().map(|_| DMatrix::from_row_slice(n, dof, &dq)),
@@ -304,8 +304,8 @@ impl JointLogPy {
             coordinates: f.coordinates,
             source: source.unwrap_or_else(|| sources.join(" + ")),
         };
-        traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(JointLogPy::new(traj, None))
+        log.validate().map_err(|e| input(e.to_string()))?;
+        Ok(JointLogPy::new(log, None))
     }
 
     /// Pickling (and ``copy.deepcopy``): the arrays and names.
@@ -314,7 +314,7 @@ impl JointLogPy {
     ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyTuple>)> {
         let py = slf.py();
         let d = slf.get();
-        let t = &d.traj;
+        let t = &d.log;
         let args = PyTuple::new(
             py,
             [
@@ -350,7 +350,7 @@ impl JointLogPy {
     ) -> PyResult<JointLogPy> {
         let arr = float_array(py, time, "time")?;
         let time: Vec<f64> = arr.readonly().as_array().iter().copied().collect();
-        let traj = JointLog {
+        let log = JointLog {
             time,
             q: matrix_arg(py, q, "q")?,
             dq: dq.map(|d| matrix_arg(py, d, "dq")).transpose()?,
@@ -359,52 +359,52 @@ impl JointLogPy {
             coordinates: parse_coordinates(coordinates)?,
             source,
         };
-        traj.validate().map_err(|e| input(e.to_string()))?;
-        Ok(JointLogPy::new(traj, path))
+        log.validate().map_err(|e| input(e.to_string()))?;
+        Ok(JointLogPy::new(log, path))
     }
 
     /// Sample times, s, shape ``(N,)``.
     #[getter]
     fn time<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        let n = self.traj.time.len();
-        array(py, self.traj.time.clone(), &[n])
+        let n = self.log.time.len();
+        array(py, self.log.time.clone(), &[n])
     }
 
     /// Positions, rad or m, shape ``(N, joints)``.
     #[getter]
     fn q<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.traj.q)
+        matrix(py, &self.log.q)
     }
 
     /// Measured velocities, rad/s or m/s, shape ``(N, joints)``, or ``None``.
     #[getter]
     fn dq<'py>(&self, py: Python<'py>) -> Option<Bound<'py, PyArrayDyn<f64>>> {
-        self.traj.dq.as_ref().map(|d| matrix(py, d))
+        self.log.dq.as_ref().map(|d| matrix(py, d))
     }
 
     /// Efforts, N·m or N, shape ``(N, joints)``.
     #[getter]
     fn tau<'py>(&self, py: Python<'py>) -> Bound<'py, PyArrayDyn<f64>> {
-        matrix(py, &self.traj.tau)
+        matrix(py, &self.log.tau)
     }
 
     /// One name per column.
     #[getter]
     fn joint_names(&self) -> Vec<String> {
-        self.traj.joint_names.clone()
+        self.log.joint_names.clone()
     }
 
     /// ``"measured"`` (the robot's measured joints, e.g. ROS names) or ``"model"``
     /// (the model's coordinates).
     #[getter]
     fn coordinates(&self) -> String {
-        self.traj.coordinates.to_string()
+        self.log.coordinates.to_string()
     }
 
     /// Where the data came from (the file, or ``source`` of the constructor).
     #[getter]
     fn source(&self) -> String {
-        self.traj.source.clone()
+        self.log.source.clone()
     }
 
     /// The file the data were read from, or ``None``.
@@ -416,17 +416,17 @@ impl JointLogPy {
     /// Number of joints (columns).
     #[getter]
     fn dof(&self) -> usize {
-        self.traj.dof()
+        self.log.dof()
     }
 
     /// Sampling rate estimate, Hz (inverse median time step), or ``None``.
     #[getter]
     fn rate(&self) -> Option<f64> {
-        self.traj.rate_hz()
+        self.log.rate_hz()
     }
 
     fn __len__(&self) -> usize {
-        self.traj.len()
+        self.log.len()
     }
 
     /// The data in ``robot``'s model coordinates: columns matched to its measured
@@ -435,9 +435,9 @@ impl JointLogPy {
     /// they are (after checking the number of joints).
     fn to_model(&self, py: Python<'_>, robot: &Bound<'_, ModelPy>) -> PyResult<JointLogPy> {
         let model = robot.get().model.clone();
-        let traj = self.traj.clone();
+        let log = self.log.clone();
         let t = py
-            .detach(move || to_model_coordinates(&model, &traj))
+            .detach(move || to_model_coordinates(&model, &log))
             .map_err(from_ident)?;
         Ok(JointLogPy::new(t, self.path.clone()))
     }
@@ -468,12 +468,12 @@ impl JointLogPy {
         if topic.is_some() && format != LogFormat::Mcap {
             return Err(input("topic: only MCAP logs have topics"));
         }
-        let traj = self.traj.clone();
+        let log = self.log.clone();
         py.detach(move || match (format, topic) {
             (LogFormat::Mcap, Some(topic)) => {
-                mcap::write_mcap(&path, &traj, &topic, &mcap::McapWriteOptions::default())
+                mcap::write_mcap(&path, &log, &topic, &mcap::McapWriteOptions::default())
             }
-            (format, _) => log::write(&path, &traj, format),
+            (format, _) => log::write(&path, &log, format),
         })
         .map_err(from_log)
     }
@@ -481,15 +481,15 @@ impl JointLogPy {
     fn __repr__(&self) -> String {
         format!(
             "JointLog({} samples, {} joints, {} coordinates, velocities {}, source={})",
-            self.traj.len(),
-            self.traj.dof(),
-            self.traj.coordinates,
-            if self.traj.dq.is_some() {
+            self.log.len(),
+            self.log.dof(),
+            self.log.coordinates,
+            if self.log.dq.is_some() {
                 "measured"
             } else {
                 "absent"
             },
-            py_str(&self.traj.source)
+            py_str(&self.log.source)
         )
     }
 }
@@ -681,18 +681,18 @@ pub fn read_log(
     };
     let model = robot.map(|r| r.get().model.clone());
     let file = path.clone();
-    let traj = background(py, move || {
+    let log = background(py, move || {
         let options = match &model {
             Some(m) => options.for_model(m),
             None => options,
         };
-        let traj = options.read(&file).map_err(fail_log)?;
+        let log = options.read(&file).map_err(fail_log)?;
         if let Some(model) = &model {
-            to_model_coordinates(model, &traj).map_err(fail_ident)?;
+            to_model_coordinates(model, &log).map_err(fail_ident)?;
         }
-        Ok(traj)
+        Ok(log)
     })?;
-    Ok(JointLogPy::new(traj, Some(absolute(&path))))
+    Ok(JointLogPy::new(log, Some(absolute(&path))))
 }
 
 /// `path` made absolute, for the provenance (the file as given when that fails).

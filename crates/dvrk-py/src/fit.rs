@@ -37,7 +37,7 @@ pub(crate) fn logs_arg(
                 d.get_type()
             ))
         })?;
-        Ok((d.get().traj.clone(), d.get().path.clone()))
+        Ok((d.get().log.clone(), d.get().path.clone()))
     };
     if obj.cast::<JointLogPy>().is_ok() {
         return Ok(vec![one(obj)?]);
@@ -242,10 +242,10 @@ fn prepared(
     data: &JointLogPy,
     settings: FitSettings,
 ) -> PyResult<PreparedPy> {
-    let traj = data.traj.clone();
+    let log = data.log.clone();
     let map = JointMap::new(&model, settings.joints).map_err(from_ident)?;
     let p = background(py, move || {
-        prepare_data(&model, &traj, &settings.processing).map_err(fail_ident)
+        prepare_data(&model, &log, &settings.processing).map_err(fail_ident)
     })?;
     Ok(PreparedPy::new(p, &map))
 }
@@ -612,10 +612,10 @@ impl FitResultPy {
         let model = self.model(py, robot)?;
         let params = self.params(&model)?;
         let map = JointMap::new(&model, self.joints(joints)?).map_err(from_ident)?;
-        let traj = data.get().traj.clone();
+        let log = data.get().log.clone();
         let processing = self.inner.settings.processing.clone();
         let m = background(py, move || {
-            let p = prepare_data(&model, &traj, &processing).map_err(fail_ident)?;
+            let p = prepare_data(&model, &log, &processing).map_err(fail_ident)?;
             joint_metrics(&model, &params, &p, test_window, &map).map_err(fail_ident)
         })?;
         to_python(py, &m)

@@ -142,7 +142,7 @@ fn log_sources(data: &Bound<'_, PyAny>) -> PyResult<Vec<LogSource>> {
     let one = |d: &Bound<'_, PyAny>| -> PyResult<LogSource> {
         if let Ok(d) = d.cast::<JointLogPy>() {
             return Ok(LogSource::Samples {
-                samples: d.get().traj.clone(),
+                samples: d.get().log.clone(),
                 file: d.get().path.clone(),
             });
         }

@@ -94,9 +94,9 @@ pub fn external_torque<'py>(
         wrench,
         wrench_rcond,
     };
-    let traj = data.get().traj.clone();
+    let log = data.get().log.clone();
     let res = background(py, move || {
-        residual_of(&model, &params, &fitted, &traj, &options).map_err(fail_ident)
+        residual_of(&model, &params, &fitted, &log, &options).map_err(fail_ident)
     })?;
     let n = res.joints.len();
     if as_dataframe {

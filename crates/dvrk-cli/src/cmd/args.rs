@@ -65,9 +65,9 @@ pub fn read_options(format: Option<LogFormat>, rate: Option<f64>, mcap: &McapArg
 
 /// Reads a log into memory, with a spinner.
 pub fn read(options: &ReadOptions, path: &str) -> Result<JointLog> {
-    let traj =
+    let log =
         crate::progress::Bars::new().spin(&format!("reading {path}"), || options.read(path))?;
-    Ok(traj)
+    Ok(log)
 }
 
 /// The flags of every command that uses a result on logs (validate, report, residual,

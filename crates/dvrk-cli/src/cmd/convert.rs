@@ -49,11 +49,11 @@ pub fn run(args: Args) -> Result<()> {
     let inputs = super::inputs(&[&args.input], &[("the robot", args.robot.as_deref())]);
     let stdout_taken = super::check_outputs(&[("OUT", Some(&args.output))], &[], &inputs)?;
     let model = args.robot.as_deref().map(Model::load).transpose()?;
-    let traj = read(
+    let log = read(
         &read_options(args.in_format, args.rate, &args.mcap),
         &args.input,
     )?;
-    traj.validate()?;
+    log.validate()?;
     let format = output_format(&args.output, args.out_format);
     let target = match (args.coordinates, format) {
         (Some(Coordinates::Measured), LogFormat::Wpi) => {
@@ -66,16 +66,16 @@ pub fn run(args: Args) -> Result<()> {
         (Some(Coordinates::Measured), _) => Coordinates::Measured,
         (None, LogFormat::Wpi) => Coordinates::Model,
         (None, LogFormat::Mcap) => Coordinates::Measured,
-        (None, _) => traj.coordinates,
+        (None, _) => log.coordinates,
     };
     let out = match (target, &model) {
-        (Coordinates::Model, Some(m)) => dvrk_ident::fit::to_model_coordinates(m, &traj)?,
-        (Coordinates::Measured, Some(m)) => to_measured_coordinates(m, &traj)?,
-        (t, None) if t == traj.coordinates => traj,
+        (Coordinates::Model, Some(m)) => dvrk_ident::fit::to_model_coordinates(m, &log)?,
+        (Coordinates::Measured, Some(m)) => to_measured_coordinates(m, &log)?,
+        (t, None) if t == log.coordinates => log,
         (t, None) => bail!(
             "{}: the log is in {} coordinates; converting to {t} coordinates needs --robot",
             args.input,
-            traj.coordinates
+            log.coordinates
         ),
     };
     if format == LogFormat::Wpi {

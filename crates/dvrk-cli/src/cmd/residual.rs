@@ -140,8 +140,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let mut residuals = Vec::new();
     for path in &args.logs {
-        let traj = super::args::read(&read, path)?;
-        let r = external_torque(&model, &params, &result, &traj, &options)?;
+        let log = super::args::read(&read, path)?;
+        let r = external_torque(&model, &params, &result, &log, &options)?;
         let observer_rms = r.observer_rms();
         let width = super::joint_width(&r.joints);
         let _ = writeln!(

@@ -92,24 +92,24 @@ pub fn output_format(path: &str, format: Option<LogFormat>) -> LogFormat {
     }
 }
 
-/// Writes `traj` in `format`: MCAP on `topic`, the 2019 layout in model coordinates.
+/// Writes `log` in `format`: MCAP on `topic`, the 2019 layout in model coordinates.
 pub fn write_log(
     model: Option<&Model>,
-    traj: &dvrk_ident::JointLog,
+    log: &dvrk_ident::JointLog,
     path: &str,
     format: LogFormat,
     topic: &str,
 ) -> Result<()> {
     match format {
-        LogFormat::Mcap => mcap::write_mcap(path, traj, topic, &mcap::McapWriteOptions::default())?,
+        LogFormat::Mcap => mcap::write_mcap(path, log, topic, &mcap::McapWriteOptions::default())?,
         LogFormat::Wpi => {
-            let model_traj = match model {
-                Some(m) => dvrk_ident::fit::to_model_coordinates(m, traj)?,
-                None => traj.clone(),
+            let in_model = match model {
+                Some(m) => dvrk_ident::fit::to_model_coordinates(m, log)?,
+                None => log.clone(),
             };
-            log::write(path, &model_traj, LogFormat::Wpi)?
+            log::write(path, &in_model, LogFormat::Wpi)?
         }
-        _ => log::write(path, traj, format)?,
+        _ => log::write(path, log, format)?,
     }
     Ok(())
 }

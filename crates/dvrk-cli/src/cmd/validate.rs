@@ -64,8 +64,8 @@ pub fn run(args: Args) -> Result<()> {
         args.logs.iter().map(String::as_str),
     );
     for path in &args.logs {
-        let traj = super::args::read(&read, path)?;
-        let data = prepare(&model, &traj, &settings.processing)?;
+        let log = super::args::read(&read, path)?;
+        let data = prepare(&model, &log, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window, &joints)?;
         m.check_finite(path)?;
         // Beside the fit's own training (and test) errors, so a held-out log reads

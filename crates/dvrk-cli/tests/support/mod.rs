@@ -158,7 +158,7 @@ pub fn write_model_log(
             tau[(k, j)] = t[j];
         }
     }
-    let traj = JointLog {
+    let log = JointLog {
         time,
         q,
         dq: Some(dq),
@@ -167,7 +167,7 @@ pub fn write_model_log(
         coordinates: Coordinates::Model,
         source: "test".into(),
     };
-    dvrk_ident::log::write(path, &traj, dvrk_ident::log::LogFormat::Wpi).unwrap();
+    dvrk_ident::log::write(path, &log, dvrk_ident::log::LogFormat::Wpi).unwrap();
 }
 
 /// A noise-free log of the arm (2019 CSV layout, model coordinates) with its URDF's

@@ -53,59 +53,59 @@ impl Prepared {
 /// The trajectory in model coordinates: columns matched to the robot's measured joint
 /// names (any order, extra joints ignored), then `q = M⁻¹ q_measured`,
 /// `q̇ = M⁻¹ q̇_measured`, `τ = Mᵀ τ_measured`.
-pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, IdentError> {
+pub fn to_model_coordinates(model: &Model, log: &JointLog) -> Result<JointLog, IdentError> {
     let n = model.dof();
     let mismatch = |message: String| IdentError::Mismatch {
-        source_name: traj.source.clone(),
+        source_name: log.source.clone(),
         message,
     };
-    check_velocity_clock(traj)?;
-    if traj.coordinates == Coordinates::Model {
+    check_velocity_clock(log)?;
+    if log.coordinates == Coordinates::Model {
         // A headered CSV tells model coordinates by their names `q1..qn`; a robot whose
         // measured joints carry those very names through a non-identity coupling would
         // make such a file ambiguous.
-        if model.measured.joints == traj.joint_names
+        if model.measured.joints == log.joint_names
             && model.measured.coupling != DMatrix::identity(n, n)
         {
             return Err(mismatch(format!(
                 "the log's joints `{}` are both robot {}'s model coordinates and its measured \
                  joints, which differ by a coupling: rename the measured joints",
-                traj.joint_names.join(", "),
+                log.joint_names.join(", "),
                 model.name
             )));
         }
-        if traj.dof() != n {
+        if log.dof() != n {
             return Err(mismatch(format!(
                 "the log has {} joints in model coordinates but robot {} has {n} coordinates",
-                traj.dof(),
+                log.dof(),
                 model.name
             )));
         }
         let coupling = &model.measured.coupling;
-        check_ranges(model, traj, |i, k| {
-            (0..n).fold(0.0, |acc, j| acc + coupling[(k, j)] * traj.q[(i, j)])
+        check_ranges(model, log, |i, k| {
+            (0..n).fold(0.0, |acc, j| acc + coupling[(k, j)] * log.q[(i, j)])
         })?;
-        return Ok(traj.clone());
+        return Ok(log.clone());
     }
     let mut cols = Vec::with_capacity(n);
     for name in &model.measured.joints {
-        match traj.joint_names.iter().position(|j| j == name) {
+        match log.joint_names.iter().position(|j| j == name) {
             Some(c) => cols.push(c),
             None => {
                 return Err(mismatch(format!(
                     "joint `{name}` of robot {} is missing (the log has: {})",
                     model.name,
-                    traj.joint_names.join(", ")
+                    log.joint_names.join(", ")
                 )))
             }
         }
     }
-    check_ranges(model, traj, |i, k| traj.q[(i, cols[k])])?;
+    check_ranges(model, log, |i, k| log.q[(i, cols[k])])?;
     let minv = model
         .measured_to_model_matrix()
         .ok_or_else(|| mismatch("the robot's coupling matrix is singular".into()))?;
     let mt = model.measured.coupling.transpose();
-    let rows = traj.len();
+    let rows = log.len();
     // `x · Mᵀ` of the picked columns, summed in a fixed order per sample, so that a
     // sample maps to the same bits whatever block of a log it comes in.
     let map = |x: &DMatrix<f64>, m: &DMatrix<f64>| {
@@ -113,17 +113,17 @@ pub fn to_model_coordinates(model: &Model, traj: &JointLog) -> Result<JointLog, 
             (0..n).fold(0.0, |acc, k| acc + x[(i, cols[k])] * m[(j, k)])
         })
     };
-    let q = map(&traj.q, &minv);
-    let dq = traj.dq.as_ref().map(|d| map(d, &minv));
-    let tau = map(&traj.tau, &mt);
+    let q = map(&log.q, &minv);
+    let dq = log.dq.as_ref().map(|d| map(d, &minv));
+    let tau = map(&log.tau, &mt);
     Ok(JointLog {
-        time: traj.time.clone(),
+        time: log.time.clone(),
         q,
         dq,
         tau,
         joint_names: model.coordinates.clone(),
         coordinates: Coordinates::Model,
-        source: traj.source.clone(),
+        source: log.source.clone(),
     })
 }
 
@@ -141,13 +141,13 @@ pub const RANGE_MARGIN: f64 = 1.0;
 /// [`RANGE_MARGIN`], naming the joint, the range seen and the robot's.
 fn check_ranges(
     model: &Model,
-    traj: &JointLog,
+    log: &JointLog,
     q_measured: impl Fn(usize, usize) -> f64,
 ) -> Result<(), IdentError> {
     for (k, range) in model.measured.ranges.iter().enumerate() {
         let Some([lo, hi]) = *range else { continue };
         let margin = RANGE_MARGIN * (hi - lo);
-        let (seen_lo, seen_hi) = (0..traj.len())
+        let (seen_lo, seen_hi) = (0..log.len())
             .map(|i| q_measured(i, k))
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
                 (a.min(x), b.max(x))
@@ -159,7 +159,7 @@ fn check_ranges(
                 "rad"
             };
             return Err(IdentError::Mismatch {
-                source_name: traj.source.clone(),
+                source_name: log.source.clone(),
                 message: format!(
                     "joint {} runs from {seen_lo:.3} to {seen_hi:.3} {unit}, outside robot {}'s \
                      range {} to {} {unit}: is this a log of another arm, or in \
@@ -193,19 +193,19 @@ const VELOCITY_CLOCK_MIN_CORRELATION: f64 = 0.9;
 /// fit then explains inertial torques with the wrong factor; nothing downstream would
 /// see it. Joints whose velocities correlate less than 0.9 with the differences are
 /// not judged.
-fn check_velocity_clock(traj: &JointLog) -> Result<(), IdentError> {
-    let Some(dq) = &traj.dq else { return Ok(()) };
-    let n = traj.len();
-    for j in 0..traj.dof() {
+fn check_velocity_clock(log: &JointLog) -> Result<(), IdentError> {
+    let Some(dq) = &log.dq else { return Ok(()) };
+    let n = log.len();
+    for j in 0..log.dof() {
         let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
         for i in 1..n.saturating_sub(1) {
-            let dt = traj.time[i + 1] - traj.time[i - 1];
+            let dt = log.time[i + 1] - log.time[i - 1];
             // Time stamps are checked increasing and finite later; skip what is not.
             if dt.is_nan() || dt <= 0.0 {
                 continue;
             }
             let x = dq[(i, j)];
-            let y = (traj.q[(i + 1, j)] - traj.q[(i - 1, j)]) / dt;
+            let y = (log.q[(i + 1, j)] - log.q[(i - 1, j)]) / dt;
             sxy += x * y;
             sxx += x * x;
             syy += y * y;
@@ -218,7 +218,7 @@ fn check_velocity_clock(traj: &JointLog) -> Result<(), IdentError> {
         }
         let slope = sxy / sxx;
         if !(1.0 / VELOCITY_CLOCK_RATIO..=VELOCITY_CLOCK_RATIO).contains(&slope) {
-            let clock = match traj.rate_hz() {
+            let clock = match log.rate_hz() {
                 Some(rate) => format!(
                     " at {} Hz; they match a clock of {} Hz",
                     dvrk_model::input::show_approx(rate),
@@ -227,13 +227,13 @@ fn check_velocity_clock(traj: &JointLog) -> Result<(), IdentError> {
                 None => String::new(),
             };
             return Err(IdentError::Mismatch {
-                source_name: traj.source.clone(),
+                source_name: log.source.clone(),
                 message: format!(
                     "the measured velocities of joint {} are {} times the rate of change of its \
                      positions on the log's clock{clock}: give the log's real sampling rate \
                      (--rate, or time stamps), or velocities in the positions' units per \
                      second",
-                    traj.joint_names[j],
+                    log.joint_names[j],
                     dvrk_model::input::show_significant(1.0 / slope, 3),
                 ),
             });
@@ -269,10 +269,10 @@ pub(crate) fn subtract_known_forces(model: &Model, t: &mut JointLog) {
 /// [`super::stream`] sees of the same log read from its file).
 pub fn prepare(
     model: &Model,
-    traj: &JointLog,
+    log: &JointLog,
     processing: &Processing,
 ) -> Result<Prepared, IdentError> {
-    let mut t = to_model_coordinates(model, traj)?;
+    let mut t = to_model_coordinates(model, log)?;
     subtract_known_forces(model, &mut t);
     let p = process_in_blocks(std::slice::from_ref(&t), processing).map_err(|error| {
         IdentError::Signal {

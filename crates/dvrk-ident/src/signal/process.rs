@@ -31,7 +31,7 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 /// let n = 1000;
 /// let rate = 200.0;
 /// let t = uniform_time(n, rate);
-/// let traj = JointLog {
+/// let log = JointLog {
 ///     time: t.clone(),
 ///     q: DMatrix::from_fn(n, 1, |i, _| t[i].sin()),
 ///     dq: None,
@@ -40,7 +40,7 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 ///     coordinates: Coordinates::Model,
 ///     source: "example".into(),
 /// };
-/// let p = process(&traj, &Processing::default()).unwrap();
+/// let p = process(&log, &Processing::default()).unwrap();
 /// assert_eq!(p.len(), n - 400);
 /// // d/dt sin = cos, d²/dt² sin = -sin, recovered through the filter.
 /// let k = 300;
@@ -48,16 +48,16 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 /// assert!((p.dq[(k, 0)] - tk.cos()).abs() < 1e-6);
 /// assert!((p.ddq[(k, 0)] + tk.sin()).abs() < 1e-6);
 /// ```
-pub fn process(traj: &JointLog, settings: &Processing) -> Result<Processed, SignalError> {
-    traj.validate()?;
-    settings.check(traj.dof())?;
+pub fn process(log: &JointLog, settings: &Processing) -> Result<Processed, SignalError> {
+    log.validate()?;
+    settings.check(log.dof())?;
     let Uniform {
         time,
         q,
         dq: dq_raw,
         tau,
         rate_hz,
-    } = uniform_signals(traj, settings)?;
+    } = uniform_signals(log, settings)?;
     let tau = advanced(tau, &settings.delay_s, rate_hz);
     let n = time.len();
     if 2 * settings.trim >= n {
@@ -70,9 +70,9 @@ pub fn process(traj: &JointLog, settings: &Processing) -> Result<Processed, Sign
     // Errors of a column name the source, the signal and the joint.
     let in_column = |signal: &'static str, j: usize| {
         move |e: SignalError| SignalError::InColumn {
-            source_name: traj.source.clone(),
+            source_name: log.source.clone(),
             signal,
-            joint: traj.joint_names[j].clone(),
+            joint: log.joint_names[j].clone(),
             inner: Box::new(e),
         }
     };
@@ -120,18 +120,18 @@ pub fn process(traj: &JointLog, settings: &Processing) -> Result<Processed, Sign
         "acceleration",
     )?;
 
-    let rows = kept_rows(settings, n, &dq_f, &traj.source)?;
+    let rows = kept_rows(settings, n, &dq_f, &log.source)?;
     Ok(Processed {
         time: rows.iter().map(|&i| time[i]).collect(),
         q: select_rows(&q_f, &rows),
         dq: select_rows(&dq_f, &rows),
         ddq: select_rows(&ddq_f, &rows),
         tau: select_rows(&tau_f, &rows),
-        joint_names: traj.joint_names.clone(),
-        coordinates: traj.coordinates,
+        joint_names: log.joint_names.clone(),
+        coordinates: log.coordinates,
         rate_hz,
         dq_measured: dq_raw.is_some(),
-        source: traj.source.clone(),
+        source: log.source.clone(),
     })
 }
 
@@ -148,13 +148,13 @@ struct Uniform {
 
 /// The signals on a uniform clock: resampled to `settings.resample_hz`, or checked
 /// uniform.
-fn uniform_signals(traj: &JointLog, settings: &Processing) -> Result<Uniform, SignalError> {
+fn uniform_signals(log: &JointLog, settings: &Processing) -> Result<Uniform, SignalError> {
     Ok(match settings.resample_hz {
         Some(rate) => {
-            let (t, q) = resample_linear(&traj.time, &traj.q, rate)?;
-            let (_, tau) = resample_linear(&traj.time, &traj.tau, rate)?;
-            let dq = match &traj.dq {
-                Some(d) => Some(resample_linear(&traj.time, d, rate)?.1),
+            let (t, q) = resample_linear(&log.time, &log.q, rate)?;
+            let (_, tau) = resample_linear(&log.time, &log.tau, rate)?;
+            let dq = match &log.dq {
+                Some(d) => Some(resample_linear(&log.time, d, rate)?.1),
                 None => None,
             };
             Uniform {
@@ -166,12 +166,12 @@ fn uniform_signals(traj: &JointLog, settings: &Processing) -> Result<Uniform, Si
             }
         }
         None => {
-            let rate = traj.check_uniform(settings.uniform_tolerance)?;
+            let rate = log.check_uniform(settings.uniform_tolerance)?;
             Uniform {
-                time: traj.time.clone(),
-                q: traj.q.clone(),
-                dq: traj.dq.clone(),
-                tau: traj.tau.clone(),
+                time: log.time.clone(),
+                q: log.q.clone(),
+                dq: log.dq.clone(),
+                tau: log.tau.clone(),
                 rate_hz: rate,
             }
         }

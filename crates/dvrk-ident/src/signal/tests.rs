@@ -22,12 +22,12 @@ fn sine_traj(n: usize, rate: f64, with_dq: bool) -> JointLog {
 fn process_recovers_derivatives() {
     let w = [1.0, 2.0];
     for with_dq in [true, false] {
-        let traj = sine_traj(1200, 200.0, with_dq);
-        let p = process(&traj, &Processing::default()).unwrap();
+        let log = sine_traj(1200, 200.0, with_dq);
+        let p = process(&log, &Processing::default()).unwrap();
         assert_eq!(p.len(), 800);
         assert_eq!(p.dq_measured, with_dq);
         assert!((p.rate_hz - 200.0).abs() < 1e-9);
-        assert_eq!(p.time[0], traj.time[200]);
+        assert_eq!(p.time[0], log.time[200]);
         // Largest errors (q, dq, ddq, tau) over all kept samples and over the middle
         // half of them.
         let mut all = [0.0f64; 4];
@@ -74,17 +74,17 @@ fn process_recovers_derivatives() {
 fn torques_are_filtered_only_on_request() {
     // A friction-like step in the torque at a velocity reversal: the regressor's
     // sign(q̇) column stays a step, so by default the torque must stay one too.
-    let mut traj = sine_traj(1200, 200.0, true);
+    let mut log = sine_traj(1200, 200.0, true);
     for i in 0..1200 {
-        traj.tau[(i, 0)] = 0.3 * traj.dq.as_ref().unwrap()[(i, 0)].signum();
+        log.tau[(i, 0)] = 0.3 * log.dq.as_ref().unwrap()[(i, 0)].signum();
     }
-    let p = process(&traj, &Processing::default()).unwrap();
-    assert_eq!(p.time[0], traj.time[200]);
+    let p = process(&log, &Processing::default()).unwrap();
+    assert_eq!(p.time[0], log.time[200]);
     for k in 0..p.len() {
-        assert_eq!(p.tau[(k, 0)], traj.tau[(k + 200, 0)], "sample {k}");
+        assert_eq!(p.tau[(k, 0)], log.tau[(k + 200, 0)], "sample {k}");
     }
     let filtered = process(
-        &traj,
+        &log,
         &Processing {
             filter_torque: true,
             ..Processing::default()
@@ -100,8 +100,8 @@ fn torques_are_filtered_only_on_request() {
 
 #[test]
 fn wpi_settings_and_ba_path() {
-    let traj = sine_traj(1200, 200.0, true);
-    let p = process(&traj, &Processing::wpi(1.8)).unwrap();
+    let log = sine_traj(1200, 200.0, true);
+    let p = process(&log, &Processing::wpi(1.8)).unwrap();
     assert_eq!(p.len(), 800);
     // The 2019 filter equals a standard one at pi * fc.
     let std = Processing {
@@ -118,14 +118,14 @@ fn wpi_settings_and_ba_path() {
         }),
         ..std
     };
-    let p2 = process(&traj, &std).unwrap();
+    let p2 = process(&log, &std).unwrap();
     assert!((&p.q - &p2.q).amax() < 1e-12);
     assert!((&p.ddq - &p2.ddq).amax() < 1e-9);
 }
 
 #[test]
 fn no_filter_trim_decimate_min_speed() {
-    let traj = sine_traj(100, 100.0, true);
+    let log = sine_traj(100, 100.0, true);
     let settings = Processing {
         filter: None,
         trim: 10,
@@ -133,12 +133,12 @@ fn no_filter_trim_decimate_min_speed() {
         min_speed: Some(0.5),
         ..Processing::default()
     };
-    let p = process(&traj, &settings).unwrap();
+    let p = process(&log, &settings).unwrap();
     // Unfiltered q passes through.
     for (k, &t) in p.time.iter().enumerate() {
         let i = (t * 100.0).round() as usize;
         assert!((10..90).contains(&i) && (i - 10) % 4 == 0);
-        assert_eq!(p.q[(k, 0)], traj.q[(i, 0)]);
+        assert_eq!(p.q[(k, 0)], log.q[(i, 0)]);
         assert!(p.dq.row(k).iter().all(|v| v.abs() >= 0.5));
     }
     assert!(p.len() < 20);
@@ -147,20 +147,20 @@ fn no_filter_trim_decimate_min_speed() {
         ..settings.clone()
     };
     assert!(matches!(
-        process(&traj, &none_left),
+        process(&log, &none_left),
         Err(SignalError::NoSamplesLeft { .. })
     ));
 }
 
 #[test]
 fn setting_errors() {
-    let traj = sine_traj(100, 100.0, true);
+    let log = sine_traj(100, 100.0, true);
     let base = Processing {
         trim: 10,
         ..Processing::default()
     };
     let e = process(
-        &traj,
+        &log,
         &Processing {
             trim: 50,
             ..base.clone()
@@ -172,7 +172,7 @@ fn setting_errors() {
     // of usize::MAX would overflow).
     for trim in [MAX_TRIM + 1, usize::MAX] {
         let e = process(
-            &traj,
+            &log,
             &Processing {
                 trim,
                 ..base.clone()
@@ -185,7 +185,7 @@ fn setting_errors() {
         );
     }
     let e = process(
-        &traj,
+        &log,
         &Processing {
             decimate: 0,
             ..base.clone()
@@ -200,7 +200,7 @@ fn setting_errors() {
         }
     ));
     let e = process(
-        &traj,
+        &log,
         &Processing {
             filter: Some(LowPass {
                 cutoff_hz: Cutoff::PerJoint(vec![1.0]),
@@ -219,7 +219,7 @@ fn setting_errors() {
     ));
     // A cut-off above Nyquist on joint "b" names the joint and the source.
     let e = process(
-        &traj,
+        &log,
         &Processing {
             filter: Some(LowPass {
                 cutoff_hz: Cutoff::PerJoint(vec![5.0, 60.0]),
@@ -246,7 +246,7 @@ fn setting_errors() {
     .unwrap_err();
     assert!(e.to_string().contains("too short"), "{e}");
     let e = process(
-        &traj,
+        &log,
         &Processing {
             min_speed: Some(f64::NAN),
             ..base.clone()
@@ -264,24 +264,24 @@ fn setting_errors() {
 
 #[test]
 fn gaps_rejected_or_resampled() {
-    let mut traj = sine_traj(600, 100.0, true);
+    let mut log = sine_traj(600, 100.0, true);
     // Remove samples 300..305: a gap.
     let keep: Vec<usize> = (0..600).filter(|i| !(300..305).contains(i)).collect();
-    traj.time = keep.iter().map(|&i| traj.time[i]).collect();
-    traj.q = select_rows(&traj.q, &keep);
-    traj.tau = select_rows(&traj.tau, &keep);
-    traj.dq = traj.dq.as_ref().map(|d| select_rows(d, &keep));
+    log.time = keep.iter().map(|&i| log.time[i]).collect();
+    log.q = select_rows(&log.q, &keep);
+    log.tau = select_rows(&log.tau, &keep);
+    log.dq = log.dq.as_ref().map(|d| select_rows(d, &keep));
     let base = Processing {
         trim: 50,
         ..Processing::default()
     };
-    let e = process(&traj, &base).unwrap_err();
+    let e = process(&log, &base).unwrap_err();
     assert!(matches!(
         e,
         SignalError::JointLog(JointLogError::NonUniform { row: 300, .. })
     ));
     let p = process(
-        &traj,
+        &log,
         &Processing {
             resample_hz: Some(100.0),
             ..base
@@ -294,9 +294,9 @@ fn gaps_rejected_or_resampled() {
 
 #[test]
 fn invalid_trajectory_is_reported() {
-    let mut traj = sine_traj(100, 100.0, true);
-    traj.q[(5, 1)] = f64::NAN;
-    let e = process(&traj, &Processing::default()).unwrap_err();
+    let mut log = sine_traj(100, 100.0, true);
+    log.q[(5, 1)] = f64::NAN;
+    let e = process(&log, &Processing::default()).unwrap_err();
     assert!(matches!(
         e,
         SignalError::JointLog(JointLogError::NonFinite { row: 5, .. })

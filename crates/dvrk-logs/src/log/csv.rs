@@ -236,10 +236,10 @@ impl WpiBlocks {
 /// use dvrk_logs::log::read_wpi;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-wpi-{}.csv", std::process::id()));
 /// std::fs::write(&path, "0.1,0.2,1.0,2.0,-3.0,4.5\n0.2,0.3,1.0,2.0,-3.0,4.5\n").unwrap();
-/// let traj = read_wpi(&path, 200.0, None).unwrap();
-/// assert_eq!((traj.len(), traj.dof()), (2, 2));
-/// assert_eq!(traj.dq.as_ref().unwrap()[(0, 1)], 2.0);
-/// assert_eq!(traj.time[1], 0.005);
+/// let log = read_wpi(&path, 200.0, None).unwrap();
+/// assert_eq!((log.len(), log.dof()), (2, 2));
+/// assert_eq!(log.dq.as_ref().unwrap()[(0, 1)], 2.0);
+/// assert_eq!(log.time[1], 0.005);
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_wpi(
@@ -471,10 +471,10 @@ impl HeaderedBlocks {
 /// use dvrk_logs::log::read_headered;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-csv-{}.csv", std::process::id()));
 /// std::fs::write(&path, "effort.yaw,time,position.yaw\n0.5,0.0,1.0\n0.6,0.01,1.1\n").unwrap();
-/// let traj = read_headered(&path).unwrap();
-/// assert_eq!(traj.joint_names, vec!["yaw"]);
-/// assert!(traj.dq.is_none());
-/// assert_eq!(traj.tau[(1, 0)], 0.6);
+/// let log = read_headered(&path).unwrap();
+/// assert_eq!(log.joint_names, vec!["yaw"]);
+/// assert!(log.dq.is_none());
+/// assert_eq!(log.tau[(1, 0)], 0.6);
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_headered(path: impl AsRef<Path>) -> Result<JointLog, LogError> {
@@ -486,8 +486,8 @@ pub fn read_headered(path: impl AsRef<Path>) -> Result<JointLog, LogError> {
     Ok(all.build())
 }
 
-fn validated(path: &Path, traj: &JointLog) -> Result<(), LogError> {
-    traj.validate().map_err(|source| LogError::Invalid {
+fn validated(path: &Path, log: &JointLog) -> Result<(), LogError> {
+    log.validate().map_err(|source| LogError::Invalid {
         path: path.to_path_buf(),
         source,
     })
@@ -497,26 +497,26 @@ fn validated(path: &Path, traj: &JointLog) -> Result<(), LogError> {
 /// coordinates and velocities and no time stamps: a trajectory in measured coordinates
 /// or without velocities is refused, and the time stamps are dropped (the reader
 /// assumes a uniform clock at the rate it is given).
-pub fn write_wpi(path: impl AsRef<Path>, traj: &JointLog) -> Result<(), LogError> {
+pub fn write_wpi(path: impl AsRef<Path>, log: &JointLog) -> Result<(), LogError> {
     let path = path.as_ref();
-    validated(path, traj)?;
-    if traj.coordinates != Coordinates::Model {
+    validated(path, log)?;
+    if log.coordinates != Coordinates::Model {
         return Err(LogError::WrongCoordinates {
             path: path.to_path_buf(),
-            found: traj.coordinates,
+            found: log.coordinates,
         });
     }
-    let Some(dq) = &traj.dq else {
+    let Some(dq) = &log.dq else {
         return Err(LogError::MissingVelocity {
             path: path.to_path_buf(),
         });
     };
     write_atomic(path, |w| {
         let mut wr = WriterBuilder::new().has_headers(false).from_writer(w);
-        let mut rec: Vec<String> = Vec::with_capacity(3 * traj.dof());
-        for i in 0..traj.len() {
+        let mut rec: Vec<String> = Vec::with_capacity(3 * log.dof());
+        for i in 0..log.len() {
             rec.clear();
-            for m in [&traj.q, dq, &traj.tau] {
+            for m in [&log.q, dq, &log.tau] {
                 rec.extend(m.row(i).iter().map(|v| fmt_f64(*v)));
             }
             wr.write_record(&rec)?;
@@ -532,33 +532,33 @@ pub fn write_wpi(path: impl AsRef<Path>, traj: &JointLog) -> Result<(), LogError
 /// which is how the reader tells the two joint spaces apart. Values are written with the
 /// shortest representation that reads back to the same `f64`, so a write-read round trip
 /// is exact.
-pub fn write_headered(path: impl AsRef<Path>, traj: &JointLog) -> Result<(), LogError> {
+pub fn write_headered(path: impl AsRef<Path>, log: &JointLog) -> Result<(), LogError> {
     let path = path.as_ref();
-    validated(path, traj)?;
+    validated(path, log)?;
     let model_names: Vec<String>;
-    let joint_names = match traj.coordinates {
+    let joint_names = match log.coordinates {
         Coordinates::Model => {
-            model_names = (1..=traj.dof()).map(|k| format!("q{k}")).collect();
+            model_names = (1..=log.dof()).map(|k| format!("q{k}")).collect();
             &model_names
         }
-        Coordinates::Measured => &traj.joint_names,
+        Coordinates::Measured => &log.joint_names,
     };
     write_atomic(path, |w| {
         let mut wr = WriterBuilder::new().has_headers(false).from_writer(w);
         let mut header = vec!["time".to_string()];
-        let mut signals: Vec<(&str, &DMatrix<f64>)> = vec![("position", &traj.q)];
-        if let Some(dq) = &traj.dq {
+        let mut signals: Vec<(&str, &DMatrix<f64>)> = vec![("position", &log.q)];
+        if let Some(dq) = &log.dq {
             signals.push(("velocity", dq));
         }
-        signals.push(("effort", &traj.tau));
+        signals.push(("effort", &log.tau));
         for (prefix, _) in &signals {
             header.extend(joint_names.iter().map(|j| format!("{prefix}.{j}")));
         }
         wr.write_record(&header)?;
         let mut rec: Vec<String> = Vec::with_capacity(header.len());
-        for i in 0..traj.len() {
+        for i in 0..log.len() {
             rec.clear();
-            rec.push(fmt_f64(traj.time[i]));
+            rec.push(fmt_f64(log.time[i]));
             for (_, m) in &signals {
                 rec.extend(m.row(i).iter().map(|v| fmt_f64(*v)));
             }

@@ -355,7 +355,7 @@ pub enum LogError {
 /// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-read-{}.csv", std::process::id()));
-/// let traj = JointLog {
+/// let log = JointLog {
 ///     time: uniform_time(4, 200.0),
 ///     q: DMatrix::from_element(4, 2, 0.5),
 ///     dq: Some(DMatrix::zeros(4, 2)),
@@ -364,7 +364,7 @@ pub enum LogError {
 ///     coordinates: Coordinates::Model,
 ///     source: "doc".into(),
 /// };
-/// write_wpi(&path, &traj).unwrap();
+/// write_wpi(&path, &log).unwrap();
 /// let back = read(&path, None, Some(200.0)).unwrap(); // detected as the 2019 layout
 /// assert_eq!(back.dof(), 2);
 /// assert_eq!(back.tau[(3, 1)], -1.25);
@@ -383,17 +383,17 @@ pub fn read(
     .read(path)
 }
 
-/// Every signal of `traj` (read from `path`) resampled to a uniform `hz` (Hz) by linear
+/// Every signal of `log` (read from `path`) resampled to a uniform `hz` (Hz) by linear
 /// interpolation: what `--resample` does for logs read without MCAP's own resampling.
-pub fn resample(path: &Path, traj: JointLog, hz: f64) -> Result<JointLog, LogError> {
-    traj.validate().map_err(|source| LogError::Samples {
+pub fn resample(path: &Path, log: JointLog, hz: f64) -> Result<JointLog, LogError> {
+    log.validate().map_err(|source| LogError::Samples {
         path: path.to_path_buf(),
         source,
     })?;
-    let mut r = blocks::BlockResampler::new(path, hz, traj.dof(), traj.dq.is_some())?;
+    let mut r = blocks::BlockResampler::new(path, hz, log.dof(), log.dq.is_some())?;
     let mut all = JointLogBuilder::default();
-    all.push(&r.push(&traj)?);
-    all.push(&r.finish(&traj)?);
+    all.push(&r.push(&log)?);
+    all.push(&r.finish(&log)?);
     Ok(all.build())
 }
 
@@ -401,15 +401,15 @@ pub fn resample(path: &Path, traj: JointLog, hz: f64) -> Result<JointLog, LogErr
 /// [`write_headered`] and [`mcap::write_mcap`] (here on topic
 /// [`mcap::DEFAULT_TOPIC`] with [`mcap::McapWriteOptions::default`]) for what each layout
 /// requires.
-pub fn write(path: impl AsRef<Path>, traj: &JointLog, format: LogFormat) -> Result<(), LogError> {
+pub fn write(path: impl AsRef<Path>, log: &JointLog, format: LogFormat) -> Result<(), LogError> {
     let path = path.as_ref();
     match format {
-        LogFormat::Wpi => write_wpi(path, traj),
-        LogFormat::Csv => write_headered(path, traj),
+        LogFormat::Wpi => write_wpi(path, log),
+        LogFormat::Csv => write_headered(path, log),
         #[cfg(feature = "recordings")]
         LogFormat::Mcap => mcap::write_mcap(
             path,
-            traj,
+            log,
             mcap::DEFAULT_TOPIC,
             &mcap::McapWriteOptions::default(),
         ),

@@ -32,7 +32,7 @@ impl Resampling for Option<f64> {
 /// use nalgebra::DMatrix;
 ///
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-options-{}.csv", std::process::id()));
-/// let traj = JointLog {
+/// let log = JointLog {
 ///     time: uniform_time(4, 200.0),
 ///     q: DMatrix::from_element(4, 2, 0.5),
 ///     dq: Some(DMatrix::zeros(4, 2)),
@@ -41,7 +41,7 @@ impl Resampling for Option<f64> {
 ///     coordinates: Coordinates::Model,
 ///     source: "doc".into(),
 /// };
-/// write_wpi(&path, &traj).unwrap();
+/// write_wpi(&path, &log).unwrap();
 /// let options = ReadOptions { rate_hz: Some(200.0), ..ReadOptions::default() };
 /// assert_eq!(options.read(&path).unwrap().len(), 4);
 /// // A recording's option on a CSV log is refused, naming the file.

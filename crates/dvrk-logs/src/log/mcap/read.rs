@@ -14,12 +14,12 @@ use crate::log::LogError;
 #[allow(unused_imports)] // the docs' links
 use crate::log::LogFormat;
 
-/// A log read by [`read_mcap_log`]: the trajectory and what is known about it.
+/// A log read by [`read_mcap_log`]: the samples and what is known about it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct McapLog {
     /// Measured joints; time from 0 s at the first kept sample.
-    pub trajectory: JointLog,
-    /// The absolute time of `trajectory.time[0]`, ns since the epoch, in the chosen
+    pub samples: JointLog,
+    /// The absolute time of `samples.time[0]`, ns since the epoch, in the chosen
     /// [`TimeSource`].
     pub start_time_ns: i64,
     /// The topics read, the clock first.
@@ -43,7 +43,7 @@ pub fn list_topics(path: impl AsRef<Path>) -> Result<Vec<TopicInfo>, LogError> {
 /// Reads an MCAP log into a [`JointLog`] in measured coordinates (see the module docs
 /// for topic choice, merging, time and checks).
 pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointLog, LogError> {
-    read_mcap_log(path, options).map(|log| log.trajectory)
+    read_mcap_log(path, options).map(|log| log.samples)
 }
 
 /// [`read_mcap`], also returning the absolute start time, the topics read and the timing
@@ -55,7 +55,7 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointL
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-{}.mcap", std::process::id()));
 /// let n = 50;
-/// let traj = JointLog {
+/// let written = JointLog {
 ///     time: uniform_time(n, 200.0),
 ///     q: DMatrix::from_fn(n, 2, |i, j| (i * (j + 1)) as f64 * 1e-3),
 ///     dq: None,
@@ -66,13 +66,13 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointL
 /// };
 /// let start = 1_700_000_000_000_000_000;
 /// let write = McapWriteOptions { start_time_ns: start, ..Default::default() };
-/// write_mcap(&path, &traj, "/PSM1/measured_js", &write).unwrap();
+/// write_mcap(&path, &written, "/PSM1/measured_js", &write).unwrap();
 /// let log = read_mcap_log(&path, &McapOptions::default()).unwrap();
 /// assert_eq!(log.topics, ["/PSM1/measured_js"]);
 /// assert_eq!(log.start_time_ns, start);
-/// assert_eq!(log.trajectory.time, traj.time);
-/// assert_eq!(log.trajectory.q, traj.q);
-/// assert!(log.trajectory.dq.is_none());
+/// assert_eq!(log.samples.time, written.time);
+/// assert_eq!(log.samples.q, written.q);
+/// assert!(log.samples.dq.is_none());
 /// std::fs::remove_file(&path).unwrap();
 /// ```
 pub fn read_mcap_log(path: impl AsRef<Path>, options: &McapOptions) -> Result<McapLog, LogError> {
@@ -82,7 +82,7 @@ pub fn read_mcap_log(path: impl AsRef<Path>, options: &McapOptions) -> Result<Mc
         all.push(&block?);
     }
     Ok(McapLog {
-        trajectory: all.build(),
+        samples: all.build(),
         start_time_ns: reader.plan.start_time_ns,
         topics: reader.plan.topics.clone(),
         time_source: reader.plan.time_source,

@@ -53,7 +53,7 @@ impl Default for McapWriteOptions {
     }
 }
 
-/// Writes `traj` (measured coordinates) as `sensor_msgs/msg/JointState` messages on
+/// Writes `log` (measured coordinates) as `sensor_msgs/msg/JointState` messages on
 /// `topic` of a ROS 2 MCAP file, one message per sample: `name` = joint names,
 /// `position` = q, `velocity` = dq (empty arrays when `dq` is `None`), `effort` = tau,
 /// `header.stamp` = log time = publish time = `start_time_ns + round(time * 1e9)` ns,
@@ -66,25 +66,25 @@ impl Default for McapWriteOptions {
 /// 1e9).
 pub fn write_mcap(
     path: impl AsRef<Path>,
-    traj: &JointLog,
+    log: &JointLog,
     topic: &str,
     options: &McapWriteOptions,
 ) -> Result<(), LogError> {
     let path = path.as_ref();
-    traj.validate().map_err(|source| LogError::Invalid {
+    log.validate().map_err(|source| LogError::Invalid {
         path: path.to_path_buf(),
         source,
     })?;
     let err = |p: McapProblem| mcap_error(path, Some(topic), p);
-    if traj.coordinates != Coordinates::Measured {
+    if log.coordinates != Coordinates::Measured {
         return Err(err(McapProblem::WrongCoordinates));
     }
     if topic.is_empty() || topic.chars().any(char::is_whitespace) {
         return Err(err(McapProblem::BadTopic(topic.to_owned())));
     }
     // Stamps first, so that a bad one leaves nothing behind.
-    let mut stamps: Vec<(i64, Time)> = Vec::with_capacity(traj.len());
-    for (index, &t) in traj.time.iter().enumerate() {
+    let mut stamps: Vec<(i64, Time)> = Vec::with_capacity(log.len());
+    for (index, &t) in log.time.iter().enumerate() {
         let bad = || err(McapProblem::BadStamp { index, time_s: t });
         let offset = (t * 1e9).round();
         if !offset.is_finite() || offset.abs() >= 9.2e18 {
@@ -121,7 +121,7 @@ pub fn write_mcap(
                 stamp: Time::default(),
                 frame_id: options.frame_id.clone(),
             },
-            name: traj.joint_names.clone(),
+            name: log.joint_names.clone(),
             position: Vec::new(),
             velocity: Vec::new(),
             effort: Vec::new(),
@@ -129,13 +129,13 @@ pub fn write_mcap(
         for (k, &(ns, stamp)) in stamps.iter().enumerate() {
             msg.header.stamp = stamp;
             msg.position.clear();
-            msg.position.extend(traj.q.row(k).iter());
+            msg.position.extend(log.q.row(k).iter());
             msg.velocity.clear();
-            if let Some(dq) = &traj.dq {
+            if let Some(dq) = &log.dq {
                 msg.velocity.extend(dq.row(k).iter());
             }
             msg.effort.clear();
-            msg.effort.extend(traj.tau.row(k).iter());
+            msg.effort.extend(log.tau.row(k).iter());
             let data = joint_state::encode_cdr(&msg).map_err(|reason| {
                 ::mcap::McapError::Io(std::io::Error::other(format!("CDR encoding: {reason}")))
             })?;
