@@ -65,7 +65,7 @@ pub use dynamics::{
     dvrk_forward_dynamics, dvrk_gravity, dvrk_inverse_dynamics, dvrk_mass_matrix,
     dvrk_measured_to_model, dvrk_model_to_measured_torque, dvrk_rigid_body_dynamics,
 };
-pub use load::{dvrk_model_free, dvrk_model_from_result};
+pub use load::{dvrk_model_free, dvrk_model_from_result, LoadError};
 pub use model::{
     dvrk_model_coordinate_name, dvrk_model_dof, dvrk_model_joint_name, dvrk_model_n_measured,
     dvrk_model_n_params, dvrk_model_param_name, dvrk_model_params, dvrk_workspace_free,

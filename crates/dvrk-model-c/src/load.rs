@@ -11,6 +11,79 @@ use crate::{DvrkModel, BOUNDED_Q_MAX, BOUND_MAX};
 
 /// What the loader reads of a result document: the rest (metrics, solver, inputs) is not
 /// needed to evaluate the model.
+/// Why a result cannot be loaded (`dvrk_model_from_result` writes its text to `err`).
+/// Each names the file first, as the CLI's messages do.
+#[derive(Debug, thiserror::Error)]
+pub enum LoadError {
+    /// `result_path` is NULL.
+    #[error("result_path is NULL")]
+    NullPath,
+    /// `result_path` is not UTF-8.
+    #[error("result_path is not UTF-8")]
+    PathNotUtf8,
+    /// The file cannot be read (missing, too large, not UTF-8).
+    #[error("{file}: {source}")]
+    Read {
+        /// The result file.
+        file: String,
+        /// The OS error or the reason.
+        source: std::io::Error,
+    },
+    /// The file is not a result document.
+    #[error("{file}: not a dvrk-ident result: {source}")]
+    NotAResult {
+        /// The result file.
+        file: String,
+        /// The JSON parser's message (with line and column).
+        source: serde_json::Error,
+    },
+    /// The recorded robot cannot be loaded, or a fit option of the result is refused.
+    #[error("{file}: {source}")]
+    Model {
+        /// The result file.
+        file: String,
+        /// The model's error.
+        source: dvrk_model::ModelError,
+    },
+    /// The recorded robot's description now describes another robot.
+    #[error("{file} was fitted for {fitted}, but its robot {robot_source} is {found}")]
+    OtherRobot {
+        /// The result file.
+        file: String,
+        /// The robot the result was fitted for.
+        fitted: String,
+        /// Where the result says that robot comes from (`builtin:psm`, a path).
+        robot_source: String,
+        /// The name of the robot found there.
+        found: String,
+    },
+    /// A setting of the result (the mounting pitch) is out of range.
+    #[error("{file}: {source}")]
+    Setting {
+        /// The result file.
+        file: String,
+        /// What is wrong with the setting.
+        source: dvrk_model::input::InputError,
+    },
+    /// A parameter or the payload is refused (the error names the file).
+    #[error(transparent)]
+    Parameters(dvrk_model::ModelError),
+    /// The robot's measured-joint coupling matrix cannot be inverted.
+    #[error("{file}: the robot's measured-joint coupling matrix is singular")]
+    SingularCoupling {
+        /// The result file.
+        file: String,
+    },
+    /// A joint, coordinate or parameter name holds a NUL byte (no C string).
+    #[error("{file}: {source}")]
+    Name {
+        /// The result file.
+        file: String,
+        /// Where the NUL is.
+        source: std::ffi::NulError,
+    },
+}
+
 #[derive(serde::Deserialize)]
 struct ResultDocument {
     robot: String,
@@ -53,54 +126,61 @@ impl DvrkModel {
     /// on every friction element when the fit had `stribeck_velocity`, every
     /// parameter by name (missing, unknown or non-finite ones refused), and its
     /// `payload` (`dvrk-ident payload`), if any, added to its frame's link.
-    pub fn from_result(path: &Path) -> Result<DvrkModel, String> {
-        let shown = path.display();
-        let text = dvrk_model::input::read_text(path).map_err(|e| format!("{shown}: {e}"))?;
-        let doc: ResultDocument = serde_json::from_str(&text)
-            .map_err(|e| format!("{shown}: not a dvrk-ident result: {e}"))?;
+    pub fn from_result(path: &Path) -> Result<DvrkModel, LoadError> {
+        let file = path.display().to_string();
+        let text = dvrk_model::input::read_text(path).map_err(|source| LoadError::Read {
+            file: file.clone(),
+            source,
+        })?;
+        let doc: ResultDocument =
+            serde_json::from_str(&text).map_err(|source| LoadError::NotAResult {
+                file: file.clone(),
+                source,
+            })?;
+        let model_error = |source| LoadError::Model {
+            file: file.clone(),
+            source,
+        };
         let robot = doc
             .robot_source
             .strip_prefix("builtin:")
             .unwrap_or(&doc.robot_source);
-        let mut model = Model::load(robot).map_err(|e| format!("{shown}: {e}"))?;
+        let mut model = Model::load(robot).map_err(model_error)?;
         if model.name != doc.robot {
-            return Err(format!(
-                "{shown} was fitted for {}, but its robot {} is {}",
-                doc.robot, doc.robot_source, model.name
-            ));
+            return Err(LoadError::OtherRobot {
+                file,
+                fitted: doc.robot,
+                robot_source: doc.robot_source,
+                found: model.name,
+            });
         }
         if let Some(v) = doc.settings.stribeck_velocity {
-            model = model
-                .with_stribeck(v)
-                .map_err(|e| format!("{shown}: {e}"))?;
+            model = model.with_stribeck(v).map_err(model_error)?;
         }
         if let Some(sigma) = doc.settings.dahl_sigma {
-            model = model
-                .with_dahl(sigma)
-                .map_err(|e| format!("{shown}: {e}"))?;
+            model = model.with_dahl(sigma).map_err(model_error)?;
         }
         if let Some(order) = doc.settings.position_torque_order {
-            model = model
-                .with_position_torque(order)
-                .map_err(|e| format!("{shown}: {e}"))?;
+            model = model.with_position_torque(order).map_err(model_error)?;
         }
         if doc.settings.load_friction {
             model = model.with_load_friction();
         }
         if let Some(pitch) = doc.settings.mounting_pitch_deg {
             model.gravity =
-                Model::mounting_pitch_gravity(pitch).map_err(|e| format!("{shown}: {e}"))?;
+                Model::mounting_pitch_gravity(pitch).map_err(|source| LoadError::Setting {
+                    file: file.clone(),
+                    source,
+                })?;
         }
+        // These name the file themselves.
         let mut params = model
-            .params_from_named(
-                doc.parameters.iter().map(|(k, v)| (k.as_str(), *v)),
-                &shown.to_string(),
-            )
-            .map_err(|e| e.to_string())?;
+            .params_from_named(doc.parameters.iter().map(|(k, v)| (k.as_str(), *v)), &file)
+            .map_err(LoadError::Parameters)?;
         // As every consumer of a result: the arm with its payload, if it carries one.
         if let Some(p) = &doc.payload {
-            p.add_to(&model, &mut params, &shown.to_string())
-                .map_err(|e| e.to_string())?;
+            p.add_to(&model, &mut params, &file)
+                .map_err(LoadError::Parameters)?;
         }
         let mut link_params = vec![0.0; params.len()];
         for &j in model.link_frames() {
@@ -109,13 +189,18 @@ impl DvrkModel {
             }
         }
         let n = model.dof();
-        let minv = model.measured_to_model_matrix().ok_or_else(|| {
-            format!("{shown}: the robot's measured-joint coupling matrix is singular")
-        })?;
+        let minv = model
+            .measured_to_model_matrix()
+            .ok_or_else(|| LoadError::SingularCoupling { file: file.clone() })?;
         let measured_to_model = (0..n * n).map(|k| minv[(k / n, k % n)]).collect();
-        let names = |v: Vec<String>| -> Result<Vec<std::ffi::CString>, String> {
+        let names = |v: Vec<String>| -> Result<Vec<std::ffi::CString>, LoadError> {
             v.into_iter()
-                .map(|s| std::ffi::CString::new(s).map_err(|e| format!("{shown}: {e}")))
+                .map(|s| {
+                    std::ffi::CString::new(s).map_err(|source| LoadError::Name {
+                        file: file.clone(),
+                        source,
+                    })
+                })
                 .collect()
         };
         let bounded = model.gravity_torque_bound(&params, BOUNDED_Q_MAX) <= BOUND_MAX
@@ -179,19 +264,17 @@ pub unsafe extern "C" fn dvrk_model_from_result(
 ) -> *mut DvrkModel {
     let loaded = catch_unwind(|| {
         if result_path.is_null() {
-            return Err("result_path is NULL".to_string());
+            return Err(LoadError::NullPath);
         }
         // SAFETY: non-NULL, and the caller gives a NUL-terminated string.
         let path = unsafe { CStr::from_ptr(result_path) };
-        let path = path
-            .to_str()
-            .map_err(|_| "result_path is not UTF-8".to_string())?;
+        let path = path.to_str().map_err(|_| LoadError::PathNotUtf8)?;
         DvrkModel::from_result(Path::new(path))
     });
     match loaded {
         Ok(Ok(model)) => Box::into_raw(Box::new(model)),
-        Ok(Err(message)) => {
-            write_error(&message, err, err_len);
+        Ok(Err(error)) => {
+            write_error(&error.to_string(), err, err_len);
             std::ptr::null_mut()
         }
         Err(_) => {

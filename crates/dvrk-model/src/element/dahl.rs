@@ -29,7 +29,7 @@ use super::{
     clamp_near, BoundOrigin, BoundRow, BoundsContext, Element, FrameContext, Law, Note, Sample,
 };
 use crate::error::ModelError;
-use crate::input;
+use crate::input::{self, InputError};
 use crate::model::Model;
 use crate::param::{Nominal, Param, ParamKind};
 use crate::workspace::Workspace;
@@ -54,16 +54,8 @@ impl Dahl {
     }
 
     /// `σ` if it is positive and finite (1/rad or 1/m), else the reason.
-    pub fn check_sigma(sigma: f64) -> Result<f64, String> {
-        input::check_magnitude(sigma, input::MAX_VALUE, "1/rad or 1/m")
-            .map_err(|m| format!("the Dahl stiffness sigma {m}"))?;
-        if sigma > 0.0 {
-            Ok(sigma)
-        } else {
-            Err(format!(
-                "the Dahl stiffness sigma must be positive (1/rad or 1/m), got {sigma}"
-            ))
-        }
+    pub fn check_sigma(sigma: f64) -> Result<f64, InputError> {
+        input::check_positive(sigma, "the Dahl stiffness sigma", "1/rad or 1/m")
     }
 
     /// The state after a monotone displacement `ds` (rad or m) from state `z`: the exact
@@ -202,7 +194,7 @@ impl Model {
             model: self.name.clone(),
             message,
         };
-        let sigma = Dahl::check_sigma(sigma).map_err(numeric)?;
+        let sigma = Dahl::check_sigma(sigma).map_err(|e| numeric(e.to_string()))?;
         let p = self.params.len();
         let Some(f) = frame.checked_sub(1).and_then(|i| self.frames.get_mut(i)) else {
             return Err(numeric(format!("no frame {frame}")));
@@ -241,9 +233,9 @@ impl Model {
     /// ```
     pub fn with_dahl(&self, sigma: f64) -> Result<Model, ModelError> {
         let mut m = self.clone();
-        Dahl::check_sigma(sigma).map_err(|message| ModelError::Numeric {
+        Dahl::check_sigma(sigma).map_err(|e| ModelError::Numeric {
             model: m.name.clone(),
-            message,
+            message: e.to_string(),
         })?;
         let frames: Vec<usize> = (1..=m.frames.len())
             .filter(|&i| {

@@ -154,6 +154,20 @@ impl JointSpec {
     }
 }
 
+/// Why a model cannot be written as URDF: the message of [`ModelError::Urdf`].
+#[derive(Debug, thiserror::Error)]
+enum GenerateError {
+    /// Two frames (or a frame and a link the generator adds) give one link name.
+    #[error("two links would be named `{0}`")]
+    DuplicateLink(String),
+    /// Two joints the generator writes get one name.
+    #[error("two joints would be named `{0}`")]
+    DuplicateJoint(String),
+    /// urdf-rs cannot write the document.
+    #[error(transparent)]
+    Write(#[from] urdf_rs::UrdfError),
+}
+
 /// The URDF being generated, with unique names.
 #[derive(Default)]
 struct Builder {
@@ -164,9 +178,13 @@ struct Builder {
 }
 
 impl Builder {
-    fn link(&mut self, name: &str, inertial: Option<&StandardInertia>) -> Result<(), String> {
+    fn link(
+        &mut self,
+        name: &str,
+        inertial: Option<&StandardInertia>,
+    ) -> Result<(), GenerateError> {
         if !self.link_names.insert(name.to_string()) {
-            return Err(format!("two links would be named `{name}`"));
+            return Err(GenerateError::DuplicateLink(name.to_string()));
         }
         self.links.push(urdf_rs::Link {
             name: name.to_string(),
@@ -177,9 +195,9 @@ impl Builder {
         Ok(())
     }
 
-    fn joint(&mut self, j: JointSpec) -> Result<(), String> {
+    fn joint(&mut self, j: JointSpec) -> Result<(), GenerateError> {
         if !self.joint_names.insert(j.name.clone()) {
-            return Err(format!("two joints would be named `{}`", j.name));
+            return Err(GenerateError::DuplicateJoint(j.name));
         }
         let joint_type = match j.kind {
             JointKind::Fixed => urdf_rs::JointType::Fixed,
@@ -303,9 +321,9 @@ impl Model {
     pub fn to_urdf(&self, params: &[f64]) -> Result<String, ModelError> {
         self.check_export_params(params)?;
         let inertials = self.export_inertials(params)?;
-        let error = |message| ModelError::Urdf {
+        let error = |e: GenerateError| ModelError::Urdf {
             file: self.source.clone(),
-            message,
+            message: e.to_string(),
         };
         let carriers = self.coordinate_carriers();
         if self.carriers_lead(&carriers) {
@@ -353,7 +371,7 @@ impl Model {
         params: &[f64],
         inertials: &[Option<StandardInertia>],
         carriers: &[Option<(usize, f64)>],
-    ) -> Result<String, String> {
+    ) -> Result<String, GenerateError> {
         let mut g = Generator {
             model: self,
             params,
@@ -404,7 +422,7 @@ impl Generator<'_> {
 
     /// Gravity: URDF tools pull along −z of the root link, so a model whose gravity
     /// points elsewhere hangs from a `{root}_world` link turned to match.
-    fn gravity(&mut self) -> Result<(), String> {
+    fn gravity(&mut self) -> Result<(), GenerateError> {
         let g = self.model.gravity;
         if g.norm() == 0.0 {
             self.notes
@@ -438,7 +456,7 @@ impl Generator<'_> {
     }
 
     /// Coordinates no frame can carry get a massless link of their own.
-    fn coordinate_links(&mut self) -> Result<(), String> {
+    fn coordinate_links(&mut self) -> Result<(), GenerateError> {
         let m = self.model;
         for (k, c) in self.carriers.iter().enumerate() {
             if c.is_none() {
@@ -469,7 +487,7 @@ impl Generator<'_> {
     /// root-level `<qk>_coordinate` joint, the frames hanging from the root go under one
     /// massless link whose fixed joint's name extends the greatest coordinate name, so it
     /// sorts after all of them: every coordinate is met before any mimic.
-    fn frames_link(&mut self) -> Result<String, String> {
+    fn frames_link(&mut self) -> Result<String, GenerateError> {
         let root = self.names[0].clone();
         if !self.carriers.iter().all(Option::is_none) {
             return Ok(root);
@@ -489,7 +507,7 @@ impl Generator<'_> {
 
     /// The joints of frame `i` (`f`) under link `parent`: a fixed joint, the joint
     /// carrying a coordinate, a mimic of one coordinate, or a chain of mimics.
-    fn frame(&mut self, i: usize, f: &Frame, parent: String) -> Result<(), String> {
+    fn frame(&mut self, i: usize, f: &Frame, parent: String) -> Result<(), GenerateError> {
         if f.kind == JointKind::Fixed {
             return self.out.joint(JointSpec::fixed(
                 format!("{}_joint", f.name),
@@ -567,7 +585,7 @@ impl Generator<'_> {
         end: String,
         axis: Vector3<f64>,
         origin: Transform,
-    ) -> Result<(), String> {
+    ) -> Result<(), GenerateError> {
         let c = f.value.offset;
         let mut from = parent;
         let last = f.value.terms.len() - 1;
@@ -664,7 +682,7 @@ impl Generator<'_> {
     }
 
     /// The document: the header comment, then the robot.
-    fn finish(self) -> Result<String, String> {
+    fn finish(self) -> Result<String, GenerateError> {
         let head = self.header();
         let robot = urdf_rs::Robot {
             name: self.model.name.clone(),
@@ -673,7 +691,7 @@ impl Generator<'_> {
             joints: self.out.joints,
             materials: Vec::new(),
         };
-        let body = urdf_rs::write_to_string(&robot).map_err(|e| e.to_string())?;
+        let body = urdf_rs::write_to_string(&robot)?;
         Ok(format!(
             "<?xml version=\"1.0\"?>\n<!--\n{}-->\n{body}\n",
             comment_safe(&head)
