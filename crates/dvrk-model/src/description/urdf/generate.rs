@@ -42,17 +42,18 @@
 //! Joint-origin rotations are converted to rpy by removing one angle at a time, which
 //! reproduces the rotation to rounding also at pitch ±π/2.
 
-use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
-use super::inertials::urdf_inertial;
 use crate::element::Note;
 use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::inertia::{pseudo_inertia_min_eigenvalue, StandardInertia};
 use crate::model::*;
+
+mod document;
+use document::{Builder, GenerateError, JointSpec, Range};
 
 /// URDF tools assume this gravity along −z of the root link (m/s²).
 const URDF_GRAVITY: f64 = 9.81;
@@ -78,153 +79,11 @@ pub(crate) fn rpy_from_rotation(r: &Matrix3<f64>) -> [f64; 3] {
     [roll + 0.0, pitch + 0.0, yaw + 0.0]
 }
 
-fn pose(t: &Transform) -> urdf_rs::Pose {
-    urdf_rs::Pose {
-        xyz: urdf_rs::Vec3(t.translation.map(|x| x + 0.0).into()),
-        rpy: urdf_rs::Vec3(rpy_from_rotation(&t.rotation)),
-    }
-}
-
 fn motion(kind: JointKind, s: f64) -> Transform {
     match kind {
         JointKind::Revolute => Transform::rot_z(s),
         JointKind::Prismatic => Transform::trans(0.0, 0.0, s),
         JointKind::Fixed => Transform::identity(),
-    }
-}
-
-/// Position range and speed bound of a coordinate from the description's limits.
-#[derive(Clone, Copy, Default)]
-struct Range {
-    position: Option<[f64; 2]>,
-    velocity: Option<f64>,
-}
-
-impl Range {
-    /// The range of `a·q + c` for `q` in this range.
-    fn map(&self, a: f64, c: f64) -> Range {
-        Range {
-            position: self.position.map(|[lo, hi]| {
-                let (x, y) = (a * lo + c, a * hi + c);
-                [x.min(y), x.max(y)]
-            }),
-            velocity: self.velocity.map(|v| a.abs() * v),
-        }
-    }
-
-    fn limit(&self) -> urdf_rs::JointLimit {
-        let [lower, upper] = self.position.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
-        urdf_rs::JointLimit {
-            lower,
-            upper,
-            effort: 0.0,
-            velocity: self.velocity.unwrap_or(0.0),
-            ..Default::default()
-        }
-    }
-}
-
-/// A joint being written; `None` limit means the joint type has none.
-struct JointSpec {
-    name: String,
-    kind: JointKind,
-    origin: Transform,
-    parent: String,
-    child: String,
-    axis: Vector3<f64>,
-    range: Range,
-    mimic: Option<(String, f64, f64)>,
-    dynamics: Option<urdf_rs::Dynamics>,
-}
-
-impl JointSpec {
-    /// A fixed joint placing `child` at `origin` in `parent`.
-    fn fixed(name: String, origin: Transform, parent: String, child: String) -> JointSpec {
-        JointSpec {
-            name,
-            kind: JointKind::Fixed,
-            origin,
-            parent,
-            child,
-            axis: Vector3::z(),
-            range: Range::default(),
-            mimic: None,
-            dynamics: None,
-        }
-    }
-}
-
-/// Why a model cannot be written as URDF: the message of [`ModelError::Urdf`].
-#[derive(Debug, thiserror::Error)]
-enum GenerateError {
-    /// Two frames (or a frame and a link the generator adds) give one link name.
-    #[error("two links would be named `{0}`")]
-    DuplicateLink(String),
-    /// Two joints the generator writes get one name.
-    #[error("two joints would be named `{0}`")]
-    DuplicateJoint(String),
-    /// urdf-rs cannot write the document.
-    #[error(transparent)]
-    Write(#[from] urdf_rs::UrdfError),
-}
-
-/// The URDF being generated, with unique names.
-#[derive(Default)]
-struct Builder {
-    links: Vec<urdf_rs::Link>,
-    joints: Vec<urdf_rs::Joint>,
-    link_names: HashSet<String>,
-    joint_names: HashSet<String>,
-}
-
-impl Builder {
-    fn link(
-        &mut self,
-        name: &str,
-        inertial: Option<&StandardInertia>,
-    ) -> Result<(), GenerateError> {
-        if !self.link_names.insert(name.to_string()) {
-            return Err(GenerateError::DuplicateLink(name.to_string()));
-        }
-        self.links.push(urdf_rs::Link {
-            name: name.to_string(),
-            inertial: urdf_inertial(inertial),
-            visual: Vec::new(),
-            collision: Vec::new(),
-        });
-        Ok(())
-    }
-
-    fn joint(&mut self, j: JointSpec) -> Result<(), GenerateError> {
-        if !self.joint_names.insert(j.name.clone()) {
-            return Err(GenerateError::DuplicateJoint(j.name));
-        }
-        let joint_type = match j.kind {
-            JointKind::Fixed => urdf_rs::JointType::Fixed,
-            JointKind::Prismatic => urdf_rs::JointType::Prismatic,
-            JointKind::Revolute if j.range.position.is_some() => urdf_rs::JointType::Revolute,
-            JointKind::Revolute => urdf_rs::JointType::Continuous,
-        };
-        self.joints.push(urdf_rs::Joint {
-            name: j.name,
-            joint_type,
-            origin: pose(&j.origin),
-            parent: urdf_rs::LinkName { link: j.parent },
-            child: urdf_rs::LinkName { link: j.child },
-            axis: urdf_rs::Axis {
-                xyz: urdf_rs::Vec3(j.axis.map(|x| x + 0.0).into()),
-            },
-            limit: j.range.limit(),
-            calibration: None,
-            dynamics: j.dynamics,
-            mimic: j.mimic.map(|(joint, multiplier, offset)| urdf_rs::Mimic {
-                joint,
-                multiplier: Some(multiplier),
-                offset: (offset != 0.0).then_some(offset),
-            }),
-            safety_controller: None,
-        });
-        Ok(())
     }
 }
 
