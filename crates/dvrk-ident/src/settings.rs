@@ -349,9 +349,9 @@ impl FitSettings {
         }
         if let Some(pitch) = self.mounting_pitch_deg {
             let gravity =
-                Model::mounting_pitch_gravity(pitch).map_err(|message| IdentError::Setting {
+                Model::mounting_pitch_gravity(pitch).map_err(|e| IdentError::Setting {
                     name: crate::options::Setting::MountingPitch.into(),
-                    message,
+                    message: e.to_string(),
                 })?;
             if m.gravity != gravity {
                 m.to_mut().gravity = gravity;

@@ -1,7 +1,7 @@
 //! The momentum observer through the C ABI: [`dvrk_model::MomentumObserver`] on a loaded
 //! result, one allocation-free `dvrk_observer_update` per control cycle (the external
 //! torque the model does not explain, without an acceleration). A module of its own so
-//! that the observer's entry points stay apart from the model's (`lib.rs`); they share
+//! that the observer's entry points stay apart from the model's (`dynamics.rs`); they share
 //! its checks ([`pair`], [`input`], [`output`], [`finite`], [`guarded`]).
 
 use std::ffi::c_int;
@@ -9,10 +9,9 @@ use std::panic::catch_unwind;
 
 use dvrk_model::MomentumObserver;
 
-use crate::{
-    finite, guarded, input, model_ref, output, pair, DvrkModel, DvrkWorkspace, DVRK_ERR_NULL,
-    DVRK_ERR_OVERFLOW,
-};
+use crate::boundary::{finite, guarded, input, model_ref, output, pair};
+use crate::codes::{DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
+use crate::{DvrkModel, DvrkWorkspace};
 
 /// An argument is out of its range: the observer's step `dt` is not positive (a
 /// non-finite `dt` is `DVRK_ERR_NOT_FINITE`), or the observer was created for another
@@ -147,7 +146,7 @@ pub unsafe extern "C" fn dvrk_observer_update(
         let estimate = o
             .observer
             .update(m.model(), &mut w.ws, m.params(), q, dq, tau, dt);
-        if crate::deliver(estimate, out).is_err() {
+        if crate::boundary::deliver(estimate, out).is_err() {
             o.observer.reset();
             return Err(DVRK_ERR_OVERFLOW);
         }

@@ -1,6 +1,6 @@
-//! The committed header is what cbindgen makes of src/lib.rs (and src/observer.rs): CI fails when an entry
-//! point, a constant or a doc comment changed without the header. With
-//! `DVRK_UPDATE_HEADER=1` the test writes the header instead (then commit it).
+//! The committed header is what cbindgen makes of src/ (lib.rs and its modules): CI
+//! fails when an entry point, a constant or a doc comment changed without the header.
+//! With `DVRK_UPDATE_HEADER=1` the test writes the header instead (then commit it).
 
 use std::path::Path;
 

@@ -58,17 +58,19 @@ pub enum ModelError {
 }
 
 impl ModelError {
+    /// A [`ModelError::Field`]; `message` is a text or a typed error such as
+    /// [`crate::input::InputError`].
     pub(crate) fn field(
         file: &str,
         place: impl Into<String>,
         field: &str,
-        message: impl Into<String>,
+        message: impl std::fmt::Display,
     ) -> Self {
         ModelError::Field {
             file: file.to_string(),
             place: place.into(),
             field: field.to_string(),
-            message: message.into(),
+            message: message.to_string(),
         }
     }
 }

@@ -64,7 +64,7 @@ impl Model {
             model: self.name.clone(),
             message,
         };
-        let sigma = Dahl::check_sigma(sigma).map_err(numeric)?;
+        let sigma = Dahl::check_sigma(sigma).map_err(|e| numeric(e.to_string()))?;
         let p = self.params.len();
         let Some(f) = frame.checked_sub(1).and_then(|i| self.frames.get_mut(i)) else {
             return Err(numeric(format!("no frame {frame}")));
@@ -103,9 +103,9 @@ impl Model {
     /// ```
     pub fn with_dahl(&self, sigma: f64) -> Result<Model, ModelError> {
         let mut m = self.clone();
-        Dahl::check_sigma(sigma).map_err(|message| ModelError::Numeric {
+        Dahl::check_sigma(sigma).map_err(|e| ModelError::Numeric {
             model: m.name.clone(),
-            message,
+            message: e.to_string(),
         })?;
         let frames: Vec<usize> = (1..=m.frames.len())
             .filter(|&i| {

@@ -223,22 +223,19 @@ impl Ellipsoid {
     }
 
     /// Finite centre and angles within the accepted magnitudes, positive finite semi-axes;
-    /// the message names the field.
-    pub fn check(&self) -> Result<(), String> {
+    /// the error names the field.
+    pub fn check(&self) -> Result<(), crate::input::InputError> {
         for (field, values, max) in [
             ("center", self.center, crate::input::MAX_LENGTH_M),
             ("rpy", self.rpy, crate::input::MAX_ANGLE_RAD),
         ] {
             for v in values {
-                crate::input::check_magnitude(v, max, "").map_err(|m| format!("{field}: {m}"))?;
+                crate::input::check_magnitude(v, max, "").map_err(|e| e.of(field))?;
             }
         }
         for a in self.semi_axes {
             if !(a.is_finite() && a > 0.0 && a <= crate::input::MAX_LENGTH_M) {
-                return Err(format!(
-                    "semi_axes: each must be a positive length of at most {:e} m, got {a}",
-                    crate::input::MAX_LENGTH_M
-                ));
+                return Err(crate::input::InputError::SemiAxis { value: a });
             }
         }
         Ok(())

@@ -69,34 +69,190 @@ pub fn read_text(path: &Path) -> std::io::Result<String> {
 
 /// Checks a model's parameter count against [`MAX_PARAMETERS`], before the base
 /// parameters (cubic in it) are computed.
-pub fn check_parameter_count(parameters: usize) -> Result<(), String> {
+pub fn check_parameter_count(parameters: usize) -> Result<(), InputError> {
     if parameters > MAX_PARAMETERS {
-        Err(format!(
-            "{parameters} parameters; at most {MAX_PARAMETERS} are accepted (the base \
-             parameters cost the cube of the count: 500 take about 2 s, 1000 about 20 s)"
-        ))
+        Err(InputError::TooManyParameters { count: parameters })
     } else {
         Ok(())
     }
 }
 
-/// Checks that `value` is finite and at most `max` in magnitude; the message says what
-/// is wrong (the caller names the file and field).
-pub fn check_magnitude(value: f64, max: f64, unit: &str) -> Result<f64, String> {
-    let unit = if unit.is_empty() {
+/// Checks that `value` is finite and at most `max` in magnitude (`unit` for the
+/// message, `""` for none); the error says what is wrong (the caller names the file and
+/// field).
+pub fn check_magnitude(value: f64, max: f64, unit: &str) -> Result<f64, InputError> {
+    if !value.is_finite() {
+        Err(InputError::NotFinite { value })
+    } else if value.abs() > max {
+        Err(InputError::BeyondRange {
+            value,
+            max,
+            unit: unit.to_string(),
+        })
+    } else {
+        Ok(value)
+    }
+}
+
+/// Checks that `value` is positive, finite and at most [`MAX_VALUE`]: a stiffness, a
+/// period. The error names `quantity` (`the Dahl stiffness sigma`) and its `unit`.
+pub fn check_positive(
+    value: f64,
+    quantity: &'static str,
+    unit: &'static str,
+) -> Result<f64, InputError> {
+    check_magnitude(value, MAX_VALUE, unit).map_err(|e| InputError::Quantity {
+        quantity,
+        problem: Box::new(e),
+    })?;
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(InputError::NotPositive {
+            quantity,
+            unit,
+            value,
+        })
+    }
+}
+
+/// A number, size or body that is not accepted where it enters. The text says what is
+/// wrong and echoes the value; the caller adds the file and the field (e.g. with
+/// [`InputError::of`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum InputError {
+    /// NaN or an infinity.
+    #[error("must be a finite number, got {value}")]
+    NotFinite {
+        /// The value given.
+        value: f64,
+    },
+    /// Finite, but beyond the accepted magnitude.
+    #[error("{}{} is beyond the accepted ±{max:e}{}", show(*.value), spaced(.unit), spaced(.unit))]
+    BeyondRange {
+        /// The value given.
+        value: f64,
+        /// The largest accepted magnitude.
+        max: f64,
+        /// The value's unit (`m`, `kg·m²`), empty when it has none.
+        unit: String,
+    },
+    /// More parameters than [`MAX_PARAMETERS`].
+    #[error(
+        "{count} parameters; at most {MAX_PARAMETERS} are accepted (the base parameters \
+         cost the cube of the count: 500 take about 2 s, 1000 about 20 s)"
+    )]
+    TooManyParameters {
+        /// The model's parameter count.
+        count: usize,
+    },
+    /// A negative mass (kg).
+    #[error("mass {mass} kg: must be non-negative")]
+    NegativeMass {
+        /// The mass given, kg.
+        mass: f64,
+    },
+    /// An inertia about the centre of mass with a negative principal moment (kg·m²).
+    #[error(
+        "inertia about the centre of mass has a negative principal moment ({}, {}, {} \
+         kg·m²): no rigid body has it",
+        show_approx(.moments[0]), show_approx(.moments[1]), show_approx(.moments[2])
+    )]
+    NegativeMoment {
+        /// The principal moments, ascending, kg·m².
+        moments: [f64; 3],
+    },
+    /// Principal moments whose largest exceeds the sum of the other two (kg·m²).
+    // Enough digits to show a breach just beyond the 1e-6 tolerance.
+    #[error(
+        "principal moments {}, {}, {} kg·m² break the triangle inequality (the largest \
+         exceeds the sum of the other two): no rigid body has them",
+        show_significant(.moments[0], 9), show_significant(.moments[1], 9),
+        show_significant(.moments[2], 9)
+    )]
+    TriangleInequality {
+        /// The principal moments, ascending, kg·m².
+        moments: [f64; 3],
+    },
+    /// A rotation with a non-finite entry.
+    #[error("the rotation is not finite")]
+    RotationNotFinite,
+    /// A rotation that is not orthonormal with determinant 1 (to 1e-9).
+    #[error("the rotation is not orthonormal with determinant 1")]
+    RotationNotProper,
+    /// A semi-axis of an ellipsoid that is not a positive length within
+    /// [`MAX_LENGTH_M`].
+    #[error(
+        "semi_axes: each must be a positive length of at most {MAX_LENGTH_M:e} m, got {value}"
+    )]
+    SemiAxis {
+        /// The semi-axis given, m.
+        value: f64,
+    },
+    /// A quantity that must be positive and is not.
+    #[error("{quantity} must be positive ({unit}), got {value}")]
+    NotPositive {
+        /// What it is, e.g. `the Dahl stiffness sigma`.
+        quantity: &'static str,
+        /// Its unit, e.g. `1/rad or 1/m`.
+        unit: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A series order out of its range.
+    #[error("{quantity} must be 1 to {max}, got {value}")]
+    Order {
+        /// What it is, e.g. `the position torque's order`.
+        quantity: &'static str,
+        /// The largest accepted order.
+        max: usize,
+        /// The order given.
+        value: usize,
+    },
+    /// A mounting pitch that is not finite or beyond ±180°.
+    #[error("mounting pitch must be a finite angle within ±180°, got {}", show(*.pitch_deg))]
+    MountingPitch {
+        /// The pitch given, degrees.
+        pitch_deg: f64,
+    },
+    /// A problem of one named part of a value: `{name}: {problem}` (a field such as
+    /// `mass`, `com`, `center`).
+    #[error("{name}: {problem}")]
+    Named {
+        /// The part, e.g. `centre of mass`.
+        name: String,
+        /// What is wrong with it.
+        #[source]
+        problem: Box<InputError>,
+    },
+    /// A problem of a quantity named in a sentence: `{quantity} {problem}`, e.g. `the
+    /// Dahl stiffness sigma must be a finite number, got NaN`.
+    #[error("{quantity} {problem}")]
+    Quantity {
+        /// The quantity, e.g. `the Dahl stiffness sigma`.
+        quantity: &'static str,
+        /// What is wrong with it.
+        #[source]
+        problem: Box<InputError>,
+    },
+}
+
+impl InputError {
+    /// This problem as one of the part `name` of a value: `{name}: {self}`.
+    pub fn of(self, name: impl Into<String>) -> InputError {
+        InputError::Named {
+            name: name.into(),
+            problem: Box::new(self),
+        }
+    }
+}
+
+/// ` unit`, or nothing for no unit.
+fn spaced(unit: &str) -> String {
+    if unit.is_empty() {
         String::new()
     } else {
         format!(" {unit}")
-    };
-    if !value.is_finite() {
-        Err(format!("must be a finite number, got {value}"))
-    } else if value.abs() > max {
-        Err(format!(
-            "{}{unit} is beyond the accepted ±{max:e}{unit}",
-            show(value)
-        ))
-    } else {
-        Ok(value)
     }
 }
 
@@ -152,17 +308,17 @@ pub fn show_significant(value: f64, digits: usize) -> String {
 /// mass ≥ 0, principal moments ≥ 0 and each at most the sum of the other two (the
 /// triangle inequality: no mass distribution has others). Moments are compared with a
 /// relative tolerance of 1e-6 so that inertias rounded to a few digits (CAD exports)
-/// pass. Returns a message naming the broken condition.
-pub fn check_rigid_body(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> Result<(), String> {
-    check_magnitude(mass, MAX_MASS_KG, "kg").map_err(|m| format!("mass: {m}"))?;
+/// pass. The error names the broken condition.
+pub fn check_rigid_body(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> Result<(), InputError> {
+    check_magnitude(mass, MAX_MASS_KG, "kg").map_err(|e| e.of("mass"))?;
     if mass < 0.0 {
-        return Err(format!("mass {mass} kg: must be non-negative"));
+        return Err(InputError::NegativeMass { mass });
     }
     for c in com {
-        check_magnitude(c, MAX_LENGTH_M, "m").map_err(|m| format!("centre of mass: {m}"))?;
+        check_magnitude(c, MAX_LENGTH_M, "m").map_err(|e| e.of("centre of mass"))?;
     }
     for i in inertia_com {
-        check_magnitude(i, MAX_VALUE, "kg·m²").map_err(|m| format!("inertia: {m}"))?;
+        check_magnitude(i, MAX_VALUE, "kg·m²").map_err(|e| e.of("inertia"))?;
     }
     let mut moments: Vec<f64> = sym3(&inertia_com)
         .symmetric_eigenvalues()
@@ -170,25 +326,13 @@ pub fn check_rigid_body(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> Resu
         .copied()
         .collect();
     moments.sort_by(f64::total_cmp);
+    let moments = [moments[0], moments[1], moments[2]];
     let tol = 1e-6 * moments[2].abs().max(f64::MIN_POSITIVE);
     if moments[0] < -tol {
-        return Err(format!(
-            "inertia about the centre of mass has a negative principal moment \
-             ({}, {}, {} kg·m²): no rigid body has it",
-            show_approx(moments[0]),
-            show_approx(moments[1]),
-            show_approx(moments[2])
-        ));
+        return Err(InputError::NegativeMoment { moments });
     }
     if moments[2] > moments[0] + moments[1] + tol {
-        return Err(format!(
-            "principal moments {}, {}, {} kg·m² break the triangle inequality \
-             (the largest exceeds the sum of the other two): no rigid body has them",
-            // Enough digits to show a breach just beyond the 1e-6 tolerance.
-            show_significant(moments[0], 9),
-            show_significant(moments[1], 9),
-            show_significant(moments[2], 9)
-        ));
+        return Err(InputError::TriangleInequality { moments });
     }
     Ok(())
 }
@@ -216,18 +360,84 @@ mod tests {
         check_rigid_body(0.0, [0.0; 3], [0.0; 6]).unwrap();
         // ixx < 0, and a triangle inequality broken (3 > 1 + 1).
         let e = check_rigid_body(1.0, [0.0; 3], [-0.1, 0.0, 0.0, 0.1, 0.0, 0.1]).unwrap_err();
-        assert!(e.contains("negative principal moment"), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "inertia about the centre of mass has a negative principal moment (-0.1, 0.1, \
+             0.1 kg·m²): no rigid body has it"
+        );
         let e = check_rigid_body(1.0, [0.0; 3], [1.0, 0.0, 0.0, 1.0, 0.0, 3.0]).unwrap_err();
-        assert!(e.contains("triangle inequality"), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "principal moments 1, 1, 3 kg·m² break the triangle inequality (the largest \
+             exceeds the sum of the other two): no rigid body has them"
+        );
         // Rotated: the products of inertia count (eigenvalues 3, 1, -1).
         let e = check_rigid_body(1.0, [0.0; 3], [1.0, 2.0, 0.0, 1.0, 0.0, 1.0]).unwrap_err();
-        assert!(e.contains("negative"), "{e}");
+        let InputError::NegativeMoment { moments } = e else {
+            panic!("{e:?}")
+        };
+        for (m, want) in moments.iter().zip([-1.0, 1.0, 3.0]) {
+            assert!((m - want).abs() < 1e-12, "{moments:?}");
+        }
         let e = check_rigid_body(-1.0, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert!(e.contains("non-negative"), "{e}");
+        assert_eq!(e, InputError::NegativeMass { mass: -1.0 });
+        assert_eq!(e.to_string(), "mass -1 kg: must be non-negative");
         let e = check_rigid_body(f64::NAN, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert!(e.contains("finite"), "{e}");
+        assert_eq!(e.to_string(), "mass: must be a finite number, got NaN");
         let e = check_rigid_body(1e299, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert!(e.contains("beyond"), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "mass: 1e299 kg is beyond the accepted ±1e6 kg"
+        );
+        let e = check_rigid_body(1.0, [0.0, 2e3, 0.0], [0.0; 6]).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "centre of mass: 2000 m is beyond the accepted ±1e3 m"
+        );
+        // No unit, no space.
+        let e = check_magnitude(-1e16, MAX_VALUE, "").unwrap_err();
+        assert_eq!(e.to_string(), "-1e16 is beyond the accepted ±1e9");
+    }
+
+    /// The texts the CLI, Python and the C ABI show, word for word: a positive quantity
+    /// (`--dahl`, a description's `position_torque.period`), a series order and a
+    /// mounting pitch.
+    #[test]
+    fn element_and_setting_texts() {
+        let sigma = |v| check_positive(v, "the Dahl stiffness sigma", "1/rad or 1/m");
+        assert_eq!(sigma(20.0), Ok(20.0));
+        assert_eq!(
+            sigma(0.0).unwrap_err().to_string(),
+            "the Dahl stiffness sigma must be positive (1/rad or 1/m), got 0"
+        );
+        assert_eq!(
+            sigma(f64::NAN).unwrap_err().to_string(),
+            "the Dahl stiffness sigma must be a finite number, got NaN"
+        );
+        assert_eq!(
+            sigma(-1e300).unwrap_err().to_string(),
+            "the Dahl stiffness sigma -1e300 1/rad or 1/m is beyond the accepted ±1e9 1/rad or 1/m"
+        );
+        let order = InputError::Order {
+            quantity: "the position torque's order",
+            max: 3,
+            value: 4,
+        };
+        assert_eq!(
+            order.to_string(),
+            "the position torque's order must be 1 to 3, got 4"
+        );
+        assert_eq!(
+            InputError::MountingPitch { pitch_deg: 1e300 }.to_string(),
+            "mounting pitch must be a finite angle within ±180°, got 1e300"
+        );
+        assert_eq!(
+            check_parameter_count(MAX_PARAMETERS + 1)
+                .unwrap_err()
+                .to_string(),
+            "601 parameters; at most 600 are accepted (the base parameters cost the cube of \
+             the count: 500 take about 2 s, 1000 about 20 s)"
+        );
     }
 
     #[test]

@@ -508,12 +508,11 @@ impl Model {
     /// assert!((g[1] - 9.81 * 0.5f64.sqrt()).abs() < 1e-12 && (g[2] + 9.81 * 0.5f64.sqrt()).abs() < 1e-12);
     /// assert!(dvrk_model::Model::mounting_pitch_gravity(f64::NAN).is_err());
     /// ```
-    pub fn mounting_pitch_gravity(pitch_deg: f64) -> Result<Vector3<f64>, String> {
+    pub fn mounting_pitch_gravity(
+        pitch_deg: f64,
+    ) -> Result<Vector3<f64>, crate::input::InputError> {
         if !(pitch_deg.is_finite() && pitch_deg.abs() <= 180.0) {
-            return Err(format!(
-                "mounting pitch must be a finite angle within ±180°, got {}",
-                crate::input::show(pitch_deg)
-            ));
+            return Err(crate::input::InputError::MountingPitch { pitch_deg });
         }
         let p = pitch_deg.to_radians();
         Ok(Vector3::new(
@@ -527,9 +526,9 @@ impl Model {
     /// [`Model::mounting_pitch_gravity`]).
     pub fn set_mounting_pitch(&mut self, pitch_deg: f64) -> Result<(), ModelError> {
         self.gravity =
-            Model::mounting_pitch_gravity(pitch_deg).map_err(|message| ModelError::Numeric {
+            Model::mounting_pitch_gravity(pitch_deg).map_err(|e| ModelError::Numeric {
                 model: self.name.clone(),
-                message,
+                message: e.to_string(),
             })?;
         Ok(())
     }

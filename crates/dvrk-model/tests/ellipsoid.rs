@@ -5,6 +5,7 @@
 //! the ellipsoids a URDF's collision geometry gives.
 
 use dvrk_model::inertia::{barycentric_from_standard, pseudo_inertia, Ellipsoid};
+use dvrk_model::input::InputError;
 use dvrk_test_support::Rng;
 use nalgebra::{Matrix4, Vector3};
 
@@ -192,17 +193,31 @@ fn ellipsoid_check_names_the_field() {
             semi_axes: semi,
             ..good.clone()
         };
-        let message = e.check().unwrap_err();
-        assert!(message.contains(needle), "{message}");
+        let error = e.check().unwrap_err();
+        assert!(matches!(error, InputError::SemiAxis { .. }), "{error:?}");
+        assert!(error.to_string().contains(needle), "{error}");
     }
     let e = Ellipsoid {
         center: [f64::NAN, 0.0, 0.0],
         ..good.clone()
     };
-    assert!(e.check().unwrap_err().contains("center"));
+    let error = e.check().unwrap_err();
+    assert!(
+        matches!(&error, InputError::Named { name, problem } if name == "center"
+            && matches!(**problem, InputError::NotFinite { .. })),
+        "{error:?}"
+    );
+    assert_eq!(
+        error.to_string(),
+        "center: must be a finite number, got NaN"
+    );
     let e = Ellipsoid {
         rpy: [0.0, f64::INFINITY, 0.0],
         ..good
     };
-    assert!(e.check().unwrap_err().contains("rpy"));
+    let error = e.check().unwrap_err();
+    assert!(
+        matches!(&error, InputError::Named { name, .. } if name == "rpy"),
+        "{error:?}"
+    );
 }

@@ -2,20 +2,21 @@
 //! transforms, the frame count, nominal values, bounds and ranges.
 
 use super::*;
+use crate::input::InputError;
 
 /// A transform of finite numbers (translation within ±[`input::MAX_LENGTH_M`]) whose
 /// rotation is orthonormal with determinant 1 (to 1e-9).
-pub(super) fn check_transform(t: &Transform) -> Result<(), String> {
+pub(super) fn check_transform(t: &Transform) -> Result<(), InputError> {
     for &x in t.translation.iter() {
         input::check_magnitude(x, input::MAX_LENGTH_M, "m")?;
     }
     let r = &t.rotation;
     if !r.iter().all(|x| x.is_finite()) {
-        return Err("the rotation is not finite".into());
+        return Err(InputError::RotationNotFinite);
     }
     let off = (r.transpose() * r - Matrix3::identity()).abs().max();
     if off > 1e-9 || (r.determinant() - 1.0).abs() > 1e-9 {
-        return Err("the rotation is not orthonormal with determinant 1".into());
+        return Err(InputError::RotationNotProper);
     }
     Ok(())
 }
@@ -38,9 +39,9 @@ pub(super) fn check_frame_count(source: &str, n_frames: usize) -> Result<(), Mod
 
 /// A frame's nominal values: a rigid body where they give one (mass, centre of mass and
 /// inertia), every other value finite and within range.
-pub(super) fn check_nominal(n: &Nominal) -> Result<(), String> {
-    if let Some(m) = n.mass.filter(|&m| m < 0.0) {
-        return Err(format!("mass {m} kg: must be non-negative"));
+pub(super) fn check_nominal(n: &Nominal) -> Result<(), InputError> {
+    if let Some(mass) = n.mass.filter(|&m| m < 0.0) {
+        return Err(InputError::NegativeMass { mass });
     }
     if let (Some(mass), Some(com), Some(inertia)) = (n.mass, n.com, n.inertia) {
         input::check_rigid_body(mass, com, inertia)?;
@@ -56,7 +57,7 @@ pub(super) fn check_nominal(n: &Nominal) -> Result<(), String> {
     ];
     for (name, v) in scalars {
         if let Some(v) = v {
-            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
+            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|e| e.of(name))?;
         }
     }
     for (name, values) in [
@@ -64,7 +65,7 @@ pub(super) fn check_nominal(n: &Nominal) -> Result<(), String> {
         ("inertia", n.inertia.as_ref().map(|i| &i[..])),
     ] {
         for &v in values.unwrap_or(&[]) {
-            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|m| format!("{name}: {m}"))?;
+            input::check_magnitude(v, input::MAX_VALUE, "").map_err(|e| e.of(name))?;
         }
     }
     Ok(())

@@ -30,7 +30,7 @@ impl Joint {
                 ));
             }
             for x in a.terms.iter().map(|t| t.1).chain([a.offset]) {
-                input::check_magnitude(x, max, "").map_err(|m| err(field, m))?;
+                input::check_magnitude(x, max, "").map_err(|e| err(field, e.to_string()))?;
             }
             Ok(())
         };
@@ -43,8 +43,9 @@ impl Joint {
                 d,
             } => {
                 let (length, angle) = (input::MAX_LENGTH_M, input::MAX_ANGLE_RAD);
-                input::check_magnitude(*a, length, "m").map_err(|m| err("a", m))?;
-                input::check_magnitude(*alpha, angle, "rad").map_err(|m| err("alpha", m))?;
+                input::check_magnitude(*a, length, "m").map_err(|e| err("a", e.to_string()))?;
+                input::check_magnitude(*alpha, angle, "rad")
+                    .map_err(|e| err("alpha", e.to_string()))?;
                 check("theta", theta, angle)?;
                 check("d", d, length)?;
                 dh_geometry(*convention, *a, *alpha, theta, d)
@@ -72,7 +73,7 @@ impl Joint {
                     ));
                 }
                 for (field, t) in [("pre", pre), ("post", post)] {
-                    check_transform(t).map_err(|m| err(field, m))?;
+                    check_transform(t).map_err(|e| err(field, e.to_string()))?;
                 }
                 Ok(Geometry {
                     kind: *kind,

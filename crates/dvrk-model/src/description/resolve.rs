@@ -60,7 +60,7 @@ impl Ctx<'_> {
                 .map_err(|e| ModelError::field(self.file, place, field, e.to_string()))?,
         };
         let bad = |m: String| ModelError::field(self.file, place, field, m);
-        input::check_magnitude(a.offset, max, unit).map_err(bad)?;
+        input::check_magnitude(a.offset, max, unit).map_err(|e| bad(e.to_string()))?;
         for &(k, c) in &a.terms {
             input::check_magnitude(c, input::MAX_ANGLE_RAD, "")
                 .map_err(|m| bad(format!("coefficient of {}: {m}", self.coordinates[k])))?;

@@ -27,7 +27,7 @@
 
 use super::{clamp_near, BoundOrigin, BoundRow, BoundsContext, FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
-use crate::input;
+use crate::input::{self, InputError};
 use crate::param::{Nominal, ParamKind};
 
 /// Dahl friction (see the module documentation).
@@ -50,16 +50,8 @@ impl Dahl {
     }
 
     /// `σ` if it is positive and finite (1/rad or 1/m), else the reason.
-    pub fn check_sigma(sigma: f64) -> Result<f64, String> {
-        input::check_magnitude(sigma, input::MAX_VALUE, "1/rad or 1/m")
-            .map_err(|m| format!("the Dahl stiffness sigma {m}"))?;
-        if sigma > 0.0 {
-            Ok(sigma)
-        } else {
-            Err(format!(
-                "the Dahl stiffness sigma must be positive (1/rad or 1/m), got {sigma}"
-            ))
-        }
+    pub fn check_sigma(sigma: f64) -> Result<f64, InputError> {
+        input::check_positive(sigma, "the Dahl stiffness sigma", "1/rad or 1/m")
     }
 
     /// The state after a monotone displacement `ds` (rad or m) from state `z`: the exact

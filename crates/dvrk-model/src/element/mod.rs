@@ -499,7 +499,7 @@ pub(crate) struct FrameContext<'a> {
 }
 
 impl FrameContext<'_> {
-    pub(crate) fn error(&self, field: &str, message: impl Into<String>) -> ModelError {
+    pub(crate) fn error(&self, field: &str, message: impl std::fmt::Display) -> ModelError {
         ModelError::field(self.file, self.place, field, message)
     }
 

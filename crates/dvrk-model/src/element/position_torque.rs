@@ -33,7 +33,7 @@ use std::f64::consts::TAU;
 use super::{FrameContext, Law, Note, Sample};
 use crate::error::ModelError;
 use crate::expr::Affine;
-use crate::input;
+use crate::input::{self, InputError};
 use crate::param::{Nominal, ParamKind};
 
 /// Highest order of one element (the parameter names have a letter per order; a higher
@@ -85,27 +85,21 @@ impl PositionTorque {
     }
 
     /// `order` if it is 1 to [`MAX_ORDER`], else the reason.
-    pub fn check_order(order: usize) -> Result<usize, String> {
+    pub fn check_order(order: usize) -> Result<usize, InputError> {
         if (1..=MAX_ORDER).contains(&order) {
             Ok(order)
         } else {
-            Err(format!(
-                "the position torque's order must be 1 to {MAX_ORDER}, got {order}"
-            ))
+            Err(InputError::Order {
+                quantity: "the position torque's order",
+                max: MAX_ORDER,
+                value: order,
+            })
         }
     }
 
     /// `period` if it is positive and finite (rad or m), else the reason.
-    pub fn check_period(period: f64) -> Result<f64, String> {
-        input::check_magnitude(period, input::MAX_VALUE, "rad or m")
-            .map_err(|m| format!("the position torque's period {m}"))?;
-        if period > 0.0 {
-            Ok(period)
-        } else {
-            Err(format!(
-                "the position torque's period must be positive (rad or m), got {period}"
-            ))
-        }
+    pub fn check_period(period: f64) -> Result<f64, InputError> {
+        input::check_positive(period, "the position torque's period", "rad or m")
     }
 
     /// The regressor factors of order `k` (1-based) at joint value `s`:

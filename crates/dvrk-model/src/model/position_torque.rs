@@ -27,9 +27,9 @@ impl Model {
     /// assert!(psm.with_position_torque(0).is_err() && psm.with_position_torque(4).is_err());
     /// ```
     pub fn with_position_torque(&self, order: usize) -> Result<Model, ModelError> {
-        PositionTorque::check_order(order).map_err(|message| ModelError::Numeric {
+        PositionTorque::check_order(order).map_err(|e| ModelError::Numeric {
             model: self.name.clone(),
-            message,
+            message: e.to_string(),
         })?;
         let mut m = self.clone();
         for (i, f) in m.frames.iter_mut().enumerate() {

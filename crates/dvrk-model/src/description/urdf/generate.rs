@@ -42,17 +42,18 @@
 //! Joint-origin rotations are converted to rpy by removing one angle at a time, which
 //! reproduces the rotation to rounding also at pitch ±π/2.
 
-use std::collections::HashSet;
 use std::fmt::Write as _;
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
-use super::inertials::urdf_inertial;
 use crate::element::Note;
 use crate::error::ModelError;
 use crate::expr::Affine;
 use crate::inertia::{pseudo_inertia_min_eigenvalue, StandardInertia};
 use crate::model::*;
+
+mod document;
+use document::{Builder, GenerateError, JointSpec, Range};
 
 /// URDF tools assume this gravity along −z of the root link (m/s²).
 const URDF_GRAVITY: f64 = 9.81;
@@ -78,135 +79,11 @@ pub(crate) fn rpy_from_rotation(r: &Matrix3<f64>) -> [f64; 3] {
     [roll + 0.0, pitch + 0.0, yaw + 0.0]
 }
 
-fn pose(t: &Transform) -> urdf_rs::Pose {
-    urdf_rs::Pose {
-        xyz: urdf_rs::Vec3(t.translation.map(|x| x + 0.0).into()),
-        rpy: urdf_rs::Vec3(rpy_from_rotation(&t.rotation)),
-    }
-}
-
 fn motion(kind: JointKind, s: f64) -> Transform {
     match kind {
         JointKind::Revolute => Transform::rot_z(s),
         JointKind::Prismatic => Transform::trans(0.0, 0.0, s),
         JointKind::Fixed => Transform::identity(),
-    }
-}
-
-/// Position range and speed bound of a coordinate from the description's limits.
-#[derive(Clone, Copy, Default)]
-struct Range {
-    position: Option<[f64; 2]>,
-    velocity: Option<f64>,
-}
-
-impl Range {
-    /// The range of `a·q + c` for `q` in this range.
-    fn map(&self, a: f64, c: f64) -> Range {
-        Range {
-            position: self.position.map(|[lo, hi]| {
-                let (x, y) = (a * lo + c, a * hi + c);
-                [x.min(y), x.max(y)]
-            }),
-            velocity: self.velocity.map(|v| a.abs() * v),
-        }
-    }
-
-    fn limit(&self) -> urdf_rs::JointLimit {
-        let [lower, upper] = self.position.unwrap_or([f64::NEG_INFINITY, f64::INFINITY]);
-        urdf_rs::JointLimit {
-            lower,
-            upper,
-            effort: 0.0,
-            velocity: self.velocity.unwrap_or(0.0),
-            ..Default::default()
-        }
-    }
-}
-
-/// A joint being written; `None` limit means the joint type has none.
-struct JointSpec {
-    name: String,
-    kind: JointKind,
-    origin: Transform,
-    parent: String,
-    child: String,
-    axis: Vector3<f64>,
-    range: Range,
-    mimic: Option<(String, f64, f64)>,
-    dynamics: Option<urdf_rs::Dynamics>,
-}
-
-impl JointSpec {
-    /// A fixed joint placing `child` at `origin` in `parent`.
-    fn fixed(name: String, origin: Transform, parent: String, child: String) -> JointSpec {
-        JointSpec {
-            name,
-            kind: JointKind::Fixed,
-            origin,
-            parent,
-            child,
-            axis: Vector3::z(),
-            range: Range::default(),
-            mimic: None,
-            dynamics: None,
-        }
-    }
-}
-
-/// The URDF being generated, with unique names.
-#[derive(Default)]
-struct Builder {
-    links: Vec<urdf_rs::Link>,
-    joints: Vec<urdf_rs::Joint>,
-    link_names: HashSet<String>,
-    joint_names: HashSet<String>,
-}
-
-impl Builder {
-    fn link(&mut self, name: &str, inertial: Option<&StandardInertia>) -> Result<(), String> {
-        if !self.link_names.insert(name.to_string()) {
-            return Err(format!("two links would be named `{name}`"));
-        }
-        self.links.push(urdf_rs::Link {
-            name: name.to_string(),
-            inertial: urdf_inertial(inertial),
-            visual: Vec::new(),
-            collision: Vec::new(),
-        });
-        Ok(())
-    }
-
-    fn joint(&mut self, j: JointSpec) -> Result<(), String> {
-        if !self.joint_names.insert(j.name.clone()) {
-            return Err(format!("two joints would be named `{}`", j.name));
-        }
-        let joint_type = match j.kind {
-            JointKind::Fixed => urdf_rs::JointType::Fixed,
-            JointKind::Prismatic => urdf_rs::JointType::Prismatic,
-            JointKind::Revolute if j.range.position.is_some() => urdf_rs::JointType::Revolute,
-            JointKind::Revolute => urdf_rs::JointType::Continuous,
-        };
-        self.joints.push(urdf_rs::Joint {
-            name: j.name,
-            joint_type,
-            origin: pose(&j.origin),
-            parent: urdf_rs::LinkName { link: j.parent },
-            child: urdf_rs::LinkName { link: j.child },
-            axis: urdf_rs::Axis {
-                xyz: urdf_rs::Vec3(j.axis.map(|x| x + 0.0).into()),
-            },
-            limit: j.range.limit(),
-            calibration: None,
-            dynamics: j.dynamics,
-            mimic: j.mimic.map(|(joint, multiplier, offset)| urdf_rs::Mimic {
-                joint,
-                multiplier: Some(multiplier),
-                offset: (offset != 0.0).then_some(offset),
-            }),
-            safety_controller: None,
-        });
-        Ok(())
     }
 }
 
@@ -303,9 +180,9 @@ impl Model {
     pub fn to_urdf(&self, params: &[f64]) -> Result<String, ModelError> {
         self.check_export_params(params)?;
         let inertials = self.export_inertials(params)?;
-        let error = |message| ModelError::Urdf {
+        let error = |e: GenerateError| ModelError::Urdf {
             file: self.source.clone(),
-            message,
+            message: e.to_string(),
         };
         let carriers = self.coordinate_carriers();
         if self.carriers_lead(&carriers) {
@@ -353,7 +230,7 @@ impl Model {
         params: &[f64],
         inertials: &[Option<StandardInertia>],
         carriers: &[Option<(usize, f64)>],
-    ) -> Result<String, String> {
+    ) -> Result<String, GenerateError> {
         let mut g = Generator {
             model: self,
             params,
@@ -404,7 +281,7 @@ impl Generator<'_> {
 
     /// Gravity: URDF tools pull along −z of the root link, so a model whose gravity
     /// points elsewhere hangs from a `{root}_world` link turned to match.
-    fn gravity(&mut self) -> Result<(), String> {
+    fn gravity(&mut self) -> Result<(), GenerateError> {
         let g = self.model.gravity;
         if g.norm() == 0.0 {
             self.notes
@@ -438,7 +315,7 @@ impl Generator<'_> {
     }
 
     /// Coordinates no frame can carry get a massless link of their own.
-    fn coordinate_links(&mut self) -> Result<(), String> {
+    fn coordinate_links(&mut self) -> Result<(), GenerateError> {
         let m = self.model;
         for (k, c) in self.carriers.iter().enumerate() {
             if c.is_none() {
@@ -469,7 +346,7 @@ impl Generator<'_> {
     /// root-level `<qk>_coordinate` joint, the frames hanging from the root go under one
     /// massless link whose fixed joint's name extends the greatest coordinate name, so it
     /// sorts after all of them: every coordinate is met before any mimic.
-    fn frames_link(&mut self) -> Result<String, String> {
+    fn frames_link(&mut self) -> Result<String, GenerateError> {
         let root = self.names[0].clone();
         if !self.carriers.iter().all(Option::is_none) {
             return Ok(root);
@@ -489,7 +366,7 @@ impl Generator<'_> {
 
     /// The joints of frame `i` (`f`) under link `parent`: a fixed joint, the joint
     /// carrying a coordinate, a mimic of one coordinate, or a chain of mimics.
-    fn frame(&mut self, i: usize, f: &Frame, parent: String) -> Result<(), String> {
+    fn frame(&mut self, i: usize, f: &Frame, parent: String) -> Result<(), GenerateError> {
         if f.kind == JointKind::Fixed {
             return self.out.joint(JointSpec::fixed(
                 format!("{}_joint", f.name),
@@ -567,7 +444,7 @@ impl Generator<'_> {
         end: String,
         axis: Vector3<f64>,
         origin: Transform,
-    ) -> Result<(), String> {
+    ) -> Result<(), GenerateError> {
         let c = f.value.offset;
         let mut from = parent;
         let last = f.value.terms.len() - 1;
@@ -664,7 +541,7 @@ impl Generator<'_> {
     }
 
     /// The document: the header comment, then the robot.
-    fn finish(self) -> Result<String, String> {
+    fn finish(self) -> Result<String, GenerateError> {
         let head = self.header();
         let robot = urdf_rs::Robot {
             name: self.model.name.clone(),
@@ -673,7 +550,7 @@ impl Generator<'_> {
             joints: self.out.joints,
             materials: Vec::new(),
         };
-        let body = urdf_rs::write_to_string(&robot).map_err(|e| e.to_string())?;
+        let body = urdf_rs::write_to_string(&robot)?;
         Ok(format!(
             "<?xml version=\"1.0\"?>\n<!--\n{}-->\n{body}\n",
             comment_safe(&head)

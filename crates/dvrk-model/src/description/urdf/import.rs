@@ -17,10 +17,109 @@ use nalgebra::{Matrix3, Rotation3, Unit, Vector3};
 
 use crate::error::ModelError;
 use crate::expr::Affine;
-use crate::input;
+use crate::input::{self, InputError};
 use crate::model::*;
 
 use crate::inertia::rotation_rpy as rpy;
+
+/// What is wrong with a URDF document: the message of [`ModelError::Urdf`].
+#[derive(Debug, thiserror::Error)]
+enum ImportError {
+    #[error("element <{element}> is in a namespace with no bound prefix: URDF uses no namespaces")]
+    UnboundElement { element: String },
+    #[error(
+        "attribute `{attribute}` of <{element}> has a namespace prefix that is not bound: URDF \
+         uses no namespaces"
+    )]
+    UnboundAttribute { attribute: String, element: String },
+    #[error("cannot parse the document (malformed XML or a missing element): {0}")]
+    Parse(#[source] urdf_rs::UrdfError),
+    #[error("{count} joints; at most {} are accepted", input::MAX_FRAMES)]
+    TooManyJoints { count: usize },
+    #[error(
+        "{count} moving joints; at most {} are accepted",
+        input::MAX_COORDINATES
+    )]
+    TooManyCoordinates { count: usize },
+    #[error(transparent)]
+    Input(#[from] InputError),
+    #[error("link `{0}` is defined twice")]
+    DuplicateLink(String),
+    #[error("joint `{0}` is defined twice")]
+    DuplicateJoint(String),
+    #[error("expected one root link, found {}: {roots:?}", .roots.len())]
+    RootCount { roots: Vec<String> },
+    #[error(
+        "link `{link}` has two parents (joint `{joint}` closes a loop or duplicates another \
+         joint)"
+    )]
+    TwoParents { link: String, joint: String },
+    /// Joints not below the root, each with its parent link.
+    #[error("joints not connected to the root link `{root}`: {}", joint_list(.lost))]
+    Disconnected {
+        root: String,
+        lost: Vec<(String, String)>,
+    },
+    #[error(
+        "joint `{joint}`: type `{kind}` is not supported (revolute, continuous, prismatic, \
+         fixed)"
+    )]
+    UnsupportedType { joint: String, kind: String },
+    #[error(
+        "joint `{joint}`: origin xyz {xyz:?} m, rpy {rpy:?} rad: must be finite, within ±{:e} m \
+         and ±{:e} rad",
+        input::MAX_LENGTH_M,
+        input::MAX_ANGLE_RAD
+    )]
+    Origin {
+        joint: String,
+        xyz: [f64; 3],
+        rpy: [f64; 3],
+    },
+    #[error("joint `{joint}`: axis {axis:?} is zero or not finite")]
+    Axis { joint: String, axis: [f64; 3] },
+    /// A mimic of a joint that is not a coordinate's, and why.
+    #[error("joint `{joint}` mimics `{mimicked}`: {why}")]
+    Mimic {
+        joint: String,
+        mimicked: String,
+        why: &'static str,
+    },
+    #[error(
+        "joint `{joint}`: mimic multiplier {multiplier} and offset {offset} must be finite and \
+         within ±{:e}",
+        input::MAX_ANGLE_RAD
+    )]
+    MimicRange {
+        joint: String,
+        multiplier: f64,
+        offset: f64,
+    },
+    #[error("joint `{0}`: <limit> has a NaN value")]
+    NanLimit(String),
+    #[error("joint `{joint}`: child link `{link}` is not defined")]
+    MissingChild { joint: String, link: String },
+    #[error("link `{link}`: <collision> geometry: {problem}")]
+    Collision { link: String, problem: InputError },
+    #[error(
+        "link `{link}`: inertial values must be finite (origin within ±{:e} m, ±{:e} rad)",
+        input::MAX_LENGTH_M,
+        input::MAX_ANGLE_RAD
+    )]
+    InertialNotFinite { link: String },
+    #[error("link `{link}`: <inertial>: {problem}")]
+    Inertial { link: String, problem: InputError },
+    #[error("no moving joint")]
+    NoMovingJoint,
+}
+
+/// `` `joint` (parent link `link`) ``, comma-separated.
+fn joint_list(lost: &[(String, String)]) -> String {
+    lost.iter()
+        .map(|(joint, parent)| format!("`{joint}` (parent link `{parent}`)"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}
 
 /// Rotation taking z onto `axis` (unit), the shortest one (π about x for axis = −z).
 fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
@@ -42,7 +141,7 @@ fn align_z(axis: &Vector3<f64>) -> Matrix3<f64> {
 /// one RustyXML's writer makes, on the tree RustyXML's own parser builds, so whatever
 /// that parser accepts is checked; URDF uses no namespaces, so nothing valid is refused.
 /// A document RustyXML cannot parse is left to urdf-rs's own error.
-fn check_namespaces(text: &str) -> Result<(), String> {
+fn check_namespaces(text: &str) -> Result<(), ImportError> {
     let Ok(root) = text.parse::<xml::Element>() else {
         return Ok(());
     };
@@ -60,7 +159,7 @@ fn check_element_namespaces<'a>(
     e: &'a xml::Element,
     prefixes: &HashMap<&'a str, &'a str>,
     default: Option<&'a str>,
-) -> Result<(), String> {
+) -> Result<(), ImportError> {
     let mut prefixes = prefixes.clone();
     let mut default = default;
     for ((name, ns), value) in &e.attributes {
@@ -72,20 +171,18 @@ fn check_element_namespaces<'a>(
             _ => {}
         }
     }
-    let unbound = |what: String| format!("{what}: URDF uses no namespaces");
     if e.ns.as_deref() != default && !prefixes.contains_key(e.ns.as_deref().unwrap_or("")) {
-        return Err(unbound(format!(
-            "element <{}> is in a namespace with no bound prefix",
-            e.name
-        )));
+        return Err(ImportError::UnboundElement {
+            element: e.name.clone(),
+        });
     }
     for (name, ns) in e.attributes.keys() {
         if let Some(ns) = ns.as_deref() {
             if !prefixes.contains_key(ns) {
-                return Err(unbound(format!(
-                    "attribute `{name}` of <{}> has a namespace prefix that is not bound",
-                    e.name
-                )));
+                return Err(ImportError::UnboundAttribute {
+                    attribute: name.clone(),
+                    element: e.name.clone(),
+                });
             }
         }
     }
@@ -100,16 +197,12 @@ fn check_element_namespaces<'a>(
 impl Model {
     /// Imports a URDF document; `file` names it in error messages.
     pub fn from_urdf_str(text: &str, file: &str) -> Result<Model, ModelError> {
-        let err = |message: String| ModelError::Urdf {
+        let err = |e: ImportError| ModelError::Urdf {
             file: file.to_string(),
-            message,
+            message: e.to_string(),
         };
         check_namespaces(text).map_err(err)?;
-        let robot = urdf_rs::read_from_string(text).map_err(|e| {
-            err(format!(
-                "cannot parse the document (malformed XML or a missing element): {e}"
-            ))
-        })?;
+        let robot = urdf_rs::read_from_string(text).map_err(|e| err(ImportError::Parse(e)))?;
         check_sizes_and_names(&robot).map_err(err)?;
         let tree = Tree::of(&robot).map_err(err)?;
         let (coordinates, coordinate_is_length) = coordinates(&robot, &tree.order).map_err(err)?;
@@ -153,7 +246,7 @@ impl Model {
         }
         // After the frames, so that a broken mimic is reported as such.
         if coordinates.is_empty() {
-            return Err(err("no moving joint".into()));
+            return Err(err(ImportError::NoMovingJoint));
         }
         let n = coordinates.len();
         Ok(Model {
@@ -177,23 +270,21 @@ impl Model {
 }
 
 /// Within the size limits (joints, parameters), each link and joint defined once.
-fn check_sizes_and_names(robot: &urdf_rs::Robot) -> Result<(), String> {
+fn check_sizes_and_names(robot: &urdf_rs::Robot) -> Result<(), ImportError> {
     if robot.joints.len() > input::MAX_FRAMES {
-        return Err(format!(
-            "{} joints; at most {} are accepted",
-            robot.joints.len(),
-            input::MAX_FRAMES
-        ));
+        return Err(ImportError::TooManyJoints {
+            count: robot.joints.len(),
+        });
     }
     // Every joint's child link carries 10 parameters.
     input::check_parameter_count(10 * robot.joints.len())?;
     let mut seen = std::collections::HashSet::new();
     if let Some(l) = robot.links.iter().find(|l| !seen.insert(l.name.as_str())) {
-        return Err(format!("link `{}` is defined twice", l.name));
+        return Err(ImportError::DuplicateLink(l.name.clone()));
     }
     let mut seen = std::collections::HashSet::new();
     if let Some(j) = robot.joints.iter().find(|j| !seen.insert(j.name.as_str())) {
-        return Err(format!("joint `{}` is defined twice", j.name));
+        return Err(ImportError::DuplicateJoint(j.name.clone()));
     }
     Ok(())
 }
@@ -209,7 +300,7 @@ struct Tree {
 impl Tree {
     /// The tree of `robot`: one root link, no link with two parents, every joint
     /// connected.
-    fn of(robot: &urdf_rs::Robot) -> Result<Tree, String> {
+    fn of(robot: &urdf_rs::Robot) -> Result<Tree, ImportError> {
         let is_child = |l: &str| robot.joints.iter().any(|j| j.child.link == l);
         let roots: Vec<&str> = robot
             .links
@@ -218,11 +309,9 @@ impl Tree {
             .filter(|l| !is_child(l))
             .collect();
         if roots.len() != 1 {
-            return Err(format!(
-                "expected one root link, found {}: {:?}",
-                roots.len(),
-                roots
-            ));
+            return Err(ImportError::RootCount {
+                roots: roots.iter().map(|r| r.to_string()).collect(),
+            });
         }
         let mut order: Vec<usize> = Vec::new();
         let mut frontier = std::collections::VecDeque::from([roots[0].to_string()]);
@@ -232,10 +321,10 @@ impl Tree {
             for (ji, j) in robot.joints.iter().enumerate() {
                 if j.parent.link == link {
                     if link_frame.contains_key(&j.child.link) {
-                        return Err(format!(
-                            "link `{}` has two parents (joint `{}` closes a loop or duplicates another joint)",
-                            j.child.link, j.name
-                        ));
+                        return Err(ImportError::TwoParents {
+                            link: j.child.link.clone(),
+                            joint: j.name.clone(),
+                        });
                     }
                     order.push(ji);
                     link_frame.insert(j.child.link.clone(), order.len());
@@ -244,18 +333,17 @@ impl Tree {
             }
         }
         if order.len() != robot.joints.len() {
-            let lost: Vec<String> = robot
+            let lost = robot
                 .joints
                 .iter()
                 .enumerate()
                 .filter(|(ji, _)| !order.contains(ji))
-                .map(|(_, j)| format!("`{}` (parent link `{}`)", j.name, j.parent.link))
+                .map(|(_, j)| (j.name.clone(), j.parent.link.clone()))
                 .collect();
-            return Err(format!(
-                "joints not connected to the root link `{}`: {}",
-                roots[0],
-                lost.join(", ")
-            ));
+            return Err(ImportError::Disconnected {
+                root: roots[0].to_string(),
+                lost,
+            });
         }
         Ok(Tree { order, link_frame })
     }
@@ -266,7 +354,7 @@ impl Tree {
 fn coordinates(
     robot: &urdf_rs::Robot,
     order: &[usize],
-) -> Result<(Vec<String>, Vec<bool>), String> {
+) -> Result<(Vec<String>, Vec<bool>), ImportError> {
     let mut coordinates = Vec::new();
     let mut coordinate_is_length = Vec::new();
     for &ji in order {
@@ -282,20 +370,17 @@ fn coordinates(
             }
             urdf_rs::JointType::Fixed => {}
             ref other => {
-                let kind = format!("{other:?}").to_lowercase();
-                return Err(format!(
-                    "joint `{}`: type `{kind}` is not supported (revolute, continuous, prismatic, fixed)",
-                    j.name
-                ));
+                return Err(ImportError::UnsupportedType {
+                    joint: j.name.clone(),
+                    kind: format!("{other:?}").to_lowercase(),
+                });
             }
         }
     }
     if coordinates.len() > input::MAX_COORDINATES {
-        return Err(format!(
-            "{} moving joints; at most {} are accepted",
-            coordinates.len(),
-            input::MAX_COORDINATES
-        ));
+        return Err(ImportError::TooManyCoordinates {
+            count: coordinates.len(),
+        });
     }
     Ok((coordinates, coordinate_is_length))
 }
@@ -307,19 +392,15 @@ fn finite(v: &[f64; 3], max: f64) -> bool {
 
 /// The joint's kind and its `pre`/`post` transforms: the origin, then z turned onto the
 /// joint's axis (and back after the motion).
-fn joint_pose(j: &urdf_rs::Joint) -> Result<(JointKind, Transform, Transform), String> {
+fn joint_pose(j: &urdf_rs::Joint) -> Result<(JointKind, Transform, Transform), ImportError> {
     if !finite(&j.origin.xyz.0, input::MAX_LENGTH_M)
         || !finite(&j.origin.rpy.0, input::MAX_ANGLE_RAD)
     {
-        return Err(format!(
-            "joint `{}`: origin xyz {:?} m, rpy {:?} rad: must be finite, within ±{:e} m \
-             and ±{:e} rad",
-            j.name,
-            j.origin.xyz.0,
-            j.origin.rpy.0,
-            input::MAX_LENGTH_M,
-            input::MAX_ANGLE_RAD
-        ));
+        return Err(ImportError::Origin {
+            joint: j.name.clone(),
+            xyz: j.origin.xyz.0,
+            rpy: j.origin.rpy.0,
+        });
     }
     let origin = Transform {
         rotation: rpy(&j.origin.rpy.0),
@@ -335,10 +416,10 @@ fn joint_pose(j: &urdf_rs::Joint) -> Result<(JointKind, Transform, Transform), S
     }
     let axis = Vector3::from(j.axis.xyz.0);
     if !axis.iter().all(|x| x.is_finite()) || axis.norm() < 1e-12 {
-        return Err(format!(
-            "joint `{}`: axis {:?} is zero or not finite",
-            j.name, j.axis.xyz.0
-        ));
+        return Err(ImportError::Axis {
+            joint: j.name.clone(),
+            axis: j.axis.xyz.0,
+        });
     }
     let r = align_z(&axis.normalize());
     let pre = origin.compose(&Transform {
@@ -359,7 +440,7 @@ fn joint_value(
     j: &urdf_rs::Joint,
     kind: JointKind,
     coordinates: &[String],
-) -> Result<Affine, String> {
+) -> Result<Affine, ImportError> {
     let coord_of = |name: &str| coordinates.iter().position(|c| c == name);
     if kind == JointKind::Fixed {
         return Ok(Affine::constant(0.0));
@@ -376,7 +457,11 @@ fn joint_value(
             Some(o) if o.mimic.is_some() => "it is itself a mimic joint",
             Some(_) => "it is not a moving joint",
         };
-        format!("joint `{}` mimics `{}`: {why}", j.name, m.joint)
+        ImportError::Mimic {
+            joint: j.name.clone(),
+            mimicked: m.joint.clone(),
+            why,
+        }
     })?;
     let multiplier = m.multiplier.unwrap_or(1.0);
     let offset = m.offset.unwrap_or(0.0);
@@ -386,11 +471,11 @@ fn joint_value(
         && multiplier.abs() <= max
         && offset.abs() <= max)
     {
-        return Err(format!(
-            "joint `{}`: mimic multiplier {multiplier} and offset {offset} must be \
-             finite and within ±{max:e}",
-            j.name
-        ));
+        return Err(ImportError::MimicRange {
+            joint: j.name.clone(),
+            multiplier,
+            offset,
+        });
     }
     Ok(Affine {
         terms: vec![(k, multiplier)],
@@ -400,7 +485,7 @@ fn joint_value(
 
 /// The `<limit>` of a moving joint on its value `value` (for a mimic joint,
 /// multiplier·q + offset), if it limits anything.
-fn joint_limit(j: &urdf_rs::Joint, value: &Affine) -> Result<Option<Limit>, String> {
+fn joint_limit(j: &urdf_rs::Joint, value: &Affine) -> Result<Option<Limit>, ImportError> {
     let lim = &j.limit;
     if [
         lim.lower,
@@ -412,7 +497,7 @@ fn joint_limit(j: &urdf_rs::Joint, value: &Affine) -> Result<Option<Limit>, Stri
     .iter()
     .any(|v| v.is_nan())
     {
-        return Err(format!("joint `{}`: <limit> has a NaN value", j.name));
+        return Err(ImportError::NanLimit(j.name.clone()));
     }
     let position = (j.joint_type != urdf_rs::JointType::Continuous
         && lim.lower.is_finite()
@@ -438,16 +523,14 @@ fn joint_limit(j: &urdf_rs::Joint, value: &Affine) -> Result<Option<Limit>, Stri
 fn child_link<'a>(
     robot: &'a urdf_rs::Robot,
     j: &urdf_rs::Joint,
-) -> Result<&'a urdf_rs::Link, String> {
+) -> Result<&'a urdf_rs::Link, ImportError> {
     robot
         .links
         .iter()
         .find(|l| l.name == j.child.link)
-        .ok_or_else(|| {
-            format!(
-                "joint `{}`: child link `{}` is not defined",
-                j.name, j.child.link
-            )
+        .ok_or_else(|| ImportError::MissingChild {
+            joint: j.name.clone(),
+            link: j.child.link.clone(),
         })
 }
 
@@ -458,9 +541,15 @@ fn child_link<'a>(
 /// their ellipsoids. `None` without collision geometry or with a mesh (its vertices are
 /// in another file, which the import does not read): that link is only kept physically
 /// consistent.
-fn collision_ellipsoid(link: &urdf_rs::Link) -> Result<Option<crate::inertia::Ellipsoid>, String> {
+fn collision_ellipsoid(
+    link: &urdf_rs::Link,
+) -> Result<Option<crate::inertia::Ellipsoid>, ImportError> {
     use crate::inertia::Ellipsoid;
     use urdf_rs::Geometry;
+    let invalid = |problem| ImportError::Collision {
+        link: link.name.clone(),
+        problem,
+    };
     let mut parts = Vec::new();
     for c in &link.collision {
         let (center, rpy) = (c.origin.xyz.0, c.origin.rpy.0);
@@ -479,8 +568,7 @@ fn collision_ellipsoid(link: &urdf_rs::Link) -> Result<Option<crate::inertia::El
             },
             Geometry::Mesh { .. } => return Ok(None),
         };
-        e.check()
-            .map_err(|m| format!("link `{}`: <collision> geometry: {m}", link.name))?;
+        e.check().map_err(invalid)?;
         parts.push(e);
     }
     Ok(match parts.len() {
@@ -504,8 +592,7 @@ fn collision_ellipsoid(link: &urdf_rs::Link) -> Result<Option<crate::inertia::El
                 std::array::from_fn(|k| 0.5 * (hi[k] - lo[k])),
                 [0.0; 3],
             );
-            e.check()
-                .map_err(|m| format!("link `{}`: <collision> geometry: {m}", link.name))?;
+            e.check().map_err(invalid)?;
             Some(e)
         }
     })
@@ -513,7 +600,7 @@ fn collision_ellipsoid(link: &urdf_rs::Link) -> Result<Option<crate::inertia::El
 
 /// The link's `<inertial>` as nominal values in the link frame: a rigid body of finite
 /// numbers, its inertia about the centre of mass rotated from the inertial frame.
-fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, String> {
+fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, ImportError> {
     let inertial = &link.inertial;
     let i = &inertial.inertia;
     let values = [
@@ -529,12 +616,9 @@ fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, String> {
         || !finite(&inertial.origin.xyz.0, input::MAX_LENGTH_M)
         || !finite(&inertial.origin.rpy.0, input::MAX_ANGLE_RAD)
     {
-        return Err(format!(
-            "link `{}`: inertial values must be finite (origin within ±{:e} m, ±{:e} rad)",
-            link.name,
-            input::MAX_LENGTH_M,
-            input::MAX_ANGLE_RAD
-        ));
+        return Err(ImportError::InertialNotFinite {
+            link: link.name.clone(),
+        });
     }
     // Inertia about the centre of mass, rotated from the inertial frame to the link frame.
     let ri = rpy(&inertial.origin.rpy.0);
@@ -547,7 +631,10 @@ fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, String> {
         inertial.origin.xyz.0,
         [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz],
     )
-    .map_err(|m| format!("link `{}`: <inertial>: {m}", link.name))?;
+    .map_err(|problem| ImportError::Inertial {
+        link: link.name.clone(),
+        problem,
+    })?;
     Ok(Nominal {
         mass: Some(inertial.mass.value),
         com: Some(inertial.origin.xyz.0),

@@ -1,0 +1,281 @@
+//! The real-time entry points: gravity, inverse dynamics (whole and of the links),
+//! mass matrix, forward dynamics and the measured-joint conversions. None allocates or
+//! locks; each checks its pointers and inputs, computes into the workspace and copies
+//! out only on success.
+
+use std::ffi::c_int;
+
+use crate::boundary::{deliver, finite, finite3, guarded, input, model_ref, output, pair};
+use crate::codes::{DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
+use crate::{DvrkModel, DvrkWorkspace, BOUNDED_Q_MAX};
+
+/// Gravity torque `g(q)` of the links alone (N·m or N per model coordinate), as
+/// Pinocchio's `computeGeneralizedGravity`: no friction, spring or known force (the
+/// whole static torque is `dvrk_inverse_dynamics` at `dq = ddq = 0`). Real-time: no
+/// allocation, no lock. 0, or a negative code with `tau` untouched.
+///
+/// # Safety
+///
+/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
+/// `q` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_gravity(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    tau: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligations, passed on.
+        let (m, w) = unsafe { pair(model, ws) }?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (q, tau) = unsafe { (input(q, n)?, output(tau, n)?) };
+        if m.bounded && q.iter().all(|x| x.abs() <= BOUNDED_Q_MAX) {
+            // Finite by `Model::gravity_torque_bound`: straight into the caller's buffer,
+            // with no output check (benches/abi.rs: 5.3-5.6 % over the Rust call with the
+            // check and the copy of a 7-value torque, 1.0-1.5 % without).
+            m.model.gravity_torque(&mut w.ws, &m.params, q, tau);
+            return Ok(());
+        }
+        finite(&[q])?;
+        m.model
+            .gravity_torque(&mut w.ws, &m.params, q, &mut w.vector);
+        deliver(&w.vector, tau)
+    })
+}
+
+/// Inverse dynamics (N·m or N per model coordinate): the torque the result's model
+/// predicts at `q`, `dq`, `ddq` — links, friction (with the Stribeck term of a fit that
+/// had one, its position torques, its load friction with the load predicted as
+/// `Model::loaded_inverse_dynamics` does), springs, motor inertias and known forces (e.g.
+/// the MTM's cable), i.e. the measured torque mapped to model coordinates. On a robot without known forces (the
+/// PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. Real-time: no
+/// allocation, no lock. 0, or a negative code with `tau` untouched.
+///
+/// # Safety
+///
+/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
+/// `q`, `dq`, `ddq` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_inverse_dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    ddq: *const f64,
+    tau: *mut f64,
+) -> c_int {
+    // SAFETY: the caller's obligations, passed on.
+    unsafe { dynamics(model, ws, q, dq, ddq, tau, Dynamics::Whole) }
+}
+
+/// Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
+/// part of `dvrk_inverse_dynamics`, without friction, springs, motor inertias or known
+/// forces, for a controller that models those itself. At `dq = ddq = 0` it is
+/// `dvrk_gravity`. Real-time: no allocation, no lock. 0, or a negative code with `tau`
+/// untouched.
+///
+/// # Safety
+///
+/// As `dvrk_inverse_dynamics`.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_rigid_body_dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    ddq: *const f64,
+    tau: *mut f64,
+) -> c_int {
+    // SAFETY: the caller's obligations, passed on.
+    unsafe { dynamics(model, ws, q, dq, ddq, tau, Dynamics::Links) }
+}
+
+/// Which torque [`dynamics`] computes.
+#[derive(Clone, Copy, PartialEq)]
+enum Dynamics {
+    /// The result's whole model, known forces included (`dvrk_inverse_dynamics`).
+    Whole,
+    /// The links alone (`dvrk_rigid_body_dynamics`).
+    Links,
+}
+
+/// The body of `dvrk_inverse_dynamics` and `dvrk_rigid_body_dynamics`, which differ only
+/// in the parameters and the known forces.
+///
+/// # Safety
+///
+/// As `dvrk_inverse_dynamics`.
+unsafe fn dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    ddq: *const f64,
+    tau: *mut f64,
+    which: Dynamics,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligations, passed on.
+        let (m, w) = unsafe { pair(model, ws) }?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (q, dq, ddq, tau) =
+            unsafe { (input(q, n)?, input(dq, n)?, input(ddq, n)?, output(tau, n)?) };
+        finite3(q, dq, ddq)?;
+        let params = match which {
+            Dynamics::Whole => &m.params,
+            Dynamics::Links => &m.link_params,
+        };
+        // Load friction (if the fit had it) with its load predicted, as in the metrics.
+        m.model
+            .loaded_inverse_dynamics(&mut w.ws, params, q, dq, ddq, &mut w.vector);
+        if which == Dynamics::Whole {
+            m.model.add_known_forces(q, &mut w.vector);
+        }
+        deliver(&w.vector, tau)
+    })
+}
+
+/// Mass matrix `M(q)` (n×n, kg·m² or kg, motor inertias included), written row-major
+/// into `m` (it is symmetric). Real-time: no allocation, no lock. 0, or a negative code
+/// with `m` untouched.
+///
+/// # Safety
+///
+/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
+/// `q` is NULL or valid for n doubles, `m` for n·n doubles (`n = dvrk_model_dof`).
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_mass_matrix(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    m: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligations, passed on.
+        let (dm, w) = unsafe { pair(model, ws) }?;
+        let n = dm.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (q, out) = unsafe { (input(q, n)?, output(m, n * n)?) };
+        if dm.bounded && q.iter().all(|x| x.abs() <= BOUNDED_Q_MAX) {
+            // Finite by `Model::mass_matrix_bound`: straight into the caller's buffer,
+            // as `dvrk_gravity` does.
+            dm.model.mass_matrix_into(&mut w.ws, &dm.params, q, out);
+            return Ok(());
+        }
+        finite(&[q])?;
+        // dvrk-model writes M column-major, each off-diagonal product added to both of
+        // its entries at once, so M is symmetric to the bit and its column-major layout
+        // is its row-major one: no transpose (tests/c_abi.rs compares every entry with
+        // dvrk-model's, bit for bit).
+        dm.model
+            .mass_matrix_into(&mut w.ws, &dm.params, q, &mut w.matrix);
+        deliver(&w.matrix, out)
+    })
+}
+
+/// Forward dynamics (rad/s² or m/s² per model coordinate): the accelerations under the
+/// torques `tau` (as `dvrk_inverse_dynamics` gives them: known forces included) with the
+/// result's whole model, `M(q)·ddq = tau − h(q, dq) − tau_known(q)`. Real-time: no
+/// allocation, no lock. 0, or a negative code (`DVRK_ERR_NOT_POSITIVE_DEFINITE` when
+/// the parameters are not physical at `q`) with `ddq` untouched.
+///
+/// # Safety
+///
+/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
+/// `q`, `dq`, `tau` and `ddq` are NULL or valid for `dvrk_model_dof` doubles.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_forward_dynamics(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    q: *const f64,
+    dq: *const f64,
+    tau: *const f64,
+    ddq: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligations, passed on.
+        let (m, w) = unsafe { pair(model, ws) }?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (q, dq, tau, ddq) =
+            unsafe { (input(q, n)?, input(dq, n)?, input(tau, n)?, output(ddq, n)?) };
+        finite3(q, dq, tau)?;
+        m.model
+            .forward_dynamics_into(&mut w.ws, &m.params, q, dq, tau, &mut w.vector)
+            .map_err(|_| DVRK_ERR_NOT_POSITIVE_DEFINITE)?;
+        deliver(&w.vector, ddq)
+    })
+}
+
+/// Measured joint positions or velocities (the dVRK's/ROS joint space,
+/// `dvrk_model_n_measured` values) to model coordinates: `q_model = M⁻¹ q_measured`
+/// where `q_measured = M q_model` is the description's coupling (linear, so velocities
+/// map the same way). Real-time: no allocation, no lock. 0, or a negative code with
+/// `model_out` untouched.
+///
+/// # Safety
+///
+/// `model` is NULL or live; `measured` and `model_out` are NULL or valid for
+/// `dvrk_model_dof` doubles (= `dvrk_model_n_measured`) and do not overlap.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_measured_to_model(
+    model: *const DvrkModel,
+    measured: *const f64,
+    model_out: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligation, passed on.
+        let m = unsafe { model_ref(model) }.ok_or(DVRK_ERR_NULL)?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (x, out) = unsafe { (input(measured, n)?, output(model_out, n)?) };
+        finite(&[x])?;
+        // out_i = Σ_k M⁻¹[i, k] x_k (row-major M⁻¹).
+        map_linear(x, out, |i, k| m.measured_to_model[i * n + k])
+    })
+}
+
+/// Model-coordinate torques (as `dvrk_inverse_dynamics` gives them) to the measured
+/// joints' efforts, by virtual work: `tau_measured = M⁻ᵀ tau_model` (dvrk-ident maps
+/// measured efforts to the model as `tau_model = Mᵀ tau_measured`). Real-time: no
+/// allocation, no lock. 0, or a negative code with `measured_out` untouched.
+///
+/// # Safety
+///
+/// `model` is NULL or live; `tau_model` and `measured_out` are NULL or valid for
+/// `dvrk_model_dof` doubles and do not overlap.
+#[no_mangle]
+pub unsafe extern "C" fn dvrk_model_to_measured_torque(
+    model: *const DvrkModel,
+    tau_model: *const f64,
+    measured_out: *mut f64,
+) -> c_int {
+    guarded(|| {
+        // SAFETY: the caller's obligation, passed on.
+        let m = unsafe { model_ref(model) }.ok_or(DVRK_ERR_NULL)?;
+        let n = m.model.dof();
+        // SAFETY: the caller's obligations, passed on.
+        let (t, out) = unsafe { (input(tau_model, n)?, output(measured_out, n)?) };
+        finite(&[t])?;
+        // out_k = Σ_j M⁻¹[j, k] t_j: the transpose of M⁻¹ (row-major).
+        map_linear(t, out, |k, j| m.measured_to_model[j * n + k])
+    })
+}
+
+/// `out_i = Σ_k a(i, k)·x_k` for the joint conversions, which have no workspace to
+/// compute into: every entry is checked finite before any is written (each computed
+/// twice, 2n² flops), so `out` is untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
+fn map_linear(x: &[f64], out: &mut [f64], a: impl Fn(usize, usize) -> f64) -> Result<(), c_int> {
+    let n = x.len();
+    let row = |i: usize| (0..n).fold(0.0, |acc, k| acc + a(i, k) * x[k]);
+    if !(0..out.len()).all(|i| row(i).is_finite()) {
+        return Err(DVRK_ERR_OVERFLOW);
+    }
+    for (i, o) in out.iter_mut().enumerate() {
+        *o = row(i);
+    }
+    Ok(())
+}
