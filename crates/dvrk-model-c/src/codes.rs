@@ -3,8 +3,6 @@
 
 use std::ffi::{c_char, c_int, CStr};
 
-use crate::observer::DVRK_ERR_ARGUMENT;
-
 /// Success.
 pub const DVRK_OK: c_int = 0;
 /// A pointer argument was NULL.
@@ -20,6 +18,10 @@ pub const DVRK_ERR_NOT_POSITIVE_DEFINITE: c_int = -4;
 pub const DVRK_ERR_OVERFLOW: c_int = -5;
 /// A bug in the library (a Rust panic, caught at the boundary). Please report it.
 pub const DVRK_ERR_INTERNAL: c_int = -6;
+/// An argument is out of its range: the observer's step `dt` is not positive (a
+/// non-finite `dt` is `DVRK_ERR_NOT_FINITE`), or the observer was created for another
+/// model.
+pub const DVRK_ERR_ARGUMENT: c_int = -7;
 
 /// A static, NUL-terminated description of a return code (`DVRK_OK`, `DVRK_ERR_*`);
 /// "unknown error code" for any other value. Never NULL.

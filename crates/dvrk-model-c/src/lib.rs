@@ -58,7 +58,7 @@ mod codes;
 mod observer;
 
 pub use codes::{
-    dvrk_error_string, dvrk_version, DVRK_ERR_INTERNAL, DVRK_ERR_NOT_FINITE,
+    dvrk_error_string, dvrk_version, DVRK_ERR_ARGUMENT, DVRK_ERR_INTERNAL, DVRK_ERR_NOT_FINITE,
     DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW, DVRK_ERR_WORKSPACE, DVRK_OK,
 };
 pub use dynamics::{
@@ -73,7 +73,6 @@ pub use model::{
 };
 pub use observer::{
     dvrk_observer_free, dvrk_observer_new, dvrk_observer_reset, dvrk_observer_update, DvrkObserver,
-    DVRK_ERR_ARGUMENT,
 };
 
 /// The model of a `dvrk-ident fit` result: the robot with the fit's model options

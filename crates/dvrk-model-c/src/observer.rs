@@ -10,13 +10,8 @@ use std::panic::catch_unwind;
 use dvrk_model::MomentumObserver;
 
 use crate::boundary::{finite, guarded, input, model_ref, output, pair};
-use crate::codes::{DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
+use crate::codes::{DVRK_ERR_ARGUMENT, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
 use crate::{DvrkModel, DvrkWorkspace};
-
-/// An argument is out of its range: the observer's step `dt` is not positive (a
-/// non-finite `dt` is `DVRK_ERR_NOT_FINITE`), or the observer was created for another
-/// model.
-pub const DVRK_ERR_ARGUMENT: c_int = -7;
 
 /// A generalized-momentum observer of one model (`dvrk_observer_new`): its gains and the
 /// previous sample. Serves one thread at a time, like a workspace.

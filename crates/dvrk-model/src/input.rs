@@ -6,8 +6,6 @@
 use std::io::Read;
 use std::path::Path;
 
-use crate::inertia::sym3;
-
 /// Largest text file read whole (descriptions, URDF, results, parameter, trajectory and
 /// limits files), bytes: the largest of them is a few hundred kB.
 pub const MAX_TEXT_BYTES: u64 = 64 << 20;
@@ -303,97 +301,12 @@ pub fn show_significant(value: f64, digits: usize) -> String {
     }
 }
 
-/// Checks that mass (kg), centre of mass (m) and inertia about the centre of mass
-/// `[xx, xy, xz, yy, yz, zz]` (kg·m²) describe a rigid body: finite and within range,
-/// mass ≥ 0, principal moments ≥ 0 and each at most the sum of the other two (the
-/// triangle inequality: no mass distribution has others). Moments are compared with a
-/// relative tolerance of 1e-6 so that inertias rounded to a few digits (CAD exports)
-/// pass. The error names the broken condition.
-pub fn check_rigid_body(mass: f64, com: [f64; 3], inertia_com: [f64; 6]) -> Result<(), InputError> {
-    check_magnitude(mass, MAX_MASS_KG, "kg").map_err(|e| e.of("mass"))?;
-    if mass < 0.0 {
-        return Err(InputError::NegativeMass { mass });
-    }
-    for c in com {
-        check_magnitude(c, MAX_LENGTH_M, "m").map_err(|e| e.of("centre of mass"))?;
-    }
-    for i in inertia_com {
-        check_magnitude(i, MAX_VALUE, "kg·m²").map_err(|e| e.of("inertia"))?;
-    }
-    let mut moments: Vec<f64> = sym3(&inertia_com)
-        .symmetric_eigenvalues()
-        .iter()
-        .copied()
-        .collect();
-    moments.sort_by(f64::total_cmp);
-    let moments = [moments[0], moments[1], moments[2]];
-    let tol = 1e-6 * moments[2].abs().max(f64::MIN_POSITIVE);
-    if moments[0] < -tol {
-        return Err(InputError::NegativeMoment { moments });
-    }
-    if moments[2] > moments[0] + moments[1] + tol {
-        return Err(InputError::TriangleInequality { moments });
-    }
-    Ok(())
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
-    fn rigid_bodies() {
-        // A uniform box 0.1 × 0.2 × 0.3 m of 2 kg: I = m/12 (b² + c², ...).
-        let m = 2.0;
-        let (a, b, c): (f64, f64, f64) = (0.1, 0.2, 0.3);
-        let i = [
-            m / 12.0 * (b * b + c * c),
-            0.0,
-            0.0,
-            m / 12.0 * (a * a + c * c),
-            0.0,
-            m / 12.0 * (a * a + b * b),
-        ];
-        check_rigid_body(m, [0.0, 0.1, 0.0], i).unwrap();
-        // A thin rod (one moment zero, the other two equal) and a massless link.
-        check_rigid_body(1.0, [0.0; 3], [0.1, 0.0, 0.0, 0.1, 0.0, 0.0]).unwrap();
-        check_rigid_body(0.0, [0.0; 3], [0.0; 6]).unwrap();
-        // ixx < 0, and a triangle inequality broken (3 > 1 + 1).
-        let e = check_rigid_body(1.0, [0.0; 3], [-0.1, 0.0, 0.0, 0.1, 0.0, 0.1]).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "inertia about the centre of mass has a negative principal moment (-0.1, 0.1, \
-             0.1 kg·m²): no rigid body has it"
-        );
-        let e = check_rigid_body(1.0, [0.0; 3], [1.0, 0.0, 0.0, 1.0, 0.0, 3.0]).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "principal moments 1, 1, 3 kg·m² break the triangle inequality (the largest \
-             exceeds the sum of the other two): no rigid body has them"
-        );
-        // Rotated: the products of inertia count (eigenvalues 3, 1, -1).
-        let e = check_rigid_body(1.0, [0.0; 3], [1.0, 2.0, 0.0, 1.0, 0.0, 1.0]).unwrap_err();
-        let InputError::NegativeMoment { moments } = e else {
-            panic!("{e:?}")
-        };
-        for (m, want) in moments.iter().zip([-1.0, 1.0, 3.0]) {
-            assert!((m - want).abs() < 1e-12, "{moments:?}");
-        }
-        let e = check_rigid_body(-1.0, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert_eq!(e, InputError::NegativeMass { mass: -1.0 });
-        assert_eq!(e.to_string(), "mass -1 kg: must be non-negative");
-        let e = check_rigid_body(f64::NAN, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert_eq!(e.to_string(), "mass: must be a finite number, got NaN");
-        let e = check_rigid_body(1e299, [0.0; 3], [0.0; 6]).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "mass: 1e299 kg is beyond the accepted ±1e6 kg"
-        );
-        let e = check_rigid_body(1.0, [0.0, 2e3, 0.0], [0.0; 6]).unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "centre of mass: 2000 m is beyond the accepted ±1e3 m"
-        );
+    fn magnitudes_without_a_unit() {
         // No unit, no space.
         let e = check_magnitude(-1e16, MAX_VALUE, "").unwrap_err();
         assert_eq!(e.to_string(), "-1e16 is beyond the accepted ±1e9");

@@ -44,7 +44,7 @@ pub(super) fn check_nominal(n: &Nominal) -> Result<(), InputError> {
         return Err(InputError::NegativeMass { mass });
     }
     if let (Some(mass), Some(com), Some(inertia)) = (n.mass, n.com, n.inertia) {
-        input::check_rigid_body(mass, com, inertia)?;
+        crate::inertia::check_rigid_body(mass, com, inertia)?;
     }
     let scalars = [
         ("mass", n.mass),

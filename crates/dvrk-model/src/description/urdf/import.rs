@@ -626,7 +626,7 @@ fn link_nominal(link: &urdf_rs::Link) -> Result<Nominal, ImportError> {
         ri * Matrix3::new(
             i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
         ) * ri.transpose();
-    input::check_rigid_body(
+    crate::inertia::check_rigid_body(
         inertial.mass.value,
         inertial.origin.xyz.0,
         [i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz],

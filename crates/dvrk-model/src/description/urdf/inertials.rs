@@ -98,7 +98,7 @@ impl Model {
                         f.name
                     ));
                 } else if let Err(why) =
-                    crate::input::check_rigid_body(s.mass, s.com, s.inertia_com)
+                    crate::inertia::check_rigid_body(s.mass, s.com, s.inertia_com)
                 {
                     bad.push(format!("{} ({why})", f.name));
                 }
