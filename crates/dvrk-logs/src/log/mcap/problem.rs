@@ -9,6 +9,7 @@ use thiserror::Error;
 
 use super::options::{TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 use super::schema::JOINT_STATE_TYPE;
+use crate::hint::Hint;
 use crate::joint_log::{JointLogError, Signal};
 #[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
@@ -118,7 +119,7 @@ pub enum McapProblem {
         rejected: Vec<String>,
     },
     /// Automatic choice: several candidate topics.
-    #[error("several {JOINT_STATE_TYPE} topics (or arm and jaw topic pairs) have positions and efforts: {}; choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)", candidates.join(", "))]
+    #[error("several {JOINT_STATE_TYPE} topics (or arm and jaw topic pairs) have positions and efforts: {}; choose one with {}", candidates.join(", "), Hint::Topics)]
     Ambiguous {
         /// The candidate topics.
         candidates: Vec<String>,
@@ -210,7 +211,7 @@ pub enum McapProblem {
         value: u64,
     },
     /// Time stamps that go backwards or repeat.
-    #[error("{time_source} do not strictly increase: sample {index} (t = {time_s} s) {} sample {} (t = {previous_s} s); {backwards} backward step(s) and {duplicates} repeated stamp(s) in {samples} samples. The sample order cannot be trusted: check the recording{}", if time_s == previous_s { "repeats the stamp of" } else { "comes before" }, index - 1, if *time_source == TimeSource::HeaderStamp { ", or read with log times (--time log)" } else { "" })]
+    #[error("{time_source} do not strictly increase: sample {index} (t = {time_s} s) {} sample {} (t = {previous_s} s); {backwards} backward step(s) and {duplicates} repeated stamp(s) in {samples} samples. The sample order cannot be trusted: check the recording{}", if time_s == previous_s { "repeats the stamp of" } else { "comes before" }, index - 1, if *time_source == TimeSource::HeaderStamp { format!(", or read with log times ({})", Hint::LogTimes) } else { String::new() })]
     NotIncreasing {
         /// Index of the offending sample, 0-based.
         index: usize,
@@ -228,7 +229,7 @@ pub enum McapProblem {
         time_source: TimeSource,
     },
     /// Gaps or jitter without resampling.
-    #[error("non-uniform sampling ({time_source}): first at sample {index} (t = {time_s} s), a step of {} ms against a median of {} ms; {gaps} gap(s) (> {GAP_FACTOR} median steps, the longest {} ms) and {jittered} jittered step(s) (> {}% off the median) in {samples} samples. Filtering and differentiation need a uniform clock: resample with --resample HZ, e.g. --resample {suggested_hz}", fmt_ms(*step_s), fmt_ms(*median_step_s), fmt_ms(*largest_step_s), JITTER_TOLERANCE * 100.0)]
+    #[error("non-uniform sampling ({time_source}): first at sample {index} (t = {time_s} s), a step of {} ms against a median of {} ms; {gaps} gap(s) (> {GAP_FACTOR} median steps, the longest {} ms) and {jittered} jittered step(s) (> {}% off the median) in {samples} samples. Filtering and differentiation need a uniform clock: resample with {}, e.g. {}", fmt_ms(*step_s), fmt_ms(*median_step_s), fmt_ms(*largest_step_s), JITTER_TOLERANCE * 100.0, Hint::ResampleHz, Hint::ResampleAt(*suggested_hz))]
     NonUniform {
         /// Index of the second sample of the first irregular step, 0-based.
         index: usize,
