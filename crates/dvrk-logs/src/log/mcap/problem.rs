@@ -14,6 +14,81 @@ use crate::joint_log::{JointLogError, Signal};
 #[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
 
+/// Why a message does not decode as a `sensor_msgs/msg/JointState`
+/// ([`McapProblem::Decode`]).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// A CDR message shorter than its encapsulation header.
+    #[error("{bytes} bytes: too short for the 4-byte CDR encapsulation header")]
+    TooShort {
+        /// The message's length, bytes.
+        bytes: usize,
+    },
+    /// A CDR representation other than plain CDR.
+    #[error("CDR encapsulation {kind:#06x} is {what}; only plain CDR (0x0000 big-endian, 0x0001 little-endian) is supported")]
+    Encapsulation {
+        /// The representation identifier (the header's first two bytes, big-endian).
+        kind: u16,
+        /// What it is (`XCDR2 (CDR2)`).
+        what: &'static str,
+    },
+    /// A message that ends inside a field.
+    #[error(
+        "message ends in field {field}: {needed} bytes needed at offset {offset}, {left} left"
+    )]
+    Truncated {
+        /// The field (`header.frame_id`).
+        field: &'static str,
+        /// The bytes it needs.
+        needed: usize,
+        /// Where, counted from the message's start (its encapsulation header included).
+        offset: usize,
+        /// The bytes left.
+        left: usize,
+    },
+    /// A string field that is not UTF-8.
+    #[error("field {field}: invalid UTF-8: {error}")]
+    Utf8 {
+        /// The field.
+        field: &'static str,
+        /// Where the bytes stop being UTF-8.
+        error: std::str::Utf8Error,
+    },
+    /// A sequence length larger than the bytes left could hold.
+    #[error("field {field}: sequence of {count} elements does not fit in the {left} bytes left")]
+    Sequence {
+        /// The field.
+        field: &'static str,
+        /// The length the message gives.
+        count: usize,
+        /// The bytes left.
+        left: usize,
+    },
+    /// A ROS 1 stamp beyond the `int32` seconds of ROS 2's time.
+    #[error("stamp {sec}.{nanosec:09} s is beyond the year 2038")]
+    Beyond2038 {
+        /// Seconds.
+        sec: u32,
+        /// Nanoseconds.
+        nanosec: u32,
+    },
+    /// A JSON message that does not parse as a joint state.
+    #[error("JSON: {0}")]
+    Json(serde_json::Error),
+    /// A JSON message without `header.stamp`.
+    #[error("JSON: no header.stamp")]
+    NoStamp,
+    /// A JSON stamp outside the `int32` seconds of ROS 2's time.
+    #[error("JSON: stamp {sec}.{nanosec} s out of range")]
+    StampRange {
+        /// Seconds.
+        sec: i64,
+        /// Nanoseconds.
+        nanosec: i64,
+    },
+}
+
 /// A topic of an MCAP file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct TopicInfo {
@@ -130,7 +205,7 @@ pub enum McapProblem {
         /// Message index on the topic, 0-based.
         index: usize,
         /// What is wrong.
-        reason: String,
+        reason: DecodeError,
     },
     /// A first message without joint names and positions.
     #[error("message {index} has no joints (empty name and position arrays)")]
