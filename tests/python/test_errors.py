@@ -159,8 +159,11 @@ def test_fit_setting_errors(psm):
         di.fit(psm, data, method="lasso")
     with pytest.raises(di.InputError, match="cutoff"):
         di.fit(psm, data, method="ols", cutoff="fast")
-    with pytest.raises(di.InputError, match="cut-off 500 Hz"):
+    with pytest.raises(di.InputError, match="cut-off 500 Hz") as e:
         di.fit(psm, data, method="ols", cutoff=500.0)
+    # The setting the filter's message suggests, named as the keyword.
+    msg = str(e.value)
+    assert msg.endswith("choose a cutoff= in that range") and "--cutoff" not in msg, msg
     with pytest.raises(di.InputError, match="3 per-joint cut-offs given for 7 joints"):
         di.fit(psm, data, method="ols", cutoff=[1.0, 2.0, 3.0])
     with pytest.raises(di.InputError, match="settings: unknown field `bogus`"):

@@ -277,10 +277,6 @@ fn errors(
     window: Option<usize>,
     joints: Joints,
 ) -> Result<JointMetrics, IdentError> {
-    let fail = |message: String| IdentError::Mismatch {
-        source_name: side.name.to_string(),
-        message: format!("evaluated on {message}"),
-    };
     let params = side
         .result
         .params_for(side.model)
@@ -288,11 +284,15 @@ fn errors(
             file: side.name.to_string(),
             message: e.to_string(),
         })?;
+    let evaluated = |error: Box<dyn std::error::Error + Send + Sync>| IdentError::Evaluated {
+        result: side.name.to_string(),
+        error,
+    };
     let data = prepare(side.model, log, &side.result.settings.processing)
-        .map_err(|e| fail(e.to_string()))?;
+        .map_err(|e| evaluated(Box::new(e)))?;
     let joints = JointMap::new(side.model, joints)?;
     let m = joint_metrics(side.model, &params, &data, window, &joints)?;
-    m.check_finite(name).map_err(|e| fail(e.to_string()))?;
+    m.check_finite(name).map_err(|e| evaluated(Box::new(e)))?;
     Ok(m)
 }
 

@@ -4,6 +4,9 @@
 use thiserror::Error;
 
 use crate::options::Setting;
+/// The settings a message suggests, spelled by each front end its own way
+/// (`--rate HZ`, `rate=HZ`): see [`dvrk_logs::hint`].
+pub use dvrk_logs::hint::{spelled, Hint, Spelling};
 
 /// What a refused setting is: fit options by identity (several when they are refused
 /// together), or another argument of a call by its name (`wrench`, `observer_gain`).
@@ -73,6 +76,51 @@ pub enum IdentError {
         /// What differs (a missing joint, a column count).
         message: String,
     },
+    /// A log whose measured velocities contradict its clock: a wrong sampling rate
+    /// scales every derivative (the accelerations by its square).
+    #[error("{source_name}: the measured velocities of joint {joint} are {} times the rate of change of its positions on the log's clock{}: give the log's real sampling rate ({}, or time stamps), or velocities in the positions' units per second", dvrk_model::input::show_significant(*ratio, 3), clock_text(clock_hz), Hint::Rate)]
+    WrongClock {
+        /// The log.
+        source_name: String,
+        /// The first joint whose velocities contradict the clock.
+        joint: String,
+        /// Its measured velocities over the rate of change of its positions.
+        ratio: f64,
+        /// The log's rate and the rate the velocities match, Hz (`None`: a log
+        /// without a uniform rate).
+        clock_hz: Option<[f64; 2]>,
+    },
+    /// Nothing is left of a log once processed (trimmed, decimated).
+    #[error(
+        "{source_name}: no processed sample is left (a longer log or a smaller {})",
+        Hint::Trim
+    )]
+    NoSampleLeft {
+        /// The log.
+        source_name: String,
+    },
+    /// A number of a fit's result that is not finite: no result is written.
+    #[error("{robot}: the fit gives {place} = {value}{cause}: no result is written")]
+    NotFinite {
+        /// The result's robot.
+        robot: String,
+        /// The number's place in the result (`metrics.test.rms.q1`).
+        place: String,
+        /// The number.
+        value: f64,
+        /// Why, where the usual causes tell.
+        cause: NotFiniteCause,
+    },
+    /// A result evaluated on a log that failed (its processing, its metrics).
+    #[error("{result}: evaluated on {error}")]
+    Evaluated {
+        /// The result (its file, or what stands for it).
+        result: String,
+        /// What failed, kept as the error itself so that its hints are spelled
+        /// when shown.
+        #[source]
+        error: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// The data do not determine the parameters (too few or unexciting samples).
     #[error("{source_name}: {message}")]
     RankDeficient {
@@ -138,6 +186,54 @@ pub enum IdentError {
         /// What is wrong (version, robot, content).
         message: String,
     },
+}
+
+/// Why a number of a result is not finite ([`IdentError::NotFinite`]), shown as a
+/// parenthesis after the number (nothing for [`NotFiniteCause::Unknown`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NotFiniteCause {
+    /// A metric of a role (training, test) with no processed sample.
+    NoSample,
+    /// A relative error of a joint whose torques are all zero.
+    ZeroTorques,
+    /// A parameter or its statistics: the data overflow the estimator.
+    Overflow,
+    /// A metric of none of the usual causes.
+    Unknown,
+}
+
+impl std::fmt::Display for NotFiniteCause {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            NotFiniteCause::NoSample => write!(
+                f,
+                " (no processed sample is left for these metrics: a longer log, a smaller {} \
+                 or a larger {})",
+                Hint::Trim,
+                Hint::TestWindow
+            ),
+            NotFiniteCause::ZeroTorques => f.write_str(
+                " (the torques of this joint are all zero, so an error relative to them is \
+                 undefined)",
+            ),
+            NotFiniteCause::Overflow => f.write_str(
+                " (the data overflow the estimator: check the log's units and magnitudes)",
+            ),
+            NotFiniteCause::Unknown => Ok(()),
+        }
+    }
+}
+
+/// ` at RATE Hz; they match a clock of CLOCK Hz` of [`IdentError::WrongClock`].
+fn clock_text(clock_hz: &Option<[f64; 2]>) -> String {
+    match clock_hz {
+        Some([rate, matched]) => format!(
+            " at {} Hz; they match a clock of {} Hz",
+            dvrk_model::input::show_approx(*rate),
+            dvrk_model::input::show_significant(*matched, 3)
+        ),
+        None => String::new(),
+    }
 }
 
 /// `source: error`, unless the error already starts with the source (errors of one

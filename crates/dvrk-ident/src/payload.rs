@@ -126,9 +126,8 @@ pub fn identify_payload(
     for log in logs {
         let data = prepare(model, log, &result.settings.processing)?;
         if data.is_empty() {
-            return Err(IdentError::RankDeficient {
+            return Err(IdentError::NoSampleLeft {
                 source_name: data.source.clone(),
-                message: "no processed sample is left (a longer log or a smaller --trim)".into(),
             });
         }
         let unexplained = &data.tau - predict(model, params, &data);

@@ -11,7 +11,7 @@ use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use crate::error::IdentError;
+use crate::error::{IdentError, NotFiniteCause};
 use crate::settings::FitSettings;
 
 mod payload;
@@ -634,27 +634,27 @@ impl FitResult {
         let Some((place, v)) = self.numbers().into_iter().find(|(_, v)| !v.is_finite()) else {
             return Ok(());
         };
-        let why = if place.starts_with("metrics.") {
+        let cause = if place.starts_with("metrics.") {
             let role = if place.starts_with("metrics.test") {
                 self.metrics.test.as_ref()
             } else {
                 Some(&self.metrics.train)
             };
             if role.is_some_and(|m| m.samples == 0) {
-                " (no processed sample is left for these metrics: a longer log, a smaller \
-                 --trim or a larger --test-window)"
+                NotFiniteCause::NoSample
             } else if place.contains(".relative_error.") {
-                " (the torques of this joint are all zero, so an error relative to them is \
-                 undefined)"
+                NotFiniteCause::ZeroTorques
             } else {
-                ""
+                NotFiniteCause::Unknown
             }
         } else {
-            " (the data overflow the estimator: check the log's units and magnitudes)"
+            NotFiniteCause::Overflow
         };
-        Err(IdentError::Mismatch {
-            source_name: self.robot.clone(),
-            message: format!("the fit gives {place} = {v}{why}: no result is written"),
+        Err(IdentError::NotFinite {
+            robot: self.robot.clone(),
+            place,
+            value: v,
+            cause,
         })
     }
 

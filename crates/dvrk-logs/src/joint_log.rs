@@ -171,7 +171,7 @@ pub enum JointLogError {
     /// A time step deviates from the median step by more than the allowed tolerance
     /// (a gap or jitter): filtering and finite differences assume uniform sampling.
     /// The steps are shown rounded ([`dvrk_model::input::show_approx`]).
-    #[error("{source_name}: non-uniform sampling at sample {row} (0-based): step {} s vs median {} s (relative tolerance {tolerance}); resample the log first with --resample HZ", dvrk_model::input::show_approx(*step_s), dvrk_model::input::show_approx(*median_step_s))]
+    #[error("{source_name}: non-uniform sampling at sample {row} (0-based): step {} s vs median {} s (relative tolerance {tolerance}); resample the log first with {}", dvrk_model::input::show_approx(*step_s), dvrk_model::input::show_approx(*median_step_s), crate::hint::Hint::ResampleHz)]
     NonUniform {
         /// The trajectory's `source`.
         source_name: String,

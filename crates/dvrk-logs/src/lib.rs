@@ -39,6 +39,7 @@
 
 pub mod columns;
 mod destination;
+pub mod hint;
 pub mod joint_log;
 pub mod log;
 pub mod median;

@@ -179,7 +179,7 @@ impl JointLogPy {
             coordinates,
             source: source.to_string(),
         };
-        log.validate().map_err(|e| input(e.to_string()))?;
+        log.validate().map_err(|e| input(crate::errors::text(&e)))?;
         Ok(JointLogPy::new(log, None))
     }
 
@@ -212,7 +212,7 @@ impl JointLogPy {
             coordinates,
             source: source.to_string(),
         };
-        log.validate().map_err(|e| input(e.to_string()))?;
+        log.validate().map_err(|e| input(crate::errors::text(&e)))?;
         Ok(JointLogPy::new(log, None))
     }
 
@@ -304,7 +304,7 @@ impl JointLogPy {
             coordinates: f.coordinates,
             source: source.unwrap_or_else(|| sources.join(" + ")),
         };
-        log.validate().map_err(|e| input(e.to_string()))?;
+        log.validate().map_err(|e| input(crate::errors::text(&e)))?;
         Ok(JointLogPy::new(log, None))
     }
 
@@ -359,7 +359,7 @@ impl JointLogPy {
             coordinates: parse_coordinates(coordinates)?,
             source,
         };
-        log.validate().map_err(|e| input(e.to_string()))?;
+        log.validate().map_err(|e| input(crate::errors::text(&e)))?;
         Ok(JointLogPy::new(log, path))
     }
 
@@ -608,7 +608,7 @@ impl PreparedPy {
 }
 
 fn fail_log(e: log::LogError) -> Failure {
-    (log_kind(&e), e.to_string())
+    (log_kind(&e), crate::errors::text(&e))
 }
 
 pub fn fail_ident(e: dvrk_ident::IdentError) -> Failure {

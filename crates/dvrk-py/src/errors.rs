@@ -12,9 +12,10 @@
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
 //! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `FitResult` |
 
-use dvrk_ident::error::SettingName;
+use dvrk_ident::error::{Hint, SettingName};
 use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;
+use dvrk_ident::request::Setting;
 use dvrk_ident::IdentError;
 use dvrk_model::ModelError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
@@ -130,44 +131,35 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
-/// The library's messages are written for the command line; from Python, the flags
-/// they suggest are the keyword arguments of the same name.
-fn keywords(message: String) -> String {
-    const PHRASES: [(&str, &str); 6] = [
-        (
-            "choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)",
-            "choose one with topic=\"...\" (a list of topics merges their joints, e.g. an arm and its jaw)",
-        ),
-        (
-            "resample with --resample HZ, e.g. --resample ",
-            "resample with resample=HZ, e.g. resample=",
-        ),
-        ("with --rate HZ", "with rate=HZ"),
-        ("choose a --cutoff in that range", "choose a cutoff= in that range"),
-        ("(--time log)", "(time_source=\"log\")"),
-        ("with --resample HZ", "with resample=HZ"),
-    ];
-    const FLAGS: [(&str, &str); 7] = [
-        ("--topic", "topic="),
-        ("--resample", "resample="),
-        ("--test-window", "test_window="),
-        ("--cutoff", "cutoff="),
-        ("--trim", "trim="),
-        ("--rate", "rate="),
-        ("--time ", "time_source="),
-    ];
-    let mut m = message;
-    for (cli, py) in PHRASES.iter().chain(&FLAGS) {
-        if m.contains(cli) {
-            m = m.replace(cli, py);
+/// How Python spells a setting a library message suggests ([`Hint`]): as its keyword
+/// (`rate=HZ`, `topic="..."`) where the command line gives its flag (`--rate HZ`).
+fn keyword(hint: Hint) -> String {
+    let option = |s: Setting| format!("{}=", crate::overrides::keyword(s));
+    match hint {
+        Hint::Rate => "rate=".into(),
+        Hint::RateHz => "rate=HZ".into(),
+        Hint::Resample => "resample=".into(),
+        Hint::ResampleHz => "resample=HZ".into(),
+        Hint::ResampleAt(hz) => format!("resample={hz}"),
+        Hint::Topics => {
+            "topic=\"...\" (a list of topics merges their joints, e.g. an arm and its jaw)".into()
         }
+        Hint::LogTimes => "time_source=\"log\"".into(),
+        Hint::Cutoff => option(Setting::Cutoff),
+        Hint::Trim => option(Setting::Trim),
+        Hint::TestWindow => option(Setting::TestWindow),
     }
-    m
 }
 
-/// An exception of `kind` with `message` (command-line flags named as keywords).
+/// A library error's text as Python shows it: the settings it suggests as keywords
+/// ([`keyword`]), in it and in every error nested in it.
+pub fn text(e: &dyn std::fmt::Display) -> String {
+    dvrk_ident::error::spelled(e, keyword)
+}
+
+/// An exception of `kind` with `message` (a library error's as [`text`] gives it).
 pub fn error(kind: Kind, message: impl Into<String>) -> PyErr {
-    let message = keywords(message.into());
+    let message = message.into();
     Python::attach(|py| match exceptions(py) {
         Ok(e) => {
             let ty = match kind {
@@ -244,11 +236,11 @@ pub fn ident_kind(e: &IdentError) -> Kind {
 }
 
 pub fn from_model(e: ModelError) -> PyErr {
-    error(model_kind(&e), e.to_string())
+    error(model_kind(&e), text(&e))
 }
 
 pub fn from_log(e: LogError) -> PyErr {
-    error(log_kind(&e), e.to_string())
+    error(log_kind(&e), text(&e))
 }
 
 /// How Python spells a setting the library refuses: each fit option and any other
@@ -269,7 +261,7 @@ pub fn spelled(name: &SettingName) -> String {
 pub fn ident_failure(e: &IdentError) -> (Kind, String) {
     let text = match e {
         IdentError::Setting { name, message } => format!("{}: {message}", spelled(name)),
-        e => e.to_string(),
+        e => text(e),
     };
     (ident_kind(e), text)
 }

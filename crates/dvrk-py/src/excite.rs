@@ -21,15 +21,15 @@ use crate::overrides::{json, refused, unexpected};
 type Array<'py> = Bound<'py, PyArrayDyn<f64>>;
 
 fn fail_excite(e: ExciteError) -> Failure {
-    (excite_kind(&e), e.to_string())
+    (excite_kind(&e), crate::errors::text(&e))
 }
 
 fn from_excite(e: ExciteError) -> PyErr {
-    error(excite_kind(&e), e.to_string())
+    error(excite_kind(&e), crate::errors::text(&e))
 }
 
 fn from_fourier(e: FourierError) -> PyErr {
-    error(fourier_kind(&e), e.to_string())
+    error(fourier_kind(&e), crate::errors::text(&e))
 }
 
 /// The functions that take excitation options as keywords, and which.
@@ -130,7 +130,7 @@ impl FourierTrajectoryPy {
     fn _restore(text: &str) -> PyResult<Self> {
         Ok(FourierTrajectoryPy {
             inner: FourierTrajectory::from_json_str(text, "<pickle>")
-                .map_err(|e| input(e.to_string()))?,
+                .map_err(|e| input(crate::errors::text(&e)))?,
         })
     }
 

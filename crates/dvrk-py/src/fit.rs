@@ -181,7 +181,7 @@ pub fn fit(
                     input("excitation: expected a FourierTrajectory or the path of its JSON document")
                 })?;
                     FourierTrajectory::from_json_file(&path)
-                        .map_err(|err| error(fourier_kind(&err), err.to_string()))?
+                        .map_err(|err| error(fourier_kind(&err), crate::errors::text(&err)))?
                 }
             })
         }
@@ -299,7 +299,8 @@ impl FitResultPy {
     #[staticmethod]
     #[pyo3(signature = (text, robot = None))]
     fn from_json(text: &str, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
-        let inner = FitResult::from_json(text, "<string>").map_err(|e| input(e.to_string()))?;
+        let inner =
+            FitResult::from_json(text, "<string>").map_err(|e| input(crate::errors::text(&e)))?;
         Ok(with_robot(inner, robot))
     }
 
@@ -309,7 +310,7 @@ impl FitResultPy {
     fn read(path: PathBuf, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
         let text = dvrk_model::input::read_text(&path).map_err(|e| from_io(&path, &e))?;
         let inner = FitResult::from_json(&text, &path.display().to_string())
-            .map_err(|e| input(e.to_string()))?;
+            .map_err(|e| input(crate::errors::text(&e)))?;
         Ok(with_robot(inner, robot))
     }
 
@@ -331,7 +332,8 @@ impl FitResultPy {
     #[staticmethod]
     #[pyo3(signature = (text, robot = None))]
     fn _restore(text: &str, robot: Option<&Bound<'_, ModelPy>>) -> PyResult<Self> {
-        let inner = FitResult::from_json(text, "<pickle>").map_err(|e| input(e.to_string()))?;
+        let inner =
+            FitResult::from_json(text, "<pickle>").map_err(|e| input(crate::errors::text(&e)))?;
         Ok(with_robot(inner, robot))
     }
 

@@ -237,7 +237,8 @@ impl MomentumObserverPy {
             Gains::One(g) => vec![g; n],
             Gains::Each(g) => vector(py, &g, Some(n), "gains", &model.coordinates)?,
         };
-        let observer = MomentumObserver::new(&model, &gains).map_err(|e| input(e.to_string()))?;
+        let observer =
+            MomentumObserver::new(&model, &gains).map_err(|e| input(crate::errors::text(&e)))?;
         Ok(MomentumObserverPy {
             ws: Workspace::new(&model),
             model,

@@ -313,6 +313,31 @@ mod tests {
         assert_eq!(crate::message(&e), "--delay: m");
     }
 
+    /// A setting a library message suggests ([`Hint`]) is the command line's flag, in a
+    /// nested error too: the library's default spelling is the flags [`flag`] declares.
+    #[test]
+    fn suggested_settings_are_named_as_flags() {
+        use dvrk_ident::error::Hint;
+        for (hint, setting) in [
+            (Hint::Cutoff, Setting::Cutoff),
+            (Hint::Trim, Setting::Trim),
+            (Hint::TestWindow, Setting::TestWindow),
+        ] {
+            assert_eq!(hint.to_string(), flag(setting));
+        }
+        let e = anyhow::Error::from(IdentError::Evaluated {
+            result: "a.json".into(),
+            error: Box::new(IdentError::NoSampleLeft {
+                source_name: "t.csv".into(),
+            }),
+        });
+        assert_eq!(
+            crate::message(&e),
+            "a.json: evaluated on t.csv: no processed sample is left (a longer log or a \
+             smaller --trim)"
+        );
+    }
+
     /// `--resample`, declared with the reading flags, is read as the fit option in
     /// every command that takes it (the reading flags take their values afterwards).
     #[test]

@@ -218,24 +218,11 @@ fn check_velocity_clock(log: &JointLog) -> Result<(), IdentError> {
         }
         let slope = sxy / sxx;
         if !(1.0 / VELOCITY_CLOCK_RATIO..=VELOCITY_CLOCK_RATIO).contains(&slope) {
-            let clock = match log.rate_hz() {
-                Some(rate) => format!(
-                    " at {} Hz; they match a clock of {} Hz",
-                    dvrk_model::input::show_approx(rate),
-                    dvrk_model::input::show_significant(rate / slope, 3)
-                ),
-                None => String::new(),
-            };
-            return Err(IdentError::Mismatch {
+            return Err(IdentError::WrongClock {
                 source_name: log.source.clone(),
-                message: format!(
-                    "the measured velocities of joint {} are {} times the rate of change of its \
-                     positions on the log's clock{clock}: give the log's real sampling rate \
-                     (--rate, or time stamps), or velocities in the positions' units per \
-                     second",
-                    log.joint_names[j],
-                    dvrk_model::input::show_significant(1.0 / slope, 3),
-                ),
+                joint: log.joint_names[j].clone(),
+                ratio: 1.0 / slope,
+                clock_hz: log.rate_hz().map(|rate| [rate, rate / slope]),
             });
         }
     }

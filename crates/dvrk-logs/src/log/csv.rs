@@ -137,7 +137,8 @@ impl WpiBlocks {
         if !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Err(LogError::InvalidRate {
                 path: path.to_path_buf(),
-                flag: "the sampling rate (--rate)",
+                what: "the sampling rate",
+                setting: crate::hint::Hint::Rate,
                 rate_hz,
             });
         }

@@ -44,6 +44,7 @@ pub use self::csv::{
 };
 pub use self::options::{ReadOptions, Resampling};
 
+use crate::hint::Hint;
 use crate::joint_log::{Coordinates, JointLog, JointLogError};
 use serde::{Deserialize, Serialize};
 use std::io::{BufRead, Write};
@@ -229,7 +230,7 @@ pub enum LogError {
     },
     /// A sampling rate given for a log that carries its own time stamps: it would change
     /// nothing, so it is refused rather than ignored.
-    #[error("{}: the sampling rate (--rate) applies to the 2019 layout only, which has no time stamps; this {format} log carries its own (leave --rate out, or resample with --resample HZ)", path.display())]
+    #[error("{}: the sampling rate ({}) applies to the 2019 layout only, which has no time stamps; this {format} log carries its own (leave {} out, or resample with {})", path.display(), Hint::Rate, Hint::Rate, Hint::ResampleHz)]
     RateNotApplicable {
         /// The file.
         path: PathBuf,
@@ -237,19 +238,20 @@ pub enum LogError {
         format: LogFormat,
     },
     /// The 2019 layout has no time stamps and no rate was given.
-    #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate with --rate HZ (the 2019 dVRK logs are 200 Hz)", path.display())]
+    #[error("{}: the 2019 (wpi) layout has no time stamps: give the sampling rate with {} (the 2019 dVRK logs are 200 Hz)", path.display(), Hint::RateHz)]
     MissingRate {
         /// The file.
         path: PathBuf,
     },
     /// A rate that is not positive and finite.
-    #[error("{}: {flag} must be positive and finite, got {rate_hz} Hz", path.display())]
+    #[error("{}: {what} ({setting}) must be positive and finite, got {rate_hz} Hz", path.display())]
     InvalidRate {
         /// The file.
         path: PathBuf,
-        /// The setting, named as the command line's flag: `the sampling rate (--rate)`
-        /// or `the resampling rate (--resample)`.
-        flag: &'static str,
+        /// What the rate is: `the sampling rate` or `the resampling rate`.
+        what: &'static str,
+        /// Its setting: [`Hint::Rate`] or [`Hint::Resample`].
+        setting: Hint,
         /// The rate, Hz.
         rate_hz: f64,
     },

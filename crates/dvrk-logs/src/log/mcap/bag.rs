@@ -167,31 +167,20 @@ const MAX_YAML_DEPTH: usize = 32;
 /// Checks a `metadata.yaml` before it is loaded: no anchors or aliases (rosbag2 never
 /// writes them, and an alias expanded by the loader can turn a kilobyte into gigabytes)
 /// and a nesting of at most [`MAX_YAML_DEPTH`] (a deeper one is no rosbag2 metadata).
-fn check_yaml_events(text: &str) -> Result<(), String> {
+fn check_yaml_events(text: &str) -> Result<(), YamlProblem> {
     use yaml_rust2::parser::{Event, Parser};
     let mut parser = Parser::new_from_str(text);
     let mut depth = 0usize;
     loop {
-        let (event, mark) = parser
-            .next_token()
-            .map_err(|e| format!("not valid YAML: {e}"))?;
-        let at = || format!("line {}", mark.line());
+        let (event, mark) = parser.next_token().map_err(YamlProblem::Invalid)?;
+        let line = mark.line();
         let anchored = match &event {
             Event::StreamEnd => return Ok(()),
-            Event::Alias(_) => {
-                return Err(format!(
-                    "{}: a YAML alias (`*name`); rosbag2 never writes anchors or aliases",
-                    at()
-                ))
-            }
+            Event::Alias(_) => return Err(YamlProblem::Alias { line }),
             Event::SequenceStart(anchor, _) | Event::MappingStart(anchor, _) => {
                 depth += 1;
                 if depth > MAX_YAML_DEPTH {
-                    return Err(format!(
-                        "{}: nested more than {MAX_YAML_DEPTH} levels deep; rosbag2 \
-                         metadata has 4",
-                        at()
-                    ));
+                    return Err(YamlProblem::TooDeep { line });
                 }
                 *anchor
             }
@@ -203,12 +192,22 @@ fn check_yaml_events(text: &str) -> Result<(), String> {
             _ => 0,
         };
         if anchored > 0 {
-            return Err(format!(
-                "{}: a YAML anchor (`&name`); rosbag2 never writes anchors or aliases",
-                at()
-            ));
+            return Err(YamlProblem::Anchor { line });
         }
     }
+}
+
+/// Why a `metadata.yaml` is not loaded ([`check_yaml_events`]).
+#[derive(Debug, thiserror::Error)]
+enum YamlProblem {
+    #[error("not valid YAML: {0}")]
+    Invalid(yaml_rust2::ScanError),
+    #[error("line {line}: a YAML alias (`*name`); rosbag2 never writes anchors or aliases")]
+    Alias { line: usize },
+    #[error("line {line}: nested more than {MAX_YAML_DEPTH} levels deep; rosbag2 metadata has 4")]
+    TooDeep { line: usize },
+    #[error("line {line}: a YAML anchor (`&name`); rosbag2 never writes anchors or aliases")]
+    Anchor { line: usize },
 }
 
 /// The files a rosbag2 `metadata.yaml` lists (`relative_file_paths`, relative to `dir`):
@@ -217,7 +216,7 @@ fn check_yaml_events(text: &str) -> Result<(), String> {
 fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
     let bad = |reason: String| mcap_error(yaml, None, McapProblem::Metadata { reason });
     let text = dvrk_model::input::read_text(yaml).map_err(io_error(yaml))?;
-    check_yaml_events(&text).map_err(bad)?;
+    check_yaml_events(&text).map_err(|e| bad(e.to_string()))?;
     let docs = yaml_rust2::YamlLoader::load_from_str(&text)
         .map_err(|e| bad(format!("not valid YAML: {e}")))?;
     let info = docs
@@ -270,24 +269,20 @@ fn metadata_files(yaml: &Path, dir: &Path) -> Result<Vec<PathBuf>, LogError> {
 /// normal components only, which exists and, symbolic links followed, is a file inside
 /// the folder. Older rosbag2 versions wrote the paths with the folder's name in front:
 /// the file name alone is tried next.
-fn member(dir: &Path, root: &Path, name: &str) -> Result<PathBuf, String> {
+fn member(dir: &Path, root: &Path, name: &str) -> Result<PathBuf, MemberProblem> {
     use std::path::Component;
     let relative = Path::new(name);
     if name.is_empty() {
-        return Err("an empty file name".into());
+        return Err(MemberProblem::Empty);
     }
     if relative.is_absolute() || relative.has_root() {
-        return Err("an absolute path; a recording names files inside its folder".into());
+        return Err(MemberProblem::Absolute);
     }
     if relative
         .components()
         .any(|c| !matches!(c, Component::Normal(_) | Component::CurDir))
     {
-        return Err(
-            "a path leading out of the folder (`..`); a recording names files \
-                    inside its folder"
-                .into(),
-        );
+        return Err(MemberProblem::LeadsOut);
     }
     let direct = dir.join(relative);
     let file = if std::fs::symlink_metadata(&direct).is_ok() {
@@ -295,27 +290,46 @@ fn member(dir: &Path, root: &Path, name: &str) -> Result<PathBuf, String> {
     } else {
         match relative.file_name().map(|n| dir.join(n)) {
             Some(p) if std::fs::symlink_metadata(&p).is_ok() => p,
-            _ => return Err(format!("not in {}", dir.display())),
+            _ => return Err(MemberProblem::Missing(dir.to_path_buf())),
         }
     };
     let resolved = std::fs::canonicalize(&file).map_err(|e| {
         if e.raw_os_error() == Some(40) || e.to_string().contains("symbolic links") {
-            "a loop of symbolic links".to_string()
+            MemberProblem::LinkLoop
         } else {
-            format!("cannot be followed: {e}")
+            MemberProblem::Unfollowable(e)
         }
     })?;
     if !resolved.starts_with(root) {
-        return Err(format!(
-            "a symbolic link to {}, outside the folder; a recording names files inside \
-             its folder",
-            resolved.display()
-        ));
+        return Err(MemberProblem::LinkOut(resolved));
     }
     if !resolved.is_file() {
-        return Err("not a file".into());
+        return Err(MemberProblem::NotAFile);
     }
     Ok(file)
+}
+
+/// Why a name is not a file of a rosbag2 folder ([`member`]).
+#[derive(Debug, thiserror::Error)]
+enum MemberProblem {
+    #[error("an empty file name")]
+    Empty,
+    #[error("an absolute path; a recording names files inside its folder")]
+    Absolute,
+    #[error("a path leading out of the folder (`..`); a recording names files inside its folder")]
+    LeadsOut,
+    /// Not in the folder (the folder).
+    #[error("not in {}", .0.display())]
+    Missing(PathBuf),
+    #[error("a loop of symbolic links")]
+    LinkLoop,
+    #[error("cannot be followed: {0}")]
+    Unfollowable(std::io::Error),
+    /// A symbolic link out of the folder (where it leads).
+    #[error("a symbolic link to {}, outside the folder; a recording names files inside its folder", .0.display())]
+    LinkOut(PathBuf),
+    #[error("not a file")]
+    NotAFile,
 }
 
 /// A rosbag2 folder without its metadata.yaml (a recording that was interrupted before
@@ -484,6 +498,22 @@ pub(crate) struct Unpacker {
     pub out: Vec<u8>,
 }
 
+/// Why a compressed message is not decompressed ([`Unpacker::unpack`]).
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum UnpackProblem {
+    #[error("a compressed message does not decompress: {0}")]
+    Decompress(std::io::Error),
+    /// A frame that states a size above the bound.
+    #[error("a compressed message of {size} bytes is larger than the {limit} bytes it may decompress to ({})", Unpacker::BOUNDS)]
+    Stated { size: u64, limit: u64 },
+    /// A frame that decompresses to more than the bound.
+    #[error(
+        "a compressed message is larger than the {limit} bytes it may decompress to ({})",
+        Unpacker::BOUNDS
+    )]
+    Larger { limit: u64 },
+}
+
 impl Unpacker {
     /// Largest decompressed message, bytes: bounds what a corrupted frame can allocate.
     const LIMIT: u64 = 1 << 28;
@@ -495,18 +525,14 @@ impl Unpacker {
     /// for CDR and JSON payloads, which cannot start with a zstd or lz4 frame magic.
     /// More than `budget` bytes (or [`Unpacker::LIMIT`]) is an error, found before
     /// decompressing when the frame states its size.
-    pub(crate) fn unpack(&mut self, data: &[u8], budget: u64) -> Option<Result<(), String>> {
+    pub(crate) fn unpack(&mut self, data: &[u8], budget: u64) -> Option<Result<(), UnpackProblem>> {
         let limit = Self::LIMIT.min(budget);
-        let fail = |e: std::io::Error| format!("a compressed message does not decompress: {e}");
+        let fail = UnpackProblem::Decompress;
         self.out.clear();
         if data.starts_with(ZSTD_MAGIC) {
             if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
                 if size > limit {
-                    return Some(Err(format!(
-                        "a compressed message of {size} bytes is larger than the {limit} \
-                         bytes it may decompress to ({})",
-                        Self::BOUNDS
-                    )));
+                    return Some(Err(UnpackProblem::Stated { size, limit }));
                 }
                 let decompressor = match &mut self.zstd {
                     Some(d) => d,
@@ -537,11 +563,7 @@ impl Unpacker {
                 .map_err(fail)
                 .and_then(|n| {
                     if n as u64 > limit {
-                        Err(format!(
-                            "a compressed message is larger than the {limit} bytes it may \
-                             decompress to ({})",
-                            Self::BOUNDS
-                        ))
+                        Err(UnpackProblem::Larger { limit })
                     } else {
                         Ok(())
                     }

@@ -163,11 +163,13 @@ impl Scanner {
                 let file = &bag.files[*next_file - 1];
                 let budget = file.unpack_limit.saturating_sub(*unpacked);
                 if let Some(r) = unpacker.unpack(data, budget) {
-                    r.map_err(|reason| {
+                    r.map_err(|e| {
                         mcap_error(
                             &file.path,
                             Some(&channel.topic),
-                            McapProblem::Container { reason },
+                            McapProblem::Container {
+                                reason: e.to_string(),
+                            },
                         )
                     })?;
                     data = unpacker.out.as_slice();

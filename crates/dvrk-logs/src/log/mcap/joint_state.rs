@@ -9,6 +9,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::problem::DecodeError;
+
 /// One decoded joint state message.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub(crate) struct JointStateMsg {
@@ -52,12 +54,9 @@ impl Time {
 /// Decodes a CDR-encoded `sensor_msgs/msg/JointState` (4-byte encapsulation header,
 /// then plain CDR, little- or big-endian). Trailing bytes (alignment padding) are
 /// ignored.
-pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, String> {
+pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, DecodeError> {
     if data.len() < 4 {
-        return Err(format!(
-            "{} bytes: too short for the 4-byte CDR encapsulation header",
-            data.len()
-        ));
+        return Err(DecodeError::TooShort { bytes: data.len() });
     }
     let little_endian = match (data[0], data[1]) {
         (0, 0) => false,
@@ -71,9 +70,7 @@ pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, String> {
                 10 | 11 => "XCDR2 parameter list (PL_CDR2)",
                 _ => "an unknown representation",
             };
-            return Err(format!(
-                "CDR encapsulation {kind:#06x} is {what}; only plain CDR (0x0000 big-endian, 0x0001 little-endian) is supported"
-            ));
+            return Err(DecodeError::Encapsulation { kind, what });
         }
     };
     let mut r = CdrReader {
@@ -104,7 +101,7 @@ pub(crate) fn decode_cdr(data: &[u8]) -> Result<JointStateMsg, String> {
 /// Decodes a `sensor_msgs/JointState` in ROS 1 serialization (what ROS 1 bags hold):
 /// little-endian, no alignment, no encapsulation header; the header has a `seq` before
 /// its stamp, whose seconds are unsigned.
-pub(crate) fn decode_ros1(data: &[u8]) -> Result<JointStateMsg, String> {
+pub(crate) fn decode_ros1(data: &[u8]) -> Result<JointStateMsg, DecodeError> {
     let mut r = CdrReader {
         data,
         pos: 0,
@@ -120,8 +117,7 @@ pub(crate) fn decode_ros1(data: &[u8]) -> Result<JointStateMsg, String> {
     let velocity = r.f64_seq("velocity")?;
     let effort = r.f64_seq("effort")?;
     let ns = i64::from(sec) * 1_000_000_000 + i64::from(nanosec);
-    let stamp = Time::from_nanos(ns)
-        .ok_or_else(|| format!("stamp {sec}.{nanosec:09} s is beyond the year 2038"))?;
+    let stamp = Time::from_nanos(ns).ok_or(DecodeError::Beyond2038 { sec, nanosec })?;
     Ok(JointStateMsg {
         header: Header { stamp, frame_id },
         name,
@@ -133,14 +129,14 @@ pub(crate) fn decode_ros1(data: &[u8]) -> Result<JointStateMsg, String> {
 
 /// Encodes a joint state as little-endian CDR with its encapsulation header, as ROS 2
 /// publishes it.
-pub(crate) fn encode_cdr(msg: &JointStateMsg) -> Result<Vec<u8>, String> {
-    cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite).map_err(|e| e.to_string())
+pub(crate) fn encode_cdr(msg: &JointStateMsg) -> Result<Vec<u8>, cdr::Error> {
+    cdr::serialize::<_, _, cdr::CdrLe>(msg, cdr::Infinite)
 }
 
 /// Decodes a JSON-encoded joint state (MCAP message encoding `json`, as written by
 /// Foxglove tools): the ROS field names, `header.stamp.nanosec` also accepted as `nsec`,
 /// missing fields empty.
-pub(crate) fn decode_json(data: &[u8]) -> Result<JointStateMsg, String> {
+pub(crate) fn decode_json(data: &[u8]) -> Result<JointStateMsg, DecodeError> {
     #[derive(Deserialize)]
     struct JsonTime {
         #[serde(default)]
@@ -168,18 +164,18 @@ pub(crate) fn decode_json(data: &[u8]) -> Result<JointStateMsg, String> {
         #[serde(default)]
         effort: Vec<f64>,
     }
-    let m: JsonJointState = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
-    let stamp = m
-        .header
-        .stamp
-        .ok_or_else(|| "JSON: no header.stamp".to_string())?;
-    let ns = stamp
+    let m: JsonJointState = serde_json::from_slice(data).map_err(DecodeError::Json)?;
+    let stamp = m.header.stamp.ok_or(DecodeError::NoStamp)?;
+    let out_of_range = DecodeError::StampRange {
+        sec: stamp.sec,
+        nanosec: stamp.nanosec,
+    };
+    let stamp = stamp
         .sec
         .checked_mul(1_000_000_000)
         .and_then(|s| s.checked_add(stamp.nanosec))
-        .ok_or_else(|| format!("JSON: stamp {}.{} s out of range", stamp.sec, stamp.nanosec))?;
-    let stamp = Time::from_nanos(ns)
-        .ok_or_else(|| format!("JSON: stamp {}.{} s out of range", stamp.sec, stamp.nanosec))?;
+        .and_then(Time::from_nanos)
+        .ok_or(out_of_range)?;
     Ok(JointStateMsg {
         header: Header {
             stamp,
@@ -213,20 +209,21 @@ impl<'a> CdrReader<'a> {
         self.data.len().saturating_sub(self.pos)
     }
 
-    fn take(&mut self, n: usize, field: &str) -> Result<&'a [u8], String> {
+    fn take(&mut self, n: usize, field: &'static str) -> Result<&'a [u8], DecodeError> {
         if self.remaining() < n {
-            return Err(format!(
-                "message ends in field {field}: {n} bytes needed at offset {}, {} left",
-                self.pos + 4,
-                self.remaining()
-            ));
+            return Err(DecodeError::Truncated {
+                field,
+                needed: n,
+                offset: self.pos + 4,
+                left: self.remaining(),
+            });
         }
         let s = &self.data[self.pos..self.pos + n];
         self.pos += n;
         Ok(s)
     }
 
-    fn u32(&mut self, field: &str) -> Result<u32, String> {
+    fn u32(&mut self, field: &'static str) -> Result<u32, DecodeError> {
         self.align(4);
         let b: [u8; 4] = self.take(4, field)?.try_into().expect("4 bytes");
         Ok(if self.little_endian {
@@ -236,35 +233,40 @@ impl<'a> CdrReader<'a> {
         })
     }
 
-    fn string(&mut self, field: &str) -> Result<String, String> {
+    fn string(&mut self, field: &'static str) -> Result<String, DecodeError> {
         let len = self.u32(field)? as usize;
         let bytes = self.take(len, field)?;
         // The length counts a terminating NUL; tolerate its absence.
         let bytes = bytes.strip_suffix(&[0]).unwrap_or(bytes);
         std::str::from_utf8(bytes)
             .map(str::to_owned)
-            .map_err(|e| format!("field {field}: invalid UTF-8: {e}"))
+            .map_err(|error| DecodeError::Utf8 { field, error })
     }
 
     /// A sequence length, checked against the bytes left (each element needs at least
     /// `min_element_bytes`) before anything is allocated.
-    fn seq_len(&mut self, field: &str, min_element_bytes: usize) -> Result<usize, String> {
+    fn seq_len(
+        &mut self,
+        field: &'static str,
+        min_element_bytes: usize,
+    ) -> Result<usize, DecodeError> {
         let count = self.u32(field)? as usize;
         if count.saturating_mul(min_element_bytes) > self.remaining() {
-            return Err(format!(
-                "field {field}: sequence of {count} elements does not fit in the {} bytes left",
-                self.remaining()
-            ));
+            return Err(DecodeError::Sequence {
+                field,
+                count,
+                left: self.remaining(),
+            });
         }
         Ok(count)
     }
 
-    fn string_seq(&mut self, field: &str) -> Result<Vec<String>, String> {
+    fn string_seq(&mut self, field: &'static str) -> Result<Vec<String>, DecodeError> {
         let count = self.seq_len(field, 4)?;
         (0..count).map(|_| self.string(field)).collect()
     }
 
-    fn f64_seq(&mut self, field: &str) -> Result<Vec<f64>, String> {
+    fn f64_seq(&mut self, field: &'static str) -> Result<Vec<f64>, DecodeError> {
         let count = self.seq_len(field, 8)?;
         if count == 0 {
             // Fast-CDR (and the Python writer) do not align an empty sequence.
@@ -336,9 +338,9 @@ mod tests {
         // The name sequence count sits after sec, nanosec, frame_id (4 + 4 + 4 + 4 bytes).
         le[4 + 16..4 + 20].copy_from_slice(&u32::MAX.to_le_bytes());
         let e = decode_cdr(&le).unwrap_err();
-        assert!(e.contains("does not fit"), "{e}");
+        assert!(e.to_string().contains("does not fit"), "{e}");
         let e = decode_cdr(&[0, 7, 0, 0, 1, 2, 3, 4]).unwrap_err();
-        assert!(e.contains("XCDR2"), "{e}");
+        assert!(e.to_string().contains("XCDR2"), "{e}");
     }
 
     /// ROS 1 serialization written out by hand from the message definition.

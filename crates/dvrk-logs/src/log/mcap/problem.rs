@@ -9,9 +9,85 @@ use thiserror::Error;
 
 use super::options::{TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
 use super::schema::JOINT_STATE_TYPE;
+use crate::hint::Hint;
 use crate::joint_log::{JointLogError, Signal};
 #[cfg_attr(not(feature = "recordings"), allow(unused_imports))] // the docs' link
 use crate::log::LogError;
+
+/// Why a message does not decode as a `sensor_msgs/msg/JointState`
+/// ([`McapProblem::Decode`]).
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum DecodeError {
+    /// A CDR message shorter than its encapsulation header.
+    #[error("{bytes} bytes: too short for the 4-byte CDR encapsulation header")]
+    TooShort {
+        /// The message's length, bytes.
+        bytes: usize,
+    },
+    /// A CDR representation other than plain CDR.
+    #[error("CDR encapsulation {kind:#06x} is {what}; only plain CDR (0x0000 big-endian, 0x0001 little-endian) is supported")]
+    Encapsulation {
+        /// The representation identifier (the header's first two bytes, big-endian).
+        kind: u16,
+        /// What it is (`XCDR2 (CDR2)`).
+        what: &'static str,
+    },
+    /// A message that ends inside a field.
+    #[error(
+        "message ends in field {field}: {needed} bytes needed at offset {offset}, {left} left"
+    )]
+    Truncated {
+        /// The field (`header.frame_id`).
+        field: &'static str,
+        /// The bytes it needs.
+        needed: usize,
+        /// Where, counted from the message's start (its encapsulation header included).
+        offset: usize,
+        /// The bytes left.
+        left: usize,
+    },
+    /// A string field that is not UTF-8.
+    #[error("field {field}: invalid UTF-8: {error}")]
+    Utf8 {
+        /// The field.
+        field: &'static str,
+        /// Where the bytes stop being UTF-8.
+        error: std::str::Utf8Error,
+    },
+    /// A sequence length larger than the bytes left could hold.
+    #[error("field {field}: sequence of {count} elements does not fit in the {left} bytes left")]
+    Sequence {
+        /// The field.
+        field: &'static str,
+        /// The length the message gives.
+        count: usize,
+        /// The bytes left.
+        left: usize,
+    },
+    /// A ROS 1 stamp beyond the `int32` seconds of ROS 2's time.
+    #[error("stamp {sec}.{nanosec:09} s is beyond the year 2038")]
+    Beyond2038 {
+        /// Seconds.
+        sec: u32,
+        /// Nanoseconds.
+        nanosec: u32,
+    },
+    /// A JSON message that does not parse as a joint state.
+    #[error("JSON: {0}")]
+    Json(serde_json::Error),
+    /// A JSON message without `header.stamp`.
+    #[error("JSON: no header.stamp")]
+    NoStamp,
+    /// A JSON stamp outside the `int32` seconds of ROS 2's time.
+    #[error("JSON: stamp {sec}.{nanosec} s out of range")]
+    StampRange {
+        /// Seconds.
+        sec: i64,
+        /// Nanoseconds.
+        nanosec: i64,
+    },
+}
 
 /// A topic of an MCAP file.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -118,7 +194,7 @@ pub enum McapProblem {
         rejected: Vec<String>,
     },
     /// Automatic choice: several candidate topics.
-    #[error("several {JOINT_STATE_TYPE} topics (or arm and jaw topic pairs) have positions and efforts: {}; choose one with --topic (repeat --topic to merge the joints of several topics, e.g. an arm and its jaw)", candidates.join(", "))]
+    #[error("several {JOINT_STATE_TYPE} topics (or arm and jaw topic pairs) have positions and efforts: {}; choose one with {}", candidates.join(", "), Hint::Topics)]
     Ambiguous {
         /// The candidate topics.
         candidates: Vec<String>,
@@ -129,7 +205,7 @@ pub enum McapProblem {
         /// Message index on the topic, 0-based.
         index: usize,
         /// What is wrong.
-        reason: String,
+        reason: DecodeError,
     },
     /// A first message without joint names and positions.
     #[error("message {index} has no joints (empty name and position arrays)")]
@@ -210,7 +286,7 @@ pub enum McapProblem {
         value: u64,
     },
     /// Time stamps that go backwards or repeat.
-    #[error("{time_source} do not strictly increase: sample {index} (t = {time_s} s) {} sample {} (t = {previous_s} s); {backwards} backward step(s) and {duplicates} repeated stamp(s) in {samples} samples. The sample order cannot be trusted: check the recording{}", if time_s == previous_s { "repeats the stamp of" } else { "comes before" }, index - 1, if *time_source == TimeSource::HeaderStamp { ", or read with log times (--time log)" } else { "" })]
+    #[error("{time_source} do not strictly increase: sample {index} (t = {time_s} s) {} sample {} (t = {previous_s} s); {backwards} backward step(s) and {duplicates} repeated stamp(s) in {samples} samples. The sample order cannot be trusted: check the recording{}", if time_s == previous_s { "repeats the stamp of" } else { "comes before" }, index - 1, if *time_source == TimeSource::HeaderStamp { format!(", or read with log times ({})", Hint::LogTimes) } else { String::new() })]
     NotIncreasing {
         /// Index of the offending sample, 0-based.
         index: usize,
@@ -228,7 +304,7 @@ pub enum McapProblem {
         time_source: TimeSource,
     },
     /// Gaps or jitter without resampling.
-    #[error("non-uniform sampling ({time_source}): first at sample {index} (t = {time_s} s), a step of {} ms against a median of {} ms; {gaps} gap(s) (> {GAP_FACTOR} median steps, the longest {} ms) and {jittered} jittered step(s) (> {}% off the median) in {samples} samples. Filtering and differentiation need a uniform clock: resample with --resample HZ, e.g. --resample {suggested_hz}", fmt_ms(*step_s), fmt_ms(*median_step_s), fmt_ms(*largest_step_s), JITTER_TOLERANCE * 100.0)]
+    #[error("non-uniform sampling ({time_source}): first at sample {index} (t = {time_s} s), a step of {} ms against a median of {} ms; {gaps} gap(s) (> {GAP_FACTOR} median steps, the longest {} ms) and {jittered} jittered step(s) (> {}% off the median) in {samples} samples. Filtering and differentiation need a uniform clock: resample with {}, e.g. {}", fmt_ms(*step_s), fmt_ms(*median_step_s), fmt_ms(*largest_step_s), JITTER_TOLERANCE * 100.0, Hint::ResampleHz, Hint::ResampleAt(*suggested_hz))]
     NonUniform {
         /// Index of the second sample of the first irregular step, 0-based.
         index: usize,

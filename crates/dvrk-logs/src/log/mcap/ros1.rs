@@ -43,14 +43,15 @@ pub(crate) struct Ros1File {
 }
 
 fn container(path: &Path, reason: String) -> LogError {
-    mcap_error(
-        path,
-        None,
-        McapProblem::Damaged {
-            kind: "ROS 1 bag",
-            reason,
-        },
-    )
+    mcap_error(path, None, damaged(reason))
+}
+
+/// A ROS 1 bag that cannot be read, and why.
+fn damaged(reason: String) -> McapProblem {
+    McapProblem::Damaged {
+        kind: "ROS 1 bag",
+        reason,
+    }
 }
 
 impl Ros1File {
@@ -59,7 +60,7 @@ impl Ros1File {
         let readable = file.readable();
         // The crate slices its memory map at the header's index position without
         // checking it: check it first, so a bag that was never closed is an error.
-        check_header(readable).map_err(|reason| container(&path, reason))?;
+        check_header(readable).map_err(|problem| mcap_error(&path, None, problem))?;
         let bag = RosBag::new(readable).map_err(|e| container(&path, e.to_string()))?;
         let fail = |e: rosbag::Error| container(&path, format!("its index: {e}"));
         let mut connections = HashMap::new();
@@ -77,7 +78,7 @@ impl Ros1File {
         }
         chunks.sort_unstable();
         let lz4 = check_chunk_sizes(readable, &chunks, file.unpack_limit)
-            .map_err(|reason| container(&path, reason))?;
+            .map_err(|problem| mcap_error(&path, None, problem))?;
         Ok(Ros1File {
             path,
             bag_path: readable.to_path_buf(),
@@ -98,8 +99,8 @@ impl Ros1File {
         let path = &self.path;
         let fail = |e: rosbag::Error| container(path, format!("chunk at byte {pos}: {e}"));
         if let Some(&(data_pos, data_len, size)) = self.lz4.get(&pos) {
-            check_lz4_size(&self.bag_path, data_pos, data_len, size)
-                .map_err(|reason| container(path, format!("chunk at byte {pos}: {reason}")))?;
+            check_lz4_size(&self.bag_path, pos, (data_pos, data_len), size)
+                .map_err(|problem| mcap_error(path, None, problem))?;
         }
         let mut records = self.bag.chunk_records();
         records.seek(pos).map_err(fail)?;
@@ -159,16 +160,16 @@ impl Ros1File {
 
 /// Checks the bag header record: its index position must lie after the header and
 /// within the file (0 while `rosbag record` is still writing, or was killed).
-fn check_header(path: &Path) -> Result<(), String> {
-    let io = |e: std::io::Error| e.to_string();
+fn check_header(path: &Path) -> Result<(), McapProblem> {
+    let io = |e: std::io::Error| damaged(e.to_string());
     let mut file = std::fs::File::open(path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
     let mut head = [0u8; 13 + 4];
     file.read_exact(&mut head)
-        .map_err(|_| "the file ends inside its header (truncated)".to_string())?;
+        .map_err(|_| damaged("the file ends inside its header (truncated)".into()))?;
     let header_len = u32::from_le_bytes(head[13..17].try_into().expect("4 bytes")) as u64;
     if header_len > 1 << 20 || 17 + header_len + 4 > len {
-        return Err("invalid or truncated header record".into());
+        return Err(damaged("invalid or truncated header record".into()));
     }
     let mut header = vec![0u8; header_len as usize];
     let mut data_len = [0u8; 4];
@@ -190,11 +191,13 @@ fn check_header(path: &Path) -> Result<(), String> {
         fields = &fields[4 + n..];
     }
     match index_pos {
-        None => Err("the header has no index position".into()),
-        Some(0) => Err("no index: the recording was not closed (`rosbag reindex` rebuilds it)".into()),
-        Some(p) if p < start || p > len => Err(format!(
-            "the header's index position {p} is outside the file ({len} bytes): truncated? (`rosbag reindex` may rebuild it)"
+        None => Err(damaged("the header has no index position".into())),
+        Some(0) => Err(damaged(
+            "no index: the recording was not closed (`rosbag reindex` rebuilds it)".into(),
         )),
+        Some(p) if p < start || p > len => Err(damaged(format!(
+            "the header's index position {p} is outside the file ({len} bytes): truncated? (`rosbag reindex` may rebuild it)"
+        ))),
         Some(_) => Ok(()),
     }
 }
@@ -211,9 +214,9 @@ fn check_chunk_sizes(
     path: &Path,
     chunks: &[u64],
     limit: u64,
-) -> Result<HashMap<u64, (u64, u64, u64)>, String> {
+) -> Result<HashMap<u64, (u64, u64, u64)>, McapProblem> {
     use std::io::{Seek, SeekFrom};
-    let io = |e: std::io::Error| e.to_string();
+    let io = |e: std::io::Error| damaged(e.to_string());
     let mut file = std::fs::File::open(path).map_err(io)?;
     let len = file.metadata().map_err(io)?.len();
     let mut total = 0u64;
@@ -258,19 +261,19 @@ fn check_chunk_sizes(
         }
         let size = u64::from(size);
         if size > MAX_CHUNK_BYTES {
-            return Err(format!(
+            return Err(damaged(format!(
                 "the chunk at byte {pos} states {size} bytes decompressed, more than the {} \
                  MiB a chunk may hold",
                 MAX_CHUNK_BYTES >> 20
-            ));
+            )));
         }
         total += size;
         if total > limit {
-            return Err(super::bag::unpack_bound_exceeded(
+            return Err(damaged(super::bag::unpack_bound_exceeded(
                 "its compressed chunks",
                 limit,
                 len,
-            ));
+            )));
         }
         if compression == b"lz4" {
             lz4.insert(pos, (pos + 4 + header_len + 4, data_len, size));
@@ -279,21 +282,26 @@ fn check_chunk_sizes(
     Ok(lz4)
 }
 
-/// Decodes the lz4 data of a chunk (`data_len` bytes at `data_pos` of `path`), output
-/// discarded, refusing more than its stated `size`.
-fn check_lz4_size(path: &Path, data_pos: u64, data_len: u64, size: u64) -> Result<(), String> {
+/// Decodes the lz4 data of the chunk at byte `chunk` of `path` (`data_len` bytes at
+/// `data_pos`), output discarded, refusing more than its stated `size`.
+fn check_lz4_size(
+    path: &Path,
+    chunk: u64,
+    (data_pos, data_len): (u64, u64),
+    size: u64,
+) -> Result<(), McapProblem> {
     use std::io::{Seek, SeekFrom};
-    let io = |e: std::io::Error| e.to_string();
+    let fail = |reason: String| damaged(format!("chunk at byte {chunk}: {reason}"));
+    let io = |e: std::io::Error| fail(e.to_string());
     let mut file = std::fs::File::open(path).map_err(io)?;
     file.seek(SeekFrom::Start(data_pos)).map_err(io)?;
-    let decoder = lz4::Decoder::new(file.take(data_len))
-        .map_err(|e| format!("its lz4 data does not decompress: {e}"))?;
-    let n = std::io::copy(&mut decoder.take(size + 1), &mut std::io::sink())
-        .map_err(|e| format!("its lz4 data does not decompress: {e}"))?;
+    let unpack = |e: std::io::Error| fail(format!("its lz4 data does not decompress: {e}"));
+    let decoder = lz4::Decoder::new(file.take(data_len)).map_err(unpack)?;
+    let n = std::io::copy(&mut decoder.take(size + 1), &mut std::io::sink()).map_err(unpack)?;
     if n > size {
-        return Err(format!(
+        return Err(fail(format!(
             "its lz4 data decompresses to more than the {size} bytes its header states"
-        ));
+        )));
     }
     Ok(())
 }

@@ -38,10 +38,10 @@ pub(crate) struct SqliteFile {
 impl SqliteFile {
     pub(crate) fn open(file: &BagFile, channels: &mut Channels) -> Result<SqliteFile, LogError> {
         let path = file.path.clone();
-        check_size(file.readable()).map_err(|reason| mcap_error(&path, None, invalid(reason)))?;
+        check_size(file.readable()).map_err(|problem| mcap_error(&path, None, problem))?;
         let fail = |e: rusqlite::Error| sqlite_error(&path, &e);
-        let conn = open_read_only(file.readable())
-            .map_err(|reason| mcap_error(&path, None, invalid(reason)))?;
+        let conn =
+            open_read_only(file.readable()).map_err(|problem| mcap_error(&path, None, problem))?;
         let order = message_order(&conn).map_err(fail)?;
         // Rows without an id would be skipped by the batches: refused, counted.
         let missing: i64 = conn
@@ -165,7 +165,7 @@ fn sqlite_error(path: &std::path::Path, e: &rusqlite::Error) -> LogError {
 /// opens); with a `-wal`, read-only with it (its pages are part of the recording), which
 /// needs a writable folder for SQLite's `-shm`; a `-journal` is a transaction that was
 /// interrupted, which only a writable copy can roll back.
-fn open_read_only(path: &std::path::Path) -> Result<Connection, String> {
+fn open_read_only(path: &std::path::Path) -> Result<Connection, McapProblem> {
     let beside = |suffix: &str| {
         let mut p = path.as_os_str().to_owned();
         p.push(suffix);
@@ -173,26 +173,27 @@ fn open_read_only(path: &std::path::Path) -> Result<Connection, String> {
     };
     let (wal, journal) = (beside("-wal"), beside("-journal"));
     if std::fs::metadata(&journal).is_ok_and(|m| m.len() > 0) {
-        return Err(format!(
+        return Err(invalid(format!(
             "a rollback journal {} beside it: the recording was interrupted inside a \
              transaction; open a copy of both with sqlite3 (which rolls it back) and read \
              the copy",
             journal.display()
-        ));
+        )));
     }
     let flags = OpenFlags::SQLITE_OPEN_READ_ONLY | OpenFlags::SQLITE_OPEN_NO_MUTEX;
     if wal.exists() {
         return Connection::open_with_flags(path, flags).map_err(|e| {
-            format!(
+            invalid(format!(
                 "{e}: it has a write-ahead log {} beside it, which SQLite reads only from \
                  a folder it may write (for its -shm file); copy the recording with its \
                  -wal to a writable folder",
                 wal.display()
-            )
+            ))
         });
     }
     let uri = format!("file:{}?immutable=1", uri_path(path));
-    Connection::open_with_flags(uri, flags | OpenFlags::SQLITE_OPEN_URI).map_err(|e| e.to_string())
+    Connection::open_with_flags(uri, flags | OpenFlags::SQLITE_OPEN_URI)
+        .map_err(|e| invalid(e.to_string()))
 }
 
 /// `path` for an SQLite URI: every byte but unreserved characters and `/`
@@ -238,13 +239,16 @@ fn invalid(reason: String) -> McapProblem {
 /// wrong values without an error: the size the header records (page count × page
 /// size, when the header's count is valid) must be in the file. (A write-ahead log
 /// beside the file may hold the last pages: then the file may be shorter.)
-fn check_size(path: &std::path::Path) -> Result<(), String> {
+fn check_size(path: &std::path::Path) -> Result<(), McapProblem> {
     use std::io::Read;
     let mut head = [0u8; 100];
-    let mut f = std::fs::File::open(path).map_err(|e| e.to_string())?;
-    let len = f.metadata().map_err(|e| e.to_string())?.len();
+    let io = |e: std::io::Error| invalid(e.to_string());
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
     if f.read_exact(&mut head).is_err() {
-        return Err("truncated sqlite3 file: it ends inside its 100-byte header".into());
+        return Err(invalid(
+            "truncated sqlite3 file: it ends inside its 100-byte header".into(),
+        ));
     }
     let page = match u16::from_be_bytes([head[16], head[17]]) {
         1 => 65536,
@@ -257,10 +261,10 @@ fn check_size(path: &std::path::Path) -> Result<(), String> {
     let mut wal = path.as_os_str().to_owned();
     wal.push("-wal");
     if count_valid && pages * page > len && !std::path::Path::new(&wal).exists() {
-        return Err(format!(
+        return Err(invalid(format!(
             "truncated sqlite3 file: its header records {pages} pages of {page} bytes ({} bytes), the file has {len}; was the recording interrupted?",
             pages * page
-        ));
+        )));
     }
     Ok(())
 }

@@ -606,7 +606,8 @@ pub(super) fn plan(bag: &Arc<Bag>, options: &McapOptions) -> Result<Plan, LogErr
         if !(rate.is_finite() && rate > 0.0) {
             return Err(LogError::InvalidRate {
                 path: path.to_path_buf(),
-                flag: "the resampling rate (--resample)",
+                what: "the resampling rate",
+                setting: crate::hint::Hint::Resample,
                 rate_hz: rate,
             });
         }
