@@ -76,7 +76,7 @@ pub enum SignalError {
     /// A cut-off in Hz outside 0.001 to 0.95 of the Nyquist frequency (`CUTOFF_RANGE_WN`).
     /// The rate (measured from time stamps) and the ratios are shown rounded
     /// ([`dvrk_model::input::show_approx`]), the cut-off as given.
-    #[error("cut-off {cutoff_hz} Hz at a {} Hz sampling rate is {} of the Nyquist frequency: it must be between {} and {} of it ({} to {} Hz): choose a {} in that range", show_approx(*rate_hz), show_fraction(*wn), butter::CUTOFF_RANGE_WN[0], butter::CUTOFF_RANGE_WN[1], show_approx(butter::CUTOFF_RANGE_WN[0] * rate_hz / 2.0), show_approx(butter::CUTOFF_RANGE_WN[1] * rate_hz / 2.0), crate::error::Hint::Cutoff)]
+    #[error("cut-off {cutoff_hz} Hz at a {} Hz sampling rate is {} of the Nyquist frequency: it must be between {} and {} of it ({} to {} Hz): choose a {} in that range", show_approx(*rate_hz), show_fraction(*wn), butter::CUTOFF_RANGE_WN[0], butter::CUTOFF_RANGE_WN[1], show_approx(butter::CUTOFF_RANGE_WN[0] * rate_hz / 2.0), show_approx(butter::CUTOFF_RANGE_WN[1] * rate_hz / 2.0), dvrk_logs::hint::Hint::Cutoff)]
     InvalidCutoff {
         /// Requested cut-off, Hz.
         cutoff_hz: f64,

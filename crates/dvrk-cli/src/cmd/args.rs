@@ -70,42 +70,6 @@ pub fn read(options: &ReadOptions, path: &str) -> Result<JointLog> {
     Ok(log)
 }
 
-/// The flags of every command that uses a result on logs (validate, report, residual,
-/// payload): the robot, the processing (the result's own unless given) and how the logs
-/// are read. Declared once so the four commands read and default them alike.
-#[derive(clap::Args, Clone)]
-pub struct ResultOnLogs {
-    /// Robot [default: the one the result was fitted for]
-    #[arg(long, help_heading = MODEL)]
-    pub robot: Option<String>,
-    // The fit options (`--cutoff`, ...: every processing `Setting`), before `log_args`:
-    // they read `--resample`, which `log_args` declares and takes.
-    #[command(flatten)]
-    pub settings: super::settings::SettingFlags<super::settings::Processing>,
-    #[command(flatten)]
-    pub log_args: LogArgs,
-}
-
-impl ResultOnLogs {
-    /// The result file `path` with its model (the robot given, or the result's), and the
-    /// settings to use it with: the result's, with those given on the command line.
-    pub fn load(&self, path: &str) -> Result<(super::LoadedResult, dvrk_ident::FitSettings)> {
-        let loaded = super::load_result(path, self.robot.as_deref())?;
-        let settings = self.settings.settings(loaded.result.settings.clone())?;
-        Ok((loaded, settings))
-    }
-
-    /// How `logs` are read with `model` and `processing` ([`LogArgs::read_options_for`]).
-    pub fn read_options<'a>(
-        &self,
-        model: &dvrk_model::Model,
-        processing: &impl Resampling,
-        logs: impl IntoIterator<Item = &'a str>,
-    ) -> ReadOptions {
-        self.log_args.read_options_for(model, processing, logs)
-    }
-}
-
 /// Options shared by every command that reads logs.
 #[derive(clap::Args, Clone)]
 pub struct LogArgs {

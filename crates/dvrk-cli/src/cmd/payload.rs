@@ -10,7 +10,8 @@ use dvrk_ident::output::Outputs;
 use dvrk_ident::payload::identify_payload;
 use serde_json::json;
 
-use super::args::{ResultOnLogs, MODEL, OUTPUT};
+use super::args::{MODEL, OUTPUT};
+use super::settings::ResultOnLogs;
 use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]

@@ -12,8 +12,9 @@ use dvrk_ident::result::InputInfo;
 use dvrk_ident::{FitResult, FitSettings, JointLog};
 use dvrk_model::Model;
 
-use super::args::{JointsArgs, ResultOnLogs, INPUT, OUTPUT};
+use super::args::{JointsArgs, INPUT, OUTPUT};
 use super::emit;
+use super::settings::ResultOnLogs;
 
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a

@@ -18,7 +18,8 @@ use dvrk_ident::residual::{
 use dvrk_ident::settings::Joints;
 use serde_json::json;
 
-use super::args::{JointsArgs, ResultOnLogs, MODEL, OUTPUT};
+use super::args::{JointsArgs, MODEL, OUTPUT};
+use super::settings::ResultOnLogs;
 use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]

@@ -254,6 +254,42 @@ impl<S: Scope> clap::Args for SettingFlags<S> {
     }
 }
 
+/// The flags of every command that uses a result on logs (validate, report, residual,
+/// payload): the robot, the processing (the result's own unless given) and how the logs
+/// are read. Declared once so the four commands read and default them alike.
+#[derive(clap::Args, Clone)]
+pub struct ResultOnLogs {
+    /// Robot [default: the one the result was fitted for]
+    #[arg(long, help_heading = super::args::MODEL)]
+    pub robot: Option<String>,
+    // The fit options (`--cutoff`, ...: every processing `Setting`), before `log_args`:
+    // they read `--resample`, which `log_args` declares and takes.
+    #[command(flatten)]
+    pub settings: SettingFlags<Processing>,
+    #[command(flatten)]
+    pub log_args: super::args::LogArgs,
+}
+
+impl ResultOnLogs {
+    /// The result file `path` with its model (the robot given, or the result's), and the
+    /// settings to use it with: the result's, with those given on the command line.
+    pub fn load(&self, path: &str) -> Result<(super::LoadedResult, dvrk_ident::FitSettings)> {
+        let loaded = super::load_result(path, self.robot.as_deref())?;
+        let settings = self.settings.settings(loaded.result.settings.clone())?;
+        Ok((loaded, settings))
+    }
+
+    /// How `logs` are read with `model` and `processing` ([`super::args::LogArgs::read_options_for`]).
+    pub fn read_options<'a>(
+        &self,
+        model: &dvrk_model::Model,
+        processing: &impl dvrk_ident::log::Resampling,
+        logs: impl IntoIterator<Item = &'a str>,
+    ) -> dvrk_ident::log::ReadOptions {
+        self.log_args.read_options_for(model, processing, logs)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

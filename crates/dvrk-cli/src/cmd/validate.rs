@@ -6,7 +6,8 @@ use anyhow::Result;
 use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
 use serde_json::json;
 
-use super::args::{JointsArgs, ResultOnLogs, INPUT, OUTPUT};
+use super::args::{JointsArgs, INPUT, OUTPUT};
+use super::settings::ResultOnLogs;
 use super::{emit, LoadedResult};
 
 #[derive(clap::Args)]
