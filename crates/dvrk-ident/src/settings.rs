@@ -388,7 +388,7 @@ impl Difference {
     /// unset setting, numbers and lists as JSON writes them.
     ///
     /// ```
-    /// use dvrk_ident::settings::Difference;
+    /// use dvrk_ident::Difference;
     /// let d = Difference { path: "joints".into(), a: "measured".into(), b: serde_json::Value::Null };
     /// assert_eq!(d.shown(), ("measured".to_string(), "none".to_string()));
     /// ```

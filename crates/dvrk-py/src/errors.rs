@@ -12,10 +12,10 @@
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
 //! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `FitResult` |
 
-use dvrk_ident::error::SettingName;
 use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;
 use dvrk_ident::IdentError;
+use dvrk_ident::SettingName;
 use dvrk_model::ModelError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;

@@ -69,7 +69,7 @@ pub fn run(args: Args) -> Result<()> {
         (None, _) => traj.coordinates,
     };
     let out = match (target, &model) {
-        (Coordinates::Model, Some(m)) => dvrk_ident::fit::to_model_coordinates(m, &traj)?,
+        (Coordinates::Model, Some(m)) => dvrk_ident::simulate::to_model_coordinates(m, &traj)?,
         (Coordinates::Measured, Some(m)) => to_measured_coordinates(m, &traj)?,
         (t, None) if t == traj.coordinates => traj,
         (t, None) => bail!(

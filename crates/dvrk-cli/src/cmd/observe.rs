@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use anyhow::Result;
-use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{LogSource, ObserveRequest, Streaming};
+use dvrk_ident::{LogSource, ObserveRequest, Streaming};
+use dvrk_logs::output::Outputs;
 use dvrk_model::Model;
 
 use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
@@ -66,7 +66,7 @@ pub fn run(args: Args) -> Result<()> {
             "{}: robot {}, {} log(s), {} samples, {} bytes",
             args.out,
             state.robot,
-            state.observed.logs.len(),
+            state.logs().len(),
             state.samples(),
             bytes.len()
         ),

@@ -10,10 +10,10 @@ use std::marker::PhantomData;
 use anyhow::Result;
 use clap::parser::ValueSource;
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use dvrk_ident::error::SettingName;
-use dvrk_ident::request::{Overrides, Preset, Setting, SettingError};
-use dvrk_ident::settings::{FitSettings, Joints, PriorMetric};
+use dvrk_ident::SettingName;
 use dvrk_ident::{BoundsSet, IdentError, Method};
+use dvrk_ident::{FitSettings, Joints, PriorMetric};
+use dvrk_ident::{Overrides, Preset, Setting, SettingError};
 
 use super::args::{ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::{at_least_one, named};

@@ -146,7 +146,7 @@ impl std::str::FromStr for Candidate {
 /// The candidates of a selection, in the order given (ties go to the earlier).
 ///
 /// ```rust
-/// use dvrk_ident::fit::select::Candidates;
+/// use dvrk_ident::Candidates;
 ///
 /// let builtin: Candidates = "builtin".parse().unwrap();
 /// assert_eq!(builtin.to_string(), "coulomb,stribeck,dahl,stribeck+dahl");
@@ -245,7 +245,7 @@ pub enum Folds {
     Blocked {
         /// Blocks (folds).
         folds: usize,
-        /// Training samples dropped on each side of a held-out block, s ([`guard_s`]).
+        /// Training samples dropped on each side of a held-out block, s (`guard_s`).
         guard_s: f64,
     },
 }
