@@ -137,9 +137,11 @@ pub use state::{model_hash, ObservationState};
 pub use cable::{fit_cable, CableFit, CableSettings};
 // Progress reports.
 pub use progress::{Progress, Silent};
-// Errors.
+// Errors (and those of the public modules: `log::LogError`, `signal::SignalError`,
+// `excite::ExciteError`, which `IdentError` carries too).
 pub use error::{IdentError, SettingName};
 pub use estimate::sdp::SdpError;
+pub use output::OutputError;
 pub use result::MetricsError;
 
 // The book's Rust chapter (docs/book/src/rust.md): its Rust blocks are this crate's doc

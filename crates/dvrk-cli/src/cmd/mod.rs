@@ -130,7 +130,7 @@ pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
 }
 
 /// Checks every output of a command before any work is done (see
-/// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
+/// [`dvrk_logs::output`]): files `(flag, path)` and folders `(flag, path)` must be
 /// writable destinations whose folder exists, no two the same, at most one `-`
 /// (standard output), none of them one of the command's `inputs`. Returns whether one of
 /// them is standard output.

@@ -1,6 +1,6 @@
 //! `dvrk-ident observe LOG... --robot ROBOT --out part.obs`: the map of a distributed fit.
 //! The logs are processed and reduced as `fit` does before its estimator, and the state
-//! ([`dvrk_ident::state`]) is written; `fit --states` merges states and fits them.
+//! ([`dvrk_ident::ObservationState`]) is written; `fit --states` merges states and fits them.
 
 use std::path::Path;
 

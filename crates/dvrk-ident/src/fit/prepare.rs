@@ -308,8 +308,8 @@ pub struct LogData<'a> {
 }
 
 impl<'a> LogData<'a> {
-    /// Samples without a file.
-    #[cfg(test)]
+    /// Samples without a file (the observation states' tests).
+    #[cfg(all(test, feature = "recordings"))]
     pub fn new(samples: &'a JointLog) -> Self {
         LogData {
             samples,
