@@ -18,7 +18,9 @@ pub mod select;
 pub mod status;
 pub mod stream;
 
-pub use joints::{units, JointMap};
+#[cfg(feature = "report")]
+pub use joints::units;
+pub use joints::JointMap;
 pub use metrics::{joint_metrics, predict, TorqueRange};
 pub use observed::{Observed, ObservedLog};
 pub use prepare::{prepare, to_model_coordinates, LogData, Prepared};
