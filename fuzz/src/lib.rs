@@ -320,7 +320,7 @@ pub fn limits(data: &[u8]) {
 /// of address space per thread on first use, which the stable seed test counts as heap,
 /// and a fit per input would slow the target tenfold.)
 pub fn state(data: &[u8]) {
-    use dvrk_ident::state::ObservationState;
+    use dvrk_ident::ObservationState;
     static ROBOT: std::sync::OnceLock<dvrk_model::Model> = std::sync::OnceLock::new();
     let Ok(state) = ObservationState::from_bytes(data, "fuzz.obs") else {
         return;

@@ -73,7 +73,7 @@ def test_fit_matches_cli(psm, psm_logs, run_cli, method):
 
 
 # Every option of `dvrk-ident fit` against its keyword of `di.fit`: both map onto one
-# library request (dvrk_ident::request::FitRequest), so the documents must agree to
+# library request (dvrk_ident::FitRequest), so the documents must agree to
 # rounding. Each case: (keywords, flags); the test log and its window are added to all.
 OPTIONS = [
     ({"method": "ols", "cutoff": 4.0}, ["--method", "ols", "--cutoff", "4"]),

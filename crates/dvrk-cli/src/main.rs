@@ -16,7 +16,7 @@ fn main() -> ExitCode {
     if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) {
         std::thread::spawn(move || {
             if let Some(signal) = signals.forever().next() {
-                dvrk_ident::temporary::remove_all();
+                dvrk_logs::temporary::remove_all();
                 eprintln!("dvrk-ident: interrupted (its temporary files are removed)");
                 std::process::exit(128 + signal);
             }

@@ -336,10 +336,10 @@ fn summary_and_export_say_what_the_data_did_not_determine() {
         assert!(text.contains(&line), "{text}");
         // The summary's mass column says the same as the document.
         let mark = match result.parameter_status[&format!("m{}", l.frame)] {
-            dvrk_ident::result::ParameterStatus::Identified => "yes",
-            dvrk_ident::result::ParameterStatus::AtLowerBound => "lower",
-            dvrk_ident::result::ParameterStatus::AtUpperBound => "upper",
-            dvrk_ident::result::ParameterStatus::Unidentified => "no",
+            dvrk_ident::ParameterStatus::Identified => "yes",
+            dvrk_ident::ParameterStatus::AtLowerBound => "lower",
+            dvrk_ident::ParameterStatus::AtUpperBound => "upper",
+            dvrk_ident::ParameterStatus::Unidentified => "no",
         };
         let row = summary
             .lines()
@@ -351,8 +351,7 @@ fn summary_and_export_say_what_the_data_did_not_determine() {
     for (name, st) in &result.parameter_status {
         if matches!(
             st,
-            dvrk_ident::result::ParameterStatus::AtLowerBound
-                | dvrk_ident::result::ParameterStatus::AtUpperBound
+            dvrk_ident::ParameterStatus::AtLowerBound | dvrk_ident::ParameterStatus::AtUpperBound
         ) {
             assert!(warnings.contains(&format!("{name} ")), "{name}: {warnings}");
         }

@@ -7,8 +7,8 @@ mod support;
 use std::path::Path;
 
 use dvrk_ident::excite::optimize::ExciteOptions;
-use dvrk_ident::settings::{FitSettings, Prior, PriorMetric};
 use dvrk_ident::signal::Cutoff;
+use dvrk_ident::{FitSettings, Prior, PriorMetric};
 use support::{example, files, run, run_ok, s, temp_dir};
 
 /// The headings of a help text with the long flags listed under each, in order.
@@ -233,7 +233,7 @@ fn excite_help_shows_the_library_defaults() {
         o.samples_per_harmonic.to_string()
     );
     assert_eq!(default_of(&h, "--check-rate"), o.check_rate_hz.to_string());
-    use dvrk_ident::names::Named;
+    use dvrk_ident::Named;
     assert_eq!(default_of(&h, "--criterion"), o.criterion.name());
 }
 

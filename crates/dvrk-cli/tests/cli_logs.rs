@@ -206,7 +206,7 @@ fn simulate_then_convert_round_trips_values() {
     assert!(ok, "{err}");
     let w = log::read(&wpi, None, Some(200.0)).unwrap();
     let model = Model::builtin("psm").unwrap();
-    let expected = dvrk_ident::fit::to_model_coordinates(&model, &original).unwrap();
+    let expected = dvrk_ident::simulate::to_model_coordinates(&model, &original).unwrap();
     assert_eq!(w.coordinates, dvrk_ident::Coordinates::Model);
     assert!((&w.q - &expected.q).abs().max() == 0.0);
     assert!((&w.tau - &expected.tau).abs().max() == 0.0);

@@ -71,7 +71,7 @@ fn nominal_prior_returns_the_generating_parameters() {
         let prior = r.settings.prior.as_ref().unwrap();
         assert_eq!(prior.source, "nominal");
         assert_eq!(prior.metric.name(), metric);
-        assert_eq!(prior.weight, dvrk_ident::settings::Prior::DEFAULT_WEIGHT);
+        assert_eq!(prior.weight, dvrk_ident::Prior::DEFAULT_WEIGHT);
         assert_eq!(r.prior_divergence.is_some(), metric == "entropic");
     }
     // Without a prior the parameters the data do not see are elsewhere.

@@ -9,7 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::progress::Silent;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitSettings, JointLog, LogSource, Method, Training};
 use dvrk_model::Model;
 use dvrk_test_support::read_json;

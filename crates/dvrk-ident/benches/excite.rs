@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use dvrk_ident::excite::optimize::{self, Criterion, ExciteOptions, Limits};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::progress::Silent;
+use dvrk_ident::Silent;
 use dvrk_model::Model;
 
 const WPI2019: &str = concat!(

@@ -112,7 +112,8 @@ impl Scaled {
 
 /// Least-squares polynomial (highest degree first), on a centred and scaled abscissa for
 /// conditioning, expanded back to powers of `x`.
-pub fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Option<Vec<f64>> {
+#[cfg(test)]
+fn polyfit(x: &[f64], y: &[f64], degree: usize) -> Option<Vec<f64>> {
     Scaled::fit(x, y, degree).map(|p| p.expand())
 }
 

@@ -119,7 +119,7 @@ impl Summary {
 
 /// A setting (or `tool`, `robot_source`) whose values differ, with its value in result
 /// A (`a`) and in result B (`b`).
-pub use crate::settings::Difference;
+use crate::settings::Difference;
 
 /// A base parameter's value and standard deviation in one result.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]

@@ -5,8 +5,8 @@ use thiserror::Error;
 
 use crate::options::Setting;
 /// The settings a message suggests, spelled by each front end its own way
-/// (`--rate HZ`, `rate=HZ`): see [`dvrk_logs::hint`].
-pub use dvrk_logs::hint::{spelled, Hint, Spelling};
+/// (`--rate HZ`, `rate=HZ`, with [`dvrk_logs::hint::spelled`]).
+use dvrk_logs::hint::Hint;
 
 /// What a refused setting is: fit options by identity (several when they are refused
 /// together), or another argument of a call by its name (`wrench`, `observer_gain`).

@@ -12,16 +12,16 @@
 //! prediction — friction, springs, motor inertias and known forces included — is
 //! subtracted: what remains is what [`crate::residual`] calls the external torque, here
 //! fitted by `H_p·π_p`. The estimate is the semidefinite fit of any result
-//! ([`crate::estimate::sdp`]) on that one body: weighted least squares (the result's row
+//! (`crate::estimate::sdp`) on that one body: weighted least squares (the result's row
 //! weights per coordinate) under `J(π_p) ⪰ eps·I`, so the payload is physically
 //! consistent.
 //!
 //! # What the logs determine
 //!
-//! As for a fit's parameters ([`crate::fit::status`]): a barycentric parameter is
+//! As for a fit's parameters (`crate::fit::status`): a barycentric parameter is
 //! identified when it is a base parameter of the body by itself (its motion exposes it:
 //! a mass on a link that only rotates about a fixed axis shows only its first moment,
-//! never its mass) and the logs measure it to [`crate::fit::status::DETERMINED_FRACTION`]
+//! never its mass) and the logs measure it to `crate::fit::status::DETERMINED_FRACTION`
 //! of its plausible magnitude. The mass is determined with `m`, the centre of mass with
 //! `l` and `m`, the inertia about the centre of mass with `L`, `l` and `m`
 //! ([`LinkDetermined`]); undetermined quantities are reported as such (their values are
@@ -44,10 +44,11 @@ use crate::fit::{predict, prepare, Prepared};
 use crate::joint_log::JointLog;
 use crate::observation::Observation;
 use crate::progress::Silent;
+// The identification's record is part of the result document; its public path is here.
 use crate::result::{
-    BaseParameterResult, FitResult, LinkDetermined, ParameterStatus, PayloadIdentification,
-    PayloadStd, ResultPayload,
+    BaseParameterResult, FitResult, LinkDetermined, ParameterStatus, ResultPayload,
 };
+pub use crate::result::{PayloadIdentification, PayloadStd};
 
 /// A payload estimated from logs ([`identify_payload`]).
 #[derive(Clone, Debug, PartialEq)]

@@ -10,7 +10,7 @@
 /// implements only what it shows.
 ///
 /// ```
-/// use dvrk_ident::progress::{Progress, Silent};
+/// use dvrk_ident::{Progress, Silent};
 /// use std::sync::atomic::{AtomicU64, Ordering};
 ///
 /// /// Counts the work units reported, e.g. to check a pipeline reports all samples.

@@ -11,8 +11,7 @@
 //! ```
 //! use dvrk_ident::log::ReadOptions;
 //! use dvrk_ident::reproduce::cli_command;
-//! use dvrk_ident::result::InputInfo;
-//! use dvrk_ident::{FitSettings, Method};
+//! use dvrk_ident::{FitSettings, InputInfo, Method};
 //! let mut settings = FitSettings { method: Method::Ols, ..FitSettings::default() };
 //! settings.stribeck_velocity = Some(0.3);
 //! let train = InputInfo { role: "train".into(), path: "one.csv".into(), sha256: String::new(),
@@ -58,7 +57,7 @@ fn num(v: f64) -> String {
 }
 
 /// `word` quoted for a POSIX shell when it needs it.
-pub fn shell_quote(word: &str) -> String {
+pub(crate) fn shell_quote(word: &str) -> String {
     let safe = !word.is_empty()
         && word
             .chars()

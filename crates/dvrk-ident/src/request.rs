@@ -27,7 +27,7 @@ pub use prior::PriorSource;
 /// `preset="dvrk"`): each fills the settings the request does not give itself.
 ///
 /// ```rust
-/// use dvrk_ident::request::{Overrides, Preset};
+/// use dvrk_ident::{Overrides, Preset};
 /// use dvrk_ident::Method;
 ///
 /// let o = Overrides { preset: Some(Preset::Dvrk), method: Some(Method::Wls), ..Overrides::default() };
@@ -52,7 +52,7 @@ pub enum Preset {
     /// descriptions' bounding ellipsoids (the dVRK's meshes: 7 MTM links, the PSM's
     /// pitch_front, 3 ECM links) apply too (MTM +0.3 % test error, PSM none); a
     /// partial prior toward the dVRK's nominal masses (`--prior nominal --prior-weight
-    /// 0.05`, [`PRESET_PRIOR_WEIGHT`]; `--prior-weight 0` leaves it out) is part of the
+    /// 0.05`, `PRESET_PRIOR_WEIGHT`; `--prior-weight 0` leaves it out) is part of the
     /// preset wherever the description has nominal masses (the MTM, the Classic ECM, the
     /// Si arms; not the Classic PSM, whose maker publishes none) and the method is
     /// `sdp`: on the real MTM it moves every mass the dVRK publishes into 0.38-1.8 times
@@ -202,7 +202,7 @@ pub struct FitRequest {
     pub excitation: Option<FourierTrajectory>,
     /// Whether the logs are read block by block (default: by size).
     pub streaming: Streaming,
-    /// Samples per block when the logs are streamed (default [`BLOCK_SAMPLES`]): a
+    /// Samples per block when the logs are streamed (default `BLOCK_SAMPLES`): a
     /// memory knob only, the result is the same to the last bit for any block size.
     pub block_samples: usize,
 }
@@ -251,7 +251,7 @@ impl FitRequest {
     /// let samples = log::read(file, None, None).unwrap();
     /// let settings = FitSettings { method: Method::Wls, ..FitSettings::default() };
     /// let request = FitRequest::of_samples([&samples], None, settings);
-    /// let result = request.run(Some(&psm), &dvrk_ident::progress::Silent).unwrap().result;
+    /// let result = request.run(Some(&psm), &dvrk_ident::Silent).unwrap().result;
     /// assert_eq!((result.robot.as_str(), result.method.as_str()), ("psm", "wls"));
     /// ```
     pub fn of_samples<'a>(
@@ -642,8 +642,8 @@ impl FitRequest {
 /// state byte for byte.
 ///
 /// ```rust
-/// use dvrk_ident::progress::Silent;
-/// use dvrk_ident::request::{LogSource, ObserveRequest, Overrides, Streaming};
+/// use dvrk_ident::Silent;
+/// use dvrk_ident::{LogSource, ObserveRequest, Overrides, Streaming};
 /// use dvrk_model::Model;
 ///
 /// let log = concat!(env!("CARGO_MANIFEST_DIR"), "/../../examples/psm_excitation.mcap");

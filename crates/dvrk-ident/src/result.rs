@@ -42,15 +42,15 @@ pub struct LinkResult {
 ///
 /// A parameter is `identified` when the data alone fix it: it is a base parameter by
 /// itself (the unit vector of its column lies in the row space of the regressor, so no
-/// combination of other columns can stand in for it; see [`crate::fit::status`]), and
+/// combination of other columns can stand in for it; see `crate::fit::status`), and
 /// its standard deviation from the same weighted data is at most
-/// [`crate::fit::status::DETERMINED_FRACTION`] of its plausible magnitude `‖W·τ‖ /
+/// `crate::fit::status::DETERMINED_FRACTION` of its plausible magnitude `‖W·τ‖ /
 /// ‖W·H·eᵢ‖` (the value at which it alone would produce the whole measured torque).
 /// Otherwise its value is set by the regularization, a prior, the physical-consistency
 /// constraints or the representative of a least-squares fit: `unidentified`. A
 /// semidefinite fit's parameter that sits on one of its linear bounds (mass range,
 /// centre-of-mass box, friction and motor-inertia bounds, `Fc + Fs ≥ 0`; to
-/// `1e-4·max(1, |bound|)`, [`crate::fit::status::BOUND_TOLERANCE`]) is `at_lower_bound` or
+/// `1e-4·max(1, |bound|)`, `crate::fit::status::BOUND_TOLERANCE`) is `at_lower_bound` or
 /// `at_upper_bound` whatever the data say: the bound, not the data, set it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -161,7 +161,7 @@ impl BaseParameterResult {
     }
 }
 
-pub use crate::estimate::SolverInfo;
+use crate::estimate::SolverInfo;
 
 /// Per-joint errors on one trajectory (model coordinates).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
@@ -284,7 +284,7 @@ impl FitResult {
 
 /// A result's `robot_source` (`builtin:psm`, or a path) as [`dvrk_model::Model::load`]
 /// takes it.
-pub fn loadable_robot(robot_source: &str) -> &str {
+pub(crate) fn loadable_robot(robot_source: &str) -> &str {
     robot_source
         .strip_prefix("builtin:")
         .unwrap_or(robot_source)
@@ -400,7 +400,7 @@ pub struct FitResult {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub delay: Option<DelayEstimate>,
     /// The friction model chosen by held-out error (`select`, see
-    /// [`crate::fit::select`]): the folds, every candidate's held-out errors and the
+    /// `crate::fit::select`): the folds, every candidate's held-out errors and the
     /// one chosen, whose terms `settings` holds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub selection: Option<Selection>,
@@ -690,12 +690,6 @@ impl FitResult {
         })?;
         FitResult::from_json(&text, &path.display().to_string())
     }
-}
-
-/// Writes `text` to `path` atomically (temporary file in the same folder, synced, then
-/// renamed), so an interrupted run never leaves a half-written output.
-pub fn write_atomic(path: &Path, text: &str) -> Result<(), IdentError> {
-    crate::log::write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(IdentError::from)
 }
 
 /// The delays found, recorded in the result (`delay`) and applied through

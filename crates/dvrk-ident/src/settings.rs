@@ -388,7 +388,7 @@ impl Difference {
     /// unset setting, numbers and lists as JSON writes them.
     ///
     /// ```
-    /// use dvrk_ident::settings::Difference;
+    /// use dvrk_ident::Difference;
     /// let d = Difference { path: "joints".into(), a: "measured".into(), b: serde_json::Value::Null };
     /// assert_eq!(d.shown(), ("measured".to_string(), "none".to_string()));
     /// ```
@@ -598,7 +598,7 @@ impl std::str::FromStr for Candidate {
 /// The candidates of a selection, in the order given (ties go to the earlier).
 ///
 /// ```rust
-/// use dvrk_ident::settings::Candidates;
+/// use dvrk_ident::Candidates;
 ///
 /// let builtin: Candidates = "builtin".parse().unwrap();
 /// assert_eq!(builtin.to_string(), "coulomb,stribeck,dahl,stribeck+dahl");

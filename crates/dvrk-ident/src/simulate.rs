@@ -20,7 +20,11 @@ use nalgebra::DMatrix;
 
 use crate::error::IdentError;
 use crate::excite::FourierTrajectory;
-use crate::external::ExternalTorque;
+/// External torques a simulation adds ([`Simulation`]'s `external`).
+pub use crate::external::ExternalTorque;
+/// The other way: a log in the robot's measured coordinates (joint positions, motor
+/// torques of the coupled joints) turned into the model's, as the fit reads it.
+pub use crate::fit::to_model_coordinates;
 use crate::joint_log::{uniform_time, Coordinates, JointLog};
 
 /// Most samples [`simulate`] produces (a guard against a mistyped duration or rate).

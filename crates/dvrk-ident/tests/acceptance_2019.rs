@@ -8,7 +8,7 @@
 #[path = "support/protocol_2019.rs"]
 mod protocol_2019;
 
-use dvrk_ident::progress::Silent;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, JointLog, Method};
 use dvrk_model::Model;
 use protocol_2019::{settings, stribeck_settings, Protocol};
@@ -320,7 +320,7 @@ fn rows(t: &JointLog, a: usize, b: usize) -> JointLog {
 /// default weight the held-out error is within 3 % of the fit without a prior (measured:
 /// +0.6/−0.0 % PSM, +2.0/+0.1 % MTM, entropic/Euclidean).
 fn priors_on_a_short_log(case: &Case) {
-    use dvrk_ident::settings::{Prior, PriorMetric};
+    use dvrk_ident::{Prior, PriorMetric};
     let Some((model, one, two)) = protocol_2019::load(&case.protocol) else {
         return;
     };
@@ -404,7 +404,7 @@ fn mtm_priors_on_a_short_log() {
 /// the masses a bound holds (the book's identification chapter, §6.5, says why the PSM's
 /// and the MTM's parallelogram links stay there).
 fn preset_is_plausible(case: &Case, preset_mean: f64) {
-    use dvrk_ident::request::{Overrides, Preset};
+    use dvrk_ident::{Overrides, Preset};
     let Some((model, train, test)) = protocol_2019::load(&case.protocol) else {
         return;
     };

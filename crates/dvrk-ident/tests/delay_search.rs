@@ -8,8 +8,8 @@
 use std::path::PathBuf;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::progress::Silent;
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 

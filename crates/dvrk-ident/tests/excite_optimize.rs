@@ -6,10 +6,10 @@
 
 use dvrk_ident::excite::optimize::{
     self, check_feasibility, criterion_value, objective_and_gradient, penalty_and_gradient,
-    Criterion, ExciteError, ExciteOptions, Limits,
+    Criterion, ExciteOptions, Limits,
 };
-use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::progress::Silent;
+use dvrk_ident::excite::{ExciteError, FourierTrajectory};
+use dvrk_ident::Silent;
 use dvrk_model::Model;
 
 /// The planar 2-link arm with a massless `tip` frame and joint limits, shared with the

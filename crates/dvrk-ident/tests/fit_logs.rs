@@ -6,11 +6,11 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::progress::Silent;
-use dvrk_ident::request::Streaming;
-use dvrk_ident::settings::Joints;
+use dvrk_ident::validate::{joint_metrics, prepare, JointMap};
+use dvrk_ident::Joints;
+use dvrk_ident::Silent;
+use dvrk_ident::Streaming;
 use dvrk_ident::{FitRequest, FitSettings, JointLog, LogSource, Method, Training};
 use dvrk_model::{Model, Workspace};
 use logs::{example, part};
@@ -53,10 +53,11 @@ fn two_logs_fit_as_their_stacked_samples_and_never_cross_the_boundary() {
     let (mut h, mut hb) = (vec![0.0; n * p], vec![0.0; n * k]);
     let mut row = 0;
     for d in &prepared {
-        let s = d.samples();
         let (mut q, mut dq, mut ddq) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         for i in 0..d.len() {
-            s.read(i, &mut q, &mut dq, &mut ddq);
+            for j in 0..n {
+                (q[j], dq[j], ddq[j]) = (d.q[(i, j)], d.dq[(i, j)], d.ddq[(i, j)]);
+            }
             model.regressor_into(&mut ws, &q, &dq, &ddq, &mut h);
             base.select_into(&h, p, &mut hb);
             for j in 0..n {
@@ -271,8 +272,7 @@ fn held_out(r: &dvrk_ident::FitResult, name: &str) -> f64 {
 /// not beat Coulomb + viscous by more than the noise's share of the error.
 #[test]
 fn select_chooses_the_friction_law_of_the_torques_by_held_out_error() {
-    use dvrk_ident::result::Folds;
-    use dvrk_ident::settings::Candidates;
+    use dvrk_ident::{Candidates, Folds};
     let plain = pendulum();
     let settings = |cands: &str| FitSettings {
         method: Method::Ols,

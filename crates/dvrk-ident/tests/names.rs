@@ -1,13 +1,13 @@
-//! Every option enum's names (`dvrk_ident::names::Named`): what the CLI's flags and
+//! Every option enum's names (`dvrk_ident::Named`): what the CLI's flags and
 //! Python's keyword arguments both parse. Kept out of `names.rs` so that the trait's
 //! module depends on none of the enums that implement it.
 
-use dvrk_ident::estimate::sdp::PriorMetric;
 use dvrk_ident::excite::optimize::Criterion;
 use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::LogFormat;
-use dvrk_ident::names::Named;
 use dvrk_ident::Coordinates;
+use dvrk_ident::Named;
+use dvrk_ident::PriorMetric;
 use dvrk_ident::{BoundsSet, Method};
 
 /// Every name parses back to its value in any case and with `-` for `_`; the

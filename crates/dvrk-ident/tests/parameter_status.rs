@@ -12,11 +12,11 @@
 //! every other link parameter (`L1zz`, `l1x`, `m2` lumped; `m1`, `Lxx … Lyz`, `lz`
 //! unseen) is not.
 
-use dvrk_ident::joint_log::uniform_time;
-use dvrk_ident::progress::Silent;
-use dvrk_ident::result::ParameterStatus;
 use dvrk_ident::simulate::{model_log, motion_torques};
+use dvrk_ident::ParameterStatus;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, JointLog, Method};
+use dvrk_logs::joint_log::uniform_time;
 use dvrk_model::{inertia, Model};
 use nalgebra::DMatrix;
 
@@ -252,8 +252,8 @@ fn a_result_written_before_parameter_statuses_still_loads() {
 /// value and leaves the base parameters where the data put them.
 #[test]
 fn a_partial_prior_moves_an_unidentified_mass_and_not_the_base_parameters() {
-    use dvrk_ident::request::PriorSource;
     use dvrk_ident::Overrides;
+    use dvrk_ident::PriorSource;
     let truth_model = arm();
     let log = simulate(&truth_model, &truth(&truth_model), 30.0, 100.0, 0.001);
     // The truth has m1 = 1.5 kg; the nominal says 3 kg.

@@ -5,8 +5,8 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 use dvrk_ident::excite::optimize::{optimize, ExciteOptions, Limits};
-use dvrk_ident::fit::prepare;
-use dvrk_ident::progress::Progress;
+use dvrk_ident::validate::prepare;
+use dvrk_ident::Progress;
 use dvrk_ident::{FitRequest, FitSettings, Method};
 use dvrk_model::Model;
 

@@ -1,9 +1,9 @@
 //! Reads the real 2019 dVRK logs from the shared data folder (not part of the
 //! repository). Skips with a message when they are not there.
 
-use dvrk_ident::joint_log::Coordinates;
 use dvrk_ident::log::{read, read_wpi, LogFormat};
 use dvrk_ident::signal::{process, Processing};
+use dvrk_ident::Coordinates;
 use std::path::PathBuf;
 
 fn shared(rel: &str) -> Option<PathBuf> {

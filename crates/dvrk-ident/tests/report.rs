@@ -7,13 +7,13 @@
 use std::path::PathBuf;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::{joint_metrics, predict, prepare, JointMap};
-use dvrk_ident::joint_log::JointLog;
-use dvrk_ident::progress::Silent;
 use dvrk_ident::report::draw::kinematic_drawing;
 use dvrk_ident::report::plot::{render, Figure, ImageFormat, MAX_POINTS};
 use dvrk_ident::report::{build, figures, ReportInput, ReportLog};
-use dvrk_ident::settings::Joints;
+use dvrk_ident::validate::{joint_metrics, predict, prepare, JointMap};
+use dvrk_ident::JointLog;
+use dvrk_ident::Joints;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, Method};
 use dvrk_model::Model;
 

@@ -5,13 +5,13 @@
 //! residual stays within the fit's noise floor.
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::{predict, prepare};
-use dvrk_ident::progress::Silent;
 use dvrk_ident::residual::{
     external_torque, tip_wrench, wrench_frame, ResidualOptions, DEFAULT_WRENCH_RCOND,
 };
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::validate::{predict, prepare};
 use dvrk_ident::FitRequest;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitResult, FitSettings, Joints};
 use dvrk_model::{Model, Payload, Workspace};
 use dvrk_test_support::{example, fixtures::example_params};

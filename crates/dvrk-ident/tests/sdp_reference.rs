@@ -17,8 +17,8 @@ mod protocol_2019;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use dvrk_ident::progress::Silent;
 use dvrk_ident::FitRequest;
+use dvrk_ident::Silent;
 use protocol_2019::{Protocol, MTM, PSM};
 use serde::{Deserialize, Serialize};
 

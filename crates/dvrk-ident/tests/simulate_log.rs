@@ -3,7 +3,7 @@
 //! inputs are refused with messages naming them.
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::to_model_coordinates;
+use dvrk_ident::simulate::to_model_coordinates;
 use dvrk_ident::simulate::{simulate, to_measured_coordinates, Simulation};
 use dvrk_ident::Coordinates;
 use dvrk_model::{Model, Workspace};

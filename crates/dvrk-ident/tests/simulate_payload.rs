@@ -4,8 +4,8 @@
 //! model coordinates, sample by sample; a bad torque file is refused.
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::external::ExternalTorque;
-use dvrk_ident::fit::to_model_coordinates;
+use dvrk_ident::simulate::to_model_coordinates;
+use dvrk_ident::simulate::ExternalTorque;
 use dvrk_ident::simulate::{motion_torques, simulate, Simulation};
 use dvrk_model::{Model, Payload};
 use nalgebra::DMatrix;

@@ -9,7 +9,7 @@
 mod protocol_2019;
 
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::progress::Silent;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, JointLog};
 use dvrk_model::Model;
 

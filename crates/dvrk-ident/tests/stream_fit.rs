@@ -8,12 +8,12 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::fit::to_model_coordinates;
 use dvrk_ident::log::{self, LogFormat, ReadOptions};
-use dvrk_ident::progress::{Progress, Silent};
-use dvrk_ident::request::Streaming;
+use dvrk_ident::simulate::to_model_coordinates;
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::Streaming;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, JointLog, LogSource, Method, Training};
+use dvrk_ident::{Progress, Silent};
 use dvrk_model::Model;
 
 fn example() -> PathBuf {

@@ -8,9 +8,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::log::{self, LogFormat};
-use dvrk_ident::progress::Silent;
-use dvrk_ident::request::Streaming;
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::Silent;
+use dvrk_ident::Streaming;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, LogSource, Method, Training};
 use dvrk_model::Model;
 

@@ -5,11 +5,12 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog, JointLogError};
-use dvrk_ident::signal::stream::process_in_blocks;
+use dvrk_ident::signal::process_in_blocks;
 use dvrk_ident::signal::{
     process, AccelerationSource, Cutoff, LowPass, Processed, Processing, SignalError, Stencil,
 };
+use dvrk_ident::{Coordinates, JointLog, JointLogError};
+use dvrk_logs::joint_log::uniform_time;
 use logs::worst_relative;
 use nalgebra::DMatrix;
 

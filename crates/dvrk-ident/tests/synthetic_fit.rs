@@ -3,10 +3,11 @@
 //! that the base parameters come back within what the noise allows, and that the
 //! semidefinite fit is consistent.
 
-use dvrk_ident::joint_log::{uniform_time, JointLog};
-use dvrk_ident::progress::Silent;
 use dvrk_ident::simulate::{model_log, motion_torques};
+use dvrk_ident::JointLog;
+use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitSettings, Method};
+use dvrk_logs::joint_log::uniform_time;
 use dvrk_model::{inertia, Model};
 use dvrk_test_support::fixtures::assert_recovered;
 use nalgebra::DMatrix;

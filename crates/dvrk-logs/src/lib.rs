@@ -7,8 +7,8 @@
 //! writes the CSV layouts and MCAP; [`output`] is where every output file is written,
 //! atomically. [`resample`] puts a log on a uniform clock while it is read.
 //!
-//! dvrk-ident builds its identification on this crate and re-exports these modules under
-//! the same paths (`dvrk_logs::log`, `dvrk_logs::joint_log`, `dvrk_ident::output`).
+//! dvrk-ident builds its identification on this crate and re-exports the [`log`] module
+//! as `dvrk_ident::log`, and `JointLog`, `Coordinates`, `Signal` and `Named` at its root.
 //!
 //! ```rust
 //! use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};

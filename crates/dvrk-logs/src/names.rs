@@ -5,7 +5,7 @@
 //!
 //! The trait lives with the logs, the lowest crate that names options (log formats, time
 //! sources, coordinates); dvrk-ident implements it for its own (estimators, criteria...)
-//! and re-exports this module as `dvrk_ident::names`.
+//! and re-exports the trait as `dvrk_ident::Named`.
 //!
 //! ```
 //! use dvrk_logs::log::LogFormat;

@@ -365,8 +365,8 @@ pub fn py_bool(b: bool) -> &'static str {
 }
 
 /// A keyword argument naming an option of the library (`method="sdp"`, `criterion=...`,
-/// `format=...`): parsed by the library ([`dvrk_ident::names::Named`]), as the command
+/// `format=...`): parsed by the library ([`dvrk_ident::Named`]), as the command
 /// line parses its flags, the error prefixed with the argument's name.
-pub fn named<T: dvrk_ident::names::Named>(argument: &str, text: &str) -> PyResult<T> {
+pub fn named<T: dvrk_ident::Named>(argument: &str, text: &str) -> PyResult<T> {
     T::parse_name(text).map_err(|e| crate::errors::input(format!("{argument}: {e}")))
 }

@@ -4,9 +4,10 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use dvrk_ident::fit::{to_model_coordinates, Prepared};
-use dvrk_ident::joint_log::{Coordinates, JointLog};
 use dvrk_ident::log::{self, mcap, LogFormat, ReadOptions};
+use dvrk_ident::simulate::to_model_coordinates;
+use dvrk_ident::validate::Prepared;
+use dvrk_ident::{Coordinates, JointLog};
 use nalgebra::DMatrix;
 use numpy::{PyArrayDyn, PyArrayMethods};
 use pyo3::prelude::*;
@@ -508,12 +509,12 @@ pub struct PreparedPy {
     /// In the joints shown (`inner` itself for the model coordinates).
     pub shown: Arc<Prepared>,
     pub joint_names: Vec<String>,
-    pub joints: dvrk_ident::settings::Joints,
+    pub joints: dvrk_ident::Joints,
 }
 
 impl PreparedPy {
     /// `p` (model coordinates) shown in the joints of `map`.
-    pub fn new(p: Prepared, map: &dvrk_ident::fit::JointMap) -> PreparedPy {
+    pub fn new(p: Prepared, map: &dvrk_ident::validate::JointMap) -> PreparedPy {
         let inner = Arc::new(p);
         let shown = match map.prepared(&inner) {
             std::borrow::Cow::Borrowed(_) => inner.clone(),

@@ -12,11 +12,12 @@
 //! | `SolverError` | `DvrkError`, `RuntimeError` | numerical failures (solver, base parameters), internal errors |
 //! | `NotConvergedError` | `SolverError` | a fit whose solver did not converge; `.result` holds the unconverged `FitResult` |
 
-use dvrk_ident::error::{Hint, SettingName};
 use dvrk_ident::excite::{ExciteError, FourierError};
 use dvrk_ident::log::LogError;
-use dvrk_ident::request::Setting;
 use dvrk_ident::IdentError;
+use dvrk_ident::Setting;
+use dvrk_ident::SettingName;
+use dvrk_logs::hint::Hint;
 use dvrk_model::ModelError;
 use pyo3::exceptions::{PyException, PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -154,7 +155,7 @@ fn keyword(hint: Hint) -> String {
 /// A library error's text as Python shows it: the settings it suggests as keywords
 /// ([`keyword`]), in it and in every error nested in it.
 pub fn text(e: &dyn std::fmt::Display) -> String {
-    dvrk_ident::error::spelled(e, keyword)
+    dvrk_logs::hint::spelled(e, keyword)
 }
 
 /// An exception of `kind` with `message` (a library error's as [`text`] gives it).

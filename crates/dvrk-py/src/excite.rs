@@ -3,9 +3,9 @@
 
 use std::path::PathBuf;
 
-use dvrk_ident::excite::optimize::{self, Excitation, ExciteError, ExciteOption, ExciteOptions};
-use dvrk_ident::excite::{FourierError, FourierTrajectory};
-use dvrk_ident::progress::Silent;
+use dvrk_ident::excite::optimize::{self, Excitation, ExciteOption, ExciteOptions};
+use dvrk_ident::excite::{ExciteError, FourierError, FourierTrajectory};
+use dvrk_ident::Silent;
 use numpy::PyArrayDyn;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;

@@ -5,11 +5,11 @@ use std::sync::Arc;
 
 use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::export::Export;
-use dvrk_ident::fit::{joint_metrics, predict, prepare as prepare_data, JointMap};
-use dvrk_ident::progress::Silent;
-use dvrk_ident::request::{FitRequest, LogSource, Streaming, Training};
-use dvrk_ident::settings::Joints;
+use dvrk_ident::validate::{joint_metrics, predict, prepare as prepare_data, JointMap};
 use dvrk_ident::JointLog;
+use dvrk_ident::Joints;
+use dvrk_ident::Silent;
+use dvrk_ident::{FitRequest, LogSource, Streaming, Training};
 use dvrk_ident::{FitResult, FitSettings};
 use dvrk_model::Model;
 use numpy::PyArrayDyn;
@@ -125,7 +125,7 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///
 /// The keywords are the flags of ``dvrk-ident fit`` (``filter_torque`` is
 /// ``--filter-torque``...), applied by the same library request
-/// (``dvrk_ident::request::FitRequest``), so both give the same result document.
+/// (``dvrk_ident::FitRequest``), so both give the same result document.
 ///
 /// A fit whose solver did not converge raises ``NotConvergedError`` (its ``result``
 /// attribute holds the unconverged :class:`FitResult`) unless ``allow_unconverged``.
@@ -511,10 +511,7 @@ impl FitResultPy {
                 }
             };
         }
-        Py::new(
-            py,
-            ModelPy::of_result(py, &self.inner.robot_source, settings)?,
-        )
+        Py::new(py, ModelPy::of_result(py, self.inner.robot(), settings)?)
     }
 
     /// The processed samples of ``data`` with this result's processing settings (see

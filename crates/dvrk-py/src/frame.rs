@@ -2,8 +2,8 @@
 //! (converted exactly), joint columns named `position.<joint>` (or a MultiIndex), and
 //! DataFrames out. pandas is imported only when a DataFrame is asked for.
 
-use dvrk_ident::columns::{are_model_coordinate_names, signal_of, ColumnLayout};
-use dvrk_ident::joint_log::{Coordinates, Signal};
+use dvrk_ident::{Coordinates, Signal};
+use dvrk_logs::columns::{are_model_coordinate_names, signal_of, ColumnLayout};
 use dvrk_model::Model;
 use nalgebra::DMatrix;
 use pyo3::prelude::*;

@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use dvrk_ident::result::write_atomic;
+use dvrk_ident::log::write_atomic;
+use dvrk_ident::IdentError;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use serde::de::DeserializeOwned;
@@ -40,6 +41,8 @@ pub fn from_python<T: DeserializeOwned>(
 /// The `write` of every class with a JSON document: `text` written to `path` atomically
 /// (temporary file and rename), without the GIL.
 pub fn write_document(py: Python<'_>, path: &Path, text: String) -> PyResult<()> {
-    py.detach(move || write_atomic(path, &text))
-        .map_err(from_ident)
+    py.detach(move || {
+        write_atomic(path, |w| w.write_all(text.as_bytes())).map_err(IdentError::from)
+    })
+    .map_err(from_ident)
 }

@@ -4,9 +4,9 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::progress::Silent;
-use dvrk_ident::request::{LogSource, ObserveRequest};
-use dvrk_ident::state::ObservationState;
+use dvrk_ident::ObservationState;
+use dvrk_ident::Silent;
+use dvrk_ident::{LogSource, ObserveRequest};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
@@ -107,13 +107,13 @@ impl ObservationPy {
     #[getter]
     fn logs<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let list = PyList::empty(py);
-        for l in &self.inner.observed.logs {
+        for (info, samples) in self.inner.logs() {
             let d = PyDict::new(py);
-            d.set_item("path", &l.info.path)?;
-            d.set_item("sha256", &l.info.sha256)?;
-            d.set_item("bytes", l.info.bytes)?;
-            d.set_item("source", &l.info.source)?;
-            d.set_item("samples", l.parts.first().map_or(0, |p| p.rows()))?;
+            d.set_item("path", &info.path)?;
+            d.set_item("sha256", &info.sha256)?;
+            d.set_item("bytes", info.bytes)?;
+            d.set_item("source", &info.source)?;
+            d.set_item("samples", samples)?;
             list.append(d)?;
         }
         Ok(list)
@@ -130,7 +130,7 @@ impl ObservationPy {
         format!(
             "Observation(robot={}, {} log(s), {} samples)",
             self.inner.robot,
-            self.inner.observed.logs.len(),
+            self.inner.logs().len(),
             self.inner.samples()
         )
     }

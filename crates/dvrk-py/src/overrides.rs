@@ -1,15 +1,15 @@
 //! The fit options as keyword arguments (`**options` of `fit`, `observe` and
 //! `prepare`): each named as the library's option ([`Setting::name`]), converted in one
 //! place ([`options`]) by the library's one conversion
-//! ([`request::Overrides::from_values`]). The type stub lists them; a test checks it
+//! ([`Overrides::from_values`]). The type stub lists them; a test checks it
 //! against [`options_table`], so an option the stub misses fails a test.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use dvrk_ident::request::{self, PriorSource, Setting, SettingError};
-use dvrk_ident::settings::Joints;
 use dvrk_ident::FitSettings;
+use dvrk_ident::Joints;
+use dvrk_ident::{Overrides, PriorSource, Setting, SettingError};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
@@ -74,10 +74,7 @@ pub(crate) fn unexpected(function: &str, name: &str) -> PyErr {
 /// The fit options among `function`'s keyword arguments (`None`: not given) as the
 /// library's overrides; a keyword that is not one of `function`'s options is a
 /// `TypeError`, as Python's own.
-pub(crate) fn options(
-    function: &str,
-    kwargs: Option<&Bound<'_, PyDict>>,
-) -> PyResult<request::Overrides> {
+pub(crate) fn options(function: &str, kwargs: Option<&Bound<'_, PyDict>>) -> PyResult<Overrides> {
     let scope = FUNCTIONS
         .iter()
         .find(|(f, _)| *f == function)
@@ -111,7 +108,7 @@ pub(crate) fn options(
         }
         values.push((setting, json(&value, keyword(setting))?));
     }
-    let mut overrides = request::Overrides::from_values(values).map_err(setting_error)?;
+    let mut overrides = Overrides::from_values(values).map_err(setting_error)?;
     if in_memory.is_some() {
         overrides.prior = in_memory;
     }

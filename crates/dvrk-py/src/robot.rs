@@ -46,10 +46,10 @@ impl ModelPy {
         }
     }
 
-    /// The robot of a fit result: its robot (built-in name or file) with the fit's
-    /// model options (Stribeck and Dahl terms, mounting pitch, bounds).
-    pub fn of_result(py: Python<'_>, robot_source: &str, fit: FitSettings) -> PyResult<ModelPy> {
-        let name = dvrk_ident::result::loadable_robot(robot_source).to_string();
+    /// The robot of a fit result (`FitResult::robot`: a built-in name or file) with the
+    /// fit's model options (Stribeck and Dahl terms, mounting pitch, bounds).
+    pub fn of_result(py: Python<'_>, robot: &str, fit: FitSettings) -> PyResult<ModelPy> {
+        let name = robot.to_string();
         let (model, origin, fit) = py
             .detach(move || {
                 let (model, origin) = Origin::load(&name)?;

@@ -6,10 +6,10 @@ use anyhow::Result;
 use clap::builder::StyledStr;
 use dvrk_ident::log::mcap::TimeSource;
 use dvrk_ident::log::{LogFormat, ReadOptions, Resampling};
-use dvrk_ident::names::Named;
-use dvrk_ident::request::Setting;
-use dvrk_ident::settings::Joints;
 use dvrk_ident::JointLog;
+use dvrk_ident::Joints;
+use dvrk_ident::Named;
+use dvrk_ident::Setting;
 
 /// Help headings: every subcommand groups its options under these (those it has).
 pub const INPUT: &str = "Input";
@@ -41,7 +41,7 @@ pub struct McapArgs {
     /// where a fit's options are taken ([`super::settings::SettingFlags`] reads it), a
     /// reading option elsewhere.
     #[arg(long, value_name = "HZ", help_heading = PROCESSING,
-          help = dvrk_ident::request::Setting::Resample.doc())]
+          help = dvrk_ident::Setting::Resample.doc())]
     pub resample: Option<f64>,
     /// Recordings: the largest size (MiB) a zstd- or lz4-compressed sqlite3 .db3 or ROS 1
     /// .bag may decompress to in the temporary folder [default: 100 times its compressed

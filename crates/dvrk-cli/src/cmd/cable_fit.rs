@@ -2,8 +2,8 @@
 //! sweep in both directions (the MTM joint-4 cable).
 
 use anyhow::{Context, Result};
-use dvrk_ident::cable::{fit_cable, CableSettings};
-use dvrk_ident::joint_log::Signal;
+use dvrk_ident::Signal;
+use dvrk_ident::{fit_cable, CableSettings};
 
 use super::args::{MODEL, OUTPUT, PROCESSING};
 use super::emit;

@@ -69,7 +69,7 @@ pub fn run(args: Args) -> Result<()> {
         (None, _) => log.coordinates,
     };
     let out = match (target, &model) {
-        (Coordinates::Model, Some(m)) => dvrk_ident::fit::to_model_coordinates(m, &log)?,
+        (Coordinates::Model, Some(m)) => dvrk_ident::simulate::to_model_coordinates(m, &log)?,
         (Coordinates::Measured, Some(m)) => to_measured_coordinates(m, &log)?,
         (t, None) if t == log.coordinates => log,
         (t, None) => bail!(

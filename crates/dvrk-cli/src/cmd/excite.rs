@@ -11,9 +11,9 @@ use dvrk_ident::excite::optimize::{
     self, Criterion, Evaluation, ExciteOption, ExciteOptions, Limits,
 };
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::output::Outputs;
 use dvrk_ident::report::figure_bytes;
 use dvrk_ident::report::figures::excitation_figure;
+use dvrk_logs::output::Outputs;
 use dvrk_model::{BaseParameters, Limit, Model};
 use std::path::Path;
 
@@ -172,9 +172,11 @@ impl LimitsOf {
         })
     }
 
-    fn name(&self, e: optimize::ExciteError) -> anyhow::Error {
+    fn name(&self, e: dvrk_ident::excite::ExciteError) -> anyhow::Error {
         match e {
-            optimize::ExciteError::ImpossibleLimits(m) if !m.starts_with(&self.source) => {
+            dvrk_ident::excite::ExciteError::ImpossibleLimits(m)
+                if !m.starts_with(&self.source) =>
+            {
                 anyhow::anyhow!("{}: impossible limits: {m}", self.source)
             }
             other => other.into(),

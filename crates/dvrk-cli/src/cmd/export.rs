@@ -9,7 +9,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use dvrk_ident::export::{dvrk_gc, Export, UrdfTemplate};
-use dvrk_ident::output::Outputs;
+use dvrk_logs::output::Outputs;
 use dvrk_model::Model;
 
 use super::args::{INPUT, MODEL, OUTPUT};

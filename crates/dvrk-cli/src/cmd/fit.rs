@@ -6,11 +6,11 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
-use dvrk_ident::result::{LinkResult, ParameterStatus};
-use dvrk_ident::state::ObservationState;
+use dvrk_ident::ObservationState;
+use dvrk_ident::{FitOutcome, FitRequest, LogSource, PriorSource, Streaming, Training};
 use dvrk_ident::{FitResult, JointLog};
+use dvrk_ident::{LinkResult, ParameterStatus};
+use dvrk_logs::output::Outputs;
 use dvrk_model::Model;
 
 use super::args::{LogArgs, INPUT, MODEL, OUTPUT};

@@ -18,9 +18,9 @@ pub mod simulate;
 pub mod validate;
 
 use anyhow::{bail, Context, Result};
-use dvrk_ident::names::Named;
-use dvrk_ident::output::Inputs;
 use dvrk_ident::FitResult;
+use dvrk_ident::Named;
+use dvrk_logs::output::Inputs;
 use dvrk_model::Model;
 
 /// The clap parser of a flag whose values are a library option enum's names
@@ -130,7 +130,7 @@ pub fn emit_summary(text: &str, stdout_taken: bool) -> Result<()> {
 }
 
 /// Checks every output of a command before any work is done (see
-/// [`dvrk_ident::output`]): files `(flag, path)` and folders `(flag, path)` must be
+/// [`dvrk_logs::output`]): files `(flag, path)` and folders `(flag, path)` must be
 /// writable destinations whose folder exists, no two the same, at most one `-`
 /// (standard output), none of them one of the command's `inputs`. Returns whether one of
 /// them is standard output.
@@ -139,7 +139,7 @@ pub fn check_outputs(
     dirs: &[(&str, Option<&str>)],
     inputs: &Inputs,
 ) -> Result<bool> {
-    use dvrk_ident::output::{check_dir, Destination};
+    use dvrk_logs::output::{check_dir, Destination};
     let mut seen: Vec<(Option<std::path::PathBuf>, &str)> = Vec::new();
     for &(flag, path) in files.iter().chain(dirs) {
         let Some(path) = path else { continue };
@@ -220,7 +220,7 @@ pub fn parse_vector(text: &str, n: usize, flag: &str) -> Result<Vec<f64>> {
         bail!("{flag}: value {x} is not finite");
     }
     // The range of logged values (positions, velocities; accelerations alike).
-    let max = dvrk_ident::joint_log::Signal::Position.max_magnitude();
+    let max = dvrk_ident::Signal::Position.max_magnitude();
     if let Some(x) = v.iter().find(|x| x.abs() > max) {
         bail!(
             "{flag}: value {} is beyond the accepted ±{max:e}",
@@ -282,7 +282,7 @@ pub fn read_params<'m>(
 /// The note `validate` and `report` print when their processing flags change the fit's
 /// settings (`changed`: [`dvrk_ident::FitSettings::differences`] from the fit's), so a
 /// log's numbers are not read as the fit's; `None` when nothing changed.
-pub fn settings_note(changed: &[dvrk_ident::settings::Difference]) -> Option<String> {
+pub fn settings_note(changed: &[dvrk_ident::Difference]) -> Option<String> {
     if changed.is_empty() {
         return None;
     }

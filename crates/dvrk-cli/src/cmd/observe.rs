@@ -1,12 +1,12 @@
 //! `dvrk-ident observe LOG... --robot ROBOT --out part.obs`: the map of a distributed fit.
 //! The logs are processed and reduced as `fit` does before its estimator, and the state
-//! ([`dvrk_ident::state`]) is written; `fit --states` merges states and fits them.
+//! ([`dvrk_ident::ObservationState`]) is written; `fit --states` merges states and fits them.
 
 use std::path::Path;
 
 use anyhow::Result;
-use dvrk_ident::output::Outputs;
-use dvrk_ident::request::{LogSource, ObserveRequest, Streaming};
+use dvrk_ident::{LogSource, ObserveRequest, Streaming};
+use dvrk_logs::output::Outputs;
 use dvrk_model::Model;
 
 use super::args::{LogArgs, INPUT, MODEL, OUTPUT};
@@ -66,7 +66,7 @@ pub fn run(args: Args) -> Result<()> {
             "{}: robot {}, {} log(s), {} samples, {} bytes",
             args.out,
             state.robot,
-            state.observed.logs.len(),
+            state.logs().len(),
             state.samples(),
             bytes.len()
         ),

@@ -6,8 +6,8 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::Result;
-use dvrk_ident::output::Outputs;
 use dvrk_ident::payload::identify_payload;
+use dvrk_logs::output::Outputs;
 use serde_json::json;
 
 use super::args::{MODEL, OUTPUT};

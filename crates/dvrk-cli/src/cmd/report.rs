@@ -4,12 +4,12 @@
 use std::path::Path;
 
 use anyhow::{bail, Context, Result};
-use dvrk_ident::excite::fourier::FourierTrajectory;
+use dvrk_ident::excite::FourierTrajectory;
 use dvrk_ident::log::ReadOptions;
-use dvrk_ident::output::Outputs;
 use dvrk_ident::report::{self, ReportInput, ReportLog};
-use dvrk_ident::result::InputInfo;
+use dvrk_ident::InputInfo;
 use dvrk_ident::{FitResult, FitSettings, JointLog};
+use dvrk_logs::output::Outputs;
 use dvrk_model::Model;
 
 use super::args::{JointsArgs, INPUT, OUTPUT};

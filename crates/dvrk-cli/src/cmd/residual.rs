@@ -6,16 +6,16 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use anyhow::{bail, Result};
-use dvrk_ident::fit::JointMap;
-use dvrk_ident::joint_log::Coordinates;
 use dvrk_ident::log::mcap;
-use dvrk_ident::output::Outputs;
 use dvrk_ident::report::residual::residual_report;
 use dvrk_ident::residual::{
     external_torque, ResidualOptions, TipWrench, DEFAULT_OBSERVER_GAIN, DEFAULT_WRENCH_RCOND,
     WRENCH_COMPONENTS,
 };
-use dvrk_ident::settings::Joints;
+use dvrk_ident::validate::JointMap;
+use dvrk_ident::Coordinates;
+use dvrk_ident::Joints;
+use dvrk_logs::output::Outputs;
 use serde_json::json;
 
 use super::args::{JointsArgs, MODEL, OUTPUT};

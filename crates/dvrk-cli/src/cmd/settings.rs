@@ -10,10 +10,10 @@ use std::marker::PhantomData;
 use anyhow::Result;
 use clap::parser::ValueSource;
 use clap::{Arg, ArgAction, ArgMatches, Command};
-use dvrk_ident::error::SettingName;
-use dvrk_ident::request::{Overrides, Preset, Setting, SettingError};
-use dvrk_ident::settings::{FitSettings, Joints, PriorMetric};
+use dvrk_ident::SettingName;
 use dvrk_ident::{BoundsSet, IdentError, Method};
+use dvrk_ident::{FitSettings, Joints, PriorMetric};
+use dvrk_ident::{Overrides, Preset, Setting, SettingError};
 
 use super::args::{ESTIMATOR, INPUT, MODEL, OUTPUT, PROCESSING};
 use super::{at_least_one, named};
@@ -353,7 +353,7 @@ mod tests {
     /// nested error too: the library's default spelling is the flags [`flag`] declares.
     #[test]
     fn suggested_settings_are_named_as_flags() {
-        use dvrk_ident::error::Hint;
+        use dvrk_logs::hint::Hint;
         for (hint, setting) in [
             (Hint::Cutoff, Setting::Cutoff),
             (Hint::Trim, Setting::Trim),

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::{bail, Result};
 use clap_complete::Shell;
-use dvrk_ident::output::Outputs;
+use dvrk_logs::output::Outputs;
 
 use super::args::OUTPUT;
 use super::emit;

@@ -5,10 +5,10 @@ use std::path::Path;
 
 use anyhow::{bail, Context, Result};
 use dvrk_ident::excite::FourierTrajectory;
-use dvrk_ident::external::ExternalTorque;
-use dvrk_ident::fit::delay::DelayOption;
 use dvrk_ident::log::{self, mcap, LogFormat};
+use dvrk_ident::simulate::ExternalTorque;
 use dvrk_ident::simulate::{simulate, Simulation};
+use dvrk_ident::DelayOption;
 use dvrk_model::Model;
 
 use super::args::{MountingArgs, INPUT, MODEL, OUTPUT};
@@ -104,7 +104,7 @@ pub fn write_log(
         LogFormat::Mcap => mcap::write_mcap(path, log, topic, &mcap::McapWriteOptions::default())?,
         LogFormat::Wpi => {
             let in_model = match model {
-                Some(m) => dvrk_ident::fit::to_model_coordinates(m, log)?,
+                Some(m) => dvrk_ident::simulate::to_model_coordinates(m, log)?,
                 None => log.clone(),
             };
             log::write(path, &in_model, LogFormat::Wpi)?
@@ -180,8 +180,8 @@ pub fn run(args: Args) -> Result<()> {
     let format = output_format(&args.out, args.out_format);
     let log = simulate(model, &params, &traj, &sim)?;
     write_log(Some(model), &log, &args.out, format, &args.out_topic)?;
-    let bytes = match dvrk_ident::output::Destination::of(Path::new(&args.out)) {
-        Ok(dvrk_ident::output::Destination::File(p)) => std::fs::metadata(p)
+    let bytes = match dvrk_logs::output::Destination::of(Path::new(&args.out)) {
+        Ok(dvrk_logs::output::Destination::File(p)) => std::fs::metadata(p)
             .map(|m| format!(", {} bytes", m.len()))
             .unwrap_or_default(),
         _ => String::new(),

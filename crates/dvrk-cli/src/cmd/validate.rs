@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use anyhow::Result;
-use dvrk_ident::fit::{joint_metrics, prepare, JointMap};
+use dvrk_ident::validate::{joint_metrics, prepare, JointMap};
 use serde_json::json;
 
 use super::args::{JointsArgs, INPUT, OUTPUT};

@@ -7,7 +7,8 @@ use std::fmt::Debug;
 use std::path::Path;
 use std::process::Command;
 
-use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
+use dvrk_ident::{Coordinates, JointLog};
+use dvrk_logs::joint_log::uniform_time;
 use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
 

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 /// (`"Solved"`, `"AlmostSolved"`, ...).
 ///
 /// ```rust
-/// use dvrk_ident::estimate::SolverStatus;
+/// use dvrk_ident::SolverStatus;
 ///
 /// assert!(SolverStatus::Solved.converged());
 /// // Reduced accuracy is not a result.

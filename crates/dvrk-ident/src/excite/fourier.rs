@@ -148,7 +148,7 @@ impl FourierTrajectory {
     }
 
     /// Checks sizes (`q0`, `a`, `b`, `coordinates`), that the order is at least 1, the
-    /// base frequency in (0, [`MAX_BASE_FREQUENCY_HZ`]] and every coefficient finite and
+    /// base frequency in (0, `MAX_BASE_FREQUENCY_HZ`] and every coefficient finite and
     /// at most [`dvrk_model::input::MAX_ANGLE_RAD`] in magnitude. `source` names the input
     /// in the message.
     pub fn validate(&self, source: &str) -> Result<(), FourierError> {

@@ -1,14 +1,14 @@
 //! Excitation trajectories: the motions a robot runs so that its log determines the
-//! dynamic parameters. [`fourier`]: finite Fourier series (the 2019 package's
+//! dynamic parameters. [`FourierTrajectory`]: finite Fourier series (the 2019 package's
 //! parametrization), with their analytic derivatives and the loader of the 2019
 //! coefficient files.
 
 mod criterion;
 mod error;
-pub mod fourier;
+mod fourier;
 mod grid;
 mod lbfgs;
-pub mod limits;
+mod limits;
 pub mod optimize;
 mod options;
 mod rng;

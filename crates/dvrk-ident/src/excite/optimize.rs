@@ -67,7 +67,7 @@ use serde::{Deserialize, Serialize};
 
 use super::criterion::CriterionEval;
 pub use super::criterion::{Criterion, CriterionValue};
-pub use super::error::ExciteError;
+use super::error::ExciteError;
 use super::grid::{from_x, to_x, Grid};
 use super::limits::{Constraints, Enforced, Multipliers};
 pub use super::limits::{Feasibility, Limits, Violation};

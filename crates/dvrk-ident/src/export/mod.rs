@@ -195,7 +195,7 @@ impl Export<'_> {
     }
 
     /// The values this export writes of `result` that the data did not determine
-    /// (`result.parameter_status`, see [`crate::fit::status`]), one line each; empty for
+    /// (`result.parameter_status`, see `crate::fit::status`), one line each; empty for
     /// a result written before parameter statuses. What each format writes: a URDF the
     /// links' mass, centre of mass and inertia (a generated one also lists every
     /// element's parameter in its header), `params.json` the links and the elements; the

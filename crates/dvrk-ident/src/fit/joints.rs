@@ -29,8 +29,8 @@ pub fn units(is_length: bool) -> [&'static str; 4] {
 /// the other way. Known forces stay subtracted, as in the model-coordinate torques.
 ///
 /// ```
-/// use dvrk_ident::fit::JointMap;
-/// use dvrk_ident::settings::Joints;
+/// use dvrk_ident::validate::JointMap;
+/// use dvrk_ident::Joints;
 /// use nalgebra::DMatrix;
 ///
 /// let psm = dvrk_model::Model::builtin("psm").unwrap();

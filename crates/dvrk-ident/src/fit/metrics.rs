@@ -281,10 +281,3 @@ impl TorqueRange {
             .collect()
     }
 }
-
-/// Joint weights `1 / (max − min)` of the prepared torques (1/N·m or 1/N).
-pub fn range_weights(data: &Prepared) -> Vec<f64> {
-    let mut r = TorqueRange::new(data.tau.ncols());
-    r.add(&data.tau);
-    r.weights()
-}

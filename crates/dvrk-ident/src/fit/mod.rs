@@ -18,11 +18,12 @@ pub mod select;
 pub mod status;
 pub mod stream;
 
-pub use document::ELEMENT_TOLERANCE;
-pub use joints::{units, JointMap};
-pub use metrics::{joint_metrics, predict, range_weights, MetricSums, TorqueRange};
+#[cfg(feature = "report")]
+pub use joints::units;
+pub use joints::JointMap;
+pub use metrics::{joint_metrics, predict, TorqueRange};
 pub use observed::{Observed, ObservedLog};
-pub use prepare::{prepare, to_model_coordinates, LogData, Prepared, RANGE_MARGIN};
+pub use prepare::{prepare, to_model_coordinates, LogData, Prepared};
 
 pub(crate) use memory::{fit_logs, observe_prepared, prepare_logs, test_inputs};
 pub(crate) use observed::{fit_observed, no_delay_search, no_training_log, MetricPasses};

@@ -30,7 +30,7 @@ pub struct Prepared {
 
 impl Prepared {
     /// The samples as the regressor and the metrics read them.
-    pub fn samples(&self) -> Samples<'_> {
+    pub(crate) fn samples(&self) -> Samples<'_> {
         Samples {
             q: &self.q,
             dq: &self.dq,
@@ -253,7 +253,7 @@ pub(crate) fn subtract_known_forces(model: &Model, t: &mut JointLog) {
 /// Model coordinates, known forces subtracted (on the raw positions, as in 2019), then
 /// processed by the block processor ([`process_in_blocks`]: equal to
 /// [`crate::signal::process`] to 1e-12 relative, and to the last bit to what
-/// [`super::stream`] sees of the same log read from its file).
+/// `super::stream` sees of the same log read from its file).
 pub fn prepare(
     model: &Model,
     log: &JointLog,
@@ -295,7 +295,8 @@ pub struct LogData<'a> {
 }
 
 impl<'a> LogData<'a> {
-    /// Samples without a file.
+    /// Samples without a file (the observation states' tests).
+    #[cfg(all(test, feature = "recordings"))]
     pub fn new(samples: &'a JointLog) -> Self {
         LogData {
             samples,

@@ -7,7 +7,7 @@ use nalgebra::DMatrix;
 
 use super::curves::Curve;
 use super::plot::{colors, Panel, PanelGrid, Series, SeriesStyle};
-use crate::excite::fourier::FourierTrajectory;
+use crate::excite::FourierTrajectory;
 use crate::fit::{JointMap, Prepared};
 use crate::result::{FitResult, JointMetrics};
 

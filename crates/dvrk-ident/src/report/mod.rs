@@ -18,7 +18,7 @@ use dvrk_model::Model;
 use thiserror::Error;
 
 use crate::error::IdentError;
-use crate::excite::fourier::FourierTrajectory;
+use crate::excite::FourierTrajectory;
 use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, JointMap, Prepared};
 use crate::joint_log::JointLog;
 use crate::log::ReadOptions;

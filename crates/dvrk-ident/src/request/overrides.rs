@@ -28,7 +28,7 @@ macro_rules! overrides {
         /// unknown keys refused.
         ///
         /// ```rust
-        /// use dvrk_ident::request::Overrides;
+        /// use dvrk_ident::Overrides;
         /// use dvrk_ident::signal::Cutoff;
         /// use dvrk_ident::{FitSettings, Method};
         ///
@@ -171,8 +171,8 @@ impl Overrides {
     /// `"5,5,3"`, `"auto"`); an error names the option.
     ///
     /// ```rust
-    /// use dvrk_ident::request::{Overrides, Setting};
-    /// use dvrk_ident::fit::delay::DelayOption;
+    /// use dvrk_ident::{Overrides, Setting};
+    /// use dvrk_ident::DelayOption;
     /// use serde_json::json;
     ///
     /// let o = Overrides::from_values([

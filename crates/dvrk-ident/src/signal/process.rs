@@ -13,9 +13,9 @@ use crate::joint_log::JointLog;
 type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 
 /// The reference processing of a whole log in memory, which the fit does not call: the
-/// fit processes every log block by block ([`stream::BlockProcessor`], through
+/// fit processes every log block by block (`stream::BlockProcessor`, through
 /// [`crate::fit::prepare`]), and the tests hold that processor to this definition (1e-12
-/// relative; the filters' settling tolerance, [`stream::SETTLE_TOLERANCE`]). The steps:
+/// relative; the filters' settling tolerance, `stream::SETTLE_TOLERANCE`). The steps:
 /// 1. validate it; resample to `resample_hz` if set, else require a uniform clock;
 /// 2. low-pass q (zero phase), and tau with `filter_torque`;
 /// 3. dq: the filtered measured velocity, else the derivative of the filtered q;
@@ -26,7 +26,8 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 ///
 /// ```rust
 /// use dvrk_ident::signal::{process, Processing};
-/// use dvrk_ident::joint_log::{uniform_time, Coordinates, JointLog};
+/// use dvrk_ident::{Coordinates, JointLog};
+/// use dvrk_logs::joint_log::uniform_time;
 /// use nalgebra::DMatrix;
 /// let n = 1000;
 /// let rate = 200.0;

@@ -12,7 +12,7 @@ mod timing;
 mod zero_phase;
 
 pub(crate) use super::resample::Resampler;
-pub use processor::{BlockProcessor, SETTLE_TOLERANCE};
+pub use processor::BlockProcessor;
 pub use timing::{LogTiming, TimingSurvey};
 
 use super::{stack_rows, Processed, Processing, SignalError};
@@ -20,9 +20,9 @@ use crate::joint_log::JointLog;
 use nalgebra::DMatrix;
 
 /// The processing of a trajectory held in memory as consecutive `blocks` (one or more)
-/// by a [`BlockProcessor`] (a timing survey, then the blocks in order): what a log
+/// by a `BlockProcessor` (a timing survey, then the blocks in order): what a log
 /// streamed from disk gets, to the last bit, for a log in memory. It equals
-/// [`super::process`] of the whole to [`SETTLE_TOLERANCE`] relative.
+/// [`super::process`] of the whole to `SETTLE_TOLERANCE` relative.
 pub fn process_in_blocks(
     blocks: &[JointLog],
     settings: &Processing,

@@ -23,13 +23,16 @@ use crate::error::IdentError;
 use crate::fit::{fit_observed, prepare_logs, test_inputs, LogData, Observed};
 use crate::log::LogReader;
 use crate::progress::Progress;
-use crate::result::FitResult;
+use crate::result::{FitResult, InputInfo};
 use crate::settings::FitSettings;
 use crate::signal::Processing;
 
 mod codec;
 
-pub use codec::{MAGIC, MAX_FACTOR_ENTRY, MAX_HEADER_BYTES, MAX_SAMPLES_PER_LOG, VERSION};
+#[cfg(all(test, feature = "recordings"))]
+use codec::MAGIC;
+#[cfg(all(test, feature = "recordings"))]
+mod tests;
 
 /// The training logs of a fit reduced, with what identifies the model and the
 /// processing they were reduced for (see the module docs).
@@ -54,7 +57,7 @@ pub struct ObservationState {
     /// merge must agree on it.
     pub mounting_pitch_deg: Option<f64>,
     /// The reduced logs: each log's factors, their merge and the torque range.
-    pub observed: Observed,
+    pub(crate) observed: Observed,
 }
 
 /// SHA-256 (hex) of what makes a model's regressor: coordinates, measured joints and
@@ -128,7 +131,7 @@ pub fn model_hash(model: &Model) -> String {
 impl ObservationState {
     /// The state of reduced logs: `model` is the robot as loaded, `settings` those of
     /// the reduction (the processing and the Stribeck velocity are kept).
-    pub fn new(
+    pub(crate) fn new(
         model: &Model,
         settings: &FitSettings,
         observed: Observed,
@@ -148,7 +151,7 @@ impl ObservationState {
 
     /// The map: training logs in memory, each processed on its own and reduced, as
     /// the fit of logs in memory does before the estimator.
-    pub fn observe(
+    pub(crate) fn observe(
         model: &Model,
         logs: &[LogData<'_>],
         settings: &FitSettings,
@@ -164,7 +167,7 @@ impl ObservationState {
 
     /// The map of logs read from their files block by block
     /// ([`crate::fit::stream::observe_stream_logs`]): the same state as [`Self::observe`].
-    pub fn observe_stream(
+    pub(crate) fn observe_stream(
         model: &Model,
         logs: &[&LogReader],
         settings: &FitSettings,
@@ -208,6 +211,15 @@ impl ObservationState {
     fn shape(&self) -> (usize, usize) {
         let parts = &self.observed.parts;
         (parts.len(), parts.first().map_or(0, |p| p.r().ncols()))
+    }
+
+    /// Each log's provenance (role `train`, path, hash, bytes, source) and its processed
+    /// samples, in the order the logs were observed and merged.
+    pub fn logs(&self) -> impl ExactSizeIterator<Item = (&InputInfo, usize)> {
+        self.observed
+            .logs
+            .iter()
+            .map(|l| (&l.info, l.parts.first().map_or(0, |p| p.rows())))
     }
 
     /// Processed samples of all the logs.

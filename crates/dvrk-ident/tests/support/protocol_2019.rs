@@ -109,7 +109,7 @@ pub fn delay_settings(protocol: &Protocol) -> FitSettings {
     s.bounds = None;
     s.ellipsoids = true;
     s.stribeck_velocity = Some(0.3);
-    s.delay_search_s = Some(dvrk_ident::fit::delay::DEFAULT_MAX_DELAY_S);
+    s.delay_search_s = Some(dvrk_ident::DEFAULT_MAX_DELAY_S);
     s
 }
 

@@ -20,7 +20,7 @@ pub fn fit_example(dir: &Path) -> PathBuf {
         ..FitRequest::new(Training::Logs(vec![LogSource::File(log.into())]))
     };
     let outcome = request
-        .run(Some(&psm), &dvrk_ident::progress::Silent)
+        .run(Some(&psm), &dvrk_ident::Silent)
         .expect("the example fits");
     assert_eq!(outcome.result.method, "sdp");
     assert!(outcome.result.solver.converged);

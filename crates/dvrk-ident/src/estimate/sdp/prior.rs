@@ -134,16 +134,8 @@ pub const MAX_PRIOR_WEIGHT: f64 = 1e6;
 pub const MIN_PRIOR_WEIGHT: f64 = 1e-9;
 
 /// Why `weight` is not a prior weight, if it is not: 0 (no pull) or within
-/// [[`MIN_PRIOR_WEIGHT`], [`MAX_PRIOR_WEIGHT`]].
-///
-/// ```
-/// use dvrk_ident::estimate::sdp::prior_weight_problem;
-/// assert!(prior_weight_problem(0.0).is_none() && prior_weight_problem(10.0).is_none());
-/// assert_eq!(
-///     prior_weight_problem(1e-300).unwrap(),
-///     "must be 0 or in [1e-9, 1e6], got 1e-300"
-/// );
-/// ```
+/// [[`MIN_PRIOR_WEIGHT`], [`MAX_PRIOR_WEIGHT`]] (tests/prior.rs:
+/// `prior_weights_are_zero_or_in_range`).
 pub fn prior_weight_problem(weight: f64) -> Option<String> {
     if weight == 0.0 || (MIN_PRIOR_WEIGHT..=MAX_PRIOR_WEIGHT).contains(&weight) {
         None

@@ -245,16 +245,6 @@ impl BlockProcessor {
         Ok(())
     }
 
-    /// Sampling rate the signals are filtered and differentiated at, Hz.
-    pub fn rate_hz(&self) -> f64 {
-        self.rate_hz
-    }
-
-    /// Samples kept so far.
-    pub fn kept(&self) -> usize {
-        self.kept
-    }
-
     /// Processes the next block of the log; the samples that are done (possibly none).
     pub fn push(&mut self, block: &JointLog) -> Result<Processed, SignalError> {
         let n = self.dof;

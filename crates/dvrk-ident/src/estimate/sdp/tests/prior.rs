@@ -247,3 +247,14 @@ fn sdp_prior_errors() {
         ));
     }
 }
+
+/// A prior weight is 0 (no pull) or within [1e-9, 1e6]; the message names the range and
+/// the weight given.
+#[test]
+fn prior_weights_are_zero_or_in_range() {
+    assert!(prior_weight_problem(0.0).is_none() && prior_weight_problem(10.0).is_none());
+    assert_eq!(
+        prior_weight_problem(1e-300).unwrap(),
+        "must be 0 or in [1e-9, 1e6], got 1e-300"
+    );
+}

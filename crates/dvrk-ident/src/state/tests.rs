@@ -1,18 +1,19 @@
-//! Observation states (`dvrk_ident::state`): the fit of merged states equals the fit of
+//! Observation states: the fit of merged states equals the fit of
 //! their logs; the file round trip is exact; merges are associative and commutative to
 //! rounding (Gram matrices to 1e-12, fits to 1e-10); states of other robots or
 //! settings, other format versions and damaged files are refused with the file named.
 
-#[path = "support/logs.rs"]
+// The log helpers of dvrk-logs' tests (the bundled example log, a log cut into parts).
+#[path = "../../../dvrk-logs/tests/support/logs.rs"]
 mod logs;
 
 use std::sync::Arc;
 
-use dvrk_ident::fit::LogData;
-use dvrk_ident::progress::Silent;
-use dvrk_ident::signal::{Cutoff, LowPass};
-use dvrk_ident::state::{ObservationState, MAGIC};
-use dvrk_ident::{FitRequest, FitResult, FitSettings, IdentError, JointLog, Method, Training};
+use super::{model_hash, ObservationState, MAGIC};
+use crate::fit::LogData;
+use crate::progress::Silent;
+use crate::signal::{Cutoff, LowPass};
+use crate::{FitRequest, FitResult, FitSettings, IdentError, JointLog, Method, Training};
 use dvrk_model::Model;
 use logs::{example, part};
 
@@ -204,7 +205,7 @@ fn merge_refuses_other_robots_and_settings() {
         "{e}"
     );
     let cut = FitSettings {
-        processing: dvrk_ident::signal::Processing {
+        processing: crate::signal::Processing {
             filter: Some(LowPass {
                 cutoff_hz: Cutoff::All(8.0),
                 ..LowPass::default()
@@ -360,7 +361,7 @@ fn forged_headers_are_refused_with_the_file_named() {
     // A consistent file of another model's shape under psm's hash: an error naming the
     // file, from the fit and from a merge, never a panic in the factors' arithmetic.
     let forged = observe(&simplified, &a, &s).to_bytes();
-    let hash = dvrk_ident::state::model_hash(&psm);
+    let hash = model_hash(&psm);
     let forged = with_header(&forged, |t| {
         let v: serde_json::Value = serde_json::from_str(t).unwrap();
         let old = v["robot_hash"].as_str().unwrap().to_string();
@@ -381,7 +382,7 @@ fn forged_headers_are_refused_with_the_file_named() {
 /// a frame that carries a parameter changes it.
 #[test]
 fn frames_without_parameters_leave_the_hash() {
-    let text = include_str!("../../dvrk-model/robots/psm.toml");
+    let text = include_str!("../../../dvrk-model/robots/psm.toml");
     let rule =
         "# ---------------------------------------------------------------------------------\n";
     let start = text.find(&format!("{rule}# The tool tip")).unwrap();
@@ -392,7 +393,7 @@ fn frames_without_parameters_leave_the_hash() {
     let psm = Model::builtin("psm").unwrap();
     let before = Model::from_toml_str(&without, "psm.toml").unwrap();
     assert_eq!(psm.frames.len(), before.frames.len() + 2);
-    let hash = dvrk_ident::state::model_hash;
+    let hash = model_hash;
     assert_eq!(hash(&psm), hash(&before));
     let tip = text.find("name = \"tool_tip\"").unwrap();
     // Friction on the tip (turning with q4): a parameter, another hash.

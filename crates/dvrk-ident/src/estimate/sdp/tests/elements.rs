@@ -9,7 +9,7 @@
 
 use dvrk_test_support as support;
 
-use dvrk_ident::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::estimate::sdp::{solve_sdp, SdpOptions};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::{DMatrix, DVector};
 use support::models::one_link_with;
@@ -289,9 +289,9 @@ const VERTICAL_LINK: &str = "name = \"vertical\"\nconvention = \"modified\"\n\
 /// `q = 2.5·sin(0.5t) + 0.5·sin(1.7t)`, its torques simulated (`simulate::motion_torques`,
 /// load friction with its load solved for) plus noise of standard deviation `noise`
 /// (N·m).
-fn swing_log(model: &Model, pi: &[f64], noise: f64) -> dvrk_ident::JointLog {
-    use dvrk_ident::joint_log::uniform_time;
-    use dvrk_ident::simulate::{model_log, motion_torques};
+fn swing_log(model: &Model, pi: &[f64], noise: f64) -> crate::JointLog {
+    use crate::joint_log::uniform_time;
+    use crate::simulate::{model_log, motion_torques};
     let (count, rate) = (2000, 100.0);
     let time = uniform_time(count, rate);
     let wave = |t: f64| {
@@ -318,19 +318,19 @@ fn swing_log(model: &Model, pi: &[f64], noise: f64) -> dvrk_ident::JointLog {
 /// signals (no filter, no trim), `method` and the setting `set` applied.
 fn fit_swing(
     plain: &Model,
-    log: &dvrk_ident::JointLog,
-    method: dvrk_ident::Method,
-    set: impl FnOnce(&mut dvrk_ident::FitSettings),
-) -> dvrk_ident::FitResult {
-    let mut settings = dvrk_ident::FitSettings {
+    log: &crate::JointLog,
+    method: crate::Method,
+    set: impl FnOnce(&mut crate::FitSettings),
+) -> crate::FitResult {
+    let mut settings = crate::FitSettings {
         method,
-        ..dvrk_ident::FitSettings::default()
+        ..crate::FitSettings::default()
     };
     settings.processing.filter = None;
     settings.processing.trim = 0;
     set(&mut settings);
-    dvrk_ident::FitRequest::of_samples([log], None, settings)
-        .run(Some(plain), &dvrk_ident::progress::Silent)
+    crate::FitRequest::of_samples([log], None, settings)
+        .run(Some(plain), &crate::progress::Silent)
         .unwrap()
         .result
 }
@@ -350,7 +350,7 @@ fn fit_recovers_a_position_torque_within_noise() {
     let want = [0.08, 0.03, -0.05, 0.04, -0.03, 0.02, 0.01];
     pi.extend(want);
     let log = swing_log(&model, &pi, 0.002);
-    let r = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
+    let r = fit_swing(&plain, &log, crate::Method::Sdp, |s| {
         s.position_torque_order = Some(2)
     });
     for (name, want) in names[10..].iter().zip(want) {
@@ -379,9 +379,7 @@ fn loaded_pendulum(fl: f64) -> (Model, Model, Vec<f64>) {
 fn fit_recovers_load_friction_within_noise() {
     let (plain, model, pi) = loaded_pendulum(0.08);
     let log = swing_log(&model, &pi, 0.002);
-    let r = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
-        s.load_friction = true
-    });
+    let r = fit_swing(&plain, &log, crate::Method::Sdp, |s| s.load_friction = true);
     let (fl, fc) = (r.parameters["Fl1"], r.parameters["Fc1"]);
     assert!((fl - 0.08).abs() < 0.003, "Fl1 {fl} vs 0.08");
     assert!((fc - 0.08).abs() < 0.003, "Fc1 {fc} vs 0.08");
@@ -399,14 +397,10 @@ fn sdp_keeps_load_friction_nonnegative() {
     let (plain, _, pi) = loaded_pendulum(-0.05);
     let model = plain.with_load_friction();
     let log = swing_log(&model, &pi, 0.0);
-    let ols = fit_swing(&plain, &log, dvrk_ident::Method::Ols, |s| {
-        s.load_friction = true
-    });
+    let ols = fit_swing(&plain, &log, crate::Method::Ols, |s| s.load_friction = true);
     let fl = ols.parameters["Fl1"];
     assert!((fl + 0.05).abs() < 1e-6, "least squares Fl1 {fl}");
-    let sdp = fit_swing(&plain, &log, dvrk_ident::Method::Sdp, |s| {
-        s.load_friction = true
-    });
+    let sdp = fit_swing(&plain, &log, crate::Method::Sdp, |s| s.load_friction = true);
     let fl = sdp.parameters["Fl1"];
     assert!((0.0..1e-6).contains(&fl), "semidefinite Fl1 {fl}");
     let values: Vec<f64> = sdp.parameters.values().copied().collect();
