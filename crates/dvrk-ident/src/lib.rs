@@ -107,6 +107,8 @@ pub(crate) mod request;
 pub(crate) mod result;
 pub(crate) mod settings;
 pub(crate) mod state;
+#[cfg(test)]
+mod tests;
 #[cfg(all(test, not(feature = "recordings")))]
 mod without_recordings;
 // The logs' crate, under the paths the stages use.

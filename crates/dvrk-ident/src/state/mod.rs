@@ -30,9 +30,7 @@ use crate::signal::Processing;
 mod codec;
 
 #[cfg(all(test, feature = "recordings"))]
-use codec::MAGIC;
-#[cfg(all(test, feature = "recordings"))]
-mod tests;
+pub(crate) use codec::MAGIC;
 
 /// The training logs of a fit reduced, with what identifies the model and the
 /// processing they were reduced for (see the module docs).

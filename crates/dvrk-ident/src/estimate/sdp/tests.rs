@@ -12,7 +12,6 @@ use dvrk_test_support::models::{one_link_with, ONE_LINK};
 use dvrk_test_support::Rng;
 use nalgebra::{DVector, Matrix3, Matrix4, Rotation3, Vector3};
 
-mod elements;
 mod prior;
 
 /// Upper-triangular (p+1)×(p+1) R of `[h | tau]` by Householder QR (zero rows

@@ -9,7 +9,7 @@ mod logs;
 
 use std::sync::Arc;
 
-use super::{model_hash, ObservationState, MAGIC};
+use crate::state::{model_hash, ObservationState, MAGIC};
 use crate::fit::LogData;
 use crate::progress::Silent;
 use crate::signal::{Cutoff, LowPass};
