@@ -132,10 +132,16 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     Ok(())
 }
 
+/// How Python spells an option: its keyword (`cutoff`), in messages and in the
+/// conversion of keyword arguments alike.
+pub(crate) fn setting_keyword(s: Setting) -> &'static str {
+    s.name()
+}
+
 /// How Python spells a setting a library message suggests ([`Hint`]): as its keyword
 /// (`rate=HZ`, `topic="..."`) where the command line gives its flag (`--rate HZ`).
 fn keyword(hint: Hint) -> String {
-    let option = |s: Setting| format!("{}=", crate::overrides::keyword(s));
+    let option = |s: Setting| format!("{}=", setting_keyword(s));
     match hint {
         Hint::Rate => "rate=".into(),
         Hint::RateHz => "rate=HZ".into(),
@@ -250,7 +256,7 @@ pub fn spelled(name: &SettingName) -> String {
     match name {
         SettingName::Options(settings) => settings
             .iter()
-            .map(|s| crate::overrides::keyword(*s))
+            .map(|s| setting_keyword(*s))
             .collect::<Vec<_>>()
             .join(", "),
         SettingName::Argument(n) => (*n).into(),

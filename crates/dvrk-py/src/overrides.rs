@@ -15,7 +15,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use crate::classes::FitResultPy;
-use crate::errors::input;
+use crate::errors::{input, setting_keyword as keyword};
 use crate::json::from_python;
 
 /// `joints=`: ``"model"`` or ``"measured"``.
@@ -40,11 +40,6 @@ pub(crate) fn options_table<'py>(py: Python<'py>) -> PyResult<Bound<'py, PyDict>
         table.set_item(function, names)?;
     }
     Ok(table)
-}
-
-/// How Python spells an option: its keyword (`cutoff`).
-pub(crate) fn keyword(s: Setting) -> &'static str {
-    s.name()
 }
 
 /// An option's value refused, named as its keyword: a value of the wrong type is

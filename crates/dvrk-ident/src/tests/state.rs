@@ -9,10 +9,10 @@ mod logs;
 
 use std::sync::Arc;
 
-use crate::state::{model_hash, ObservationState, MAGIC};
 use crate::fit::LogData;
 use crate::progress::Silent;
 use crate::signal::{Cutoff, LowPass};
+use crate::state::{model_hash, ObservationState, MAGIC};
 use crate::{FitRequest, FitResult, FitSettings, IdentError, JointLog, Method, Training};
 use dvrk_model::Model;
 use logs::{example, part};
