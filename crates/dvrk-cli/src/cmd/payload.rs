@@ -60,7 +60,7 @@ pub fn run(args: Args) -> Result<()> {
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
     result.settings = settings;
-    let read = args.on_logs.read_options(
+    let read = args.on_logs.log_args.read_options_for(
         &model,
         &result.settings.processing,
         args.logs.iter().map(String::as_str),

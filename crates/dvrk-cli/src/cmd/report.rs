@@ -128,7 +128,7 @@ pub fn run(args: Args) -> Result<()> {
     for (_, p) in &sources {
         inputs.add_log(Path::new(p));
     }
-    let read = args.on_logs.read_options(
+    let read = args.on_logs.log_args.read_options_for(
         &model,
         &settings.processing,
         sources.iter().map(|(_, p)| p.as_str()),

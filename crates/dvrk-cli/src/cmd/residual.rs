@@ -130,7 +130,7 @@ pub fn run(args: Args) -> Result<()> {
         wrench: args.wrench.clone(),
         wrench_rcond: args.wrench_rcond,
     };
-    let read = args.on_logs.read_options(
+    let read = args.on_logs.log_args.read_options_for(
         &model,
         &result.settings.processing,
         args.logs.iter().map(String::as_str),

@@ -278,16 +278,6 @@ impl ResultOnLogs {
         let settings = self.settings.settings(loaded.result.settings.clone())?;
         Ok((loaded, settings))
     }
-
-    /// How `logs` are read with `model` and `processing` ([`super::args::LogArgs::read_options_for`]).
-    pub fn read_options<'a>(
-        &self,
-        model: &dvrk_model::Model,
-        processing: &impl dvrk_ident::log::Resampling,
-        logs: impl IntoIterator<Item = &'a str>,
-    ) -> dvrk_ident::log::ReadOptions {
-        self.log_args.read_options_for(model, processing, logs)
-    }
 }
 
 #[cfg(test)]

@@ -59,7 +59,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(note) = result.offset_note() {
         let _ = writeln!(text, "{note}");
     }
-    let read = args.on_logs.read_options(
+    let read = args.on_logs.log_args.read_options_for(
         &model,
         &settings.processing,
         args.logs.iter().map(String::as_str),
