@@ -18,7 +18,8 @@ pub enum Folds {
     Blocked {
         /// Blocks (folds).
         folds: usize,
-        /// Training samples dropped on each side of a held-out block, s ([`crate::fit::select::guard_s`]).
+        /// Training samples dropped on each side of a held-out block, s (the filter's
+        /// decay, plus the largest delay and the difference stencils).
         guard_s: f64,
     },
 }
@@ -38,7 +39,7 @@ impl Folds {
 /// One candidate's held-out errors.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct CandidateScore {
-    /// The candidate ([`crate::settings::Candidate::name`]).
+    /// The candidate ([`crate::Candidate::name`]).
     pub candidate: String,
     /// Per joint `‖τ − τ̂‖ / ‖τ‖` over every held-out sample of every fold.
     pub relative_error: Vec<f64>,
