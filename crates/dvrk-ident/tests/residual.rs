@@ -12,7 +12,7 @@ use dvrk_ident::simulate::{simulate, Simulation};
 use dvrk_ident::validate::{predict, prepare};
 use dvrk_ident::FitRequest;
 use dvrk_ident::Silent;
-use dvrk_ident::{FitResult, FitSettings, Joints};
+use dvrk_ident::{FitResult, FitSettings, JointLog, Joints};
 use dvrk_model::{Model, Payload, Workspace};
 use dvrk_test_support::{example, fixtures::example_params};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -29,6 +29,36 @@ fn psm_fit() -> (Model, FitResult, FourierTrajectory, Vec<f64>) {
     (model, result, traj, truth)
 }
 
+/// A simulated log of `periods` periods of `traj` with 0.002 torque noise, optionally
+/// carrying `payload`.
+fn noisy_log(
+    model: &Model,
+    truth: &[f64],
+    traj: &FourierTrajectory,
+    periods: f64,
+    seed: u64,
+    payload: Option<Payload>,
+) -> JointLog {
+    let sim = Simulation {
+        duration_s: Some(periods * traj.period_s()),
+        noise_std: vec![0.002],
+        seed,
+        payload,
+        ..Simulation::default()
+    };
+    simulate(model, truth, traj, &sim).unwrap()
+}
+
+/// The payload: 0.2 kg, com [0, 0.02, 0.165] m on the insertion stage.
+fn insertion_payload() -> Payload {
+    Payload {
+        frame: "main_insertion".into(),
+        mass: 0.2,
+        com: [0.0, 0.02, 0.165],
+        inertia: [1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0],
+    }
+}
+
 fn rms(x: impl Iterator<Item = f64>) -> f64 {
     let (mut s, mut n) = (0.0, 0);
     for v in x {
@@ -42,20 +72,8 @@ fn rms(x: impl Iterator<Item = f64>) -> f64 {
 fn residual_of_a_payload_log_is_the_payloads_torque() {
     let (model, result, traj, truth) = psm_fit();
     let params = result.params_for(&model).unwrap();
-    let payload = Payload {
-        frame: "main_insertion".into(),
-        mass: 0.2,
-        com: [0.0, 0.02, 0.165],
-        inertia: [1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0],
-    };
-    let sim = Simulation {
-        duration_s: Some(2.0 * traj.period_s()),
-        noise_std: vec![0.002],
-        seed: 2,
-        payload: Some(payload.clone()),
-        ..Simulation::default()
-    };
-    let log = simulate(&model, &truth, &traj, &sim).unwrap();
+    let payload = insertion_payload();
+    let log = noisy_log(&model, &truth, &traj, 2.0, 2, Some(payload.clone()));
     let options = ResidualOptions {
         joints: Some(Joints::Model),
         ..ResidualOptions::default()
@@ -127,13 +145,7 @@ fn residual_without_external_force_stays_within_the_noise_floor() {
         );
     }
     // On another log of the same arm (new noise), within the floor.
-    let sim = Simulation {
-        duration_s: Some(2.0 * traj.period_s()),
-        noise_std: vec![0.002],
-        seed: 9,
-        ..Simulation::default()
-    };
-    let other = simulate(&model, &truth, &traj, &sim).unwrap();
+    let other = noisy_log(&model, &truth, &traj, 2.0, 9, None);
     let r = external_torque(
         &model,
         &params,
@@ -173,20 +185,8 @@ fn payload_of_a_simulated_log_is_found() {
     use dvrk_ident::payload::identify_payload;
     let (model, result, traj, truth) = psm_fit();
     let params = result.params_for(&model).unwrap();
-    let payload = Payload {
-        frame: "main_insertion".into(),
-        mass: 0.2,
-        com: [0.0, 0.02, 0.165],
-        inertia: [1e-4, 1e-4, 1e-4, 0.0, 0.0, 0.0],
-    };
-    let sim = Simulation {
-        duration_s: Some(traj.period_s()),
-        noise_std: vec![0.002],
-        seed: 5,
-        payload: Some(payload.clone()),
-        ..Simulation::default()
-    };
-    let log = simulate(&model, &truth, &traj, &sim).unwrap();
+    let payload = insertion_payload();
+    let log = noisy_log(&model, &truth, &traj, 1.0, 5, Some(payload.clone()));
     let est = identify_payload(
         &model,
         &params,
@@ -256,14 +256,7 @@ fn payload_that_the_logs_cannot_show_is_reported() {
         com: [0.05, 0.02, 0.1],
         inertia: [1e-3, 1e-3, 1e-3, 0.0, 0.0, 0.0],
     };
-    let sim = Simulation {
-        duration_s: Some(traj.period_s()),
-        noise_std: vec![0.002],
-        seed: 6,
-        payload: Some(payload),
-        ..Simulation::default()
-    };
-    let log = simulate(&model, &truth, &traj, &sim).unwrap();
+    let log = noisy_log(&model, &truth, &traj, 1.0, 6, Some(payload));
     let est =
         identify_payload(&model, &params, &result, std::slice::from_ref(&log), "yaw").unwrap();
     let id = &est.identification;

@@ -53,28 +53,14 @@ pub(crate) fn fit_logs(
     let test_data = prepare_logs(model, test, &settings.processing)?;
     progress.finish();
     let observed = observe_prepared(model, train, &data, progress)?;
-    let train_pass = |params: &[f64]| {
-        Ok(data
-            .iter()
-            .map(|d| {
-                let mut sums = MetricSums::new(model);
-                sums.add(model, params, d.samples(), None);
-                sums
-            })
-            .collect())
-    };
+    let train_pass = |params: &[f64]| Ok(MetricSums::of_logs(model, params, &data));
     let test_pass =
         |params: &[f64]| test_inputs(model, test, &test_data, params, settings.test_window);
-    let mut result = fit_observed(
-        model,
-        &observed,
-        settings,
-        MetricPasses {
-            train: Some(&train_pass),
-            test: &test_pass,
-        },
-        progress,
-    )?;
+    let passes = MetricPasses {
+        train: Some(&train_pass),
+        test: &test_pass,
+    };
+    let mut result = fit_observed(model, &observed, settings, passes, progress)?;
     result.delay = delays;
     result.check_finite()?;
     Ok(result)
@@ -103,8 +89,7 @@ pub(crate) fn test_inputs(
     logs.iter()
         .zip(prepared)
         .map(|(log, p)| {
-            let mut sums = MetricSums::new(model);
-            sums.add(model, params, p.samples(), window);
+            let sums = MetricSums::of_samples(model, params, p.samples(), window);
             Ok((log_info("test", log, &p.source)?, sums))
         })
         .collect()

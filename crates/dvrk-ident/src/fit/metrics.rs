@@ -81,6 +81,27 @@ impl MetricSums {
         }
     }
 
+    /// One set of sums per prepared log, in order: the training pass of an
+    /// in-memory fit and of a cross-validation fold.
+    pub(crate) fn of_logs(model: &Model, params: &[f64], logs: &[Prepared]) -> Vec<MetricSums> {
+        logs.iter()
+            .map(|log| MetricSums::of_samples(model, params, log.samples(), None))
+            .collect()
+    }
+
+    /// The sums of one log's samples on their own (its Dahl states starting at zero),
+    /// up to `window` samples ([`MetricSums::add`]).
+    pub(crate) fn of_samples(
+        model: &Model,
+        params: &[f64],
+        samples: Samples<'_>,
+        window: Option<usize>,
+    ) -> MetricSums {
+        let mut sums = MetricSums::new(model);
+        sums.add(model, params, samples, window);
+        sums
+    }
+
     /// Samples summed so far.
     pub fn samples(&self) -> usize {
         self.samples

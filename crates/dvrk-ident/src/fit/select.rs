@@ -194,9 +194,7 @@ pub(crate) fn select(
             })?;
             for t in &fold.test {
                 // Each piece's own sums (the Dahl states start at zero in each).
-                let mut sums = MetricSums::new(&model);
-                sums.add(&model, &params, t.samples(), None);
-                held_out.merge(&sums);
+                held_out.merge(&MetricSums::of_samples(&model, &params, t.samples(), None));
             }
         }
         progress.finish();
@@ -251,16 +249,7 @@ fn fit_pieces(
         Observed::push(&mut observed, ObservedLog { info, parts }, range);
     }
     let observed = observed.ok_or_else(super::observed::no_training_log)?;
-    let train_pass = |params: &[f64]| {
-        Ok(train
-            .iter()
-            .map(|p| {
-                let mut sums = MetricSums::new(model);
-                sums.add(model, params, p.samples(), None);
-                sums
-            })
-            .collect())
-    };
+    let train_pass = |params: &[f64]| Ok(MetricSums::of_logs(model, params, train));
     let result = fit_observed(
         model,
         &observed,

@@ -321,16 +321,11 @@ pub(crate) fn fit_stream_logs(
             })
             .collect()
     };
-    fit_observed(
-        model,
-        &observed,
-        settings,
-        MetricPasses {
-            train: Some(&train_pass),
-            test: &test_pass,
-        },
-        progress,
-    )
+    let passes = MetricPasses {
+        train: Some(&train_pass),
+        test: &test_pass,
+    };
+    fit_observed(model, &observed, settings, passes, progress)
 }
 
 /// The training logs of a streamed fit reduced, without the estimator: what the
