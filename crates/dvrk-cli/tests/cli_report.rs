@@ -3,8 +3,8 @@
 
 mod support;
 use dvrk_test_support::read_json;
-use std::path::PathBuf;
-use support::{example, files, fit_example_args, run, run_json, run_ok, temp_dir};
+use std::path::{Path, PathBuf};
+use support::{example, files, fit_example_args, run, run_json, run_ok, s, temp_dir};
 
 #[test]
 fn fit_report_then_report_command_show_the_result() {
@@ -261,6 +261,11 @@ fn fit_with_excitation_uses_its_period_and_draws_it() {
 
 /// The words of a command line as a POSIX shell splits it: blanks separate words, single
 /// quotes keep everything up to the next one (the quoting `reproduce::shell_quote` uses).
+/// The bundled example fitted by OLS into `out`: a result document to report on.
+fn fit_ols_example(out: &Path) {
+    run_ok(&fit_example_args(&["--method", "ols", "--out", &s(out)]));
+}
+
 fn shell_words(text: &str) -> Vec<String> {
     let mut words = Vec::new();
     let mut word: Option<String> = None;
@@ -372,12 +377,7 @@ fn the_reports_command_line_repeats_the_fit() {
 fn a_setting_without_a_flag_is_named_in_the_report() {
     let dir = temp_dir("noflag");
     let out = dir.join("result.json");
-    run_ok(&fit_example_args(&[
-        "--method",
-        "ols",
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    fit_ols_example(&out);
     let mut doc = read_json(&out);
     doc["settings"]["processing"]["filter"]["form"] = "ba".into();
     doc["settings"]["processing"]["filter"]["convention"] = "wpi".into();
@@ -418,12 +418,7 @@ fn a_setting_without_a_flag_is_named_in_the_report() {
 fn a_reports_own_settings_are_listed_not_passed_off_as_the_fits() {
     let dir = temp_dir("report-shown");
     let out = dir.join("result.json");
-    run_ok(&fit_example_args(&[
-        "--method",
-        "ols",
-        "--out",
-        out.to_str().unwrap(),
-    ]));
+    fit_ols_example(&out);
     let before = std::fs::read(&out).unwrap();
     let rep = dir.join("rep");
     let (ok, _, err) = run(&[

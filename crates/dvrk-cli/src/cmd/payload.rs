@@ -40,26 +40,16 @@ pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(
         &[("--out", args.out.as_deref())],
         &[],
-        &super::inputs(
-            &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
-            &[
-                ("the result", Some(&args.result)),
-                ("the robot", args.on_logs.robot.as_deref()),
-            ],
-        ),
+        &args.on_logs.inputs(&args.result, &args.logs, &[]),
     )?;
-    let (
-        LoadedResult {
-            mut result,
-            model,
-            params,
-            ..
-        },
-        settings,
-    ) = args.on_logs.load(&args.result)?;
+    let LoadedResult {
+        result,
+        model,
+        params,
+        ..
+    } = args.on_logs.load_with_settings(&args.result)?;
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
-    result.settings = settings;
     let read = args.on_logs.log_args.read_options_for(
         &model,
         &result.settings.processing,

@@ -69,15 +69,10 @@ pub fn build(
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let logs: Vec<&str> = args.logs.iter().map(String::as_str).collect();
-    let mut inputs = super::inputs(
-        &logs,
-        &[
-            ("the result", Some(&args.result)),
-            ("the excitation", args.excitation.as_deref()),
-            ("the robot", args.on_logs.robot.as_deref()),
-        ],
-    );
+    let excitation_file = [("the excitation", args.excitation.as_deref())];
+    let mut inputs = args
+        .on_logs
+        .inputs(&args.result, &args.logs, &excitation_file);
     super::check_outputs(&[], &[("--out", Some(&args.out))], &inputs)?;
     let (super::LoadedResult { result, model, .. }, mut settings) =
         args.on_logs.load(&args.result)?;

@@ -82,13 +82,7 @@ pub fn run(args: Args) -> Result<()> {
             ("--wrench-out", args.wrench_out.as_deref()),
         ],
         &[("--report", args.report.as_deref())],
-        &super::inputs(
-            &args.logs.iter().map(String::as_str).collect::<Vec<_>>(),
-            &[
-                ("the result", Some(&args.result)),
-                ("the robot", args.on_logs.robot.as_deref()),
-            ],
-        ),
+        &args.on_logs.inputs(&args.result, &args.logs, &[]),
     )?;
     if (args.out.is_some() || args.observer_out.is_some() || args.wrench_out.is_some())
         && args.logs.len() != 1
@@ -103,16 +97,12 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--wrench-out {path}: the wrench is written as CSV (FILE.csv)");
         }
     }
-    let (
-        LoadedResult {
-            mut result,
-            model,
-            params,
-            ..
-        },
-        settings,
-    ) = args.on_logs.load(&args.result)?;
-    result.settings = settings;
+    let LoadedResult {
+        result,
+        model,
+        params,
+        ..
+    } = args.on_logs.load_with_settings(&args.result)?;
     let joints = args.joints.joints.unwrap_or(result.settings.joints);
     for (flag, path) in [("--out", &args.out), ("--observer-out", &args.observer_out)] {
         if let Some(path) = path {

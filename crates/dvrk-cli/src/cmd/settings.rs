@@ -278,6 +278,32 @@ impl ResultOnLogs {
         let settings = self.settings.settings(loaded.result.settings.clone())?;
         Ok((loaded, settings))
     }
+
+    /// [`ResultOnLogs::load`] with those settings put in the result: for the commands
+    /// whose computation reads them from the result (`residual`, `payload`).
+    pub fn load_with_settings(&self, path: &str) -> Result<super::LoadedResult> {
+        let (mut loaded, settings) = self.load(path)?;
+        loaded.result.settings = settings;
+        Ok(loaded)
+    }
+
+    /// What a command on the result `path` and `logs` reads ([`super::inputs`]: the
+    /// logs, the result, the robot's description and `others`), so that no output
+    /// overwrites it.
+    pub fn inputs(
+        &self,
+        path: &str,
+        logs: &[String],
+        others: &[(&str, Option<&str>)],
+    ) -> super::Inputs {
+        let logs: Vec<&str> = logs.iter().map(String::as_str).collect();
+        let mut files = vec![
+            ("the result", Some(path)),
+            ("the robot", self.robot.as_deref()),
+        ];
+        files.extend_from_slice(others);
+        super::inputs(&logs, &files)
+    }
 }
 
 #[cfg(test)]

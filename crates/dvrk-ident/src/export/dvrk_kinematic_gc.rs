@@ -70,11 +70,10 @@ struct Arm {
     /// The built-in descriptions of the arm: the arm alone, then the arm with its
     /// instrument (whose extra coordinates the controller's file ignores).
     robots: &'static [&'static str],
-    /// The file's links: (the description's frame, the name the dVRK's file gives it).
-    links: &'static [(&'static str, &'static str)],
-    /// Each link's joint value as `(coordinate, coefficient)` pairs (the controller's
-    /// position map; empty: 0, a passive link).
-    position: &'static [&'static [(usize, f64)]],
+    /// The file's links, in order: `setup` (the links an arm shares with others), then
+    /// `links`.
+    setup: &'static [GcFrame],
+    links: &'static [GcFrame],
     /// Each arm joint's effort as `(link, coefficient)` pairs (the effort map; empty: the
     /// controller sends 0).
     effort: &'static [&'static [(usize, f64)]],
@@ -84,75 +83,60 @@ struct Arm {
     shipped: &'static str,
 }
 
-const SI_LINKS: [(&str, &str); 5] = [
-    ("yaw", "yaw"),
-    ("intermediate_yaw", "intermediate yaw"),
-    ("pitch1", "pitch1"),
-    ("pitch2", "pitch2"),
-    ("pitch3", "pitch3"),
+impl Arm {
+    fn links(&self) -> impl Iterator<Item = &GcFrame> {
+        self.setup.iter().chain(self.links)
+    }
+}
+
+/// A link of the file: the description's frame, the name the dVRK's file gives it, and
+/// its joint value as `(coordinate, coefficient)` pairs (the controller's position map;
+/// empty: 0, a passive link).
+struct GcFrame(&'static str, &'static str, &'static [(usize, f64)]);
+
+/// The Si arms' yaw and their pitch parallelogram, moved by the yaw (coordinate 0) and
+/// the pitch (coordinate 1): the first five links of the PSM Si's file and the ECM Si's.
+const SI_SETUP: [GcFrame; 5] = [
+    GcFrame("yaw", "yaw", &[(0, 1.0)]),
+    GcFrame("intermediate_yaw", "intermediate yaw", &[]),
+    GcFrame("pitch1", "pitch1", &[(1, 1.0)]),
+    GcFrame("pitch2", "pitch2", &[(1, -1.0)]),
+    GcFrame("pitch3", "pitch3", &[(1, 1.0)]),
 ];
+
+/// The Si arms' yaw and pitch efforts: the pitch's is the parallelogram's three links'.
+const SI_YAW_EFFORT: &[(usize, f64)] = &[(0, 1.0)];
+const SI_PITCH_EFFORT: &[(usize, f64)] = &[(2, 1.0), (3, -1.0), (4, 1.0)];
 
 const ARMS: [Arm; 3] = [
     Arm {
         robots: &["psm_si", "psm_si_tool"],
+        setup: &SI_SETUP,
         links: &[
-            SI_LINKS[0],
-            SI_LINKS[1],
-            SI_LINKS[2],
-            SI_LINKS[3],
-            SI_LINKS[4],
-            ("insertion1", "insertion1"),
-            ("insertion2", "insertion2"),
+            GcFrame("insertion1", "insertion1", &[(2, 0.5)]),
+            GcFrame("insertion2", "insertion2", &[(2, 0.5)]),
         ],
-        position: &[
-            &[(0, 1.0)],
-            &[],
-            &[(1, 1.0)],
-            &[(1, -1.0)],
-            &[(1, 1.0)],
-            &[(2, 0.5)],
-            &[(2, 0.5)],
-        ],
-        effort: &[&[(0, 1.0)], &[(2, 1.0), (3, -1.0), (4, 1.0)], &[(6, 1.0)]],
+        effort: &[SI_YAW_EFFORT, SI_PITCH_EFFORT, &[(6, 1.0)]],
         endoscope_link: None,
         shipped: "kinematic/PSM_Si_physical.json",
     },
     Arm {
         robots: &["ecm_si"],
-        links: &[
-            SI_LINKS[0],
-            SI_LINKS[1],
-            SI_LINKS[2],
-            SI_LINKS[3],
-            SI_LINKS[4],
-            ("insertion", "insertion"),
-        ],
-        position: &[
-            &[(0, 1.0)],
-            &[],
-            &[(1, 1.0)],
-            &[(1, -1.0)],
-            &[(1, 1.0)],
-            &[(2, 1.0)],
-        ],
-        effort: &[
-            &[(0, 1.0)],
-            &[(2, 1.0), (3, -1.0), (4, 1.0)],
-            &[(5, 1.0)],
-            &[],
-        ],
+        setup: &SI_SETUP,
+        links: &[GcFrame("insertion", "insertion", &[(2, 1.0)])],
+        effort: &[SI_YAW_EFFORT, SI_PITCH_EFFORT, &[(5, 1.0)], &[]],
         endoscope_link: Some(5),
         shipped: "kinematic/ECM_Si_physical.json",
     },
     Arm {
         robots: &["ecm"],
+        setup: &[],
         links: &[
-            ("yaw", "yaw"),
-            ("pitch", "pitch"),
-            ("insertion", "insertion"),
-            ("roll", "roll"),
+            GcFrame("yaw", "yaw", &[(0, 1.0)]),
+            GcFrame("pitch", "pitch", &[(1, 1.0)]),
+            GcFrame("insertion", "insertion", &[(2, 1.0)]),
+            GcFrame("roll", "roll", &[(3, 1.0)]),
         ],
-        position: &[&[(0, 1.0)], &[(1, 1.0)], &[(2, 1.0)], &[(3, 1.0)]],
         effort: &[&[(0, 1.0)], &[(1, 1.0)], &[(2, 1.0)], &[(3, 1.0)]],
         endoscope_link: Some(2),
         shipped: "kinematic/ECM.json",
@@ -429,15 +413,16 @@ fn check_model(model: &Model, arm: &Arm) -> Result<Vec<usize>, IdentError> {
             return Err(mismatch(
                 model,
                 format!(
-                    "frame {} carries a link moved by coordinate(s) beyond the arm's {na},                      whose gravity the controller's file cannot hold",
+                    "frame {} carries a link moved by coordinate(s) beyond the arm's {na}, \
+                     whose gravity the controller's file cannot hold",
                     f.name
                 ),
             ));
         }
     }
     let names = model.frame_names();
-    let mut frames = Vec::with_capacity(arm.links.len());
-    for ((frame, _), map) in arm.links.iter().zip(arm.position) {
+    let mut frames = Vec::new();
+    for GcFrame(frame, _, map) in arm.links() {
         let i = names
             .iter()
             .position(|n| n == frame)
@@ -691,8 +676,8 @@ fn fit(
         .iter()
         .map(|s| (s / configurations as f64).sqrt())
         .collect();
-    for (i, link) in links.iter_mut().enumerate() {
-        link.name = arm.links[i].1.to_string();
+    for (i, (link, frame)) in links.iter_mut().zip(arm.links()).enumerate() {
+        link.name = frame.1.to_string();
         let m = w[4 * i];
         let l = [w[4 * i + 1], w[4 * i + 2], w[4 * i + 3]];
         let first = l.iter().fold(0.0f64, |a, x| a.max(x.abs()));
