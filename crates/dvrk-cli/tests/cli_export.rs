@@ -6,7 +6,7 @@
 mod support;
 use dvrk_test_support::{rigid_only, torque_difference};
 use std::path::{Path, PathBuf};
-use support::{example, run, s, temp_dir, write_arm_log, ARM};
+use support::{fit_example_args, run, s, temp_dir, write_arm_log, ARM};
 
 use dvrk_ident::FitResult;
 use dvrk_model::Model;
@@ -18,11 +18,7 @@ fn fit_example(dir: &Path, method: &str) -> (PathBuf, PathBuf) {
         dir.join(format!("{method}.json")),
         dir.join(format!("{method}_params.json")),
     );
-    let (ok, _, err) = run(&[
-        "fit",
-        &example("psm_excitation.mcap"),
-        "--robot",
-        "psm",
+    let (ok, _, err) = run(&fit_example_args(&[
         "--cutoff",
         "none",
         "--method",
@@ -31,7 +27,7 @@ fn fit_example(dir: &Path, method: &str) -> (PathBuf, PathBuf) {
         &s(&out),
         "--wpi-json",
         &s(&wpi),
-    ]);
+    ]));
     assert!(ok, "{err}");
     (out, wpi)
 }
@@ -266,16 +262,7 @@ fn export_errors_name_the_file_and_write_nothing() {
 fn summary_and_export_say_what_the_data_did_not_determine() {
     let dir = temp_dir("export-status");
     let out = dir.join("sdp.json");
-    let (ok, summary, err) = run(&[
-        "fit",
-        &example("psm_excitation.mcap"),
-        "--robot",
-        "psm",
-        "--cutoff",
-        "none",
-        "--out",
-        &s(&out),
-    ]);
+    let (ok, summary, err) = run(&fit_example_args(&["--cutoff", "none", "--out", &s(&out)]));
     assert!(ok, "{err}");
     let result = FitResult::read(&out).unwrap();
     let model = Model::builtin("psm").unwrap();

@@ -14,19 +14,10 @@ use dvrk_ident::signal::process_in_blocks;
 use dvrk_ident::signal::{process, Cutoff, LowPass, Processing};
 use dvrk_ident::{Coordinates, JointLog};
 use dvrk_logs::joint_log::uniform_time;
+use dvrk_test_support::fixed_seed_config;
 use logs::worst_relative;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
-
-fn config(cases: u32) -> Config {
-    Config {
-        cases,
-        rng_seed: RngSeed::Fixed(0x005e_ed19),
-        failure_persistence: None,
-        ..Config::default()
-    }
-}
 
 /// A signal of `n` samples at 200 Hz per joint: a sum of sines given by
 /// `(amplitude, frequency Hz, phase)` triples, plus a square wave of the given height
@@ -69,7 +60,7 @@ fn trajectory(n: usize, waves: &[(f64, f64, f64)], step: f64, with_dq: bool) -> 
 }
 
 proptest! {
-    #![proptest_config(config(48))]
+    #![proptest_config(fixed_seed_config(48))]
 
     #[test]
     fn block_processing_equals_whole_log_processing(

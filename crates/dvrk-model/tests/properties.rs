@@ -9,8 +9,8 @@
 use dvrk_test_support as support;
 
 use dvrk_model::{Model, Workspace};
+use dvrk_test_support::fixed_seed_config;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
 use support::id;
 
 /// The built-in robots (parallelograms, tendon couplings, springs, the MTM cable) and
@@ -24,17 +24,8 @@ fn models() -> Vec<Model> {
     v
 }
 
-fn config() -> Config {
-    Config {
-        cases: 64,
-        rng_seed: RngSeed::Fixed(0x005e_ed19),
-        failure_persistence: None,
-        ..Config::default()
-    }
-}
-
 proptest! {
-    #![proptest_config(config())]
+    #![proptest_config(fixed_seed_config(64))]
 
     #[test]
     fn regressor_times_params_is_inverse_dynamics(

@@ -177,6 +177,19 @@ pub fn random_params(model: &Model, rng: &mut Rng) -> Vec<f64> {
 
 pub use dvrk_model::inertia::sym6;
 
+/// The configuration of every property test: `cases` cases from one fixed seed, and no
+/// failure files, so a run is the same on every machine and writes nothing.
+#[cfg(feature = "proptest")]
+pub fn fixed_seed_config(cases: u32) -> proptest::test_runner::Config {
+    use proptest::test_runner::{Config, RngSeed};
+    Config {
+        cases,
+        rng_seed: RngSeed::Fixed(0x005e_ed19),
+        failure_persistence: None,
+        ..Config::default()
+    }
+}
+
 /// A random positive-definite inertia about the centre of mass that a real mass
 /// distribution realizes (principal moments from positive second moments, so the
 /// triangle inequalities hold), in random principal axes.

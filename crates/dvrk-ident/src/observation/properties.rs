@@ -3,17 +3,8 @@
 //! are merged in.
 
 use super::*;
+use dvrk_test_support::fixed_seed_config;
 use proptest::prelude::*;
-use proptest::test_runner::{Config, RngSeed};
-
-fn config(cases: u32) -> Config {
-    Config {
-        cases,
-        rng_seed: RngSeed::Fixed(0x005e_ed19),
-        failure_persistence: None,
-        ..Config::default()
-    }
-}
 
 /// `rows` random samples of `model` from `seed`: positions, rates and torques.
 fn samples(model: &Model, rows: usize, seed: u64) -> [DMatrix<f64>; 4] {
@@ -24,7 +15,7 @@ fn samples(model: &Model, rows: usize, seed: u64) -> [DMatrix<f64>; 4] {
 }
 
 proptest! {
-    #![proptest_config(config(24))]
+    #![proptest_config(fixed_seed_config(24))]
 
     #[test]
     fn merge_order_does_not_matter(

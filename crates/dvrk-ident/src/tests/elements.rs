@@ -9,7 +9,7 @@
 
 use dvrk_test_support as support;
 
-use crate::estimate::sdp::{solve_sdp, SdpOptions};
+use crate::estimate::sdp::{solve_sdp, SdpOptions, SdpSolution};
 use dvrk_model::{inertia, Model, Workspace};
 use nalgebra::{DMatrix, DVector};
 use support::models::one_link_with;
@@ -75,21 +75,14 @@ fn sdp_recovers_quadratic_viscous_friction() {
     let base = model.base_parameters().unwrap();
     assert!(base.independent.contains(&FQ));
     let r = r_factor(&h, &tau);
-    let sol = solve_sdp(&model, &r, &SdpOptions::default()).unwrap();
-    assert!(sol.converged, "status {}", sol.status);
+    let sol = solved(&model, &r, &SdpOptions::default());
     assert!(
         (sol.params[FQ] - 0.05).abs() < 1e-6,
         "Fq {}",
         sol.params[FQ]
     );
     // The friction too (noise-free data).
-    for (k, want) in [(10, 0.08), (11, 0.03), (12, -0.01)] {
-        assert!(
-            (sol.params[k] - want).abs() < 1e-6,
-            "{k}: {}",
-            sol.params[k]
-        );
-    }
+    assert_friction_of_truth(&sol.params);
 }
 
 #[test]
@@ -98,8 +91,7 @@ fn sdp_holds_quadratic_viscous_friction_at_its_bounds() {
     for (fq, bound) in [(-0.05, 0.0), (1.5, 1.0)] {
         let (h, tau) = observe(&model, &truth(&model, fq), 400);
         let r = r_factor(&h, &tau);
-        let sol = solve_sdp(&model, &r, &SdpOptions::default()).unwrap();
-        assert!(sol.converged, "status {}", sol.status);
+        let sol = solved(&model, &r, &SdpOptions::default());
         // At the bound, and never beyond it (the element clamps a solver's miss away).
         let got = sol.params[FQ];
         assert!((got - bound).abs() < 1e-6, "data Fq {fq}: {got}");
@@ -109,14 +101,27 @@ fn sdp_holds_quadratic_viscous_friction_at_its_bounds() {
             override_bounds: true,
             ..SdpOptions::default()
         };
-        let sol = solve_sdp(&model, &r, &free).unwrap();
-        assert!(sol.converged, "status {}", sol.status);
+        let sol = solved(&model, &r, &free);
         let want = fq.max(0.0);
         assert!(
             (sol.params[FQ] - want).abs() < 1e-6,
             "Fq {} vs {want}",
             sol.params[FQ]
         );
+    }
+}
+
+/// The semidefinite fit of `r`, which must converge.
+fn solved(model: &Model, r: &DMatrix<f64>, options: &SdpOptions) -> SdpSolution {
+    let sol = solve_sdp(model, r, options).unwrap();
+    assert!(sol.converged, "status {}", sol.status);
+    sol
+}
+
+/// The friction of [`truth`] recovered from noise-free data: `Fc1 Fv1 Fo1`.
+fn assert_friction_of_truth(params: &[f64]) {
+    for (k, want) in [(10, 0.08), (11, 0.03), (12, -0.01)] {
+        assert!((params[k] - want).abs() < 1e-6, "{k}: {}", params[k]);
     }
 }
 
@@ -147,19 +152,12 @@ fn sdp_recovers_monotone_friction() {
     let (h, tau) = observe(&model, &pi, 600);
     let base = model.base_parameters().unwrap();
     assert!((FM..FM + 4).all(|c| base.independent.contains(&c)));
-    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
-    assert!(sol.converged, "status {}", sol.status);
+    let sol = solved(&model, &r_factor(&h, &tau), &SdpOptions::default());
     for (k, want) in weights.iter().enumerate() {
         let got = sol.params[FM + k];
         assert!((got - want).abs() < 1e-6, "weight {k}: {got} vs {want}");
     }
-    for (k, want) in [(10, 0.08), (11, 0.03), (12, -0.01)] {
-        assert!(
-            (sol.params[k] - want).abs() < 1e-6,
-            "{k}: {}",
-            sol.params[k]
-        );
-    }
+    assert_friction_of_truth(&sol.params);
 }
 
 /// Torques asking for a negative weight (a friction curve that falls with speed): least
@@ -172,8 +170,7 @@ fn sdp_keeps_monotone_friction_weights_nonnegative() {
     let (h, tau) = observe(&model, &pi, 600);
     let ls = h.clone().svd(true, true).solve(&tau, 1e-12).unwrap();
     assert!((ls[FM] + 0.1).abs() < 1e-6, "least squares Fpa1 {}", ls[FM]);
-    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
-    assert!(sol.converged, "status {}", sol.status);
+    let sol = solved(&model, &r_factor(&h, &tau), &SdpOptions::default());
     for k in FM..FM + 4 {
         assert!(
             sol.params[k] >= 0.0,
@@ -245,8 +242,7 @@ fn sdp_recovers_dahl_friction_within_noise() {
     assert!(base.independent.contains(&FD), "Fd1 is identifiable");
     let pi = dahl_truth(0.06);
     let (h, tau) = observe_path(&model, &pi, 0.002);
-    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
-    assert!(sol.converged, "status {}", sol.status);
+    let sol = solved(&model, &r_factor(&h, &tau), &SdpOptions::default());
     let got = sol.params[FD];
     assert!((got - 0.06).abs() < 0.003, "Fd1 {got} vs 0.06");
     // Coulomb friction and Dahl friction are told apart (Fc1 = 0.08).
@@ -265,8 +261,7 @@ fn sdp_keeps_dahl_friction_nonnegative() {
     let (h, tau) = observe_path(&model, &dahl_truth(-0.05), 0.0);
     let ls = h.clone().svd(true, true).solve(&tau, 1e-12).unwrap();
     assert!((ls[FD] + 0.05).abs() < 1e-6, "least squares Fd1 {}", ls[FD]);
-    let sol = solve_sdp(&model, &r_factor(&h, &tau), &SdpOptions::default()).unwrap();
-    assert!(sol.converged, "status {}", sol.status);
+    let sol = solved(&model, &r_factor(&h, &tau), &SdpOptions::default());
     assert!(
         sol.params[FD] >= 0.0 && sol.params[FD] < 1e-6,
         "Fd1 {}",
