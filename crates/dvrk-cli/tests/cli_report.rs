@@ -296,7 +296,7 @@ fn shell_words(text: &str) -> Vec<String> {
 #[test]
 fn the_reports_command_line_repeats_the_fit() {
     use dvrk_ident::log::ReadOptions;
-    use dvrk_ident::reproduce::cli_command;
+    use dvrk_ident::reproduce::FitCall;
 
     let dir = temp_dir("reproduce");
     let log = dir.join("psm excitation.mcap");
@@ -334,12 +334,8 @@ fn the_reports_command_line_repeats_the_fit() {
         rep.to_str().unwrap(),
     ]);
     let result = dvrk_ident::FitResult::read(&first).unwrap();
-    let rendered = cli_command(
-        &result.robot_source,
-        &result.settings,
-        &result.inputs,
-        Some(&ReadOptions::default()),
-    );
+    let read = ReadOptions::default();
+    let rendered = FitCall::of_result(&result, Some(&read)).cli_command();
     assert!(rendered.unrendered.is_empty(), "{:?}", rendered.unrendered);
     let words = shell_words(&rendered.text);
     assert_eq!(words, rendered.args);

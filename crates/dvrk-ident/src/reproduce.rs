@@ -5,19 +5,21 @@
 //! Both renderings read the same [`FitSettings`], and every setting is either rendered or
 //! named in [`Rendered::unrendered`]: a setting the command line has no flag for (the
 //! filter's order, form or convention, the differentiation stencils, ...) is listed, never
-//! invented. The command-line tests parse [`cli_command`]'s text with the real binary and
+//! invented. The command-line tests parse [`FitCall::cli_command`]'s text with the real binary and
 //! compare the settings of the document it writes with the original ones.
 //!
 //! ```
 //! use dvrk_ident::log::ReadOptions;
-//! use dvrk_ident::reproduce::cli_command;
+//! use dvrk_ident::reproduce::FitCall;
 //! use dvrk_ident::{FitSettings, InputInfo, Method};
 //! let mut settings = FitSettings { method: Method::Ols, ..FitSettings::default() };
 //! settings.stribeck_velocity = Some(0.3);
 //! let train = InputInfo { role: "train".into(), path: "one.csv".into(), sha256: String::new(),
 //!     bytes: 0, source: String::new(), metrics: None, offset: None };
 //! let read = ReadOptions { rate_hz: Some(200.0), ..ReadOptions::default() };
-//! let r = cli_command("psm", &settings, &[train], Some(&read));
+//! let inputs = [train];
+//! let call = FitCall { robot: "psm", settings: &settings, inputs: &inputs, read: Some(&read) };
+//! let r = call.cli_command();
 //! assert_eq!(r.text, "dvrk-ident fit one.csv --robot psm --rate 200 --method ols --stribeck 0.3");
 //! assert!(r.unrendered.is_empty());
 //! ```
@@ -428,141 +430,165 @@ fn paths<'a>(inputs: &'a [InputInfo], role: &'a str) -> impl Iterator<Item = Str
     })
 }
 
-/// The `dvrk-ident fit` command line of a fit of `robot` (a built-in name, a description
-/// path, or a result's `robot_source`) with `settings` on `inputs` (the result's:
-/// training logs, test logs, a prior's file), its logs read with `read` (`None`: not
-/// known; the text then says so in [`Rendered::unrendered`]).
-///
-/// Every setting that differs from its default is a flag (the method always); a setting
-/// without a flag is listed in [`Rendered::unrendered`], not rendered.
-pub fn cli_command(
-    robot: &str,
-    settings: &FitSettings,
-    inputs: &[InputInfo],
-    read: Option<&ReadOptions>,
-) -> Rendered {
-    let options = options(settings);
-    let mut args: Vec<String> = vec!["dvrk-ident".into(), "fit".into()];
-    args.extend(paths(inputs, "train"));
-    args.push("--robot".into());
-    args.push(loadable_robot(robot).into());
-    let push = |args: &mut Vec<String>, name: &str, v: &Value| {
-        args.push(match v {
-            Value::SwitchOff => flag(&format!("no_{name}")),
-            _ => flag(name),
-        });
-        if let Some(text) = v.flag() {
-            args.push(text);
+/// A fit to repeat: of `robot` (a built-in name, a description path, or a result's
+/// `robot_source`) with `settings` on `inputs` (the result's: training logs, test logs, a
+/// prior's file), its logs read with `read` (`None`: not known; the renderings then say
+/// so in [`Rendered::unrendered`]).
+#[derive(Clone, Copy, Debug)]
+pub struct FitCall<'a> {
+    /// The robot as the fit loaded it.
+    pub robot: &'a str,
+    /// The fit's settings.
+    pub settings: &'a FitSettings,
+    /// The fit's inputs, in the result's order.
+    pub inputs: &'a [InputInfo],
+    /// How the logs were read, when known.
+    pub read: Option<&'a ReadOptions>,
+}
+
+impl<'a> FitCall<'a> {
+    /// The fit that made `result`, its logs read with `read`.
+    pub fn of_result(result: &'a crate::FitResult, read: Option<&'a ReadOptions>) -> Self {
+        FitCall {
+            robot: &result.robot_source,
+            settings: &result.settings,
+            inputs: &result.inputs,
+            read,
         }
-    };
-    if let Some(read) = read {
-        for (name, v) in read_options(read) {
-            push(&mut args, name, &v);
-        }
-    }
-    let tests: Vec<String> = paths(inputs, "test").collect();
-    for (name, v) in &options.given {
-        push(&mut args, name, v);
-        if *name == "method" && !tests.is_empty() {
-            args.push("--test".into());
-            args.extend(tests.iter().cloned());
-        }
-    }
-    let mut unrendered = options.without_flag;
-    input_notes(inputs, read, &mut unrendered);
-    Rendered {
-        text: args
-            .iter()
-            .map(|a| shell_quote(a))
-            .collect::<Vec<_>>()
-            .join(" "),
-        args,
-        unrendered,
     }
 }
 
-/// The Python statements that repeat the fit of [`cli_command`]: `di.read_log` of each
-/// log with the reading options, then `di.fit(robot, train, ...)` with the settings as
-/// keyword arguments, and the settings without a keyword in `settings={...}` (the
-/// result document's `settings` layout), so everything but logs without a file and a
-/// prior held in memory is repeated.
-pub fn python_call(
-    robot: &str,
-    settings: &FitSettings,
-    inputs: &[InputInfo],
-    read: Option<&ReadOptions>,
-) -> Rendered {
-    let options = options(settings);
-    let mut o = String::new();
-    let _ = writeln!(o, "import dvrk_ident as di");
-    let _ = writeln!(
-        o,
-        "robot = di.Model.load({})",
-        py_str(loadable_robot(robot))
-    );
-    let mut read_kw = String::new();
-    if let Some(read) = read {
-        let mut topics = Vec::new();
-        for (name, v) in read_options(read) {
-            match name {
-                "topic" => topics.push(v.python()),
-                "time" => {
-                    let _ = write!(read_kw, ", time_source={}", v.python());
+impl FitCall<'_> {
+    /// The `dvrk-ident fit` command line.
+    ///
+    /// Every setting that differs from its default is a flag (the method always); a
+    /// setting without a flag is listed in [`Rendered::unrendered`], not rendered.
+    pub fn cli_command(&self) -> Rendered {
+        let (robot, settings, inputs, read) = (self.robot, self.settings, self.inputs, self.read);
+        let options = options(settings);
+        let mut args: Vec<String> = vec!["dvrk-ident".into(), "fit".into()];
+        args.extend(paths(inputs, "train"));
+        args.push("--robot".into());
+        args.push(loadable_robot(robot).into());
+        let push = |args: &mut Vec<String>, name: &str, v: &Value| {
+            args.push(match v {
+                Value::SwitchOff => flag(&format!("no_{name}")),
+                _ => flag(name),
+            });
+            if let Some(text) = v.flag() {
+                args.push(text);
+            }
+        };
+        if let Some(read) = read {
+            for (name, v) in read_options(read) {
+                push(&mut args, name, &v);
+            }
+        }
+        let tests: Vec<String> = paths(inputs, "test").collect();
+        for (name, v) in &options.given {
+            push(&mut args, name, v);
+            if *name == "method" && !tests.is_empty() {
+                args.push("--test".into());
+                args.extend(tests.iter().cloned());
+            }
+        }
+        let mut unrendered = options.without_flag;
+        input_notes(inputs, read, &mut unrendered);
+        Rendered {
+            text: args
+                .iter()
+                .map(|a| shell_quote(a))
+                .collect::<Vec<_>>()
+                .join(" "),
+            args,
+            unrendered,
+        }
+    }
+
+    /// The Python statements that repeat the fit of [`cli_command`]: `di.read_log` of each
+    /// log with the reading options, then `di.fit(robot, train, ...)` with the settings as
+    /// keyword arguments, and the settings without a keyword in `settings={...}` (the
+    /// result document's `settings` layout), so everything but logs without a file and a
+    /// prior held in memory is repeated.
+    /// The Python statements: `di.read_log` of each log with the reading options, then
+    /// `di.fit(robot, train, ...)` with the settings as keyword arguments, and the
+    /// settings without a keyword in `settings={...}` (the result document's `settings`
+    /// layout), so everything but logs without a file and a prior held in memory is
+    /// repeated.
+    pub fn python_call(&self) -> Rendered {
+        let (robot, settings, inputs, read) = (self.robot, self.settings, self.inputs, self.read);
+        let options = options(settings);
+        let mut o = String::new();
+        let _ = writeln!(o, "import dvrk_ident as di");
+        let _ = writeln!(
+            o,
+            "robot = di.Model.load({})",
+            py_str(loadable_robot(robot))
+        );
+        let mut read_kw = String::new();
+        if let Some(read) = read {
+            let mut topics = Vec::new();
+            for (name, v) in read_options(read) {
+                match name {
+                    "topic" => topics.push(v.python()),
+                    "time" => {
+                        let _ = write!(read_kw, ", time_source={}", v.python());
+                    }
+                    _ => {
+                        let _ = write!(read_kw, ", {name}={}", v.python());
+                    }
+                }
+            }
+            match topics.len() {
+                0 => {}
+                1 => {
+                    let _ = write!(read_kw, ", topic={}", topics[0]);
                 }
                 _ => {
-                    let _ = write!(read_kw, ", {name}={}", v.python());
+                    let _ = write!(read_kw, ", topic=[{}]", topics.join(", "));
                 }
             }
         }
-        match topics.len() {
-            0 => {}
-            1 => {
-                let _ = write!(read_kw, ", topic={}", topics[0]);
-            }
-            _ => {
-                let _ = write!(read_kw, ", topic=[{}]", topics.join(", "));
+        if let Some(r) = settings.processing.resample_hz {
+            // The command line reads its files at the processing rate too.
+            let _ = write!(read_kw, ", resample={}", num(r));
+        }
+        let list = |role: &str| -> String {
+            let items: Vec<String> = paths(inputs, role)
+                .map(|p| format!("di.read_log({}, robot{read_kw})", py_str(&p)))
+                .collect();
+            format!("[{}]", items.join(", "))
+        };
+        let _ = writeln!(o, "train = {}", list("train"));
+        let has_test = inputs.iter().any(|i| i.role == "test");
+        if has_test {
+            let _ = writeln!(o, "test = {}", list("test"));
+        }
+        let mut kw: Vec<String> = Vec::new();
+        for (name, v) in &options.given {
+            kw.push(format!("{name}={}", v.python()));
+            if *name == "method" && has_test {
+                kw.push("test=test".into());
             }
         }
-    }
-    if let Some(r) = settings.processing.resample_hz {
-        // The command line reads its files at the processing rate too.
-        let _ = write!(read_kw, ", resample={}", num(r));
-    }
-    let list = |role: &str| -> String {
-        let items: Vec<String> = paths(inputs, role)
-            .map(|p| format!("di.read_log({}, robot{read_kw})", py_str(&p)))
+        if !options.without_option.is_empty() {
+            kw.push(format!(
+                "settings={}",
+                py_value(&serde_json::Value::Object(options.without_option.clone()))
+            ));
+        }
+        let _ = writeln!(o, "result = di.fit(robot, train, {})", kw.join(", "));
+        let mut unrendered: Vec<String> = options
+            .without_flag
+            .into_iter()
+            .filter(|w| w.starts_with("the prior, a result in memory"))
             .collect();
-        format!("[{}]", items.join(", "))
-    };
-    let _ = writeln!(o, "train = {}", list("train"));
-    let has_test = inputs.iter().any(|i| i.role == "test");
-    if has_test {
-        let _ = writeln!(o, "test = {}", list("test"));
-    }
-    let mut kw: Vec<String> = Vec::new();
-    for (name, v) in &options.given {
-        kw.push(format!("{name}={}", v.python()));
-        if *name == "method" && has_test {
-            kw.push("test=test".into());
+        input_notes(inputs, read, &mut unrendered);
+        Rendered {
+            text: o,
+            args: Vec::new(),
+            unrendered,
         }
-    }
-    if !options.without_option.is_empty() {
-        kw.push(format!(
-            "settings={}",
-            py_value(&serde_json::Value::Object(options.without_option.clone()))
-        ));
-    }
-    let _ = writeln!(o, "result = di.fit(robot, train, {})", kw.join(", "));
-    let mut unrendered: Vec<String> = options
-        .without_flag
-        .into_iter()
-        .filter(|w| w.starts_with("the prior, a result in memory"))
-        .collect();
-    input_notes(inputs, read, &mut unrendered);
-    Rendered {
-        text: o,
-        args: Vec::new(),
-        unrendered,
     }
 }
 
@@ -570,6 +596,20 @@ pub fn python_call(
 mod tests {
     use super::*;
     use crate::signal::Stencil;
+
+    fn call<'a>(
+        robot: &'a str,
+        settings: &'a FitSettings,
+        inputs: &'a [InputInfo],
+        read: Option<&'a ReadOptions>,
+    ) -> FitCall<'a> {
+        FitCall {
+            robot,
+            settings,
+            inputs,
+            read,
+        }
+    }
 
     fn input(role: &str, path: &str) -> InputInfo {
         InputInfo {
@@ -607,7 +647,7 @@ mod tests {
         s.processing.velocity_stencil = Stencil::ThreePoint;
         s.delay_search_s = Some(0.05);
         let inputs = [input("train", "one.csv"), input("test", "two.csv")];
-        let cli = cli_command("builtin:psm", &s, &inputs, Some(&ReadOptions::default()));
+        let cli = call("builtin:psm", &s, &inputs, Some(&ReadOptions::default())).cli_command();
         assert_eq!(
             cli.text,
             "dvrk-ident fit one.csv --robot psm --method sdp --test two.csv"
@@ -616,7 +656,7 @@ mod tests {
         assert!(cli.unrendered[0].contains("\"convention\":\"wpi\""));
         assert!(cli.unrendered[1].contains("velocity_stencil"));
         assert!(cli.unrendered[2].contains("[0, 0.05] s"));
-        let py = python_call("builtin:psm", &s, &inputs, Some(&ReadOptions::default()));
+        let py = call("builtin:psm", &s, &inputs, Some(&ReadOptions::default())).python_call();
         assert!(py.unrendered.is_empty(), "{:?}", py.unrendered);
         assert!(
             py.text.contains(
@@ -653,7 +693,7 @@ mod tests {
             ..ReadOptions::default()
         };
         let inputs = [input("train", "my one.csv"), input("test", "two.csv")];
-        let cli = cli_command("psm", &s, &inputs, Some(&read));
+        let cli = call("psm", &s, &inputs, Some(&read)).cli_command();
         assert_eq!(
             cli.text,
             "dvrk-ident fit 'my one.csv' --robot psm --format wpi --rate 200 --method sdp \
@@ -662,7 +702,7 @@ mod tests {
              --stribeck 0.3 --bounds 2019 --no-ellipsoids"
         );
         assert!(cli.unrendered.is_empty(), "{:?}", cli.unrendered);
-        let py = python_call("psm", &s, &inputs, Some(&read));
+        let py = call("psm", &s, &inputs, Some(&read)).python_call();
         assert_eq!(
             py.text,
             "import dvrk_ident as di\nrobot = di.Model.load(\"psm\")\n\
@@ -674,7 +714,7 @@ mod tests {
              ellipsoids=False)\n"
         );
         // Unknown reading options are said, not guessed.
-        let unknown = cli_command("psm", &s, &inputs, None);
+        let unknown = call("psm", &s, &inputs, None).cli_command();
         assert!(unknown.unrendered[0].contains("--format, --rate"));
     }
 
@@ -690,13 +730,13 @@ mod tests {
             ..FitSettings::default()
         };
         let inputs = [input("train", "a.csv"), input("train", "b.csv")];
-        let cli = cli_command("psm", &s, &inputs, Some(&ReadOptions::default()));
+        let cli = call("psm", &s, &inputs, Some(&ReadOptions::default())).cli_command();
         assert_eq!(
             cli.text,
             "dvrk-ident fit a.csv b.csv --robot psm --method ols \
              --select coulomb,stribeck,dahl,stribeck+dahl --log-offsets"
         );
-        let py = python_call("psm", &s, &inputs, Some(&ReadOptions::default()));
+        let py = call("psm", &s, &inputs, Some(&ReadOptions::default())).python_call();
         assert!(
             py.text.contains(
                 "method=\"ols\", select=\"coulomb,stribeck,dahl,stribeck+dahl\", log_offsets=True)"
@@ -716,12 +756,12 @@ mod tests {
             ..ReadOptions::default()
         };
         let inputs = [input("train", "big.mcap.zst")];
-        let cli = cli_command("psm", &s, &inputs, Some(&read));
+        let cli = call("psm", &s, &inputs, Some(&read)).cli_command();
         assert_eq!(
             cli.text,
             "dvrk-ident fit big.mcap.zst --robot psm --max-unpacked-mib 40000 --method sdp"
         );
-        let py = python_call("psm", &s, &inputs, Some(&read));
+        let py = call("psm", &s, &inputs, Some(&read)).python_call();
         assert!(
             py.text
                 .contains("train = [di.read_log(\"big.mcap.zst\", robot, max_unpacked_mib=40000)]"),

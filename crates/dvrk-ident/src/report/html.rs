@@ -8,7 +8,7 @@ use dvrk_model::{Model, ParamKind};
 use super::{LogSummary, RenderedFigure};
 use crate::fit::JointMap;
 use crate::log::ReadOptions;
-use crate::reproduce::{cli_command, python_call};
+use crate::reproduce::FitCall;
 use crate::result::{FitResult, JointMetrics, LinkResult, ParameterStatus};
 use crate::settings::Difference;
 
@@ -284,8 +284,8 @@ fn summary(o: &mut String, result: &FitResult) {
 /// The command line and the Python call that repeat the fit, and what they cannot
 /// repeat.
 fn reproduce(o: &mut String, result: &FitResult, read: Option<&ReadOptions>) {
-    let cli = cli_command(&result.robot_source, &result.settings, &result.inputs, read);
-    let py = python_call(&result.robot_source, &result.settings, &result.inputs, read);
+    let call = FitCall::of_result(result, read);
+    let (cli, py) = (call.cli_command(), call.python_call());
     let _ = write!(
         o,
         "<section id=reproduce><h2>Reproduce</h2><p>The command line that repeats this fit \
