@@ -121,7 +121,7 @@ pub use request::{
 };
 // Logs in memory (the readers are the `log` module).
 pub use joint_log::{Coordinates, JointLog, JointLogError, Signal};
-pub use names::Named;
+pub use names::{Named, UnknownName};
 // Settings: the estimator's, the delays', the friction models a fit selects among
 // (`FitSettings::select`); the processing's are the `signal` module's.
 pub use fit::delay::{DelayOption, DEFAULT_MAX_DELAY_S};

@@ -68,9 +68,9 @@ impl crate::names::Named for Preset {
 }
 
 impl std::str::FromStr for Preset {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }

@@ -49,9 +49,9 @@ impl crate::names::Named for Joints {
 }
 
 impl std::str::FromStr for Joints {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }
@@ -90,9 +90,9 @@ impl crate::names::Named for BoundsSet {
 }
 
 impl std::str::FromStr for BoundsSet {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }

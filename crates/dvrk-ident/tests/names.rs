@@ -27,6 +27,9 @@ fn check<T: Named + PartialEq + std::fmt::Debug>(values: &[T]) {
     }
     assert_eq!(T::names().count(), values.len());
     let e = T::parse_name("no-such-name").unwrap_err();
+    assert_eq!((e.what, e.text.as_str()), (T::WHAT, "no-such-name"));
+    assert_eq!(e.expected, T::names().collect::<Vec<_>>());
+    let e = e.to_string();
     assert!(
         e.starts_with(&format!("unknown {} \"no-such-name\"", T::WHAT)),
         "{e}"

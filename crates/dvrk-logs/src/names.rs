@@ -12,7 +12,8 @@
 //! use dvrk_logs::names::Named;
 //! assert_eq!("CSV".parse::<LogFormat>().unwrap(), LogFormat::Csv);
 //! assert_eq!(LogFormat::Wpi.name(), "wpi");
-//! assert!("parquet".parse::<LogFormat>().unwrap_err().starts_with("unknown log format \"parquet\""));
+//! let e = "parquet".parse::<LogFormat>().unwrap_err();
+//! assert_eq!(e.to_string(), "unknown log format \"parquet\": expected wpi, csv, mcap, rosbag2, sqlite3 or ros1");
 //! ```
 
 /// An option enum with one canonical name per value, and accepted aliases.
@@ -42,22 +43,40 @@ pub trait Named: Sized + Copy + 'static {
     }
 
     /// Case-insensitive, `-` and `_` alike; the error lists the canonical names.
-    fn parse_name(text: &str) -> Result<Self, String> {
+    fn parse_name(text: &str) -> Result<Self, UnknownName> {
         let key = |s: &str| s.to_ascii_lowercase().replace('-', "_");
         let wanted = key(text);
         Self::NAMES
             .iter()
             .find(|(n, _)| key(n) == wanted)
             .map(|(_, v)| *v)
-            .ok_or_else(|| {
-                let names: Vec<&str> = Self::names().collect();
-                let list = match names.split_last() {
-                    Some((last, rest)) if !rest.is_empty() => {
-                        format!("{} or {last}", rest.join(", "))
-                    }
-                    _ => names.join(""),
-                };
-                format!("unknown {} {text:?}: expected {list}", Self::WHAT)
+            .ok_or_else(|| UnknownName {
+                what: Self::WHAT,
+                text: text.to_string(),
+                expected: Self::names().collect(),
             })
     }
 }
+
+/// A text that names none of an option's values ([`Named::parse_name`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct UnknownName {
+    /// What the option is called ([`Named::WHAT`]).
+    pub what: &'static str,
+    /// The text given.
+    pub text: String,
+    /// The option's canonical names, in their order.
+    pub expected: Vec<&'static str>,
+}
+
+impl std::fmt::Display for UnknownName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let list = match self.expected.split_last() {
+            Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+            _ => self.expected.join(""),
+        };
+        write!(f, "unknown {} {:?}: expected {list}", self.what, self.text)
+    }
+}
+
+impl std::error::Error for UnknownName {}

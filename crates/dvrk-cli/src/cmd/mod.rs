@@ -27,28 +27,23 @@ use dvrk_model::Model;
 /// ([`Named`]): the command line lists and parses exactly what Python accepts.
 #[derive(Clone)]
 pub struct NamedParser<T> {
-    /// The values the flag takes (others are refused with the message), and the
-    /// only ones its help lists.
-    keep: fn(T) -> Result<(), String>,
+    /// Why the flag refuses a value (`None`: it takes it); the help lists only the
+    /// values it takes.
+    refuse: fn(T) -> Option<String>,
 }
 
 /// [`NamedParser`] for `T`, in `#[arg(value_parser = named::<T>())]`.
 pub fn named<T>() -> NamedParser<T> {
-    NamedParser { keep: |_| Ok(()) }
+    NamedParser { refuse: |_| None }
 }
 
 /// [`NamedParser`] of an output's log format: only the formats that are written, so
 /// the help offers no format that is then refused.
 pub fn writable() -> NamedParser<dvrk_ident::log::LogFormat> {
     NamedParser {
-        keep: |f| {
-            if f.is_writable() {
-                Ok(())
-            } else {
-                Err(format!(
-                    "logs are written as wpi, csv or mcap ({f} is read only)"
-                ))
-            }
+        refuse: |f| {
+            (!f.is_writable())
+                .then(|| format!("logs are written as wpi, csv or mcap ({f} is read only)"))
         },
     }
 }
@@ -64,9 +59,12 @@ impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for Nam
     ) -> Result<T, clap::Error> {
         let flag = arg.map(|a| format!("{a}: ")).unwrap_or_default();
         let message = match value.to_str() {
-            Some(text) => match T::parse_name(text).and_then(|v| (self.keep)(v).map(|()| v)) {
-                Ok(v) => return Ok(v),
-                Err(m) => m,
+            Some(text) => match T::parse_name(text) {
+                Ok(v) => match (self.refuse)(v) {
+                    None => return Ok(v),
+                    Some(m) => m,
+                },
+                Err(e) => e.to_string(),
             },
             None => format!("{} is not valid UTF-8", T::WHAT),
         };
@@ -83,7 +81,7 @@ impl<T: Named + PartialEq + Send + Sync> clap::builder::TypedValueParser for Nam
         Some(Box::new(
             T::NAMES[..T::CANONICAL]
                 .iter()
-                .filter(|(_, v)| (self.keep)(*v).is_ok())
+                .filter(|(_, v)| (self.refuse)(*v).is_none())
                 .map(|(n, _)| clap::builder::PossibleValue::new(*n)),
         ))
     }

@@ -211,9 +211,9 @@ impl PriorMetric {
 }
 
 impl std::str::FromStr for PriorMetric {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }

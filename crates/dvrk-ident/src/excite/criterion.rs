@@ -65,9 +65,9 @@ impl crate::names::Named for Criterion {
 }
 
 impl std::str::FromStr for Criterion {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }

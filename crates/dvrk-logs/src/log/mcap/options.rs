@@ -40,9 +40,9 @@ impl crate::names::Named for TimeSource {
 }
 
 impl std::str::FromStr for TimeSource {
-    type Err = String;
+    type Err = crate::names::UnknownName;
 
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         <Self as crate::names::Named>::parse_name(s)
     }
 }
