@@ -50,23 +50,23 @@ macro_rules! fit_options {
             /// --prior), relative
             sdp_regularization: f64 => SdpRegularization("sdp_regularization") with "text_or_value";
             /// Add a Stribeck friction term Fs·sign(v)·exp(-(v/VS)²) with this velocity (rad/s
-            /// or m/s) to every friction element (parameters Fs<frame>)
+            /// or m/s) to every friction element (parameters FsN, N the frame's number)
             stribeck_velocity: f64 => Stribeck("stribeck") with "text_or_value";
             /// Add Dahl friction Fd·z (rate-independent hysteresis: z follows dz/ds =
             /// SIGMA·(1 − z·sign(ds)) along the joint value, integrated from the processed
             /// positions in time order) with this stiffness (1/rad or 1/m) to every friction
-            /// element (parameters Fd<frame>, Fd ≥ 0 in the semidefinite fit)
+            /// element (parameters FdN, Fd ≥ 0 in the semidefinite fit)
             dahl_sigma: f64 => Dahl("dahl") with "text_or_value";
             /// Add a position-dependent torque Σ Pcₖ·cos(k·q) + Psₖ·sin(k·q), k = 1..ORDER (1 to
             /// 3), in the joint angle to every revolute friction element (parameters
-            /// Pca<frame>, Psa<frame>, Pcb<frame>...; no constant term, that is the offset Fo;
+            /// PcaN, PsaN, PcbN...; no constant term, that is the offset Fo;
             /// unbounded): the cables' and counterweights' torques of a cable-driven joint.
             /// Prismatic frames take it from a description (`position_torque = { order,
             /// period }`)
             position_torque_order: usize => PositionTorque("position_torque") with "text_or_value";
             /// Add load-dependent Coulomb friction Fl·|τ|·sign(q̇) to every friction element whose
             /// joint value is one coordinate's multiple, one per coordinate (parameters
-            /// Fl<frame>, 0 ≤ Fl ≤ 1/2 in the semidefinite fit): friction in proportion to the
+            /// FlN, 0 ≤ Fl ≤ 1/2 in the semidefinite fit): friction in proportion to the
             /// torque the joint transmits, the load its measured torque in the fit and its
             /// predicted torque in the metrics
             load_friction: bool => LoadFriction("load_friction");

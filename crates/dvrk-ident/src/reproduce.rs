@@ -505,7 +505,7 @@ impl FitCall<'_> {
         }
     }
 
-    /// The Python statements that repeat the fit of [`cli_command`]: `di.read_log` of each
+    /// The Python statements that repeat the fit of [`FitCall::cli_command`]: `di.read_log` of each
     /// log with the reading options, then `di.fit(robot, train, ...)` with the settings as
     /// keyword arguments, and the settings without a keyword in `settings={...}` (the
     /// result document's `settings` layout), so everything but logs without a file and a
