@@ -49,7 +49,7 @@ pub struct PositionTorque {
     /// Index of the first coefficient (`Pca`, N·m or N) in the parameter vector; the
     /// coefficients follow as cosine, sine for each order.
     pub param: usize,
-    /// The series' order `K` (1 to [`MAX_ORDER`]).
+    /// The series' order `K` (1 to `MAX_ORDER`, 3).
     pub order: usize,
     /// The period `P` of the series along the joint value (rad or m).
     pub period: f64,
@@ -84,7 +84,7 @@ impl PositionTorque {
         })
     }
 
-    /// `order` if it is 1 to [`MAX_ORDER`], else the reason.
+    /// `order` if it is 1 to `MAX_ORDER` (3), else the reason.
     pub fn check_order(order: usize) -> Result<usize, InputError> {
         if (1..=MAX_ORDER).contains(&order) {
             Ok(order)

@@ -12,7 +12,7 @@ use super::{JointKind, Model};
 /// friction (`--position-torque`).
 impl Model {
     /// This model with a position-dependent torque of order `order` (1 to
-    /// [`MAX_ORDER`]) and period one turn (2π rad) on every revolute frame with friction
+    /// 3) and period one turn (2π rad) on every revolute frame with friction
     /// and no position torque yet (e.g. `dvrk-ident fit --position-torque 2`), its
     /// coefficients appended in frame order. Prismatic frames are left out: their series
     /// needs a period in metres, which only a description gives
