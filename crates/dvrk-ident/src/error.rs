@@ -49,7 +49,7 @@ pub enum IdentError {
     Log(#[from] crate::log::LogError),
     /// Samples that do not form a trajectory (sizes, time not increasing, not finite).
     #[error(transparent)]
-    JointLog(#[from] crate::joint_log::JointLogError),
+    JointLog(#[from] crate::JointLogError),
     /// The semidefinite program could not be built or solved.
     #[error(transparent)]
     Sdp(#[from] crate::estimate::sdp::SdpError),

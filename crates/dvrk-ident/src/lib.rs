@@ -112,7 +112,7 @@ mod tests;
 #[cfg(all(test, not(feature = "recordings")))]
 mod without_recordings;
 // The logs' crate, under the paths the stages use.
-use dvrk_logs::{joint_log, median, names, output};
+use dvrk_logs::{median, names, output};
 
 // The request, its logs and its outcome.
 pub use request::{
@@ -120,7 +120,7 @@ pub use request::{
     SettingError, Streaming, Training, STREAM_ABOVE_BYTES,
 };
 // Logs in memory (the readers are the `log` module).
-pub use joint_log::{Coordinates, JointLog, JointLogError, Signal};
+pub use dvrk_logs::{Coordinates, JointLog, JointLogError, Signal};
 pub use names::{Named, UnknownName};
 // Settings: the estimator's, the delays', the friction models a fit selects among
 // (`FitSettings::select`); the processing's are the `signal` module's.

@@ -41,9 +41,9 @@ use crate::estimate::sdp::{solve_sdp, SdpOptions};
 use crate::estimate::SolverInfo;
 use crate::fit::status::{link_determined, parameter_status, StatusInputs};
 use crate::fit::{predict, prepare, Prepared};
-use crate::joint_log::JointLog;
 use crate::observation::Observation;
 use crate::progress::Silent;
+use crate::JointLog;
 // The identification's record is part of the result document; its public path is here.
 use crate::result::{
     BaseParameterResult, FitResult, LinkDetermined, ParameterStatus, ResultPayload,

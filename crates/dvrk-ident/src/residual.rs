@@ -24,9 +24,9 @@ use nalgebra::{DMatrix, Vector3};
 use crate::error::IdentError;
 use crate::external::ExternalTorque;
 use crate::fit::{predict, prepare, JointMap};
-use crate::joint_log::{Coordinates, JointLog};
 use crate::result::FitResult;
 use crate::settings::Joints;
+use crate::{Coordinates, JointLog};
 
 /// Default observer gain, 1/s (a 50 ms time constant).
 pub const DEFAULT_OBSERVER_GAIN: f64 = 20.0;

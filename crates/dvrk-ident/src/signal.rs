@@ -38,7 +38,7 @@ pub use ops::{
 pub use process::process;
 pub use stream::process_in_blocks;
 
-use crate::joint_log::{Coordinates, JointLogError};
+use crate::{Coordinates, JointLogError};
 use dvrk_model::input::show_approx;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};

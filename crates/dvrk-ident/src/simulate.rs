@@ -25,7 +25,8 @@ pub use crate::external::ExternalTorque;
 /// The other way: a log in the robot's measured coordinates (joint positions, motor
 /// torques of the coupled joints) turned into the model's, as the fit reads it.
 pub use crate::fit::to_model_coordinates;
-use crate::joint_log::{uniform_time, Coordinates, JointLog};
+use crate::{Coordinates, JointLog};
+use dvrk_logs::uniform_time;
 
 /// Most samples [`simulate`] produces (a guard against a mistyped duration or rate).
 pub const MAX_SAMPLES: usize = 10_000_000;

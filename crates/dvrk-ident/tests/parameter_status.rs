@@ -16,7 +16,7 @@ use dvrk_ident::simulate::{model_log, motion_torques};
 use dvrk_ident::ParameterStatus;
 use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitResult, FitSettings, JointLog, Method};
-use dvrk_logs::joint_log::uniform_time;
+use dvrk_logs::uniform_time;
 use dvrk_model::{inertia, Model};
 use nalgebra::DMatrix;
 

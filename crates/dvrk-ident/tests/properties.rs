@@ -13,7 +13,7 @@ mod logs;
 use dvrk_ident::signal::process_in_blocks;
 use dvrk_ident::signal::{process, Cutoff, LowPass, Processing};
 use dvrk_ident::{Coordinates, JointLog};
-use dvrk_logs::joint_log::uniform_time;
+use dvrk_logs::uniform_time;
 use dvrk_test_support::fixed_seed_config;
 use logs::worst_relative;
 use nalgebra::DMatrix;

@@ -10,7 +10,7 @@ use dvrk_ident::signal::{
     process, AccelerationSource, Cutoff, LowPass, Processed, Processing, SignalError, Stencil,
 };
 use dvrk_ident::{Coordinates, JointLog, JointLogError};
-use dvrk_logs::joint_log::uniform_time;
+use dvrk_logs::uniform_time;
 use logs::worst_relative;
 use nalgebra::DMatrix;
 

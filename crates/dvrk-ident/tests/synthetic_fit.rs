@@ -7,7 +7,7 @@ use dvrk_ident::simulate::{model_log, motion_torques};
 use dvrk_ident::JointLog;
 use dvrk_ident::Silent;
 use dvrk_ident::{FitRequest, FitSettings, Method};
-use dvrk_logs::joint_log::uniform_time;
+use dvrk_logs::uniform_time;
 use dvrk_model::{inertia, Model};
 use dvrk_test_support::fixtures::assert_recovered;
 use nalgebra::DMatrix;

@@ -105,7 +105,7 @@ impl ColumnLayout {
     ///
     /// ```
     /// use dvrk_logs::columns::{ColumnKind, ColumnLayout};
-    /// use dvrk_logs::joint_log::Signal;
+    /// use dvrk_logs::Signal;
     /// let names = ["time", "q.yaw", "tau.yaw", "position.pitch", "effort.pitch"];
     /// let layout = ColumnLayout::parse(&names, "time").unwrap();
     /// assert_eq!(layout.joints, ["yaw", "pitch"]);

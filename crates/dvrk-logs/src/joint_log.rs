@@ -223,7 +223,7 @@ pub struct JointLog {
 /// time stamps (e.g. the 2019 CSV files, 200 Hz).
 ///
 /// ```rust
-/// let t = dvrk_logs::joint_log::uniform_time(3, 200.0);
+/// let t = dvrk_logs::uniform_time(3, 200.0);
 /// assert_eq!(t, vec![0.0, 0.005, 0.01]);
 /// ```
 pub fn uniform_time(n: usize, rate_hz: f64) -> Vec<f64> {
@@ -250,7 +250,7 @@ impl JointLog {
     /// kept: a part of a log (Python's `log[a:b:step]`, the tests' training windows).
     ///
     /// ```rust
-    /// use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
+    /// use dvrk_logs::{uniform_time, Coordinates, JointLog};
     /// use nalgebra::DMatrix;
     ///
     /// let log = JointLog {
@@ -295,7 +295,7 @@ impl JointLog {
     /// non-positive median step.
     ///
     /// ```rust
-    /// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
+    /// use dvrk_logs::{Coordinates, JointLog, uniform_time};
     /// use nalgebra::DMatrix;
     /// let n = 5;
     /// let log = JointLog {

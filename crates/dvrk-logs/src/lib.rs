@@ -11,7 +11,7 @@
 //! as `dvrk_ident::log`, and `JointLog`, `Coordinates`, `Signal` and `Named` at its root.
 //!
 //! ```rust
-//! use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
+//! use dvrk_logs::{uniform_time, Coordinates, JointLog};
 //! use dvrk_logs::log::{read, write_headered};
 //! use nalgebra::DMatrix;
 //!
@@ -40,7 +40,7 @@
 pub mod columns;
 mod destination;
 pub mod hint;
-pub mod joint_log;
+mod joint_log;
 pub mod log;
 pub mod median;
 pub mod names;
@@ -48,5 +48,5 @@ pub mod output;
 pub mod resample;
 pub mod temporary;
 
-pub use joint_log::{Coordinates, JointLog, JointLogError};
+pub use joint_log::{uniform_time, Coordinates, JointLog, JointLogError, Signal};
 pub use log::LogError;

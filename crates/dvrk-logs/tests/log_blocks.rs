@@ -5,8 +5,8 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_logs::log::{write, LogError, LogFormat, LogReader, ReadOptions};
+use dvrk_logs::{uniform_time, Coordinates, JointLog};
 use logs::concatenate;
 use nalgebra::DMatrix;
 use std::path::PathBuf;

@@ -1,11 +1,11 @@
 //! CSV log readers and writers: round trips, format detection and every error case.
 
 use dvrk_logs::columns::ColumnError;
-use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_logs::log::{
     detect_format, read, read_headered, read_wpi, write, write_headered, write_wpi, LogError,
     LogFormat,
 };
+use dvrk_logs::{uniform_time, Coordinates, JointLog};
 use nalgebra::DMatrix;
 use std::path::{Path, PathBuf};
 

@@ -5,13 +5,13 @@
 #[path = "support/logs.rs"]
 mod logs;
 
-use dvrk_logs::joint_log::{uniform_time, Coordinates, JointLog};
 use dvrk_logs::log::mcap::{
     list_topics, read_joint_states, read_mcap, read_mcap_log, write_mcap, McapCompression,
     McapOptions, McapProblem, McapReader, McapWriteOptions, TimeSource, JOINT_STATE_SCHEMA,
     JOINT_STATE_TYPE,
 };
 use dvrk_logs::log::{detect_format, read, write, LogError, LogFormat};
+use dvrk_logs::{uniform_time, Coordinates, JointLog};
 use dvrk_model::Model;
 use dvrk_test_support::fixtures::TempDir;
 use logs::concatenate;

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::Command;
 
 use dvrk_ident::{Coordinates, JointLog};
-use dvrk_logs::joint_log::uniform_time;
+use dvrk_logs::uniform_time;
 use dvrk_model::{Model, Workspace};
 use nalgebra::DMatrix;
 

@@ -6,10 +6,10 @@ use dvrk_model::Model;
 use nalgebra::DMatrix;
 
 use crate::error::IdentError;
-use crate::joint_log::{Coordinates, JointLog};
 use crate::observation::Samples;
 use crate::signal::stream::process_in_blocks;
 use crate::signal::Processing;
+use crate::{Coordinates, JointLog};
 
 /// Processed samples in model coordinates, known forces subtracted from the torques.
 #[derive(Clone, Debug)]
@@ -308,7 +308,7 @@ impl<'a> LogData<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::joint_log::uniform_time;
+    use dvrk_logs::uniform_time;
 
     /// A two-joint log of `n` samples stamped at `stamp_hz` whose positions move as
     /// `sin(w·t)` on the true clock `true_hz` and whose velocities are `velocity(k, j)`.

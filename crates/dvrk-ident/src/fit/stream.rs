@@ -37,7 +37,6 @@ use super::observed::{
 };
 use super::prepare::{subtract_known_forces, to_model_coordinates};
 use crate::error::IdentError;
-use crate::joint_log::{Coordinates, JointLog};
 use crate::log::LogReader;
 use crate::observation::{PerCoordinate, Samples, CHUNK_SAMPLES};
 use crate::progress::{Progress, Silent};
@@ -45,6 +44,7 @@ use crate::result::{FitResult, InputInfo};
 use crate::settings::FitSettings;
 use crate::signal::stream::{BlockProcessor, LogTiming, TimingSurvey};
 use crate::signal::Processed;
+use crate::{Coordinates, JointLog};
 
 /// Samples per block read from a file: 4096 samples of a 7-joint log are about 1 MB
 /// through the processing, and each block's observation is assembled in parallel.

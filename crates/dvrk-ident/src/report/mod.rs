@@ -20,10 +20,10 @@ use thiserror::Error;
 use crate::error::IdentError;
 use crate::excite::FourierTrajectory;
 use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, JointMap, Prepared};
-use crate::joint_log::JointLog;
 use crate::log::ReadOptions;
 use crate::result::{FitResult, JointMetrics};
 use crate::settings::FitSettings;
+use crate::JointLog;
 pub use plot::{figure_bytes, render_both, write_figure, RenderedFigure};
 
 /// Errors of figure and report output.

@@ -7,7 +7,7 @@ use super::{
     advance, central_difference, resample_linear, select_rows, AccelerationSource, Processed,
     Processing, SignalError, Stencil,
 };
-use crate::joint_log::JointLog;
+use crate::JointLog;
 
 /// A per-column operation: (column samples, joint index) -> new column.
 type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
@@ -27,7 +27,7 @@ type ColumnFn<'a> = dyn Fn(&[f64], usize) -> Result<Vec<f64>, SignalError> + 'a;
 /// ```rust
 /// use dvrk_ident::signal::{process, Processing};
 /// use dvrk_ident::{Coordinates, JointLog};
-/// use dvrk_logs::joint_log::uniform_time;
+/// use dvrk_logs::uniform_time;
 /// use nalgebra::DMatrix;
 /// let n = 1000;
 /// let rate = 200.0;

@@ -16,7 +16,7 @@ pub use processor::BlockProcessor;
 pub use timing::{LogTiming, TimingSurvey};
 
 use super::{stack_rows, Processed, Processing, SignalError};
-use crate::joint_log::JointLog;
+use crate::JointLog;
 use nalgebra::DMatrix;
 
 /// The processing of a trajectory held in memory as consecutive `blocks` (one or more)

@@ -2,7 +2,8 @@
 //! [`super::process`] and its settings.
 
 use super::*;
-use crate::joint_log::{uniform_time, JointLog};
+use crate::JointLog;
+use dvrk_logs::uniform_time;
 
 fn sine_traj(n: usize, rate: f64, with_dq: bool) -> JointLog {
     let t = uniform_time(n, rate);

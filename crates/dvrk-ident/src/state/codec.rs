@@ -450,7 +450,7 @@ fn decode(header: Header, payload: &[u8], file: &str) -> Result<ObservationState
     };
     let min = bound("min")?;
     let max = bound("max")?;
-    let max_torque = crate::joint_log::Signal::Effort.max_magnitude();
+    let max_torque = crate::Signal::Effort.max_magnitude();
     if let Some(x) = min.iter().chain(&max).find(|x| x.abs() > max_torque) {
         return Err(bad(
             file,

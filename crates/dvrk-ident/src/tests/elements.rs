@@ -285,8 +285,8 @@ const VERTICAL_LINK: &str = "name = \"vertical\"\nconvention = \"modified\"\n\
 /// load friction with its load solved for) plus noise of standard deviation `noise`
 /// (N·m).
 fn swing_log(model: &Model, pi: &[f64], noise: f64) -> crate::JointLog {
-    use crate::joint_log::uniform_time;
     use crate::simulate::{model_log, motion_torques};
+    use dvrk_logs::uniform_time;
     let (count, rate) = (2000, 100.0);
     let time = uniform_time(count, rate);
     let wave = |t: f64| {

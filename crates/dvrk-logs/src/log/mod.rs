@@ -354,7 +354,7 @@ pub enum LogError {
 ///
 /// ```rust
 /// use dvrk_logs::log::{read, write_wpi};
-/// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
+/// use dvrk_logs::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-read-{}.csv", std::process::id()));
 /// let log = JointLog {

@@ -28,7 +28,7 @@ impl Resampling for Option<f64> {
 ///
 /// ```rust
 /// use dvrk_logs::log::{write_wpi, LogFormat, ReadOptions};
-/// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
+/// use dvrk_logs::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 ///
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-options-{}.csv", std::process::id()));

@@ -8,9 +8,9 @@ use super::difference::Difference;
 use super::timing::LogTiming;
 use super::zero_phase::{settle_margin, ZeroPhase};
 use super::Resampler;
-use crate::joint_log::{Coordinates, JointLog, JointLogError};
 use crate::signal::advance::Advance;
 use crate::signal::{AccelerationSource, Processed, Processing, SignalError};
+use crate::{Coordinates, JointLog, JointLogError};
 
 /// Relative size of the backward passes' start error within a block (see
 /// `settle_margin`): far below the 1e-9 agreement promised with the whole-log

@@ -1,8 +1,8 @@
 //! The first pass over a streamed log: what the processing must know before the first
 //! filtered sample, and what [`crate::signal::process`] checks on the whole log first.
 
-use crate::joint_log::{JointLog, JointLogError};
 use crate::median::{ExactMedian, MedianPass};
+use crate::{JointLog, JointLogError};
 
 /// The timing of a log, from [`TimingSurvey`].
 #[derive(Clone, Debug, PartialEq)]

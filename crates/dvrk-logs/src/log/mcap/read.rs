@@ -51,7 +51,7 @@ pub fn read_mcap(path: impl AsRef<Path>, options: &McapOptions) -> Result<JointL
 ///
 /// ```rust
 /// use dvrk_logs::log::mcap::{read_mcap_log, write_mcap, McapOptions, McapWriteOptions};
-/// use dvrk_logs::joint_log::{Coordinates, JointLog, uniform_time};
+/// use dvrk_logs::{Coordinates, JointLog, uniform_time};
 /// use nalgebra::DMatrix;
 /// let path = std::env::temp_dir().join(format!("dvrk-ident-doc-{}.mcap", std::process::id()));
 /// let n = 50;
