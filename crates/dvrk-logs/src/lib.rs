@@ -49,4 +49,3 @@ pub mod resample;
 pub mod temporary;
 
 pub use joint_log::{uniform_time, Coordinates, JointLog, JointLogError, Signal};
-pub use log::LogError;
