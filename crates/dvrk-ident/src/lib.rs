@@ -122,6 +122,7 @@ pub use request::{
 // Logs in memory (the readers are the `log` module).
 pub use dvrk_logs::{Coordinates, JointLog, JointLogError, Signal};
 pub use names::{Named, UnknownName};
+pub use options::ValueError;
 // Settings: the estimator's, the delays', the friction models a fit selects among
 // (`FitSettings::select`); the processing's are the `signal` module's.
 pub use fit::delay::{DelayOption, DEFAULT_MAX_DELAY_S};

@@ -195,17 +195,91 @@ impl Setting {
     }
 }
 
+/// Why an option's text is not one of its values: the errors of the options' `FromStr`
+/// (the command line's flags, Python's strings, a result document's text).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ValueError {
+    /// A name none of an option enum's.
+    #[error(transparent)]
+    UnknownName(#[from] crate::names::UnknownName),
+    /// `cutoff`: not a number, a list of them or `none`.
+    #[error("`{0}` is not a cut-off (Hz), a list of them or `none`")]
+    NotCutoff(String),
+    /// `cutoff`: a value that is not positive and finite (Hz).
+    #[error("cut-off {0} Hz: must be positive and finite (or `none`: no filter)")]
+    CutoffNotPositive(f64),
+    /// `delay`: not `auto` nor seconds.
+    #[error("`{0}` is not a delay: expected auto or seconds d1,d2,...")]
+    NotDelay(String),
+    /// `select`: a term's value that is not a positive number.
+    #[error("candidate `{candidate}`: `{value}` is not a positive number ({term}'s value)")]
+    CandidateValue {
+        /// The candidate as given.
+        candidate: String,
+        /// The term (`stribeck`, `dahl`).
+        term: String,
+        /// The value's text.
+        value: String,
+    },
+    /// `select`: a term that is neither `stribeck` nor `dahl`.
+    #[error(
+        "unknown candidate term `{term}` in `{candidate}`: expected coulomb, or terms \
+         stribeck[:VS] and dahl[:SIGMA] joined by +"
+    )]
+    UnknownCandidateTerm {
+        /// The candidate as given.
+        candidate: String,
+        /// The term as given.
+        term: String,
+    },
+    /// `select`: a candidate with a term twice.
+    #[error("candidate `{candidate}` gives {term} twice")]
+    TermTwice {
+        /// The candidate as given.
+        candidate: String,
+        /// The term given twice.
+        term: String,
+    },
+    /// `select`: fewer than two candidates.
+    #[error("`{0}`: give at least two candidates to choose from (or `builtin`)")]
+    TooFewCandidates(String),
+    /// `select`: a candidate given twice.
+    #[error("`{list}`: candidate {candidate} is given twice")]
+    CandidateTwice {
+        /// The list as given.
+        list: String,
+        /// The candidate's name.
+        candidate: String,
+    },
+    /// `prior`: an empty text.
+    #[error("give `nominal` or a result file")]
+    NoPrior,
+}
+
 /// An option's value as a front end gives it: text is parsed as its flag's text
 /// ([`FromStr`](std::str::FromStr), whose error names the accepted values), any other
 /// value is read as the value itself. The one reading of the fit options'
 /// (`request/overrides.rs`) and the excitation options' (`excite/options.rs`) values.
-pub(crate) fn parse_text_or_value<T>(value: serde_json::Value) -> Result<T, String>
+pub(crate) fn parse_text_or_value<T>(value: serde_json::Value) -> Result<T, TextOrValueError>
 where
     T: std::str::FromStr + serde::de::DeserializeOwned,
-    T::Err: std::fmt::Display,
+    T::Err: std::error::Error + Send + Sync + 'static,
 {
     match value {
-        serde_json::Value::String(text) => text.parse().map_err(|e: T::Err| e.to_string()),
-        value => T::deserialize(value).map_err(|e| e.to_string()),
+        serde_json::Value::String(text) => text
+            .parse()
+            .map_err(|e: T::Err| TextOrValueError::Text(Box::new(e))),
+        value => T::deserialize(value).map_err(TextOrValueError::Value),
     }
+}
+
+/// Why [`parse_text_or_value`] refused a value: its text (the type's `FromStr` error:
+/// a [`ValueError`], an [`UnknownName`](crate::names::UnknownName), a number's), or the
+/// value itself.
+#[derive(Debug, thiserror::Error)]
+pub(crate) enum TextOrValueError {
+    #[error(transparent)]
+    Text(Box<dyn std::error::Error + Send + Sync>),
+    #[error(transparent)]
+    Value(serde_json::Error),
 }

@@ -11,6 +11,7 @@ pub use crate::estimate::sdp::PriorMetric;
 use crate::estimate::sdp::SdpOptions;
 pub use crate::estimate::Method;
 use crate::options::Setting;
+use crate::options::ValueError;
 use crate::signal::Processing;
 
 /// Which joints a fit's errors, figures and predictions are reported in: the model's
@@ -552,10 +553,10 @@ impl Candidate {
 }
 
 impl std::str::FromStr for Candidate {
-    type Err = String;
+    type Err = ValueError;
 
     /// `coulomb`, or `+`-joined terms `stribeck[:VS]` and `dahl[:SIGMA]`.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, ValueError> {
         let mut c = Candidate {
             stribeck_velocity: None,
             dahl_sigma: None,
@@ -568,27 +569,32 @@ impl std::str::FromStr for Candidate {
                 Some((w, v)) => (w, Some(v)),
                 None => (term, None),
             };
-            let value = |default: f64| -> Result<f64, String> {
+            let value = |default: f64| -> Result<f64, ValueError> {
                 let Some(v) = value else { return Ok(default) };
                 match v.parse::<f64>() {
                     Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
-                    _ => Err(format!(
-                        "candidate `{s}`: `{v}` is not a positive number ({what}'s value)"
-                    )),
+                    _ => Err(ValueError::CandidateValue {
+                        candidate: s.to_string(),
+                        term: what.to_string(),
+                        value: v.to_string(),
+                    }),
                 }
             };
             let slot = match what {
                 "stribeck" => (&mut c.stribeck_velocity, value(DEFAULT_STRIBECK)?),
                 "dahl" => (&mut c.dahl_sigma, value(DEFAULT_DAHL)?),
                 _ => {
-                    return Err(format!(
-                        "unknown candidate term `{term}` in `{s}`: expected coulomb, or terms \
-                         stribeck[:VS] and dahl[:SIGMA] joined by +"
-                    ))
+                    return Err(ValueError::UnknownCandidateTerm {
+                        candidate: s.to_string(),
+                        term: term.to_string(),
+                    })
                 }
             };
             if slot.0.replace(slot.1).is_some() {
-                return Err(format!("candidate `{s}` gives {what} twice"));
+                return Err(ValueError::TermTwice {
+                    candidate: s.to_string(),
+                    term: what.to_string(),
+                });
             }
         }
         Ok(c)
@@ -624,25 +630,26 @@ impl Candidates {
 }
 
 impl std::str::FromStr for Candidates {
-    type Err = String;
+    type Err = ValueError;
 
     /// `builtin`, or candidate names separated by commas (at least two, distinct).
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, ValueError> {
         if s == "builtin" {
             return Ok(Candidates::builtin());
         }
         let list = s
             .split(',')
             .map(|c| c.trim().parse())
-            .collect::<Result<Vec<Candidate>, String>>()?;
+            .collect::<Result<Vec<Candidate>, ValueError>>()?;
         if list.len() < 2 {
-            return Err(format!(
-                "`{s}`: give at least two candidates to choose from (or `builtin`)"
-            ));
+            return Err(ValueError::TooFewCandidates(s.to_string()));
         }
         for (i, c) in list.iter().enumerate() {
             if list[..i].contains(c) {
-                return Err(format!("`{s}`: candidate {} is given twice", c.name()));
+                return Err(ValueError::CandidateTwice {
+                    list: s.to_string(),
+                    candidate: c.name(),
+                });
             }
         }
         Ok(Candidates(list))

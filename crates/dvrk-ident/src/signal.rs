@@ -38,6 +38,7 @@ pub use ops::{
 pub use process::process;
 pub use stream::process_in_blocks;
 
+use crate::options::ValueError;
 use crate::{Coordinates, JointLogError};
 use dvrk_model::input::show_approx;
 use nalgebra::DMatrix;
@@ -260,7 +261,7 @@ impl Cutoff {
     /// assert!(Cutoff::parse_flag("nan").is_err());
     /// assert!(Cutoff::parse_flag("5,-1").is_err());
     /// ```
-    pub fn parse_flag(text: &str) -> Result<Option<Cutoff>, String> {
+    pub fn parse_flag(text: &str) -> Result<Option<Cutoff>, ValueError> {
         if text.trim().eq_ignore_ascii_case("none") {
             return Ok(None);
         }
@@ -268,7 +269,7 @@ impl Cutoff {
             .split(',')
             .map(|v| v.trim().parse::<f64>())
             .collect::<Result<_, _>>()
-            .map_err(|_| format!("`{text}` is not a cut-off (Hz), a list of them or `none`"))?;
+            .map_err(|_| ValueError::NotCutoff(text.to_string()))?;
         let cutoff = match values[..] {
             [one] => Cutoff::All(one),
             _ => Cutoff::PerJoint(values),
@@ -279,15 +280,13 @@ impl Cutoff {
 
     /// Every cut-off positive and finite: what any cut-off read (a flag, a result's or a
     /// state's settings) must be.
-    fn check_values(&self) -> Result<(), String> {
+    fn check_values(&self) -> Result<(), ValueError> {
         let values = match self {
             Cutoff::All(v) => std::slice::from_ref(v),
             Cutoff::PerJoint(v) => v.as_slice(),
         };
         if let Some(v) = values.iter().find(|v| !(v.is_finite() && **v > 0.0)) {
-            return Err(format!(
-                "cut-off {v} Hz: must be positive and finite (or `none`: no filter)"
-            ));
+            return Err(ValueError::CutoffNotPositive(*v));
         }
         Ok(())
     }
@@ -310,7 +309,7 @@ impl Cutoff {
                 .check_values()
                 .map_err(|reason| SignalError::InvalidSetting {
                     name: "cutoff_hz",
-                    reason,
+                    reason: reason.to_string(),
                 }),
         }
     }

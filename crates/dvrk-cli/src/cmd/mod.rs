@@ -190,11 +190,12 @@ pub fn inputs(logs: &[&str], files: &[(&str, Option<&str>)]) -> Inputs {
 
 /// A count flag that must be at least 1 (e.g. `--test-window`: 0 samples have no
 /// metrics).
-pub fn at_least_one(text: &str) -> std::result::Result<usize, String> {
-    match text.parse::<usize>() {
-        Ok(0) => Err("must be at least 1".into()),
-        Ok(n) => Ok(n),
-        Err(e) => Err(e.to_string()),
+pub fn at_least_one(
+    text: &str,
+) -> std::result::Result<usize, Box<dyn std::error::Error + Send + Sync>> {
+    match text.parse::<usize>()? {
+        0 => Err("must be at least 1".into()),
+        n => Ok(n),
     }
 }
 

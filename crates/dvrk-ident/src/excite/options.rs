@@ -115,7 +115,10 @@ macro_rules! excite_options {
                 option: ExciteOption,
                 value: serde_json::Value,
             ) -> Result<(), ExciteOptionError> {
-                let error = |message| ExciteOptionError { option, message };
+                let error = |e: crate::options::TextOrValueError| ExciteOptionError {
+                    option,
+                    message: e.to_string(),
+                };
                 match option {
                     $(ExciteOption::$variant => self.$field = parse_text_or_value(value).map_err(error)?,)*
                 }

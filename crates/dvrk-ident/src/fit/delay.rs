@@ -60,23 +60,20 @@ impl serde::Serialize for DelayOption {
 }
 
 impl std::str::FromStr for DelayOption {
-    type Err = String;
+    type Err = crate::options::ValueError;
 
     /// `auto`, or seconds separated by commas.
-    fn from_str(text: &str) -> Result<Self, String> {
+    fn from_str(text: &str) -> Result<Self, Self::Err> {
         if text.trim().eq_ignore_ascii_case("auto") {
             return Ok(DelayOption::Auto);
         }
         text.split(',')
             .map(|t| {
-                t.trim().parse::<f64>().map_err(|_| {
-                    format!(
-                        "`{}` is not a delay: expected auto or seconds d1,d2,...",
-                        t.trim()
-                    )
-                })
+                t.trim()
+                    .parse::<f64>()
+                    .map_err(|_| crate::options::ValueError::NotDelay(t.trim().to_string()))
             })
-            .collect::<Result<Vec<f64>, String>>()
+            .collect::<Result<Vec<f64>, _>>()
             .map(DelayOption::Fixed)
     }
 }

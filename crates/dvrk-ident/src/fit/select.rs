@@ -309,11 +309,38 @@ mod tests {
         ] {
             assert_eq!(name.parse::<Candidate>().unwrap().name(), name);
         }
+        use crate::options::ValueError;
         let e = "coulomb,viscous".parse::<Candidates>().unwrap_err();
-        assert!(e.contains("unknown candidate term `viscous`"), "{e}");
+        assert_eq!(
+            e,
+            ValueError::UnknownCandidateTerm {
+                candidate: "viscous".into(),
+                term: "viscous".into()
+            }
+        );
+        assert!(
+            e.to_string().contains("unknown candidate term `viscous`"),
+            "{e}"
+        );
         let e = "stribeck:-1,coulomb".parse::<Candidates>().unwrap_err();
-        assert!(e.contains("`-1` is not a positive number"), "{e}");
+        assert!(
+            e.to_string().contains("`-1` is not a positive number"),
+            "{e}"
+        );
         let e = "dahl+dahl:5,coulomb".parse::<Candidates>().unwrap_err();
-        assert!(e.contains("gives dahl twice"), "{e}");
+        assert_eq!(
+            e,
+            ValueError::TermTwice {
+                candidate: "dahl+dahl:5".into(),
+                term: "dahl".into()
+            }
+        );
+        assert_eq!(
+            "coulomb,coulomb"
+                .parse::<Candidates>()
+                .unwrap_err()
+                .to_string(),
+            "`coulomb,coulomb`: candidate coulomb is given twice"
+        );
     }
 }

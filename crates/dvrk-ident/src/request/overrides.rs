@@ -211,7 +211,7 @@ fn text_or_value<'de, D, T>(d: D) -> Result<Option<T>, D::Error>
 where
     D: Deserializer<'de>,
     T: FromStr + DeserializeOwned,
-    T::Err: std::fmt::Display,
+    T::Err: std::error::Error + Send + Sync + 'static,
 {
     crate::options::parse_text_or_value(serde_json::Value::deserialize(d)?)
         .map(Some)

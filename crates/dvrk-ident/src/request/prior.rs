@@ -58,12 +58,12 @@ impl PartialEq for PriorSource {
 }
 
 impl std::str::FromStr for PriorSource {
-    type Err = String;
+    type Err = crate::options::ValueError;
 
     /// `nominal`, or the path of a result file.
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
-            "" => Err("give `nominal` or a result file".into()),
+            "" => Err(crate::options::ValueError::NoPrior),
             "nominal" => Ok(PriorSource::Nominal),
             path => Ok(PriorSource::File(PathBuf::from(path))),
         }
