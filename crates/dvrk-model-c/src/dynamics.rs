@@ -5,7 +5,9 @@
 
 use std::ffi::c_int;
 
-use crate::boundary::{deliver, finite, finite3, guarded, input, model_ref, output, pair};
+use dvrk_model::{Model, Workspace};
+
+use crate::boundary::{deliver, finite, finite3, guarded, model_ref, slices, workspace_args};
 use crate::codes::{DVRK_ERR_NOT_POSITIVE_DEFINITE, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
 use crate::{DvrkModel, DvrkWorkspace, BOUNDED_Q_MAX};
 
@@ -27,22 +29,37 @@ pub unsafe extern "C" fn dvrk_gravity(
 ) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligations, passed on.
-        let (m, w) = unsafe { pair(model, ws) }?;
-        let n = m.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (q, tau) = unsafe { (input(q, n)?, output(tau, n)?) };
-        if m.bounded && q.iter().all(|x| x.abs() <= BOUNDED_Q_MAX) {
-            // Finite by `Model::gravity_torque_bound`: straight into the caller's buffer,
-            // with no output check (benches/abi.rs: 5.3-5.6 % over the Rust call with the
-            // check and the copy of a 7-value torque, 1.0-1.5 % without).
-            m.model.gravity_torque(&mut w.ws, &m.params, q, tau);
-            return Ok(());
-        }
-        finite(&[q])?;
-        m.model
-            .gravity_torque(&mut w.ws, &m.params, q, &mut w.vector);
-        deliver(&w.vector, tau)
+        let (m, w, [q], tau) = unsafe { workspace_args(model, ws, [q], tau, |n| n) }?;
+        // Bounded by `Model::gravity_torque_bound`.
+        of_positions(m, &mut w.ws, &mut w.vector, q, tau, Model::gravity_torque)
     })
+}
+
+/// The body of `dvrk_gravity` and `dvrk_mass_matrix`, which differ only in what they
+/// compute of `q` (`compute(model, ws, params, q, out)`). When the model is bounded
+/// ([`DvrkModel::bounded`]) and `|q_k| ≤ BOUNDED_Q_MAX` (false for a non-finite `q`),
+/// the result is finite by the bound and is computed straight into the caller's buffer
+/// with no output check (benches/abi.rs: the gravity's overhead over the Rust call was
+/// 5.3-5.6 % with the check and the copy of a 7-value torque, 1.0-1.5 % without);
+/// otherwise `q` is checked finite and the result computed into `scratch` and delivered
+/// only if finite. Inlined: as a call of its own it cost the gravity 1 ns (0.5 % on
+/// the PSM, benches/abi.rs).
+#[inline(always)]
+fn of_positions(
+    m: &DvrkModel,
+    ws: &mut Workspace,
+    scratch: &mut [f64],
+    q: &[f64],
+    out: &mut [f64],
+    compute: impl Fn(&Model, &mut Workspace, &[f64], &[f64], &mut [f64]),
+) -> Result<(), c_int> {
+    if m.bounded && q.iter().all(|x| x.abs() <= BOUNDED_Q_MAX) {
+        compute(&m.model, ws, &m.params, q, out);
+        return Ok(());
+    }
+    finite(&[q])?;
+    compute(&m.model, ws, &m.params, q, scratch);
+    deliver(scratch, out)
 }
 
 /// Inverse dynamics (N·m or N per model coordinate): the torque the result's model
@@ -118,11 +135,8 @@ unsafe fn dynamics(
 ) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligations, passed on.
-        let (m, w) = unsafe { pair(model, ws) }?;
-        let n = m.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (q, dq, ddq, tau) =
-            unsafe { (input(q, n)?, input(dq, n)?, input(ddq, n)?, output(tau, n)?) };
+        let (m, w, [q, dq, ddq], tau) =
+            unsafe { workspace_args(model, ws, [q, dq, ddq], tau, |n| n) }?;
         finite3(q, dq, ddq)?;
         let params = match which {
             Dynamics::Whole => &m.params,
@@ -155,24 +169,19 @@ pub unsafe extern "C" fn dvrk_mass_matrix(
 ) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligations, passed on.
-        let (dm, w) = unsafe { pair(model, ws) }?;
-        let n = dm.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (q, out) = unsafe { (input(q, n)?, output(m, n * n)?) };
-        if dm.bounded && q.iter().all(|x| x.abs() <= BOUNDED_Q_MAX) {
-            // Finite by `Model::mass_matrix_bound`: straight into the caller's buffer,
-            // as `dvrk_gravity` does.
-            dm.model.mass_matrix_into(&mut w.ws, &dm.params, q, out);
-            return Ok(());
-        }
-        finite(&[q])?;
-        // dvrk-model writes M column-major, each off-diagonal product added to both of
-        // its entries at once, so M is symmetric to the bit and its column-major layout
-        // is its row-major one: no transpose (tests/c_abi.rs compares every entry with
-        // dvrk-model's, bit for bit).
-        dm.model
-            .mass_matrix_into(&mut w.ws, &dm.params, q, &mut w.matrix);
-        deliver(&w.matrix, out)
+        let (dm, w, [q], out) = unsafe { workspace_args(model, ws, [q], m, |n| n * n) }?;
+        // Bounded by `Model::mass_matrix_bound`. dvrk-model writes M column-major, each
+        // off-diagonal product added to both of its entries at once, so M is symmetric
+        // to the bit and its column-major layout is its row-major one: no transpose
+        // (tests/c_abi.rs compares every entry with dvrk-model's, bit for bit).
+        of_positions(
+            dm,
+            &mut w.ws,
+            &mut w.matrix,
+            q,
+            out,
+            Model::mass_matrix_into,
+        )
     })
 }
 
@@ -197,11 +206,8 @@ pub unsafe extern "C" fn dvrk_forward_dynamics(
 ) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligations, passed on.
-        let (m, w) = unsafe { pair(model, ws) }?;
-        let n = m.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (q, dq, tau, ddq) =
-            unsafe { (input(q, n)?, input(dq, n)?, input(tau, n)?, output(ddq, n)?) };
+        let (m, w, [q, dq, tau], ddq) =
+            unsafe { workspace_args(model, ws, [q, dq, tau], ddq, |n| n) }?;
         finite3(q, dq, tau)?;
         m.model
             .forward_dynamics_into(&mut w.ws, &m.params, q, dq, tau, &mut w.vector)
@@ -226,16 +232,13 @@ pub unsafe extern "C" fn dvrk_measured_to_model(
     measured: *const f64,
     model_out: *mut f64,
 ) -> c_int {
-    guarded(|| {
-        // SAFETY: the caller's obligation, passed on.
-        let m = unsafe { model_ref(model) }.ok_or(DVRK_ERR_NULL)?;
-        let n = m.model.dof();
-        // SAFETY: the caller's obligations, passed on.
-        let (x, out) = unsafe { (input(measured, n)?, output(model_out, n)?) };
-        finite(&[x])?;
-        // out_i = Σ_k M⁻¹[i, k] x_k (row-major M⁻¹).
-        map_linear(x, out, |i, k| m.measured_to_model[i * n + k])
-    })
+    // out_i = Σ_k M⁻¹[i, k] x_k (row-major M⁻¹).
+    // SAFETY: the caller's obligations, passed on.
+    unsafe {
+        map_linear(model, measured, model_out, |m_inv, n, i, k| {
+            m_inv[i * n + k]
+        })
+    }
 }
 
 /// Model-coordinate torques (as `dvrk_inverse_dynamics` gives them) to the measured
@@ -253,29 +256,46 @@ pub unsafe extern "C" fn dvrk_model_to_measured_torque(
     tau_model: *const f64,
     measured_out: *mut f64,
 ) -> c_int {
+    // out_k = Σ_j M⁻¹[j, k] t_j: the transpose of M⁻¹ (row-major).
+    // SAFETY: the caller's obligations, passed on.
+    unsafe {
+        map_linear(model, tau_model, measured_out, |m_inv, n, k, j| {
+            m_inv[j * n + k]
+        })
+    }
+}
+
+/// The body of the joint conversions, which differ only in how they read the model's
+/// `M⁻¹`: `out_i = Σ_k a(M⁻¹, n, i, k)·x_k` after the checks (model, then `x` and `out`
+/// NULL, then `x` finite). They have no workspace to compute into: every entry is
+/// checked finite before any is written (each computed twice, 2n² flops), so `out` is
+/// untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
+///
+/// # Safety
+///
+/// `model` is NULL or live; `x` and `out` are NULL or valid for `dvrk_model_dof` doubles
+/// and do not overlap.
+unsafe fn map_linear(
+    model: *const DvrkModel,
+    x: *const f64,
+    out: *mut f64,
+    a: impl Fn(&[f64], usize, usize, usize) -> f64,
+) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligation, passed on.
         let m = unsafe { model_ref(model) }.ok_or(DVRK_ERR_NULL)?;
         let n = m.model.dof();
         // SAFETY: the caller's obligations, passed on.
-        let (t, out) = unsafe { (input(tau_model, n)?, output(measured_out, n)?) };
-        finite(&[t])?;
-        // out_k = Σ_j M⁻¹[j, k] t_j: the transpose of M⁻¹ (row-major).
-        map_linear(t, out, |k, j| m.measured_to_model[j * n + k])
+        let ([x], out) = unsafe { slices([x], n, out, n) }?;
+        finite(&[x])?;
+        let row =
+            |i: usize| (0..n).fold(0.0, |acc, k| acc + a(&m.measured_to_model, n, i, k) * x[k]);
+        if !(0..n).all(|i| row(i).is_finite()) {
+            return Err(DVRK_ERR_OVERFLOW);
+        }
+        for (i, o) in out.iter_mut().enumerate() {
+            *o = row(i);
+        }
+        Ok(())
     })
-}
-
-/// `out_i = Σ_k a(i, k)·x_k` for the joint conversions, which have no workspace to
-/// compute into: every entry is checked finite before any is written (each computed
-/// twice, 2n² flops), so `out` is untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
-fn map_linear(x: &[f64], out: &mut [f64], a: impl Fn(usize, usize) -> f64) -> Result<(), c_int> {
-    let n = x.len();
-    let row = |i: usize| (0..n).fold(0.0, |acc, k| acc + a(i, k) * x[k]);
-    if !(0..out.len()).all(|i| row(i).is_finite()) {
-        return Err(DVRK_ERR_OVERFLOW);
-    }
-    for (i, o) in out.iter_mut().enumerate() {
-        *o = row(i);
-    }
-    Ok(())
 }

@@ -2,14 +2,14 @@
 //! result, one allocation-free `dvrk_observer_update` per control cycle (the external
 //! torque the model does not explain, without an acceleration). A module of its own so
 //! that the observer's entry points stay apart from the model's (`dynamics.rs`); they share
-//! its checks ([`pair`], [`input`], [`output`], [`finite`], [`guarded`]).
+//! its checks ([`pair`], [`slices`], [`finite`], [`guarded`]).
 
 use std::ffi::c_int;
 use std::panic::catch_unwind;
 
 use dvrk_model::MomentumObserver;
 
-use crate::boundary::{finite, guarded, input, model_ref, output, pair};
+use crate::boundary::{finite, guarded, input, model_ref, pair, slices};
 use crate::codes::{DVRK_ERR_ARGUMENT, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
 use crate::{DvrkModel, DvrkWorkspace};
 
@@ -126,14 +126,7 @@ pub unsafe extern "C" fn dvrk_observer_update(
         }
         let n = m.model().dof();
         // SAFETY: the caller's obligations, passed on.
-        let (q, dq, tau, out) = unsafe {
-            (
-                input(q, n)?,
-                input(dq, n)?,
-                input(tau, n)?,
-                output(tau_ext, n)?,
-            )
-        };
+        let ([q, dq, tau], out) = unsafe { slices([q, dq, tau], n, tau_ext, n) }?;
         finite(&[q, dq, tau, &[dt]])?;
         if dt <= 0.0 {
             return Err(DVRK_ERR_ARGUMENT);
