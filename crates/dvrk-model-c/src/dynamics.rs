@@ -13,13 +13,12 @@ use crate::{DvrkModel, DvrkWorkspace, BOUNDED_Q_MAX};
 
 /// Gravity torque `g(q)` of the links alone (N·m or N per model coordinate), as
 /// Pinocchio's `computeGeneralizedGravity`: no friction, spring or known force (the
-/// whole static torque is `dvrk_inverse_dynamics` at `dq = ddq = 0`). Real-time: no
-/// allocation, no lock. 0, or a negative code with `tau` untouched.
+/// whole static torque is `dvrk_inverse_dynamics` at `dq = ddq = 0`). A real-time call
+/// (see the top of the header: codes, outputs untouched on an error).
 ///
 /// # Safety
 ///
-/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
-/// `q` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+/// The real-time calls' (the top of the header), for the vectors `q` and `tau`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_gravity(
     model: *const DvrkModel,
@@ -67,13 +66,11 @@ fn of_positions(
 /// had one, its position torques, its load friction with the load predicted as
 /// `Model::loaded_inverse_dynamics` does), springs, motor inertias and known forces (e.g.
 /// the MTM's cable), i.e. the measured torque mapped to model coordinates. On a robot without known forces (the
-/// PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. Real-time: no
-/// allocation, no lock. 0, or a negative code with `tau` untouched.
+/// PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. A real-time call.
 ///
 /// # Safety
 ///
-/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
-/// `q`, `dq`, `ddq` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+/// The real-time calls', for the vectors `q`, `dq`, `ddq` and `tau`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_inverse_dynamics(
     model: *const DvrkModel,
@@ -90,8 +87,7 @@ pub unsafe extern "C" fn dvrk_inverse_dynamics(
 /// Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
 /// part of `dvrk_inverse_dynamics`, without friction, springs, motor inertias or known
 /// forces, for a controller that models those itself. At `dq = ddq = 0` it is
-/// `dvrk_gravity`. Real-time: no allocation, no lock. 0, or a negative code with `tau`
-/// untouched.
+/// `dvrk_gravity`. A real-time call.
 ///
 /// # Safety
 ///
@@ -153,13 +149,12 @@ unsafe fn dynamics(
 }
 
 /// Mass matrix `M(q)` (n×n, kg·m² or kg, motor inertias included), written row-major
-/// into `m` (it is symmetric). Real-time: no allocation, no lock. 0, or a negative code
-/// with `m` untouched.
+/// into `m` (it is symmetric). A real-time call.
 ///
 /// # Safety
 ///
-/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
-/// `q` is NULL or valid for n doubles, `m` for n·n doubles (`n = dvrk_model_dof`).
+/// The real-time calls', for the vector `q`; `m` is NULL or valid for n·n doubles
+/// (`n = dvrk_model_dof`).
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_mass_matrix(
     model: *const DvrkModel,
@@ -187,14 +182,12 @@ pub unsafe extern "C" fn dvrk_mass_matrix(
 
 /// Forward dynamics (rad/s² or m/s² per model coordinate): the accelerations under the
 /// torques `tau` (as `dvrk_inverse_dynamics` gives them: known forces included) with the
-/// result's whole model, `M(q)·ddq = tau − h(q, dq) − tau_known(q)`. Real-time: no
-/// allocation, no lock. 0, or a negative code (`DVRK_ERR_NOT_POSITIVE_DEFINITE` when
-/// the parameters are not physical at `q`) with `ddq` untouched.
+/// result's whole model, `M(q)·ddq = tau − h(q, dq) − tau_known(q)`. A real-time call;
+/// `DVRK_ERR_NOT_POSITIVE_DEFINITE` when the parameters are not physical at `q`.
 ///
 /// # Safety
 ///
-/// `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
-/// `q`, `dq`, `tau` and `ddq` are NULL or valid for `dvrk_model_dof` doubles.
+/// The real-time calls', for the vectors `q`, `dq`, `tau` and `ddq`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_forward_dynamics(
     model: *const DvrkModel,
@@ -219,55 +212,52 @@ pub unsafe extern "C" fn dvrk_forward_dynamics(
 /// Measured joint positions or velocities (the dVRK's/ROS joint space,
 /// `dvrk_model_n_measured` values) to model coordinates: `q_model = M⁻¹ q_measured`
 /// where `q_measured = M q_model` is the description's coupling (linear, so velocities
-/// map the same way). Real-time: no allocation, no lock. 0, or a negative code with
-/// `model_out` untouched.
+/// map the same way). A real-time call, with no workspace.
 ///
 /// # Safety
 ///
-/// `model` is NULL or live; `measured` and `model_out` are NULL or valid for
-/// `dvrk_model_dof` doubles (= `dvrk_model_n_measured`) and do not overlap.
+/// The real-time calls', for the vectors `measured` and `model_out`
+/// (`dvrk_model_dof` = `dvrk_model_n_measured` doubles).
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_measured_to_model(
     model: *const DvrkModel,
     measured: *const f64,
     model_out: *mut f64,
 ) -> c_int {
-    // out_i = Σ_k M⁻¹[i, k] x_k (row-major M⁻¹).
     // SAFETY: the caller's obligations, passed on.
-    unsafe {
-        map_linear(model, measured, model_out, |m_inv, n, i, k| {
-            m_inv[i * n + k]
-        })
-    }
+    unsafe { map_linear(model, measured, model_out, Coupling::Inverse) }
 }
 
 /// Model-coordinate torques (as `dvrk_inverse_dynamics` gives them) to the measured
 /// joints' efforts, by virtual work: `tau_measured = M⁻ᵀ tau_model` (dvrk-ident maps
-/// measured efforts to the model as `tau_model = Mᵀ tau_measured`). Real-time: no
-/// allocation, no lock. 0, or a negative code with `measured_out` untouched.
+/// measured efforts to the model as `tau_model = Mᵀ tau_measured`). A real-time call,
+/// with no workspace.
 ///
 /// # Safety
 ///
-/// `model` is NULL or live; `tau_model` and `measured_out` are NULL or valid for
-/// `dvrk_model_dof` doubles and do not overlap.
+/// The real-time calls', for the vectors `tau_model` and `measured_out`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_model_to_measured_torque(
     model: *const DvrkModel,
     tau_model: *const f64,
     measured_out: *mut f64,
 ) -> c_int {
-    // out_k = Σ_j M⁻¹[j, k] t_j: the transpose of M⁻¹ (row-major).
     // SAFETY: the caller's obligations, passed on.
-    unsafe {
-        map_linear(model, tau_model, measured_out, |m_inv, n, k, j| {
-            m_inv[j * n + k]
-        })
-    }
+    unsafe { map_linear(model, tau_model, measured_out, Coupling::InverseTransposed) }
 }
 
-/// The body of the joint conversions, which differ only in how they read the model's
-/// `M⁻¹`: `out_i = Σ_k a(M⁻¹, n, i, k)·x_k` after the checks (model, then `x` and `out`
-/// NULL, then `x` finite). They have no workspace to compute into: every entry is
+/// Which matrix of the coupling `M` a joint conversion applies.
+#[derive(Clone, Copy, PartialEq)]
+enum Coupling {
+    /// `M⁻¹`: measured positions or velocities to model coordinates.
+    Inverse,
+    /// `M⁻ᵀ`: model torques to measured efforts.
+    InverseTransposed,
+}
+
+/// The body of the joint conversions, which differ only in the matrix: `out = A·x` with
+/// `A` = `M⁻¹` or `M⁻ᵀ` (`which`, read from the model's row-major `M⁻¹`) after the
+/// checks (model, then `x` and `out` NULL, then `x` finite). They have no workspace to compute into: every entry is
 /// checked finite before any is written (each computed twice, 2n² flops), so `out` is
 /// untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
 ///
@@ -279,7 +269,7 @@ unsafe fn map_linear(
     model: *const DvrkModel,
     x: *const f64,
     out: *mut f64,
-    a: impl Fn(&[f64], usize, usize, usize) -> f64,
+    which: Coupling,
 ) -> c_int {
     guarded(|| {
         // SAFETY: the caller's obligation, passed on.
@@ -288,8 +278,12 @@ unsafe fn map_linear(
         // SAFETY: the caller's obligations, passed on.
         let ([x], out) = unsafe { slices([x], n, out, n) }?;
         finite(&[x])?;
-        let row =
-            |i: usize| (0..n).fold(0.0, |acc, k| acc + a(&m.measured_to_model, n, i, k) * x[k]);
+        let m_inv = &m.measured_to_model;
+        let a = |i: usize, k: usize| match which {
+            Coupling::Inverse => m_inv[i * n + k],
+            Coupling::InverseTransposed => m_inv[k * n + i],
+        };
+        let row = |i: usize| (0..n).fold(0.0, |acc, k| acc + a(i, k) * x[k]);
         if !(0..n).all(|i| row(i).is_finite()) {
             return Err(DVRK_ERR_OVERFLOW);
         }

@@ -68,7 +68,7 @@ pub unsafe extern "C" fn dvrk_observer_free(observer: *mut DvrkObserver) {
 
 /// Forgets the previous sample and the estimate: the next update starts the observer
 /// again (returning zeros), as after a pause of the control loop or a change of tool.
-/// Real-time. 0, or `DVRK_ERR_NULL`.
+/// A real-time call: 0, or `DVRK_ERR_NULL`.
 ///
 /// # Safety
 ///
@@ -92,18 +92,16 @@ pub unsafe extern "C" fn dvrk_observer_reset(observer: *mut DvrkObserver) -> c_i
 /// torque the joints apply beyond the result's model, e.g. `+g` of a payload it does not
 /// know; the opposite of the torque the environment applies), N·m or N per model
 /// coordinate. The first update (and the first after `dvrk_observer_reset`) only stores
-/// the sample and writes zeros. Real-time: no allocation, no lock.
+/// the sample and writes zeros. A real-time call.
 ///
-/// 0, or a negative code with `tau_ext` and the observer untouched: `DVRK_ERR_NULL`,
-/// `DVRK_ERR_NOT_FINITE` (an input or `dt`), `DVRK_ERR_ARGUMENT` (`dt ≤ 0`, or an
-/// observer of another model), `DVRK_ERR_WORKSPACE`. On `DVRK_ERR_OVERFLOW` (an
-/// estimate that is not finite) `tau_ext` is untouched and the observer is reset.
+/// On an error the observer too is untouched, except on `DVRK_ERR_OVERFLOW` (an
+/// estimate that is not finite), which resets it. `DVRK_ERR_NOT_FINITE` covers `dt` as
+/// well; `DVRK_ERR_ARGUMENT` is `dt ≤ 0` or an observer of another model.
 ///
 /// # Safety
 ///
-/// `model`, `ws` and `observer` are NULL or live (ws and observer made for model, used
-/// by this thread alone); `q`, `dq`, `tau` and `tau_ext` are NULL or valid for
-/// `dvrk_model_dof` doubles.
+/// The real-time calls', for the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
+/// NULL or live, made for `model` and used by this thread alone.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn dvrk_observer_update(
