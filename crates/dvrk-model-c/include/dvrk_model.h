@@ -207,7 +207,7 @@ void dvrk_workspace_free(DvrkWorkspace *ws);
 
  # Safety
 
- The real-time calls' (the top of the header), for the vectors `q` and `tau`.
+ As every real-time call (the top of the header), with the vectors `q` and `tau`.
  */
 int dvrk_gravity(const DvrkModel *model, DvrkWorkspace *ws, const double *q, double *tau);
 
@@ -221,7 +221,7 @@ int dvrk_gravity(const DvrkModel *model, DvrkWorkspace *ws, const double *q, dou
 
  # Safety
 
- The real-time calls', for the vectors `q`, `dq`, `ddq` and `tau`.
+ As every real-time call, with the vectors `q`, `dq`, `ddq` and `tau`.
  */
 int dvrk_inverse_dynamics(const DvrkModel *model,
                           DvrkWorkspace *ws,
@@ -253,7 +253,7 @@ int dvrk_rigid_body_dynamics(const DvrkModel *model,
 
  # Safety
 
- The real-time calls', for the vector `q`; `m` is NULL or valid for n·n doubles
+ As every real-time call, with the vector `q`; `m` is NULL or valid for n·n doubles
  (`n = dvrk_model_dof`).
  */
 int dvrk_mass_matrix(const DvrkModel *model, DvrkWorkspace *ws, const double *q, double *m);
@@ -266,7 +266,7 @@ int dvrk_mass_matrix(const DvrkModel *model, DvrkWorkspace *ws, const double *q,
 
  # Safety
 
- The real-time calls', for the vectors `q`, `dq`, `tau` and `ddq`.
+ As every real-time call, with the vectors `q`, `dq`, `tau` and `ddq`.
  */
 int dvrk_forward_dynamics(const DvrkModel *model,
                           DvrkWorkspace *ws,
@@ -283,7 +283,7 @@ int dvrk_forward_dynamics(const DvrkModel *model,
 
  # Safety
 
- The real-time calls', for the vectors `measured` and `model_out`
+ As every real-time call, with the vectors `measured` and `model_out`
  (`dvrk_model_dof` = `dvrk_model_n_measured` doubles).
  */
 int dvrk_measured_to_model(const DvrkModel *model, const double *measured, double *model_out);
@@ -296,7 +296,7 @@ int dvrk_measured_to_model(const DvrkModel *model, const double *measured, doubl
 
  # Safety
 
- The real-time calls', for the vectors `tau_model` and `measured_out`.
+ As every real-time call, with the vectors `tau_model` and `measured_out`.
  */
 int dvrk_model_to_measured_torque(const DvrkModel *model,
                                   const double *tau_model,
@@ -364,7 +364,7 @@ int dvrk_observer_reset(DvrkObserver *observer);
 
  # Safety
 
- The real-time calls', for the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
+ As every real-time call, with the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
  NULL or live, made for `model` and used by this thread alone.
  */
 int dvrk_observer_update(const DvrkModel *model,

@@ -18,7 +18,7 @@ use crate::{DvrkModel, DvrkWorkspace, BOUNDED_Q_MAX};
 ///
 /// # Safety
 ///
-/// The real-time calls' (the top of the header), for the vectors `q` and `tau`.
+/// As every real-time call (the top of the header), with the vectors `q` and `tau`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_gravity(
     model: *const DvrkModel,
@@ -70,7 +70,7 @@ fn of_positions(
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vectors `q`, `dq`, `ddq` and `tau`.
+/// As every real-time call, with the vectors `q`, `dq`, `ddq` and `tau`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_inverse_dynamics(
     model: *const DvrkModel,
@@ -153,7 +153,7 @@ unsafe fn dynamics(
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vector `q`; `m` is NULL or valid for n·n doubles
+/// As every real-time call, with the vector `q`; `m` is NULL or valid for n·n doubles
 /// (`n = dvrk_model_dof`).
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_mass_matrix(
@@ -187,7 +187,7 @@ pub unsafe extern "C" fn dvrk_mass_matrix(
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vectors `q`, `dq`, `tau` and `ddq`.
+/// As every real-time call, with the vectors `q`, `dq`, `tau` and `ddq`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_forward_dynamics(
     model: *const DvrkModel,
@@ -216,7 +216,7 @@ pub unsafe extern "C" fn dvrk_forward_dynamics(
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vectors `measured` and `model_out`
+/// As every real-time call, with the vectors `measured` and `model_out`
 /// (`dvrk_model_dof` = `dvrk_model_n_measured` doubles).
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_measured_to_model(
@@ -235,7 +235,7 @@ pub unsafe extern "C" fn dvrk_measured_to_model(
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vectors `tau_model` and `measured_out`.
+/// As every real-time call, with the vectors `tau_model` and `measured_out`.
 #[no_mangle]
 pub unsafe extern "C" fn dvrk_model_to_measured_torque(
     model: *const DvrkModel,

@@ -100,7 +100,7 @@ pub unsafe extern "C" fn dvrk_observer_reset(observer: *mut DvrkObserver) -> c_i
 ///
 /// # Safety
 ///
-/// The real-time calls', for the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
+/// As every real-time call, with the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
 /// NULL or live, made for `model` and used by this thread alone.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
