@@ -1,6 +1,15 @@
 /* dvrk_model.h: the identified robot model (a `dvrk-ident fit` result) in C.
    Model coordinates, SI units, row-major matrices. A DvrkModel is immutable and may be
-   shared between threads; a DvrkWorkspace serves one thread at a time. */
+   shared between threads; a DvrkWorkspace serves one thread at a time.
+
+   The real-time calls (dvrk_gravity, dvrk_inverse_dynamics, dvrk_rigid_body_dynamics,
+   dvrk_mass_matrix, dvrk_forward_dynamics, dvrk_measured_to_model,
+   dvrk_model_to_measured_torque, dvrk_observer_update, dvrk_observer_reset) allocate
+   nothing and take no lock. Each returns DVRK_OK (0) or a negative DVRK_ERR_* code,
+   and on an error leaves every output untouched. Their pointers: `model` is NULL or a
+   live model; `ws` is NULL or a live workspace made for `model` (dvrk_workspace_new)
+   and used by this thread alone during the call; each vector is NULL or valid for
+   dvrk_model_dof doubles, and no output overlaps an input. */
 
 #ifndef DVRK_MODEL_H
 #define DVRK_MODEL_H
@@ -193,13 +202,12 @@ void dvrk_workspace_free(DvrkWorkspace *ws);
 /*
  Gravity torque `g(q)` of the links alone (N·m or N per model coordinate), as
  Pinocchio's `computeGeneralizedGravity`: no friction, spring or known force (the
- whole static torque is `dvrk_inverse_dynamics` at `dq = ddq = 0`). Real-time: no
- allocation, no lock. 0, or a negative code with `tau` untouched.
+ whole static torque is `dvrk_inverse_dynamics` at `dq = ddq = 0`). A real-time call
+ (see the top of the header: codes, outputs untouched on an error).
 
  # Safety
 
- `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
- `q` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+ As every real-time call (the top of the header), with the vectors `q` and `tau`.
  */
 int dvrk_gravity(const DvrkModel *model, DvrkWorkspace *ws, const double *q, double *tau);
 
@@ -209,13 +217,11 @@ int dvrk_gravity(const DvrkModel *model, DvrkWorkspace *ws, const double *q, dou
  had one, its position torques, its load friction with the load predicted as
  `Model::loaded_inverse_dynamics` does), springs, motor inertias and known forces (e.g.
  the MTM's cable), i.e. the measured torque mapped to model coordinates. On a robot without known forces (the
- PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. Real-time: no
- allocation, no lock. 0, or a negative code with `tau` untouched.
+ PSM) it is `dvrk-ident model ROBOT --torque --params RESULT`. A real-time call.
 
  # Safety
 
- `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
- `q`, `dq`, `ddq` and `tau` are NULL or valid for `dvrk_model_dof` doubles.
+ As every real-time call, with the vectors `q`, `dq`, `ddq` and `tau`.
  */
 int dvrk_inverse_dynamics(const DvrkModel *model,
                           DvrkWorkspace *ws,
@@ -228,8 +234,7 @@ int dvrk_inverse_dynamics(const DvrkModel *model,
  Inverse dynamics of the links alone (N·m or N per model coordinate): the rigid-body
  part of `dvrk_inverse_dynamics`, without friction, springs, motor inertias or known
  forces, for a controller that models those itself. At `dq = ddq = 0` it is
- `dvrk_gravity`. Real-time: no allocation, no lock. 0, or a negative code with `tau`
- untouched.
+ `dvrk_gravity`. A real-time call.
 
  # Safety
 
@@ -244,27 +249,24 @@ int dvrk_rigid_body_dynamics(const DvrkModel *model,
 
 /*
  Mass matrix `M(q)` (n×n, kg·m² or kg, motor inertias included), written row-major
- into `m` (it is symmetric). Real-time: no allocation, no lock. 0, or a negative code
- with `m` untouched.
+ into `m` (it is symmetric). A real-time call.
 
  # Safety
 
- `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
- `q` is NULL or valid for n doubles, `m` for n·n doubles (`n = dvrk_model_dof`).
+ As every real-time call, with the vector `q`; `m` is NULL or valid for n·n doubles
+ (`n = dvrk_model_dof`).
  */
 int dvrk_mass_matrix(const DvrkModel *model, DvrkWorkspace *ws, const double *q, double *m);
 
 /*
  Forward dynamics (rad/s² or m/s² per model coordinate): the accelerations under the
  torques `tau` (as `dvrk_inverse_dynamics` gives them: known forces included) with the
- result's whole model, `M(q)·ddq = tau − h(q, dq) − tau_known(q)`. Real-time: no
- allocation, no lock. 0, or a negative code (`DVRK_ERR_NOT_POSITIVE_DEFINITE` when
- the parameters are not physical at `q`) with `ddq` untouched.
+ result's whole model, `M(q)·ddq = tau − h(q, dq) − tau_known(q)`. A real-time call;
+ `DVRK_ERR_NOT_POSITIVE_DEFINITE` when the parameters are not physical at `q`.
 
  # Safety
 
- `model` and `ws` are NULL or live (ws made for model, used by this thread alone);
- `q`, `dq`, `tau` and `ddq` are NULL or valid for `dvrk_model_dof` doubles.
+ As every real-time call, with the vectors `q`, `dq`, `tau` and `ddq`.
  */
 int dvrk_forward_dynamics(const DvrkModel *model,
                           DvrkWorkspace *ws,
@@ -277,26 +279,24 @@ int dvrk_forward_dynamics(const DvrkModel *model,
  Measured joint positions or velocities (the dVRK's/ROS joint space,
  `dvrk_model_n_measured` values) to model coordinates: `q_model = M⁻¹ q_measured`
  where `q_measured = M q_model` is the description's coupling (linear, so velocities
- map the same way). Real-time: no allocation, no lock. 0, or a negative code with
- `model_out` untouched.
+ map the same way). A real-time call, with no workspace.
 
  # Safety
 
- `model` is NULL or live; `measured` and `model_out` are NULL or valid for
- `dvrk_model_dof` doubles (= `dvrk_model_n_measured`) and do not overlap.
+ As every real-time call, with the vectors `measured` and `model_out`
+ (`dvrk_model_dof` = `dvrk_model_n_measured` doubles).
  */
 int dvrk_measured_to_model(const DvrkModel *model, const double *measured, double *model_out);
 
 /*
  Model-coordinate torques (as `dvrk_inverse_dynamics` gives them) to the measured
  joints' efforts, by virtual work: `tau_measured = M⁻ᵀ tau_model` (dvrk-ident maps
- measured efforts to the model as `tau_model = Mᵀ tau_measured`). Real-time: no
- allocation, no lock. 0, or a negative code with `measured_out` untouched.
+ measured efforts to the model as `tau_model = Mᵀ tau_measured`). A real-time call,
+ with no workspace.
 
  # Safety
 
- `model` is NULL or live; `tau_model` and `measured_out` are NULL or valid for
- `dvrk_model_dof` doubles and do not overlap.
+ As every real-time call, with the vectors `tau_model` and `measured_out`.
  */
 int dvrk_model_to_measured_torque(const DvrkModel *model,
                                   const double *tau_model,
@@ -340,7 +340,7 @@ void dvrk_observer_free(DvrkObserver *observer);
 /*
  Forgets the previous sample and the estimate: the next update starts the observer
  again (returning zeros), as after a pause of the control loop or a change of tool.
- Real-time. 0, or `DVRK_ERR_NULL`.
+ A real-time call: 0, or `DVRK_ERR_NULL`.
 
  # Safety
 
@@ -356,18 +356,16 @@ int dvrk_observer_reset(DvrkObserver *observer);
  torque the joints apply beyond the result's model, e.g. `+g` of a payload it does not
  know; the opposite of the torque the environment applies), N·m or N per model
  coordinate. The first update (and the first after `dvrk_observer_reset`) only stores
- the sample and writes zeros. Real-time: no allocation, no lock.
+ the sample and writes zeros. A real-time call.
 
- 0, or a negative code with `tau_ext` and the observer untouched: `DVRK_ERR_NULL`,
- `DVRK_ERR_NOT_FINITE` (an input or `dt`), `DVRK_ERR_ARGUMENT` (`dt ≤ 0`, or an
- observer of another model), `DVRK_ERR_WORKSPACE`. On `DVRK_ERR_OVERFLOW` (an
- estimate that is not finite) `tau_ext` is untouched and the observer is reset.
+ On an error the observer too is untouched, except on `DVRK_ERR_OVERFLOW` (an
+ estimate that is not finite), which resets it. `DVRK_ERR_NOT_FINITE` covers `dt` as
+ well; `DVRK_ERR_ARGUMENT` is `dt ≤ 0` or an observer of another model.
 
  # Safety
 
- `model`, `ws` and `observer` are NULL or live (ws and observer made for model, used
- by this thread alone); `q`, `dq`, `tau` and `tau_ext` are NULL or valid for
- `dvrk_model_dof` doubles.
+ As every real-time call, with the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
+ NULL or live, made for `model` and used by this thread alone.
  */
 int dvrk_observer_update(const DvrkModel *model,
                          DvrkWorkspace *ws,

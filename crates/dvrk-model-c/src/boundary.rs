@@ -42,6 +42,61 @@ pub(crate) unsafe fn pair<'a>(
     Ok((m, w))
 }
 
+/// The arguments of a real-time call on a model and its workspace, after the checks
+/// every such call shares, in this order (so the first failing one gives the code):
+/// the model and workspace ([`pair`]), then the `N` inputs of `n = dof` doubles and the
+/// output of `out_len(n)` doubles ([`slices`]). Each entry point then states only what
+/// differs: which inputs must be finite, what it computes and how it delivers.
+///
+/// # Safety
+///
+/// As [`pair`]; each input is NULL or valid for `n` doubles as in [`input`], `out` is
+/// NULL or valid for `out_len(n)` doubles as in [`output`].
+pub(crate) unsafe fn workspace_args<'a, const N: usize>(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    inputs: [*const f64; N],
+    out: *mut f64,
+    out_len: impl FnOnce(usize) -> usize,
+) -> Result<WorkspaceArgs<'a, N>, c_int> {
+    // SAFETY: the caller's obligations, passed on.
+    let (m, w) = unsafe { pair(model, ws) }?;
+    let n = m.model.dof();
+    // SAFETY: the caller's obligations, passed on.
+    let (inputs, out) = unsafe { slices(inputs, n, out, out_len(n)) }?;
+    Ok((m, w, inputs, out))
+}
+
+/// What [`workspace_args`] returns: the model, its workspace, the inputs and the output.
+pub(crate) type WorkspaceArgs<'a, const N: usize> = (
+    &'a DvrkModel,
+    &'a mut DvrkWorkspace,
+    [&'a [f64]; N],
+    &'a mut [f64],
+);
+
+/// `N` inputs of `n` doubles and an output of `out_len` doubles as slices, NULL checked
+/// in order (inputs first) as [`input`] and [`output`] do.
+///
+/// # Safety
+///
+/// Each input is NULL or valid for `n` doubles as in [`input`], `out` is NULL or valid
+/// for `out_len` doubles as in [`output`].
+pub(crate) unsafe fn slices<'a, const N: usize>(
+    inputs: [*const f64; N],
+    n: usize,
+    out: *mut f64,
+    out_len: usize,
+) -> Result<([&'a [f64]; N], &'a mut [f64]), c_int> {
+    let mut read: [&[f64]; N] = [&[]; N];
+    for (slice, p) in read.iter_mut().zip(inputs) {
+        // SAFETY: the caller's obligation, passed on.
+        *slice = unsafe { input(p, n) }?;
+    }
+    // SAFETY: the caller's obligation, passed on.
+    Ok((read, unsafe { output(out, out_len) }?))
+}
+
 /// `n` doubles at `p` as a slice; NULL is [`DVRK_ERR_NULL`].
 ///
 /// # Safety

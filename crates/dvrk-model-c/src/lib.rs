@@ -15,7 +15,8 @@
 //! references and slices. That is done here and only here, each `unsafe` block as small
 //! as one conversion, with the caller's obligation it relies on in its `// SAFETY:`
 //! comment (`#![deny(unsafe_op_in_unsafe_fn)]`: no unsafe operation hides in the body of
-//! an `unsafe fn`). The contract C callers keep is in the header's comments: pointers
+//! an `unsafe fn`). The contract C callers keep is in the header's comments (what the
+//! real-time calls share at its top, from cbindgen.toml; the rest per function): pointers
 //! are NULL or valid for the documented lengths (`dvrk_model_dof` doubles for a vector,
 //! its square for a matrix), a model outlives its workspaces, a workspace is used by one
 //! thread at a time.

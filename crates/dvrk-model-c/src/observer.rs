@@ -2,14 +2,14 @@
 //! result, one allocation-free `dvrk_observer_update` per control cycle (the external
 //! torque the model does not explain, without an acceleration). A module of its own so
 //! that the observer's entry points stay apart from the model's (`dynamics.rs`); they share
-//! its checks ([`pair`], [`input`], [`output`], [`finite`], [`guarded`]).
+//! its checks ([`pair`], [`slices`], [`finite`], [`guarded`]).
 
 use std::ffi::c_int;
 use std::panic::catch_unwind;
 
 use dvrk_model::MomentumObserver;
 
-use crate::boundary::{finite, guarded, input, model_ref, output, pair};
+use crate::boundary::{finite, guarded, input, model_ref, pair, slices};
 use crate::codes::{DVRK_ERR_ARGUMENT, DVRK_ERR_NULL, DVRK_ERR_OVERFLOW};
 use crate::{DvrkModel, DvrkWorkspace};
 
@@ -68,7 +68,7 @@ pub unsafe extern "C" fn dvrk_observer_free(observer: *mut DvrkObserver) {
 
 /// Forgets the previous sample and the estimate: the next update starts the observer
 /// again (returning zeros), as after a pause of the control loop or a change of tool.
-/// Real-time. 0, or `DVRK_ERR_NULL`.
+/// A real-time call: 0, or `DVRK_ERR_NULL`.
 ///
 /// # Safety
 ///
@@ -92,18 +92,16 @@ pub unsafe extern "C" fn dvrk_observer_reset(observer: *mut DvrkObserver) -> c_i
 /// torque the joints apply beyond the result's model, e.g. `+g` of a payload it does not
 /// know; the opposite of the torque the environment applies), N·m or N per model
 /// coordinate. The first update (and the first after `dvrk_observer_reset`) only stores
-/// the sample and writes zeros. Real-time: no allocation, no lock.
+/// the sample and writes zeros. A real-time call.
 ///
-/// 0, or a negative code with `tau_ext` and the observer untouched: `DVRK_ERR_NULL`,
-/// `DVRK_ERR_NOT_FINITE` (an input or `dt`), `DVRK_ERR_ARGUMENT` (`dt ≤ 0`, or an
-/// observer of another model), `DVRK_ERR_WORKSPACE`. On `DVRK_ERR_OVERFLOW` (an
-/// estimate that is not finite) `tau_ext` is untouched and the observer is reset.
+/// On an error the observer too is untouched, except on `DVRK_ERR_OVERFLOW` (an
+/// estimate that is not finite), which resets it. `DVRK_ERR_NOT_FINITE` covers `dt` as
+/// well; `DVRK_ERR_ARGUMENT` is `dt ≤ 0` or an observer of another model.
 ///
 /// # Safety
 ///
-/// `model`, `ws` and `observer` are NULL or live (ws and observer made for model, used
-/// by this thread alone); `q`, `dq`, `tau` and `tau_ext` are NULL or valid for
-/// `dvrk_model_dof` doubles.
+/// As every real-time call, with the vectors `q`, `dq`, `tau` and `tau_ext`; `observer` is
+/// NULL or live, made for `model` and used by this thread alone.
 #[no_mangle]
 #[allow(clippy::too_many_arguments)]
 pub unsafe extern "C" fn dvrk_observer_update(
@@ -126,14 +124,7 @@ pub unsafe extern "C" fn dvrk_observer_update(
         }
         let n = m.model().dof();
         // SAFETY: the caller's obligations, passed on.
-        let (q, dq, tau, out) = unsafe {
-            (
-                input(q, n)?,
-                input(dq, n)?,
-                input(tau, n)?,
-                output(tau_ext, n)?,
-            )
-        };
+        let ([q, dq, tau], out) = unsafe { slices([q, dq, tau], n, tau_ext, n) }?;
         finite(&[q, dq, tau, &[dt]])?;
         if dt <= 0.0 {
             return Err(DVRK_ERR_ARGUMENT);

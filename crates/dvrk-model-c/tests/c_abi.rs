@@ -132,9 +132,8 @@ fn c_and_cpp_programs_reproduce_the_rust_model() {
         return;
     }
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi");
-    std::fs::create_dir_all(&dir).unwrap();
-    let result_path = fit_example(&dir);
+    let result_path = fit_example("c_abi");
+    let dir = result_path.parent().unwrap();
 
     // The Rust side: the model and parameters as dvrk-ident reads the result.
     let result = FitResult::read(&result_path).unwrap();
@@ -447,10 +446,8 @@ fn readme_cpp_example_runs() {
         eprintln!("SKIPPED: no C++ compiler on this machine");
         return;
     };
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("c_abi_readme");
-    std::fs::create_dir_all(&dir).unwrap();
-    let result_path = fit_example(&dir);
-    let exe = dir.join("readme");
+    let result_path = fit_example("c_abi_readme");
+    let exe = result_path.with_file_name("readme");
     let compiled = Command::new(&cxx)
         .args(["-O2", "-std=c++11", "-Wall", "-Wextra", "-Werror", "-o"])
         .arg(&exe)
@@ -508,9 +505,7 @@ fn psm_result(
         "settings": settings,
         "parameters": named,
     });
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(label);
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join("result.json");
+    let path = common::scratch_dir(label).join("result.json");
     std::fs::write(&path, doc.to_string()).unwrap();
     path
 }

@@ -37,29 +37,41 @@ unsafe impl GlobalAlloc for Counting {
 #[global_allocator]
 static GLOBAL: Counting = Counting;
 
+/// `dvrk_observer_update` with the state and inverse dynamics' torque of `calls`, `dt`
+/// seconds after the previous update, into `estimate`.
+///
+/// # Safety
+///
+/// `model`, `ws` and `observer` are live, made for one another, and of the `n`
+/// coordinates of `calls` and `estimate`.
+unsafe fn observe(
+    model: *const DvrkModel,
+    ws: *mut DvrkWorkspace,
+    observer: *mut DvrkObserver,
+    calls: &common::Calls,
+    dt: f64,
+    estimate: &mut [f64],
+) -> std::ffi::c_int {
+    let (q, dq, tau) = (calls.q.as_ptr(), calls.dq.as_ptr(), calls.tau.as_ptr());
+    // SAFETY: the caller's pointers; buffers of n doubles.
+    unsafe { dvrk_observer_update(model, ws, observer, q, dq, tau, dt, estimate.as_mut_ptr()) }
+}
+
 #[test]
 fn real_time_calls_allocate_nothing() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("no_alloc");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = common::fit_example(&dir);
-    let c_path = std::ffi::CString::new(path.to_str().unwrap()).unwrap();
-
-    let mut err = [0 as std::ffi::c_char; 256];
-    // SAFETY: a NUL-terminated path and an error buffer of its length.
-    let model = unsafe { dvrk_model_from_result(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
-    assert!(!model.is_null());
+    let (path, model) = common::load_example("no_alloc");
     // SAFETY: a live model.
     let ws = unsafe { dvrk_workspace_new(model) };
     // SAFETY: a live model.
     let n = unsafe { dvrk_model_dof(model) };
-    let q: Vec<f64> = (0..n).map(|i| 0.1 + 0.05 * i as f64).collect();
-    let dq: Vec<f64> = (0..n).map(|i| 0.3 - 0.1 * i as f64).collect();
-    let ddq: Vec<f64> = (0..n).map(|i| 0.5 * i as f64 - 1.0).collect();
-    let mut nan = q.clone();
+    let mut calls = common::Calls::new(n);
+    for i in 0..n {
+        calls.q[i] = 0.1 + 0.05 * i as f64;
+        calls.dq[i] = 0.3 - 0.1 * i as f64;
+        calls.ddq[i] = 0.5 * i as f64 - 1.0;
+    }
+    let mut nan = calls.q.clone();
     nan[1] = f64::NAN;
-    let mut tau = vec![0.0; n];
-    let mut acc = vec![0.0; n];
-    let mut m = vec![0.0; n * n];
     let mut x = vec![0.0; n];
     let gains = vec![30.0; n];
     // SAFETY: a live model and n gains.
@@ -77,57 +89,16 @@ fn real_time_calls_allocate_nothing() {
     for _ in 0..1000 {
         // SAFETY: a live model and its workspace; every buffer of n (or n·n) doubles.
         unsafe {
-            codes[0] = dvrk_gravity(model, ws, q.as_ptr(), tau.as_mut_ptr());
-            codes[1] = dvrk_inverse_dynamics(
-                model,
-                ws,
-                q.as_ptr(),
-                dq.as_ptr(),
-                ddq.as_ptr(),
-                tau.as_mut_ptr(),
-            );
-            codes[2] = dvrk_mass_matrix(model, ws, q.as_ptr(), m.as_mut_ptr());
-            codes[8] = dvrk_rigid_body_dynamics(
-                model,
-                ws,
-                q.as_ptr(),
-                dq.as_ptr(),
-                ddq.as_ptr(),
-                x.as_mut_ptr(),
-            );
-            codes[3] = dvrk_forward_dynamics(
-                model,
-                ws,
-                q.as_ptr(),
-                dq.as_ptr(),
-                tau.as_ptr(),
-                acc.as_mut_ptr(),
-            );
-            codes[4] = dvrk_measured_to_model(model, q.as_ptr(), x.as_mut_ptr());
-            codes[5] = dvrk_model_to_measured_torque(model, tau.as_ptr(), x.as_mut_ptr());
+            codes[..4].copy_from_slice(&calls.dynamics(model, ws));
+            let (q, dq, ddq) = (calls.q.as_ptr(), calls.dq.as_ptr(), calls.ddq.as_ptr());
+            codes[4] = dvrk_measured_to_model(model, q, x.as_mut_ptr());
+            codes[5] = dvrk_model_to_measured_torque(model, calls.tau.as_ptr(), x.as_mut_ptr());
             // The error paths too.
-            codes[6] = dvrk_gravity(model, ws, nan.as_ptr(), tau.as_mut_ptr());
-            codes[7] = dvrk_mass_matrix(model, std::ptr::null_mut(), q.as_ptr(), m.as_mut_ptr());
-            codes[9] = dvrk_observer_update(
-                model,
-                ws,
-                observer,
-                q.as_ptr(),
-                dq.as_ptr(),
-                tau.as_ptr(),
-                1e-3,
-                estimate.as_mut_ptr(),
-            );
-            codes[10] = dvrk_observer_update(
-                model,
-                ws,
-                observer,
-                q.as_ptr(),
-                dq.as_ptr(),
-                tau.as_ptr(),
-                -1.0,
-                estimate.as_mut_ptr(),
-            );
+            codes[6] = dvrk_gravity(model, ws, nan.as_ptr(), calls.g.as_mut_ptr());
+            codes[7] = dvrk_mass_matrix(model, std::ptr::null_mut(), q, calls.m.as_mut_ptr());
+            codes[8] = dvrk_rigid_body_dynamics(model, ws, q, dq, ddq, x.as_mut_ptr());
+            codes[9] = observe(model, ws, observer, &calls, 1e-3, &mut estimate);
+            codes[10] = observe(model, ws, observer, &calls, -1.0, &mut estimate);
             std::hint::black_box(dvrk_error_string(DVRK_ERR_NULL));
         }
     }
@@ -135,16 +106,7 @@ fn real_time_calls_allocate_nothing() {
     unsafe {
         codes[11] = dvrk_observer_reset(observer);
         for _ in 0..2 {
-            dvrk_observer_update(
-                model,
-                ws,
-                observer,
-                q.as_ptr(),
-                dq.as_ptr(),
-                tau.as_ptr(),
-                1e-3,
-                estimate.as_mut_ptr(),
-            );
+            observe(model, ws, observer, &calls, 1e-3, &mut estimate);
         }
     }
     let after = ALLOCATIONS.load(Ordering::SeqCst);
@@ -161,7 +123,8 @@ fn real_time_calls_allocate_nothing() {
         "allocations in 1000 rounds of the real-time calls"
     );
     // Forward dynamics inverted the inverse dynamics: the calls computed something.
-    for (a, d) in acc.iter().zip(&ddq) {
+    let (acc, ddq) = (&calls.ddq_fd, &calls.ddq);
+    for (a, d) in acc.iter().zip(ddq) {
         assert!((a - d).abs() < 1e-8, "{acc:?} vs {ddq:?}");
     }
     // The observer computed: q̇ did not change between the two updates after the reset,
@@ -171,7 +134,7 @@ fn real_time_calls_allocate_nothing() {
     let mut rust_ws = dvrk_model::Workspace::new(loaded.model());
     let mass = loaded
         .model()
-        .mass_matrix(&mut rust_ws, loaded.params(), &q);
+        .mass_matrix(&mut rust_ws, loaded.params(), &calls.q);
     let lag = 1.0 - (-30.0f64 * 1e-3).exp();
     for i in 0..n {
         let expected = lag * (0..n).map(|k| mass[(i, k)] * ddq[k]).sum::<f64>();

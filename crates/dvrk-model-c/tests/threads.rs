@@ -5,8 +5,6 @@
 
 mod common;
 
-use std::ffi::CString;
-
 use dvrk_model_c::*;
 
 /// The shared model crosses threads as an address: `DvrkModel` is immutable after
@@ -24,42 +22,20 @@ fn evaluate(model: Shared, seed: usize, states: usize) -> Vec<f64> {
     let (ws, n) = unsafe { (dvrk_workspace_new(model), dvrk_model_dof(model)) };
     assert!(!ws.is_null());
     let mut out = Vec::new();
-    let (mut g, mut tau, mut m, mut ddq_fd) =
-        (vec![0.0; n], vec![0.0; n], vec![0.0; n * n], vec![0.0; n]);
+    let mut calls = common::Calls::new(n);
     for k in 0..states {
         let x = |i: usize, scale: f64| {
             scale * (((seed * 7919 + k * 131 + i * 17) % 997) as f64 / 498.5 - 1.0)
         };
-        let q: Vec<f64> = (0..n)
-            .map(|i| x(i, if i == 2 { 0.1 } else { 1.0 }))
-            .collect();
-        let dq: Vec<f64> = (0..n).map(|i| x(i + n, 2.0)).collect();
-        let ddq: Vec<f64> = (0..n).map(|i| x(i + 2 * n, 5.0)).collect();
-        // SAFETY: a live model, this thread's workspace, buffers of n and n·n doubles.
-        let codes = unsafe {
-            [
-                dvrk_gravity(model, ws, q.as_ptr(), g.as_mut_ptr()),
-                dvrk_inverse_dynamics(
-                    model,
-                    ws,
-                    q.as_ptr(),
-                    dq.as_ptr(),
-                    ddq.as_ptr(),
-                    tau.as_mut_ptr(),
-                ),
-                dvrk_mass_matrix(model, ws, q.as_ptr(), m.as_mut_ptr()),
-                dvrk_forward_dynamics(
-                    model,
-                    ws,
-                    q.as_ptr(),
-                    dq.as_ptr(),
-                    tau.as_ptr(),
-                    ddq_fd.as_mut_ptr(),
-                ),
-            ]
-        };
+        for i in 0..n {
+            calls.q[i] = x(i, if i == 2 { 0.1 } else { 1.0 });
+            calls.dq[i] = x(i + n, 2.0);
+            calls.ddq[i] = x(i + 2 * n, 5.0);
+        }
+        // SAFETY: a live model and this thread's workspace.
+        let codes = unsafe { calls.dynamics(model, ws) };
         assert_eq!(codes, [DVRK_OK; 4], "state {k} of seed {seed}");
-        for v in [&g, &tau, &m, &ddq_fd] {
+        for v in [&calls.g, &calls.tau, &calls.m, &calls.ddq_fd] {
             out.extend_from_slice(v);
         }
     }
@@ -70,13 +46,7 @@ fn evaluate(model: Shared, seed: usize, states: usize) -> Vec<f64> {
 
 #[test]
 fn one_model_shared_by_threads_with_a_workspace_each() {
-    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("threads");
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = CString::new(common::fit_example(&dir).to_str().unwrap()).unwrap();
-    let mut err = [0 as std::ffi::c_char; 256];
-    // SAFETY: a NUL-terminated path and an error buffer of its length.
-    let model = unsafe { dvrk_model_from_result(path.as_ptr(), err.as_mut_ptr(), err.len()) };
-    assert!(!model.is_null());
+    let (_, model) = common::load_example("threads");
     let shared = Shared(model);
     const THREADS: usize = 4;
     const STATES: usize = 200;

@@ -307,12 +307,45 @@ fn near(a: f64, b: f64, tol: f64, what: &str) {
     assert!((a - b).abs() <= tol, "{what}: {a} vs {b}");
 }
 
+/// `Σ aₖ·bₖ`: a regressor row times the parameters (`H·π`), or columns times coefficients.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// `pi` with the parameters `cols` (an element's) set to zero: the model without it.
+fn zeroed(pi: &[f64], cols: std::ops::Range<usize>) -> Vec<f64> {
+    let mut without = pi.to_vec();
+    without[cols].fill(0.0);
+    without
+}
+
+/// A pendulum ([`support::models::ONE_LINK`]) with friction and `element` (its
+/// description line), whose parameters follow `Fc1 Fv1 Fo1` from column 13.
+fn pendulum_with(element: &str) -> Model {
+    load(&support::models::one_link_with(&format!(
+        "friction = true\n{element}\n"
+    )))
+}
+
+/// The pendulum's last element (the one [`pendulum_with`] adds) and its bound rows
+/// under the default bounds, the frame's included.
+fn element_rows(model: &Model) -> (Element, Vec<BoundRow>) {
+    let e = model.frame(1).elements.last().unwrap().clone();
+    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
+    let ctx = BoundsContext {
+        global: &global,
+        frame: &frame,
+        use_frame: true,
+    };
+    let mut rows = Vec::new();
+    e.bound_rows(&ctx, &mut rows);
+    (e, rows)
+}
+
 /// A pendulum with friction and Dahl friction of stiffness 20 /rad (`Fd1` after
 /// `Fc1 Fv1 Fo1`).
 fn dahl_pendulum() -> Model {
-    load(&support::models::one_link_with(
-        "friction = true\ndahl = { sigma = 20 }\n",
-    ))
+    pendulum_with("dahl = { sigma = 20 }")
 }
 
 /// The state follows the closed form of `dz/ds = σ·(1 − z·sign(ṡ))`: from rest (`z = 0`)
@@ -371,23 +404,13 @@ fn dahl_regressor_torque_and_bound() {
         let z = ws.hysteresis()[13];
         assert_eq!(h[13], z, "the Fd1 column is z");
         model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
-        near(hp, tau[0], 1e-10, "H·π = τ");
-        let mut without = pi.clone();
-        without[13] = 0.0;
+        near(dot(&h, &pi), tau[0], 1e-10, "H·π = τ");
+        let without = zeroed(&pi, 13..14);
         let mut tau0 = [0.0];
         model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
         near(tau[0] - tau0[0], pi[13] * z, 1e-12, "force Fd·z");
     }
-    let e = model.frame(1).elements.last().unwrap().clone();
-    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
-    let ctx = BoundsContext {
-        global: &global,
-        frame: &frame,
-        use_frame: true,
-    };
-    let mut rows = Vec::new();
-    e.bound_rows(&ctx, &mut rows);
+    let (e, rows) = element_rows(&model);
     assert_eq!(
         rows,
         [BoundRow::at_least(
@@ -438,9 +461,7 @@ fn dahl_refuses_bad_sigma() {
 /// A pendulum (horizontal axis) with friction and a position torque of order 2
 /// (`Pca1 Psa1 Pcb1 Psb1` after `Fc1 Fv1 Fo1`).
 fn position_pendulum() -> Model {
-    load(&support::models::one_link_with(
-        "friction = true\nposition_torque = { order = 2 }\n",
-    ))
+    pendulum_with("position_torque = { order = 2 }")
 }
 
 /// The torque is `Σ Aₖ·cos(k·q) + Bₖ·sin(k·q)` against its closed form, in `H·π`, the
@@ -479,12 +500,10 @@ fn position_torque_closed_form() {
             1e-14,
         );
         model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
-        near(hp, tau[0], 1e-10, "H·π = τ");
-        let mut without = pi.clone();
-        without[13..17].fill(0.0);
+        near(dot(&h, &pi), tau[0], 1e-10, "H·π = τ");
+        let without = zeroed(&pi, 13..17);
         model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
-        let force: f64 = expected.iter().zip(&pi[13..17]).map(|(a, b)| a * b).sum();
+        let force = dot(&expected, &pi[13..17]);
         near(tau[0] - tau0[0], force, 1e-12, "force Σ A·cos + B·sin");
         // At rest the static torque holds the series too (no friction at onset 0).
         let mut with_static = [0.0];
@@ -497,15 +516,7 @@ fn position_torque_closed_form() {
             &format!("static torque {k}"),
         );
     }
-    let e = model.frame(1).elements.last().unwrap().clone();
-    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
-    let ctx = BoundsContext {
-        global: &global,
-        frame: &frame,
-        use_frame: true,
-    };
-    let mut rows = Vec::new();
-    e.bound_rows(&ctx, &mut rows);
+    let (e, rows) = element_rows(&model);
     assert!(rows.is_empty(), "no bound on a position torque: {rows:?}");
     assert!(e.consistent(&vec![-5.0; p], 0.0));
     assert_eq!(
@@ -642,9 +653,7 @@ fn position_torque_refuses_bad_input() {
 
 /// A pendulum with friction and load friction (`Fl1` after `Fc1 Fv1 Fo1`).
 fn load_pendulum() -> Model {
-    load(&support::models::one_link_with(
-        "friction = true\nload_friction = true\n",
-    ))
+    pendulum_with("load_friction = true")
 }
 
 /// The column is `|τ_measured|·sign(q̇)` with the load given (`Model::set_load`), and
@@ -678,12 +687,15 @@ fn load_friction_closed_form() {
             "column |τ|·sign(q̇)",
         );
         model.inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let hp: f64 = h.iter().zip(&pi).map(|(a, b)| a * b).sum();
-        near(hp, tau[0], 1e-10, "H·π = τ with the measured load");
+        near(
+            dot(&h, &pi),
+            tau[0],
+            1e-10,
+            "H·π = τ with the measured load",
+        );
         // The prediction: a fixed point of τ = τ₀ + μ·|τ|·sign(q̇).
         model.loaded_inverse_dynamics(&mut ws, &pi, &q, &dq, &ddq, &mut tau);
-        let mut without = pi.clone();
-        without[13] = 0.0;
+        let without = zeroed(&pi, 13..14);
         model.inverse_dynamics(&mut ws, &without, &q, &dq, &ddq, &mut tau0);
         let fixed = tau0[0] + 0.2 * tau[0].abs() * dq[0].signum();
         near(tau[0], fixed, 1e-12, "τ = τ₀ + μ|τ|sign(q̇)");
@@ -698,15 +710,7 @@ fn load_friction_closed_form() {
             "the predicted load reproduces the prediction",
         );
     }
-    let e = model.frame(1).elements.last().unwrap().clone();
-    let (global, frame) = (GlobalBounds::default(), FrameBounds::default());
-    let ctx = BoundsContext {
-        global: &global,
-        frame: &frame,
-        use_frame: true,
-    };
-    let mut rows = Vec::new();
-    e.bound_rows(&ctx, &mut rows);
+    let (e, rows) = element_rows(&model);
     assert_eq!(
         rows,
         [

@@ -17,6 +17,7 @@
 #include "dvrk_model.h"
 
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -50,6 +51,23 @@ static int untouched(const double *x, size_t n) {
     return 1;
 }
 
+/* Checks that a call returned `code` and left out[0..len) untouched (len 0 where the
+   output argument was NULL itself); the format and what follows name the call. */
+static void check_code(int line, int rc, int code, const double *out, size_t len,
+                       const char *format, ...) {
+    if (rc == code && untouched(out, len)) return;
+    va_list args;
+    va_start(args, format);
+    fprintf(stderr, "FAIL line %d: ", line);
+    vfprintf(stderr, format, args);
+    va_end(args);
+    fprintf(stderr, " = %d, expected %d%s\n", rc, code,
+            untouched(out, len) ? "" : " with the output untouched");
+    failures++;
+}
+#define CHECK_CODE(call, code, out, len, ...) \
+    check_code(__LINE__, call, code, out, len, __VA_ARGS__)
+
 /* Every error path of the real-time calls: NULL model, workspace, input and output; a
    NaN and an infinity in each input; a workspace of another model. */
 static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkModel *other,
@@ -57,63 +75,54 @@ static void check_errors(const DvrkModel *model, DvrkWorkspace *ws, const DvrkMo
     double *out = malloc(n * n * sizeof(double));
     double *bad = malloc(n * sizeof(double));
     DvrkWorkspace *other_ws = dvrk_workspace_new(other);
-    int rc;
 
     fill(out, n * n);
-    rc = dvrk_gravity(NULL, ws, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL model) = %d", rc);
-    rc = dvrk_gravity(model, NULL, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL ws) = %d", rc);
-    rc = dvrk_gravity(model, ws, NULL, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "gravity(NULL q) = %d", rc);
-    rc = dvrk_gravity(model, ws, q, NULL);
-    CHECK(rc == DVRK_ERR_NULL, "gravity(NULL tau) = %d", rc);
-    rc = dvrk_gravity(model, other_ws, q, out);
-    CHECK(rc == DVRK_ERR_WORKSPACE && untouched(out, n), "gravity(other ws) = %d", rc);
+    CHECK_CODE(dvrk_gravity(NULL, ws, q, out), DVRK_ERR_NULL, out, n, "gravity(NULL model)");
+    CHECK_CODE(dvrk_gravity(model, NULL, q, out), DVRK_ERR_NULL, out, n, "gravity(NULL ws)");
+    CHECK_CODE(dvrk_gravity(model, ws, NULL, out), DVRK_ERR_NULL, out, n, "gravity(NULL q)");
+    CHECK_CODE(dvrk_gravity(model, ws, q, NULL), DVRK_ERR_NULL, out, 0, "gravity(NULL tau)");
+    CHECK_CODE(dvrk_gravity(model, other_ws, q, out),
+               DVRK_ERR_WORKSPACE, out, n, "gravity(other ws)");
 
     for (size_t k = 0; k < n; k++) {
         for (int inf = 0; inf < 2; inf++) {
             memcpy(bad, q, n * sizeof(double));
             bad[k] = inf ? INFINITY : NAN;
             fill(out, n * n);
-            rc = dvrk_gravity(model, ws, bad, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "gravity(bad q[%zu]) = %d", k, rc);
-            rc = dvrk_mass_matrix(model, ws, bad, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n * n), "mass(bad q[%zu]) = %d", k, rc);
+            CHECK_CODE(dvrk_gravity(model, ws, bad, out),
+                       DVRK_ERR_NOT_FINITE, out, n, "gravity(bad q[%zu])", k);
+            CHECK_CODE(dvrk_mass_matrix(model, ws, bad, out),
+                       DVRK_ERR_NOT_FINITE, out, n * n, "mass(bad q[%zu])", k);
             /* the bad vector in each of the three inputs in turn */
-            rc = dvrk_inverse_dynamics(model, ws, bad, q, q, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad q[%zu]) = %d", k, rc);
-            rc = dvrk_inverse_dynamics(model, ws, q, bad, q, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad dq[%zu]) = %d", k, rc);
-            rc = dvrk_inverse_dynamics(model, ws, q, q, bad, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "id(bad ddq[%zu]) = %d", k, rc);
-            rc = dvrk_rigid_body_dynamics(model, ws, q, bad, q, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "rigid(bad dq[%zu]) = %d", k, rc);
-            rc = dvrk_forward_dynamics(model, ws, q, q, bad, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "fd(bad tau[%zu]) = %d", k, rc);
-            rc = dvrk_forward_dynamics(model, ws, bad, q, q, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "fd(bad q[%zu]) = %d", k, rc);
+            for (int which = 0; which < 3; which++) {
+                const double *in[3] = {q, q, q};
+                in[which] = bad;
+                CHECK_CODE(dvrk_inverse_dynamics(model, ws, in[0], in[1], in[2], out),
+                           DVRK_ERR_NOT_FINITE, out, n, "id(bad input %d, [%zu])", which, k);
+                CHECK_CODE(dvrk_rigid_body_dynamics(model, ws, in[0], in[1], in[2], out),
+                           DVRK_ERR_NOT_FINITE, out, n, "rigid(bad input %d, [%zu])", which, k);
+                CHECK_CODE(dvrk_forward_dynamics(model, ws, in[0], in[1], in[2], out),
+                           DVRK_ERR_NOT_FINITE, out, n, "fd(bad input %d, [%zu])", which, k);
+            }
         }
     }
     fill(out, n * n);
-    rc = dvrk_inverse_dynamics(model, ws, q, NULL, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL dq) = %d", rc);
-    rc = dvrk_inverse_dynamics(model, ws, q, q, NULL, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "id(NULL ddq) = %d", rc);
-    rc = dvrk_rigid_body_dynamics(model, ws, q, q, q, NULL);
-    CHECK(rc == DVRK_ERR_NULL, "rigid(NULL tau) = %d", rc);
-    rc = dvrk_mass_matrix(NULL, ws, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n * n), "mass(NULL model) = %d", rc);
-    rc = dvrk_mass_matrix(model, ws, q, NULL);
-    CHECK(rc == DVRK_ERR_NULL, "mass(NULL m) = %d", rc);
-    rc = dvrk_forward_dynamics(model, NULL, q, q, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "fd(NULL ws) = %d", rc);
-    rc = dvrk_forward_dynamics(model, ws, q, q, NULL, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "fd(NULL tau) = %d", rc);
-    rc = dvrk_measured_to_model(model, NULL, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "measured_to_model(NULL) = %d", rc);
-    rc = dvrk_model_to_measured_torque(NULL, q, out);
-    CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "model_to_measured_torque(NULL) = %d", rc);
+    CHECK_CODE(dvrk_inverse_dynamics(model, ws, q, NULL, q, out),
+               DVRK_ERR_NULL, out, n, "id(NULL dq)");
+    CHECK_CODE(dvrk_inverse_dynamics(model, ws, q, q, NULL, out),
+               DVRK_ERR_NULL, out, n, "id(NULL ddq)");
+    CHECK_CODE(dvrk_rigid_body_dynamics(model, ws, q, q, q, NULL),
+               DVRK_ERR_NULL, out, 0, "rigid(NULL tau)");
+    CHECK_CODE(dvrk_mass_matrix(NULL, ws, q, out), DVRK_ERR_NULL, out, n * n, "mass(NULL model)");
+    CHECK_CODE(dvrk_mass_matrix(model, ws, q, NULL), DVRK_ERR_NULL, out, 0, "mass(NULL m)");
+    CHECK_CODE(dvrk_forward_dynamics(model, NULL, q, q, q, out),
+               DVRK_ERR_NULL, out, n, "fd(NULL ws)");
+    CHECK_CODE(dvrk_forward_dynamics(model, ws, q, q, NULL, out),
+               DVRK_ERR_NULL, out, n, "fd(NULL tau)");
+    CHECK_CODE(dvrk_measured_to_model(model, NULL, out),
+               DVRK_ERR_NULL, out, n, "measured_to_model(NULL)");
+    CHECK_CODE(dvrk_model_to_measured_torque(NULL, q, out),
+               DVRK_ERR_NULL, out, n, "model_to_measured_torque(NULL)");
 
     /* NULL objects are harmless everywhere else too. */
     CHECK(dvrk_model_dof(NULL) == 0, "dof(NULL)");
@@ -177,35 +186,34 @@ static void run_observer(FILE *cases, const DvrkModel *model, DvrkWorkspace *ws,
         for (size_t i = 0; i < 3 * n; i++)
             if (fscanf(cases, "%lf", &x[i]) != 1) CHECK(0, "observer sample %d", k);
         if (k == m_samples / 2) {
-            int rc;
             fill(out, n);
-            rc = dvrk_observer_update(model, ws, NULL, q, dq, tau, dt, out);
-            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL observer) = %d", rc);
-            rc = dvrk_observer_update(NULL, ws, obs, q, dq, tau, dt, out);
-            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL model) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, NULL, tau, dt, out);
-            CHECK(rc == DVRK_ERR_NULL && untouched(out, n), "update(NULL dq) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, dt, NULL);
-            CHECK(rc == DVRK_ERR_NULL, "update(NULL tau_ext) = %d", rc);
-            rc = dvrk_observer_update(model, other_ws, obs, q, dq, tau, dt, out);
-            CHECK(rc == DVRK_ERR_WORKSPACE && untouched(out, n), "update(other ws) = %d", rc);
-            rc = dvrk_observer_update(model, ws, other_obs, q, dq, tau, dt, out);
-            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(other observer) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, 0.0, out);
-            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(dt 0) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, -dt, out);
-            CHECK(rc == DVRK_ERR_ARGUMENT && untouched(out, n), "update(dt < 0) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, NAN, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(dt NaN) = %d", rc);
-            rc = dvrk_observer_update(model, ws, obs, q, dq, tau, INFINITY, out);
-            CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(dt inf) = %d", rc);
+            CHECK_CODE(dvrk_observer_update(model, ws, NULL, q, dq, tau, dt, out),
+                       DVRK_ERR_NULL, out, n, "update(NULL observer)");
+            CHECK_CODE(dvrk_observer_update(NULL, ws, obs, q, dq, tau, dt, out),
+                       DVRK_ERR_NULL, out, n, "update(NULL model)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, NULL, tau, dt, out),
+                       DVRK_ERR_NULL, out, n, "update(NULL dq)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, dq, tau, dt, NULL),
+                       DVRK_ERR_NULL, out, 0, "update(NULL tau_ext)");
+            CHECK_CODE(dvrk_observer_update(model, other_ws, obs, q, dq, tau, dt, out),
+                       DVRK_ERR_WORKSPACE, out, n, "update(other ws)");
+            CHECK_CODE(dvrk_observer_update(model, ws, other_obs, q, dq, tau, dt, out),
+                       DVRK_ERR_ARGUMENT, out, n, "update(other observer)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, dq, tau, 0.0, out),
+                       DVRK_ERR_ARGUMENT, out, n, "update(dt 0)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, dq, tau, -dt, out),
+                       DVRK_ERR_ARGUMENT, out, n, "update(dt < 0)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, dq, tau, NAN, out),
+                       DVRK_ERR_NOT_FINITE, out, n, "update(dt NaN)");
+            CHECK_CODE(dvrk_observer_update(model, ws, obs, q, dq, tau, INFINITY, out),
+                       DVRK_ERR_NOT_FINITE, out, n, "update(dt inf)");
             for (int which = 0; which < 3; which++) {
                 memcpy(bad, x + which * n, n * sizeof(double));
                 bad[which] = NAN;
-                rc = dvrk_observer_update(model, ws, obs, which == 0 ? bad : q,
-                                          which == 1 ? bad : dq, which == 2 ? bad : tau, dt, out);
-                CHECK(rc == DVRK_ERR_NOT_FINITE && untouched(out, n), "update(NaN in input %d) = %d",
-                      which, rc);
+                const double *in[3] = {q, dq, tau};
+                in[which] = bad;
+                CHECK_CODE(dvrk_observer_update(model, ws, obs, in[0], in[1], in[2], dt, out),
+                           DVRK_ERR_NOT_FINITE, out, n, "update(NaN in input %d)", which);
             }
         }
         int rc = dvrk_observer_update(model, ws, obs, q, dq, tau, dt, out);

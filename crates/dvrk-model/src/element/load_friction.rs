@@ -109,16 +109,12 @@ impl Law for LoadFriction {
 
     /// `0 ≤ Fl ≤ 1/2`: dissipative, and at most half the load.
     fn bound_rows(&self, _b: &BoundsContext, rows: &mut Vec<BoundRow>) {
-        rows.push(BoundRow::at_least(
-            self.param,
-            0.0,
-            BoundOrigin::Physical("load friction Fl ≥ 0"),
-        ));
-        rows.push(BoundRow::at_most(
-            self.param,
+        let lo = (0.0, BoundOrigin::Physical("load friction Fl ≥ 0"));
+        let hi = (
             MAX_LOAD_RATIO,
             BoundOrigin::Physical("load friction Fl ≤ 1/2"),
-        ));
+        );
+        BoundRow::interval(self.param, lo, Some(hi), rows);
     }
 
     fn clamp(&self, _b: &BoundsContext, params: &mut [f64]) {

@@ -16,6 +16,23 @@
 //! (and the `each!` dispatch below), its variant in [`ElementSpec`] (the numeric
 //! constructor's) and its description field in `description/elements.rs`.
 
+/// [`Law::add_torque`] and [`Law::add_static`] of an element whose torque is a function of
+/// the position alone, its `push(value, q, params, tau)`: the same torque in motion as
+/// held at rest, whatever the direction of the next motion.
+macro_rules! position_law {
+    () => {
+        #[inline(always)]
+        fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
+            self.push(s.value, s.q, params, tau);
+        }
+
+        #[inline(always)]
+        fn add_static(&self, value: &Affine, q: &[f64], _: f64, params: &[f64], tau: &mut [f64]) {
+            self.push(value, q, params, tau);
+        }
+    };
+}
+
 mod dahl;
 mod friction;
 mod known_force;
@@ -150,6 +167,20 @@ impl BoundRow {
             coefficients: vec![(k, 1.0)],
             limit: hi,
             origin,
+        }
+    }
+
+    /// The rows of a parameter bounded on its own: `lo ≤ π[k]` and, when `hi` is given,
+    /// `π[k] ≤ hi`, each bound with its origin.
+    pub fn interval(
+        k: usize,
+        lo: (f64, BoundOrigin),
+        hi: Option<(f64, BoundOrigin)>,
+        rows: &mut Vec<BoundRow>,
+    ) {
+        rows.push(BoundRow::at_least(k, lo.0, lo.1));
+        if let Some((hi, origin)) = hi {
+            rows.push(BoundRow::at_most(k, hi, origin));
         }
     }
 

@@ -74,15 +74,10 @@ impl Law for MotorInertia {
     }
 
     fn bound_rows(&self, b: &BoundsContext, rows: &mut Vec<BoundRow>) {
-        let k = self.param;
-        rows.push(BoundRow::at_least(
-            k,
-            b.global.ia_min,
-            BoundOrigin::Global("ia_min"),
-        ));
-        if let Some(v) = b.frame.ia_max.filter(|_| b.use_frame) {
-            rows.push(BoundRow::at_most(k, v, BoundOrigin::Frame("ia_max")));
-        }
+        let lo = (b.global.ia_min, BoundOrigin::Global("ia_min"));
+        let hi = b.frame.ia_max.filter(|_| b.use_frame);
+        let hi = hi.map(|v| (v, BoundOrigin::Frame("ia_max")));
+        BoundRow::interval(self.param, lo, hi, rows);
     }
 
     fn clamp(&self, b: &BoundsContext, params: &mut [f64]) {

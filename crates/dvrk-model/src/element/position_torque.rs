@@ -155,16 +155,8 @@ impl Law for PositionTorque {
         }
     }
 
-    #[inline(always)]
-    fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
-        self.push(s.value, s.q, params, tau);
-    }
-
-    /// A torque of the position: held at rest as well.
-    #[inline(always)]
-    fn add_static(&self, value: &Affine, q: &[f64], _onset: f64, params: &[f64], tau: &mut [f64]) {
-        self.push(value, q, params, tau);
-    }
+    // A torque of the position: in motion and held at rest as well.
+    position_law!();
 
     fn nominal(&self, _nominal: &Nominal, pi: &mut [f64]) -> Option<()> {
         pi[self.param..self.param + 2 * self.order].fill(0.0);

@@ -100,12 +100,10 @@ impl Law for QuadraticViscous {
 
     /// `Fq ≥ 0` (dissipation), `Fq ≤ max` with the frame's bounds.
     fn bound_rows(&self, b: &BoundsContext, rows: &mut Vec<BoundRow>) {
-        let origin = BoundOrigin::Physical("Fq ≥ 0");
-        rows.push(BoundRow::at_least(self.param, 0.0, origin));
-        if let Some(v) = self.max.filter(|_| b.use_frame) {
-            let origin = BoundOrigin::Frame("quadratic_viscous.max");
-            rows.push(BoundRow::at_most(self.param, v, origin));
-        }
+        let lo = (0.0, BoundOrigin::Physical("Fq ≥ 0"));
+        let hi = self.max.filter(|_| b.use_frame);
+        let hi = hi.map(|v| (v, BoundOrigin::Frame("quadratic_viscous.max")));
+        BoundRow::interval(self.param, lo, hi, rows);
     }
 
     fn clamp(&self, b: &BoundsContext, params: &mut [f64]) {

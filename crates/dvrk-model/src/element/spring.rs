@@ -88,15 +88,8 @@ impl Law for Spring {
         }
     }
 
-    #[inline(always)]
-    fn add_torque(&self, s: &Sample, params: &[f64], tau: &mut [f64]) {
-        self.push(s.value, s.q, params, tau);
-    }
-
-    #[inline(always)]
-    fn add_static(&self, value: &Affine, q: &[f64], _onset: f64, params: &[f64], tau: &mut [f64]) {
-        self.push(value, q, params, tau);
-    }
+    // The spring's torque, in motion and held at rest.
+    position_law!();
 
     fn nominal(&self, nominal: &Nominal, pi: &mut [f64]) -> Option<()> {
         pi[self.param] = nominal.k?;
@@ -105,9 +98,8 @@ impl Law for Spring {
 
     fn bound_rows(&self, b: &BoundsContext, rows: &mut Vec<BoundRow>) {
         if let Some([lo, hi]) = b.frame.spring.filter(|_| b.use_frame) {
-            let k = self.param;
-            rows.push(BoundRow::at_least(k, lo, BoundOrigin::Frame("spring")));
-            rows.push(BoundRow::at_most(k, hi, BoundOrigin::Frame("spring")));
+            let origin = BoundOrigin::Frame("spring");
+            BoundRow::interval(self.param, (lo, origin), Some((hi, origin)), rows);
         }
     }
 
