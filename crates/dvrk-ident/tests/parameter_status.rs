@@ -22,29 +22,7 @@ use nalgebra::DMatrix;
 
 /// `fo_max` bounds the offsets at 0.2 N·m; the truth below puts `Fo1 = +0.3` and
 /// `Fo2 = −0.3` outside them.
-const ARM: &str = r#"
-name = "planar2r"
-convention = "modified"
-coordinates = ["q1", "q2"]
-gravity = [0.0, -9.81, 0.0]
-
-[[frames]]
-name = "upper"
-parent = "base"
-theta = "q1"
-inertia = true
-friction = true
-bounds = { fo_max = 0.2 }
-
-[[frames]]
-name = "lower"
-parent = "upper"
-a = 0.3
-theta = "q2"
-inertia = true
-friction = true
-bounds = { fo_max = 0.2 }
-"#;
+const ARM: &str = include_str!("../../../tests/fixtures/planar_2r_offset_bounds.toml");
 
 /// The parameters identifiable one by one (see the module documentation).
 const IDENTIFIABLE: [&str; 10] = [
