@@ -225,6 +225,13 @@ def test_dvrk_gc_file_matches_the_real_mtm_fit(mtm, mtm_fit, cli, tmp_path):
           "random worst: pos", worst["pos"], "neg", worst["neg"])
     assert res["pos_max"][0] < 1e-9 and res["neg_max"][0] < 1e-9
     assert max(res["pos_max"][:6]) < 0.02 and max(res["neg_max"][:6]) < 0.02
+    # The kinematic gravity compensation is not the MTM's: the message names the export
+    # that is, as Python's method (the command line: `export --dvrk-gc`).
+    with pytest.raises(di.InputError) as e:
+        result.dvrk_kinematic_gc()
+    msg = str(e.value)
+    assert msg.endswith("the MTM's gravity compensation is its own file: FitResult.dvrk_gc()") \
+        and "--" not in msg, msg
 
 
 def test_result_says_what_the_data_determined_and_exports_warn(psm, psm_logs):
