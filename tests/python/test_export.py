@@ -266,8 +266,12 @@ def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
     with pytest.raises(di.InputError, match="for the MTM"):
         result.dvrk_gc()
     # The Classic PSM has no kinematic gravity compensation either: told which it has.
-    with pytest.raises(di.InputError, match="Classic PSM"):
+    with pytest.raises(di.InputError, match="Classic PSM") as e:
         result.dvrk_kinematic_gc()
+    # The exports it suggests, as Python's methods (the command line's flags).
+    msg = str(e.value)
+    assert msg.endswith("Model.to_urdf() or FitResult.wpi_params() for other controllers") \
+        and "--" not in msg, msg
 
 
 def test_dvrk_kinematic_gc_matches_cli(run_cli, cli, tmp_path):

@@ -192,7 +192,13 @@ fn other_arms_and_bad_endoscopes_are_refused() {
         "{mtm}"
     );
     let psm = message("psm", None);
-    assert!(psm.contains("Classic PSM"), "{psm}");
+    assert!(
+        psm.ends_with(
+            "the Classic PSM (its controller loads none; only the PSM Si's): export --urdf \
+             or --wpi-json for other controllers"
+        ),
+        "{psm}"
+    );
     let ecm = message("ecm", None);
     assert!(
         ecm.contains("endoscope") && ecm.contains("Classic_HD_STRAIGHT"),

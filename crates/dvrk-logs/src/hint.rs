@@ -70,6 +70,8 @@ pub enum Hint {
     MethodSdp,
     /// The dVRK's MTM gravity-compensation export: `export --dvrk-gc`.
     DvrkGc,
+    /// The exports for other controllers: `export --urdf or --wpi-json`.
+    OtherExports,
 }
 
 /// How a front end writes a hint.
@@ -96,6 +98,7 @@ impl Hint {
             Hint::Excitation => "--excitation".into(),
             Hint::MethodSdp => "--method sdp".into(),
             Hint::DvrkGc => "export --dvrk-gc (Python FitResult.dvrk_gc())".into(),
+            Hint::OtherExports => "export --urdf or --wpi-json".into(),
         }
     }
 }

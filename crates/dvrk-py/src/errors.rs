@@ -159,6 +159,7 @@ fn keyword(hint: Hint) -> String {
         Hint::Excitation => "excitation=".into(),
         Hint::MethodSdp => format!("{}\"sdp\"", option(Setting::Method)),
         Hint::DvrkGc => "FitResult.dvrk_gc()".into(),
+        Hint::OtherExports => "Model.to_urdf() or FitResult.wpi_params()".into(),
     }
 }
 

@@ -330,10 +330,11 @@ fn instead(name: &str) -> String {
             "; the MTM's gravity compensation is its own file: {}",
             Hint::DvrkGc
         ),
-        "psm" | "psm_simplified" => "; the dVRK has no kinematic gravity compensation for the \
-             Classic PSM (its controller loads none; only the PSM Si's): export --urdf or \
-             --wpi-json for other controllers"
-            .into(),
+        "psm" | "psm_simplified" => format!(
+            "; the dVRK has no kinematic gravity compensation for the Classic PSM (its \
+             controller loads none; only the PSM Si's): {} for other controllers",
+            Hint::OtherExports
+        ),
         _ => String::new(),
     }
 }
