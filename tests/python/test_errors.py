@@ -50,6 +50,11 @@ def test_mismatched_batches(psm):
         psm.regressor(np.zeros((3, 7)), np.zeros((4, 7)))
     with pytest.raises(di.InputError, match="ddq has shape"):
         psm.inverse_dynamics(np.zeros(115), np.zeros((3, 7)), None, np.zeros(7))
+    # The torques are named as themselves (they were once called ddq).
+    with pytest.raises(di.InputError, match=r"^tau: expected shape \(7,\)"):
+        psm.forward_dynamics(np.zeros(115), np.zeros(7), np.zeros(7), np.zeros(6))
+    with pytest.raises(di.InputError, match="^tau has shape"):
+        psm.forward_dynamics(np.zeros(115), np.zeros((3, 7)), np.zeros((3, 7)), np.zeros(7))
 
 
 def test_nan_and_inf(psm):

@@ -225,6 +225,13 @@ def test_dvrk_gc_file_matches_the_real_mtm_fit(mtm, mtm_fit, cli, tmp_path):
           "random worst: pos", worst["pos"], "neg", worst["neg"])
     assert res["pos_max"][0] < 1e-9 and res["neg_max"][0] < 1e-9
     assert max(res["pos_max"][:6]) < 0.02 and max(res["neg_max"][:6]) < 0.02
+    # The kinematic gravity compensation is not the MTM's: the message names the export
+    # that is, as Python's method (the command line: `export --dvrk-gc`).
+    with pytest.raises(di.InputError) as e:
+        result.dvrk_kinematic_gc()
+    msg = str(e.value)
+    assert msg.endswith("the MTM's gravity compensation is its own file: FitResult.dvrk_gc()") \
+        and "--" not in msg, msg
 
 
 def test_result_says_what_the_data_determined_and_exports_warn(psm, psm_logs):
@@ -259,8 +266,12 @@ def test_dvrk_gc_refuses_other_robots(psm, psm_logs):
     with pytest.raises(di.InputError, match="for the MTM"):
         result.dvrk_gc()
     # The Classic PSM has no kinematic gravity compensation either: told which it has.
-    with pytest.raises(di.InputError, match="Classic PSM"):
+    with pytest.raises(di.InputError, match="Classic PSM") as e:
         result.dvrk_kinematic_gc()
+    # The exports it suggests, as Python's methods (the command line's flags).
+    msg = str(e.value)
+    assert msg.endswith("Model.to_urdf() or FitResult.wpi_params() for other controllers") \
+        and "--" not in msg, msg
 
 
 def test_dvrk_kinematic_gc_matches_cli(run_cli, cli, tmp_path):

@@ -541,5 +541,7 @@ def test_identify_payload_matches_cli(psm, cli, run_cli, tmp_path):
     assert loaded.parameters == result.parameters
     assert max(loaded.validate(data)["rms"][:3]) < 0.0025
     assert min(result.validate(data)["rms"][:3]) > 0.1
-    with pytest.raises(di.InputError, match="no frame `nowhere`.*main_insertion"):
+    with pytest.raises(di.InputError, match="no frame `nowhere`.*main_insertion") as e:
         di.identify_payload(result, data, frame="nowhere")
+    # The argument refused, named as the keyword (the command line's `--frame: ...`).
+    assert str(e.value).startswith("frame: robot psm has no frame `nowhere`"), str(e.value)

@@ -20,11 +20,46 @@ def test_abi3_extension_and_typing_files():
     assert (PACKAGE / "__init__.pyi").exists()
 
 
+def stub_tree():
+    return ast.parse((PACKAGE / "__init__.pyi").read_text())
+
+
+def typed_dicts(tree):
+    """The stub's ``TypedDict`` classes (typing only, not in the module): each one's
+    fields ``{name: annotation}`` in order, its bases' first, and whether every field
+    may be left out (``total=False``)."""
+    found = {}
+    for node in tree.body:
+        if not isinstance(node, ast.ClassDef):
+            continue
+        bases = [b.id for b in node.bases if isinstance(b, ast.Name)]
+        if not any(b == "TypedDict" or b in found for b in bases):
+            continue
+        fields = {}
+        for b in bases:
+            fields.update(found.get(b, ({}, True))[0])
+        fields.update({n.target.id: n.annotation for n in node.body
+                       if isinstance(n, ast.AnnAssign)})
+        total = not any(k.arg == "total" and k.value.value is False for k in node.keywords)
+        found[node.name] = (fields, total)
+    return found
+
+
+def unpacked(fn):
+    """The ``TypedDict`` a stub's ``**options: Unpack[...]`` names, or None."""
+    kwarg = fn.args.kwarg
+    annotation = kwarg.annotation if kwarg else None
+    if isinstance(annotation, ast.Subscript) and getattr(annotation.value, "id", None) == "Unpack":
+        return annotation.slice.id
+    return None
+
+
 def stub_names():
-    tree = ast.parse((PACKAGE / "__init__.pyi").read_text())
+    tree = stub_tree()
+    typed = typed_dicts(tree)
     top, members = set(), {}
     for node in tree.body:
-        if isinstance(node, ast.ClassDef):
+        if isinstance(node, ast.ClassDef) and node.name not in typed:
             top.add(node.name)
             members[node.name] = {
                 n.name for n in node.body if isinstance(n, (ast.FunctionDef, ast.AnnAssign))
@@ -54,8 +89,9 @@ def test_stubs_match_the_module():
         assert not extra, f"{cls}: in the module, not in the stubs: {extra}"
 
 
-def stub_parameters(fn):
-    """A stub's parameter names in order, ``*`` before keyword-only ones."""
+def stub_parameters(fn, typed):
+    """A stub's parameter names in order, ``*`` before keyword-only ones, a
+    ``**options: Unpack[...]`` written out as its ``TypedDict``'s fields (``typed``)."""
     a = fn.args
     names = [p.arg for p in a.posonlyargs + a.args]
     if a.vararg:
@@ -63,7 +99,9 @@ def stub_parameters(fn):
     elif a.kwonlyargs:
         names.append("*")
     names += [p.arg for p in a.kwonlyargs]
-    if a.kwarg:
+    if unpacked(fn):
+        names += [n for n in typed[unpacked(fn)][0] if n not in names]
+    elif a.kwarg:
         names.append("**" + a.kwarg.arg)
     return [n for n in names if n not in ("self", "cls")]
 
@@ -98,10 +136,13 @@ def test_stub_signatures_match_the_module():
     keyword-only alike, so an editor's completion is the module's truth (properties and
     operators aside)."""
     checked = 0
-    for node in ast.parse((PACKAGE / "__init__.pyi").read_text()).body:
+    tree = stub_tree()
+    typed = typed_dicts(tree)
+    for node in tree.body:
         if isinstance(node, ast.FunctionDef):
             pairs = [(node.name, node, getattr(di, node.name))]
-        elif isinstance(node, ast.ClassDef) and not issubclass(getattr(di, node.name), BaseException):
+        elif (isinstance(node, ast.ClassDef) and node.name not in typed
+              and not issubclass(getattr(di, node.name), BaseException)):
             cls = getattr(di, node.name)
             pairs = [
                 (f"{node.name}.{n.name}", n, cls if n.name == "__init__" else getattr(cls, n.name))
@@ -113,29 +154,31 @@ def test_stub_signatures_match_the_module():
         else:
             continue
         for name, stub, obj in pairs:
-            assert module_parameters(obj) == stub_parameters(stub), name
+            assert module_parameters(obj) == stub_parameters(stub, typed), name
             checked += 1
     assert checked > 60, checked
 
 
 def test_stub_lists_every_option(psm, psm_excitation):
+    """The fit options a function takes as keywords (``**options``, converted in one
+    place from the library's list of options) are in the stub, as the fields of the
+    ``TypedDict`` its ``**options: Unpack[...]`` names, in the library's order, each
+    optional (``total=False``) and accepting None: an option the stub misses (a new
+    one) fails here."""
     e = psm_excitation
     log = di.JointLog(e["t"], e["q"], e["noisy"])
-    """The fit options a function takes as keywords (``**options``, converted in one
-    place from the library's list of options) are in the stub, in the library's order,
-    each defaulting to None: an option the stub misses (a new one) fails here."""
-    stubs = {n.name: n for n in ast.parse((PACKAGE / "__init__.pyi").read_text()).body
-             if isinstance(n, ast.FunctionDef)}
+    tree = stub_tree()
+    stubs = {n.name: n for n in tree.body if isinstance(n, ast.FunctionDef)}
+    typed = typed_dicts(tree)
     assert set(di._options) == {"fit", "observe", "prepare", "external_torque"}
     assert "filter_order" in di._options["prepare"] and "method" in di._options["fit"]
     for function, names in di._options.items():
-        args = stubs[function].args
-        positional = [a.arg for a in args.args]
-        keywords = dict(zip((a.arg for a in args.kwonlyargs), args.kw_defaults))
-        listed = [n for n in keywords if n in names]
-        assert listed == [n for n in names if n not in positional], function
-        for n in listed:
-            assert isinstance(keywords[n], ast.Constant) and keywords[n].value is None, n
+        positional = [a.arg for a in stubs[function].args.args]
+        fields, total = typed[unpacked(stubs[function])]
+        assert list(fields) == [n for n in names if n not in positional], function
+        assert not total, function
+        for n, annotation in fields.items():
+            assert ast.unparse(annotation).startswith("Optional["), (function, n)
     with pytest.raises(TypeError, match="unexpected keyword argument 'stribeck'"):
         di.prepare(psm, log, stribeck=0.3)
     # The option added through the list (tests/python/test_fit.py compares it with

@@ -76,6 +76,16 @@ pub enum IdentError {
         /// What differs (a missing joint, a column count).
         message: String,
     },
+    /// As [`IdentError::Mismatch`], for a reason that suggests a setting (a robot or
+    /// links the dVRK's kinematic gravity compensation cannot hold): kept as the error
+    /// itself so that its hints are spelled when shown.
+    #[error("{source_name}: {reason}")]
+    Unsuited {
+        /// What does not fit (`robot `psm``).
+        source_name: String,
+        /// Why, with the setting it suggests.
+        reason: Box<dyn std::error::Error + Send + Sync>,
+    },
     /// A log whose measured velocities contradict its clock: a wrong sampling rate
     /// scales every derivative (the accelerations by its square).
     #[error("{source_name}: the measured velocities of joint {joint} are {} times the rate of change of its positions on the log's clock{}: give the log's real sampling rate ({}, or time stamps), or velocities in the positions' units per second", dvrk_model::input::show_significant(*ratio, 3), clock_text(clock_hz), Hint::Rate)]

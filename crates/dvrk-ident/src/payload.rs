@@ -101,7 +101,15 @@ pub fn identify_payload(
             ),
         });
     }
-    let body = model.payload_model(frame, "--frame")?;
+    // The frame is the caller's argument (`--frame`, `frame=`): refused as it, each front
+    // end naming it its own way.
+    let body = model.payload_model(frame, "").map_err(|e| match e {
+        dvrk_model::ModelError::Field { message, .. } => IdentError::Setting {
+            name: crate::error::SettingName::Argument("frame"),
+            message,
+        },
+        e => e.into(),
+    })?;
     let n = model.dof();
     if logs.is_empty() {
         return Err(IdentError::Setting {

@@ -182,9 +182,23 @@ fn other_arms_and_bad_endoscopes_are_refused() {
             .to_string()
     };
     let mtm = message("mtm", None);
-    assert!(mtm.contains("--dvrk-gc"), "{mtm}");
+    // The command line's spelling of the export that serves the MTM (Python's:
+    // tests/python/test_export.py).
+    assert!(
+        mtm.ends_with(
+            "the MTM's gravity compensation is its own file: export --dvrk-gc (Python \
+             FitResult.dvrk_gc())"
+        ),
+        "{mtm}"
+    );
     let psm = message("psm", None);
-    assert!(psm.contains("Classic PSM"), "{psm}");
+    assert!(
+        psm.ends_with(
+            "the Classic PSM (its controller loads none; only the PSM Si's): export --urdf \
+             or --wpi-json for other controllers"
+        ),
+        "{psm}"
+    );
     let ecm = message("ecm", None);
     assert!(
         ecm.contains("endoscope") && ecm.contains("Classic_HD_STRAIGHT"),

@@ -61,6 +61,17 @@ pub enum Hint {
     Trim,
     /// The test logs' window, named: `--test-window`.
     TestWindow,
+    /// The bound on what a compressed recording may decompress to, named:
+    /// `--max-unpacked-mib`.
+    MaxUnpackedMib,
+    /// The excitation trajectory the logs were recorded on, named: `--excitation`.
+    Excitation,
+    /// The semidefinite fit, physically consistent: `--method sdp`.
+    MethodSdp,
+    /// The dVRK's MTM gravity-compensation export: `export --dvrk-gc`.
+    DvrkGc,
+    /// The exports for other controllers: `export --urdf or --wpi-json`.
+    OtherExports,
 }
 
 /// How a front end writes a hint.
@@ -83,6 +94,11 @@ impl Hint {
             Hint::Cutoff => "--cutoff".into(),
             Hint::Trim => "--trim".into(),
             Hint::TestWindow => "--test-window".into(),
+            Hint::MaxUnpackedMib => "--max-unpacked-mib".into(),
+            Hint::Excitation => "--excitation".into(),
+            Hint::MethodSdp => "--method sdp".into(),
+            Hint::DvrkGc => "export --dvrk-gc (Python FitResult.dvrk_gc())".into(),
+            Hint::OtherExports => "export --urdf or --wpi-json".into(),
         }
     }
 }

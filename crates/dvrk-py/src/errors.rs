@@ -155,6 +155,11 @@ fn keyword(hint: Hint) -> String {
         Hint::Cutoff => option(Setting::Cutoff),
         Hint::Trim => option(Setting::Trim),
         Hint::TestWindow => option(Setting::TestWindow),
+        Hint::MaxUnpackedMib => "max_unpacked_mib=".into(),
+        Hint::Excitation => "excitation=".into(),
+        Hint::MethodSdp => format!("{}\"sdp\"", option(Setting::Method)),
+        Hint::DvrkGc => "FitResult.dvrk_gc()".into(),
+        Hint::OtherExports => "Model.to_urdf() or FitResult.wpi_params()".into(),
     }
 }
 

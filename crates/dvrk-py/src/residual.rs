@@ -14,7 +14,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::classes::{FitResultPy, ModelPy};
-use crate::convert::{array, background, matrix, rows, rows_or_zeros, vector};
+use crate::convert::{array, background, matrix, vector};
 use crate::data::{fail_ident, JointLogPy};
 use crate::errors::{from_ident, input};
 use crate::overrides::parse_joints;
@@ -260,10 +260,8 @@ impl MomentumObserverPy {
         dt: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let n = self.model.dof();
-        let labels = &self.model.coordinates;
-        let q = rows(py, q, n, "q", labels)?;
-        let dq = rows_or_zeros(py, Some(dq), &q, "dq", "q", labels)?;
-        let tau = rows_or_zeros(py, Some(tau), &q, "tau", "q", labels)?;
+        let (q, dq, tau) =
+            crate::robot::state_of(py, &self.model, q, Some(dq), ("tau", Some(tau)))?;
         let steps = match dt.extract::<f64>() {
             Ok(d) => vec![d; q.rows],
             Err(_) => vector(py, dt, Some(q.rows), "dt", &[])?,

@@ -97,16 +97,6 @@ impl ModelPy {
         let out = per_sample(py, q.rows, width, |k, out| f(&mut ws, q.row(k), out))?;
         Ok(array(py, out, &q.shape(shape)))
     }
-
-    fn state(
-        &self,
-        py: Python<'_>,
-        q: &Bound<'_, PyAny>,
-        dq: Option<&Bound<'_, PyAny>>,
-        ddq: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<(Rows, Rows, Rows)> {
-        state_of(py, &self.model, q, dq, ddq)
-    }
 }
 
 /// Parameter values with the model that evaluates them.
@@ -174,19 +164,20 @@ pub fn shared(model: &Arc<Model>, cow: std::borrow::Cow<'_, Model>) -> Arc<Model
     }
 }
 
-/// `q`, `dq`, `ddq` (zeros when `None`) as batches of the same shape.
-fn state_of(
+/// `q`, `dq` and a third signal of the robot state (`ddq`, or `tau` as `last` names
+/// it; zeros when `None`) as batches of the same shape, each named in errors.
+pub(crate) fn state_of(
     py: Python<'_>,
     model: &Model,
     q: &Bound<'_, PyAny>,
     dq: Option<&Bound<'_, PyAny>>,
-    ddq: Option<&Bound<'_, PyAny>>,
+    (last, third): (&str, Option<&Bound<'_, PyAny>>),
 ) -> PyResult<(Rows, Rows, Rows)> {
     let labels = &model.coordinates;
     let q = rows(py, q, model.dof(), "q", labels)?;
     let dq = rows_or_zeros(py, dq, &q, "dq", "q", labels)?;
-    let ddq = rows_or_zeros(py, ddq, &q, "ddq", "q", labels)?;
-    Ok((q, dq, ddq))
+    let third = rows_or_zeros(py, third, &q, last, "q", labels)?;
+    Ok((q, dq, third))
 }
 
 fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<ModelPy> {
@@ -195,16 +186,18 @@ fn load(py: Python<'_>, name_or_path: PathBuf) -> PyResult<ModelPy> {
     Ok(ModelPy::new(model, origin))
 }
 
-/// Full regressor rows of `n` samples into `out` (`n·dof × p`), shared with
-/// `BaseParameters.regressor`.
-fn regressor_rows(
-    py: Python<'_>,
+/// The regressor of the samples `q`, `dq`, `ddq` (`(N*dof, cols)`, `(dof, cols)` for one
+/// 1-D sample): every column, or `base`'s independent ones. `Model.regressor`,
+/// `Model.base_regressor` and `BaseParameters.regressor`.
+fn regressor_array<'py>(
+    py: Python<'py>,
     model: &Model,
     base: Option<&BaseParameters>,
-    q: &Rows,
-    dq: &Rows,
-    ddq: &Rows,
-) -> PyResult<(Vec<f64>, usize)> {
+    q: &Bound<'py, PyAny>,
+    dq: Option<&Bound<'py, PyAny>>,
+    ddq: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
+    let (q, dq, ddq) = state_of(py, model, q, dq, ("ddq", ddq))?;
     let (n, p) = (model.dof(), model.n_params());
     let cols = base.map_or(p, |b| b.rank());
     let mut ws = Workspace::new(model);
@@ -216,7 +209,7 @@ fn regressor_rows(
             b.select_into(&full, p, out);
         }
     })?;
-    Ok((out, cols))
+    Ok(array(py, out, &[q.rows * n, cols]))
 }
 
 #[pymethods]
@@ -419,9 +412,7 @@ impl ModelPy {
         dq: Option<&Bound<'py, PyAny>>,
         ddq: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
-        let (out, cols) = regressor_rows(py, &self.model, None, &q, &dq, &ddq)?;
-        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+        regressor_array(py, &self.model, None, q, dq, ddq)
     }
 
     /// The base regressor: the columns ``base().independent`` of :meth:`regressor`,
@@ -436,9 +427,7 @@ impl ModelPy {
         ddq: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let base = self.base_parameters(py)?;
-        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
-        let (out, cols) = regressor_rows(py, &self.model, Some(&base), &q, &dq, &ddq)?;
-        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+        regressor_array(py, &self.model, Some(&base), q, dq, ddq)
     }
 
     /// Inverse dynamics ``tau = H(q, dq, ddq) @ params`` (N·m or N): links, friction,
@@ -455,7 +444,7 @@ impl ModelPy {
         ddq: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let Params { model, values } = self.params(py, params)?;
-        let (q, dq, ddq) = self.state(py, q, dq, ddq)?;
+        let (q, dq, ddq) = state_of(py, &self.model, q, dq, ("ddq", ddq))?;
         let n = model.dof();
         let mut ws = Workspace::new(&model);
         let out = per_sample(py, q.rows, n, |k, out| {
@@ -522,7 +511,7 @@ impl ModelPy {
         tau: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
         let Params { model, values } = self.params(py, params)?;
-        let (q, dq, tau) = self.state(py, q, Some(dq), Some(tau))?;
+        let (q, dq, tau) = state_of(py, &self.model, q, Some(dq), ("tau", Some(tau)))?;
         let n = model.dof();
         let mut ws = Workspace::new(&model);
         let mut singular = None;
@@ -674,9 +663,7 @@ impl BaseParametersPy {
         dq: Option<&Bound<'py, PyAny>>,
         ddq: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyArrayDyn<f64>>> {
-        let (q, dq, ddq) = state_of(py, &self.model, q, dq, ddq)?;
-        let (out, cols) = regressor_rows(py, &self.model, Some(&self.base), &q, &dq, &ddq)?;
-        Ok(array(py, out, &[q.rows * self.model.dof(), cols]))
+        regressor_array(py, &self.model, Some(&self.base), q, dq, ddq)
     }
 
     /// ``{"names", "expressions", "independent", "combination"}`` with plain lists.

@@ -41,6 +41,7 @@ use dvrk_model::{JointKind, Model, Workspace};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use crate::IdentError;
+use dvrk_logs::hint::Hint;
 
 /// The dVRK's endoscope types (`mtsIntuitiveResearchKitEndoscopeTypes.cdg`, the ECM
 /// configuration's `endoscope` value) and the mass (kg) the controller puts on the ECM's
@@ -287,6 +288,48 @@ fn mismatch(model: &Model, message: String) -> IdentError {
     }
 }
 
+/// Why the file cannot be made, where the message suggests a setting
+/// ([`IdentError::Unsuited`], spelled by each front end).
+#[derive(Debug, thiserror::Error)]
+enum Unsuited {
+    /// A robot the file is not for.
+    #[error("the dVRK's kinematic gravity-compensation file is for psm_si (psm_si_tool), ecm_si and ecm{}", instead(name))]
+    Robot { name: String },
+    /// A link with a first moment and no mass (kg·m).
+    #[error("link {link}: a first moment ({first:.3e} kg·m) without mass, which a point mass cannot hold (a least-squares fit's representative parameters? fit with {})", Hint::MethodSdp)]
+    Massless { link: String, first: f64 },
+    /// A link whose centre of mass (m) is far off the arm, for its mass (kg).
+    #[error("link {link}: centre of mass {com:?} m for a mass of {mass:.3e} kg, not a place on the arm (fit with {} for physically consistent links)", Hint::MethodSdp)]
+    FarCom {
+        link: String,
+        com: [f64; 3],
+        mass: f64,
+    },
+}
+
+/// What serves the robot `name` instead of the file, after `; ` (empty: nothing).
+fn instead(name: &str) -> String {
+    match name {
+        "mtm" => format!(
+            "; the MTM's gravity compensation is its own file: {}",
+            Hint::DvrkGc
+        ),
+        "psm" | "psm_simplified" => format!(
+            "; the dVRK has no kinematic gravity compensation for the Classic PSM (its \
+             controller loads none; only the PSM Si's): {} for other controllers",
+            Hint::OtherExports
+        ),
+        _ => String::new(),
+    }
+}
+
+fn unsuited(model: &Model, reason: Unsuited) -> IdentError {
+    IdentError::Unsuited {
+        source_name: format!("robot `{}`", model.name),
+        reason: Box::new(reason),
+    }
+}
+
 /// The file for `model` (with its gravity: the result's mounting pitch) and parameters
 /// `params`; `endoscope`: the ECM's endoscope type (required for the ECMs, refused for
 /// the PSM).
@@ -299,24 +342,13 @@ pub fn dvrk_kinematic_gc(
         .iter()
         .find(|a| a.robots.contains(&model.name.as_str()))
         .ok_or_else(|| {
-        let which = match model.name.as_str() {
-            "mtm" => "the MTM's gravity compensation is its own file: export --dvrk-gc \
-                      (Python FitResult.dvrk_gc())"
-                .to_string(),
-            "psm" | "psm_simplified" => "the dVRK has no kinematic gravity compensation for \
-                 the Classic PSM (its controller loads none; only the PSM Si's): export \
-                 --urdf or --wpi-json for other controllers"
-                .to_string(),
-            _ => String::new(),
-        };
-        mismatch(
-            model,
-            format!(
-                "the dVRK's kinematic gravity-compensation file is for psm_si (psm_si_tool), ecm_si and ecm{}{which}",
-                if which.is_empty() { "" } else { "; " }
-            ),
-        )
-    })?;
+            unsuited(
+                model,
+                Unsuited::Robot {
+                    name: model.name.clone(),
+                },
+            )
+        })?;
     if params.len() != model.n_params() || params.iter().any(|p| !p.is_finite()) {
         return Err(mismatch(
             model,
@@ -683,14 +715,12 @@ fn fit(
         let first = l.iter().fold(0.0f64, |a, x| a.max(x.abs()));
         if m.abs() < 1e-12 {
             if first > 1e-9 {
-                return Err(mismatch(
+                return Err(unsuited(
                     model,
-                    format!(
-                        "link {}: a first moment ({:.3e} kg·m) without mass, which a point mass \
-                         cannot hold (a least-squares fit's representative parameters? fit \
-                         with --method sdp)",
-                        link.name, first
-                    ),
+                    Unsuited::Massless {
+                        link: link.name.clone(),
+                        first,
+                    },
                 ));
             }
             link.mass = 0.0;
@@ -699,13 +729,13 @@ fn fit(
         link.mass = m;
         link.com = [l[0] / m, l[1] / m, l[2] / m];
         if link.com.iter().any(|c| c.abs() > 10.0) {
-            return Err(mismatch(
+            return Err(unsuited(
                 model,
-                format!(
-                    "link {}: centre of mass {:?} m for a mass of {m:.3e} kg, not a place on the \
-                     arm (fit with --method sdp for physically consistent links)",
-                    link.name, link.com
-                ),
+                Unsuited::FarCom {
+                    link: link.name.clone(),
+                    com: link.com,
+                    mass: m,
+                },
             ));
         }
     }
@@ -733,4 +763,41 @@ fn grid_point(ranges: &[[f64; 2]], mut index: usize) -> Vec<f64> {
             lo + (hi - lo) * k as f64 / (POINTS - 1) as f64
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The settings the refusals suggest stay hints until shown: the command line's
+    /// flags by default, another front end's spelling through `spelled` (Python's are
+    /// checked in tests/python/test_export.py where a result reaches them).
+    #[test]
+    fn refusals_spell_their_settings_when_shown() {
+        let python = |h: Hint| match h {
+            Hint::MethodSdp => "method=\"sdp\"".to_string(),
+            Hint::DvrkGc => "FitResult.dvrk_gc()".to_string(),
+            h => h.flag(),
+        };
+        let massless = Unsuited::Massless {
+            link: "yaw".into(),
+            first: 0.5,
+        };
+        let far = Unsuited::FarCom {
+            link: "yaw".into(),
+            com: [20.0, 0.0, 0.0],
+            mass: 1.0,
+        };
+        assert!(massless.to_string().ends_with("fit with --method sdp)"));
+        assert!(dvrk_logs::hint::spelled(&massless, python).ends_with("fit with method=\"sdp\")"));
+        assert!(far
+            .to_string()
+            .ends_with("(fit with --method sdp for physically consistent links)"));
+        let far = dvrk_logs::hint::spelled(&far, python);
+        assert!(far.ends_with("(fit with method=\"sdp\" for physically consistent links)"));
+        let mtm = Unsuited::Robot { name: "mtm".into() };
+        assert!(
+            dvrk_logs::hint::spelled(&mtm, python).ends_with("its own file: FitResult.dvrk_gc()")
+        );
+    }
 }

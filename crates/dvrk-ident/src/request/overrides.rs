@@ -15,6 +15,7 @@ use crate::settings::Candidates;
 use crate::settings::{Joints, PriorMetric};
 use crate::signal::Cutoff;
 use crate::{BoundsSet, FitSettings, IdentError, Method};
+use dvrk_logs::hint::Hint;
 use dvrk_model::Model;
 
 macro_rules! overrides {
@@ -142,9 +143,10 @@ impl Setting {
                 Some(v) => v.to_string(),
                 None => "none, the log's own rate".into(),
             },
-            Setting::TestWindow => {
-                "the excitation's first period with --excitation, else every sample".into()
-            }
+            Setting::TestWindow => format!(
+                "the excitation's first period with {}, else every sample",
+                Hint::Excitation
+            ),
             Setting::IrlsIterations => fit.irls_iterations.to_string(),
             Setting::SdpRegularization => format!("{:e}", fit.sdp_regularization),
             Setting::Stribeck => "none".into(),

@@ -114,7 +114,7 @@ mod topic;
 mod write;
 
 pub use self::options::{McapOptions, TimeSource, GAP_FACTOR, JITTER_TOLERANCE};
-pub use self::problem::{DecodeError, McapProblem, TopicInfo};
+pub use self::problem::{DecodeError, McapProblem, TopicInfo, UnpackBound};
 pub use self::schema::{JOINT_STATE_SCHEMA, JOINT_STATE_TYPE};
 
 #[cfg(feature = "recordings")]

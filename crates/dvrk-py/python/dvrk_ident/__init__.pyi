@@ -7,10 +7,11 @@ a leading sample axis, which a single 1-D sample drops.
 
 import os
 import pathlib
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
+from typing_extensions import Unpack
 
 __version__: str
 
@@ -362,6 +363,55 @@ def read_log(
 def list_topics(path: PathLike) -> List[Dict[str, Any]]:
     """The topics of a recording (MCAP, sqlite3, ROS 1 bag or rosbag2 folder)."""
 
+# The fit options a function takes as keywords (``**options``, ``dvrk_ident._options``:
+# each function's, in the library's order), each written once: a class per set, a set
+# that adds options to another derives from it. Each may be left out or None: the
+# ``settings`` (or the library's default) then apply.
+
+class ProcessingOptions(TypedDict, total=False):
+    """How a log is processed (``dvrk_ident._options["prepare"]``, also
+    ``["external_torque"]``): ``cutoff`` (Hz, per coordinate, or ``"none"``/``False``),
+    ``filter_order``, ``filter_torque``, ``trim`` and ``decimate`` (samples),
+    ``min_speed`` (rad/s or m/s), ``resample`` (Hz)."""
+
+    cutoff: Optional[Union[float, Sequence[float], str, bool]]
+    filter_order: Optional[int]
+    filter_torque: Optional[bool]
+    trim: Optional[int]
+    decimate: Optional[int]
+    min_speed: Optional[float]
+    resample: Optional[float]
+
+class ObserveOptions(ProcessingOptions, total=False):
+    """:func:`observe`'s (``dvrk_ident._options["observe"]``): the processing, the
+    Stribeck terms and the mounting (degrees)."""
+
+    stribeck: Optional[float]
+    mounting_pitch: Optional[float]
+
+class FitOptions(ProcessingOptions, total=False):
+    """:func:`fit`'s (``dvrk_ident._options["fit"]``; ``method`` is its positional
+    argument)."""
+
+    test_window: Optional[int]
+    irls_iterations: Optional[int]
+    sdp_regularization: Optional[float]
+    stribeck: Optional[float]
+    dahl: Optional[float]
+    position_torque: Optional[int]
+    load_friction: Optional[bool]
+    mounting_pitch: Optional[float]
+    bounds: Optional[str]
+    ellipsoids: Optional[bool]
+    delay: Optional[Union[str, float, Sequence[float]]]
+    prior: Optional[Union[str, PathLike, "FitResult"]]
+    prior_weight: Optional[float]
+    prior_metric: Optional[str]
+    preset: Optional[str]
+    log_offsets: Optional[bool]
+    select: Optional[Union[str, bool, Sequence[str]]]
+    joints: Optional[str]
+
 class Observation:
     """Training logs reduced to their R factors (:func:`observe`): merge with ``+``,
     fit with :func:`fit`; ``bytes()`` is the file of ``dvrk-ident observe``."""
@@ -389,16 +439,7 @@ def observe(
     data: Union[JointLog, PathLike, Sequence[Union[JointLog, PathLike]]],
     *,
     settings: Optional[Mapping[str, Any]] = None,
-    # The fit options (dvrk_ident._options["observe"], the library's order).
-    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    filter_order: Optional[int] = None,
-    filter_torque: Optional[bool] = None,
-    trim: Optional[int] = None,
-    decimate: Optional[int] = None,
-    min_speed: Optional[float] = None,
-    resample: Optional[float] = None,
-    stribeck: Optional[float] = None,
-    mounting_pitch: Optional[float] = None,
+    **options: Unpack[ObserveOptions],
 ) -> Observation:
     """The logs processed as :func:`fit` processes them and reduced: the map of a fit
     over many processes or machines."""
@@ -412,32 +453,7 @@ def fit(
     excitation: Optional[Union[FourierTrajectory, PathLike]] = None,
     settings: Optional[Mapping[str, Any]] = None,
     allow_unconverged: bool = False,
-    # The fit options (dvrk_ident._options["fit"], the library's order).
-    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    filter_order: Optional[int] = None,
-    filter_torque: Optional[bool] = None,
-    trim: Optional[int] = None,
-    decimate: Optional[int] = None,
-    min_speed: Optional[float] = None,
-    resample: Optional[float] = None,
-    test_window: Optional[int] = None,
-    irls_iterations: Optional[int] = None,
-    sdp_regularization: Optional[float] = None,
-    stribeck: Optional[float] = None,
-    dahl: Optional[float] = None,
-    position_torque: Optional[int] = None,
-    load_friction: Optional[bool] = None,
-    mounting_pitch: Optional[float] = None,
-    bounds: Optional[str] = None,
-    ellipsoids: Optional[bool] = None,
-    delay: Optional[Union[str, float, Sequence[float]]] = None,
-    prior: Optional[Union[str, PathLike, FitResult]] = None,
-    prior_weight: Optional[float] = None,
-    prior_metric: Optional[str] = None,
-    preset: Optional[str] = None,
-    log_offsets: Optional[bool] = None,
-    select: Optional[Union[str, bool, Sequence[str]]] = None,
-    joints: Optional[str] = None,
+    **options: Unpack[FitOptions],
 ) -> FitResult:
     """Identifies the parameters from one log or a list of logs, each processed on its
     own, or from observations (:func:`observe`, merged in order) (``method``: ``ols``, ``wls``, ``irls``, ``sdp`` (default)); ``cutoff``: Hz,
@@ -464,14 +480,7 @@ def prepare(
     data: JointLog,
     *,
     settings: Optional[Mapping[str, Any]] = None,
-    # The fit options (dvrk_ident._options["prepare"], the library's order).
-    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    filter_order: Optional[int] = None,
-    filter_torque: Optional[bool] = None,
-    trim: Optional[int] = None,
-    decimate: Optional[int] = None,
-    min_speed: Optional[float] = None,
-    resample: Optional[float] = None,
+    **options: Unpack[ProcessingOptions],
 ) -> Prepared:
     """The processed samples the estimators see."""
 
@@ -509,14 +518,7 @@ def external_torque(
     wrench: Optional[str] = None,
     wrench_rcond: float = 1e-6,
     as_dataframe: bool = False,
-    # The fit options (dvrk_ident._options["external_torque"], the library's order).
-    cutoff: Optional[Union[float, Sequence[float], str, bool]] = None,
-    filter_order: Optional[int] = None,
-    filter_torque: Optional[bool] = None,
-    trim: Optional[int] = None,
-    decimate: Optional[int] = None,
-    min_speed: Optional[float] = None,
-    resample: Optional[float] = None,
+    **options: Unpack[ProcessingOptions],
 ) -> Any:
     """``dvrk-ident residual``: per processed sample ``tau_measured − tau_model`` and the
     momentum observer's estimate, with the result's processing (the keywords replace

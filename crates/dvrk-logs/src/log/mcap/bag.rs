@@ -8,7 +8,7 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use super::problem::{mcap_error, McapProblem};
+use super::problem::{mcap_error, McapProblem, UnpackBound};
 use super::sniff::{io_error, LZ4_MAGIC, ZSTD_MAGIC};
 pub(crate) use super::sniff::{sniff, Content, Packing, Storage};
 use crate::log::{LogError, LogFormat};
@@ -404,19 +404,6 @@ pub fn unpack_limit(compressed: u64, max_unpacked_mib: Option<u64>) -> u64 {
     }
 }
 
-/// Why a file of `compressed` bytes is refused when `what` (e.g. "it", "its compressed
-/// chunks") decompresses to more than `limit` bytes.
-pub(crate) fn unpack_bound_exceeded(what: &str, limit: u64, compressed: u64) -> String {
-    format!(
-        "{what} decompress{} to more than {} MiB ({} times its {compressed} bytes): a \
-         decompression bomb, or a recording larger than the bound; raise it with \
-         --max-unpacked-mib",
-        if what == "it" { "es" } else { "" },
-        limit >> 20,
-        limit / compressed.max(1)
-    )
-}
-
 /// A decompressed copy of a file in the temporary folder, removed when dropped.
 #[derive(Debug)]
 struct TempCopy {
@@ -461,9 +448,13 @@ impl TempCopy {
             return Err(mcap_error(
                 src,
                 None,
-                McapProblem::Damaged {
+                McapProblem::Unpacked {
                     kind: "compressed file",
-                    reason: unpack_bound_exceeded("it", limit, compressed),
+                    bound: UnpackBound::File {
+                        what: "it",
+                        limit,
+                        compressed,
+                    },
                 },
             ));
         }
@@ -498,41 +489,28 @@ pub(crate) struct Unpacker {
     pub out: Vec<u8>,
 }
 
-/// Why a compressed message is not decompressed ([`Unpacker::unpack`]).
-#[derive(Debug, thiserror::Error)]
-pub(crate) enum UnpackProblem {
-    #[error("a compressed message does not decompress: {0}")]
-    Decompress(std::io::Error),
-    /// A frame that states a size above the bound.
-    #[error("a compressed message of {size} bytes is larger than the {limit} bytes it may decompress to ({})", Unpacker::BOUNDS)]
-    Stated { size: u64, limit: u64 },
-    /// A frame that decompresses to more than the bound.
-    #[error(
-        "a compressed message is larger than the {limit} bytes it may decompress to ({})",
-        Unpacker::BOUNDS
-    )]
-    Larger { limit: u64 },
-}
-
 impl Unpacker {
     /// Largest decompressed message, bytes: bounds what a corrupted frame can allocate.
     const LIMIT: u64 = 1 << 28;
-    /// The bounds of a message, said in errors.
-    const BOUNDS: &'static str = "256 MiB a message, and what is left of the file's \
-                                  bound, which --max-unpacked-mib raises";
 
     /// Decompresses `data` into [`Unpacker::out`]; `None` if it is not compressed. Only
     /// for CDR and JSON payloads, which cannot start with a zstd or lz4 frame magic.
     /// More than `budget` bytes (or [`Unpacker::LIMIT`]) is an error, found before
     /// decompressing when the frame states its size.
-    pub(crate) fn unpack(&mut self, data: &[u8], budget: u64) -> Option<Result<(), UnpackProblem>> {
+    pub(crate) fn unpack(&mut self, data: &[u8], budget: u64) -> Option<Result<(), McapProblem>> {
         let limit = Self::LIMIT.min(budget);
-        let fail = UnpackProblem::Decompress;
+        let fail = |e: std::io::Error| McapProblem::Container {
+            reason: format!("a compressed message does not decompress: {e}"),
+        };
+        let bound = |bound| McapProblem::Unpacked {
+            kind: "MCAP file",
+            bound,
+        };
         self.out.clear();
         if data.starts_with(ZSTD_MAGIC) {
             if let Ok(Some(size)) = zstd::zstd_safe::get_frame_content_size(data) {
                 if size > limit {
-                    return Some(Err(UnpackProblem::Stated { size, limit }));
+                    return Some(Err(bound(UnpackBound::MessageStated { size, limit })));
                 }
                 let decompressor = match &mut self.zstd {
                     Some(d) => d,
@@ -563,7 +541,7 @@ impl Unpacker {
                 .map_err(fail)
                 .and_then(|n| {
                     if n as u64 > limit {
-                        Err(UnpackProblem::Larger { limit })
+                        Err(bound(UnpackBound::Message { limit }))
                     } else {
                         Ok(())
                     }

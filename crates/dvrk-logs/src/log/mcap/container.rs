@@ -23,7 +23,7 @@
 //! block and read again.
 
 use super::channels::{ChannelInfo, Channels, RawMessage};
-use super::problem::mcap_error;
+use super::problem::{mcap_error, UnpackBound};
 use super::{McapProblem, TopicInfo};
 use crate::log::LogError;
 use ::mcap::records::{op, Record};
@@ -163,15 +163,7 @@ impl Scanner {
                 let file = &bag.files[*next_file - 1];
                 let budget = file.unpack_limit.saturating_sub(*unpacked);
                 if let Some(r) = unpacker.unpack(data, budget) {
-                    r.map_err(|e| {
-                        mcap_error(
-                            &file.path,
-                            Some(&channel.topic),
-                            McapProblem::Container {
-                                reason: e.to_string(),
-                            },
-                        )
-                    })?;
+                    r.map_err(|e| mcap_error(&file.path, Some(&channel.topic), e))?;
                     data = unpacker.out.as_slice();
                     *unpacked += data.len() as u64;
                 }
@@ -294,13 +286,13 @@ impl McapFile {
             return Err(mcap_error(
                 path,
                 None,
-                McapProblem::Damaged {
+                McapProblem::Unpacked {
                     kind: "compressed file",
-                    reason: super::bag::unpack_bound_exceeded(
-                        "it",
-                        self.unpack_limit,
-                        self.compressed_len,
-                    ),
+                    bound: UnpackBound::File {
+                        what: "it",
+                        limit: self.unpack_limit,
+                        compressed: self.compressed_len,
+                    },
                 },
             ));
         }
@@ -347,29 +339,30 @@ impl McapFile {
                 } => {
                     if let Some((size, compression)) = chunk_header(data) {
                         if !compression.is_empty() {
-                            let reason = if size > RECORD_LENGTH_LIMIT as u64 {
-                                Some(format!(
-                                    "a chunk (about byte {}) states {size} bytes decompressed, \
-                                     more than the {} MiB a chunk may hold",
-                                    self.bytes_read,
-                                    RECORD_LENGTH_LIMIT >> 20
-                                ))
+                            let problem = if size > RECORD_LENGTH_LIMIT as u64 {
+                                Some(McapProblem::Container {
+                                    reason: format!(
+                                        "a chunk (about byte {}) states {size} bytes \
+                                         decompressed, more than the {} MiB a chunk may hold",
+                                        self.bytes_read,
+                                        RECORD_LENGTH_LIMIT >> 20
+                                    ),
+                                })
                             } else {
                                 self.chunks_unpacked += size;
-                                (self.chunks_unpacked > self.unpack_limit).then(|| {
-                                    super::bag::unpack_bound_exceeded(
-                                        "its compressed chunks",
-                                        self.unpack_limit,
-                                        self.compressed_len,
-                                    )
-                                })
+                                (self.chunks_unpacked > self.unpack_limit).then_some(
+                                    McapProblem::Unpacked {
+                                        kind: "MCAP file",
+                                        bound: UnpackBound::File {
+                                            what: "its compressed chunks",
+                                            limit: self.unpack_limit,
+                                            compressed: self.compressed_len,
+                                        },
+                                    },
+                                )
                             };
-                            if let Some(reason) = reason {
-                                return Err(mcap_error(
-                                    &self.path,
-                                    None,
-                                    McapProblem::Container { reason },
-                                ));
+                            if let Some(problem) = problem {
+                                return Err(mcap_error(&self.path, None, problem));
                             }
                         }
                     }

@@ -123,6 +123,39 @@ const SUPPORTED: &str = "supported: a rosbag2 folder (metadata.yaml with MCAP or
     file, a rosbag2 sqlite3 .db3 file, a ROS 1 .bag (format 2.0), each possibly \
     zstd/lz4-compressed, the 2019 headerless CSV layout and the headered CSV";
 
+/// What decompresses past its bound ([`McapProblem::Unpacked`]): a decompression bomb,
+/// or a recording larger than the bound. Kept as a value until shown, so that the
+/// setting that raises the bound ([`Hint::MaxUnpackedMib`]) is spelled by the front end.
+#[derive(Debug, Error)]
+#[non_exhaustive]
+pub enum UnpackBound {
+    /// `what` (`it`: the file; `its compressed chunks`) decompresses to more than `limit`
+    /// bytes, the file being `compressed` bytes.
+    #[error("{what} decompress{} to more than {} MiB ({} times its {compressed} bytes): a decompression bomb, or a recording larger than the bound; raise it with {}", if *what == "it" { "es" } else { "" }, limit >> 20, limit / (*compressed).max(1), Hint::MaxUnpackedMib)]
+    File {
+        /// `it` or `its compressed chunks`.
+        what: &'static str,
+        /// The bound, bytes.
+        limit: u64,
+        /// The file's size, bytes.
+        compressed: u64,
+    },
+    /// A message compressed on its own whose frame states more than `limit` bytes.
+    #[error("a compressed message of {size} bytes is larger than the {limit} bytes it may decompress to (256 MiB a message, and what is left of the file's bound, which {} raises)", Hint::MaxUnpackedMib)]
+    MessageStated {
+        /// The size the frame states, bytes.
+        size: u64,
+        /// The bound, bytes.
+        limit: u64,
+    },
+    /// A message compressed on its own that decompresses to more than `limit` bytes.
+    #[error("a compressed message is larger than the {limit} bytes it may decompress to (256 MiB a message, and what is left of the file's bound, which {} raises)", Hint::MaxUnpackedMib)]
+    Message {
+        /// The bound, bytes.
+        limit: u64,
+    },
+}
+
 /// Why an MCAP log could not be read or written. [`LogError::Mcap`] adds the file and,
 /// where it matters, the topic.
 #[derive(Debug, Error)]
@@ -164,6 +197,15 @@ pub enum McapProblem {
         kind: &'static str,
         /// What is wrong.
         reason: String,
+    },
+    /// A compressed file, or its compressed chunks or messages, that decompress past
+    /// their bound.
+    #[error("invalid {kind}: {bound}")]
+    Unpacked {
+        /// What the file is: `compressed file`, `MCAP file`, `ROS 1 bag`.
+        kind: &'static str,
+        /// What decompresses past which bound.
+        bound: UnpackBound,
     },
     /// A requested topic is not in the file.
     #[error(

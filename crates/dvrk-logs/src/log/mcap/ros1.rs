@@ -20,7 +20,7 @@ use rosbag::{ChunkRecord, IndexRecord, MessageRecord, RosBag};
 
 use super::bag::BagFile;
 use super::channels::{Channels, RawMessage};
-use super::problem::mcap_error;
+use super::problem::{mcap_error, UnpackBound};
 use super::McapProblem;
 use crate::log::LogError;
 
@@ -269,11 +269,14 @@ fn check_chunk_sizes(
         }
         total += size;
         if total > limit {
-            return Err(damaged(super::bag::unpack_bound_exceeded(
-                "its compressed chunks",
-                limit,
-                len,
-            )));
+            return Err(McapProblem::Unpacked {
+                kind: "ROS 1 bag",
+                bound: UnpackBound::File {
+                    what: "its compressed chunks",
+                    limit,
+                    compressed: len,
+                },
+            });
         }
         if compression == b"lz4" {
             lz4.insert(pos, (pos + 4 + header_len + 4, data_len, size));
