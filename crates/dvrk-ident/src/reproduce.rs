@@ -5,8 +5,8 @@
 //! Both renderings read the same [`FitSettings`], and every setting is either rendered or
 //! named in [`Rendered::unrendered`]: a setting the command line has no flag for (the
 //! filter's order, form or convention, the differentiation stencils, ...) is listed, never
-//! invented. The command-line tests parse [`FitCall::cli_command`]'s text with the real binary and
-//! compare the settings of the document it writes with the original ones.
+//! invented. The command-line tests parse [`FitCall::cli_command`]'s text with the real
+//! binary and compare the settings of the document it writes with the original ones.
 //!
 //! ```
 //! use dvrk_ident::log::ReadOptions;

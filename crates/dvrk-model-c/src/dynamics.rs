@@ -257,9 +257,9 @@ enum Coupling {
 
 /// The body of the joint conversions, which differ only in the matrix: `out = A·x` with
 /// `A` = `M⁻¹` or `M⁻ᵀ` (`which`, read from the model's row-major `M⁻¹`) after the
-/// checks (model, then `x` and `out` NULL, then `x` finite). They have no workspace to compute into: every entry is
-/// checked finite before any is written (each computed twice, 2n² flops), so `out` is
-/// untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
+/// checks (model, then `x` and `out` NULL, then `x` finite). They have no workspace to
+/// compute into: every entry is checked finite before any is written (each computed
+/// twice, 2n² flops), so `out` is untouched on `DVRK_ERR_OVERFLOW` as with `deliver`.
 ///
 /// # Safety
 ///

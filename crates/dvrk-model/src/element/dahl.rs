@@ -104,7 +104,7 @@ impl Law for Dahl {
     /// `Fd ≥ 0`: the force opposes the last motion.
     fn bound_rows(&self, _b: &BoundsContext, rows: &mut Vec<BoundRow>) {
         let origin = BoundOrigin::Physical("Dahl friction Fd ≥ 0");
-        BoundRow::interval(self.param, (0.0, origin), None, rows);
+        rows.push(BoundRow::at_least(self.param, 0.0, origin));
     }
 
     fn clamp(&self, _b: &BoundsContext, params: &mut [f64]) {

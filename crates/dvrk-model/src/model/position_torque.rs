@@ -11,12 +11,11 @@ use super::{JointKind, Model};
 /// The model's side of the position-dependent torque: adding it to the frames with
 /// friction (`--position-torque`).
 impl Model {
-    /// This model with a position-dependent torque of order `order` (1 to
-    /// 3) and period one turn (2π rad) on every revolute frame with friction
-    /// and no position torque yet (e.g. `dvrk-ident fit --position-torque 2`), its
-    /// coefficients appended in frame order. Prismatic frames are left out: their series
-    /// needs a period in metres, which only a description gives
-    /// (`position_torque = { order = 1, period = 0.5 }`).
+    /// This model with a position-dependent torque of order `order` (1 to 3) and period
+    /// one turn (2π rad) on every revolute frame with friction and no position torque yet
+    /// (e.g. `dvrk-ident fit --position-torque 2`), its coefficients appended in frame
+    /// order. Prismatic frames are left out: their series needs a period in metres,
+    /// which only a description gives (`position_torque = { order = 1, period = 0.5 }`).
     ///
     /// ```
     /// let psm = dvrk_model::Model::builtin("psm").unwrap();
