@@ -23,7 +23,10 @@ fn fit(urdf: &Path, log: &Path, out: &Path, extra: &[&str]) -> FitResult {
     args.extend_from_slice(extra);
     let (ok, stdout, err) = run(&args);
     assert!(ok, "{err}");
-    if extra.contains(&"--prior") {
+    if extra
+        .windows(2)
+        .any(|w| w[0] == "--prior" && w[1] != "none")
+    {
         assert!(stdout.contains("metric, weight"), "{stdout}");
     }
     FitResult::read(out).unwrap()
@@ -76,6 +79,81 @@ fn nominal_prior_returns_the_generating_parameters() {
     }
     // Without a prior the parameters the data do not see are elsewhere.
     assert!(without > 1e-2, "{without:e}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// `--prior none` (the flag's default, spelled out) leaves out the preset's prior: the
+/// fit is the preset's other flags alone. `--prior-weight 0` is not the same: it drops
+/// the prior's term but keeps the regularization's pull toward the prior, which places
+/// what the data do not determine. A prior's weight given beside `none` is refused.
+#[test]
+fn prior_none_leaves_out_the_presets_prior() {
+    let dir = temp_dir("prior-none");
+    let urdf = dir.join("arm.urdf");
+    std::fs::write(&urdf, ARM).unwrap();
+    let log = dir.join("arm.csv");
+    write_arm_log(&urdf, &log);
+    let preset = fit(&urdf, &log, &dir.join("preset.json"), &["--preset", "dvrk"]);
+    // The arm's URDF has nominal inertias: the preset pulls toward them.
+    assert_eq!(preset.settings.prior.as_ref().unwrap().source, "nominal");
+    let none = fit(
+        &urdf,
+        &log,
+        &dir.join("none.json"),
+        &["--preset", "dvrk", "--prior", "none"],
+    );
+    let spelled = fit(
+        &urdf,
+        &log,
+        &dir.join("spelled.json"),
+        &["--method", "sdp", "--stribeck", "0.3", "--dahl", "20"],
+    );
+    let weight0 = fit(
+        &urdf,
+        &log,
+        &dir.join("weight0.json"),
+        &["--preset", "dvrk", "--prior-weight", "0"],
+    );
+    assert!(none.settings.prior.is_none());
+    assert_eq!(none.parameters, spelled.parameters);
+    assert_ne!(none.parameters, preset.parameters);
+    // With weight 0 the regularization still pulls toward the nominal values: the
+    // unidentified first link's mass lands on its nominal 2 kg, not without the prior.
+    let m1 = |r: &FitResult| r.parameters["m1"];
+    assert!((m1(&weight0) - 2.0).abs() < 1e-3, "{}", m1(&weight0));
+    assert!((m1(&none) - 2.0).abs() > 0.5, "{}", m1(&none));
+    // Without a preset it is the default.
+    let plain = fit(&urdf, &log, &dir.join("plain.json"), &[]);
+    let plain_none = fit(
+        &urdf,
+        &log,
+        &dir.join("plain_none.json"),
+        &["--prior", "none"],
+    );
+    assert_eq!(plain.parameters, plain_none.parameters);
+    let out = dir.join("refused.json");
+    let (u, l, o) = (s(&urdf), s(&log), s(&out));
+    let (ok, _, err) = run(&[
+        "fit",
+        &l,
+        "--robot",
+        &u,
+        "--format",
+        "wpi-csv",
+        "--rate",
+        "200",
+        "--out",
+        &o,
+        "--prior",
+        "none",
+        "--prior-weight",
+        "0.1",
+    ]);
+    assert!(
+        !ok && err.contains("--prior-weight: needs a prior"),
+        "{err}"
+    );
+    assert!(!out.exists());
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

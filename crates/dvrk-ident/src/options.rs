@@ -90,7 +90,8 @@ macro_rules! fit_options {
             delay: DelayOption => Delay("delay") with "delay";
             /// Regularize the semidefinite fit toward a prior: `nominal` (the description's
             /// nominal parameters, e.g. a URDF's inertias) or an earlier result document (its
-            /// values are recorded in the result's settings)
+            /// values are recorded in the result's settings); `none` leaves out a preset's
+            /// prior
             prior: PriorSource => Prior("prior") with "text_or_value";
             /// Weight of the prior, relative to the data term scaled to at most 1 (0, or 1e-9 to 1e6)
             prior_weight: f64 => PriorWeight("prior_weight") with "text_or_value";

@@ -52,7 +52,7 @@ pub enum Preset {
     /// descriptions' bounding ellipsoids (the dVRK's meshes: 7 MTM links, the PSM's
     /// pitch_front, 3 ECM links) apply too (MTM +0.3 % test error, PSM none); a
     /// partial prior toward the dVRK's nominal masses (`--prior nominal --prior-weight
-    /// 0.05`, `PRESET_PRIOR_WEIGHT`; `--prior-weight 0` leaves it out) is part of the
+    /// 0.05`, `PRESET_PRIOR_WEIGHT`; `--prior none` leaves it out) is part of the
     /// preset wherever the description has nominal masses (the MTM, the Classic ECM, the
     /// Si arms; not the Classic PSM, whose maker publishes none) and the method is
     /// `sdp`: on the real MTM it moves every mass the dVRK publishes into 0.38-1.8 times
@@ -294,17 +294,22 @@ impl FitRequest {
             // The preset's prior toward the nominal values: only for the semidefinite fit
             // of a robot that has some (`--prior nominal` would apply); otherwise left
             // out, not refused (the Classic PSM has none).
-            if self.overrides.prior.is_none() && overrides.prior.is_some() {
+            // `--prior none` leaves it out as a robot without nominal masses does.
+            let none_given = matches!(self.overrides.prior, Some(PriorSource::None));
+            if (self.overrides.prior.is_none() || none_given) && overrides.prior.is_some() {
                 let states_robot = match (robot, &self.train) {
                     (None, Training::Observations(states)) => {
                         states.first().and_then(|(s, _)| s.robot_model().ok())
                     }
                     _ => None,
                 };
-                let applies = overrides.method.unwrap_or(self.settings.method) == Method::Sdp
-                    && robot
-                        .or(states_robot.as_ref())
-                        .is_some_and(|m| PriorSource::Nominal.parameters(m).is_ok());
+                let applies = !none_given
+                    && overrides.method.unwrap_or(self.settings.method) == Method::Sdp
+                    && robot.or(states_robot.as_ref()).is_some_and(|m| {
+                        PriorSource::Nominal
+                            .parameters(m)
+                            .is_ok_and(|p| p.is_some())
+                    });
                 if !applies {
                     overrides.prior = None;
                     // A weight given beside it asks for the preset's prior: refused

@@ -381,7 +381,7 @@ impl Overrides {
     /// overridden, then checked.
     pub(super) fn set_prior(&self, s: &mut FitSettings, fitted: &Model) -> Result<(), IdentError> {
         if let Some(source) = &self.prior {
-            s.prior = Some(source.parameters(fitted)?);
+            s.prior = source.parameters(fitted)?;
         }
         match &mut s.prior {
             Some(p) => {

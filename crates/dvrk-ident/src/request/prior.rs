@@ -1,5 +1,6 @@
-//! Where the semidefinite fit's prior comes from (`--prior nominal|RESULT`, Python
-//! `prior=`): the description's nominal values, whole or partial, or an earlier result.
+//! Where the semidefinite fit's prior comes from (`--prior nominal|RESULT|none`, Python
+//! `prior=`): the description's nominal values, whole or partial, an earlier result, or
+//! none at all (to leave out a preset's or a base's prior).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -12,6 +13,11 @@ use crate::{FitResult, IdentError};
 /// Where a prior's values come from.
 #[derive(Clone, Debug)]
 pub enum PriorSource {
+    /// No prior: `none`, the flag's default, spelled out to leave out the prior of
+    /// `--preset dvrk` or of the settings a fit starts from. (`--prior-weight 0` is not
+    /// the same: the regularization still pulls toward the prior, which places what the
+    /// data do not determine.)
+    None,
     /// The robot description's nominal parameters (a URDF's inertias, a description's
     /// `nominal` entries).
     Nominal,
@@ -21,11 +27,12 @@ pub enum PriorSource {
     Result(Arc<FitResult>),
 }
 
-/// As the flag reads it: `"nominal"` or the file's path (a result in memory as its
+/// As the flag reads it: `"nominal"`, `"none"` or the file's path (a result in memory as its
 /// description).
 impl serde::Serialize for PriorSource {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         match self {
+            PriorSource::None => s.serialize_str("none"),
             PriorSource::Nominal => s.serialize_str("nominal"),
             PriorSource::File(p) => s.serialize_str(&p.display().to_string()),
             PriorSource::Result(r) => s.collect_str(&format_args!(
@@ -36,7 +43,7 @@ impl serde::Serialize for PriorSource {
     }
 }
 
-/// `"nominal"` or a file's path.
+/// `"nominal"`, `"none"` or a file's path.
 impl<'de> serde::Deserialize<'de> for PriorSource {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         String::deserialize(d)?
@@ -49,6 +56,7 @@ impl<'de> serde::Deserialize<'de> for PriorSource {
 impl PartialEq for PriorSource {
     fn eq(&self, other: &Self) -> bool {
         match (self, other) {
+            (PriorSource::None, PriorSource::None) => true,
             (PriorSource::Nominal, PriorSource::Nominal) => true,
             (PriorSource::File(a), PriorSource::File(b)) => a == b,
             (PriorSource::Result(a), PriorSource::Result(b)) => Arc::ptr_eq(a, b),
@@ -60,10 +68,11 @@ impl PartialEq for PriorSource {
 impl std::str::FromStr for PriorSource {
     type Err = crate::options::ValueError;
 
-    /// `nominal`, or the path of a result file.
+    /// `nominal`, `none`, or the path of a result file (`./none` for a file named so).
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         match s {
             "" => Err(crate::options::ValueError::NoPrior),
+            "none" => Ok(PriorSource::None),
             "nominal" => Ok(PriorSource::Nominal),
             path => Ok(PriorSource::File(PathBuf::from(path))),
         }
@@ -157,12 +166,13 @@ fn partial_nominal(model: &Model) -> Result<Prior, IdentError> {
 impl PriorSource {
     /// The values for every parameter of `model` (the model fitted), or, for
     /// [`PriorSource::Nominal`] on a robot without every nominal value, the partial
-    /// prior of [`partial_nominal`].
-    pub(super) fn parameters(&self, model: &Model) -> Result<Prior, IdentError> {
+    /// prior of [`partial_nominal`]; `None` for [`PriorSource::None`].
+    pub(super) fn parameters(&self, model: &Model) -> Result<Option<Prior>, IdentError> {
         let (source, values) = match self {
+            PriorSource::None => return Ok(None),
             PriorSource::Nominal => match model.nominal_parameters() {
                 Some(values) if every_nominal_inertia(model) => ("nominal".to_string(), values),
-                _ => return partial_nominal(model),
+                _ => return partial_nominal(model).map(Some),
             },
             PriorSource::File(path) => {
                 let source = path.display().to_string();
@@ -178,7 +188,7 @@ impl PriorSource {
                 (source, values)
             }
         };
-        Ok(Prior {
+        Ok(Some(Prior {
             source,
             metric: PriorMetric::default(),
             weight: Prior::DEFAULT_WEIGHT,
@@ -188,6 +198,6 @@ impl PriorSource {
                 .zip(values)
                 .map(|(p, v)| (p.name.clone(), v))
                 .collect(),
-        })
+        }))
     }
 }

@@ -467,7 +467,7 @@ def fit(
     each coordinate's torque (``--load-friction``);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, and
     ``prior="nominal"``, ``prior_weight=0.05`` for an sdp fit of a robot with nominal
-    masses, for the keywords not given; ``prior_weight=0`` leaves the prior out); ``log_offsets=True``: every log after the first gets its own
+    masses, for the keywords not given; ``prior="none"`` leaves the prior out); ``log_offsets=True``: every log after the first gets its own
     torque offset per coordinate (``inputs[k]["offset"]``; the model's ``Fo`` are the
     first log's); ``select``: ``True``/``"builtin"`` or candidate names
     (``["coulomb", "stribeck:0.2+dahl"]``): the friction model chosen by held-out error
