@@ -98,6 +98,8 @@ OPTIONS = [
     ({"method": "ols", "resample": 250.0}, ["--method", "ols", "--resample", "250"]),
     ({"method": "ols", "filter_order": 2}, ["--method", "ols", "--filter-order", "2"]),
     ({"method": "ols", "position_torque": 1}, ["--method", "ols", "--position-torque", "1"]),
+    ({"method": "ols", "position_torque": 1, "position_torque_frames": ["yaw", "pitch_front"]},
+     ["--method", "ols", "--position-torque", "1", "--position-torque-frames", "yaw,pitch_front"]),
     ({"method": "ols", "load_friction": True}, ["--method", "ols", "--load-friction"]),
     ({"method": "ols", "select": ["coulomb", "dahl"]},
      ["--method", "ols", "--select", "coulomb,dahl"]),
@@ -129,6 +131,7 @@ def test_every_option_matches_cli(psm, psm_logs, run_cli, kwargs, flags):
             "ellipsoids": settings.get("ellipsoids", True),
             "mounting_pitch": settings.get("mounting_pitch_deg"),
             "position_torque": settings.get("position_torque_order"),
+            "position_torque_frames": settings.get("position_torque_frames"),
             "load_friction": settings.get("load_friction"),
             "log_offsets": settings.get("log_offsets"),
         }.get(key)

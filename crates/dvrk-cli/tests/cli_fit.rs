@@ -504,3 +504,96 @@ fn new_arms_round_trip_through_excite_simulate_fit_preset_and_report() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The position torque's frames: `--preset dvrk` takes them from the MTM's description
+/// (the reproduce line repeats them), `--position-torque 0` leaves them out, and
+/// `--position-torque-frames` puts the torque on the named frames only; a name that is
+/// not a revolute frame with friction, or frames without an order, are refused naming
+/// the flag, writing nothing.
+#[test]
+fn position_torque_frames_from_the_preset_and_the_flag() {
+    let dir = temp_dir("position-torque-frames");
+    let log = dir.join("mtm.csv");
+    write_mtm_log(&log, 0.0);
+    let torques = |doc: &serde_json::Value| -> Vec<String> {
+        let params = doc["parameters"].as_object().unwrap();
+        params
+            .keys()
+            .filter(|k| k.starts_with("Pc") || k.starts_with("Ps"))
+            .cloned()
+            .collect()
+    };
+    let preset = run_json(&fit_mtm_args(&log, &["--preset", "dvrk", "--json"]));
+    // (serde_json's map sorts the names)
+    assert_eq!(torques(&preset), ["Pca2", "Pca3", "Psa2", "Psa3"]);
+    assert_eq!(
+        preset["settings"]["position_torque_frames"],
+        serde_json::json!(["upper_arm", "forearm"])
+    );
+    let result: dvrk_ident::FitResult = serde_json::from_value(preset.clone()).unwrap();
+    let line = dvrk_ident::reproduce::FitCall::of_result(&result, None)
+        .cli_command()
+        .text;
+    assert!(
+        line.contains("--position-torque 1 --position-torque-frames upper_arm,forearm"),
+        "{line}"
+    );
+    let py = dvrk_ident::reproduce::FitCall::of_result(&result, None)
+        .python_call()
+        .text;
+    assert!(
+        py.contains("position_torque_frames=\"upper_arm,forearm\""),
+        "{py}"
+    );
+    let off = run_json(&fit_mtm_args(
+        &log,
+        &["--preset", "dvrk", "--position-torque", "0", "--json"],
+    ));
+    assert!(torques(&off).is_empty());
+    let one = run_json(&fit_mtm_args(
+        &log,
+        &[
+            "--method",
+            "ols",
+            "--position-torque",
+            "1",
+            "--position-torque-frames",
+            "top_panel",
+            "--json",
+        ],
+    ));
+    assert_eq!(torques(&one), ["Pca1", "Psa1"]);
+    let out = dir.join("out.json");
+    let o = out.to_str().unwrap();
+    for (extra, want) in [
+        (
+            &["--position-torque-frames", "upper_arm"][..],
+            "--position-torque-frames: needs the position torque's order (position_torque)",
+        ),
+        (
+            &[
+                "--position-torque",
+                "1",
+                "--position-torque-frames",
+                "elbow",
+            ][..],
+            "--position-torque-frames: elbow: no frame is named elbow",
+        ),
+        (
+            &[
+                "--position-torque",
+                "1",
+                "--position-torque-frames",
+                "upper_arm,,forearm",
+            ][..],
+            "expected frame names separated by commas",
+        ),
+    ] {
+        let mut args = fit_mtm_args(&log, &["--method", "ols", "--out", o]);
+        args.extend_from_slice(extra);
+        let (ok, _, err) = run(&args);
+        assert!(!ok && err.contains(want), "{extra:?}: {err}");
+        assert!(!out.exists(), "{extra:?} wrote a result");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

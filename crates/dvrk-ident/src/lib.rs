@@ -128,7 +128,8 @@ pub use options::ValueError;
 pub use fit::delay::{DelayOption, DEFAULT_MAX_DELAY_S};
 pub use result::Folds;
 pub use settings::{
-    BoundsSet, Candidate, Candidates, Difference, FitSettings, Joints, Method, Prior, PriorMetric,
+    BoundsSet, Candidate, Candidates, Difference, FitSettings, FrameNames, Joints, Method, Prior,
+    PriorMetric,
 };
 // The result document and its parts.
 pub use estimate::{SolverInfo, SolverStatus};

@@ -58,12 +58,17 @@ macro_rules! fit_options {
             /// element (parameters FdN, Fd ≥ 0 in the semidefinite fit)
             dahl_sigma: f64 => Dahl("dahl") with "text_or_value";
             /// Add a position-dependent torque Σ Pcₖ·cos(k·q) + Psₖ·sin(k·q), k = 1..ORDER (1 to
-            /// 3), in the joint angle to every revolute friction element (parameters
+            /// 3; 0: none, which leaves out a preset's), in the joint angle to every revolute
+            /// friction element (parameters
             /// PcaN, PsaN, PcbN...; no constant term, that is the offset Fo;
             /// unbounded): the cables' and counterweights' torques of a cable-driven joint.
             /// Prismatic frames take it from a description (`position_torque = { order,
             /// period }`)
             position_torque_order: usize => PositionTorque("position_torque") with "text_or_value";
+            /// The frames of --position-torque, by name, comma-separated (each revolute with
+            /// friction); without it every revolute frame with friction. `--preset dvrk`
+            /// takes both from the description's `[preset]` (the MTM's upper arm and forearm)
+            position_torque_frames: FrameNames => PositionTorqueFrames("position_torque_frames") with "text_or_value";
             /// Add load-dependent Coulomb friction Fl·|τ|·sign(q̇) to every friction element whose
             /// joint value is one coordinate's multiple, one per coordinate (parameters
             /// FlN, 0 ≤ Fl ≤ 1/2 in the semidefinite fit): friction in proportion to the
@@ -99,9 +104,11 @@ macro_rules! fit_options {
             /// link's pseudo-inertia from the prior's) or `euclidean`
             prior_metric: PriorMetric => PriorMetric("prior_metric") with "text_or_value";
             /// Settings recommended for an arm, for every setting not given here: `dvrk` (the
-            /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20, and --prior nominal
-            /// --prior-weight 0.05 for an sdp fit of a robot with nominal masses). The
-            /// result records the settings it expanded to
+            /// dVRK arms: --method sdp --stribeck 0.3 --dahl 20, --prior nominal
+            /// --prior-weight 0.05 for an sdp fit of a robot with nominal masses, and the
+            /// description's `[preset]`: the MTM's --position-torque 1
+            /// --position-torque-frames upper_arm,forearm). The result records the settings
+            /// it expanded to
             preset: Preset => Preset("preset") with "text_or_value";
             /// Give every training log after the first its own torque offset per coordinate
             /// (the arm is re-homed between recordings): fitted with the parameters, recorded
@@ -252,6 +259,9 @@ pub enum ValueError {
         /// The candidate's name.
         candidate: String,
     },
+    /// `position_torque_frames`: an empty name.
+    #[error("`{0}`: expected frame names separated by commas")]
+    NotFrameNames(String),
     /// `prior`: an empty text.
     #[error("give `nominal` or a result file")]
     NoPrior,

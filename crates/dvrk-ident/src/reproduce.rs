@@ -319,6 +319,10 @@ fn options(settings: &FitSettings) -> Options {
     }
     if let Some(k) = settings.position_torque_order {
         given.push(("position_torque", Value::Int(k)));
+        if !settings.position_torque_frames.is_empty() {
+            let frames = settings.position_torque_frames.join(",");
+            given.push(("position_torque_frames", Value::Name(frames)));
+        }
     }
     if settings.load_friction {
         given.push(("load_friction", Value::Switch));

@@ -30,6 +30,24 @@ pub enum Joints {
     Measured,
 }
 
+/// Frame names, comma-separated in a flag's text (`upper_arm,forearm`), a list in a
+/// document or a Python call.
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(transparent)]
+pub struct FrameNames(pub Vec<String>);
+
+impl std::str::FromStr for FrameNames {
+    type Err = crate::options::ValueError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let names: Vec<String> = s.split(',').map(|n| n.trim().to_string()).collect();
+        if names.iter().any(String::is_empty) {
+            return Err(crate::options::ValueError::NotFrameNames(s.to_string()));
+        }
+        Ok(FrameNames(names))
+    }
+}
+
 impl Joints {
     /// The name the command line, Python and results use (see [`crate::names`]).
     pub fn name(self) -> &'static str {
@@ -213,6 +231,11 @@ pub struct FitSettings {
     /// [`FitSettings::model`]). `None`: the model as described.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position_torque_order: Option<usize>,
+    /// The frames (by name) of [`FitSettings::position_torque_order`]'s torque; empty:
+    /// every revolute frame with friction (see
+    /// [`dvrk_model::Model::with_position_torque_on`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub position_torque_frames: Vec<String>,
     /// Adds load-dependent Coulomb friction `Fl·|τ|·sign(q̇)` ([`dvrk_model::LoadFriction`],
     /// the load the coordinate's measured torque in the fit, the predicted one in the
     /// metrics) to every frame with friction whose joint value is one coordinate's
@@ -336,7 +359,7 @@ impl FitSettings {
         }
         if let Some(order) = self.position_torque_order {
             // As for Stribeck: a model with its position torques already is kept.
-            let extended = m.with_position_torque(order)?;
+            let extended = m.with_position_torque_on(order, &self.position_torque_frames)?;
             if extended.n_params() != m.n_params() {
                 m = std::borrow::Cow::Owned(extended);
             }
@@ -479,6 +502,7 @@ impl Default for FitSettings {
             stribeck_velocity: None,
             dahl_sigma: None,
             position_torque_order: None,
+            position_torque_frames: Vec::new(),
             load_friction: false,
             mounting_pitch_deg: None,
             bounds: None,

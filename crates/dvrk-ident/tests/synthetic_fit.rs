@@ -274,3 +274,50 @@ fn ecm_and_si_arms_mounted_synthetic_fit_recovers_base_parameters() {
     check_at("ecm_si", Some(-70.0));
     check_at("ecm", Some(-45.0));
 }
+
+/// `--preset dvrk` on the MTM adds the position torque of its description's `[preset]`
+/// (upper arm and forearm, order 1) and records it; `position_torque: 0` leaves it out.
+/// On a log without such a torque the forearm's terms (in the elbow's relative angle,
+/// which no link's gravity depends on) come back small: measured 0.003 and 0.001 N·m,
+/// where the upper arm's, which the links' gravity spans, take 0.30 and −0.18 N·m of the
+/// gravity that the prior moves off the masses (this log's are not the nominal ones).
+#[test]
+fn mtm_preset_adds_the_descriptions_position_torque() {
+    use dvrk_ident::{Overrides, Preset};
+    let model = Model::builtin("mtm").unwrap();
+    let truth = consistent_params(&model);
+    let train = simulate(&model, &truth, 30.0, 200.0, 0.005, 3);
+    let fit = |extra: Overrides| {
+        FitRequest {
+            overrides: Overrides {
+                preset: Some(Preset::Dvrk),
+                ..extra
+            },
+            ..FitRequest::of_samples([&train], None, settings(Method::Sdp))
+        }
+        .run(Some(&model), &Silent)
+        .unwrap()
+        .result
+    };
+    let r = fit(Overrides::default());
+    let torques: Vec<(&str, f64)> = r
+        .parameters
+        .iter()
+        .filter(|(k, _)| k.starts_with("Pc") || k.starts_with("Ps"))
+        .map(|(k, v)| (k.as_str(), *v))
+        .collect();
+    println!("mtm --preset dvrk position torques (N·m): {torques:?}");
+    let names: Vec<&str> = torques.iter().map(|t| t.0).collect();
+    assert_eq!(names, ["Pca2", "Psa2", "Pca3", "Psa3"]);
+    for (name, v) in &torques[2..] {
+        assert!(v.abs() < 1e-2, "{name} = {v}");
+    }
+    assert_eq!(r.settings.position_torque_order, Some(1));
+    assert_eq!(r.settings.position_torque_frames, ["upper_arm", "forearm"]);
+    let none = fit(Overrides {
+        position_torque_order: Some(0),
+        ..Overrides::default()
+    });
+    assert_eq!(none.parameters.len(), r.parameters.len() - 4);
+    assert_eq!(none.settings.position_torque_order, None);
+}

@@ -256,6 +256,16 @@ impl Measured {
 /// [`Model::mounting_pitch_gravity`]).
 pub const STANDARD_GRAVITY: f64 = 9.81;
 
+/// Elements a description recommends for the identification preset (its `[preset]`
+/// table), measured on real logs; the model as described does not have them.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PresetElements {
+    /// A position-dependent torque of this order on these frames (by name; see
+    /// [`Model::with_position_torque_on`]), e.g. the MTM's cable torques of the shoulder
+    /// and elbow pitch.
+    pub position_torque: Option<(usize, Vec<String>)>,
+}
+
 /// The robot model. Build it from numbers with [`ModelBuilder`](crate::ModelBuilder), or,
 /// with the `description` feature (default), from a file with `Model::load`,
 /// `Model::builtin`, `Model::from_toml_str` or `Model::from_urdf_str`.
@@ -281,6 +291,11 @@ pub struct Model {
     pub cartesian_limits: Vec<CartesianLimit>,
     /// Lower bounds applied to every element by the physically consistent fit.
     pub bounds: GlobalBounds,
+    /// What the description recommends adding to the model for the identification
+    /// preset (`--preset dvrk`), which the model as described leaves out so that it
+    /// stays the published one (the 2019 fits reproduce it): the description's
+    /// `[preset]` table.
+    pub preset: PresetElements,
     /// Every parameter's name, kind and frame, in regressor column order.
     pub params: Vec<Param>,
     // Derived, for the per-sample algorithms.
@@ -565,6 +580,7 @@ impl Model {
             limits: Vec::new(),
             cartesian_limits: Vec::new(),
             bounds: GlobalBounds::default(),
+            preset: PresetElements::default(),
             params: Vec::new(),
             links: Vec::new(),
             active: Vec::new(),

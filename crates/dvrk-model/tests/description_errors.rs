@@ -493,3 +493,36 @@ fn ellipsoid_loads_and_names_its_mistakes() {
     );
     expect_error(&text, &["massless", "bounds", "without link inertia"]);
 }
+
+/// `[preset]`'s position torque is checked when the description loads, as the preset
+/// will use it: an order out of 1-3, a frame that does not exist or has no friction.
+#[test]
+fn preset_position_torque_errors() {
+    let ok =
+        format!("{VALID}\n[preset]\nposition_torque = {{ order = 1, frames = [\"upper\"] }}\n");
+    let m = load(&ok).unwrap();
+    assert_eq!(
+        m.preset.position_torque,
+        Some((1, vec!["upper".to_string()]))
+    );
+    // The model as described does not have it.
+    assert!(!m.param_names().iter().any(|p| p.starts_with("Pc")));
+    assert_eq!(load(VALID).unwrap().preset.position_torque, None);
+    expect_error(
+        &ok.replace("order = 1", "order = 0"),
+        &[FILE, "preset", "position_torque.order"],
+    );
+    expect_error(
+        &ok.replace("[\"upper\"]", "[\"elbow\"]"),
+        &[FILE, "elbow", "no frame is named elbow"],
+    );
+    // `lower` has no friction.
+    expect_error(
+        &ok.replace("[\"upper\"]", "[\"lower\"]"),
+        &[FILE, "lower", "not a revolute frame with friction"],
+    );
+    expect_error(
+        &ok.replace("order = 1,", "order = 1, period = 2.0,"),
+        &[FILE, "period"],
+    );
+}

@@ -89,7 +89,9 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   hysteresis over the displacement, with this stiffness, 1/rad or 1/m, to every
 ///   friction element, as ``--dahl``), ``position_torque`` (adds a position-dependent
 ///   torque, a Fourier series of this order, 1 to 3, in the joint angle, to every
-///   revolute friction element, as ``--position-torque``), ``load_friction``
+///   revolute friction element, as ``--position-torque``; 0: none),
+///   ``position_torque_frames`` (the frames of it by name, a list or
+///   ``"upper_arm,forearm"``, as ``--position-torque-frames``), ``load_friction``
 ///   (``True`` adds Coulomb friction in proportion to each coordinate's torque, as
 ///   ``--load-friction``);
 /// - ``delay``: the torques' measurement delays (``dvrk-ident fit --delay``):
@@ -113,7 +115,8 @@ fn samples(logs: Vec<(Arc<JointLog>, Option<PathBuf>)>) -> Vec<LogSource> {
 ///   ``--prior``, ``--prior-weight``, ``--prior-metric``; the values used are in
 ///   ``result.settings["prior"]``;
 /// - ``preset``: ``"dvrk"``, the settings recommended for the dVRK arms for every
-///   keyword not given (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, as
+///   keyword not given (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, the prior
+///   toward nominal masses and the description's ``[preset]`` elements, as
 ///   ``--preset dvrk``); the result records what it expanded to;
 /// - ``joints``: ``"model"`` (the default) or ``"measured"``: the metrics in the model
 ///   coordinates or in the arm's measured joints by name (``--joints``); the fit is the

@@ -139,6 +139,7 @@ pub fn arg(s: Setting) -> Arg {
             .value_parser(usize)
             .value_name("ORDER")
             .help_heading(MODEL),
+        Setting::PositionTorqueFrames => a.value_name("FRAME,...").help_heading(MODEL),
         Setting::MountingPitch => a
             .value_parser(f64)
             .value_name("DEG")

@@ -12,7 +12,7 @@ pub use crate::options::Setting;
 use super::{Preset, PriorSource};
 use crate::fit::delay::DelayOption;
 use crate::settings::Candidates;
-use crate::settings::{Joints, PriorMetric};
+use crate::settings::{FrameNames, Joints, PriorMetric};
 use crate::signal::Cutoff;
 use crate::{BoundsSet, FitSettings, IdentError, Method};
 use dvrk_logs::hint::Hint;
@@ -152,6 +152,7 @@ impl Setting {
             Setting::Stribeck => "none".into(),
             Setting::Dahl => "none".into(),
             Setting::PositionTorque => "none".into(),
+            Setting::PositionTorqueFrames => "every revolute frame with friction".into(),
             Setting::MountingPitch => "the description's gravity (a result's: its own)".into(),
             Setting::Bounds => "the description's; the built-in robots': physical".into(),
             Setting::Delay => "0".into(),
@@ -334,7 +335,11 @@ impl Overrides {
             s.dahl_sigma = Some(v);
         }
         if let Some(k) = self.position_torque_order {
-            s.position_torque_order = Some(k);
+            // 0: none (leaves out a preset's).
+            s.position_torque_order = (k > 0).then_some(k);
+        }
+        if let Some(FrameNames(f)) = &self.position_torque_frames {
+            s.position_torque_frames = f.clone();
         }
         if let Some(l) = self.load_friction {
             s.load_friction = l;
@@ -371,6 +376,7 @@ impl Overrides {
         if let Some(d) = &self.delay {
             d.apply(&mut s, model.dof())?;
         }
+        check_position_torque_frames(&s, model)?;
         let fitted = s.model(model)?.into_owned();
         self.set_prior(&mut s, &fitted)?;
         Ok(s)
@@ -422,10 +428,36 @@ impl Overrides {
                         Setting::Delay
                             | Setting::Dahl
                             | Setting::PositionTorque
+                            | Setting::PositionTorqueFrames
                             | Setting::LoadFriction
                     )
             })
             .collect()
+    }
+}
+
+/// The position torque's frames of `s` name frames of `model` that can carry one, and
+/// come with its order: refused naming the setting, not as a model error.
+fn check_position_torque_frames(s: &FitSettings, model: &Model) -> Result<(), IdentError> {
+    if s.position_torque_frames.is_empty() {
+        return Ok(());
+    }
+    let refuse = |message: String| IdentError::Setting {
+        name: Setting::PositionTorqueFrames.into(),
+        message,
+    };
+    let Some(order) = s.position_torque_order else {
+        return Err(refuse(format!(
+            "needs the position torque's order ({})",
+            Setting::PositionTorque.name()
+        )));
+    };
+    match model.with_position_torque_on(order, &s.position_torque_frames) {
+        Err(dvrk_model::ModelError::Field { field, message, .. }) => {
+            Err(refuse(format!("{field}: {message}")))
+        }
+        // The order is the position torque's own setting, checked with the model.
+        _ => Ok(()),
     }
 }
 

@@ -33,6 +33,24 @@ struct FileDesc {
     cartesian_limits: Vec<CartesianLimitSpec>,
     #[serde(default)]
     bounds: GlobalBounds,
+    #[serde(default)]
+    preset: PresetDesc,
+}
+
+/// `[preset]`: what the identification preset adds to the model (see
+/// [`PresetElements`]).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PresetDesc {
+    /// `position_torque = { order = 1, frames = ["upper_arm", "forearm"] }`.
+    position_torque: Option<PresetTorqueDesc>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PresetTorqueDesc {
+    order: usize,
+    frames: Vec<String>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -204,7 +222,15 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
     })?;
     b.set_limits(limits)?;
     b.set_bounds(desc.bounds);
-    b.build()
+    let mut model = b.build()?;
+    if let Some(t) = desc.preset.position_torque {
+        // Checked as the preset will use it: the order and each frame.
+        crate::element::PositionTorque::check_order(t.order)
+            .map_err(|e| ModelError::field(file, "preset", "position_torque.order", e))?;
+        model.with_position_torque_on(t.order, &t.frames)?;
+        model.preset.position_torque = Some((t.order, t.frames));
+    }
+    Ok(model)
 }
 
 /// One `[[frames]]` table: its DH numbers and elements resolved against the file's

@@ -26,17 +26,53 @@ impl Model {
     /// assert!(psm.with_position_torque(0).is_err() && psm.with_position_torque(4).is_err());
     /// ```
     pub fn with_position_torque(&self, order: usize) -> Result<Model, ModelError> {
+        self.with_position_torque_on(order, &[])
+    }
+
+    /// As [`Model::with_position_torque`], on the named frames only (each revolute with
+    /// friction; one that has a position torque already keeps it); no names: every such
+    /// frame. A description's `[preset]` names the frames whose joints carry a cable
+    /// torque (the MTM's shoulder and elbow pitch), so that the others keep the torque
+    /// the links' gravity explains.
+    ///
+    /// ```
+    /// let mtm = dvrk_model::Model::builtin("mtm").unwrap();
+    /// let frames = ["upper_arm".to_string(), "forearm".to_string()];
+    /// let with = mtm.with_position_torque_on(1, &frames).unwrap();
+    /// assert_eq!(with.param_names()[mtm.n_params()..], ["Pca2", "Psa2", "Pca3", "Psa3"]);
+    /// // The recommendation of the MTM's description for `--preset dvrk`.
+    /// assert_eq!(mtm.preset.position_torque, Some((1, frames.to_vec())));
+    /// let err = mtm.with_position_torque_on(1, &["elbow".to_string()]).unwrap_err();
+    /// assert!(err.to_string().contains("no frame is named elbow"), "{err}");
+    /// ```
+    pub fn with_position_torque_on(
+        &self,
+        order: usize,
+        frames: &[String],
+    ) -> Result<Model, ModelError> {
         PositionTorque::check_order(order).map_err(|e| ModelError::Numeric {
             model: self.name.clone(),
             message: e.to_string(),
         })?;
+        for name in frames {
+            let refuse =
+                |why: &str| ModelError::field(&self.source, "position torque frames", name, why);
+            match self.frames.iter().find(|f| &f.name == name) {
+                None => return Err(refuse(&format!("no frame is named {name}"))),
+                Some(f) if f.kind != JointKind::Revolute || f.friction().is_none() => {
+                    return Err(refuse("not a revolute frame with friction"))
+                }
+                Some(_) => {}
+            }
+        }
         let mut m = self.clone();
         for (i, f) in m.frames.iter_mut().enumerate() {
             let has = f
                 .elements
                 .iter()
                 .any(|e| matches!(e, Element::PositionTorque(_)));
-            if f.kind != JointKind::Revolute || f.friction().is_none() || has {
+            let chosen = frames.is_empty() || frames.contains(&f.name);
+            if f.kind != JointKind::Revolute || f.friction().is_none() || has || !chosen {
                 continue;
             }
             let t = PositionTorque {

@@ -399,6 +399,7 @@ class FitOptions(ProcessingOptions, total=False):
     stribeck: Optional[float]
     dahl: Optional[float]
     position_torque: Optional[int]
+    position_torque_frames: Optional[Union[str, Sequence[str]]]
     load_friction: Optional[bool]
     mounting_pitch: Optional[float]
     bounds: Optional[str]
@@ -462,12 +463,15 @@ def fit(
     description (``--no-ellipsoids``); ``mounting_pitch``: degrees, gravity
     ``(0, -9.81 sin p, -9.81 cos p)`` in the base frame (``--mounting-pitch``); ``delay``: ``"auto"`` or seconds (one, or one per coordinate);
     ``dahl``: Dahl friction of this stiffness (1/rad or 1/m) on every friction element (``--dahl``);
-    ``position_torque``: a Fourier series of this order (1 to 3) in the joint angle on every revolute
-    friction element (``--position-torque``); ``load_friction=True``: Coulomb friction in proportion to
+    ``position_torque``: a Fourier series of this order (1 to 3; 0: none) in the joint angle on every
+    revolute friction element (``--position-torque``), or on the frames named by
+    ``position_torque_frames`` (``"upper_arm,forearm"`` or a list); ``load_friction=True``: Coulomb friction in proportion to
     each coordinate's torque (``--load-friction``);
     ``preset``: ``"dvrk"`` (``method="sdp"``, ``stribeck=0.3``, ``dahl=20``, and
     ``prior="nominal"``, ``prior_weight=0.05`` for an sdp fit of a robot with nominal
-    masses, for the keywords not given; ``prior="none"`` leaves the prior out); ``log_offsets=True``: every log after the first gets its own
+    masses, and the description's ``[preset]``: the MTM's ``position_torque=1``,
+    ``position_torque_frames="upper_arm,forearm"``, for the keywords not given;
+    ``prior="none"`` leaves the prior out, ``position_torque=0`` the position torque); ``log_offsets=True``: every log after the first gets its own
     torque offset per coordinate (``inputs[k]["offset"]``; the model's ``Fo`` are the
     first log's); ``select``: ``True``/``"builtin"`` or candidate names
     (``["coulomb", "stribeck:0.2+dahl"]``): the friction model chosen by held-out error
