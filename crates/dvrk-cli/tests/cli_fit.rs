@@ -523,7 +523,23 @@ fn position_torque_frames_from_the_preset_and_the_flag() {
             .cloned()
             .collect()
     };
-    let preset = run_json(&fit_mtm_args(&log, &["--preset", "dvrk", "--json"]));
+    let two = dir.join("mtm_two.csv");
+    write_mtm_log(&two, 1.0);
+    let fitted = dir.join("preset.json");
+    let (t, f) = (two.to_str().unwrap(), fitted.to_str().unwrap());
+    let preset = run_json(&fit_mtm_args(
+        &log,
+        &["--preset", "dvrk", "--test", t, "--out", f, "--json"],
+    ));
+    // validate rebuilds the model with the preset's frames: the fit's test metrics.
+    let v = run_json(&[
+        "validate", f, t, "--format", "wpi-csv", "--rate", "200", "--json",
+    ]);
+    let a = &v["validations"][0]["metrics"]["relative_error"];
+    let b = &preset["metrics"]["test"]["relative_error"];
+    for j in 0..7 {
+        assert!((a[j].as_f64().unwrap() - b[j].as_f64().unwrap()).abs() < 1e-12);
+    }
     // (serde_json's map sorts the names)
     assert_eq!(torques(&preset), ["Pca2", "Pca3", "Psa2", "Psa3"]);
     assert_eq!(

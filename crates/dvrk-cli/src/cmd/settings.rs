@@ -340,7 +340,7 @@ mod tests {
                 assert!(help.starts_with(&s.doc()), "{command} {}: {help}", flag(*s));
             }
         }
-        assert_eq!(Setting::ALL.len(), 26);
+        assert_eq!(Setting::ALL.len(), 27);
     }
 
     /// A setting the library refuses is named as the command line's flag: the fit
