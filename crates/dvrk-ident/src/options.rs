@@ -59,11 +59,10 @@ macro_rules! fit_options {
             dahl_sigma: f64 => Dahl("dahl") with "text_or_value";
             /// Add a position-dependent torque Σ Pcₖ·cos(k·q) + Psₖ·sin(k·q), k = 1..ORDER (1 to
             /// 3; 0: none, which leaves out a preset's), in the joint angle to every revolute
-            /// friction element (parameters
-            /// PcaN, PsaN, PcbN...; no constant term, that is the offset Fo;
-            /// unbounded): the cables' and counterweights' torques of a cable-driven joint.
-            /// Prismatic frames take it from a description (`position_torque = { order,
-            /// period }`)
+            /// friction element (parameters PcaN, PsaN, PcbN...; no constant term, that is
+            /// the offset Fo; unbounded): the cables' and counterweights' torques of a
+            /// cable-driven joint. Prismatic frames take it from a description
+            /// (`position_torque = { order, period }`)
             position_torque_order: usize => PositionTorque("position_torque") with "text_or_value";
             /// The frames of --position-torque, by name, comma-separated (each revolute with
             /// friction); without it every revolute frame with friction. `--preset dvrk`

@@ -310,11 +310,9 @@ impl FitRequest {
                 };
                 let applies = !none_given
                     && overrides.method.unwrap_or(self.settings.method) == Method::Sdp
-                    && robot.or(states_robot.as_ref()).is_some_and(|m| {
-                        PriorSource::Nominal
-                            .parameters(m)
-                            .is_ok_and(|p| p.is_some())
-                    });
+                    && robot
+                        .or(states_robot.as_ref())
+                        .is_some_and(|m| PriorSource::Nominal.parameters(m).is_ok());
                 if !applies {
                     overrides.prior = None;
                     // A weight given beside it asks for the preset's prior: refused

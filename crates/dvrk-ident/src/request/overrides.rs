@@ -446,19 +446,20 @@ fn check_position_torque_frames(s: &FitSettings, model: &Model) -> Result<(), Id
         name: Setting::PositionTorqueFrames.into(),
         message,
     };
-    let Some(order) = s.position_torque_order else {
+    if s.position_torque_order.is_none() {
         return Err(refuse(format!(
             "needs the position torque's order ({})",
             Setting::PositionTorque.name()
         )));
-    };
-    match model.with_position_torque_on(order, &s.position_torque_frames) {
-        Err(dvrk_model::ModelError::Field { field, message, .. }) => {
-            Err(refuse(format!("{field}: {message}")))
-        }
-        // The order is the position torque's own setting, checked with the model.
-        _ => Ok(()),
     }
+    model
+        .check_position_torque_frames(&s.position_torque_frames)
+        .map_err(|e| match e {
+            dvrk_model::ModelError::Field { field, message, .. } => {
+                refuse(format!("{field}: {message}"))
+            }
+            other => other.into(),
+        })
 }
 
 #[cfg(test)]

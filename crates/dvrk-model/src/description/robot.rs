@@ -227,7 +227,7 @@ fn build(desc: FileDesc, file: &str) -> Result<Model, ModelError> {
         // Checked as the preset will use it: the order and each frame.
         crate::element::PositionTorque::check_order(t.order)
             .map_err(|e| ModelError::field(file, "preset", "position_torque.order", e))?;
-        model.with_position_torque_on(t.order, &t.frames)?;
+        model.check_position_torque_frames(&t.frames)?;
         model.preset.position_torque = Some((t.order, t.frames));
     }
     Ok(model)

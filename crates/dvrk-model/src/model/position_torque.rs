@@ -6,7 +6,7 @@ use std::f64::consts::TAU;
 use crate::element::{Element, PositionTorque};
 use crate::error::ModelError;
 
-use super::{JointKind, Model};
+use super::{Frame, JointKind, Model};
 
 /// The model's side of the position-dependent torque: adding it to the frames with
 /// friction (`--position-torque`).
@@ -54,17 +54,7 @@ impl Model {
             model: self.name.clone(),
             message: e.to_string(),
         })?;
-        for name in frames {
-            let refuse =
-                |why: &str| ModelError::field(&self.source, "position torque frames", name, why);
-            match self.frames.iter().find(|f| &f.name == name) {
-                None => return Err(refuse(&format!("no frame is named {name}"))),
-                Some(f) if f.kind != JointKind::Revolute || f.friction().is_none() => {
-                    return Err(refuse("not a revolute frame with friction"))
-                }
-                Some(_) => {}
-            }
-        }
+        self.check_position_torque_frames(frames)?;
         let mut m = self.clone();
         for (i, f) in m.frames.iter_mut().enumerate() {
             let has = f
@@ -72,7 +62,7 @@ impl Model {
                 .iter()
                 .any(|e| matches!(e, Element::PositionTorque(_)));
             let chosen = frames.is_empty() || frames.contains(&f.name);
-            if f.kind != JointKind::Revolute || f.friction().is_none() || has || !chosen {
+            if !takes_position_torque(f) || has || !chosen {
                 continue;
             }
             let t = PositionTorque {
@@ -87,4 +77,29 @@ impl Model {
         m.element_plan = m.derive_element_plan();
         Ok(m)
     }
+
+    /// Refuses a name of `frames` that is not one of this model's frames able to take a
+    /// position torque ([`Model::with_position_torque_on`]), without building the model
+    /// that would have it: for a description's `[preset]` and a fit's settings.
+    pub fn check_position_torque_frames(&self, frames: &[String]) -> Result<(), ModelError> {
+        for name in frames {
+            let refuse =
+                |why: &str| ModelError::field(&self.source, "position torque frames", name, why);
+            match self.frames.iter().find(|f| &f.name == name) {
+                None => return Err(refuse(&format!("no frame is named {name}"))),
+                Some(f) if !takes_position_torque(f) => {
+                    return Err(refuse("not a revolute frame with friction"))
+                }
+                Some(_) => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Whether `f` can take the position torque of `--position-torque`: a revolute frame
+/// (a prismatic one's series needs a period in metres, which only a description gives)
+/// with friction.
+fn takes_position_torque(f: &Frame) -> bool {
+    f.kind == JointKind::Revolute && f.friction().is_some()
 }
