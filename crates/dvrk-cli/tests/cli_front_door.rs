@@ -166,7 +166,18 @@ fn preset_dvrk_records_what_it_expands_to() {
     fit_example_to(&preset, &["--preset", "dvrk"]);
     fit_example_to(
         &spelled,
-        &["--method", "sdp", "--stribeck", "0.3", "--dahl", "20"],
+        &[
+            "--method",
+            "sdp",
+            "--stribeck",
+            "0.3",
+            "--dahl",
+            "20",
+            "--prior",
+            "nominal",
+            "--prior-weight",
+            "0.05",
+        ],
     );
     let a = dvrk_test_support::read_json(&preset);
     let b = dvrk_test_support::read_json(&spelled);

@@ -44,20 +44,21 @@ pub enum Preset {
     /// The dVRK arms: the physically consistent fit (`sdp`), a Stribeck term of 0.3 rad/s
     /// (m/s) and Dahl friction of stiffness 20/rad (1/m) on every friction element. On
     /// the real 2019 logs (fit "one", test "two", the 2019 processing) it beats the
-    /// published 2019 SDP on every joint: mean test error PSM 0.1265 against 0.1875
-    /// (−32.6 %), MTM 0.1726 against 0.2103 (−17.9 %); on the PSM speed pair (fit one
-    /// speed, test the other) 0.186 (1.0 → 0.5) and 0.167 (0.5 → 1.0), where the earlier
+    /// published 2019 SDP on every joint: mean test error PSM 0.1257 against 0.1875
+    /// (−33.0 %), MTM 0.1726 against 0.2103 (−17.9 %); on the PSM speed pair (fit one
+    /// speed, test the other) 0.187 (1.0 → 0.5) and 0.168 (0.5 → 1.0), where the earlier
     /// preset's delay search gave 0.270 and 0.290: the wrist's lag is hysteresis over a
     /// displacement, not a delay (the book's "Generalization across speeds"). The
     /// descriptions' bounding ellipsoids (the dVRK's meshes: 7 MTM links, the PSM's
     /// pitch_front, 3 ECM links) apply too (MTM +0.3 % test error, PSM none); a
-    /// partial prior toward the dVRK's nominal masses (`--prior nominal --prior-weight
-    /// 0.05`, `PRESET_PRIOR_WEIGHT`; `--prior none` leaves it out) is part of the
-    /// preset wherever the description has nominal masses (the MTM, the Classic ECM, the
-    /// Si arms; not the Classic PSM, whose maker publishes none) and the method is
-    /// `sdp`: on the real MTM it moves every mass the dVRK publishes into 0.38-1.8 times
-    /// it (the upper arm from its 15 kg bound, 16.7 times the dVRK's 0.9 kg, to 1.6 kg)
-    /// for +1.6 % in mean test error. In a fit of logs the description's `[preset]`
+    /// partial prior toward the nominal masses (`--prior nominal --prior-weight 0.05`,
+    /// `PRESET_PRIOR_WEIGHT`; `--prior none` leaves it out) is part of the preset
+    /// wherever the description has nominal masses (every built-in arm but
+    /// `psm_simplified`; the Classic PSM's are the CAD masses of WPI's model, its maker
+    /// publishing none) and the method is `sdp`: on the real MTM it moves every mass the
+    /// dVRK publishes into 0.38-1.8 times it (the upper arm from its 15 kg bound, 16.7
+    /// times the dVRK's 0.9 kg, to 1.6 kg) for +1.6 % in mean test error; on the real PSM
+    /// it takes three parallelogram masses off their 2019 bounds for −0.6 %. In a fit of logs the description's `[preset]`
     /// elements join the model ([`dvrk_model::PresetElements`]; `--position-torque 0`
     /// leaves the position torque out): the MTM's shoulder and elbow cable torques,
     /// which take its mean test error from 0.1799 to 0.1726, put every MTM mass with a
@@ -298,7 +299,7 @@ impl FitRequest {
             let mut overrides = self.overrides.expanded(from_states);
             // The preset's prior toward the nominal values: only for the semidefinite fit
             // of a robot that has some (`--prior nominal` would apply); otherwise left
-            // out, not refused (the Classic PSM has none).
+            // out, not refused (`psm_simplified` has none).
             // `--prior none` leaves it out as a robot without nominal masses does.
             let none_given = matches!(self.overrides.prior, Some(PriorSource::None));
             if (self.overrides.prior.is_none() || none_given) && overrides.prior.is_some() {
