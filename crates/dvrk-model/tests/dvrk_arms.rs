@@ -17,7 +17,7 @@ use std::f64::consts::FRAC_PI_2;
 use dvrk_model::{Model, Workspace};
 use dvrk_test_support::cisst::{self, Link};
 use dvrk_test_support::Rng;
-use nalgebra::{Matrix4, Vector3};
+use nalgebra::{Matrix3, Matrix4, Vector3};
 
 const POSES: usize = 200;
 
@@ -433,6 +433,129 @@ fn nominal_gravity_is_the_controllers_gravity_compensation() {
                 worst < 1e-4,
                 "{robot} at {pitch_deg}°: nominal gravity torque differs from the controller's by {worst:e} N·m"
             );
+        }
+    }
+}
+
+/// `psm.toml`'s nominal masses are the CAD masses of WPI's model of the Classic PSM
+/// (WPI-AIM/dvrk_env 675a3fa, `dvrk_description/psm/psm.urdf.xacro`), transcribed below
+/// with how each WPI link moves with the pitch q2. The mapping onto the 2019 frames is
+/// checked on our kinematics: a WPI link that turns with q2 (a revolute joint, or a mimic
+/// +q2 on a link that translates) maps to a frame that turns, about a pivot as far from
+/// the pitch axis as WPI's (its joint's offset from `pitch_back_joint`); one that
+/// translates (mimic −q2 on a link that turns) to a frame whose points all circle the
+/// pitch axis at WPI's crank length. Tolerance 3 mm: the URDF's and the 2019 model's
+/// parallelogram lengths differ by up to 2.8 mm (pitch_top_link's crank: 0.1842 m in the
+/// URDF, √(l_2L3² + (l_2H1 + l_2H2)²) = 0.1870 m here).
+#[test]
+fn psm_nominal_masses_are_wpis_cad_masses() {
+    enum Moves {
+        /// Turns with q2 about a fixed pivot this far (m) from the pitch axis.
+        Turns(f64),
+        /// Translates; every point circles the pitch axis at this radius (m).
+        Translates(f64),
+    }
+    use Moves::*;
+    // (our frame, WPI link, WPI <mass> kg, how the WPI link moves). WPI's joint origins:
+    // pitch_bottom (0.15, 0, 0) and pitch_top (0.18366, 0.014121, 0) on pitch_back_link;
+    // pitch_end 0.516 along pitch_bottom_link (so its pivot sits 0.516 m out along the
+    // translating bar); pitch_front_joint 0.0664 + 0.0296 m from pitch_back_joint on the
+    // yaw link, perpendicular to the pitch axis.
+    let wpi = [
+        ("pitch_intermediate", "pitch_back_link", 0.98494, Turns(0.0)),
+        (
+            "pitch_front",
+            "pitch_bottom_link",
+            0.44569,
+            Translates(0.15),
+        ),
+        (
+            "pitch_front_ext",
+            "pitch_top_link",
+            0.17841,
+            Translates(0.18366f64.hypot(0.014121)),
+        ),
+        ("pitch_bottom", "pitch_end_link", 2.091, Turns(0.516)),
+        (
+            "pitch_top",
+            "pitch_front_link",
+            0.074425,
+            Turns(0.0664 + 0.0296),
+        ),
+    ];
+    let model = builtin("psm");
+    let index = |name: &str| {
+        1 + model
+            .frames
+            .iter()
+            .position(|f| f.name == name)
+            .unwrap_or_else(|| panic!("no frame {name}"))
+    };
+    // The yaw link has no parallelogram to check; its mass is WPI's yaw_link's.
+    assert_eq!(model.frame(index("yaw")).nominal.mass, Some(1.4705));
+    // pitch_end (no instrument in WPI's insertion link) and the counterweight: none.
+    for name in ["pitch_end", "main_insertion"] {
+        assert_eq!(model.frame(index(name)).nominal.mass, None, "{name}");
+    }
+    let with_mass = model
+        .frames
+        .iter()
+        .filter(|f| f.nominal.mass.is_some())
+        .count();
+    assert_eq!(with_mass, 6);
+    // Three pitches at a fixed yaw and insertion.
+    let pitches = [-0.5f64, 0.1, 0.6];
+    let poses: Vec<_> = pitches
+        .iter()
+        .map(|&q2| model.frame_poses(&[0.3, q2, 0.1, 0.0, 0.0, 0.0, 0.0]))
+        .collect();
+    let axis_frame = index("pitch_intermediate");
+    let (a, z) = {
+        let p = &poses[0][axis_frame];
+        (p.translation, p.rotation.column(2).into_owned())
+    };
+    let off_axis = |p: Vector3<f64>| {
+        let d = p - a;
+        (d - z * z.dot(&d)).norm()
+    };
+    for (ours, link, mass, moves) in wpi {
+        let f = index(ours);
+        assert_eq!(model.frame(f).nominal.mass, Some(mass), "{ours} = {link}");
+        let turn =
+            (poses[0][f].rotation.transpose() * poses[2][f].rotation - Matrix3::identity()).norm();
+        match moves {
+            Translates(radius) => {
+                assert!(turn < 1e-12, "{ours} turns ({turn:e}), {link} translates");
+                let (o0, o2) = (poses[0][f].translation, poses[2][f].translation);
+                let chord = 2.0 * ((pitches[2] - pitches[0]) / 2.0).sin();
+                let r = (o2 - o0).norm() / chord;
+                assert!(
+                    (r - radius).abs() < 3e-3,
+                    "{ours}: crank {r:.4} m, {link} {radius:.4} m"
+                );
+            }
+            Turns(distance) => {
+                assert!(turn > 0.5, "{ours} translates, {link} turns");
+                // The body point that stays put: o_i + R_i·v equal for every pose.
+                let mut m = nalgebra::DMatrix::zeros(6, 3);
+                let mut rhs = nalgebra::DVector::zeros(6);
+                for (k, (i, j)) in [(0, 1), (1, 2)].into_iter().enumerate() {
+                    let dr = poses[i][f].rotation - poses[j][f].rotation;
+                    let dt = poses[j][f].translation - poses[i][f].translation;
+                    m.view_mut((3 * k, 0), (3, 3)).copy_from(&dr);
+                    rhs.rows_mut(3 * k, 3).copy_from(&dt);
+                }
+                let v = m.svd(true, true).solve(&rhs, 1e-9).unwrap();
+                let v = Vector3::new(v[0], v[1], v[2]);
+                let pivot = poses[0][f].translation + poses[0][f].rotation * v;
+                let moved = (poses[2][f].translation + poses[2][f].rotation * v - pivot).norm();
+                assert!(moved < 1e-9, "{ours}: no fixed pivot ({moved:e})");
+                let d = off_axis(pivot);
+                assert!(
+                    (d - distance).abs() < 3e-3,
+                    "{ours}: pivot {d:.4} m, {link} {distance:.4} m"
+                );
+            }
         }
     }
 }
