@@ -15,13 +15,15 @@ use super::settings::ResultOnLogs;
 use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]
-#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
+#[command(
+    allow_negative_numbers = true,
+    mut_args = super::args::result_defaults,
+    mut_arg("result", |a| a.help(
+        "Result file written by `dvrk-ident fit --out`, of the arm without the payload"
+    )),
+    mut_arg("logs", |a| a.help("Logs of the arm carrying the payload"))
+)]
 pub struct Args {
-    /// Result file written by `dvrk-ident fit --out`, of the arm without the payload
-    pub result: String,
-    /// Logs of the arm carrying the payload
-    #[arg(required = true, value_name = "LOG")]
-    pub logs: Vec<String>,
     /// The frame the payload is fixed to (a frame with link parameters)
     #[arg(long, value_name = "NAME", help_heading = MODEL)]
     pub frame: String,
@@ -40,22 +42,23 @@ pub fn run(args: Args) -> Result<()> {
     let stdout_taken = super::check_outputs(
         &[("--out", args.out.as_deref())],
         &[],
-        &args.on_logs.inputs(&args.result, &args.logs, &[]),
+        &args.on_logs.inputs(&[]),
     )?;
     let LoadedResult {
         result,
         model,
         params,
         ..
-    } = args.on_logs.load_with_settings(&args.result)?;
+    } = args.on_logs.load_with_settings()?;
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
     let read = args.on_logs.log_args.read_options_for(
         &model,
         &result.settings.processing,
-        args.logs.iter().map(String::as_str),
+        args.on_logs.logs.iter().map(String::as_str),
     );
     let logs = args
+        .on_logs
         .logs
         .iter()
         .map(|path| super::args::read(&read, path))
@@ -70,7 +73,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         return emit_summary(
             &serde_json::to_string_pretty(&json!({
-                "result": args.result,
+                "result": args.on_logs.result,
                 "payload": p,
                 "identification": id,
             }))?,

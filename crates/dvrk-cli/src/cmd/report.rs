@@ -19,14 +19,15 @@ use super::settings::ResultOnLogs;
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
+#[command(
+    allow_negative_numbers = true,
+    mut_args = super::args::result_defaults,
+    mut_arg("logs", |a| a.required(false).help(
+        "Logs to show [default: the result's own training and test logs, if they exist \
+         unchanged]"
+    ))
+)]
 pub struct Args {
-    /// Result file written by `dvrk-ident fit --out`
-    pub result: String,
-    /// Logs to show [default: the result's own training and test logs, if they exist
-    /// unchanged]
-    #[arg(value_name = "LOG")]
-    pub logs: Vec<String>,
     /// Excitation trajectory (JSON of `dvrk-ident excite`) to plot against the limits
     #[arg(long, value_name = "TRAJ.json", help_heading = INPUT)]
     pub excitation: Option<String>,
@@ -70,12 +71,9 @@ pub fn build(
 
 pub fn run(args: Args) -> Result<()> {
     let excitation_file = [("the excitation", args.excitation.as_deref())];
-    let mut inputs = args
-        .on_logs
-        .inputs(&args.result, &args.logs, &excitation_file);
+    let mut inputs = args.on_logs.inputs(&excitation_file);
     super::check_outputs(&[], &[("--out", Some(&args.out))], &inputs)?;
-    let (super::LoadedResult { result, model, .. }, mut settings) =
-        args.on_logs.load(&args.result)?;
+    let (super::LoadedResult { result, model, .. }, mut settings) = args.on_logs.load()?;
     settings.test_window = result.settings.test_window;
     if let Some(note) = super::settings_note(&settings.differences(&result.settings)) {
         eprintln!("{note}");
@@ -83,7 +81,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(j) = args.joints.joints {
         settings.joints = j;
     }
-    let sources: Vec<(String, String)> = if args.logs.is_empty() {
+    let sources: Vec<(String, String)> = if args.on_logs.logs.is_empty() {
         // The result's own logs, as they were when fitted: a missing one or one whose
         // content changed is an error, not a figure silently dropped or drawn from other
         // data.
@@ -92,14 +90,14 @@ pub fn run(args: Args) -> Result<()> {
                 format!(
                     "{}: the result's {} log is not readable: give the logs to draw \
                      (dvrk-ident report RESULT LOG...)",
-                    args.result, i.role
+                    args.on_logs.result, i.role
                 )
             })?;
             if now.sha256 != i.sha256 {
                 bail!(
                     "{}: the result's {} log {} changed since the fit (SHA-256 {} instead of \
                      {}): give the logs to draw explicitly to draw it anyway",
-                    args.result,
+                    args.on_logs.result,
                     i.role,
                     i.path,
                     now.sha256,
@@ -113,7 +111,8 @@ pub fn run(args: Args) -> Result<()> {
             .map(|i| (i.role.clone(), i.path.clone()))
             .collect()
     } else {
-        args.logs
+        args.on_logs
+            .logs
             .iter()
             .enumerate()
             .map(|(k, p)| (format!("log {}", k + 1), p.clone()))

@@ -23,13 +23,12 @@ use super::settings::ResultOnLogs;
 use super::{emit_summary, LoadedResult};
 
 #[derive(clap::Args)]
-#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
+#[command(
+    allow_negative_numbers = true,
+    mut_args = super::args::result_defaults,
+    mut_arg("logs", |a| a.help("Logs whose external torques to estimate"))
+)]
 pub struct Args {
-    /// Result file written by `dvrk-ident fit --out`
-    pub result: String,
-    /// Logs whose external torques to estimate
-    #[arg(required = true, value_name = "LOG")]
-    pub logs: Vec<String>,
     #[command(flatten)]
     pub on_logs: ResultOnLogs,
     /// Gain of the momentum observer (1/s, every joint; its time constant is 1/gain)
@@ -82,14 +81,14 @@ pub fn run(args: Args) -> Result<()> {
             ("--wrench-out", args.wrench_out.as_deref()),
         ],
         &[("--report", args.report.as_deref())],
-        &args.on_logs.inputs(&args.result, &args.logs, &[]),
+        &args.on_logs.inputs(&[]),
     )?;
     if (args.out.is_some() || args.observer_out.is_some() || args.wrench_out.is_some())
-        && args.logs.len() != 1
+        && args.on_logs.logs.len() != 1
     {
         bail!(
             "--out, --observer-out and --wrench-out take one log ({} given)",
-            args.logs.len()
+            args.on_logs.logs.len()
         );
     }
     if let Some(path) = &args.wrench_out {
@@ -102,7 +101,7 @@ pub fn run(args: Args) -> Result<()> {
         model,
         params,
         ..
-    } = args.on_logs.load_with_settings(&args.result)?;
+    } = args.on_logs.load_with_settings()?;
     let joints = args.joints.joints.unwrap_or(result.settings.joints);
     for (flag, path) in [("--out", &args.out), ("--observer-out", &args.observer_out)] {
         if let Some(path) = path {
@@ -123,14 +122,14 @@ pub fn run(args: Args) -> Result<()> {
     let read = args.on_logs.log_args.read_options_for(
         &model,
         &result.settings.processing,
-        args.logs.iter().map(String::as_str),
+        args.on_logs.logs.iter().map(String::as_str),
     );
     let (mut text, mut reports, mut outputs) = (String::new(), Vec::new(), Outputs::new());
     if let Some(note) = result.offset_note() {
         let _ = writeln!(text, "{note}");
     }
     let mut residuals = Vec::new();
-    for path in &args.logs {
+    for path in &args.on_logs.logs {
         let log = super::args::read(&read, path)?;
         let r = external_torque(&model, &params, &result, &log, &options)?;
         let observer_rms = r.observer_rms();
@@ -204,7 +203,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if let Some(dir) = &args.report {
         let map = JointMap::new(&model, joints)?;
-        let report = residual_report(&map, &args.result, &residuals, args.observer_gain)?;
+        let report = residual_report(&map, &args.on_logs.result, &residuals, args.observer_gain)?;
         report.stage(&mut outputs, Path::new(dir))?;
         let _ = writeln!(
             text,
@@ -216,7 +215,7 @@ pub fn run(args: Args) -> Result<()> {
     if args.json {
         emit_summary(
             &serde_json::to_string_pretty(&json!({
-                "result": args.result,
+                "result": args.on_logs.result,
                 "observer_gain": args.observer_gain,
                 "residuals": reports,
             }))?,

@@ -255,11 +255,18 @@ impl<S: Scope> clap::Args for SettingFlags<S> {
     }
 }
 
-/// The flags of every command that uses a result on logs (validate, report, residual,
-/// payload): the robot, the processing (the result's own unless given) and how the logs
-/// are read. Declared once so the four commands read and default them alike.
+/// The arguments of every command that uses a result on logs (validate, report,
+/// residual, payload): the result file and the logs, the robot, the processing (the
+/// result's own unless given) and how the logs are read. Declared once so the four
+/// commands read and default them alike; each words the two files' help for what it does
+/// (`mut_arg`).
 #[derive(clap::Args, Clone)]
 pub struct ResultOnLogs {
+    /// Result file written by `dvrk-ident fit --out`
+    pub result: String,
+    /// Logs to use the result on
+    #[arg(required = true, value_name = "LOG")]
+    pub logs: Vec<String>,
     /// Robot [default: the one the result was fitted for]
     #[arg(long, help_heading = super::args::MODEL)]
     pub robot: Option<String>,
@@ -272,34 +279,28 @@ pub struct ResultOnLogs {
 }
 
 impl ResultOnLogs {
-    /// The result file `path` with its model (the robot given, or the result's), and the
+    /// The result file with its model (the robot given, or the result's), and the
     /// settings to use it with: the result's, with those given on the command line.
-    pub fn load(&self, path: &str) -> Result<(super::LoadedResult, dvrk_ident::FitSettings)> {
-        let loaded = super::load_result(path, self.robot.as_deref())?;
+    pub fn load(&self) -> Result<(super::LoadedResult, dvrk_ident::FitSettings)> {
+        let loaded = super::load_result(&self.result, self.robot.as_deref())?;
         let settings = self.settings.settings(loaded.result.settings.clone())?;
         Ok((loaded, settings))
     }
 
     /// [`ResultOnLogs::load`] with those settings put in the result: for the commands
     /// whose computation reads them from the result (`residual`, `payload`).
-    pub fn load_with_settings(&self, path: &str) -> Result<super::LoadedResult> {
-        let (mut loaded, settings) = self.load(path)?;
+    pub fn load_with_settings(&self) -> Result<super::LoadedResult> {
+        let (mut loaded, settings) = self.load()?;
         loaded.result.settings = settings;
         Ok(loaded)
     }
 
-    /// What a command on the result `path` and `logs` reads ([`super::inputs`]: the
-    /// logs, the result, the robot's description and `others`), so that no output
-    /// overwrites it.
-    pub fn inputs(
-        &self,
-        path: &str,
-        logs: &[String],
-        others: &[(&str, Option<&str>)],
-    ) -> super::Inputs {
-        let logs: Vec<&str> = logs.iter().map(String::as_str).collect();
+    /// What the command reads ([`super::inputs`]: the logs, the result, the robot's
+    /// description and `others`), so that no output overwrites it.
+    pub fn inputs(&self, others: &[(&str, Option<&str>)]) -> super::Inputs {
+        let logs: Vec<&str> = self.logs.iter().map(String::as_str).collect();
         let mut files = vec![
-            ("the result", Some(path)),
+            ("the result", Some(self.result.as_str())),
             ("the robot", self.robot.as_deref()),
         ];
         files.extend_from_slice(others);

@@ -13,13 +13,12 @@ use super::{emit, LoadedResult};
 #[derive(clap::Args)]
 // A negative number is a value (`--f0 -1`, `--rate -5`), refused by the checks with a
 // message, not an unknown flag.
-#[command(allow_negative_numbers = true, mut_args = super::args::result_defaults)]
+#[command(
+    allow_negative_numbers = true,
+    mut_args = super::args::result_defaults,
+    mut_arg("logs", |a| a.help("Logs to validate on"))
+)]
 pub struct Args {
-    /// Result file written by `dvrk-ident fit --out`
-    pub result: String,
-    /// Logs to validate on
-    #[arg(required = true, value_name = "LOG")]
-    pub logs: Vec<String>,
     /// Metrics on the first N processed samples only (N ≥ 1) [default: every sample]
     #[arg(long, value_parser = super::at_least_one, value_name = "N", help_heading = INPUT)]
     pub test_window: Option<usize>,
@@ -42,7 +41,7 @@ pub fn run(args: Args) -> Result<()> {
             ..
         },
         mut settings,
-    ) = args.on_logs.load(&args.result)?;
+    ) = args.on_logs.load()?;
     // Flags that change the processing make this log's column differ from the fit's
     // columns beside it for a reason other than the model: said first. (Other joints
     // only leave the fit's columns out.)
@@ -62,9 +61,9 @@ pub fn run(args: Args) -> Result<()> {
     let read = args.on_logs.log_args.read_options_for(
         &model,
         &settings.processing,
-        args.logs.iter().map(String::as_str),
+        args.on_logs.logs.iter().map(String::as_str),
     );
-    for path in &args.logs {
+    for path in &args.on_logs.logs {
         let log = super::args::read(&read, path)?;
         let data = prepare(&model, &log, &settings.processing)?;
         let m = joint_metrics(&model, &params, &data, args.test_window, &joints)?;
@@ -95,7 +94,7 @@ pub fn run(args: Args) -> Result<()> {
     }
     if args.json {
         emit(&serde_json::to_string_pretty(&json!({
-            "result": args.result,
+            "result": args.on_logs.result,
             "fit": result.metrics,
             "settings_differences": changed,
             "validations": reports,
