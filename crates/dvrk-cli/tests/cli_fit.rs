@@ -547,16 +547,13 @@ fn position_torque_frames_from_the_preset_and_the_flag() {
         serde_json::json!(["upper_arm", "forearm"])
     );
     let result: dvrk_ident::FitResult = serde_json::from_value(preset.clone()).unwrap();
-    let line = dvrk_ident::reproduce::FitCall::of_result(&result, None)
-        .cli_command()
-        .text;
+    let call = dvrk_ident::reproduce::FitCall::of_result(&result, None);
+    let line = call.cli_command().text;
     assert!(
         line.contains("--position-torque 1 --position-torque-frames upper_arm,forearm"),
         "{line}"
     );
-    let py = dvrk_ident::reproduce::FitCall::of_result(&result, None)
-        .python_call()
-        .text;
+    let py = call.python_call().text;
     assert!(
         py.contains("position_torque_frames=\"upper_arm,forearm\""),
         "{py}"

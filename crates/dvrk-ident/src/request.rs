@@ -58,12 +58,12 @@ pub enum Preset {
     /// publishing none) and the method is `sdp`: on the real MTM it moves every mass the
     /// dVRK publishes into 0.38-1.8 times it (the upper arm from its 15 kg bound, 16.7
     /// times the dVRK's 0.9 kg, to 1.6 kg) for +1.6 % in mean test error; on the real PSM
-    /// it takes three parallelogram masses off their 2019 bounds for −0.6 %. In a fit of logs the description's `[preset]`
-    /// elements join the model ([`dvrk_model::PresetElements`]; `--position-torque 0`
-    /// leaves the position torque out): the MTM's shoulder and elbow cable torques,
-    /// which take its mean test error from 0.1799 to 0.1726, put every MTM mass with a
-    /// dVRK value within 0.77-1.00 times it and none on a bound (the book's
-    /// identification chapter, §6.5).
+    /// it takes three parallelogram masses off their 2019 bounds for −0.6 %. In a fit of
+    /// logs the description's `[preset]` elements join the model
+    /// ([`dvrk_model::PresetElements`]; `--position-torque 0` leaves the position torque
+    /// out): the MTM's shoulder and elbow cable torques, which take its mean test error
+    /// from 0.1799 to 0.1726, put every MTM mass with a dVRK value within 0.77-1.00 times
+    /// it and none on a bound (the book's identification chapter, §6.5).
     Dvrk,
 }
 
@@ -324,14 +324,12 @@ impl FitRequest {
             // The description's `[preset]` elements, for a fit of logs (states carry
             // their own model): its position torque, unless the request gives an order
             // (`0`: none).
-            if let (false, Some((order, frames))) = (
-                from_states,
-                robot.and_then(|m| m.preset.position_torque.clone()),
-            ) {
+            let preset_torque = robot.and_then(|m| m.preset.position_torque.as_ref());
+            if let Some((order, frames)) = preset_torque.filter(|_| !from_states) {
                 if self.overrides.position_torque_order.is_none() {
-                    overrides.position_torque_order = Some(order);
+                    overrides.position_torque_order = Some(*order);
                     if self.overrides.position_torque_frames.is_none() {
-                        overrides.position_torque_frames = Some(crate::FrameNames(frames));
+                        overrides.position_torque_frames = Some(crate::FrameNames(frames.clone()));
                     }
                 }
             }

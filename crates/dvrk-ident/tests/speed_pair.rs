@@ -120,10 +120,7 @@ fn the_presets_masses_stay_off_their_bounds_at_both_speeds() {
     let on_bound = |r: &FitResult| -> Vec<String> {
         r.links
             .iter()
-            .filter(|l| {
-                let [lo, hi] = model.frame(l.frame).bounds.mass.unwrap();
-                (l.mass - lo).abs() <= 1e-3 * (hi - lo) || (l.mass - hi).abs() <= 1e-3 * (hi - lo)
-            })
+            .filter(|l| protocol_2019::mass_on_bound(&model, l))
             .map(|l| format!("{} {:.3} kg", l.link, l.mass))
             .collect()
     };

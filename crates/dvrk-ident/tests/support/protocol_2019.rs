@@ -10,7 +10,7 @@ use std::path::PathBuf;
 
 use dvrk_ident::log::{self, LogFormat};
 use dvrk_ident::signal::{Cutoff, LowPass};
-use dvrk_ident::{BoundsSet, FitSettings, JointLog, Method};
+use dvrk_ident::{BoundsSet, FitSettings, JointLog, LinkResult, Method};
 use dvrk_model::Model;
 
 /// One robot's protocol.
@@ -65,6 +65,16 @@ pub fn processing(protocol: &Protocol) -> FitSettings {
     });
     s.processing.filter_torque = true;
     s
+}
+
+/// Whether a fitted link's mass sits on one of its description's mass bounds: within
+/// 0.1 % of the bounds' range (looser than `parameter_status`'s 1e-5 of the bound, so
+/// that a mass a hair inside a bound counts as held by it).
+pub fn mass_on_bound(model: &Model, link: &LinkResult) -> bool {
+    let [lo, hi] = model.frame(link.frame).bounds.mass.unwrap();
+    [lo, hi]
+        .iter()
+        .any(|b| (link.mass - b).abs() <= 1e-3 * (hi - lo))
 }
 
 /// The fit settings of the protocol for `method`, with the 2019 lower bounds
