@@ -1,9 +1,11 @@
 #!/usr/bin/env python3
 """Print the cycles of each crate's module graph (issue 13: "a module graph without cycles").
 
-Usage: python3 tools/module_cycles.py [--edges] [CRATE_DIR...]   (default: every crates/*)
+Usage: python3 tools/module_cycles.py [--edges] [--parents] [CRATE_DIR...]   (default: every crates/*)
        --edges also prints every edge with its first witness.
-Exit status: 1 when some crate has a cycle, 0 otherwise.
+       --parents also prints every call-back: a module naming an item that its parent
+       (or an ancestor) defines in its own file, test modules aside.
+Exit status: 1 when some crate has a cycle (or, with --parents, a call-back), 0 otherwise.
 
 Why a script: rustc accepts any module graph, so a cycle (module `a` uses an item of `b`
 while `b` uses one of `a`) creeps in unnoticed, and then neither module can be read,
@@ -166,6 +168,7 @@ class Crate:
         self.items = defaultdict(set)  # module -> names defined at its top level
         self.reexports = defaultdict(list)  # module -> [(name|'*', target segments)]
         self.refs = []  # (from module, target segments absolute, file, line, text)
+        self.test_modules = set()  # modules that exist for tests only
         for top in ("lib.rs", "main.rs"):
             p = os.path.join(self.src, top)
             if os.path.exists(p):
@@ -183,6 +186,10 @@ class Crate:
             base = os.path.join(base, name[:-3])
         for m in MOD_DECL_RE.finditer(text):
             child = m.group(1)
+            if child == "tests" or "cfg(test)" in m.group(0) or re.search(
+                r"#\[cfg\(test\)\]\s*$", text[: m.start()]
+            ):
+                self.test_modules.add(module + (child,))
             for cand in (os.path.join(base, child + ".rs"), os.path.join(base, child, "mod.rs")):
                 if os.path.exists(cand):
                     self.children[module].add(child)
@@ -280,6 +287,34 @@ class Crate:
         return edges
 
 
+def call_backs(crate):
+    """[(module, ancestor, item, witness)]: a module naming an item its ancestor defines in
+    its own file (issue 26: "no module calls back into its parent"; a parent is the facade
+    that declares its children and re-exports theirs). A glob import of an ancestor counts:
+    what it brings in cannot be told apart. Test modules (`tests`, or declared under
+    `#[cfg(test)]`) are the parent's own and exempt."""
+    crate.graph() if not crate.refs else None
+    found, seen = [], set()
+    for module, target, path, line, text in crate.refs:
+        if any(part in crate.test_modules for part in prefixes(module)):
+            continue
+        ancestor = crate.resolve([s for s in target if s != "*"])
+        if not (len(ancestor) < len(module) and module[: len(ancestor)] == ancestor):
+            continue
+        rest = target[len(ancestor):]
+        item = rest[0] if rest else "*"
+        if item != "*" and (item not in crate.items[ancestor] or item in crate.children[ancestor]):
+            continue
+        if (module, ancestor, item) not in seen:
+            seen.add((module, ancestor, item))
+            found.append((module, ancestor, item, (os.path.relpath(path), line, text)))
+    return found
+
+
+def prefixes(module):
+    return [module[: i + 1] for i in range(len(module))]
+
+
 def scc(nodes, adjacency):
     """Tarjan's strongly connected components."""
     index, low, on, stack, out = {}, {}, set(), [], []
@@ -343,7 +378,8 @@ def cycles(crate):
 
 def main(argv):
     show_edges = "--edges" in argv
-    argv = [a for a in argv if a != "--edges"]
+    parents = "--parents" in argv
+    argv = [a for a in argv if a not in ("--edges", "--parents")]
     here = os.path.dirname(os.path.abspath(__file__))
     crates = argv or sorted(
         os.path.join(here, "..", "crates", d) for d in os.listdir(os.path.join(here, "..", "crates"))
@@ -366,6 +402,12 @@ def main(argv):
             print(f"  cycle{inside}: {' <-> '.join(comp)}")
             for a, b, (path, line, text) in ws:
                 print(f"    {name(a)} -> {name(b)}: {path}:{line} {text}")
+        if parents:
+            backs = call_backs(crate)
+            print(f"{label}: {len(backs)} call-back{'s' if len(backs) != 1 else ''} into a parent")
+            for module, ancestor, item, (path, line, text) in backs:
+                any_cycle = True
+                print(f"  {name(module)} -> {name(ancestor)}::{item}: {path}:{line} {text}")
     return 1 if any_cycle else 0
 
 

@@ -198,6 +198,30 @@ pub enum IdentError {
     },
 }
 
+impl IdentError {
+    /// A model's refusal of a value a caller gave as a setting (`--frame`,
+    /// `--position-torque-frames`): a [`dvrk_model::ModelError::Field`] becomes the
+    /// setting's error, so that each front end names the setting its own way; the field
+    /// is named in the message unless it is the setting itself (a payload's `frame`), and
+    /// any other model error passes unchanged.
+    pub(crate) fn of_setting(
+        name: impl Into<SettingName>,
+    ) -> impl Fn(dvrk_model::ModelError) -> Self {
+        let name = name.into();
+        move |error| match error {
+            dvrk_model::ModelError::Field { field, message, .. } => IdentError::Setting {
+                message: if field == name.to_string() {
+                    message
+                } else {
+                    format!("{field}: {message}")
+                },
+                name: name.clone(),
+            },
+            other => other.into(),
+        }
+    }
+}
+
 /// Why a number of a result is not finite ([`IdentError::NotFinite`]), shown as a
 /// parenthesis after the number (nothing for [`NotFiniteCause::Unknown`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

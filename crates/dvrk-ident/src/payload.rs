@@ -103,13 +103,11 @@ pub fn identify_payload(
     }
     // The frame is the caller's argument (`--frame`, `frame=`): refused as it, each front
     // end naming it its own way.
-    let body = model.payload_model(frame, "").map_err(|e| match e {
-        dvrk_model::ModelError::Field { message, .. } => IdentError::Setting {
-            name: crate::error::SettingName::Argument("frame"),
-            message,
-        },
-        e => e.into(),
-    })?;
+    let body = model
+        .payload_model(frame, "")
+        .map_err(IdentError::of_setting(crate::error::SettingName::Argument(
+            "frame",
+        )))?;
     let n = model.dof();
     if logs.is_empty() {
         return Err(IdentError::Setting {

@@ -2,7 +2,10 @@
 //! that breaks one fails here rather than in a later review: no source file under
 //! `crates/*/src` over 800 lines (small files, one job each), and `unsafe` code only in
 //! the two crates whose boundary needs it (`lapack-faer`, the Fortran ABI Clarabel calls,
-//! and `dvrk-model-c`, the C ABI); every other crate root forbids it.
+//! and `dvrk-model-c`, the C ABI); every other crate root forbids it; no crate's module
+//! graph has a cycle, and no module of dvrk-ident names an item its parent defines (a
+//! parent declares its children and re-exports theirs: `tools/module_cycles.py
+//! --parents`).
 
 use std::path::{Path, PathBuf};
 
@@ -77,5 +80,80 @@ fn unsafe_code_is_forbidden_outside_the_abi_crates() {
                 }
             );
         }
+    }
+}
+
+/// `tools/module_cycles.py` with `args`: its exit status and what it printed.
+fn module_cycles(args: &[&str]) -> (i32, String) {
+    let script = dvrk_test_support::repo().join("tools/module_cycles.py");
+    let out = std::process::Command::new("python3")
+        .arg(&script)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("python3 {}: {e}", script.display()));
+    let text = String::from_utf8_lossy(&out.stdout).into_owned();
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// A crate of `files` (path under `src/`, text) in a scratch folder.
+fn scratch_crate(tag: &str, files: &[(&str, &str)]) -> PathBuf {
+    let root = dvrk_test_support::temp_dir(tag);
+    for (path, text) in files {
+        let file = root.join("src").join(path);
+        std::fs::create_dir_all(file.parent().unwrap()).unwrap();
+        std::fs::write(file, text).unwrap();
+    }
+    root
+}
+
+#[test]
+fn no_module_cycle_and_no_module_of_dvrk_ident_calls_back_into_its_parent() {
+    let repo = dvrk_test_support::repo();
+    let (status, text) = module_cycles(&[]);
+    assert_eq!(status, 0, "{text}");
+    assert!(text.matches(", 0 cycles").count() >= 7, "{text}");
+    let ident = repo.join("crates/dvrk-ident");
+    let (status, text) = module_cycles(&["--parents", ident.to_str().unwrap()]);
+    assert_eq!(status, 0, "{text}");
+    assert!(
+        text.contains("dvrk-ident: 0 call-backs into a parent"),
+        "{text}"
+    );
+}
+
+#[test]
+fn the_module_check_finds_a_cycle_and_a_call_back() {
+    let cycle = scratch_crate(
+        "layout-cycle",
+        &[
+            ("lib.rs", "mod a;\nmod b;\n"),
+            ("a.rs", "use crate::b::Y;\npub struct X(Y);\n"),
+            ("b.rs", "use crate::a::X;\npub struct Y(Box<X>);\n"),
+        ],
+    );
+    let (status, text) = module_cycles(&[cycle.to_str().unwrap()]);
+    assert_eq!(status, 1, "{text}");
+    assert!(text.contains("cycle: a <-> b"), "{text}");
+    // A child naming its parent's own item is a call-back; one re-exported from a
+    // sibling, or a test module's, is not.
+    let back = scratch_crate(
+        "layout-call-back",
+        &[
+            ("lib.rs", "mod a;\n"),
+            (
+                "a.rs",
+                "mod b;\nmod c;\n#[cfg(test)]\nmod tests;\npub use c::Z;\npub struct X;\n",
+            ),
+            ("a/b.rs", "use super::{X, Z};\n"),
+            ("a/c.rs", "pub struct Z;\n"),
+            ("a/tests.rs", "use super::*;\n"),
+        ],
+    );
+    let (status, text) = module_cycles(&["--parents", back.to_str().unwrap()]);
+    assert_eq!(status, 1, "{text}");
+    assert!(text.contains("1 call-back into a parent"), "{text}");
+    assert!(text.contains("a::b -> a::X"), "{text}");
+    for dir in [cycle, back] {
+        std::fs::remove_dir_all(dir).unwrap();
     }
 }

@@ -120,103 +120,20 @@ use std::time::Instant;
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, SupportedConeT};
-use dvrk_model::inertia::pseudo_inertia;
 use dvrk_model::{BoundsContext, Model};
 use nalgebra::{DMatrix, Matrix4};
-use thiserror::Error;
 
 mod constraints;
+mod error;
+mod options;
 mod prior;
-use constraints::{linear_rows, lmi_rows_of_links};
+use constraints::{linear_rows, lmi_rows_of_links, Rows};
+pub use error::SdpError;
+pub use options::{PriorMetric, SdpOptions};
 pub(crate) use prior::prior_weight_problem;
 use prior::{
     entropic_rows, log_det_divergence, mass_divergence, mass_priors, whitenings, LOGDET_VARS,
 };
-
-/// Options of [`solve_sdp`].
-#[derive(Clone, Debug, PartialEq)]
-pub struct SdpOptions {
-    /// Tikhonov weight toward `prior`, relative to the data (no units; default 1e-12; see
-    /// the module documentation). 0 disables it, only sensible when R11 has full rank
-    /// (otherwise the solver typically ends `AlmostSolved`).
-    pub regularization: f64,
-    /// Values the regularization and the prior term pull toward, one per parameter
-    /// (model units); `None` means zero. E.g. the model's nominal (CAD) parameters or
-    /// an earlier fit. NaN: the prior has no value for that parameter (a partial prior,
-    /// see the module documentation): the prior term leaves it free and only the
-    /// regularization pulls it, toward zero.
-    pub prior: Option<Vec<f64>>,
-    /// Weight of the prior term (no units, relative to the data term scaled to at most 1;
-    /// see the module documentation). 0: no prior term, only the regularization.
-    pub prior_weight: f64,
-    /// The divergence the prior weight multiplies.
-    pub prior_metric: PriorMetric,
-    /// Clarabel's iteration limit.
-    pub max_iter: u32,
-    /// Clarabel's gap and feasibility tolerances, in the scaled problem whose objective
-    /// (the residual norm divided by `‖W·τ‖`) is at most about 1.
-    pub tolerance: f64,
-    /// `false`: apply the model's per-frame bounds ([`dvrk_model::FrameBounds`]: mass,
-    /// com box, friction maxima, `ia_max`, spring range). `true`: ignore them, keeping
-    /// only physical consistency (`J ⪰ eps·I`) and the global lower bounds
-    /// ([`dvrk_model::GlobalBounds`]: `fc_min`, `fv_min`, `ia_min`).
-    pub override_bounds: bool,
-    /// `true`: keep every link with a bounding ellipsoid in its description inside it
-    /// (see the module documentation); `false`: ignore the ellipsoids.
-    pub ellipsoids: bool,
-}
-
-impl Default for SdpOptions {
-    fn default() -> Self {
-        SdpOptions {
-            regularization: 1e-12,
-            prior: None,
-            prior_weight: 0.0,
-            prior_metric: PriorMetric::default(),
-            max_iter: 200,
-            tolerance: 1e-8,
-            override_bounds: false,
-            ellipsoids: true,
-        }
-    }
-}
-
-/// How a prior's weight measures the distance from the prior (see the module
-/// documentation).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum PriorMetric {
-    /// Squared differences of the equilibrated parameters: a weighted Tikhonov term.
-    Euclidean,
-    /// Log-det divergence of each link's pseudo-inertia from the prior's (physically
-    /// meaningful for every link size and frame); Euclidean for the other parameters.
-    #[default]
-    Entropic,
-}
-
-impl crate::names::Named for PriorMetric {
-    const WHAT: &'static str = "prior metric";
-    const NAMES: &'static [(&'static str, Self)] = &[
-        ("euclidean", PriorMetric::Euclidean),
-        ("entropic", PriorMetric::Entropic),
-    ];
-    const CANONICAL: usize = 2;
-}
-
-impl PriorMetric {
-    /// The name the command line, Python and results use.
-    pub fn name(self) -> &'static str {
-        crate::names::Named::name(self)
-    }
-}
-
-impl std::str::FromStr for PriorMetric {
-    type Err = crate::names::UnknownName;
-
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        <Self as crate::names::Named>::parse_name(s)
-    }
-}
 
 /// Result of [`solve_sdp`]. Only trust `params` when `converged`.
 #[derive(Clone, Debug)]
@@ -242,71 +159,6 @@ pub struct SdpSolution {
     /// gives all ten values, plus `(m/m₀ − 1)²/2` of those it gives a mass alone (no
     /// units; 0 at the prior); `None` without such links.
     pub divergence: Option<f64>,
-}
-
-/// Why `solve_sdp` could not set up the problem (infeasibility is not an error: it is
-/// reported in `SdpSolution::status`).
-#[derive(Clone, Debug, Error, PartialEq)]
-pub enum SdpError {
-    /// The R factor's size does not match the model's parameters plus the torque column.
-    #[error(
-        "the R factor is {rows}x{cols}, but model {model} needs {expected}x{expected} \
-         ({params} parameters and the torque column)"
-    )]
-    Dimension {
-        /// The model's name.
-        model: String,
-        /// The R factor's rows.
-        rows: usize,
-        /// The R factor's columns.
-        cols: usize,
-        /// The size it should have, `params + 1`.
-        expected: usize,
-        /// The model's parameter count.
-        params: usize,
-    },
-    /// The prior's values are not one per model parameter.
-    #[error("prior has {found} values, model {model} has {expected} parameters")]
-    PriorLength {
-        /// The model's name.
-        model: String,
-        /// The prior's value count.
-        found: usize,
-        /// The model's parameter count.
-        expected: usize,
-    },
-    /// The entropic prior needs a positive definite pseudo-inertia for every link.
-    #[error(
-        "the prior's link {link} (frame {frame}) is not physically consistent (smallest \
-         pseudo-inertia eigenvalue {min_eigenvalue:e}): the entropic metric needs a positive \
-         definite prior; use the euclidean metric or a physically consistent prior"
-    )]
-    PriorInconsistent {
-        /// The link's name.
-        link: String,
-        /// The link's frame index.
-        frame: usize,
-        /// The smallest eigenvalue of the prior's pseudo-inertia, kg·m² (≤ 0).
-        min_eigenvalue: f64,
-    },
-    /// A NaN or infinity in the R factor or in a bound of the description.
-    #[error("non-finite value in {what}")]
-    NonFinite {
-        /// Where: `the R factor`, or the bound (frame and field).
-        what: String,
-    },
-    /// An `SdpOptions` value out of range (regularization, prior weight, tolerance,
-    /// iteration limit).
-    #[error("invalid SDP option {name}: {message}")]
-    Option {
-        /// The option's field name in `SdpOptions`.
-        name: &'static str,
-        /// The value and the range it should be in.
-        message: String,
-    },
-    /// Clarabel refused its settings or the problem data (its own message).
-    #[error("clarabel rejected the problem: {0}")]
-    Solver(String),
 }
 
 fn median(mut v: Vec<f64>) -> Option<f64> {
@@ -564,17 +416,6 @@ struct Penalty {
     lambda: f64,
     w: f64,
     entropic: bool,
-}
-
-/// The conic program's constraint rows `s = b − A·x ∈ cones`, as triplets, in the order
-/// they are added.
-#[derive(Default)]
-struct Rows {
-    ai: Vec<usize>,
-    aj: Vec<usize>,
-    av: Vec<f64>,
-    b: Vec<f64>,
-    cones: Vec<SupportedConeT<f64>>,
 }
 
 /// The objective's second-order cone: the epigraph row(s) of `t`, the residual and the

@@ -5,7 +5,8 @@ use std::fmt::Write as _;
 
 use dvrk_model::{Model, ParamKind};
 
-use super::{LogSummary, RenderedFigure};
+use super::document::LogSummary;
+use super::plot::RenderedFigure;
 use crate::fit::JointMap;
 use crate::log::ReadOptions;
 use crate::reproduce::FitCall;

@@ -6,46 +6,25 @@
 
 pub mod base_chart;
 pub mod curves;
+mod document;
 pub mod draw;
+mod error;
 pub mod figures;
 pub mod html;
 pub mod plot;
 pub mod residual;
 
-use std::path::{Path, PathBuf};
-
 use dvrk_model::Model;
-use thiserror::Error;
 
-use crate::error::IdentError;
 use crate::excite::FourierTrajectory;
 use crate::fit::{joint_metrics, predict, prepare, to_model_coordinates, JointMap, Prepared};
 use crate::log::ReadOptions;
-use crate::result::{FitResult, JointMetrics};
+use crate::result::FitResult;
 use crate::settings::FitSettings;
 use crate::JointLog;
+pub use document::{LogSummary, Report};
+pub use error::ReportError;
 pub use plot::{figure_bytes, render_both, write_figure, RenderedFigure};
-
-/// Errors of figure and report output.
-#[derive(Debug, Error)]
-pub enum ReportError {
-    /// The drawing library failed (should not happen with in-memory backends).
-    #[error("drawing a figure failed: {0}")]
-    Draw(String),
-    /// A requested output format or figure input is not usable.
-    #[error("{file}: {message}")]
-    Format {
-        /// The file, or the input it stands for (e.g. `excitation trajectory`).
-        file: String,
-        /// What is wrong.
-        message: String,
-    },
-    /// What the report runs of the identification (the result's model, processing,
-    /// prediction) or writing its files failed. The report depends on the pipeline's
-    /// error, never the reverse.
-    #[error(transparent)]
-    Ident(#[from] IdentError),
-}
 
 /// One log shown in the report.
 #[derive(Clone, Copy, Debug)]
@@ -78,28 +57,6 @@ pub struct ReportInput<'a> {
     /// and keeps the result's own for the fit's numbers and command line. `None`: the
     /// result's.
     pub settings: Option<&'a FitSettings>,
-}
-
-/// Per-log numbers computed for the report.
-#[derive(Clone, Debug)]
-pub struct LogSummary {
-    /// The log's role, as in [`ReportLog::role`].
-    pub role: String,
-    /// The log's source (file, or name given in Python).
-    pub source: String,
-    /// The fitted model's errors on the log (over its window, if any).
-    pub metrics: JointMetrics,
-}
-
-/// A report in memory.
-#[derive(Clone, Debug)]
-pub struct Report {
-    /// Every figure, in page order.
-    pub figures: Vec<RenderedFigure>,
-    /// The numbers of each log, in the order given.
-    pub logs: Vec<LogSummary>,
-    /// The self-contained page `report.html`: tables, and the figures inlined as SVG.
-    pub html: String,
 }
 
 /// A file-name-safe version of a role (`test 2` → `test_2`).
@@ -279,40 +236,4 @@ pub fn build(input: &ReportInput<'_>) -> Result<Report, ReportError> {
         logs,
         html,
     })
-}
-
-impl Report {
-    /// The files of the report: every figure as SVG and PNG, then `report.html`.
-    pub fn files(&self) -> Vec<(String, &[u8])> {
-        let mut files = Vec::with_capacity(2 * self.figures.len() + 1);
-        for f in &self.figures {
-            files.push((format!("{}.svg", f.stem), f.svg.as_bytes()));
-            files.push((format!("{}.png", f.stem), f.png.as_slice()));
-        }
-        files.push(("report.html".into(), self.html.as_bytes()));
-        files
-    }
-
-    /// Stages the report's files into `dir` among a command's other outputs (see
-    /// [`crate::output::Outputs::add_dir`]: a new `dir` is created at the commit, its
-    /// parent folder must exist); returns the paths, the page last.
-    pub fn stage(
-        &self,
-        outputs: &mut crate::output::Outputs,
-        dir: &Path,
-    ) -> Result<Vec<PathBuf>, ReportError> {
-        Ok(outputs
-            .add_dir(dir, &self.files())
-            .map_err(IdentError::from)?)
-    }
-
-    /// Writes `report.html` and every figure as SVG and PNG into `dir` (created if
-    /// missing, but not its parent), all of them or none; returns the paths written,
-    /// the page last.
-    pub fn write(&self, dir: &Path) -> Result<Vec<PathBuf>, ReportError> {
-        let mut outputs = crate::output::Outputs::new();
-        let written = self.stage(&mut outputs, dir)?;
-        outputs.commit().map_err(IdentError::from)?;
-        Ok(written)
-    }
 }

@@ -14,7 +14,7 @@ use std::sync::Once;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
-use super::ReportError;
+use super::error::ReportError;
 
 /// The font every figure uses, registered under plotters' `sans-serif` family.
 static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");

@@ -5,10 +5,11 @@
 
 use std::fmt::Write as _;
 
+use super::document::Report;
+use super::error::ReportError;
 use super::html::{escape, inline_svg, number, STYLE};
 use super::plot::{colors, Panel, PanelGrid, Series};
 use super::plot::{render_both, RenderedFigure};
-use super::{Report, ReportError};
 use crate::fit::JointMap;
 use crate::residual::{Residual, TipWrench, WRENCH_COMPONENTS};
 

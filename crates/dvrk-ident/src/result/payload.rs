@@ -4,7 +4,8 @@
 use indexmap::IndexMap;
 use serde::{Deserialize, Serialize};
 
-use super::{BaseParameterResult, LinkDetermined, ParameterStatus, SolverInfo};
+use super::parameters::{BaseParameterResult, LinkDetermined, ParameterStatus};
+use crate::estimate::SolverInfo;
 
 /// Standard deviations of a payload's quantities (the least-squares fit of the same
 /// weighted data); `None` for a quantity the logs do not determine.

@@ -8,7 +8,7 @@
 //! (checked against a scipy fixture in the tests), which matters when reproducing
 //! published identification results computed with scipy.
 
-use super::SignalError;
+use super::error::{SignalError, CUTOFF_RANGE_WN};
 use nalgebra::Complex;
 use std::f64::consts::PI;
 
@@ -43,16 +43,6 @@ pub(crate) fn check_rate(rate_hz: f64) -> Result<(), SignalError> {
         Err(SignalError::InvalidRate { rate_hz })
     }
 }
-
-/// The range of normalized cut-offs (fraction of the Nyquist frequency) that processing
-/// accepts. At 1e-3 (0.1 Hz at 200 Hz, the lowest base frequency of the 2019 excitations)
-/// the 6th-order filter's slowest pole already has a time constant of about 2 500 samples
-/// and the streamed filter's settling margin (`signal::stream::zero_phase::settle_margin`)
-/// is about 120 000 samples; it grows as 1/Wn, and with it the memory and time of every
-/// block, so lower cut-offs are refused. Above 0.95 the poles approach the unit circle
-/// (at `Wn = 1` the filter is unstable: the margin never ends) and the filter no longer
-/// filters anything.
-pub const CUTOFF_RANGE_WN: [f64; 2] = [1e-3, 0.95];
 
 pub(crate) fn check_wn_for(wn: f64, cutoff_hz: f64, rate_hz: f64) -> Result<(), SignalError> {
     if (CUTOFF_RANGE_WN[0]..=CUTOFF_RANGE_WN[1]).contains(&wn) {

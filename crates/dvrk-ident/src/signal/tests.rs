@@ -3,7 +3,10 @@
 
 use super::*;
 use crate::JointLog;
+use crate::{Coordinates, JointLogError};
 use dvrk_logs::uniform_time;
+use nalgebra::DMatrix;
+use std::f64::consts::PI;
 
 fn sine_traj(n: usize, rate: f64, with_dq: bool) -> JointLog {
     let t = uniform_time(n, rate);

@@ -34,7 +34,7 @@ use std::path::Path;
 use nalgebra::DMatrix;
 use serde::{Deserialize, Serialize};
 
-use super::ObservationState;
+use super::record::ObservationState;
 use crate::error::IdentError;
 use crate::fit::{Observed, ObservedLog, TorqueRange};
 use crate::observation::Observation;

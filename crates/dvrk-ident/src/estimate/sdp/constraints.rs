@@ -5,7 +5,19 @@
 use clarabel::solver::SupportedConeT;
 use dvrk_model::{BoundOrigin, Model};
 
-use super::{Rows, SdpError, SdpOptions};
+use super::error::SdpError;
+use super::options::SdpOptions;
+
+/// The conic program's constraint rows `s = b − A·x ∈ cones`, as triplets, in the order
+/// they are added.
+#[derive(Default)]
+pub(super) struct Rows {
+    pub(super) ai: Vec<usize>,
+    pub(super) aj: Vec<usize>,
+    pub(super) av: Vec<f64>,
+    pub(super) b: Vec<f64>,
+    pub(super) cones: Vec<SupportedConeT<f64>>,
+}
 
 type SvecEntry = (usize, usize, &'static [(usize, f64)]);
 

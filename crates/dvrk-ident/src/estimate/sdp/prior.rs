@@ -7,7 +7,9 @@ use dvrk_model::Model;
 use nalgebra::Matrix4;
 
 use super::constraints::link_length;
-use super::{pseudo_inertia, Rows, SdpError};
+use super::constraints::Rows;
+use super::error::SdpError;
+use dvrk_model::inertia::pseudo_inertia;
 
 /// The entropic prior's cones and objective terms (nothing without it).
 pub(super) fn entropic_rows(

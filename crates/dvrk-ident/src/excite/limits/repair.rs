@@ -6,7 +6,10 @@
 // `!(x > 0.0)`-style tests are deliberate: they also catch NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
 
-use super::*;
+use super::constraints::*;
+use crate::excite::grid::Grid;
+use crate::excite::ExciteError;
+use dvrk_model::{Model, Workspace};
 
 impl Constraints {
     /// The largest excess of the position items' bounds shrunk by `margin` at a static
