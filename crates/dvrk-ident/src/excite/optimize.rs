@@ -478,8 +478,8 @@ fn check_init(model: &Model, opts: &ExciteOptions) -> Result<(), ExciteError> {
 mod tests {
     use super::super::grid::project_rest;
     use super::super::lbfgs::dot;
-    use super::super::rng::Rng;
     use super::*;
+    use dvrk_test_support::Rng;
 
     #[test]
     fn grid_matches_eval_and_backprop_is_adjoint() {
@@ -505,7 +505,7 @@ mod tests {
             }
         }
         // <g, J x> = <J^T g, x> (the map x -> (q - q0 part, dq, ddq) is linear).
-        let mut rng = Rng(3);
+        let mut rng = Rng::new(3);
         let g: Vec<f64> = (0..3 * 34).map(|_| rng.normal()).collect();
         let mut gx = vec![0.0; x.len()];
         grid.backprop(2, &g[..34], &g[34..68], &g[68..], &mut gx);
@@ -517,7 +517,7 @@ mod tests {
 
     #[test]
     fn rest_projection_zeroes_start_rates() {
-        let mut rng = Rng(5);
+        let mut rng = Rng::new(5);
         let (n, order) = (3, 4);
         let mut x: Vec<f64> = (0..n * (2 * order + 1)).map(|_| rng.normal()).collect();
         project_rest(&mut x, n, order);
