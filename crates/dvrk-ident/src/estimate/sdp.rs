@@ -65,7 +65,7 @@
 //!   parameters (friction, motor inertia, spring) keep the Euclidean term. The prior's
 //!   pseudo-inertias must be positive definite; nearly singular ones (an earlier
 //!   semidefinite fit leaves its links at `J ⪰ eps·I`) are conditioned first (see
-//!   [`PRIOR_CONDITION`]).
+//!   [`PRIOR_CONDITION`](prior::PRIOR_CONDITION)).
 //!
 //! A **partial prior** has values for some parameters only (NaN for the others in
 //! [`SdpOptions::prior`]), e.g. the link masses a robot's maker publishes and nothing

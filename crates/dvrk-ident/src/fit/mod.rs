@@ -1,7 +1,7 @@
 //! The identification pipeline, one stage per module: [`prepare`](prepare()) (log →
 //! model coordinates → known forces removed → processed samples), the observation
 //! ([`Observed`], in `observed`), the estimator ([`crate::estimate`]), the metrics
-//! ([`MetricSums`], [`joint_metrics`]) and the result document. Three drivers run the
+//! ([`MetricSums`](metrics::MetricSums), [`joint_metrics`]) and the result document. Three drivers run the
 //! stages: logs in memory (`memory`), logs read from disk block by block for logs
 //! larger than memory ([`stream`], the same result), and observation states
 //! ([`crate::state`]). [`crate::FitRequest`] picks the driver: it is the one way to fit,

@@ -90,8 +90,8 @@ impl Observed {
     }
 }
 
-/// The fit of reduced training logs (the shared end of [`fit_logs`],
-/// [`stream::fit_stream_logs`] and the fit of observation states): the weights, the
+/// The fit of reduced training logs (the shared end of [`fit_logs`](super::memory::fit_logs),
+/// [`stream::fit_stream_logs`](super::stream::fit_stream_logs) and the fit of observation states): the weights, the
 /// estimator, the training metrics from each log's factors (no pass over the samples),
 /// the test logs' metrics from `test` (given the parameters), the document. `model` is
 /// the model of the settings ([`FitSettings::model`]).

@@ -24,7 +24,7 @@
 //! and reduces them with the same chunks, so the two give the same result to the last
 //! bit (the tests require 1e-9 relative); both differ from the exact whole-log
 //! [`crate::signal::process`] only by the filters' settling tolerance
-//! ([`crate::signal::stream::SETTLE_TOLERANCE`]).
+//! (`SETTLE_TOLERANCE` of `signal/stream/processor.rs`).
 
 use std::ops::ControlFlow;
 
@@ -59,7 +59,7 @@ struct Source<'a> {
 
 impl Source<'_> {
     /// The next block in model coordinates with the known forces subtracted (what
-    /// [`super::prepare`] processes).
+    /// [`super::prepare`](fn@super::prepare) processes).
     fn model_blocks(
         &self,
     ) -> Result<impl Iterator<Item = Result<JointLog, IdentError>> + '_, IdentError> {
@@ -123,7 +123,7 @@ impl Source<'_> {
 
     /// One pass: every processed block to `f`, until it breaks (the whole log is read
     /// anyway when its clock is not uniform, so that the gap is reported as by
-    /// [`super::prepare`]). Errors when no sample is left, as [`super::prepare`].
+    /// [`super::prepare`](fn@super::prepare)). Errors when no sample is left, as [`super::prepare`](fn@super::prepare).
     fn processed(
         &self,
         settings: &FitSettings,

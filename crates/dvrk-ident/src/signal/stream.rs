@@ -2,7 +2,7 @@
 //!
 //! A first pass over the log ([`TimingSurvey`]) validates it and finds its timing; a
 //! [`BlockProcessor`] then turns the blocks, in order, into the processed samples that
-//! [`super::process`] gives for the whole log (to [`SETTLE_TOLERANCE`] relative in the
+//! [`super::process`](fn@super::process) gives for the whole log (to [`SETTLE_TOLERANCE`](processor::SETTLE_TOLERANCE) relative in the
 //! filtered signals, exactly in everything else), holding only a window of samples: the
 //! zero-phase filters' settling margin (from their slowest pole) plus a chunk.
 
@@ -22,7 +22,7 @@ use nalgebra::DMatrix;
 /// The processing of a trajectory held in memory as consecutive `blocks` (one or more)
 /// by a `BlockProcessor` (a timing survey, then the blocks in order): what a log
 /// streamed from disk gets, to the last bit, for a log in memory. It equals
-/// [`super::process`] of the whole to `SETTLE_TOLERANCE` relative.
+/// [`super::process`](fn@super::process) of the whole to `SETTLE_TOLERANCE` relative.
 pub fn process_in_blocks(
     blocks: &[JointLog],
     settings: &Processing,

@@ -1,4 +1,4 @@
-//! [`crate::signal::process`] for a log given block by block.
+//! [`crate::signal::process`](fn@crate::signal::process) for a log given block by block.
 
 use std::collections::VecDeque;
 
@@ -40,7 +40,7 @@ impl Stage {
     }
 }
 
-/// Processes a log fed in blocks (in order) into the samples [`crate::signal::process`]
+/// Processes a log fed in blocks (in order) into the samples [`crate::signal::process`](fn@crate::signal::process)
 /// gives for the whole log, block by block, in memory independent of the log's length.
 ///
 /// Every step reproduces the whole-log one: resampling and differences exactly, the
@@ -50,7 +50,7 @@ impl Stage {
 /// index in the whole log. The log's timing comes from a first pass
 /// ([`super::TimingSurvey`]): the sampling rate (inverse median step), the length that
 /// the trimming and the filters' padding are checked against. Errors are those of
-/// [`crate::signal::process`] on the whole log, in the same order.
+/// [`crate::signal::process`](fn@crate::signal::process) on the whole log, in the same order.
 #[derive(Clone, Debug)]
 pub struct BlockProcessor {
     settings: Processing,

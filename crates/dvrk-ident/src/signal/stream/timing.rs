@@ -1,5 +1,5 @@
 //! The first pass over a streamed log: what the processing must know before the first
-//! filtered sample, and what [`crate::signal::process`] checks on the whole log first.
+//! filtered sample, and what [`crate::signal::process`](fn@crate::signal::process) checks on the whole log first.
 
 use crate::median::{ExactMedian, MedianPass};
 use crate::{JointLog, JointLogError};
