@@ -24,9 +24,10 @@ item definitions. Inline modules (`mod tests { ... }`) count as part of their fi
 module. What is not seen: method calls on a type whose `impl` blocks are spread over
 several modules (no path is written), and macros' textual scope.
 
-Levels: a module and its own submodules form one unit (the parent is the facade that
-declares and re-exports them, and its children reach its shared items through
-`super::`). So the graph is examined level by level: first the crate root's children,
+Levels: a module and its own submodules form one unit for cycles (a child naming an
+item of its parent is not a cycle here; `--parents` lists those call-backs, which
+dvrk-ident has none of: there a parent only declares its children and re-exports
+theirs). So the graph is examined level by level: first the crate root's children,
 each standing for its whole subtree; then, inside every module that has submodules, its
 children, each standing for its subtree (the parent's own file is left out at that
 level). A cycle is a strongly connected component of more than one node at some level;
