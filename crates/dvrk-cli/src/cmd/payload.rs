@@ -52,11 +52,9 @@ pub fn run(args: Args) -> Result<()> {
     } = args.on_logs.load_with_settings()?;
     // The frame before the logs: a wrong name is told without reading them.
     model.payload_model(&args.frame, "--frame")?;
-    let read = args.on_logs.log_args.read_options_for(
-        &model,
-        &result.settings.processing,
-        args.on_logs.logs.iter().map(String::as_str),
-    );
+    let read = args
+        .on_logs
+        .read_options(&model, &result.settings.processing);
     let logs = args
         .on_logs
         .logs

@@ -119,11 +119,9 @@ pub fn run(args: Args) -> Result<()> {
         wrench: args.wrench.clone(),
         wrench_rcond: args.wrench_rcond,
     };
-    let read = args.on_logs.log_args.read_options_for(
-        &model,
-        &result.settings.processing,
-        args.on_logs.logs.iter().map(String::as_str),
-    );
+    let read = args
+        .on_logs
+        .read_options(&model, &result.settings.processing);
     let (mut text, mut reports, mut outputs) = (String::new(), Vec::new(), Outputs::new());
     if let Some(note) = result.offset_note() {
         let _ = writeln!(text, "{note}");

@@ -295,6 +295,18 @@ impl ResultOnLogs {
         Ok(loaded)
     }
 
+    /// How the command reads its logs ([`super::args::LogArgs::read_options_for`] on
+    /// them: these flags, `model`'s measured joints, `processing`'s resampling and the
+    /// checks across the logs); report, whose logs may be the result's own, calls that.
+    pub fn read_options(
+        &self,
+        model: &dvrk_model::Model,
+        processing: &dvrk_ident::signal::Processing,
+    ) -> dvrk_ident::log::ReadOptions {
+        self.log_args
+            .read_options_for(model, processing, self.logs.iter().map(String::as_str))
+    }
+
     /// What the command reads ([`super::inputs`]: the logs, the result, the robot's
     /// description and `others`), so that no output overwrites it.
     pub fn inputs(&self, others: &[(&str, Option<&str>)]) -> super::Inputs {

@@ -58,11 +58,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(note) = result.offset_note() {
         let _ = writeln!(text, "{note}");
     }
-    let read = args.on_logs.log_args.read_options_for(
-        &model,
-        &settings.processing,
-        args.on_logs.logs.iter().map(String::as_str),
-    );
+    let read = args.on_logs.read_options(&model, &settings.processing);
     for path in &args.on_logs.logs {
         let log = super::args::read(&read, path)?;
         let data = prepare(&model, &log, &settings.processing)?;
