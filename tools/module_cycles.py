@@ -187,9 +187,8 @@ class Crate:
             base = os.path.join(base, name[:-3])
         for m in MOD_DECL_RE.finditer(text):
             child = m.group(1)
-            if child == "tests" or "cfg(test)" in m.group(0) or re.search(
-                r"#\[cfg\(test\)\]\s*$", text[: m.start()]
-            ):
+            # MOD_DECL_RE's match includes the declaration's attributes.
+            if child == "tests" or "cfg(test)" in m.group(0):
                 self.test_modules.add(module + (child,))
             for cand in (os.path.join(base, child + ".rs"), os.path.join(base, child, "mod.rs")):
                 if os.path.exists(cand):
@@ -294,7 +293,8 @@ def call_backs(crate):
     that declares its children and re-exports theirs). A glob import of an ancestor counts:
     what it brings in cannot be told apart. Test modules (`tests`, or declared under
     `#[cfg(test)]`) are the parent's own and exempt."""
-    crate.graph() if not crate.refs else None
+    if not crate.refs:
+        crate.collect()
     found, seen = [], set()
     for module, target, path, line, text in crate.refs:
         if any(part in crate.test_modules for part in prefixes(module)):
@@ -385,7 +385,7 @@ def main(argv):
     crates = argv or sorted(
         os.path.join(here, "..", "crates", d) for d in os.listdir(os.path.join(here, "..", "crates"))
     )
-    any_cycle = False
+    failed = False
     for root in crates:
         crate = Crate(root)
         if not crate.files:
@@ -398,7 +398,7 @@ def main(argv):
             for (a, b), (path, line, text) in sorted(edges.items()):
                 print(f"  edge {name(a)} -> {name(b)}: {path}:{line} {text}")
         for parent, comp, ws in found:
-            any_cycle = True
+            failed = True
             inside = "" if not parent else f" (inside {name(parent)})"
             print(f"  cycle{inside}: {' <-> '.join(comp)}")
             for a, b, (path, line, text) in ws:
@@ -407,9 +407,9 @@ def main(argv):
             backs = call_backs(crate)
             print(f"{label}: {len(backs)} call-back{'s' if len(backs) != 1 else ''} into a parent")
             for module, ancestor, item, (path, line, text) in backs:
-                any_cycle = True
+                failed = True
                 print(f"  {name(module)} -> {name(ancestor)}::{item}: {path}:{line} {text}")
-    return 1 if any_cycle else 0
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":

@@ -128,21 +128,14 @@ fn the_presets_masses_stay_off_their_bounds_at_both_speeds() {
         let preset = fit(train, test, false);
         let plain = fit(train, test, true);
         let (m, p) = (mean(&preset), mean(&plain));
+        let (held, held_plain) = (on_bound(&preset), on_bound(&plain));
         println!(
-            "{label}: --preset dvrk {m:.4}, without ellipsoids and prior {p:.4}, on a bound {:?}",
-            on_bound(&plain)
+            "{label}: --preset dvrk {m:.4}, without ellipsoids and prior {p:.4}, on a bound {held_plain:?}"
         );
         assert!(preset.physically_consistent, "{label}");
         assert!(preset.settings.prior.is_some(), "{label}");
-        assert!(
-            on_bound(&preset).is_empty(),
-            "{label}: {:?}",
-            on_bound(&preset)
-        );
-        assert!(
-            !on_bound(&plain).is_empty(),
-            "{label}: the prior holds nothing"
-        );
+        assert!(held.is_empty(), "{label}: {held:?}");
+        assert!(!held_plain.is_empty(), "{label}: the prior holds nothing");
         assert!(m <= 1.02 * p, "{label}: {m:.4} against {p:.4}");
     }
 }
